@@ -1,0 +1,35 @@
+// Errors for bad input. Every user-facing error names the file, the line and
+// the key at fault so that it prints as `error: FILE:LINE: key: what is wrong`.
+#ifndef AIA_CORE_ERROR_H_
+#define AIA_CORE_ERROR_H_
+
+#include <stdexcept>
+#include <string>
+
+namespace aia {
+
+// Thrown for bad input (scenario files, map images, model files, flags).
+// Caught in tools/, printed with Format() and turned into exit code 2.
+class InputError : public std::runtime_error {
+ public:
+  // `line` is 1-based; 0 when no line applies (e.g. a command-line flag).
+  InputError(std::string file, int line, std::string key, std::string what);
+
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+  const std::string& key() const { return key_; }
+  const std::string& message() const { return message_; }
+
+  // "FILE:LINE: key: what" (or "FILE: key: what" when line is 0).
+  std::string Format() const;
+
+ private:
+  std::string file_;
+  int line_;
+  std::string key_;
+  std::string message_;
+};
+
+}  // namespace aia
+
+#endif  // AIA_CORE_ERROR_H_

@@ -1,0 +1,41 @@
+// Planar geometry on axis-aligned boxes: the only obstacle shape in aia (map
+// images are merged into boxes), so every geometric query is exact.
+#ifndef AIA_CORE_GEOMETRY_H_
+#define AIA_CORE_GEOMETRY_H_
+
+#include <vector>
+
+#include "aia/core/types.h"
+
+namespace aia {
+
+// Axis-aligned box [lo, hi].
+struct Box {
+  Vec2 lo{0.0, 0.0};
+  Vec2 hi{0.0, 0.0};
+
+  static Box FromCenterSize(const Vec2& center, const Vec2& size) {
+    return {center - 0.5 * size, center + 0.5 * size};
+  }
+  Vec2 Center() const { return 0.5 * (lo + hi); }
+  Vec2 Size() const { return hi - lo; }
+  bool Contains(const Vec2& p) const {
+    return p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() && p.y() <= hi.y();
+  }
+};
+
+// Squared distance from a point to a box (0 inside).
+double PointBoxDistanceSq(const Vec2& p, const Box& b);
+
+// Smallest distance between the segment [a, b] and the box (0 if they meet).
+double SegmentBoxDistance(const Vec2& a, const Vec2& b, const Box& box);
+
+// Whether the segment [a, b] meets the box (slab test).
+bool SegmentIntersectsBox(const Vec2& a, const Vec2& b, const Box& box);
+
+// Whether the open segment (a, b) meets any box in the list.
+bool SegmentBlocked(const Vec2& a, const Vec2& b, const std::vector<Box>& boxes);
+
+}  // namespace aia
+
+#endif  // AIA_CORE_GEOMETRY_H_

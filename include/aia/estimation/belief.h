@@ -1,0 +1,91 @@
+// Gaussian beliefs over the hidden state x = [x_1; ...; x_M] in information
+// form, block diagonal per target (SPEC sections 4-5). All robots' beliefs are
+// stored in one row-major matrix, one row per robot, so that DKF fusion is one
+// dense product W * B over contiguous memory and never touches a 2M x 2M matrix.
+#ifndef AIA_ESTIMATION_BELIEF_H_
+#define AIA_ESTIMATION_BELIEF_H_
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "aia/core/types.h"
+
+namespace aia {
+
+// Linear-Gaussian model of one target: x(t+1) = A x(t) + b + w, w ~ N(0, Q).
+// The measured part is the position, the first two coordinates (M = [I 0]).
+struct TargetModel {
+  int dim = 2;  // 2 (position) or 4 (position, velocity)
+  Eigen::MatrixXd A = Eigen::MatrixXd::Identity(2, 2);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(2);
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(2, 2);
+  bool is_static = true;  // A = I, b = 0, Q = 0: prediction is the identity
+};
+
+// Where each target's block lives inside a belief row: Omega (dim x dim,
+// column-major) followed by xi (dim).
+class BeliefLayout {
+ public:
+  BeliefLayout() = default;
+  explicit BeliefLayout(std::vector<TargetModel> models);
+
+  int num_targets() const { return static_cast<int>(models_.size()); }
+  int stride() const { return stride_; }  // doubles per belief row
+  const TargetModel& model(int k) const { return models_[k]; }
+  int dim(int k) const { return models_[k].dim; }
+  int omega_offset(int k) const { return offsets_[k]; }
+  int xi_offset(int k) const { return offsets_[k] + models_[k].dim * models_[k].dim; }
+  bool all_static() const { return all_static_; }
+
+ private:
+  std::vector<TargetModel> models_;
+  std::vector<int> offsets_;
+  int stride_ = 0;
+  bool all_static_ = true;
+};
+
+// Beliefs of `rows` agents (robots, or one row for the centralized filter).
+class BeliefSet {
+ public:
+  using Storage = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+  BeliefSet() = default;
+  BeliefSet(const BeliefLayout* layout, int rows);
+
+  // Every row gets the prior N(mean_k, cov_k) for each target k.
+  void SetPrior(const std::vector<Eigen::VectorXd>& means,
+                const std::vector<Eigen::MatrixXd>& covs);
+
+  int rows() const { return static_cast<int>(data_.rows()); }
+  const BeliefLayout& layout() const { return *layout_; }
+
+  Eigen::Map<Eigen::MatrixXd> Omega(int row, int k);
+  Eigen::Map<const Eigen::MatrixXd> Omega(int row, int k) const;
+  Eigen::Map<Eigen::VectorXd> Xi(int row, int k);
+  Eigen::Map<const Eigen::VectorXd> Xi(int row, int k) const;
+
+  // mu = Omega^-1 xi and Sigma = Omega^-1 of one block.
+  Eigen::VectorXd Mean(int row, int k) const;
+  Eigen::MatrixXd Covariance(int row, int k) const;
+  // Position part of the mean (first two coordinates).
+  Vec2 PositionMean(int row, int k) const;
+  // Position marginal of the covariance (top-left 2 x 2 of Sigma).
+  Mat2 PositionCovariance(int row, int k) const;
+  // det Sigma = 1 / det Omega, and its log.
+  double DetCovariance(int row, int k) const;
+  double LogDetCovariance(int row, int k) const;
+
+  // Copy of one row from another set with the same layout.
+  void CopyRow(int row, const BeliefSet& from, int from_row);
+
+  Storage& data() { return data_; }
+  const Storage& data() const { return data_; }
+
+ private:
+  const BeliefLayout* layout_ = nullptr;
+  Storage data_;
+};
+
+}  // namespace aia
+
+#endif  // AIA_ESTIMATION_BELIEF_H_

@@ -1,0 +1,49 @@
+// The information filter and the distributed Kalman filter (DKF) of SPEC
+// section 5, written per target block:
+//   predict:  Sigma^- = A Sigma A' + Q,  mu^- = A mu + b
+//   fuse:     Omega_i = sum_{j in N_i + i} kappa_ij Omega_j^- + Z_i,
+//             xi_i    = sum_{j in N_i + i} kappa_ij xi_j^-    + M' R_i^-1 (y_i + p_i)
+//   central:  Omega   = Omega^- + sum_i Z_i
+// with Z_i = M' R_i^-1 M for the targets robot i sees.
+#ifndef AIA_ESTIMATION_FILTER_H_
+#define AIA_ESTIMATION_FILTER_H_
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "aia/core/types.h"
+#include "aia/estimation/belief.h"
+#include "aia/estimation/sensor_model.h"
+
+namespace aia {
+
+// One time update of every row (identity for static targets).
+void Predict(BeliefSet* beliefs);
+
+// Adds one robot's measurements (taken at position p) to one row:
+// Omega^k += r I on the position block, xi^k += r (y + p).
+void AddMeasurements(const std::vector<Measurement>& z, const Vec2& p, BeliefSet* beliefs,
+                     int row);
+
+// DKF weights: W(i,i) = kappa_self and W(i,j) = (1 - kappa_self) / |N_i| for j
+// in N_i; an isolated robot keeps W(i,i) = 1. neighbors[i] lists the robots
+// whose messages robot i received this step (i itself excluded).
+void FusionWeights(const std::vector<std::vector<int>>& neighbors, double kappa_self,
+                   Eigen::MatrixXd* W);
+
+// out = W * predicted, then each robot's own measurements are added.
+// `out` must not alias `predicted`. No allocation once `out` has its size.
+void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
+          const std::vector<std::vector<Measurement>>& z, const std::vector<Vec2>& positions,
+          BeliefSet* out);
+
+// The centralized filter: one row, every robot's measurements added.
+void CentralUpdate(const std::vector<std::vector<Measurement>>& z,
+                   const std::vector<Vec2>& positions, BeliefSet* central);
+
+// Whether every block of every row is symmetric positive definite (within tol).
+bool AllBlocksSpd(const BeliefSet& beliefs, double tol = 1e-9);
+
+}  // namespace aia
+
+#endif  // AIA_ESTIMATION_FILTER_H_

@@ -1,0 +1,37 @@
+// The range-limited, distance-scaled position sensor of SPEC section 4:
+// y = pos_k - p_i + v, v ~ N(0, R), R = (sigma0 + eta * dist)^2 I.
+#ifndef AIA_ESTIMATION_SENSOR_MODEL_H_
+#define AIA_ESTIMATION_SENSOR_MODEL_H_
+
+#include "aia/core/types.h"
+
+namespace aia {
+
+struct SensorModel {
+  double range = 2.0;
+  double eta = 0.05;
+  double sigma0 = 0.01;
+  bool line_of_sight = true;
+
+  // Noise standard deviation at distance `dist`.
+  double Std(double dist) const { return sigma0 + eta * dist; }
+  // R^-1 = 1 / (sigma0 + eta * dist)^2, the scalar of the isotropic precision.
+  double Precision(double dist) const {
+    const double s = Std(dist);
+    return 1.0 / (s * s);
+  }
+  bool InRange(double dist) const { return dist <= range; }
+};
+
+// One robot's measurement of one target: y is the measured relative position
+// pos_k - p_i + v; precision is the scalar of R^-1 (the filter computes it from
+// |y|, the simulator draws v with the true distance).
+struct Measurement {
+  int target = 0;
+  Vec2 y{0.0, 0.0};
+  double precision = 0.0;
+};
+
+}  // namespace aia
+
+#endif  // AIA_ESTIMATION_SENSOR_MODEL_H_
