@@ -73,6 +73,9 @@ struct TargetsConfig {
   int count = 0;                    // random static targets (when `list` is empty)
   std::vector<TargetConfig> list;   // explicit targets
   double prior_sigma = 1.0;         // prior std per coordinate
+  // Std (metres) of a default prior mean's offset from the truth: targets
+  // without `prior_mean` get truth + N(0, prior_offset^2 I).
+  double prior_offset = 0.5;
 };
 
 struct MissionConfig {

@@ -1,0 +1,40 @@
+// A myopic reference policy from the literature (SPEC section 7). Each robot
+// takes the move with the largest one-step drop of its own summed log det,
+// predicted with the Riccati map at its current means. Only the part of the
+// drop above eps counts (a target already below eps in the robot's belief
+// gains nothing), so a robot does not linger at localized targets. Where no
+// move gains anything, it steps along a shortest lattice path toward the
+// nearest target its own belief still holds above eps.
+#ifndef AIA_PLANNING_GREEDY_H_
+#define AIA_PLANNING_GREEDY_H_
+
+#include <vector>
+
+#include "aia/core/rng.h"
+#include "aia/planning/information.h"
+#include "aia/planning/policy.h"
+#include "aia/scenario/config.h"
+
+namespace aia {
+
+class GreedyPolicy : public Policy {
+ public:
+  explicit GreedyPolicy(const Scenario& scenario);
+  std::string_view name() const override { return "greedy"; }
+  void Reset(const World& world, std::uint64_t seed) override;
+  PolicyStatus Decide(const DecisionContext& ctx, std::vector<Move>* moves) override;
+
+ private:
+  // BFS toward the nearest observation point of an unlocalized target;
+  // kStay when there is none.
+  Move TowardNearestTarget(const DecisionContext& ctx, int robot);
+
+  std::vector<Rng> rngs_;
+  std::vector<PredictedBlock> blocks_;
+  std::vector<int> dist_, queue_;
+  std::vector<Move> first_;
+};
+
+}  // namespace aia
+
+#endif  // AIA_PLANNING_GREEDY_H_

@@ -1,0 +1,35 @@
+// `aia bench`: decision steps per second on generated worlds, the share of
+// wall time inside mj_step, where a step's time goes, and mujoco-testspeed's
+// figure on the same generated model.
+#ifndef AIA_RUNTIME_BENCH_H_
+#define AIA_RUNTIME_BENCH_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "aia/scenario/config.h"
+
+namespace aia {
+
+// The generated worlds of the experiments (SPEC section 9): 20 x 20 m, random
+// obstacles, N robots and M random static targets, all drawn from `seed`.
+Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed);
+
+// "10x10" -> (10, 10); throws InputError on anything else.
+std::pair<int, int> ParseSize(const std::string& text, const std::string& flag);
+
+struct BenchOptions {
+  std::vector<std::string> sizes{"10x10", "80x80"};
+  int steps = 60;
+  int repeats = 5;
+  std::uint64_t seed = 1;
+  std::string policy = "random";
+  bool skip_testspeed = false;
+};
+
+int RunBench(const BenchOptions& options);
+
+}  // namespace aia
+
+#endif  // AIA_RUNTIME_BENCH_H_

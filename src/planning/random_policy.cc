@@ -1,0 +1,47 @@
+#include "aia/planning/random_policy.h"
+
+#include <algorithm>
+
+#include "aia/core/error.h"
+
+namespace aia {
+
+void CheckPolicyParams(const Scenario& scenario, const std::vector<std::string>& allowed) {
+  for (const auto& [key, value] : scenario.policy.params) {
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    std::string valid;
+    for (const auto& a : allowed) valid += (valid.empty() ? "" : ", ") + a;
+    const std::string full = "policy." + key;
+    throw InputError(scenario.file, scenario.LineOf(full), full,
+                     "unknown parameter for policy '" + scenario.policy.name + "' (valid: " +
+                         (valid.empty() ? std::string("none") : valid) + ")");
+  }
+}
+
+RandomPolicy::RandomPolicy(const Scenario& scenario) { CheckPolicyParams(scenario, {}); }
+
+void RandomPolicy::Reset(const World& world, std::uint64_t seed) {
+  rngs_.clear();
+  for (int i = 0; i < world.NumRobots(); ++i) rngs_.emplace_back(seed, "policy.random", i);
+}
+
+PolicyStatus RandomPolicy::Decide(const DecisionContext& ctx, std::vector<Move>* moves) {
+  const Lattice& lattice = ctx.world->lattice;
+  PolicyStatus status = PolicyStatus::kOk;
+  for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
+    Move valid[kNumMoves];
+    int count = 0;
+    const int p = (*ctx.positions)[i];
+    for (Move m : kMoves)
+      if (lattice.Valid(p, m)) valid[count++] = m;
+    if (count == 0) {
+      (*moves)[i] = Move::kStay;
+      if (ctx.comm->Active(i)) status = PolicyStatus::kNoValidMove;
+      continue;
+    }
+    (*moves)[i] = valid[rngs_[i].UniformInt(count)];
+  }
+  return status;
+}
+
+}  // namespace aia

@@ -1,0 +1,119 @@
+#include "aia/runtime/bench.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <regex>
+#include <string>
+
+#include "aia/core/error.h"
+#include "aia/runtime/mission.h"
+
+namespace aia {
+
+Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed) {
+  Scenario s;
+  s.name = "generated_" + std::to_string(robots) + "x" + std::to_string(targets);
+  s.seed = seed;
+  s.workspace.random = RandomObstaclesConfig{};
+  s.robots.count = robots;
+  s.targets.count = targets;
+  return s;
+}
+
+std::pair<int, int> ParseSize(const std::string& text, const std::string& flag) {
+  static const std::regex re("^([0-9]{1,5})x([0-9]{1,5})$");
+  std::smatch m;
+  if (!std::regex_match(text, m, re))
+    throw InputError("command line", 0, flag,
+                     "'" + text + "' is not a size ROBOTSxTARGETS such as 10x10");
+  const int n = std::stoi(m[1]), k = std::stoi(m[2]);
+  if (n < 1 || k < 1)
+    throw InputError("command line", 0, flag, "'" + text + "': robots and targets must be >= 1");
+  return {n, k};
+}
+
+namespace {
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// mujoco-testspeed's "Steps per second" on a model file, or -1.
+double TestSpeed(const std::string& xml_path, int nstep) {
+  const std::string cmd =
+      "mujoco-testspeed '" + xml_path + "' " + std::to_string(nstep) + " 1 0.01 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  if (!pipe) return -1.0;
+  std::string out;
+  char buf[512];
+  while (std::fgets(buf, sizeof(buf), pipe.get())) out += buf;
+  std::smatch m;
+  static const std::regex re("Steps per second\\s*:\\s*([0-9.]+)");
+  if (!std::regex_search(out, m, re)) return -1.0;
+  return std::stod(m[1]);
+}
+
+}  // namespace
+
+int RunBench(const BenchOptions& o) {
+  if (o.steps < 1) throw InputError("command line", 0, "--steps", "must be at least 1");
+  if (o.repeats < 1) throw InputError("command line", 0, "--repeats", "must be at least 1");
+  const PolicyRegistry registry = AllPolicies();
+  std::printf("aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
+              o.policy.c_str(), o.steps, o.repeats);
+  std::printf("%-8s %10s %9s %9s %9s %9s %9s %9s %8s %12s %12s\n", "size", "steps/s", "ms/step",
+              "physics", "sensing", "fusion", "policy", "rest", "mj_step%", "mj_step/s",
+              "testspeed/s");
+  for (const std::string& size_text : o.sizes) {
+    const auto [n, m] = ParseSize(size_text, "--sizes");
+    Scenario s = GeneratedScenario(n, m, o.seed);
+    ScenarioOverrides ov;
+    ov.policy = o.policy;
+    ApplyOverrides(ov, registry, &s);
+    s.mission.max_steps = o.steps;
+    s.mission.stop_at_success = false;
+    std::vector<double> rate, ms, phys, sens, fus, pol, rest, share, mjrate;
+    std::string mjcf;
+    for (int r = 0; r < o.repeats; ++r) {
+      auto episode = MakeEpisode(s, registry);
+      while (!episode->done()) episode->Step();
+      const PhaseTimes& t = episode->times();
+      const int steps = episode->step();
+      rate.push_back(steps / t.total);
+      ms.push_back(1e3 * t.total / steps);
+      phys.push_back(1e3 * t.physics / steps);
+      sens.push_back(1e3 * t.sensing / steps);
+      fus.push_back(1e3 * t.fusion / steps);
+      pol.push_back(1e3 * t.policy / steps);
+      rest.push_back(1e3 * (t.total - t.physics - t.sensing - t.fusion - t.policy) / steps);
+      share.push_back(100.0 * t.physics / t.total);
+      mjrate.push_back(episode->sim().mj_steps() / episode->sim().physics_seconds());
+      mjcf = episode->sim().mjcf();
+    }
+    double testspeed = -1.0;
+    if (!o.skip_testspeed) {
+      const auto path = std::filesystem::temp_directory_path() /
+                        ("aia_bench_" + size_text + "_" + std::to_string(::getpid()) + ".xml");
+      std::ofstream(path) << mjcf;
+      testspeed = TestSpeed(path.string(), 4000);
+      std::filesystem::remove(path);
+    }
+    std::printf("%-8s %10.1f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %7.1f%% %12.0f %12.0f\n",
+                size_text.c_str(), Median(rate), Median(ms), Median(phys), Median(sens),
+                Median(fus), Median(pol), Median(rest), Median(share), Median(mjrate), testspeed);
+    std::fflush(stdout);
+  }
+  std::printf("(per-step phase times in ms; mj_step/s is inside episodes, testspeed/s is "
+              "mujoco-testspeed on the same generated model, 1 thread, ctrlnoise 0.01)\n");
+  return 0;
+}
+
+}  // namespace aia

@@ -1,0 +1,317 @@
+#include "aia/world/world.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "aia/core/check.h"
+#include "aia/core/error.h"
+#include "aia/core/rng.h"
+
+namespace aia {
+namespace {
+
+std::string Fmt(const Vec2& v) {
+  std::ostringstream os;
+  os << "[" << v.x() << ", " << v.y() << "]";
+  return os.str();
+}
+
+[[noreturn]] void Fail(const Scenario& s, const std::string& key, const std::string& what) {
+  throw InputError(s.file, s.LineOf(key), key, what);
+}
+
+std::vector<Box> RandomBoxes(const Scenario& s, Rng& rng) {
+  const RandomObstaclesConfig& r = *s.workspace.random;
+  const Vec2& ws = s.workspace.size;
+  std::vector<Box> boxes;
+  boxes.reserve(r.count);
+  for (int i = 0; i < r.count; ++i) {
+    const Vec2 size(rng.Uniform(r.min_size.x(), r.max_size.x()),
+                    rng.Uniform(r.min_size.y(), r.max_size.y()));
+    const Vec2 lo(rng.Uniform(0.0, std::max(0.0, ws.x() - size.x())),
+                  rng.Uniform(0.0, std::max(0.0, ws.y() - size.y())));
+    boxes.push_back({lo, lo + size});
+  }
+  return boxes;
+}
+
+std::vector<Box> MapBoxes(const Scenario& s) {
+  const std::string key = "workspace.obstacles.map";
+  cv::Mat img = cv::imread(s.workspace.map, cv::IMREAD_GRAYSCALE);
+  if (img.empty()) Fail(s, key, "cannot decode image '" + s.workspace.map + "' (PGM or PNG expected)");
+  if (img.depth() != CV_8U) img.convertTo(img, CV_8U, 1.0 / 256.0);
+  std::vector<std::uint8_t> gray(img.begin<std::uint8_t>(), img.end<std::uint8_t>());
+  return BoxesFromImage(gray, img.cols, img.rows, s.workspace.size, s.workspace.map_threshold);
+}
+
+Grid<std::uint8_t> Rasterize(const Vec2& size, double cell, const std::vector<Box>& boxes) {
+  const int nx = std::max(1, static_cast<int>(std::ceil(size.x() / cell - 1e-9)));
+  const int ny = std::max(1, static_cast<int>(std::ceil(size.y() / cell - 1e-9)));
+  Grid<std::uint8_t> grid(nx, ny, cell, 0);
+  for (const Box& b : boxes) {
+    // Cells whose interior overlaps the box.
+    const int x0 = std::max(0, static_cast<int>(std::floor(b.lo.x() / cell)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(b.lo.y() / cell)));
+    const int x1 = std::min(nx - 1, static_cast<int>(std::ceil(b.hi.x() / cell)) - 1);
+    const int y1 = std::min(ny - 1, static_cast<int>(std::ceil(b.hi.y() / cell)) - 1);
+    for (int iy = y0; iy <= y1; ++iy)
+      for (int ix = x0; ix <= x1; ++ix) grid(ix, iy) = 1;
+  }
+  return grid;
+}
+
+}  // namespace
+
+std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols, int rows,
+                                const Vec2& size, double threshold) {
+  AIA_CHECK(static_cast<int>(gray.size()) == cols * rows);
+  const double px = size.x() / cols, py = size.y() / rows;
+  const double cut = threshold * 255.0;
+  // Runs of dark pixels per row, merged downwards while the next row has the
+  // exact same run: few boxes for typical maps, exact coverage always.
+  struct Run {
+    int x0, x1, y0, y1;  // pixel columns [x0, x1), rows [y0, y1)
+  };
+  std::vector<Run> open, next, done;
+  for (int r = 0; r <= rows; ++r) {
+    std::vector<std::pair<int, int>> runs;
+    if (r < rows) {
+      for (int c = 0; c < cols;) {
+        if (gray[static_cast<size_t>(r) * cols + c] < cut) {
+          int e = c;
+          while (e < cols && gray[static_cast<size_t>(r) * cols + e] < cut) ++e;
+          runs.push_back({c, e});
+          c = e;
+        } else {
+          ++c;
+        }
+      }
+    }
+    next.clear();
+    std::vector<bool> used(runs.size(), false);
+    for (const Run& o : open) {
+      bool extended = false;
+      for (size_t i = 0; i < runs.size(); ++i) {
+        if (!used[i] && runs[i].first == o.x0 && runs[i].second == o.x1) {
+          used[i] = true;
+          next.push_back({o.x0, o.x1, o.y0, r + 1});
+          extended = true;
+          break;
+        }
+      }
+      if (!extended) done.push_back(o);
+    }
+    for (size_t i = 0; i < runs.size(); ++i)
+      if (!used[i]) next.push_back({runs[i].first, runs[i].second, r, r + 1});
+    open.swap(next);
+  }
+  std::vector<Box> boxes;
+  boxes.reserve(done.size());
+  for (const Run& d : done) {
+    // Image row 0 is the top of the map.
+    boxes.push_back({Vec2(d.x0 * px, size.y() - d.y1 * py), Vec2(d.x1 * px, size.y() - d.y0 * py)});
+  }
+  std::sort(boxes.begin(), boxes.end(), [](const Box& a, const Box& b) {
+    return std::make_pair(a.lo.y(), a.lo.x()) < std::make_pair(b.lo.y(), b.lo.x());
+  });
+  return boxes;
+}
+
+void World::BuildIndex() {
+  bucket_ = 1.0;
+  bx_ = std::max(1, static_cast<int>(std::ceil(size.x() / bucket_)));
+  by_ = std::max(1, static_cast<int>(std::ceil(size.y() / bucket_)));
+  buckets_.assign(static_cast<size_t>(bx_) * by_, {});
+  for (int b = 0; b < static_cast<int>(obstacles.size()); ++b) {
+    const Box& box = obstacles[b];
+    const int x0 = std::clamp(static_cast<int>(std::floor(box.lo.x() / bucket_)), 0, bx_ - 1);
+    const int x1 = std::clamp(static_cast<int>(std::floor(box.hi.x() / bucket_)), 0, bx_ - 1);
+    const int y0 = std::clamp(static_cast<int>(std::floor(box.lo.y() / bucket_)), 0, by_ - 1);
+    const int y1 = std::clamp(static_cast<int>(std::floor(box.hi.y() / bucket_)), 0, by_ - 1);
+    for (int iy = y0; iy <= y1; ++iy)
+      for (int ix = x0; ix <= x1; ++ix) buckets_[static_cast<size_t>(iy) * bx_ + ix].push_back(b);
+  }
+}
+
+bool World::LineOfSight(const Vec2& a, const Vec2& b) const {
+  const int x0 = std::clamp(static_cast<int>(std::floor(std::min(a.x(), b.x()) / bucket_)), 0, bx_ - 1);
+  const int x1 = std::clamp(static_cast<int>(std::floor(std::max(a.x(), b.x()) / bucket_)), 0, bx_ - 1);
+  const int y0 = std::clamp(static_cast<int>(std::floor(std::min(a.y(), b.y()) / bucket_)), 0, by_ - 1);
+  const int y1 = std::clamp(static_cast<int>(std::floor(std::max(a.y(), b.y()) / bucket_)), 0, by_ - 1);
+  for (int iy = y0; iy <= y1; ++iy) {
+    for (int ix = x0; ix <= x1; ++ix) {
+      for (int bi : buckets_[static_cast<size_t>(iy) * bx_ + ix]) {
+        if (SegmentIntersectsBox(a, b, obstacles[bi])) return false;
+      }
+    }
+  }
+  return true;
+}
+
+bool World::PointFree(const Vec2& p) const {
+  if (p.x() < 0.0 || p.y() < 0.0 || p.x() > size.x() || p.y() > size.y()) return false;
+  for (const Box& b : obstacles)
+    if (b.Contains(p)) return false;
+  return true;
+}
+
+World World::Build(const Scenario& s) {
+  World w;
+  w.size = s.workspace.size;
+  w.robot_radius = s.robots.radius;
+
+  // Obstacles.
+  if (s.workspace.random) {
+    Rng rng(s.seed, "obstacles");
+    const auto boxes = RandomBoxes(s, rng);
+    w.obstacles.insert(w.obstacles.end(), boxes.begin(), boxes.end());
+  }
+  for (size_t i = 0; i < s.workspace.boxes.size(); ++i) {
+    const BoxConfig& b = s.workspace.boxes[i];
+    w.obstacles.push_back(Box::FromCenterSize(b.center, b.size));
+  }
+  if (!s.workspace.map.empty()) {
+    const auto boxes = MapBoxes(s);
+    w.obstacles.insert(w.obstacles.end(), boxes.begin(), boxes.end());
+  }
+  w.BuildIndex();
+  w.occupancy = Rasterize(w.size, s.workspace.cell, w.obstacles);
+  w.lattice = Lattice(w.size, s.robots.step, s.robots.radius, w.obstacles);
+  const Lattice& lat = w.lattice;
+  const int n = s.robots.count;
+
+  // Robot starts.
+  if (!s.robots.start.empty()) {
+    for (int i = 0; i < n; ++i) {
+      const std::string key = "robots.start[" + std::to_string(i) + "]";
+      const Vec2& p = s.robots.start[i];
+      for (const Box& b : w.obstacles) {
+        if (PointBoxDistanceSq(p, b) < s.robots.radius * s.robots.radius)
+          Fail(s, key, "start " + Fmt(p) + " is inside an obstacle (the robot disc touches the box " +
+                           Fmt(b.lo) + "-" + Fmt(b.hi) + ")");
+      }
+      const int idx = lat.NearestPoint(p);
+      if (!lat.Free(idx))
+        Fail(s, key, "start " + Fmt(p) + " snaps to lattice point " + Fmt(lat.Point(idx)) +
+                         ", which is not free (obstacle or wall within the robot radius)");
+      for (int j = 0; j < i; ++j) {
+        if (w.robot_starts[j] == idx)
+          Fail(s, key, "start " + Fmt(p) + " snaps to the same lattice point " +
+                           Fmt(lat.Point(idx)) + " as robot " + std::to_string(j));
+      }
+      w.robot_starts.push_back(idx);
+    }
+  } else {
+    // Random distinct free points of the largest connected component, so that
+    // every robot can reach every other robot's region.
+    std::vector<int> pool;
+    for (int idx = 0; idx < lat.size(); ++idx)
+      if (lat.Free(idx) && lat.components()[idx] == 0) pool.push_back(idx);
+    if (lat.NumFree() == 0) Fail(s, "robots.count", "the workspace has no free lattice point");
+    if (n > static_cast<int>(pool.size()))
+      Fail(s, "robots.count",
+           std::to_string(n) + " robots but only " + std::to_string(pool.size()) +
+               " free lattice points in the largest connected region (" +
+               std::to_string(lat.NumFree()) + " free in all)");
+    Rng rng(s.seed, "starts");
+    for (int i = 0; i < n; ++i) {  // partial Fisher-Yates
+      const size_t j = i + rng.UniformInt(pool.size() - i);
+      std::swap(pool[i], pool[j]);
+      w.robot_starts.push_back(pool[i]);
+    }
+  }
+
+  // Targets.
+  Rng prior_rng(s.seed, "priors");
+  auto add_target = [&](const Vec2& pos, const TargetConfig* cfg) {
+    TargetInstance t;
+    t.dynamics = cfg ? cfg->dynamics : DynamicsConfig{};
+    const int d = t.dynamics.dim();
+    t.x0 = Eigen::VectorXd::Zero(d);
+    t.x0.head<2>() = pos;
+    if (d == 4 && cfg) t.x0.tail<2>() = cfg->velocity;
+    const double sigma = (cfg && cfg->prior_sigma) ? *cfg->prior_sigma : s.targets.prior_sigma;
+    t.prior_cov = sigma * sigma * Eigen::MatrixXd::Identity(d, d);
+    // Default prior mean: the truth plus an offset drawn from
+    // N(0, prior_offset^2 I), redrawn (a few times) until the mean lies in free
+    // space: the robots know the map, so their prior puts its mean there. Drawn
+    // even when a mean is given, so the other targets' draws do not depend on it.
+    const double offset = s.targets.prior_offset;
+    t.prior_mean = t.x0;
+    for (int attempt = 0; attempt < 20; ++attempt) {
+      Eigen::VectorXd draw(d);
+      for (int c = 0; c < d; ++c) draw[c] = offset * prior_rng.Normal();
+      t.prior_mean = t.x0 + draw;
+      if (w.PointFree(t.prior_mean.head<2>())) break;
+      t.prior_mean = t.x0;
+    }
+    if (cfg && cfg->prior_mean) t.prior_mean.head<2>() = *cfg->prior_mean;
+    w.targets.push_back(std::move(t));
+  };
+  if (!s.targets.list.empty()) {
+    for (size_t k = 0; k < s.targets.list.size(); ++k) {
+      const std::string key = "targets.list[" + std::to_string(k) + "].position";
+      const Vec2& p = s.targets.list[k].position;
+      if (!w.PointFree(p)) {
+        if (p.x() < 0 || p.y() < 0 || p.x() > w.size.x() || p.y() > w.size.y())
+          Fail(s, key, "target " + Fmt(p) + " is outside the workspace " + Fmt(w.size));
+        Fail(s, key, "target " + Fmt(p) + " is inside an obstacle");
+      }
+      add_target(p, &s.targets.list[k]);
+    }
+  } else {
+    // Random static targets in free space, each observable (in range and in
+    // sight) from some lattice point that the robots can reach.
+    Rng rng(s.seed, "targets");
+    std::vector<char> reachable(lat.size(), 0);
+    for (int idx = 0; idx < lat.size(); ++idx) {
+      if (!lat.Free(idx)) continue;
+      for (int r : w.robot_starts)
+        if (lat.components()[idx] == lat.components()[r]) reachable[idx] = 1;
+    }
+    const double reach = 0.9 * s.sensor.range;
+    const double clearance = 0.05;
+    auto observable = [&](const Vec2& p) {
+      const int cx = lat.Ix(lat.NearestPoint(p)), cy = lat.Iy(lat.NearestPoint(p));
+      const int k = static_cast<int>(std::ceil(reach / lat.step())) + 1;
+      for (int iy = std::max(0, cy - k); iy <= std::min(lat.ny() - 1, cy + k); ++iy)
+        for (int ix = std::max(0, cx - k); ix <= std::min(lat.nx() - 1, cx + k); ++ix) {
+          const int idx = lat.Index(ix, iy);
+          if (!reachable[idx] || (lat.Point(idx) - p).norm() > reach) continue;
+          if (!s.sensor.line_of_sight || w.LineOfSight(lat.Point(idx), p)) return true;
+        }
+      return false;
+    };
+    for (int k = 0; k < s.targets.count; ++k) {
+      bool placed = false;
+      for (int attempt = 0; attempt < 10000 && !placed; ++attempt) {
+        const Vec2 p(rng.Uniform(clearance, w.size.x() - clearance),
+                     rng.Uniform(clearance, w.size.y() - clearance));
+        bool clear = true;
+        for (const Box& b : w.obstacles)
+          if (PointBoxDistanceSq(p, b) < clearance * clearance) clear = false;
+        if (!clear || !observable(p)) continue;
+        add_target(p, nullptr);
+        placed = true;
+      }
+      if (!placed)
+        Fail(s, "targets.count",
+             "cannot place target " + std::to_string(k) +
+                 " where the robots could observe it (the free space is too small or cut off)");
+    }
+  }
+
+  // Failures: "random" picks a robot from the seed's own stream.
+  Rng fail_rng(s.seed, "failures");
+  for (const FailureConfig& f : s.communication.failures) {
+    RobotFailure rf;
+    rf.step = f.step;
+    rf.robot = f.robot >= 0 ? f.robot : static_cast<int>(fail_rng.UniformInt(n));
+    w.failures.push_back(rf);
+  }
+  return w;
+}
+
+}  // namespace aia
