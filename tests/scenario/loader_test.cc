@@ -1,0 +1,532 @@
+#include "aia/scenario/loader.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "aia/core/error.h"
+#include "aia/scenario/config.h"
+#include "support/test_support.h"
+
+namespace aia {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kMinimal[] = "robots: {count: 2}\ntargets: {count: 3}\n";
+
+// The example of SPEC section 10, made consistent: the SPEC's own example
+// gives 2 start positions for 10 robots and both `count: 10` and a list of 2
+// targets, each of which the loader rejects.
+constexpr char kFullExample[] = R"(name: demo
+seed: 7
+workspace:
+  size: [20.0, 20.0]          # metres
+  cell: 0.1                   # occupancy grid cell
+  obstacles:
+    random: {count: 30, min_size: [0.4, 0.4], max_size: [2.0, 2.0]}
+    boxes: [{center: [5.0, 5.0], size: [1.0, 4.0]}]
+    map: maps/maze.pgm        # dark pixels are occupied, scaled to `size`
+robots:
+  count: 2
+  radius: 0.15
+  step: 0.5
+  start: [[1.25, 1.25], [2.25, 1.25]]   # or omitted: random free lattice points
+sensor: {range: 2.0, eta: 0.05, sigma0: 0.01, line_of_sight: true}
+targets:
+  count: 2                    # random static targets, or a list:
+  list:
+    - {position: [3.0, 4.0], prior_mean: [3.5, 4.2], prior_sigma: 1.0}
+    - {position: [10.0, 10.0], dynamics: {A: [[1, 0], [0, 1]], b: [0.05, 0.0], q: 0.001}}
+  prior_sigma: 1.0            # default for targets without their own
+mission: {eps: 0.1, max_steps: 400, stop_at_success: true}
+communication:
+  mode: full                  # full | range
+  range: 4.0
+  kappa_self: 0.75
+  packet_loss_lambda: 0.0
+  failures: [{robot: random, step: 10}]
+policy: {name: greedy, model: ../models/igbnet.pt}   # random|greedy|expert|decsb|igbnet
+physics: {timestep: 0.005, kp: 200}
+render: {width: 640, height: 480, fps: 30, follow_robot: 0}
+)";
+
+// Writes `text` to dir/name, creating parent folders.
+std::string WriteFile(const std::string& dir, const std::string& name,
+                      const std::string& text) {
+  const fs::path path = fs::path(dir) / name;
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+// The InputError that parsing `yaml` throws (fails the test if none).
+InputError ErrorOf(const std::string& yaml) {
+  try {
+    testing::ScenarioFromYaml(yaml);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error for:\n" << yaml;
+  return InputError("", 0, "", "");
+}
+
+TEST(LoaderTest, MinimalFileKeepsEveryDefault) {
+  const Scenario s = testing::ScenarioFromYaml(kMinimal, "minimal.yaml");
+  const Scenario d;  // the defaults, from config.h only
+  EXPECT_EQ(s.file, "minimal.yaml");
+  EXPECT_EQ(s.name, d.name);
+  EXPECT_EQ(s.seed, d.seed);
+  EXPECT_EQ(s.workspace.size, d.workspace.size);
+  EXPECT_EQ(s.workspace.cell, d.workspace.cell);
+  EXPECT_FALSE(s.workspace.random.has_value());
+  EXPECT_TRUE(s.workspace.boxes.empty());
+  EXPECT_TRUE(s.workspace.map.empty());
+  EXPECT_EQ(s.workspace.map_threshold, d.workspace.map_threshold);
+  EXPECT_EQ(s.robots.count, 2);
+  EXPECT_EQ(s.robots.radius, d.robots.radius);
+  EXPECT_EQ(s.robots.step, d.robots.step);
+  EXPECT_TRUE(s.robots.start.empty());
+  EXPECT_EQ(s.sensor.range, d.sensor.range);
+  EXPECT_EQ(s.sensor.eta, d.sensor.eta);
+  EXPECT_EQ(s.sensor.sigma0, d.sensor.sigma0);
+  EXPECT_EQ(s.sensor.line_of_sight, d.sensor.line_of_sight);
+  EXPECT_EQ(s.targets.count, 3);
+  EXPECT_TRUE(s.targets.list.empty());
+  EXPECT_EQ(s.targets.prior_sigma, d.targets.prior_sigma);
+  EXPECT_EQ(s.targets.prior_offset, d.targets.prior_offset);
+  EXPECT_EQ(s.NumTargets(), 3);
+  EXPECT_EQ(s.mission.eps, d.mission.eps);
+  EXPECT_EQ(s.mission.max_steps, d.mission.max_steps);
+  EXPECT_EQ(s.mission.stop_at_success, d.mission.stop_at_success);
+  EXPECT_EQ(s.communication.mode, d.communication.mode);
+  EXPECT_EQ(s.communication.range, d.communication.range);
+  EXPECT_EQ(s.communication.kappa_self, d.communication.kappa_self);
+  EXPECT_EQ(s.communication.packet_loss_lambda,
+            d.communication.packet_loss_lambda);
+  EXPECT_TRUE(s.communication.failures.empty());
+  EXPECT_EQ(s.policy.name, d.policy.name);
+  EXPECT_TRUE(s.policy.model.empty());
+  EXPECT_TRUE(s.policy.params.empty());
+  EXPECT_EQ(s.physics.timestep, d.physics.timestep);
+  EXPECT_EQ(s.physics.kp, d.physics.kp);
+  EXPECT_EQ(s.physics.robot_mass, d.physics.robot_mass);
+  EXPECT_EQ(s.physics.tolerance, d.physics.tolerance);
+  EXPECT_EQ(s.physics.step_timeout, d.physics.step_timeout);
+  EXPECT_EQ(s.render.width, d.render.width);
+  EXPECT_EQ(s.render.height, d.render.height);
+  EXPECT_EQ(s.render.fps, d.render.fps);
+  EXPECT_EQ(s.render.follow_robot, d.render.follow_robot);
+}
+
+TEST(LoaderTest, FullSpecExampleParsesWithAllValues) {
+  const std::string dir = testing::MakeTempDir("aia_scenario_");
+  WriteFile(dir, "maps/maze.pgm", "P2\n1 1\n255\n0\n");
+  const std::string path = WriteFile(dir, "demo.yaml", kFullExample);
+  const Scenario s = LoadScenario(path);
+
+  EXPECT_EQ(s.file, path);
+  EXPECT_EQ(s.name, "demo");
+  EXPECT_EQ(s.seed, 7u);
+  EXPECT_EQ(s.workspace.size, Vec2(20.0, 20.0));
+  EXPECT_EQ(s.workspace.cell, 0.1);
+  ASSERT_TRUE(s.workspace.random.has_value());
+  EXPECT_EQ(s.workspace.random->count, 30);
+  EXPECT_EQ(s.workspace.random->min_size, Vec2(0.4, 0.4));
+  EXPECT_EQ(s.workspace.random->max_size, Vec2(2.0, 2.0));
+  ASSERT_EQ(s.workspace.boxes.size(), 1u);
+  EXPECT_EQ(s.workspace.boxes[0].center, Vec2(5.0, 5.0));
+  EXPECT_EQ(s.workspace.boxes[0].size, Vec2(1.0, 4.0));
+  EXPECT_EQ(s.workspace.map, (fs::path(dir) / "maps/maze.pgm").string());
+
+  EXPECT_EQ(s.robots.count, 2);
+  EXPECT_EQ(s.robots.radius, 0.15);
+  EXPECT_EQ(s.robots.step, 0.5);
+  ASSERT_EQ(s.robots.start.size(), 2u);
+  EXPECT_EQ(s.robots.start[0], Vec2(1.25, 1.25));
+  EXPECT_EQ(s.robots.start[1], Vec2(2.25, 1.25));
+
+  EXPECT_EQ(s.sensor.range, 2.0);
+  EXPECT_EQ(s.sensor.eta, 0.05);
+  EXPECT_EQ(s.sensor.sigma0, 0.01);
+  EXPECT_TRUE(s.sensor.line_of_sight);
+
+  EXPECT_EQ(s.targets.count, 2);
+  EXPECT_EQ(s.targets.prior_sigma, 1.0);
+  ASSERT_EQ(s.targets.list.size(), 2u);
+  const TargetConfig& t0 = s.targets.list[0];
+  EXPECT_EQ(t0.position, Vec2(3.0, 4.0));
+  ASSERT_TRUE(t0.prior_mean.has_value());
+  EXPECT_EQ(*t0.prior_mean, Vec2(3.5, 4.2));
+  ASSERT_TRUE(t0.prior_sigma.has_value());
+  EXPECT_EQ(*t0.prior_sigma, 1.0);
+  EXPECT_TRUE(t0.dynamics.IsStatic());
+  const TargetConfig& t1 = s.targets.list[1];
+  EXPECT_EQ(t1.position, Vec2(10.0, 10.0));
+  EXPECT_FALSE(t1.prior_mean.has_value());
+  EXPECT_FALSE(t1.prior_sigma.has_value());
+  EXPECT_EQ(t1.dynamics.dim(), 2);
+  EXPECT_EQ(t1.dynamics.A, Eigen::MatrixXd::Identity(2, 2));
+  EXPECT_EQ(t1.dynamics.b, Eigen::Vector2d(0.05, 0.0));
+  EXPECT_EQ(t1.dynamics.q, 0.001);
+  EXPECT_FALSE(t1.dynamics.IsStatic());
+
+  EXPECT_EQ(s.mission.eps, 0.1);
+  EXPECT_EQ(s.mission.max_steps, 400);
+  EXPECT_TRUE(s.mission.stop_at_success);
+
+  EXPECT_EQ(s.communication.mode, CommMode::kFull);
+  EXPECT_EQ(s.communication.range, 4.0);
+  EXPECT_EQ(s.communication.kappa_self, 0.75);
+  EXPECT_EQ(s.communication.packet_loss_lambda, 0.0);
+  ASSERT_EQ(s.communication.failures.size(), 1u);
+  EXPECT_EQ(s.communication.failures[0].robot, -1);
+  EXPECT_EQ(s.communication.failures[0].step, 10);
+
+  EXPECT_EQ(s.policy.name, "greedy");
+  EXPECT_EQ(s.policy.model,
+            (fs::path(dir).parent_path() / "models/igbnet.pt").string());
+  EXPECT_TRUE(s.policy.params.empty());
+
+  EXPECT_EQ(s.physics.timestep, 0.005);
+  EXPECT_EQ(s.physics.kp, 200.0);
+
+  EXPECT_EQ(s.render.width, 640);
+  EXPECT_EQ(s.render.height, 480);
+  EXPECT_EQ(s.render.fps, 30);
+  EXPECT_EQ(s.render.follow_robot, 0);
+  fs::remove_all(dir);
+}
+
+TEST(LoaderTest, SpecExampleAsWrittenIsRejected) {
+  // The SPEC's example gives 2 start positions for 10 robots.
+  const std::string dir = testing::MakeTempDir("aia_scenario_");
+  WriteFile(dir, "maps/maze.pgm", "P2\n1 1\n255\n0\n");
+  std::string yaml = kFullExample;
+  yaml.replace(yaml.find("  count: 2\n"), 11, "  count: 10\n");
+  try {
+    ParseScenario(yaml, "spec.yaml", dir);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "robots.start");
+    EXPECT_EQ(e.line(), 14);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(LoaderTest, RelativePathsResolveAgainstBaseDir) {
+  const std::string dir = testing::MakeTempDir("aia_scenario_");
+  WriteFile(dir, "scenarios/maps/m.pgm", "P2\n1 1\n255\n0\n");
+  const std::string yaml = std::string(kMinimal) +
+                           "workspace: {obstacles: {map: maps/m.pgm}}\n"
+                           "policy: {name: igbnet, model: ../models/net.pt}\n";
+  const std::string base = dir + "/scenarios";
+  const Scenario s = ParseScenario(yaml, "inline.yaml", base);
+  EXPECT_EQ(s.workspace.map, base + "/maps/m.pgm");
+  EXPECT_EQ(s.policy.model, dir + "/models/net.pt");  // need not exist yet
+
+  // Absolute paths stay as they are.
+  const std::string absolute = std::string(kMinimal) +
+                               "workspace: {obstacles: {map: " + base +
+                               "/maps/m.pgm}}\n";
+  EXPECT_EQ(ParseScenario(absolute, "inline.yaml", "/nowhere").workspace.map,
+            base + "/maps/m.pgm");
+
+  // The same map, but the file is looked for next to the scenario.
+  const InputError e = [&] {
+    try {
+      ParseScenario(yaml, "inline.yaml", dir);
+    } catch (const InputError& err) {
+      return err;
+    }
+    return InputError("", 0, "", "no error");
+  }();
+  EXPECT_EQ(e.key(), "workspace.obstacles.map");
+  EXPECT_NE(e.message().find(dir + "/maps/m.pgm"), std::string::npos)
+      << e.message();
+  fs::remove_all(dir);
+}
+
+TEST(LoaderTest, LoadScenarioResolvesAgainstTheFilesDirectory) {
+  const std::string dir = testing::MakeTempDir("aia_scenario_");
+  WriteFile(dir, "sub/maps/m.pgm", "P2\n1 1\n255\n0\n");
+  const std::string path = WriteFile(
+      dir, "sub/s.yaml",
+      std::string(kMinimal) + "workspace: {obstacles: {map: maps/m.pgm}}\n");
+  EXPECT_EQ(LoadScenario(path).workspace.map, dir + "/sub/maps/m.pgm");
+  fs::remove_all(dir);
+}
+
+TEST(LoaderTest, MissingFileIsAnErrorWithoutLine) {
+  try {
+    LoadScenario("/nonexistent/dir/s.yaml");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "/nonexistent/dir/s.yaml");
+    EXPECT_EQ(e.line(), 0);
+    EXPECT_EQ(e.key(), "(file)");
+    EXPECT_EQ(e.message(), "cannot read file: No such file or directory");
+    EXPECT_EQ(
+        e.Format(),
+        "/nonexistent/dir/s.yaml: (file): cannot read file: No such file or "
+        "directory");
+  }
+}
+
+TEST(LoaderTest, DirectoryIsNotAScenarioFile) {
+  const std::string dir = testing::MakeTempDir("aia_scenario_");
+  try {
+    LoadScenario(dir);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "(file)");
+    EXPECT_NE(e.message().find("cannot read file"), std::string::npos);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(LoaderTest, ErrorNamesFileLineAndKey) {
+  const InputError e = ErrorOf(
+      "robots: {count: 2}\ntargets: {count: 1}\n"
+      "workspace:\n  size: [0, 20]\n");
+  EXPECT_EQ(e.Format(),
+            "test.yaml:4: workspace.size: must be two positive numbers [width, "
+            "height], "
+            "got [0, 20]");
+}
+
+TEST(LoaderTest, YamlSyntaxErrorsCarryTheirLine) {
+  const InputError e =
+      ErrorOf("robots: {count: 2}\ntargets:\n  count: 3\n bad: 1\n");
+  EXPECT_EQ(e.key(), "(yaml)");
+  EXPECT_GT(e.line(), 0);
+  EXPECT_NE(e.message().find("invalid YAML"), std::string::npos);
+}
+
+TEST(LoaderTest, LineOfFindsKeysItemsAndParents) {
+  const Scenario s = testing::ScenarioFromYaml(R"(robots:
+  count: 3
+  start:
+    - [1, 1]
+    - [2, 1]
+    - [3, 1]
+targets:
+  list:
+    - position: [4, 4]
+      dynamics: {A: [[1, 0], [0, 1]]}
+communication:
+  failures:
+    - {robot: 1, step: 2}
+policy:
+  name: greedy
+  model: net.pt
+)");
+  EXPECT_EQ(s.LineOf("robots"), 1);
+  EXPECT_EQ(s.LineOf("robots.count"), 2);
+  EXPECT_EQ(s.LineOf("robots.start"), 3);
+  EXPECT_EQ(s.LineOf("robots.start[2]"), 6);
+  EXPECT_EQ(s.LineOf("targets.list[0]"), 9);
+  EXPECT_EQ(s.LineOf("targets.list[0].position"), 9);
+  EXPECT_EQ(s.LineOf("targets.list[0].dynamics.A"), 10);
+  EXPECT_EQ(s.LineOf("communication.failures[0].robot"), 13);
+  EXPECT_EQ(s.LineOf("policy.name"), 15);
+  EXPECT_EQ(s.LineOf("policy.model"), 16);
+  // Keys not in the file fall back to their nearest parent, or 0.
+  EXPECT_EQ(s.LineOf("robots.radius"), 1);
+  EXPECT_EQ(s.LineOf("targets.list[0].dynamics.b"), 10);
+  EXPECT_EQ(s.LineOf("targets.list[0].dynamics.A[1]"), 10);
+  EXPECT_EQ(s.LineOf("robots.start[7]"), 3);
+  EXPECT_EQ(s.LineOf("mission.eps"), 0);
+  EXPECT_EQ(s.LineOf(""), 0);
+  EXPECT_EQ(Scenario().LineOf("robots.count"), 0);
+}
+
+TEST(LoaderTest, OtherPolicyKeysAreNumericParams) {
+  const Scenario s = testing::ScenarioFromYaml(
+      std::string(kMinimal) +
+      "policy: {name: expert, horizon: 8, lambda: 0.5, beta: -1e-3}\n");
+  EXPECT_EQ(s.policy.name, "expert");
+  ASSERT_EQ(s.policy.params.size(), 3u);
+  EXPECT_EQ(s.policy.params.at("horizon"), 8.0);
+  EXPECT_EQ(s.policy.params.at("lambda"), 0.5);
+  EXPECT_EQ(s.policy.params.at("beta"), -1e-3);
+  EXPECT_EQ(s.LineOf("policy.horizon"), 3);
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "policy: {depth: .nan}\n").key(),
+            "policy.depth");
+}
+
+TEST(LoaderTest, ListTargetsWithTwoAndFourDimensionalDynamics) {
+  const Scenario s = testing::ScenarioFromYaml(R"(robots: {count: 1}
+targets:
+  list:
+    - position: [1, 2]
+      dynamics: {A: [[1, 0], [0, 1]], b: [0.1, -0.2], q: 0.01}
+    - position: [3, 4]
+      velocity: [0.5, -0.25]
+      dynamics:
+        A: [[1, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0], [0, 0, 0, 1]]
+        q: 0.0
+    - position: [5, 6]
+      dynamics:
+        A: [[1, 0, 0.5, 0], [0, 1, 0, 0.5], [0, 0, 1, 0], [0, 0, 0, 1]]
+        b: [0, 0, 0.1, 0]
+)");
+  ASSERT_EQ(s.NumTargets(), 3);
+  const DynamicsConfig& d0 = s.targets.list[0].dynamics;
+  EXPECT_EQ(d0.dim(), 2);
+  EXPECT_EQ(d0.b, Eigen::Vector2d(0.1, -0.2));
+  EXPECT_EQ(d0.q, 0.01);
+  EXPECT_EQ(s.targets.list[0].velocity, Vec2(0.0, 0.0));
+
+  const DynamicsConfig& d1 = s.targets.list[1].dynamics;
+  EXPECT_EQ(d1.dim(), 4);
+  Eigen::MatrixXd a(4, 4);
+  a << 1, 0, 1, 0, 0, 1, 0, 1, 0, 0, 1, 0, 0, 0, 0, 1;
+  EXPECT_EQ(d1.A, a);
+  EXPECT_EQ(d1.b, Eigen::VectorXd::Zero(4));  // b defaults to zeros of A's size
+  EXPECT_EQ(s.targets.list[1].velocity, Vec2(0.5, -0.25));
+  EXPECT_FALSE(d1.IsStatic());
+
+  const DynamicsConfig& d2 = s.targets.list[2].dynamics;
+  EXPECT_EQ(d2.dim(), 4);
+  EXPECT_EQ(d2.A(0, 2), 0.5);
+  EXPECT_EQ(d2.b, Eigen::Vector4d(0, 0, 0.1, 0));
+
+  // A 4x4 A with a 2-vector b, and the other way round.
+  EXPECT_EQ(
+      ErrorOf(
+          "robots: {count: 1}\ntargets: {list: [{position: [1, 1], dynamics: "
+          "{A: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], b: [0, 0]}}]}\n")
+          .message(),
+      "must be four numbers (one per row of A), got [0, 0]");
+  EXPECT_EQ(
+      ErrorOf(
+          "robots: {count: 1}\ntargets: {list: [{position: [1, 1], dynamics: "
+          "{b: [0, 0, 0, 0]}}]}\n")
+          .key(),
+      "targets.list[0].dynamics.b");
+}
+
+TEST(LoaderTest, IsStaticOnlyForIdentityWithoutDriftOrNoise) {
+  DynamicsConfig d;
+  EXPECT_TRUE(d.IsStatic());
+  d.q = 1e-6;
+  EXPECT_FALSE(d.IsStatic());
+  d.q = 0.0;
+  d.b = Eigen::Vector2d(0.0, 1e-9);
+  EXPECT_FALSE(d.IsStatic());
+  d.A = Eigen::MatrixXd::Identity(4, 4);
+  d.b = Eigen::VectorXd::Zero(4);
+  EXPECT_TRUE(d.IsStatic());
+  d.A(0, 2) = 1.0;
+  EXPECT_FALSE(d.IsStatic());
+}
+
+TEST(LoaderTest, TargetCountAndListMustAgree) {
+  const std::string list =
+      "  list:\n    - {position: [1, 1]}\n    - {position: [2, 2]}\n";
+  const std::string robots = "robots: {count: 1}\n";
+
+  const Scenario both =
+      testing::ScenarioFromYaml(robots + "targets:\n  count: 2\n" + list);
+  EXPECT_EQ(both.NumTargets(), 2);
+  const Scenario only_list =
+      testing::ScenarioFromYaml(robots + "targets:\n" + list);
+  EXPECT_EQ(only_list.NumTargets(), 2);
+  const Scenario only_count =
+      testing::ScenarioFromYaml(robots + "targets: {count: 5}\n");
+  EXPECT_EQ(only_count.NumTargets(), 5);
+  EXPECT_TRUE(only_count.targets.list.empty());
+
+  const InputError e = ErrorOf(robots + "targets:\n  count: 3\n" + list);
+  EXPECT_EQ(e.key(), "targets.count");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(e.message().find("is 3 but targets.list has 2 targets"),
+            std::string::npos);
+
+  EXPECT_EQ(ErrorOf(robots + "targets: {list: []}\n").key(), "targets.list");
+}
+
+TEST(LoaderTest, IntegersAreNotFloats) {
+  EXPECT_EQ(ErrorOf("robots: {count: 2.0}\ntargets: {count: 1}\n").message(),
+            "must be an integer >= 1, got 2.0");
+  EXPECT_EQ(ErrorOf("robots: {count: 1e1}\ntargets: {count: 1}\n").key(),
+            "robots.count");
+  EXPECT_EQ(ErrorOf("robots: {count: 0x10}\ntargets: {count: 1}\n").key(),
+            "robots.count");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "seed: 1.5\n").key(), "seed");
+  EXPECT_EQ(
+      ErrorOf(std::string(kMinimal) + "seed: 18446744073709551616\n").key(),
+      "seed");
+  EXPECT_EQ(testing::ScenarioFromYaml(std::string(kMinimal) +
+                                      "seed: 18446744073709551615\n")
+                .seed,
+            18446744073709551615u);
+  // Whole numbers are fine where reals are expected.
+  EXPECT_EQ(
+      testing::ScenarioFromYaml(std::string(kMinimal) + "mission: {eps: 1}\n")
+          .mission.eps,
+      1.0);
+  EXPECT_EQ(testing::ScenarioFromYaml(std::string(kMinimal) +
+                                      "mission: {eps: +.5e-1}\n")
+                .mission.eps,
+            0.05);
+}
+
+TEST(LoaderTest, FailuresAndFollowRobotIndexRobots) {
+  const Scenario s = testing::ScenarioFromYaml(
+      "robots: {count: 3}\ntargets: {count: 1}\n"
+      "communication: {mode: range, failures: [{robot: 2, step: 0}, {step: "
+      "4}]}\n"
+      "render: {follow_robot: -1}\n");
+  EXPECT_EQ(s.communication.mode, CommMode::kRange);
+  ASSERT_EQ(s.communication.failures.size(), 2u);
+  EXPECT_EQ(s.communication.failures[0].robot, 2);
+  EXPECT_EQ(s.communication.failures[1].robot, -1);
+  EXPECT_EQ(s.communication.failures[1].step, 4);
+  EXPECT_EQ(s.render.follow_robot, -1);
+  EXPECT_EQ(ErrorOf("robots: {count: 3}\ntargets: {count: 1}\n"
+                    "communication: {failures: [{robot: -1}]}\n")
+                .key(),
+            "communication.failures[0].robot");
+}
+
+TEST(LoaderTest, EmptySectionMeansDefaults) {
+  const Scenario s =
+      testing::ScenarioFromYaml(std::string(kMinimal) +
+                                "workspace:\n  obstacles:\n    random:\n"
+                                "sensor:\n");
+  ASSERT_TRUE(s.workspace.random.has_value());
+  EXPECT_EQ(s.workspace.random->count, RandomObstaclesConfig().count);
+  EXPECT_EQ(s.sensor.range, SensorConfig().range);
+}
+
+TEST(LoaderTest, UnknownKeySuggestsTheNearestValidKey) {
+  const InputError e = ErrorOf(std::string(kMinimal) + "sensor: {rnage: 2}\n");
+  EXPECT_EQ(e.key(), "sensor.rnage");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.message(),
+            "unknown key (did you mean `range`?); valid keys under sensor: "
+            "range, eta, "
+            "sigma0, line_of_sight");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "zzz: 1\n")
+                .message()
+                .find("did you mean"),
+            std::string::npos);
+}
+
+TEST(LoaderTest, TargetPriorOffsetIsReadable) {
+  EXPECT_EQ(testing::ScenarioFromYaml(
+                "robots: {count: 1}\ntargets: {count: 1, prior_offset: 0}\n")
+                .targets.prior_offset,
+            0.0);
+  EXPECT_EQ(
+      ErrorOf("robots: {count: 1}\ntargets: {count: 1, prior_offset: -1}\n")
+          .key(),
+      "targets.prior_offset");
+}
+
+}  // namespace
+}  // namespace aia
