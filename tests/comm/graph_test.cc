@@ -1,0 +1,83 @@
+#include <gtest/gtest.h>
+
+#include "aia/comm/graph.h"
+
+#include <algorithm>
+
+namespace aia {
+namespace {
+
+TEST(CommTest, FullGraphConnectsEveryPair) {
+  CommNetwork net({}, 4, {}, 1);
+  net.Update(0, std::vector<Vec2>(4, Vec2(0, 0)));
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(net.Neighbors(i).size(), 3u);
+    for (int j : net.Neighbors(i)) EXPECT_NE(j, i);
+  }
+  EXPECT_TRUE(net.Lost().empty());
+}
+
+TEST(CommTest, RangeGraphByHand) {
+  CommParams p;
+  p.range_limited = true;
+  p.range = 4.0;
+  CommNetwork net(p, 3, {}, 1);
+  // 0 -- 1 are 3 m apart, 1 -- 2 are 4 m apart (in range), 0 -- 2 are 7 m.
+  net.Update(0, {{0, 0}, {3, 0}, {7, 0}});
+  EXPECT_EQ(net.Neighbors(0), (std::vector<int>{1}));
+  EXPECT_EQ(net.Neighbors(1), (std::vector<int>{0, 2}));
+  EXPECT_EQ(net.Neighbors(2), (std::vector<int>{1}));
+}
+
+TEST(CommTest, PacketLossDeletesPoissonManyDirectedEdges) {
+  CommParams p;
+  p.loss_lambda = 1.0;
+  const int n = 6;
+  CommNetwork net(p, n, {}, 7);
+  const std::vector<Vec2> pos(n, Vec2(0, 0));
+  double lost = 0;
+  const int steps = 5000;
+  for (int t = 0; t < steps; ++t) {
+    net.Update(t, pos);
+    int edges = 0;
+    for (int i = 0; i < n; ++i) edges += static_cast<int>(net.Neighbors(i).size());
+    EXPECT_EQ(edges + static_cast<int>(net.Lost().size()), n * (n - 1));
+    for (auto [i, j] : net.Lost()) {  // a lost edge is really gone, one way only
+      const auto& nb = net.Neighbors(i);
+      EXPECT_EQ(std::count(nb.begin(), nb.end(), j), 0);
+    }
+    lost += static_cast<double>(net.Lost().size());
+  }
+  EXPECT_NEAR(lost / steps, 1.0, 0.05);
+}
+
+TEST(CommTest, FailedRobotIsIsolatedForGood) {
+  CommNetwork net({}, 3, {{1, 2}}, 1);
+  const std::vector<Vec2> pos(3, Vec2(0, 0));
+  net.Update(0, pos);
+  net.Update(1, pos);
+  EXPECT_TRUE(net.Active(1));
+  EXPECT_EQ(net.Neighbors(0).size(), 2u);
+  for (int t = 2; t < 5; ++t) {
+    net.Update(t, pos);
+    EXPECT_FALSE(net.Active(1));
+    EXPECT_TRUE(net.Neighbors(1).empty());
+    EXPECT_EQ(net.Neighbors(0), (std::vector<int>{2}));
+    EXPECT_EQ(net.NumActive(), 2);
+  }
+}
+
+TEST(CommTest, SameSeedSameLosses) {
+  CommParams p;
+  p.loss_lambda = 2.0;
+  CommNetwork a(p, 5, {}, 3), b(p, 5, {}, 3);
+  const std::vector<Vec2> pos(5, Vec2(0, 0));
+  for (int t = 0; t < 50; ++t) {
+    a.Update(t, pos);
+    b.Update(t, pos);
+    EXPECT_EQ(a.Lost(), b.Lost());
+  }
+}
+
+}  // namespace
+}  // namespace aia

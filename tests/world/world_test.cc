@@ -1,0 +1,239 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "aia/core/error.h"
+#include "aia/world/lattice.h"
+#include "aia/world/mjcf.h"
+#include "aia/world/world.h"
+#include "support/test_support.h"
+
+namespace aia {
+namespace {
+
+using testing::ScenarioFromYaml;
+
+TEST(LatticeTest, PointsAndFreeTest) {
+  // 2 x 2 m, step 0.5: 4 x 4 points at 0.25, 0.75, ...; a box covering the
+  // point (0.75, 0.75) only.
+  Lattice lat({2.0, 2.0}, 0.5, 0.15, {Box{{0.6, 0.6}, {0.9, 0.9}}});
+  EXPECT_EQ(lat.nx(), 4);
+  EXPECT_EQ(lat.ny(), 4);
+  EXPECT_DOUBLE_EQ(lat.Point(lat.Index(1, 2)).x(), 0.75);
+  EXPECT_DOUBLE_EQ(lat.Point(lat.Index(1, 2)).y(), 1.25);
+  EXPECT_FALSE(lat.Free(lat.Index(1, 1)));
+  // (0.25, 0.25) is 0.35 * sqrt(2) = 0.49 from the box corner: free.
+  EXPECT_TRUE(lat.Free(lat.Index(0, 0)));
+  EXPECT_EQ(lat.NumFree(), 15);
+  // Moves into the blocked point are invalid; moves off the grid too.
+  EXPECT_EQ(lat.Next(lat.Index(0, 1), Move::kRight), -1);
+  EXPECT_EQ(lat.Next(lat.Index(0, 0), Move::kLeft), -1);
+  EXPECT_EQ(lat.Next(lat.Index(0, 0), Move::kUp), lat.Index(0, 1));
+}
+
+TEST(LatticeTest, RobotDiscMustFitInside) {
+  // Radius 0.3 > 0.25: the border points are not free.
+  Lattice lat({2.0, 2.0}, 0.5, 0.3, {});
+  EXPECT_FALSE(lat.Free(lat.Index(0, 0)));
+  EXPECT_TRUE(lat.Free(lat.Index(1, 1)));
+  EXPECT_EQ(lat.NumFree(), 4);
+}
+
+TEST(LatticeTest, ThinWallBetweenFreePointsBlocksTheMove) {
+  // A 0.04 m wall at x = 0.5 between points x = 0.25 and x = 0.75: both ends
+  // are 0.23 m away (> radius 0.15, so free), but the swept disc crosses it.
+  Lattice lat({2.0, 2.0}, 0.5, 0.15, {Box{{0.48, 0.0}, {0.52, 2.0}}});
+  const int a = lat.Index(0, 1), b = lat.Index(1, 1);
+  ASSERT_TRUE(lat.Free(a));
+  ASSERT_TRUE(lat.Free(b));
+  EXPECT_EQ(lat.Next(a, Move::kRight), -1);
+  EXPECT_EQ(lat.Next(b, Move::kLeft), -1);
+  EXPECT_EQ(lat.NumComponents(), 2);
+}
+
+TEST(LatticeTest, BfsDistancesByHand) {
+  // 3 x 3 points with the middle blocked: distances from the corner (0,0)
+  // go around the hole.
+  Lattice lat({1.5, 1.5}, 0.5, 0.1, {Box{{0.7, 0.7}, {0.8, 0.8}}});
+  ASSERT_FALSE(lat.Free(lat.Index(1, 1)));
+  std::vector<int> dist, queue;
+  const int src = lat.Index(0, 0);
+  BfsDistances(lat, &src, 1, &dist, &queue);
+  const int expected[3][3] = {{0, 1, 2}, {1, -1, 3}, {2, 3, 4}};  // [iy][ix]
+  for (int iy = 0; iy < 3; ++iy)
+    for (int ix = 0; ix < 3; ++ix) EXPECT_EQ(dist[lat.Index(ix, iy)], expected[iy][ix]);
+  // Walking down the field from the far corner reaches the source in 4 moves.
+  int p = lat.Index(2, 2);
+  for (int k = 0; k < 4; ++k) p = lat.Next(p, StepDownField(lat, dist, p));
+  EXPECT_EQ(p, src);
+  EXPECT_EQ(StepDownField(lat, dist, src), Move::kStay);
+}
+
+TEST(LatticeTest, NearestFreeSkipsBlockedPoints) {
+  Lattice lat({2.0, 2.0}, 0.5, 0.15, {Box{{0.6, 0.6}, {0.9, 0.9}}});
+  const int idx = lat.NearestFree({0.8, 0.74});
+  EXPECT_TRUE(lat.Free(idx));
+  EXPECT_NEAR((lat.Point(idx) - Vec2(0.8, 0.74)).norm(), 0.5 - 0.05 + 0.0, 0.06);
+}
+
+TEST(WorldRuleTest, InvalidMoveIsReplacedByAValidOne) {
+  Lattice lat({2.0, 2.0}, 0.5, 0.15, {});
+  Rng rng(5);
+  const int corner = lat.Index(0, 0);
+  for (int trial = 0; trial < 50; ++trial) {
+    bool replaced = false;
+    const Move m = ApplyWorldRule(lat, corner, Move::kLeft, rng, &replaced);
+    EXPECT_TRUE(replaced);
+    EXPECT_TRUE(m == Move::kRight || m == Move::kUp);
+    EXPECT_TRUE(lat.Valid(corner, m));
+  }
+  bool replaced = true;
+  EXPECT_EQ(ApplyWorldRule(lat, corner, Move::kUp, rng, &replaced), Move::kUp);
+  EXPECT_FALSE(replaced);
+}
+
+TEST(WorldRuleTest, NoValidMoveMeansStay) {
+  // A single free point boxed in on every side.
+  Lattice lat({1.5, 1.5}, 0.5, 0.15, {Box{{0, 0}, {1.5, 0.45}}, Box{{0, 1.05}, {1.5, 1.5}},
+                                      Box{{0, 0}, {0.45, 1.5}}, Box{{1.05, 0}, {1.5, 1.5}}});
+  const int c = lat.Index(1, 1);
+  ASSERT_TRUE(lat.Free(c));
+  ASSERT_EQ(lat.NumValidMoves(c), 0);
+  Rng rng(1);
+  bool replaced = false;
+  EXPECT_EQ(ApplyWorldRule(lat, c, Move::kDown, rng, &replaced), Move::kStay);
+  EXPECT_TRUE(replaced);
+}
+
+TEST(BoxesFromImageTest, MergesDarkPixelsIntoBoxes) {
+  // 4 x 3 image, row 0 on top; a 2 x 2 dark square at columns 1-2, rows 0-1
+  // and one dark pixel at column 0, row 2. Pixel = 1 m on a 4 x 3 m workspace.
+  const std::vector<std::uint8_t> img = {255, 0, 0, 255,  //
+                                         255, 0, 0, 255,  //
+                                         0, 255, 255, 255};
+  auto boxes = BoxesFromImage(img, 4, 3, {4.0, 3.0}, 0.5);
+  ASSERT_EQ(boxes.size(), 2u);
+  // Sorted by (lo.y, lo.x): the single pixel (bottom row) first.
+  EXPECT_EQ(boxes[0].lo, Vec2(0, 0));
+  EXPECT_EQ(boxes[0].hi, Vec2(1, 1));
+  EXPECT_EQ(boxes[1].lo, Vec2(1, 1));
+  EXPECT_EQ(boxes[1].hi, Vec2(3, 3));
+}
+
+TEST(WorldTest, SameSeedSameWorldAndDifferentSeedDifferentWorld) {
+  const std::string yaml =
+      "seed: 4\nrobots: {count: 5}\ntargets: {count: 6}\n"
+      "workspace: {obstacles: {random: {count: 20}}}\n";
+  Scenario s = ScenarioFromYaml(yaml);
+  const World a = World::Build(s), b = World::Build(s);
+  ASSERT_EQ(a.obstacles.size(), 20u);
+  for (size_t i = 0; i < a.obstacles.size(); ++i) EXPECT_EQ(a.obstacles[i].lo, b.obstacles[i].lo);
+  EXPECT_EQ(a.robot_starts, b.robot_starts);
+  s.seed = 5;
+  const World c = World::Build(s);
+  EXPECT_NE(a.obstacles[0].lo, c.obstacles[0].lo);
+}
+
+TEST(WorldTest, RandomStartsAndTargetsAreValid) {
+  for (std::uint64_t seed = 0; seed < 10; ++seed) {
+    Scenario s = ScenarioFromYaml(
+        "robots: {count: 20}\ntargets: {count: 20}\n"
+        "workspace: {obstacles: {random: {count: 40}}}\n");
+    s.seed = seed;
+    const World w = World::Build(s);
+    std::set<int> seen;
+    for (int idx : w.robot_starts) {
+      EXPECT_TRUE(w.lattice.Free(idx));
+      EXPECT_EQ(w.lattice.components()[idx], 0);  // all in the largest region
+      EXPECT_TRUE(seen.insert(idx).second);
+    }
+    for (const auto& t : w.targets) {
+      EXPECT_TRUE(w.PointFree(t.Position()));
+      EXPECT_TRUE(w.PointFree(t.prior_mean.head<2>()));
+      // Observable from a reachable lattice point.
+      bool observable = false;
+      for (int idx = 0; idx < w.lattice.size() && !observable; ++idx) {
+        if (!w.lattice.Free(idx) || w.lattice.components()[idx] != 0) continue;
+        const Vec2 p = w.lattice.Point(idx);
+        observable = (p - t.Position()).norm() <= 2.0 && w.LineOfSight(p, t.Position());
+      }
+      EXPECT_TRUE(observable);
+    }
+  }
+}
+
+TEST(WorldTest, LineOfSightAgainstBoxes) {
+  Scenario s = ScenarioFromYaml(
+      "robots: {count: 1, start: [[1.25, 1.25]]}\ntargets: {count: 1}\n"
+      "workspace: {obstacles: {boxes: [{center: [5, 5], size: [1, 4]}]}}\n");
+  const World w = World::Build(s);
+  EXPECT_FALSE(w.LineOfSight({3, 5}, {7, 5}));
+  EXPECT_TRUE(w.LineOfSight({3, 8}, {7, 8}));
+  EXPECT_FALSE(w.PointFree({5, 5}));
+  EXPECT_TRUE(w.PointFree({3, 3}));
+}
+
+TEST(WorldTest, StartInsideAnObstacleIsAnErrorAtItsLine) {
+  const std::string yaml =
+      "robots:\n  count: 2\n  start: [[1.25, 1.25], [5.25, 5.25]]\ntargets: {count: 1}\n"
+      "workspace: {obstacles: {boxes: [{center: [5, 5], size: [1, 1]}]}}\n";
+  Scenario s = ScenarioFromYaml(yaml);
+  try {
+    World::Build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "robots.start[1]");
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(e.message().find("inside an obstacle"), std::string::npos) << e.message();
+  }
+}
+
+TEST(WorldTest, MoreRobotsThanFreePointsIsAnError) {
+  Scenario s = ScenarioFromYaml(
+      "workspace: {size: [2, 2]}\nrobots: {count: 17}\ntargets: {count: 1}\n");
+  EXPECT_THROW(World::Build(s), InputError);
+}
+
+TEST(WorldTest, TargetInsideAnObstacleIsAnError) {
+  Scenario s = ScenarioFromYaml(
+      "robots: {count: 1}\ntargets:\n  list:\n    - {position: [5, 5]}\n"
+      "workspace: {obstacles: {boxes: [{center: [5, 5], size: [1, 1]}]}}\n");
+  try {
+    World::Build(s);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "targets.list[0].position");
+    EXPECT_EQ(e.line(), 4);
+  }
+}
+
+TEST(WorldTest, MapImageBecomesObstacles) {
+  const Scenario s = ScenarioFromYaml("robots: {count: 3}\ntargets: {count: 3}\n"
+                                      "workspace: {obstacles: {map: " +
+                                      testing::SourcePath("scenarios/maps/office.pgm") + "}}\n");
+  const World w = World::Build(s);
+  EXPECT_GT(w.obstacles.size(), 5u);
+  // The map's wall above the corridor: pixel row 44 of 100 -> y = 20 - 8.9 m.
+  EXPECT_FALSE(w.PointFree({2.0, 11.1}));
+  EXPECT_TRUE(w.PointFree({2.0, 10.0}));
+}
+
+TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
+  const Scenario s = ScenarioFromYaml(
+      "seed: 3\nrobots: {count: 4}\ntargets: {count: 3}\n"
+      "workspace: {obstacles: {random: {count: 10}}}\n");
+  const World w = World::Build(s);
+  const std::string dir = testing::MakeTempDir("aia_mjcf_");
+  const std::string path = dir + "/model.xml";
+  std::ofstream(path) << MakeMjcf(w, s);
+  // mujoco-testxml loads the file, saves it and compares both compiled models.
+  const auto r = testing::RunCommand("cd " + dir + " && mujoco-testxml model.xml");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("Max difference : 0"), std::string::npos) << r.out;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace aia
