@@ -1,0 +1,169 @@
+#include "aia/estimation/belief.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "aia/core/check.h"
+
+namespace aia {
+namespace {
+
+// Every per-block query dispatches on dim to fixed-size Eigen types, so that
+// none of them touches the heap (planners call them inside their search loops).
+template <int D>
+using MatD = Eigen::Matrix<double, D, D>;
+template <int D>
+using VecD = Eigen::Matrix<double, D, 1>;
+
+template <int D>
+MatD<D> CovarianceOf(const double* block) {
+  const Eigen::Map<const MatD<D>> omega(block);
+  const Eigen::LLT<MatD<D>> llt(omega);
+  AIA_CHECK_MSG(llt.info() == Eigen::Success,
+                "information matrix is not positive definite");
+  return llt.solve(MatD<D>::Identity());
+}
+
+template <int D>
+VecD<D> MeanOf(const double* block) {
+  const Eigen::Map<const MatD<D>> omega(block);
+  const Eigen::Map<const VecD<D>> xi(block + D * D);
+  const Eigen::LLT<MatD<D>> llt(omega);
+  AIA_CHECK_MSG(llt.info() == Eigen::Success,
+                "information matrix is not positive definite");
+  return llt.solve(xi);
+}
+
+// log det Sigma = -log det Omega = -2 sum log L_ii for Omega = L L'. Going
+// through the Cholesky factor keeps the log finite where det Omega itself
+// would overflow (Omega grows like t / sigma0^2 for a watched target).
+template <int D>
+double LogDetCovarianceOf(const double* block) {
+  const Eigen::Map<const MatD<D>> omega(block);
+  const Eigen::LLT<MatD<D>> llt(omega);
+  // An Omega without full rank leaves some direction of x_k unbounded.
+  if (llt.info() != Eigen::Success)
+    return std::numeric_limits<double>::infinity();
+  return -2.0 * llt.matrixLLT().diagonal().array().log().sum();
+}
+
+}  // namespace
+
+BeliefLayout::BeliefLayout(std::vector<TargetModel> models)
+    : models_(std::move(models)) {
+  offsets_.reserve(models_.size());
+  for (const TargetModel& m : models_) {
+    AIA_CHECK_MSG(m.dim == 2 || m.dim == 4,
+                  "target state dimension must be 2 or 4");
+    AIA_CHECK(m.A.rows() == m.dim && m.A.cols() == m.dim);
+    AIA_CHECK(m.b.size() == m.dim);
+    AIA_CHECK(m.Q.rows() == m.dim && m.Q.cols() == m.dim);
+    offsets_.push_back(stride_);
+    stride_ += m.dim * m.dim + m.dim;
+    all_static_ = all_static_ && m.is_static;
+  }
+}
+
+BeliefSet::BeliefSet(const BeliefLayout* layout, int rows) : layout_(layout) {
+  AIA_CHECK(layout != nullptr && rows >= 0);
+  data_.setZero(rows, layout->stride());
+}
+
+void BeliefSet::SetPrior(const std::vector<Eigen::VectorXd>& means,
+                         const std::vector<Eigen::MatrixXd>& covs) {
+  const BeliefLayout& lay = *layout_;
+  AIA_CHECK(static_cast<int>(means.size()) == lay.num_targets());
+  AIA_CHECK(static_cast<int>(covs.size()) == lay.num_targets());
+  if (rows() == 0) return;
+  for (int k = 0; k < lay.num_targets(); ++k) {
+    const int d = lay.dim(k);
+    AIA_CHECK(means[k].size() == d && covs[k].rows() == d &&
+              covs[k].cols() == d);
+    const Eigen::LLT<Eigen::MatrixXd> llt(covs[k]);
+    AIA_CHECK_MSG(llt.info() == Eigen::Success,
+                  "prior covariance is not positive definite");
+    const Eigen::MatrixXd omega = llt.solve(Eigen::MatrixXd::Identity(d, d));
+    // Omega_0 must be exactly symmetric: fusion and prediction keep whatever
+    // asymmetry it starts with.
+    Omega(0, k) = 0.5 * (omega + omega.transpose());
+    Xi(0, k) = Omega(0, k) * means[k];
+  }
+  for (int r = 1; r < rows(); ++r) data_.row(r) = data_.row(0);
+}
+
+Eigen::Map<Eigen::MatrixXd> BeliefSet::Omega(int row, int k) {
+  const int d = layout_->dim(k);
+  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
+              layout_->omega_offset(k),
+          d, d};
+}
+
+Eigen::Map<const Eigen::MatrixXd> BeliefSet::Omega(int row, int k) const {
+  const int d = layout_->dim(k);
+  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
+              layout_->omega_offset(k),
+          d, d};
+}
+
+Eigen::Map<Eigen::VectorXd> BeliefSet::Xi(int row, int k) {
+  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
+              layout_->xi_offset(k),
+          layout_->dim(k)};
+}
+
+Eigen::Map<const Eigen::VectorXd> BeliefSet::Xi(int row, int k) const {
+  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
+              layout_->xi_offset(k),
+          layout_->dim(k)};
+}
+
+Eigen::VectorXd BeliefSet::Mean(int row, int k) const {
+  const double* block = Omega(row, k).data();
+  if (layout_->dim(k) == 2) return MeanOf<2>(block);
+  return MeanOf<4>(block);
+}
+
+Eigen::MatrixXd BeliefSet::Covariance(int row, int k) const {
+  const double* block = Omega(row, k).data();
+  if (layout_->dim(k) == 2) return CovarianceOf<2>(block);
+  return CovarianceOf<4>(block);
+}
+
+Vec2 BeliefSet::PositionMean(int row, int k) const {
+  const double* block = Omega(row, k).data();
+  if (layout_->dim(k) == 2) return MeanOf<2>(block);
+  return MeanOf<4>(block).head<2>();
+}
+
+Mat2 BeliefSet::PositionCovariance(int row, int k) const {
+  const double* block = Omega(row, k).data();
+  if (layout_->dim(k) == 2) return CovarianceOf<2>(block);
+  return CovarianceOf<4>(block).topLeftCorner<2, 2>();
+}
+
+double BeliefSet::DetCovariance(int row, int k) const {
+  const double* block = Omega(row, k).data();
+  const double det_omega = layout_->dim(k) == 2
+                               ? Eigen::Map<const MatD<2>>(block).determinant()
+                               : Eigen::Map<const MatD<4>>(block).determinant();
+  if (!(det_omega > 0.0)) return std::numeric_limits<double>::infinity();
+  return 1.0 / det_omega;
+}
+
+double BeliefSet::LogDetCovariance(int row, int k) const {
+  const double* block = Omega(row, k).data();
+  if (layout_->dim(k) == 2) return LogDetCovarianceOf<2>(block);
+  return LogDetCovarianceOf<4>(block);
+}
+
+void BeliefSet::CopyRow(int row, const BeliefSet& from, int from_row) {
+  AIA_CHECK(data_.cols() == from.data_.cols());
+  AIA_CHECK(row >= 0 && row < rows() && from_row >= 0 &&
+            from_row < from.rows());
+  data_.row(row) = from.data_.row(from_row);
+}
+
+}  // namespace aia

@@ -1,0 +1,289 @@
+#include "aia/estimation/filter.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "aia/core/check.h"
+
+namespace aia {
+namespace {
+
+template <int D>
+using MatD = Eigen::Matrix<double, D, D>;
+template <int D>
+using VecD = Eigen::Matrix<double, D, 1>;
+using RowMap = Eigen::Map<Eigen::ArrayXd>;
+using ConstRowMap = Eigen::Map<const Eigen::ArrayXd>;
+
+// Sigma^-1 of an SPD block. For D = 2 the closed form is exact enough and
+// several times cheaper than a factorization; for D = 4 the Cholesky solve
+// avoids the cofactor formula's cancellation when Omega is badly scaled
+// (position precision ~1e4 / sigma0^2 next to a loosely known velocity).
+template <int D>
+MatD<D> InverseSpd(const MatD<D>& m) {
+  if constexpr (D == 2) {
+    const double det = m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0);
+    AIA_CHECK_MSG(det > 0.0 && m(0, 0) > 0.0, "block is not positive definite");
+    MatD<2> inv;
+    inv << m(1, 1), -m(0, 1), -m(1, 0), m(0, 0);
+    return inv / det;
+  } else {
+    const Eigen::LLT<MatD<D>> llt(m);
+    AIA_CHECK_MSG(llt.info() == Eigen::Success,
+                  "block is not positive definite");
+    return llt.solve(MatD<D>::Identity());
+  }
+}
+
+// x_{t+1|t} for one target block, through the moment form: the information
+// form has no cheaper exact time update when A is not the identity.
+template <int D>
+void PredictBlock(const TargetModel& model, double* block) {
+  Eigen::Map<MatD<D>> omega(block);
+  Eigen::Map<VecD<D>> xi(block + D * D);
+  const Eigen::Map<const MatD<D>> a(model.A.data());
+  const Eigen::Map<const VecD<D>> b(model.b.data());
+  const Eigen::Map<const MatD<D>> q(model.Q.data());
+
+  const MatD<D> sigma = InverseSpd<D>(omega);
+  const VecD<D> mu = sigma * xi;
+  const MatD<D> sigma_pred = a * sigma * a.transpose() + q;
+  const VecD<D> mu_pred = a * mu + b;
+  const MatD<D> omega_pred = InverseSpd<D>(sigma_pred);
+  // The DKF sums these blocks across robots every step; any asymmetry left
+  // here would be carried (and compounded by prediction) forever.
+  omega = 0.5 * (omega_pred + omega_pred.transpose());
+  xi = omega * mu_pred;
+}
+
+// Off-diagonal structure of row i of W: how many j != i have W(i,j) != 0,
+// and whether they all carry one common weight (as FusionWeights makes them).
+struct RowShape {
+  int off_nonzeros = 0;
+  bool uniform = true;
+  double off_weight = 0.0;
+};
+
+RowShape ShapeOf(const Eigen::MatrixXd& w, int i) {
+  RowShape s;
+  for (int j = 0; j < w.cols(); ++j) {
+    const double v = w(i, j);
+    if (j == i || v == 0.0) continue;
+    if (s.off_nonzeros == 0) {
+      s.off_weight = v;
+    } else if (v != s.off_weight) {
+      s.uniform = false;
+    }
+    ++s.off_nonzeros;
+  }
+  return s;
+}
+
+// A row worth the sum trick: its neighbours are the majority of the team, so
+// S - (the few non-neighbours) is cheaper than adding the neighbours.
+bool IsDenseUniform(const RowShape& s, int n) {
+  return s.uniform && 2 * s.off_nonzeros > n;
+}
+
+// Rows of the N x stride belief matrices, as contiguous arrays (the storage
+// is row-major) so that every pass below is one vectorized loop.
+struct RowPair {
+  const BeliefSet::Storage& b;
+  BeliefSet::Storage& out;
+
+  ConstRowMap In(int j) const { return {b.data() + j * b.cols(), b.cols()}; }
+  RowMap Out(int i) const { return {out.data() + i * out.cols(), out.cols()}; }
+};
+
+// o += scale * sum_j B_j over the rows j != i that `pick(w(i,j))` selects, in
+// index order. Four rows go in one pass over `o`, which saves loads and stores
+// of `o` in a loop that is bound by memory traffic.
+template <typename Pick>
+void AddRows(const Eigen::MatrixXd& w, const RowPair& m, int i, Pick pick,
+             double scale, RowMap o) {
+  int idx[4];
+  int count = 0;
+  for (int j = 0; j < w.cols(); ++j) {
+    if (j == i || !pick(w(i, j))) continue;
+    idx[count++] = j;
+    if (count == 4) {
+      o += scale * (m.In(idx[0]) + m.In(idx[1]) + m.In(idx[2]) + m.In(idx[3]));
+      count = 0;
+    }
+  }
+  if (count == 3) o += scale * (m.In(idx[0]) + m.In(idx[1]) + m.In(idx[2]));
+  if (count == 2) o += scale * (m.In(idx[0]) + m.In(idx[1]));
+  if (count == 1) o += scale * m.In(idx[0]);
+}
+
+// out = W * B. A dense GEMM costs N^2 * stride multiply-adds whatever the
+// graph (and Eigen heap-allocates its packing buffer at this size). The DKF's
+// W has one weight c_i per row off the diagonal, so
+//   out_i = kappa_ii B_i + c_i sum_{j in N_i} B_j
+//         = kappa_ii B_i + c_i (S - B_i - sum_{j not in N_i + i} B_j)
+// with the column sum S = sum_j B_j: the first form for few neighbours, the
+// second for many; O(N * stride) in all for the full graph. S lives in the
+// first dense row of `out` (the "holder"), which is finished last and in
+// place, so no scratch memory is needed. Rows with unequal weights take the
+// direct sum. The subtraction costs accuracy only when one robot's
+// information dwarfs the others': the error is about eps * sum_j |B_j| per
+// element. Each element is summed in an order fixed by the row indices, not
+// by cache sizes or threads as in a blocked GEMM, so results are
+// reproducible. (Tiling the columns for L1 reuse gained nothing at N = 80.)
+void MixRows(const Eigen::MatrixXd& w, const BeliefSet::Storage& b,
+             BeliefSet::Storage* out) {
+  const int n = static_cast<int>(b.rows());
+  const RowPair m{b, *out};
+  auto is_neighbor = [](double v) { return v != 0.0; };
+  auto is_excluded = [](double v) { return v == 0.0; };
+
+  int holder = -1;
+  for (int i = 0; i < n && holder < 0; ++i) {
+    if (IsDenseUniform(ShapeOf(w, i), n)) holder = i;
+  }
+  if (holder >= 0) {
+    RowMap sum = m.Out(holder);
+    sum = m.In(0);
+    for (int j = 1; j < n; ++j) sum += m.In(j);
+  }
+
+  for (int i = 0; i < n; ++i) {
+    if (i == holder) continue;
+    const RowShape s = ShapeOf(w, i);
+    RowMap o = m.Out(i);
+    if (!s.uniform) {
+      o.setZero();
+      for (int j = 0; j < n; ++j) {
+        if (w(i, j) != 0.0) o += w(i, j) * m.In(j);
+      }
+    } else if (holder >= 0 && IsDenseUniform(s, n)) {
+      o = s.off_weight * (m.Out(holder) - m.In(i)) + w(i, i) * m.In(i);
+      AddRows(w, m, i, is_excluded, -s.off_weight, o);
+    } else {
+      o = w(i, i) * m.In(i);
+      AddRows(w, m, i, is_neighbor, s.off_weight, o);
+    }
+  }
+  if (holder >= 0) {
+    // Element-wise, so S may be overwritten as it is read.
+    const double c = ShapeOf(w, holder).off_weight;
+    RowMap o = m.Out(holder);
+    o = c * (o - m.In(holder)) + w(holder, holder) * m.In(holder);
+    AddRows(w, m, holder, is_excluded, -c, o);
+  }
+}
+
+template <int D>
+bool BlockSpd(const double* block, double tol) {
+  const Eigen::Map<const MatD<D>> omega(block);
+  if (!omega.allFinite()) return false;
+  const double scale = omega.cwiseAbs().maxCoeff();
+  if ((omega - omega.transpose()).cwiseAbs().maxCoeff() > tol * scale)
+    return false;
+  const Eigen::LLT<MatD<D>> llt(omega);
+  return llt.info() == Eigen::Success;
+}
+
+}  // namespace
+
+void Predict(BeliefSet* beliefs) {
+  const BeliefLayout& layout = beliefs->layout();
+  if (layout.all_static()) return;
+  BeliefSet::Storage& data = beliefs->data();
+  for (int r = 0; r < beliefs->rows(); ++r) {
+    double* row = data.data() + r * data.cols();
+    for (int k = 0; k < layout.num_targets(); ++k) {
+      const TargetModel& model = layout.model(k);
+      if (model.is_static) continue;
+      double* block = row + layout.omega_offset(k);
+      if (model.dim == 2) {
+        PredictBlock<2>(model, block);
+      } else {
+        PredictBlock<4>(model, block);
+      }
+    }
+  }
+}
+
+void AddMeasurements(const std::vector<Measurement>& z, const Vec2& p,
+                     BeliefSet* beliefs, int row) {
+  const BeliefLayout& layout = beliefs->layout();
+  AIA_CHECK(row >= 0 && row < beliefs->rows());
+  double* data = beliefs->data().data() + row * beliefs->data().cols();
+  for (const Measurement& m : z) {
+    AIA_CHECK(m.target >= 0 && m.target < layout.num_targets());
+    AIA_CHECK(m.precision >= 0.0);
+    const int d = layout.dim(m.target);
+    // Z = M' R^-1 M with M = [I 0], R^-1 = r I: r on the first two diagonal
+    // entries of the column-major block.
+    double* omega = data + layout.omega_offset(m.target);
+    omega[0] += m.precision;
+    omega[d + 1] += m.precision;
+    // M' R^-1 (y + p): y is relative to the robot, and y + p = M x + v is
+    // the measurement of the target's absolute position.
+    double* xi = data + layout.xi_offset(m.target);
+    xi[0] += m.precision * (m.y.x() + p.x());
+    xi[1] += m.precision * (m.y.y() + p.y());
+  }
+}
+
+void FusionWeights(const std::vector<std::vector<int>>& neighbors,
+                   double kappa_self, Eigen::MatrixXd* W) {
+  const int n = static_cast<int>(neighbors.size());
+  if (W->rows() != n || W->cols() != n) W->resize(n, n);
+  W->setZero();
+  for (int i = 0; i < n; ++i) {
+    const std::vector<int>& ni = neighbors[i];
+    if (ni.empty()) {
+      (*W)(i, i) = 1.0;
+      continue;
+    }
+    (*W)(i, i) = kappa_self;
+    const double kappa_ij = (1.0 - kappa_self) / static_cast<double>(ni.size());
+    for (const int j : ni) {
+      AIA_CHECK_MSG(j >= 0 && j < n && j != i, "bad neighbour index");
+      (*W)(i, j) = kappa_ij;
+    }
+  }
+}
+
+void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
+          const std::vector<std::vector<Measurement>>& z,
+          const std::vector<Vec2>& positions, BeliefSet* out) {
+  AIA_CHECK(out != &predicted);
+  const int n = predicted.rows();
+  AIA_CHECK(W.rows() == n && W.cols() == n);
+  AIA_CHECK(static_cast<int>(z.size()) == n &&
+            static_cast<int>(positions.size()) == n);
+  if (out->data().rows() != n ||
+      out->data().cols() != predicted.data().cols()) {
+    *out = BeliefSet(&predicted.layout(), n);
+  }
+  MixRows(W, predicted.data(), &out->data());
+  for (int i = 0; i < n; ++i) AddMeasurements(z[i], positions[i], out, i);
+}
+
+void CentralUpdate(const std::vector<std::vector<Measurement>>& z,
+                   const std::vector<Vec2>& positions, BeliefSet* central) {
+  AIA_CHECK(central->rows() == 1);
+  AIA_CHECK(z.size() == positions.size());
+  for (size_t i = 0; i < z.size(); ++i)
+    AddMeasurements(z[i], positions[i], central, 0);
+}
+
+bool AllBlocksSpd(const BeliefSet& beliefs, double tol) {
+  const BeliefLayout& layout = beliefs.layout();
+  const BeliefSet::Storage& data = beliefs.data();
+  for (int r = 0; r < beliefs.rows(); ++r) {
+    const double* row = data.data() + r * data.cols();
+    for (int k = 0; k < layout.num_targets(); ++k) {
+      const double* block = row + layout.omega_offset(k);
+      const bool ok = layout.dim(k) == 2 ? BlockSpd<2>(block, tol)
+                                         : BlockSpd<4>(block, tol);
+      if (!ok) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace aia

@@ -1,0 +1,142 @@
+#include "aia/estimation/belief.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "aia/core/rng.h"
+
+namespace aia {
+namespace {
+
+TargetModel Model(int dim) {
+  TargetModel m;
+  m.dim = dim;
+  m.A = Eigen::MatrixXd::Identity(dim, dim);
+  m.b = Eigen::VectorXd::Zero(dim);
+  m.Q = Eigen::MatrixXd::Zero(dim, dim);
+  return m;
+}
+
+Eigen::MatrixXd RandomSpd(int dim, Rng* rng) {
+  Eigen::MatrixXd a(dim, dim);
+  for (int i = 0; i < a.size(); ++i) a.data()[i] = rng->Normal();
+  return a * a.transpose() + 0.5 * Eigen::MatrixXd::Identity(dim, dim);
+}
+
+Eigen::VectorXd RandomVector(int dim, Rng* rng) {
+  Eigen::VectorXd v(dim);
+  for (int i = 0; i < dim; ++i) v(i) = rng->Normal();
+  return v;
+}
+
+TEST(BeliefLayoutTest, BlocksArePackedOmegaThenXi) {
+  TargetModel moving = Model(4);
+  moving.is_static = false;
+  const BeliefLayout layout({Model(2), moving, Model(2)});
+  ASSERT_EQ(layout.num_targets(), 3);
+  // 2x2 + 2 = 6, 4x4 + 4 = 20, 6.
+  EXPECT_EQ(layout.omega_offset(0), 0);
+  EXPECT_EQ(layout.xi_offset(0), 4);
+  EXPECT_EQ(layout.omega_offset(1), 6);
+  EXPECT_EQ(layout.xi_offset(1), 22);
+  EXPECT_EQ(layout.omega_offset(2), 26);
+  EXPECT_EQ(layout.xi_offset(2), 30);
+  EXPECT_EQ(layout.stride(), 32);
+  EXPECT_FALSE(layout.all_static());
+  EXPECT_TRUE(BeliefLayout({Model(2), Model(4)}).all_static());
+}
+
+TEST(BeliefSetTest, SetPriorRoundTripsMeanAndCovariance) {
+  Rng rng(11);
+  const BeliefLayout layout({Model(2), Model(4), Model(2)});
+  std::vector<Eigen::VectorXd> means;
+  std::vector<Eigen::MatrixXd> covs;
+  for (int k = 0; k < layout.num_targets(); ++k) {
+    means.push_back(RandomVector(layout.dim(k), &rng));
+    covs.push_back(RandomSpd(layout.dim(k), &rng));
+  }
+  BeliefSet beliefs(&layout, 3);
+  beliefs.SetPrior(means, covs);
+  for (int r = 0; r < beliefs.rows(); ++r) {
+    EXPECT_EQ(beliefs.data().row(r), beliefs.data().row(0));
+    for (int k = 0; k < layout.num_targets(); ++k) {
+      EXPECT_TRUE(beliefs.Mean(r, k).isApprox(means[k], 1e-12))
+          << r << " " << k;
+      EXPECT_TRUE(beliefs.Covariance(r, k).isApprox(covs[k], 1e-12))
+          << r << " " << k;
+      const Eigen::MatrixXd omega = beliefs.Omega(r, k);
+      EXPECT_EQ(omega, omega.transpose());  // exactly, not approximately
+      EXPECT_TRUE(
+          (omega * covs[k])
+              .isApprox(Eigen::MatrixXd::Identity(layout.dim(k), layout.dim(k)),
+                        1e-12));
+    }
+  }
+}
+
+TEST(BeliefSetTest, PositionMarginalsAreTheFirstTwoCoordinates) {
+  Rng rng(12);
+  const BeliefLayout layout({Model(4), Model(2)});
+  BeliefSet beliefs(&layout, 1);
+  beliefs.SetPrior({RandomVector(4, &rng), RandomVector(2, &rng)},
+                   {RandomSpd(4, &rng), RandomSpd(2, &rng)});
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_TRUE(beliefs.PositionMean(0, k).isApprox(
+        beliefs.Mean(0, k).head<2>(), 1e-14));
+    const Eigen::MatrixXd sigma = beliefs.Covariance(0, k);
+    EXPECT_TRUE(beliefs.PositionCovariance(0, k).isApprox(
+        sigma.topLeftCorner(2, 2), 1e-14));
+  }
+}
+
+TEST(BeliefSetTest, DetAndLogDetAgree) {
+  Rng rng(13);
+  const BeliefLayout layout({Model(2), Model(4)});
+  BeliefSet beliefs(&layout, 1);
+  for (int trial = 0; trial < 20; ++trial) {
+    beliefs.SetPrior({RandomVector(2, &rng), RandomVector(4, &rng)},
+                     {RandomSpd(2, &rng), RandomSpd(4, &rng)});
+    for (int k = 0; k < 2; ++k) {
+      const double det = beliefs.Covariance(0, k).determinant();
+      EXPECT_NEAR(beliefs.DetCovariance(0, k), det, 1e-12 * det);
+      EXPECT_NEAR(beliefs.LogDetCovariance(0, k), std::log(det), 1e-12);
+    }
+  }
+}
+
+TEST(BeliefSetTest, LogDetStaysFiniteWhereDetOverflows) {
+  const BeliefLayout layout({Model(4)});
+  BeliefSet beliefs(&layout, 1);
+  // det Omega = 1e360 overflows a double; log det Sigma = -4 log 1e90 does not.
+  beliefs.Omega(0, 0) = 1e90 * Eigen::Matrix4d::Identity();
+  EXPECT_EQ(beliefs.DetCovariance(0, 0), 0.0);
+  EXPECT_NEAR(beliefs.LogDetCovariance(0, 0), -4.0 * 90.0 * std::log(10.0),
+              1e-10);
+}
+
+TEST(BeliefSetTest, NoInformationMeansUnboundedCovariance) {
+  const BeliefLayout layout({Model(2)});
+  const BeliefSet beliefs(&layout, 1);  // Omega = 0
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(beliefs.DetCovariance(0, 0), inf);
+  EXPECT_EQ(beliefs.LogDetCovariance(0, 0), inf);
+}
+
+TEST(BeliefSetTest, CopyRowCopiesEveryBlock) {
+  Rng rng(14);
+  const BeliefLayout layout({Model(2), Model(4)});
+  BeliefSet from(&layout, 3);
+  for (int i = 0; i < from.data().size(); ++i)
+    from.data().data()[i] = rng.Normal();
+  BeliefSet to(&layout, 2);
+  to.CopyRow(1, from, 2);
+  EXPECT_EQ(to.data().row(1), from.data().row(2));
+  EXPECT_TRUE(to.data().row(0).isZero(0.0));
+}
+
+}  // namespace
+}  // namespace aia

@@ -1,0 +1,578 @@
+#include "aia/estimation/filter.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <utility>
+#include <vector>
+
+#include "aia/core/rng.h"
+#include "aia/estimation/belief.h"
+#include "aia/estimation/sensor_model.h"
+
+namespace aia {
+namespace {
+
+using Graph = std::vector<std::vector<int>>;
+using Measurements = std::vector<std::vector<Measurement>>;
+
+TargetModel StaticModel(int dim) {
+  TargetModel m;
+  m.dim = dim;
+  m.A = Eigen::MatrixXd::Identity(dim, dim);
+  m.b = Eigen::VectorXd::Zero(dim);
+  m.Q = Eigen::MatrixXd::Zero(dim, dim);
+  return m;
+}
+
+// Constant velocity, state (px, py, vx, vy), unit time step, noise on v.
+TargetModel ConstantVelocity(double q) {
+  TargetModel m = StaticModel(4);
+  m.A(0, 2) = 1.0;
+  m.A(1, 3) = 1.0;
+  m.Q(2, 2) = q;
+  m.Q(3, 3) = q;
+  m.is_static = false;
+  return m;
+}
+
+Eigen::MatrixXd RandomSpd(int dim, Rng* rng) {
+  Eigen::MatrixXd a(dim, dim);
+  for (int i = 0; i < a.size(); ++i) a.data()[i] = rng->Normal();
+  return a * a.transpose() + 0.5 * Eigen::MatrixXd::Identity(dim, dim);
+}
+
+// Independent random SPD blocks and xi in every row.
+void Randomize(BeliefSet* beliefs, Rng* rng) {
+  const BeliefLayout& layout = beliefs->layout();
+  for (int r = 0; r < beliefs->rows(); ++r) {
+    for (int k = 0; k < layout.num_targets(); ++k) {
+      beliefs->Omega(r, k) = RandomSpd(layout.dim(k), rng);
+      for (int d = 0; d < layout.dim(k); ++d)
+        beliefs->Xi(r, k)(d) = rng->Normal();
+    }
+  }
+}
+
+// Directed graph: j in N_i with probability `density`.
+Graph RandomGraph(int n, double density, Rng* rng) {
+  Graph g(n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      if (j != i && rng->Bernoulli(density)) g[i].push_back(j);
+    }
+  }
+  return g;
+}
+
+Graph FullGraph(int n) {
+  Graph g(n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      if (j != i) g[i].push_back(j);
+    }
+  }
+  return g;
+}
+
+Measurements RandomMeasurements(int n, int num_targets, Rng* rng) {
+  Measurements z(n);
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < num_targets; ++k) {
+      if (rng->Bernoulli(0.5)) {
+        z[i].push_back(
+            {k, Vec2(rng->Normal(), rng->Normal()), rng->Uniform(1.0, 100.0)});
+      }
+    }
+  }
+  return z;
+}
+
+std::vector<Vec2> RandomPositions(int n, Rng* rng) {
+  std::vector<Vec2> p(n);
+  for (Vec2& q : p) q = Vec2(rng->Uniform(0.0, 10.0), rng->Uniform(0.0, 10.0));
+  return p;
+}
+
+double MaxRelDiff(const BeliefSet::Storage& a, const BeliefSet::Storage& b) {
+  return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff();
+}
+
+// ---------------------------------------------------------------------------
+// Single filter steps against hand-worked values.
+
+TEST(FilterTest, MeasurementUpdateByHand) {
+  const BeliefLayout layout({StaticModel(2)});
+  BeliefSet beliefs(&layout, 1);
+  beliefs.SetPrior({Eigen::Vector2d(0.0, 0.0)}, {Eigen::Matrix2d::Identity()});
+  // r = 1 / 0.5^2 = 4, y + p = (1, 2) + (1, 1) = (2, 3):
+  //   Omega = I + 4 I = 5 I,  xi = 0 + 4 (2, 3) = (8, 12),
+  //   mu = xi / 5 = (1.6, 2.4),  det Sigma = 1 / 25.
+  AddMeasurements({{0, Vec2(1.0, 2.0), 4.0}}, Vec2(1.0, 1.0), &beliefs, 0);
+  EXPECT_TRUE(
+      beliefs.Omega(0, 0).isApprox(5.0 * Eigen::Matrix2d::Identity(), 1e-15));
+  EXPECT_TRUE(beliefs.Xi(0, 0).isApprox(Eigen::Vector2d(8.0, 12.0), 1e-15));
+  EXPECT_TRUE(beliefs.PositionMean(0, 0).isApprox(Vec2(1.6, 2.4), 1e-14));
+  EXPECT_NEAR(beliefs.DetCovariance(0, 0), 1.0 / 25.0, 1e-15);
+  EXPECT_NEAR(beliefs.LogDetCovariance(0, 0), -std::log(25.0), 1e-14);
+}
+
+TEST(FilterTest, MeasurementOfAMovingTargetTouchesOnlyThePosition) {
+  const BeliefLayout layout({ConstantVelocity(0.1)});
+  BeliefSet beliefs(&layout, 1);
+  beliefs.SetPrior({Eigen::Vector4d(0.0, 0.0, 1.0, 2.0)},
+                   {Eigen::Matrix4d::Identity()});
+  AddMeasurements({{0, Vec2(1.0, 2.0), 4.0}}, Vec2(1.0, 1.0), &beliefs, 0);
+  // Z = M' R^-1 M with M = [I 0]: only the (px, py) diagonal grows.
+  Eigen::Matrix4d omega = Eigen::Matrix4d::Identity();
+  omega(0, 0) = omega(1, 1) = 5.0;
+  EXPECT_TRUE(beliefs.Omega(0, 0).isApprox(omega, 1e-15));
+  EXPECT_TRUE(
+      beliefs.Xi(0, 0).isApprox(Eigen::Vector4d(8.0, 12.0, 1.0, 2.0), 1e-15));
+}
+
+TEST(FilterTest, PredictTwoDimensionalDriftByHand) {
+  TargetModel m = StaticModel(2);
+  m.A << 1.0, 1.0, 0.0, 1.0;
+  m.b << 0.5, -1.0;
+  m.Q = Eigen::Matrix2d::Identity();
+  m.is_static = false;
+  const BeliefLayout layout({m});
+  BeliefSet beliefs(&layout, 2);
+  // Sigma = diag(1, 2), mu = (1, 2)  ->  Omega = diag(1, 0.5), xi = (1, 1).
+  beliefs.SetPrior({Eigen::Vector2d(1.0, 2.0)},
+                   {Eigen::Vector2d(1.0, 2.0).asDiagonal()});
+  Predict(&beliefs);
+  // A Sigma A' = [1 1; 0 1] diag(1, 2) [1 0; 1 1] = [3 2; 2 2];  + Q = [4 2; 2
+  // 3], det = 8, so Omega' = [3 -2; -2 4] / 8 = [0.375 -0.25; -0.25 0.5]. mu' =
+  // A mu + b = (3, 2) + (0.5, -1) = (3.5, 1), xi' = Omega' mu' = (1.3125 -
+  // 0.25, -0.875 + 0.5) = (1.0625, -0.375).
+  Eigen::Matrix2d omega;
+  omega << 0.375, -0.25, -0.25, 0.5;
+  for (int r = 0; r < 2; ++r) {
+    EXPECT_TRUE(beliefs.Omega(r, 0).isApprox(omega, 1e-14));
+    EXPECT_TRUE(
+        beliefs.Xi(r, 0).isApprox(Eigen::Vector2d(1.0625, -0.375), 1e-14));
+    EXPECT_TRUE(beliefs.PositionMean(r, 0).isApprox(Vec2(3.5, 1.0), 1e-14));
+  }
+}
+
+TEST(FilterTest, PredictConstantVelocityByHand) {
+  const BeliefLayout layout({ConstantVelocity(0.5)});
+  BeliefSet beliefs(&layout, 1);
+  beliefs.SetPrior({Eigen::Vector4d(0.0, 0.0, 1.0, 2.0)},
+                   {Eigen::Matrix4d::Identity()});
+  Predict(&beliefs);
+  // Per axis (p, v): A = [1 1; 0 1], A A' = [2 1; 1 1], + Q = [2 1; 1 1.5],
+  // det = 2, so Omega' = [1.5 -1; -1 2] / 2 = [0.75 -0.5; -0.5 1].
+  // mu' = (0 + 1, 0 + 2, 1, 2); per axis xi' = Omega' (p, v):
+  //   x: (0.75 - 0.5, -0.5 + 1) = (0.25, 0.5),  y: (1.5 - 1, -1 + 2) = (0.5,
+  //   1).
+  Eigen::Matrix4d omega = Eigen::Matrix4d::Zero();
+  omega(0, 0) = omega(1, 1) = 0.75;
+  omega(2, 2) = omega(3, 3) = 1.0;
+  omega(0, 2) = omega(2, 0) = omega(1, 3) = omega(3, 1) = -0.5;
+  EXPECT_TRUE(beliefs.Omega(0, 0).isApprox(omega, 1e-14));
+  EXPECT_TRUE(
+      beliefs.Xi(0, 0).isApprox(Eigen::Vector4d(0.25, 0.5, 0.5, 1.0), 1e-14));
+  EXPECT_TRUE(
+      beliefs.Mean(0, 0).isApprox(Eigen::Vector4d(1.0, 2.0, 1.0, 2.0), 1e-14));
+  EXPECT_EQ(beliefs.Omega(0, 0), beliefs.Omega(0, 0).transpose());
+}
+
+// The DKF sums Omega blocks across robots every step, so prediction must hand
+// back exactly symmetric blocks, not merely symmetric to rounding.
+TEST(FilterTest, PredictKeepsOmegaExactlySymmetric) {
+  Rng rng(2);
+  TargetModel drift = StaticModel(2);
+  drift.A << 0.9, 0.3, -0.2, 1.1;
+  drift.Q = 0.01 * Eigen::Matrix2d::Identity();
+  drift.is_static = false;
+  TargetModel cv = ConstantVelocity(0.05);
+  cv.A(2, 0) = 0.1;  // no special structure
+  const BeliefLayout layout({drift, cv});
+  BeliefSet beliefs(&layout, 6);
+  Randomize(&beliefs, &rng);
+  for (int t = 0; t < 5; ++t) {
+    Predict(&beliefs);
+    for (int r = 0; r < beliefs.rows(); ++r) {
+      for (int k = 0; k < layout.num_targets(); ++k) {
+        const Eigen::MatrixXd omega = beliefs.Omega(r, k);
+        EXPECT_EQ(omega, omega.transpose()) << "row " << r << " target " << k;
+      }
+    }
+  }
+}
+
+TEST(FilterTest, PredictLeavesStaticTargetsBitForBit) {
+  Rng rng(3);
+  const BeliefLayout mixed(
+      {StaticModel(2), ConstantVelocity(0.1), StaticModel(4)});
+  BeliefSet beliefs(&mixed, 4);
+  Randomize(&beliefs, &rng);
+  const BeliefSet before = beliefs;
+  Predict(&beliefs);
+  for (int r = 0; r < beliefs.rows(); ++r) {
+    for (int k : {0, 2}) {
+      EXPECT_EQ(beliefs.Omega(r, k), before.Omega(r, k));
+      EXPECT_EQ(beliefs.Xi(r, k), before.Xi(r, k));
+    }
+    EXPECT_NE(beliefs.Omega(r, 1), before.Omega(r, 1));
+  }
+
+  const BeliefLayout all_static({StaticModel(2), StaticModel(4)});
+  BeliefSet still(&all_static, 3);
+  Randomize(&still, &rng);
+  const BeliefSet::Storage data = still.data();
+  Predict(&still);
+  EXPECT_EQ(still.data(), data);
+}
+
+// ---------------------------------------------------------------------------
+// DKF weights and fusion.
+
+TEST(FusionWeightsTest, ByHand) {
+  // 0 hears {1, 2}; 1 hears {0}; 2 hears {0, 1, 3}; 3 is isolated.
+  const Graph g = {{1, 2}, {0}, {0, 1, 3}, {}};
+  Eigen::MatrixXd W(2, 7);
+  FusionWeights(g, 0.75, &W);
+  Eigen::MatrixXd expected(4, 4);
+  const double third = 0.25 / 3.0;
+  expected << 0.75, 0.125, 0.125, 0.0,  //
+      0.25, 0.75, 0.0, 0.0,             //
+      third, third, 0.75, third,        //
+      0.0, 0.0, 0.0, 1.0;
+  EXPECT_TRUE(W.isApprox(expected, 1e-15)) << W;
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(W.row(i).sum(), 1.0, 1e-15);
+
+  // Same size again: the storage is reused and stale entries are cleared.
+  const double* storage = W.data();
+  FusionWeights({{}, {}, {}, {0}}, 0.75, &W);
+  EXPECT_EQ(W.data(), storage);
+  expected.setIdentity();
+  expected(3, 3) = 0.75;
+  expected(3, 0) = 0.25;
+  EXPECT_EQ(W, expected);
+}
+
+TEST(FuseTest, TwoRobotsByHand) {
+  const BeliefLayout layout({StaticModel(2)});
+  BeliefSet predicted(&layout, 2);
+  predicted.Omega(0, 0) = Eigen::Matrix2d::Identity();
+  predicted.Omega(1, 0) = 3.0 * Eigen::Matrix2d::Identity();
+  predicted.Xi(1, 0) = Eigen::Vector2d(3.0, 6.0);
+  Eigen::MatrixXd W;
+  FusionWeights({{1}, {0}}, 0.75, &W);
+  BeliefSet fused;
+  Fuse(predicted, W, {{{0, Vec2(1.0, 2.0), 4.0}}, {}},
+       {Vec2(1.0, 1.0), Vec2(5.0, 5.0)}, &fused);
+  // Robot 0: 0.75 I + 0.25 (3 I) + 4 I = 5.5 I;  xi = 0.25 (3, 6) + 4 (2, 3) =
+  // (8.75, 13.5). Robot 1: 0.25 I + 0.75 (3 I) = 2.5 I;         xi = 0.75 (3,
+  // 6) = (2.25, 4.5).
+  EXPECT_TRUE(
+      fused.Omega(0, 0).isApprox(5.5 * Eigen::Matrix2d::Identity(), 1e-15));
+  EXPECT_TRUE(fused.Xi(0, 0).isApprox(Eigen::Vector2d(8.75, 13.5), 1e-15));
+  EXPECT_TRUE(
+      fused.Omega(1, 0).isApprox(2.5 * Eigen::Matrix2d::Identity(), 1e-15));
+  EXPECT_TRUE(fused.Xi(1, 0).isApprox(Eigen::Vector2d(2.25, 4.5), 1e-15));
+}
+
+// Fuse exploits the structure of W; it must still be exactly W * B + Z.
+TEST(FuseTest, MatchesDenseProductOnAnyGraph) {
+  Rng rng(5);
+  const BeliefLayout layout(
+      {StaticModel(2), ConstantVelocity(0.1), StaticModel(2)});
+  const int n = 17;
+  BeliefSet predicted(&layout, n);
+  BeliefSet fused(&layout, n);
+  const std::vector<Vec2> p = RandomPositions(n, &rng);
+  for (const double density : {0.0, 0.1, 0.45, 0.55, 0.8, 0.95, 1.0, -1.0}) {
+    Randomize(&predicted, &rng);
+    Eigen::MatrixXd W;
+    if (density >= 0.0) {
+      FusionWeights(RandomGraph(n, density, &rng), 0.75, &W);
+    } else {
+      // Unequal weights in every row: the general path.
+      W.resize(n, n);
+      for (int i = 0; i < W.size(); ++i) W.data()[i] = rng.Uniform();
+      for (int i = 0; i < n; ++i) W.row(i) /= W.row(i).sum();
+    }
+    const Measurements z = RandomMeasurements(n, layout.num_targets(), &rng);
+    Fuse(predicted, W, z, p, &fused);
+
+    BeliefSet expected(&layout, n);
+    expected.data() = W * predicted.data();
+    for (int i = 0; i < n; ++i) AddMeasurements(z[i], p[i], &expected, i);
+    EXPECT_LT(MaxRelDiff(fused.data(), expected.data()), 1e-14)
+        << "density " << density;
+  }
+}
+
+TEST(FuseTest, CommutesWithRelabellingTheRobots) {
+  Rng rng(7);
+  const BeliefLayout layout(
+      {StaticModel(2), ConstantVelocity(0.1), StaticModel(2)});
+  const int n = 12;
+  for (const double density : {0.3, 0.7, 1.0}) {
+    BeliefSet predicted(&layout, n);
+    Randomize(&predicted, &rng);
+    const Graph g = RandomGraph(n, density, &rng);
+    const Measurements z = RandomMeasurements(n, layout.num_targets(), &rng);
+    const std::vector<Vec2> p = RandomPositions(n, &rng);
+
+    // Robot i becomes robot perm[i].
+    std::vector<int> perm(n);
+    std::iota(perm.begin(), perm.end(), 0);
+    for (int i = n - 1; i > 0; --i)
+      std::swap(perm[i], perm[rng.UniformInt(i + 1)]);
+    BeliefSet predicted_pi(&layout, n);
+    Graph g_pi(n);
+    Measurements z_pi(n);
+    std::vector<Vec2> p_pi(n);
+    for (int i = 0; i < n; ++i) {
+      predicted_pi.CopyRow(perm[i], predicted, i);
+      for (const int j : g[i]) g_pi[perm[i]].push_back(perm[j]);
+      z_pi[perm[i]] = z[i];
+      p_pi[perm[i]] = p[i];
+    }
+
+    Eigen::MatrixXd W, W_pi;
+    FusionWeights(g, 0.75, &W);
+    FusionWeights(g_pi, 0.75, &W_pi);
+    BeliefSet fused, fused_pi;
+    Fuse(predicted, W, z, p, &fused);
+    Fuse(predicted_pi, W_pi, z_pi, p_pi, &fused_pi);
+
+    BeliefSet unpermuted(&layout, n);
+    for (int i = 0; i < n; ++i) unpermuted.CopyRow(i, fused_pi, perm[i]);
+    EXPECT_LT(MaxRelDiff(unpermuted.data(), fused.data()), 1e-12)
+        << "density " << density;
+  }
+}
+
+// Repeated fusion without measurements: every robot converges to one belief.
+// Returns the largest deviation from robot 0 relative to the largest entry.
+double Disagreement(const BeliefSet& b) {
+  double worst = 0.0;
+  for (int i = 1; i < b.rows(); ++i) {
+    worst = std::max(worst,
+                     (b.data().row(i) - b.data().row(0)).cwiseAbs().maxCoeff());
+  }
+  return worst / b.data().cwiseAbs().maxCoeff();
+}
+
+void FuseRepeatedly(const Graph& g, int steps, BeliefSet* beliefs) {
+  const int n = beliefs->rows();
+  Eigen::MatrixXd W;
+  FusionWeights(g, 0.75, &W);
+  const Measurements none(n);
+  const std::vector<Vec2> p(n, Vec2::Zero());
+  BeliefSet next(&beliefs->layout(), n);
+  for (int t = 0; t < steps; ++t) {
+    Fuse(*beliefs, W, none, p, &next);
+    std::swap(*beliefs, next);
+  }
+}
+
+TEST(ConsensusTest, RingAgreesAndKeepsTheAverage) {
+  Rng rng(17);
+  const BeliefLayout layout({StaticModel(2), StaticModel(4)});
+  const int n = 8;
+  Graph ring(n);
+  for (int i = 0; i < n; ++i) ring[i] = {(i + n - 1) % n, (i + 1) % n};
+  BeliefSet beliefs(&layout, n);
+  Randomize(&beliefs, &rng);
+  const Eigen::RowVectorXd average = beliefs.data().colwise().mean();
+  ASSERT_GT(Disagreement(beliefs), 0.1);
+  // Second eigenvalue of W: 0.75 + 0.25 cos(2 pi / 8) = 0.927; 0.927^400 ~
+  // 1e-13.
+  FuseRepeatedly(ring, 400, &beliefs);
+  EXPECT_LT(Disagreement(beliefs), 1e-8);
+  // Every node has two neighbours, so W is symmetric, hence doubly stochastic.
+  const Eigen::RowVectorXd after = beliefs.data().colwise().mean();
+  EXPECT_LT(
+      (after - average).cwiseAbs().maxCoeff() / average.cwiseAbs().maxCoeff(),
+      1e-12);
+  EXPECT_TRUE(AllBlocksSpd(beliefs));
+}
+
+TEST(ConsensusTest, FullGraphAgreesAndKeepsTheAverage) {
+  Rng rng(19);
+  const BeliefLayout layout({StaticModel(2), StaticModel(4)});
+  const int n = 30;
+  BeliefSet beliefs(&layout, n);
+  Randomize(&beliefs, &rng);
+  const Eigen::RowVectorXd average = beliefs.data().colwise().mean();
+  FuseRepeatedly(FullGraph(n), 100, &beliefs);
+  EXPECT_LT(Disagreement(beliefs), 1e-8);
+  const Eigen::RowVectorXd after = beliefs.data().colwise().mean();
+  EXPECT_LT(
+      (after - average).cwiseAbs().maxCoeff() / average.cwiseAbs().maxCoeff(),
+      1e-12);
+}
+
+TEST(ConsensusTest, RandomConnectedGraphAgrees) {
+  Rng rng(23);
+  const BeliefLayout layout({StaticModel(2), StaticModel(4)});
+  const int n = 15;
+  // A path through all robots keeps the graph connected; extra random edges
+  // make the degrees (and so the rows of W) differ.
+  Graph g(n);
+  for (int i = 0; i + 1 < n; ++i) {
+    g[i].push_back(i + 1);
+    g[i + 1].push_back(i);
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 2; j < n; ++j) {
+      if (rng.Bernoulli(0.2)) {
+        g[i].push_back(j);
+        g[j].push_back(i);
+      }
+    }
+  }
+  BeliefSet beliefs(&layout, n);
+  Randomize(&beliefs, &rng);
+  FuseRepeatedly(g, 1500, &beliefs);
+  EXPECT_LT(Disagreement(beliefs), 1e-8);
+  EXPECT_TRUE(AllBlocksSpd(beliefs));
+}
+
+// ---------------------------------------------------------------------------
+// Long runs and the centralized filter.
+
+TEST(FilterTest, CovariancesStaySpdOverManySteps) {
+  Rng rng(29);
+  TargetModel drift = StaticModel(2);
+  drift.A << 0.999, 0.02, -0.02, 0.999;
+  drift.b << 0.05, 0.0;
+  drift.Q = 1e-3 * Eigen::Matrix2d::Identity();
+  drift.is_static = false;
+  const std::vector<TargetModel> models = {
+      ConstantVelocity(0.01), StaticModel(2), drift, ConstantVelocity(1e-4),
+      StaticModel(2)};
+  const BeliefLayout layout(models);
+  const int n = 10;
+  const int m = layout.num_targets();
+  std::vector<Eigen::VectorXd> truth, means;
+  std::vector<Eigen::MatrixXd> covs;
+  for (int k = 0; k < m; ++k) {
+    const int d = layout.dim(k);
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(d);
+    x.head<2>() = Vec2(rng.Uniform(2.0, 8.0), rng.Uniform(2.0, 8.0));
+    if (d == 4) x.tail<2>() = Vec2(0.05 * rng.Normal(), 0.05 * rng.Normal());
+    truth.push_back(x);
+    means.push_back(Eigen::VectorXd::Constant(d, 5.0));
+    covs.push_back(4.0 * Eigen::MatrixXd::Identity(d, d));
+  }
+  BeliefSet beliefs(&layout, n);
+  BeliefSet fused(&layout, n);
+  BeliefSet central(&layout, 1);
+  beliefs.SetPrior(means, covs);
+  central.SetPrior(means, covs);
+  std::vector<Vec2> p = RandomPositions(n, &rng);
+  const SensorModel sensor;
+  Eigen::MatrixXd W;
+  int num_measurements = 0;
+
+  for (int t = 0; t < 300; ++t) {
+    for (int k = 0; k < m; ++k) {
+      const TargetModel& tm = layout.model(k);
+      truth[k] = tm.A * truth[k] + tm.b;
+      for (int d = 0; d < tm.dim; ++d)
+        truth[k](d) += std::sqrt(tm.Q(d, d)) * rng.Normal();
+    }
+    Measurements z(n);
+    for (int i = 0; i < n; ++i) {
+      p[i] += Vec2(0.3 * rng.Normal(), 0.3 * rng.Normal());
+      for (int k = 0; k < m; ++k) {
+        const Vec2 rel = truth[k].head<2>() - p[i];
+        if (!sensor.InRange(rel.norm())) continue;
+        const double s = sensor.Std(rel.norm());
+        const Vec2 y = rel + s * Vec2(rng.Normal(), rng.Normal());
+        z[i].push_back({k, y, sensor.Precision(y.norm())});
+        ++num_measurements;
+      }
+    }
+    Predict(&beliefs);
+    Predict(&central);
+    FusionWeights(RandomGraph(n, 0.4, &rng), 0.75, &W);
+    Fuse(beliefs, W, z, p, &fused);
+    std::swap(beliefs, fused);
+    CentralUpdate(z, p, &central);
+    ASSERT_TRUE(AllBlocksSpd(beliefs)) << "step " << t;
+    ASSERT_TRUE(AllBlocksSpd(central)) << "step " << t;
+    // Omega_i <= Omega_central in the Loewner order (prediction is monotone
+    // and sum_j kappa_ij Omega_j + Z_i <= Omega^- + sum_i Z_i), so no robot
+    // is ever more certain than the centralized filter.
+    for (int i = 0; i < n; ++i) {
+      for (int k = 0; k < m; ++k) {
+        EXPECT_LE(central.LogDetCovariance(0, k),
+                  beliefs.LogDetCovariance(i, k) + 1e-9)
+            << "step " << t << " robot " << i << " target " << k;
+      }
+    }
+  }
+  EXPECT_GT(num_measurements, 300);  // the run did exercise the update
+}
+
+TEST(CentralUpdateTest, SumsEveryRobotsMeasurementsByHand) {
+  const BeliefLayout layout({StaticModel(2), StaticModel(2)});
+  BeliefSet central(&layout, 1);
+  central.SetPrior({Eigen::Vector2d::Zero(), Eigen::Vector2d(1.0, 1.0)},
+                   {Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity()});
+  // Both robots see target 0 at absolute position y + p = (2, 3):
+  //   Omega = I + 4 I + 1 I = 6 I,  xi = 4 (2, 3) + 1 (2, 3) = (10, 15),
+  //   mu = (10, 15) / 6.  Target 1 is seen by nobody and keeps its prior.
+  CentralUpdate({{{0, Vec2(1.0, 2.0), 4.0}}, {{0, Vec2(-1.0, 0.0), 1.0}}},
+                {Vec2(1.0, 1.0), Vec2(3.0, 3.0)}, &central);
+  EXPECT_TRUE(
+      central.Omega(0, 0).isApprox(6.0 * Eigen::Matrix2d::Identity(), 1e-15));
+  EXPECT_TRUE(central.Xi(0, 0).isApprox(Eigen::Vector2d(10.0, 15.0), 1e-15));
+  EXPECT_TRUE(
+      central.PositionMean(0, 0).isApprox(Vec2(10.0 / 6.0, 2.5), 1e-14));
+  EXPECT_TRUE(central.Omega(0, 1).isApprox(Eigen::Matrix2d::Identity(), 1e-15));
+  EXPECT_TRUE(central.Xi(0, 1).isApprox(Eigen::Vector2d(1.0, 1.0), 1e-15));
+}
+
+TEST(AllBlocksSpdTest, RejectsAsymmetricIndefiniteAndNonFiniteBlocks) {
+  const BeliefLayout layout({StaticModel(2), StaticModel(4)});
+  BeliefSet beliefs(&layout, 2);
+  beliefs.SetPrior({Eigen::Vector2d::Zero(), Eigen::Vector4d::Zero()},
+                   {Eigen::Matrix2d::Identity(), Eigen::Matrix4d::Identity()});
+  ASSERT_TRUE(AllBlocksSpd(beliefs));
+
+  BeliefSet bad = beliefs;
+  bad.Omega(1, 1)(0, 3) = 1e-3;  // asymmetric
+  EXPECT_FALSE(AllBlocksSpd(bad));
+  EXPECT_TRUE(AllBlocksSpd(bad, 1e-2));
+
+  bad = beliefs;
+  bad.Omega(1, 0)(1, 1) = -1.0;  // indefinite
+  EXPECT_FALSE(AllBlocksSpd(bad));
+
+  bad = beliefs;
+  bad.Omega(0, 1)(2, 2) = std::nan("");
+  EXPECT_FALSE(AllBlocksSpd(bad));
+}
+
+TEST(FuseTest, SizesTheOutputOnceThenReusesIt) {
+  Rng rng(31);
+  const BeliefLayout layout({StaticModel(2)});
+  BeliefSet predicted(&layout, 5);
+  Randomize(&predicted, &rng);
+  Eigen::MatrixXd W;
+  FusionWeights(FullGraph(5), 0.75, &W);
+  const Measurements none(5);
+  const std::vector<Vec2> p(5, Vec2::Zero());
+  BeliefSet out;
+  Fuse(predicted, W, none, p, &out);
+  ASSERT_EQ(out.rows(), 5);
+  const double* storage = out.data().data();
+  Fuse(predicted, W, none, p, &out);
+  EXPECT_EQ(out.data().data(), storage);
+}
+
+}  // namespace
+}  // namespace aia
