@@ -1,6 +1,8 @@
 #include "aia/planning/registry.h"
 
 #include "aia/core/error.h"
+#include "aia/planning/decsb.h"
+#include "aia/planning/expert.h"
 #include "aia/planning/greedy.h"
 #include "aia/planning/random_policy.h"
 
@@ -56,6 +58,10 @@ PolicyRegistry BuiltinPolicies() {
         [](const Scenario& s) { return std::make_unique<RandomPolicy>(s); });
   r.Add("greedy", "one-step largest drop of the robot's own log det, else BFS to the nearest unlocalized target",
         [](const Scenario& s) { return std::make_unique<GreedyPolicy>(s); });
+  r.Add("expert", "C-SB: centralized sampling-based tree over the team and the centralized filter",
+        [](const Scenario& s) { return std::make_unique<ExpertPolicy>(s); });
+  r.Add("decsb", "Dec-SB: one receding-horizon sampling tree per robot on its own DKF belief",
+        [](const Scenario& s) { return std::make_unique<DecSbPolicy>(s); });
   return r;
 }
 

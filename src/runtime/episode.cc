@@ -122,14 +122,7 @@ void Episode::MoveTargets() {
   }
 }
 
-void Episode::Step(const SubstepHook& hook) {
-  if (done()) return;
-  const auto t_step = Clock::now();
-  const int n = world_.NumRobots();
-  const Lattice& lattice = world_.lattice;
-
-  // The policy decides on what the robots know now; the world rule applies.
-  auto t0 = Clock::now();
+DecisionContext Episode::Context() const {
   DecisionContext ctx;
   ctx.step = step_;
   ctx.world = &world_;
@@ -139,6 +132,18 @@ void Episode::Step(const SubstepHook& hook) {
   ctx.comm = &comm_;
   ctx.beliefs = &fused_;
   ctx.central = &central_;
+  return ctx;
+}
+
+void Episode::Step(const SubstepHook& hook) {
+  if (done()) return;
+  const auto t_step = Clock::now();
+  const int n = world_.NumRobots();
+  const Lattice& lattice = world_.lattice;
+
+  // The policy decides on what the robots know now; the world rule applies.
+  auto t0 = Clock::now();
+  const DecisionContext ctx = Context();
   policy_->Decide(ctx, &moves_);
   for (int i = 0; i < n; ++i) {
     if (!comm_.Active(i)) {

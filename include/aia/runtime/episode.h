@@ -72,6 +72,9 @@ class Episode {
   // min over active robots of det Sigma_i^k.
   double MinDet(int target) const { return min_det_[target]; }
   const PhaseTimes& times() const { return times_; }
+  // What a policy sees at the current step.
+  DecisionContext Context() const;
+  Policy& mutable_policy() { return *policy_; }
 
  private:
   void Observe();  // sense, exchange, fuse, judge (the second half of a step)

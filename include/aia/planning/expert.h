@@ -1,0 +1,52 @@
+// The expert (C-SB): the centralized sampling-based planner of SPEC section 7
+// over the whole team and the centralized filter, executed step by step. It
+// replans when physics leaves a robot off its planned lattice point, when a
+// target moves, when a planned measurement did not happen (the true target
+// was not where the mean said), and when the plan is spent.
+#ifndef AIA_PLANNING_EXPERT_H_
+#define AIA_PLANNING_EXPERT_H_
+
+#include <memory>
+#include <vector>
+
+#include "aia/planning/policy.h"
+#include "aia/planning/sampling_tree.h"
+#include "aia/scenario/config.h"
+
+namespace aia {
+
+// Sampling parameters from `policy:` keys p_v, p_u, anytime, max_iterations,
+// max_nodes (InputError on anything else or out of range).
+SamplingParams ExpertParams(const Scenario& scenario);
+
+// The expert's problem at a decision step: the team at its lattice points,
+// with the centralized belief as the root.
+SamplingProblem ExpertProblem(const DecisionContext& ctx);
+
+class ExpertPolicy : public Policy {
+ public:
+  explicit ExpertPolicy(const Scenario& scenario);
+  std::string_view name() const override { return "expert"; }
+  void Reset(const World& world, std::uint64_t seed) override;
+  PolicyStatus Decide(const DecisionContext& ctx, std::vector<Move>* moves) override;
+
+  // The plan being executed (for tools and tests).
+  const SamplingPlan& plan() const { return plan_; }
+  int replans() const { return replans_; }
+
+ private:
+  bool NeedsReplan(const DecisionContext& ctx) const;
+
+  SamplingParams params_;
+  SamplingTree tree_;
+  Rng rng_;
+  SamplingPlan plan_;
+  int index_ = 0;          // position of the team in plan_.configs
+  bool team_best_ = false; // plan_ was made on the team's best local beliefs
+  int replans_ = 0;
+  std::unique_ptr<BeliefSet> best_rows_;  // scratch for team-best roots
+};
+
+}  // namespace aia
+
+#endif  // AIA_PLANNING_EXPERT_H_

@@ -1,0 +1,130 @@
+// The sampling-based tree search of C-SB (Kantaros et al. 2019; SPEC section
+// 7), shared by the expert (the whole team, the centralized filter) and Dec-SB
+// (one robot, its own DKF belief).
+//
+// A node is (joint lattice configuration, per-target information blocks,
+// accumulated cost J = sum_t sum_k det Sigma_k, depth, parent). Each iteration
+// picks a node with f_V (with probability p_V one at the deepest level, else
+// any), picks one move per robot with f_U (with probability p_U a step along
+// the BFS distance field toward the robot's assigned target, else a random
+// valid move) and adds the child, whose information is the Riccati map of the
+// parent's: Omega' = (A Omega^-1 A' + Q)^-1 + sum_i r_i M'M. Nodes whose
+// targets all have det Sigma_k <= eps join the goal set; after the first goal
+// the search goes on for an anytime budget and returns the cheapest goal path.
+//
+// Storage is a flat arena (struct of arrays): no per-node heap allocation.
+// The search is deterministic for a given Rng state, and a larger anytime
+// budget only extends the same sequence of samples, so it never returns a
+// costlier plan.
+#ifndef AIA_PLANNING_SAMPLING_TREE_H_
+#define AIA_PLANNING_SAMPLING_TREE_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "aia/core/rng.h"
+#include "aia/core/types.h"
+#include "aia/estimation/belief.h"
+#include "aia/estimation/sensor_model.h"
+#include "aia/planning/policy.h"
+#include "aia/world/world.h"
+
+namespace aia {
+
+struct SamplingParams {
+  double p_v = 0.9;           // f_V: probability of expanding a deepest node
+  double p_u = 0.9;           // f_U: probability of following the assigned target's field
+  long anytime = 5000;        // iterations after the first goal
+  long max_iterations = 200000;  // iterations before giving up on a goal
+  long max_nodes = 2000000;   // arena cap (memory guard)
+  int max_depth = 0;          // 0: unlimited; else nodes this deep are not expanded
+  // f_U's assignment: with this probability the globally nearest robot-target
+  // pairs are matched first, else robots pick in a random order.
+  double p_sorted = 0.5;
+};
+
+// A problem for the tree: the team (or one robot), where it stands and what
+// it believes.
+struct SamplingProblem {
+  const World* world = nullptr;
+  const SensorModel* sensor = nullptr;
+  double eps = 0.1;
+  std::vector<int> start;                 // lattice index per robot
+  std::vector<std::uint8_t> active;       // inactive robots neither move nor sense
+  const BeliefSet* belief = nullptr;      // root information
+  int belief_row = 0;
+  // Extra information per target added to every child at depth 1 (Dec-SB:
+  // what the neighbours' planned next positions will measure), as r of r M'M.
+  std::vector<double> extra_at_depth1;
+};
+
+struct SamplingPlan {
+  bool found = false;         // a goal node was reached
+  int depth = 0;              // F*: number of moves of the returned path
+  double cost = 0.0;          // J of the returned path
+  // Joint configuration per depth, (depth + 1) x robots; row 0 is the start.
+  std::vector<std::vector<int>> configs;
+  // Planned det Sigma_k per depth, (depth + 1) x targets.
+  std::vector<std::vector<double>> det;
+  long nodes = 0;
+  long iterations = 0;
+  long first_goal_iteration = -1;
+  double seconds = 0.0;
+  std::size_t arena_bytes = 0;
+  PolicyStatus status = PolicyStatus::kOk;
+};
+
+class SamplingTree {
+ public:
+  // Solves from scratch; reuses its arena between calls (no reallocation once
+  // it has grown).
+  SamplingPlan Solve(const SamplingProblem& problem, const SamplingParams& params, Rng& rng);
+
+ private:
+  struct TargetInfo {
+    int dim = 2;
+    int offset = 0;  // into a node's packed information
+    bool is_static = true;
+  };
+  void Prepare(const SamplingProblem& problem);
+  int AddNode(int parent, const int* positions);
+  double BlockDet(const double* packed, int k) const;
+  void Assign(int node, bool sorted, Rng& rng);
+  // cost + a lower bound of the cost still to come (admissible).
+  double LowerBound(int node) const;
+  const Vec2& MeanAt(int depth, int k);
+
+  // Problem data.
+  const SamplingProblem* problem_ = nullptr;
+  int n_ = 0, m_ = 0, stride_ = 0;
+  std::vector<TargetInfo> targets_;
+  std::vector<Eigen::MatrixXd> A_, Q_;
+  std::vector<Eigen::VectorXd> b_;
+  std::vector<std::vector<Vec2>> means_;  // [depth][k] position means
+  std::vector<Eigen::VectorXd> full_mean_;  // working state for mean propagation
+  std::vector<std::vector<int>> field_;   // [k] BFS distance to k's observation region
+  // Static targets observable from each lattice point: CSR (target, r).
+  std::vector<int> obs_begin_;
+  std::vector<std::pair<int, double>> obs_;
+  bool any_moving_ = false;
+
+  // Arena.
+  std::vector<int> pos_;         // nodes x n
+  std::vector<double> info_;     // nodes x stride
+  std::vector<int> parent_, depth_, unloc_;
+  std::vector<double> cost_, det_sum_;
+  std::vector<std::vector<int>> levels_;  // expandable nodes per depth
+  // Scratch.
+  std::vector<int> assigned_, order_, child_pos_, taken_;
+  std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
+  std::vector<double> lower_;             // per node: lower bound of the total cost
+  std::vector<double> scratch_info_;
+  std::vector<int> bfs_queue_;
+};
+
+// The move that takes a robot from lattice point a to its neighbour b.
+Move MoveBetween(const Lattice& lattice, int a, int b);
+
+}  // namespace aia
+
+#endif  // AIA_PLANNING_SAMPLING_TREE_H_
