@@ -32,7 +32,8 @@ TEST_P(PolicyContractTest, ReachesSuccessOnASmallScenario) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllPolicies, PolicyContractTest,
-                         ::testing::ValuesIn(AllPolicies().Names()));
+                         ::testing::ValuesIn(AllPolicies().Names()),
+                         [](const auto& info) { return info.param; });
 
 TEST(EpisodeTest, FailedRobotStopsMovingAndSensing) {
   Scenario s = ScenarioFromYaml(
