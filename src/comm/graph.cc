@@ -7,7 +7,8 @@
 namespace aia {
 
 CommNetwork::CommNetwork(const CommParams& params, int num_robots,
-                         std::vector<ScheduledFailure> failures, std::uint64_t seed)
+                         std::vector<ScheduledFailure> failures,
+                         std::uint64_t seed)
     : params_(params),
       n_(num_robots),
       failures_(std::move(failures)),
@@ -33,7 +34,9 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
     if (!active_[i]) continue;
     for (int j = 0; j < n_; ++j) {
       if (j == i || !active_[j]) continue;
-      if (params_.range_limited && (positions[i] - positions[j]).squaredNorm() > r2) continue;
+      if (params_.range_limited &&
+          (positions[i] - positions[j]).squaredNorm() > r2)
+        continue;
       edges_.push_back({i, j});
     }
   }
@@ -41,7 +44,8 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
   lost_.clear();
   drop_.assign(edges_.size(), 0);
   if (params_.loss_lambda > 0.0) {
-    const int k = std::min<int>(rng_.Poisson(params_.loss_lambda), static_cast<int>(edges_.size()));
+    const int k = std::min<int>(rng_.Poisson(params_.loss_lambda),
+                                static_cast<int>(edges_.size()));
     for (int c = 0; c < k; ++c) {
       // Floyd's algorithm would also do; rejection is fine for k << edges.
       size_t e;

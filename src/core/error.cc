@@ -4,8 +4,10 @@
 
 namespace aia {
 
-InputError::InputError(std::string file, int line, std::string key, std::string what)
-    : std::runtime_error(file + ":" + std::to_string(line) + ": " + key + ": " + what),
+InputError::InputError(std::string file, int line, std::string key,
+                       std::string what)
+    : std::runtime_error(file + ":" + std::to_string(line) + ": " + key + ": " +
+                         what),
       file_(std::move(file)),
       line_(line),
       key_(std::move(key)),

@@ -44,13 +44,17 @@ double SegmentBoxDistance(const Vec2& a, const Vec2& b, const Box& box) {
   if (SegmentIntersectsBox(a, b, box)) return 0.0;
   // Disjoint convex sets: the closest pair involves an endpoint of the segment
   // or a corner of the box.
-  double best = std::min(PointBoxDistanceSq(a, box), PointBoxDistanceSq(b, box));
-  const Vec2 corners[4] = {box.lo, {box.hi.x(), box.lo.y()}, box.hi, {box.lo.x(), box.hi.y()}};
-  for (const Vec2& c : corners) best = std::min(best, PointSegmentDistanceSq(c, a, b));
+  double best =
+      std::min(PointBoxDistanceSq(a, box), PointBoxDistanceSq(b, box));
+  const Vec2 corners[4] = {
+      box.lo, {box.hi.x(), box.lo.y()}, box.hi, {box.lo.x(), box.hi.y()}};
+  for (const Vec2& c : corners)
+    best = std::min(best, PointSegmentDistanceSq(c, a, b));
   return std::sqrt(best);
 }
 
-bool SegmentBlocked(const Vec2& a, const Vec2& b, const std::vector<Box>& boxes) {
+bool SegmentBlocked(const Vec2& a, const Vec2& b,
+                    const std::vector<Box>& boxes) {
   for (const Box& box : boxes) {
     if (SegmentIntersectsBox(a, b, box)) return true;
   }

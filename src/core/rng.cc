@@ -6,7 +6,9 @@
 
 namespace aia {
 namespace {
-inline std::uint64_t Rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+inline std::uint64_t Rotl(std::uint64_t x, int k) {
+  return (x << k) | (x >> (64 - k));
+}
 }  // namespace
 
 std::uint64_t Mix64(std::uint64_t x) {
@@ -35,7 +37,8 @@ Rng::Rng(std::uint64_t seed) {
 }
 
 Rng::Rng(std::uint64_t seed, std::string_view name, std::uint64_t index)
-    : Rng(Mix64(seed) ^ HashName(name) ^ Mix64(index * 0x632be59bd9b4e019ULL + 1)) {}
+    : Rng(Mix64(seed) ^ HashName(name) ^
+          Mix64(index * 0x632be59bd9b4e019ULL + 1)) {}
 
 std::uint64_t Rng::Next() {
   const std::uint64_t result = Rotl(s_[1] * 5, 7) * 9;

@@ -1,7 +1,6 @@
 #include "aia/planning/decsb.h"
 
 #include "aia/core/error.h"
-
 #include "aia/planning/expert.h"
 #include "aia/planning/information.h"
 #include "aia/planning/random_policy.h"
@@ -19,14 +18,17 @@ DecSbPolicy::DecSbPolicy(const Scenario& scenario) {
   params_.max_depth = 15;
   params_.max_iterations = 300;
   if (auto it = p.find("horizon"); it != p.end()) {
-    if (it->second < 1 || it->second > 1000 || it->second != static_cast<int>(it->second))
-      throw InputError(scenario.file, scenario.LineOf("policy.horizon"), "policy.horizon",
-                       "must be an integer in [1, 1000]");
+    if (it->second < 1 || it->second > 1000 ||
+        it->second != static_cast<int>(it->second))
+      throw InputError(scenario.file, scenario.LineOf("policy.horizon"),
+                       "policy.horizon", "must be an integer in [1, 1000]");
     params_.max_depth = static_cast<int>(it->second);
   }
   if (auto it = p.find("iterations"); it != p.end()) {
-    if (it->second < 1 || it->second > 1e7 || it->second != static_cast<long>(it->second))
-      throw InputError(scenario.file, scenario.LineOf("policy.iterations"), "policy.iterations",
+    if (it->second < 1 || it->second > 1e7 ||
+        it->second != static_cast<long>(it->second))
+      throw InputError(scenario.file, scenario.LineOf("policy.iterations"),
+                       "policy.iterations",
                        "must be an integer in [1, 10000000]");
     params_.max_iterations = static_cast<long>(it->second);
   }
@@ -37,12 +39,14 @@ DecSbPolicy::DecSbPolicy(const Scenario& scenario) {
 
 void DecSbPolicy::Reset(const World& world, std::uint64_t seed) {
   rngs_.clear();
-  for (int i = 0; i < world.NumRobots(); ++i) rngs_.emplace_back(seed, "policy.decsb", i);
+  for (int i = 0; i < world.NumRobots(); ++i)
+    rngs_.emplace_back(seed, "policy.decsb", i);
   plans_.assign(world.NumRobots(), {});
   next_.assign(world.NumRobots(), -1);
 }
 
-PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx, std::vector<Move>* moves) {
+PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
+                                 std::vector<Move>* moves) {
   const Lattice& lattice = ctx.world->lattice;
   const int n = static_cast<int>(moves->size());
   const int m = ctx.beliefs->layout().num_targets();
@@ -50,7 +54,8 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx, std::vector<Move>* 
   // from the plan it made last step, if it is still on that plan.
   for (int j = 0; j < n; ++j) {
     const auto& plan = plans_[j];
-    next_[j] = (plan.size() >= 3 && plan[1] == (*ctx.positions)[j]) ? plan[2] : -1;
+    next_[j] =
+        (plan.size() >= 3 && plan[1] == (*ctx.positions)[j]) ? plan[2] : -1;
   }
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < n; ++i) {
@@ -65,7 +70,8 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx, std::vector<Move>* 
       if (next_[j] < 0) continue;
       const Vec2 q = lattice.Point(next_[j]);
       for (int k = 0; k < m; ++k)
-        extra_[k] += PredictedPrecision(*ctx.world, *ctx.sensor, q, ctx.beliefs->PositionMean(i, k));
+        extra_[k] += PredictedPrecision(*ctx.world, *ctx.sensor, q,
+                                        ctx.beliefs->PositionMean(i, k));
     }
     SamplingProblem problem;
     problem.world = ctx.world;
@@ -80,7 +86,8 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx, std::vector<Move>* 
     auto& path = plans_[i];
     path.clear();
     for (const auto& config : plan.configs) path.push_back(config[0]);
-    Move move = path.size() >= 2 ? MoveBetween(lattice, path[0], path[1]) : Move::kStay;
+    Move move =
+        path.size() >= 2 ? MoveBetween(lattice, path[0], path[1]) : Move::kStay;
     if (move == Move::kStay) {  // nothing left to gain within the horizon
       Move valid[kNumMoves];
       int count = 0;

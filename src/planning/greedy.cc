@@ -7,15 +7,19 @@
 
 namespace aia {
 
-GreedyPolicy::GreedyPolicy(const Scenario& scenario) { CheckPolicyParams(scenario, {}); }
+GreedyPolicy::GreedyPolicy(const Scenario& scenario) {
+  CheckPolicyParams(scenario, {});
+}
 
 void GreedyPolicy::Reset(const World& world, std::uint64_t seed) {
   rngs_.clear();
-  for (int i = 0; i < world.NumRobots(); ++i) rngs_.emplace_back(seed, "policy.greedy", i);
+  for (int i = 0; i < world.NumRobots(); ++i)
+    rngs_.emplace_back(seed, "policy.greedy", i);
   blocks_.assign(world.NumTargets(), {});
 }
 
-PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx, std::vector<Move>* moves) {
+PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
+                                  std::vector<Move>* moves) {
   const Lattice& lattice = ctx.world->lattice;
   const SensorModel& sensor = *ctx.sensor;
   const double log_eps = std::log(ctx.eps);
@@ -27,7 +31,8 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx, std::vector<Move>*
     if (!ctx.comm->Active(i)) continue;
     const int p = (*ctx.positions)[i];
     const Vec2 here = lattice.Point(p);
-    for (int k = 0; k < num_targets; ++k) PredictBlock(*ctx.beliefs, i, k, &blocks_[k]);
+    for (int k = 0; k < num_targets; ++k)
+      PredictBlock(*ctx.beliefs, i, k, &blocks_[k]);
 
     double best = 0.0;
     Move candidates[kNumMoves];
@@ -61,7 +66,8 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx, std::vector<Move>*
     }
     Rng& rng = rngs_[i];
     if (num_candidates > 0) {
-      (*moves)[i] = candidates[num_candidates == 1 ? 0 : rng.UniformInt(num_candidates)];
+      (*moves)[i] =
+          candidates[num_candidates == 1 ? 0 : rng.UniformInt(num_candidates)];
       continue;
     }
     Move m = TowardNearestTarget(ctx, i);
@@ -107,12 +113,16 @@ Move GreedyPolicy::TowardNearestTarget(const DecisionContext& ctx, int robot) {
     if (b.logdet_sigma <= log_eps) continue;
     const int c = lattice.NearestPoint(b.mu);
     const int cx = lattice.Ix(c), cy = lattice.Iy(c);
-    for (int iy = std::max(0, cy - span); iy <= std::min(lattice.ny() - 1, cy + span); ++iy) {
-      for (int ix = std::max(0, cx - span); ix <= std::min(lattice.nx() - 1, cx + span); ++ix) {
+    for (int iy = std::max(0, cy - span);
+         iy <= std::min(lattice.ny() - 1, cy + span); ++iy) {
+      for (int ix = std::max(0, cx - span);
+           ix <= std::min(lattice.nx() - 1, cx + span); ++ix) {
         const int q = lattice.Index(ix, iy);
         const int d = dist_[q];
         if (d < 1 || (best >= 0 && d >= best_dist)) continue;
-        if (PredictedPrecision(*ctx.world, sensor, lattice.Point(q), b.mu) <= 0.0) continue;
+        if (PredictedPrecision(*ctx.world, sensor, lattice.Point(q), b.mu) <=
+            0.0)
+          continue;
         best = q;
         best_dist = d;
       }

@@ -5,7 +5,8 @@
 
 namespace aia {
 
-void PredictBlock(const BeliefSet& beliefs, int row, int k, PredictedBlock* out) {
+void PredictBlock(const BeliefSet& beliefs, int row, int k,
+                  PredictedBlock* out) {
   const TargetModel& model = beliefs.layout().model(k);
   const int d = model.dim;
   out->dim = d;

@@ -8,7 +8,8 @@
 
 namespace aia {
 
-void PolicyRegistry::Add(const std::string& name, const std::string& description,
+void PolicyRegistry::Add(const std::string& name,
+                         const std::string& description,
                          PolicyFactory factory) {
   for (auto& e : entries_) {
     if (e.name == name) {
@@ -56,11 +57,17 @@ PolicyRegistry BuiltinPolicies() {
   PolicyRegistry r;
   r.Add("random", "a uniformly random valid move per robot (Random-Walker)",
         [](const Scenario& s) { return std::make_unique<RandomPolicy>(s); });
-  r.Add("greedy", "one-step largest drop of the robot's own log det, else BFS to the nearest unlocalized target",
+  r.Add("greedy",
+        "one-step largest drop of the robot's own log det, else BFS to the "
+        "nearest unlocalized target",
         [](const Scenario& s) { return std::make_unique<GreedyPolicy>(s); });
-  r.Add("expert", "C-SB: centralized sampling-based tree over the team and the centralized filter",
+  r.Add("expert",
+        "C-SB: centralized sampling-based tree over the team and the "
+        "centralized filter",
         [](const Scenario& s) { return std::make_unique<ExpertPolicy>(s); });
-  r.Add("decsb", "Dec-SB: one receding-horizon sampling tree per robot on its own DKF belief",
+  r.Add("decsb",
+        "Dec-SB: one receding-horizon sampling tree per robot on its own DKF "
+        "belief",
         [](const Scenario& s) { return std::make_unique<DecSbPolicy>(s); });
   return r;
 }

@@ -98,7 +98,8 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   // Observation regions at the root means and BFS fields toward them.
   field_.assign(m_, {});
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
-  const int span = static_cast<int>(std::ceil(p.sensor->range / lattice.step())) + 1;
+  const int span =
+      static_cast<int>(std::ceil(p.sensor->range / lattice.step())) + 1;
   std::vector<int> region;
   for (int k = 0; k < m_; ++k) {
     region.clear();
@@ -110,13 +111,15 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
            ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
         const int q = lattice.Index(ix, iy);
         if (!lattice.Free(q)) continue;
-        const double r = PredictedPrecision(*p.world, *p.sensor, lattice.Point(q), mu);
+        const double r =
+            PredictedPrecision(*p.world, *p.sensor, lattice.Point(q), mu);
         if (r <= 0.0) continue;
         region.push_back(q);
         if (targets_[k].is_static) per_point[q].push_back({k, r});
       }
     }
-    BfsDistances(lattice, region.data(), static_cast<int>(region.size()), &field_[k], &bfs_queue_);
+    BfsDistances(lattice, region.data(), static_cast<int>(region.size()),
+                 &field_[k], &bfs_queue_);
   }
   obs_begin_.assign(lattice.size() + 1, 0);
   obs_.clear();
@@ -167,11 +170,13 @@ int SamplingTree::AddNode(int parent, const int* positions) {
         double* blk = info + targets_[k].offset;
         if (targets_[k].dim == 2) {
           const Eigen::Matrix2d A = A_[k];
-          Eigen::Matrix2d sigma = A * Unpack<2>(blk).inverse() * A.transpose() + Eigen::Matrix2d(Q_[k]);
+          Eigen::Matrix2d sigma = A * Unpack<2>(blk).inverse() * A.transpose() +
+                                  Eigen::Matrix2d(Q_[k]);
           Pack<2>(Eigen::Matrix2d(sigma.inverse()), blk);
         } else {
           const Eigen::Matrix4d A = A_[k];
-          Eigen::Matrix4d sigma = A * Unpack<4>(blk).inverse() * A.transpose() + Eigen::Matrix4d(Q_[k]);
+          Eigen::Matrix4d sigma = A * Unpack<4>(blk).inverse() * A.transpose() +
+                                  Eigen::Matrix4d(Q_[k]);
           Pack<4>(Eigen::Matrix4d(sigma.inverse()), blk);
         }
       }
@@ -188,15 +193,18 @@ int SamplingTree::AddNode(int parent, const int* positions) {
         const Vec2 here = p.world->lattice.Point(q);
         for (int k = 0; k < m_; ++k) {
           if (targets_[k].is_static) continue;
-          const double r = PredictedPrecision(*p.world, *p.sensor, here, MeanAt(depth, k));
-          if (r > 0.0) AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, r);
+          const double r =
+              PredictedPrecision(*p.world, *p.sensor, here, MeanAt(depth, k));
+          if (r > 0.0)
+            AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, r);
         }
       }
     }
     if (depth == 1 && !p.extra_at_depth1.empty()) {
       for (int k = 0; k < m_; ++k)
         if (p.extra_at_depth1[k] > 0.0)
-          AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, p.extra_at_depth1[k]);
+          AddPositionPrecision(info + targets_[k].offset, targets_[k].dim,
+                               p.extra_at_depth1[k]);
     }
   }
   // A static target that no robot can measure before reaching its region
@@ -210,13 +218,15 @@ int SamplingTree::AddNode(int parent, const int* positions) {
     if (d <= p.eps) continue;
     ++unloc;
     if (!targets_[k].is_static) continue;
-    if (depth == 0 && !p.extra_at_depth1.empty() && p.extra_at_depth1[k] > 0.0) continue;
+    if (depth == 0 && !p.extra_at_depth1.empty() && p.extra_at_depth1[k] > 0.0)
+      continue;
     int reach = std::numeric_limits<int>::max();
     for (int i = 0; i < n_; ++i) {
       const int f = p.active[i] ? field_[k][positions[i]] : -1;
       if (f >= 0) reach = std::min(reach, f);
     }
-    if (reach != std::numeric_limits<int>::max() && reach > 1) ahead += d * (reach - 1);
+    if (reach != std::numeric_limits<int>::max() && reach > 1)
+      ahead += d * (reach - 1);
   }
   const double cost = parent < 0 ? 0.0 : cost_[parent] + sum;
   parent_.push_back(parent);
@@ -232,7 +242,8 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   const SamplingProblem& p = *problem_;
   const double* info = info_.data() + static_cast<size_t>(node) * stride_;
   const int* pos = pos_.data() + static_cast<size_t>(node) * n_;
-  for (int k = 0; k < m_; ++k) taken_[k] = BlockDet(info, k) > p.eps ? 0 : 2;  // 2: localized
+  for (int k = 0; k < m_; ++k)
+    taken_[k] = BlockDet(info, k) > p.eps ? 0 : 2;  // 2: localized
   std::fill(assigned_.begin(), assigned_.end(), -1);
   if (sorted) {
     // Globally nearest robot-target pairs first (greedy matching).
@@ -257,7 +268,8 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
     order_.clear();
     for (int i = 0; i < n_; ++i)
       if (p.active[i]) order_.push_back(i);
-    for (size_t a = order_.size(); a > 1; --a) std::swap(order_[a - 1], order_[rng.UniformInt(a)]);
+    for (size_t a = order_.size(); a > 1; --a)
+      std::swap(order_[a - 1], order_[rng.UniformInt(a)]);
     for (int i : order_) {
       int best = -1, best_d = std::numeric_limits<int>::max();
       for (int k = 0; k < m_; ++k) {
@@ -288,8 +300,8 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   }
 }
 
-SamplingPlan SamplingTree::Solve(const SamplingProblem& problem, const SamplingParams& params,
-                                 Rng& rng) {
+SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
+                                 const SamplingParams& params, Rng& rng) {
   const auto t0 = std::chrono::steady_clock::now();
   AIA_CHECK(problem.world && problem.sensor && problem.belief);
   AIA_CHECK(problem.active.size() == problem.start.size());
@@ -396,16 +408,23 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem, const SamplingP
   plan.det.assign(plan.depth + 1, std::vector<double>(m_));
   for (int v = end; v >= 0; v = parent_[v]) {
     const int d = depth_[v];
-    std::copy(pos_.begin() + static_cast<size_t>(v) * n_, pos_.begin() + static_cast<size_t>(v + 1) * n_,
+    std::copy(pos_.begin() + static_cast<size_t>(v) * n_,
+              pos_.begin() + static_cast<size_t>(v + 1) * n_,
               plan.configs[d].begin());
-    for (int k = 0; k < m_; ++k) plan.det[d][k] = BlockDet(info_.data() + static_cast<size_t>(v) * stride_, k);
+    for (int k = 0; k < m_; ++k)
+      plan.det[d][k] =
+          BlockDet(info_.data() + static_cast<size_t>(v) * stride_, k);
   }
   plan.nodes = static_cast<long>(parent_.size());
   plan.iterations = it;
-  plan.arena_bytes = pos_.capacity() * sizeof(int) + info_.capacity() * sizeof(double) +
-                     (parent_.capacity() + depth_.capacity() + unloc_.capacity()) * sizeof(int) +
-                     (cost_.capacity() + det_sum_.capacity()) * sizeof(double);
-  plan.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  plan.arena_bytes =
+      pos_.capacity() * sizeof(int) + info_.capacity() * sizeof(double) +
+      (parent_.capacity() + depth_.capacity() + unloc_.capacity()) *
+          sizeof(int) +
+      (cost_.capacity() + det_sum_.capacity()) * sizeof(double);
+  plan.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+          .count();
   return plan;
 }
 

@@ -13,12 +13,14 @@
 
 #include "aia/core/error.h"
 #include "aia/runtime/mission.h"
+#include "aia/runtime/plan_command.h"
 
 namespace aia {
 
 Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed) {
   Scenario s;
-  s.name = "generated_" + std::to_string(robots) + "x" + std::to_string(targets);
+  s.name =
+      "generated_" + std::to_string(robots) + "x" + std::to_string(targets);
   s.seed = seed;
   s.workspace.random = RandomObstaclesConfig{};
   s.robots.count = robots;
@@ -26,15 +28,18 @@ Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed) {
   return s;
 }
 
-std::pair<int, int> ParseSize(const std::string& text, const std::string& flag) {
+std::pair<int, int> ParseSize(const std::string& text,
+                              const std::string& flag) {
   static const std::regex re("^([0-9]{1,5})x([0-9]{1,5})$");
   std::smatch m;
   if (!std::regex_match(text, m, re))
-    throw InputError("command line", 0, flag,
-                     "'" + text + "' is not a size ROBOTSxTARGETS such as 10x10");
+    throw InputError(
+        "command line", 0, flag,
+        "'" + text + "' is not a size ROBOTSxTARGETS such as 10x10");
   const int n = std::stoi(m[1]), k = std::stoi(m[2]);
   if (n < 1 || k < 1)
-    throw InputError("command line", 0, flag, "'" + text + "': robots and targets must be >= 1");
+    throw InputError("command line", 0, flag,
+                     "'" + text + "': robots and targets must be >= 1");
   return {n, k};
 }
 
@@ -48,8 +53,8 @@ double Median(std::vector<double> v) {
 
 // mujoco-testspeed's "Steps per second" on a model file, or -1.
 double TestSpeed(const std::string& xml_path, int nstep) {
-  const std::string cmd =
-      "mujoco-testspeed '" + xml_path + "' " + std::to_string(nstep) + " 1 0.01 2>&1";
+  const std::string cmd = "mujoco-testspeed '" + xml_path + "' " +
+                          std::to_string(nstep) + " 1 0.01 2>&1";
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
   if (!pipe) return -1.0;
   std::string out;
@@ -63,15 +68,62 @@ double TestSpeed(const std::string& xml_path, int nstep) {
 
 }  // namespace
 
+namespace {
+
+int RunExpertBench(const BenchOptions& o) {
+  if (o.seeds < 1)
+    throw InputError("command line", 0, "--seeds", "must be at least 1");
+  std::printf(
+      "aia bench --expert: C-SB solve from the initial state, %d generated "
+      "worlds per size "
+      "(seeds %llu..%llu)\n",
+      o.seeds, static_cast<unsigned long long>(o.seed),
+      static_cast<unsigned long long>(o.seed + o.seeds - 1));
+  std::printf("%-8s %10s %10s %8s %8s %10s %12s %12s %10s\n", "size",
+              "median_s", "worst_s", "F*_med", "found", "nodes_med",
+              "arena_MiB", "arena_worst", "RSS_MiB");
+  for (const std::string& size_text : o.sizes) {
+    const auto [n, m] = ParseSize(size_text, "--sizes");
+    std::vector<double> secs, fstar, nodes, arena;
+    int found = 0;
+    for (int k = 0; k < o.seeds; ++k) {
+      const SamplingPlan plan =
+          PlanFromStart(GeneratedScenario(n, m, o.seed + k));
+      secs.push_back(plan.seconds);
+      fstar.push_back(plan.depth);
+      nodes.push_back(static_cast<double>(plan.nodes));
+      arena.push_back(plan.arena_bytes / 1048576.0);
+      found += plan.found ? 1 : 0;
+    }
+    std::printf(
+        "%-8s %10.4f %10.4f %8.1f %5d/%-2d %10.0f %12.2f %12.2f %10.1f\n",
+        size_text.c_str(), Median(secs),
+        *std::max_element(secs.begin(), secs.end()), Median(fstar), found,
+        o.seeds, Median(nodes), Median(arena),
+        *std::max_element(arena.begin(), arena.end()), PeakRssMiB());
+    std::fflush(stdout);
+  }
+  std::printf(
+      "(arena: the tree's node storage; RSS: the whole process's peak so far, "
+      "MuJoCo models of the worlds included)\n");
+  return 0;
+}
+
+}  // namespace
+
 int RunBench(const BenchOptions& o) {
-  if (o.steps < 1) throw InputError("command line", 0, "--steps", "must be at least 1");
-  if (o.repeats < 1) throw InputError("command line", 0, "--repeats", "must be at least 1");
+  if (o.expert) return RunExpertBench(o);
+  if (o.steps < 1)
+    throw InputError("command line", 0, "--steps", "must be at least 1");
+  if (o.repeats < 1)
+    throw InputError("command line", 0, "--repeats", "must be at least 1");
   const PolicyRegistry registry = AllPolicies();
-  std::printf("aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
-              o.policy.c_str(), o.steps, o.repeats);
-  std::printf("%-8s %10s %9s %9s %9s %9s %9s %9s %8s %12s %12s\n", "size", "steps/s", "ms/step",
-              "physics", "sensing", "fusion", "policy", "rest", "mj_step%", "mj_step/s",
-              "testspeed/s");
+  std::printf(
+      "aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
+      o.policy.c_str(), o.steps, o.repeats);
+  std::printf("%-8s %10s %9s %9s %9s %9s %9s %9s %8s %12s %12s\n", "size",
+              "steps/s", "ms/step", "physics", "sensing", "fusion", "policy",
+              "rest", "mj_step%", "mj_step/s", "testspeed/s");
   for (const std::string& size_text : o.sizes) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
     Scenario s = GeneratedScenario(n, m, o.seed);
@@ -93,26 +145,36 @@ int RunBench(const BenchOptions& o) {
       sens.push_back(1e3 * t.sensing / steps);
       fus.push_back(1e3 * t.fusion / steps);
       pol.push_back(1e3 * t.policy / steps);
-      rest.push_back(1e3 * (t.total - t.physics - t.sensing - t.fusion - t.policy) / steps);
+      rest.push_back(1e3 *
+                     (t.total - t.physics - t.sensing - t.fusion - t.policy) /
+                     steps);
       share.push_back(100.0 * t.physics / t.total);
-      mjrate.push_back(episode->sim().mj_steps() / episode->sim().physics_seconds());
+      mjrate.push_back(episode->sim().mj_steps() /
+                       episode->sim().physics_seconds());
       mjcf = episode->sim().mjcf();
     }
     double testspeed = -1.0;
     if (!o.skip_testspeed) {
       const auto path = std::filesystem::temp_directory_path() /
-                        ("aia_bench_" + size_text + "_" + std::to_string(::getpid()) + ".xml");
+                        ("aia_bench_" + size_text + "_" +
+                         std::to_string(::getpid()) + ".xml");
       std::ofstream(path) << mjcf;
       testspeed = TestSpeed(path.string(), 4000);
       std::filesystem::remove(path);
     }
-    std::printf("%-8s %10.1f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %7.1f%% %12.0f %12.0f\n",
-                size_text.c_str(), Median(rate), Median(ms), Median(phys), Median(sens),
-                Median(fus), Median(pol), Median(rest), Median(share), Median(mjrate), testspeed);
+    std::printf(
+        "%-8s %10.1f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %7.1f%% %12.0f "
+        "%12.0f\n",
+        size_text.c_str(), Median(rate), Median(ms), Median(phys), Median(sens),
+        Median(fus), Median(pol), Median(rest), Median(share), Median(mjrate),
+        testspeed);
     std::fflush(stdout);
   }
-  std::printf("(per-step phase times in ms; mj_step/s is inside episodes, testspeed/s is "
-              "mujoco-testspeed on the same generated model, 1 thread, ctrlnoise 0.01)\n");
+  std::printf(
+      "(per-step phase times in ms; mj_step/s is inside episodes, testspeed/s "
+      "is "
+      "mujoco-testspeed on the same generated model, 1 thread, ctrlnoise "
+      "0.01)\n");
   return 0;
 }
 

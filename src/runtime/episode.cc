@@ -77,7 +77,8 @@ Episode::Episode(const Scenario& scenario, std::unique_ptr<Policy> policy)
   cp.range = scenario_.communication.range;
   cp.loss_lambda = scenario_.communication.packet_loss_lambda;
   std::vector<ScheduledFailure> failures;
-  for (const RobotFailure& f : world_.failures) failures.push_back({f.robot, f.step});
+  for (const RobotFailure& f : world_.failures)
+    failures.push_back({f.robot, f.step});
   comm_ = CommNetwork(cp, n, failures, scenario_.seed);
 
   for (int i = 0; i < n; ++i) {
@@ -101,7 +102,8 @@ bool Episode::done() const {
 
 int Episode::NumLocalized() const {
   int count = 0;
-  for (int k = 0; k < num_targets_; ++k) count += min_det_[k] <= scenario_.mission.eps ? 1 : 0;
+  for (int k = 0; k < num_targets_; ++k)
+    count += min_det_[k] <= scenario_.mission.eps ? 1 : 0;
   return count;
 }
 
@@ -151,7 +153,8 @@ void Episode::Step(const SubstepHook& hook) {
       continue;
     }
     bool replaced = false;
-    const Move m = ApplyWorldRule(lattice, robot_idx_[i], moves_[i], rule_rngs_[i], &replaced);
+    const Move m = ApplyWorldRule(lattice, robot_idx_[i], moves_[i],
+                                  rule_rngs_[i], &replaced);
     invalid_moves_ += replaced ? 1 : 0;
     sim_->SetWaypoint(i, lattice.Point(lattice.Next(robot_idx_[i], m)));
   }
@@ -164,10 +167,12 @@ void Episode::Step(const SubstepHook& hook) {
   sim.AdvanceToWaypoints([&](double elapsed) {
     const double f = std::min(1.0, elapsed / kTargetMotionSeconds);
     for (int k = 0; k < num_targets_; ++k)
-      sim.SetTargetPosition(k, target_prev_[k] + f * (target_pos_[k] - target_prev_[k]));
+      sim.SetTargetPosition(
+          k, target_prev_[k] + f * (target_pos_[k] - target_prev_[k]));
     if (hook) hook(*this, elapsed);
   });
-  for (int k = 0; k < num_targets_; ++k) sim.SetTargetPosition(k, target_pos_[k]);
+  for (int k = 0; k < num_targets_; ++k)
+    sim.SetTargetPosition(k, target_pos_[k]);
   times_.physics += sim.physics_seconds() - physics_before;
   ++step_;
   for (int i = 0; i < n; ++i) {
@@ -183,7 +188,8 @@ void Episode::Observe() {
   const int n = world_.NumRobots();
   auto t0 = Clock::now();
   comm_.Update(step_, robot_pos_);
-  Sense(*sim_, sensor_, robot_pos_, target_pos_, comm_.active(), &sensor_rngs_, &z_);
+  Sense(*sim_, sensor_, robot_pos_, target_pos_, comm_.active(), &sensor_rngs_,
+        &z_);
   times_.sensing += Since(t0);
 
   t0 = Clock::now();
@@ -194,7 +200,8 @@ void Episode::Observe() {
     Predict(&predicted_);
     Predict(&central_);
   }
-  FusionWeights(comm_.AllNeighbors(), scenario_.communication.kappa_self, &weights_);
+  FusionWeights(comm_.AllNeighbors(), scenario_.communication.kappa_self,
+                &weights_);
   Fuse(predicted_, weights_, z_, robot_pos_, &fused_);
   CentralUpdate(z_, robot_pos_, &central_);
 

@@ -23,13 +23,16 @@
 namespace aia {
 namespace {
 
-constexpr const char* kHeader = "size,seed,policy,success,flowtime,fstar,wall_s";
+constexpr const char* kHeader =
+    "size,seed,policy,success,flowtime,fstar,wall_s";
 
 std::string FormatRow(const EvalRow& r) {
   char buf[256];
   std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%.4f\n", r.size.c_str(),
-                static_cast<unsigned long long>(r.seed), r.policy.c_str(), r.success ? 1 : 0,
-                r.flowtime >= 0 ? std::to_string(r.flowtime).c_str() : "", r.fstar, r.wall_s);
+                static_cast<unsigned long long>(r.seed), r.policy.c_str(),
+                r.success ? 1 : 0,
+                r.flowtime >= 0 ? std::to_string(r.flowtime).c_str() : "",
+                r.fstar, r.wall_s);
   return buf;
 }
 
@@ -73,10 +76,12 @@ std::vector<EvalRow> ReadRuns(const std::string& path) {
   return rows;
 }
 
-std::string SummaryCsv(const std::vector<EvalRow>& rows, const std::vector<std::string>& sizes,
+std::string SummaryCsv(const std::vector<EvalRow>& rows,
+                       const std::vector<std::string>& sizes,
                        const std::vector<std::string>& policies) {
   std::string out =
-      "size,policy,instances,success_rate,flowtime_increase,mean_flowtime,mean_fstar,"
+      "size,policy,instances,success_rate,flowtime_increase,mean_flowtime,mean_"
+      "fstar,"
       "no_expert_plan\n";
   for (const auto& size : sizes) {
     for (const auto& policy : policies) {
@@ -98,10 +103,12 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows, const std::vector<std::
       }
       char buf[256];
       if (n == 0) {
-        std::snprintf(buf, sizeof(buf), "%s,%s,0,,,,,%d\n", size.c_str(), policy.c_str(), no_plan);
+        std::snprintf(buf, sizeof(buf), "%s,%s,0,,,,,%d\n", size.c_str(),
+                      policy.c_str(), no_plan);
       } else {
-        std::snprintf(buf, sizeof(buf), "%s,%s,%d,%.4f,%.4f,%.3f,%.3f,%d\n", size.c_str(),
-                      policy.c_str(), n, static_cast<double>(ok) / n, inc / n, flow / n, fstar / n,
+        std::snprintf(buf, sizeof(buf), "%s,%s,%d,%.4f,%.4f,%.3f,%.3f,%d\n",
+                      size.c_str(), policy.c_str(), n,
+                      static_cast<double>(ok) / n, inc / n, flow / n, fstar / n,
                       no_plan);
       }
       out += buf;
@@ -111,9 +118,13 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows, const std::vector<std::
 }
 
 int RunEval(const EvalOptions& o) {
-  if (o.seeds < 1) throw InputError("command line", 0, "--seeds", "must be at least 1");
-  if (o.threads < 0) throw InputError("command line", 0, "--threads", "must be >= 0");
-  if (o.out_dir.empty()) throw InputError("command line", 0, "--out", "an output folder is required");
+  if (o.seeds < 1)
+    throw InputError("command line", 0, "--seeds", "must be at least 1");
+  if (o.threads < 0)
+    throw InputError("command line", 0, "--threads", "must be >= 0");
+  if (o.out_dir.empty())
+    throw InputError("command line", 0, "--out",
+                     "an output folder is required");
   const PolicyRegistry registry = AllPolicies();
   std::vector<std::string> policies = o.policies;
   if (policies.empty()) {
@@ -122,8 +133,9 @@ int RunEval(const EvalOptions& o) {
   }
   for (const auto& p : policies) {
     if (!registry.Has(p))
-      throw InputError("command line", 0, "--policies",
-                       "unknown policy '" + p + "' (valid: " + registry.NameList() + ")");
+      throw InputError(
+          "command line", 0, "--policies",
+          "unknown policy '" + p + "' (valid: " + registry.NameList() + ")");
   }
   std::vector<std::pair<int, int>> dims;
   for (const auto& s : o.sizes) dims.push_back(ParseSize(s, "--sizes"));
@@ -157,8 +169,10 @@ int RunEval(const EvalOptions& o) {
       if (!inst.todo.empty()) work.push_back(std::move(inst));
     }
   }
-  std::printf("aia eval: %zu sizes x %d seeds x %zu policies; %zu rows already done, %d to run\n",
-              o.sizes.size(), o.seeds, policies.size(), rows.size(), total_runs);
+  std::printf(
+      "aia eval: %zu sizes x %d seeds x %zu policies; %zu rows already done, "
+      "%d to run\n",
+      o.sizes.size(), o.seeds, policies.size(), rows.size(), total_runs);
   std::fflush(stdout);
 
   const int fd = ::open(runs_path.c_str(), O_WRONLY | O_APPEND);
@@ -193,17 +207,22 @@ int RunEval(const EvalOptions& o) {
             while (!episode->done()) episode->Step();
             row.success = episode->success();
             row.flowtime = episode->flowtime();
-            row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            row.wall_s = std::chrono::duration<double>(
+                             std::chrono::steady_clock::now() - t0)
+                             .count();
           }
           const std::string line = FormatRow(row);
           std::lock_guard<std::mutex> lock(mu);
-          if (::write(fd, line.data(), line.size()) != static_cast<ssize_t>(line.size()))
+          if (::write(fd, line.data(), line.size()) !=
+              static_cast<ssize_t>(line.size()))
             throw std::runtime_error("cannot append to " + runs_path);
           rows.push_back(row);
           ++finished;
           char buf[200];
-          std::snprintf(buf, sizeof(buf), "[aia eval] %d/%d runs  (last: %s seed %llu %s)", finished,
-                        total_runs, row.size.c_str(), static_cast<unsigned long long>(row.seed),
+          std::snprintf(buf, sizeof(buf),
+                        "[aia eval] %d/%d runs  (last: %s seed %llu %s)",
+                        finished, total_runs, row.size.c_str(),
+                        static_cast<unsigned long long>(row.seed),
                         row.policy.c_str());
           progress.Update(buf);
         }
@@ -214,8 +233,12 @@ int RunEval(const EvalOptions& o) {
       }
     }
   };
-  int threads = o.threads > 0 ? o.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::max(1, std::min<int>(threads, static_cast<int>(std::max<size_t>(work.size(), 1))));
+  int threads = o.threads > 0
+                    ? o.threads
+                    : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::max(
+      1, std::min<int>(threads,
+                       static_cast<int>(std::max<size_t>(work.size(), 1))));
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
@@ -227,28 +250,32 @@ int RunEval(const EvalOptions& o) {
   // Canonical order, so the files do not depend on the thread count.
   std::map<std::string, size_t> size_rank, policy_rank;
   for (size_t i = 0; i < o.sizes.size(); ++i) size_rank.emplace(o.sizes[i], i);
-  for (size_t i = 0; i < policies.size(); ++i) policy_rank.emplace(policies[i], i);
+  for (size_t i = 0; i < policies.size(); ++i)
+    policy_rank.emplace(policies[i], i);
   auto rank = [](const std::map<std::string, size_t>& m, const std::string& k) {
     const auto it = m.find(k);
     return it == m.end() ? m.size() : it->second;
   };
-  std::stable_sort(rows.begin(), rows.end(), [&](const EvalRow& a, const EvalRow& b) {
-    return std::make_tuple(rank(size_rank, a.size), a.size, a.seed, rank(policy_rank, a.policy),
-                           a.policy) <
-           std::make_tuple(rank(size_rank, b.size), b.size, b.seed, rank(policy_rank, b.policy),
-                           b.policy);
-  });
+  std::stable_sort(
+      rows.begin(), rows.end(), [&](const EvalRow& a, const EvalRow& b) {
+        return std::make_tuple(rank(size_rank, a.size), a.size, a.seed,
+                               rank(policy_rank, a.policy), a.policy) <
+               std::make_tuple(rank(size_rank, b.size), b.size, b.seed,
+                               rank(policy_rank, b.policy), b.policy);
+      });
   std::string text = std::string(kHeader) + "\n";
   for (const auto& r : rows) text += FormatRow(r);
   WriteFileAtomic(runs_path, text);
   std::vector<EvalRow> in_range;
   for (const auto& r : rows)
-    if (r.seed >= o.seed_base && r.seed < o.seed_base + static_cast<std::uint64_t>(o.seeds))
+    if (r.seed >= o.seed_base &&
+        r.seed < o.seed_base + static_cast<std::uint64_t>(o.seeds))
       in_range.push_back(r);
   const std::string summary = SummaryCsv(in_range, o.sizes, policies);
   WriteFileAtomic(o.out_dir + "/summary.csv", summary);
   std::printf("%s", summary.c_str());
-  std::printf("wrote %s and %s/summary.csv\n", runs_path.c_str(), o.out_dir.c_str());
+  std::printf("wrote %s and %s/summary.csv\n", runs_path.c_str(),
+              o.out_dir.c_str());
   return 0;
 }
 

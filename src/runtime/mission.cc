@@ -16,24 +16,29 @@ namespace aia {
 
 PolicyRegistry AllPolicies() { return BuiltinPolicies(); }
 
-void ApplyOverrides(const ScenarioOverrides& o, const PolicyRegistry& registry, Scenario* s) {
+void ApplyOverrides(const ScenarioOverrides& o, const PolicyRegistry& registry,
+                    Scenario* s) {
   if (o.policy) {
     if (!registry.Has(*o.policy))
       throw InputError("command line", 0, "--policy",
-                       "unknown policy '" + *o.policy + "' (valid: " + registry.NameList() + ")");
+                       "unknown policy '" + *o.policy +
+                           "' (valid: " + registry.NameList() + ")");
     s->policy.name = *o.policy;
     // Parameters in the file belonged to the policy it named.
     s->policy.params.clear();
   }
   if (o.seed) s->seed = *o.seed;
   if (o.max_steps) {
-    if (*o.max_steps < 1) throw InputError("command line", 0, "--max-steps", "must be at least 1");
+    if (*o.max_steps < 1)
+      throw InputError("command line", 0, "--max-steps", "must be at least 1");
     s->mission.max_steps = *o.max_steps;
   }
 }
 
-std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario, const PolicyRegistry& registry) {
-  return std::make_unique<Episode>(scenario, registry.Create(scenario.policy.name, scenario));
+std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
+                                     const PolicyRegistry& registry) {
+  return std::make_unique<Episode>(
+      scenario, registry.Create(scenario.policy.name, scenario));
 }
 
 MissionSummary Summarize(const Episode& e, double wall_s) {
@@ -61,7 +66,8 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   j["robots"] = s.robots;
   j["targets"] = s.targets;
   j["success"] = s.success;
-  j["flowtime"] = s.flowtime >= 0 ? nlohmann::ordered_json(s.flowtime) : nlohmann::ordered_json();
+  j["flowtime"] = s.flowtime >= 0 ? nlohmann::ordered_json(s.flowtime)
+                                  : nlohmann::ordered_json();
   j["steps"] = s.steps;
   j["max_steps"] = e.scenario().mission.max_steps;
   j["eps"] = e.scenario().mission.eps;
@@ -69,7 +75,8 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   j["localized_share"] = s.localized_share;
   j["localized_at_end"] = e.NumLocalized();
   std::vector<double> final_det;
-  for (int k = 0; k < e.world().NumTargets(); ++k) final_det.push_back(e.MinDet(k));
+  for (int k = 0; k < e.world().NumTargets(); ++k)
+    final_det.push_back(e.MinDet(k));
   j["final_min_det"] = final_det;
   std::vector<int> failed;
   for (int i = 0; i < e.world().NumRobots(); ++i)
@@ -112,12 +119,14 @@ void TraceWriter::Write(const Episode& e) {
 
 void TraceWriter::Commit() { impl_->file.Commit(); }
 
-ProgressLine::ProgressLine(bool enabled) : enabled_(enabled && ::isatty(STDERR_FILENO)) {}
+ProgressLine::ProgressLine(bool enabled)
+    : enabled_(enabled && ::isatty(STDERR_FILENO)) {}
 
 void ProgressLine::Update(const std::string& text) {
   if (!enabled_) return;
   std::string line = "\r" + text;
-  if (text.size() < last_width_) line += std::string(last_width_ - text.size(), ' ');
+  if (text.size() < last_width_)
+    line += std::string(last_width_ - text.size(), ' ');
   last_width_ = text.size();
   std::fputs(line.c_str(), stderr);
   std::fflush(stderr);
@@ -134,7 +143,8 @@ MissionSummary RunMission(const RunOptions& options) {
   ApplyOverrides(options.overrides, registry, &scenario);
   std::string out = options.out_dir;
   if (out.empty())
-    out = "renders/" + std::filesystem::path(options.scenario_path).stem().string();
+    out = "renders/" +
+          std::filesystem::path(options.scenario_path).stem().string();
 
   const auto t0 = std::chrono::steady_clock::now();
   auto episode = MakeEpisode(scenario, registry);
@@ -148,21 +158,27 @@ MissionSummary RunMission(const RunOptions& options) {
     trace.Write(*episode);
     char buf[160];
     std::snprintf(buf, sizeof(buf), "[aia run] %s  step %d/%d  localized %d/%d",
-                  std::string(episode->policy().name()).c_str(), episode->step(),
-                  scenario.mission.max_steps, episode->NumLocalized(), m);
+                  std::string(episode->policy().name()).c_str(),
+                  episode->step(), scenario.mission.max_steps,
+                  episode->NumLocalized(), m);
     progress.Update(buf);
   }
   progress.Finish();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+          .count();
   trace.Commit();
   const MissionSummary summary = Summarize(*episode, wall);
   WriteFileAtomic(out + "/summary.json", SummaryJson(summary, *episode));
-  std::printf("%s: policy %s, seed %llu: %s in %d steps (%d robots, %d targets, %ld invalid moves), "
-              "%.2f s -> %s/\n",
-              scenario.name.c_str(), summary.policy.c_str(),
-              static_cast<unsigned long long>(summary.seed),
-              summary.success ? "success" : "no success", summary.success ? summary.flowtime : summary.steps,
-              summary.robots, summary.targets, summary.invalid_moves, wall, out.c_str());
+  std::printf(
+      "%s: policy %s, seed %llu: %s in %d steps (%d robots, %d targets, %ld "
+      "invalid moves), "
+      "%.2f s -> %s/\n",
+      scenario.name.c_str(), summary.policy.c_str(),
+      static_cast<unsigned long long>(summary.seed),
+      summary.success ? "success" : "no success",
+      summary.success ? summary.flowtime : summary.steps, summary.robots,
+      summary.targets, summary.invalid_moves, wall, out.c_str());
   return summary;
 }
 

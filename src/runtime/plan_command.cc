@@ -19,7 +19,8 @@ double PeakRssMiB() {
   return u.ru_maxrss / 1024.0;  // Linux reports KiB
 }
 
-SamplingPlan PlanFromStart(const Scenario& scenario, std::optional<long> budget) {
+SamplingPlan PlanFromStart(const Scenario& scenario,
+                           std::optional<long> budget) {
   Scenario s = scenario;
   // The plan is made on the initial state; the episode's own policy is not
   // used, so build it with the cheapest one and keep the expert's keys.
@@ -39,20 +40,25 @@ SamplingPlan PlanFromStart(const Scenario& scenario, std::optional<long> budget)
 int RunPlanCommand(const PlanOptions& o) {
   Scenario scenario = LoadScenario(o.scenario_path);
   ApplyOverrides(o.overrides, AllPolicies(), &scenario);
-  if (o.budget && *o.budget < 0) throw InputError("command line", 0, "--budget", "must be >= 0");
+  if (o.budget && *o.budget < 0)
+    throw InputError("command line", 0, "--budget", "must be >= 0");
   const SamplingPlan plan = PlanFromStart(scenario, o.budget);
   const World world = World::Build(scenario);
   std::printf("%s: seed %llu, %d robots, %d targets\n", scenario.name.c_str(),
-              static_cast<unsigned long long>(scenario.seed), world.NumRobots(), world.NumTargets());
+              static_cast<unsigned long long>(scenario.seed), world.NumRobots(),
+              world.NumTargets());
   if (plan.found) {
     std::printf("F* = %d steps, cost J = %.6g\n", plan.depth, plan.cost);
   } else {
-    std::printf("no plan meets eps within the budget (best effort: %d steps)\n", plan.depth);
+    std::printf("no plan meets eps within the budget (best effort: %d steps)\n",
+                plan.depth);
   }
-  std::printf("solve %.3f s, %ld nodes, %ld iterations (first goal at %ld), arena %.1f MiB, "
-              "peak RSS %.1f MiB\n",
-              plan.seconds, plan.nodes, plan.iterations, plan.first_goal_iteration,
-              plan.arena_bytes / 1048576.0, PeakRssMiB());
+  std::printf(
+      "solve %.3f s, %ld nodes, %ld iterations (first goal at %ld), arena %.1f "
+      "MiB, "
+      "peak RSS %.1f MiB\n",
+      plan.seconds, plan.nodes, plan.iterations, plan.first_goal_iteration,
+      plan.arena_bytes / 1048576.0, PeakRssMiB());
   if (!o.out.empty()) {
     nlohmann::ordered_json j;
     j["scenario"] = scenario.name;

@@ -14,13 +14,16 @@ MjModelPtr CompileMjcf(const std::string& xml) {
   auto vfs = std::make_unique<mjVFS>();
   mj_defaultVFS(vfs.get());
   const char* name = "aia_model.xml";
-  AIA_CHECK(mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(xml.size())) == 0);
+  AIA_CHECK(
+      mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(xml.size())) == 0);
   const int idx = mj_findFileVFS(vfs.get(), name);
   std::memcpy(vfs->filedata[idx], xml.data(), xml.size());
   char error[1000] = "";
   mjModel* m = mj_loadXML(name, vfs.get(), error, sizeof(error));
   mj_deleteVFS(vfs.get());
-  if (m == nullptr) throw std::runtime_error(std::string("MuJoCo cannot compile the model: ") + error);
+  if (m == nullptr)
+    throw std::runtime_error(std::string("MuJoCo cannot compile the model: ") +
+                             error);
   return MjModelPtr(m);
 }
 
@@ -31,8 +34,10 @@ Simulation::Simulation(const World& world, const Scenario& scenario)
   const int n = world.NumRobots();
   for (int i = 0; i < n; ++i) {
     const std::string robot = "robot" + std::to_string(i);
-    const int jx = mj_name2id(model_.get(), mjOBJ_JOINT, (robot + "_x").c_str());
-    const int ax = mj_name2id(model_.get(), mjOBJ_ACTUATOR, (robot + "_x").c_str());
+    const int jx =
+        mj_name2id(model_.get(), mjOBJ_JOINT, (robot + "_x").c_str());
+    const int ax =
+        mj_name2id(model_.get(), mjOBJ_ACTUATOR, (robot + "_x").c_str());
     AIA_CHECK(jx >= 0 && ax >= 0);
     starts_.push_back(world.lattice.Point(world.robot_starts[i]));
     qpos_adr_.push_back(model_->jnt_qposadr[jx]);
@@ -42,7 +47,8 @@ Simulation::Simulation(const World& world, const Scenario& scenario)
   waypoints_ = starts_;
   num_targets_ = world.NumTargets();
   for (int k = 0; k < num_targets_; ++k) {
-    const int body = mj_name2id(model_.get(), mjOBJ_BODY, ("target" + std::to_string(k)).c_str());
+    const int body = mj_name2id(model_.get(), mjOBJ_BODY,
+                                ("target" + std::to_string(k)).c_str());
     AIA_CHECK(body >= 0 && model_->body_mocapid[body] >= 0);
     mocap_id_.push_back(model_->body_mocapid[body]);
   }
@@ -76,18 +82,24 @@ void Simulation::SetTargetPosition(int k, const Vec2& p) {
   q[1] = p.y();
 }
 
-PhysicsStepStats Simulation::AdvanceToWaypoints(const std::function<void(double)>& on_substep) {
+PhysicsStepStats Simulation::AdvanceToWaypoints(
+    const std::function<void(double)>& on_substep) {
   PhysicsStepStats stats;
   const double dt = model_->opt.timestep;
-  const int max_steps = std::max(1, static_cast<int>(std::ceil(physics_.step_timeout / dt)));
+  const int max_steps =
+      std::max(1, static_cast<int>(std::ceil(physics_.step_timeout / dt)));
   const double tol2 = physics_.tolerance * physics_.tolerance;
-  const double stall_speed = 0.01;   // m/s: a robot this slow and not there is blocked
-  const double settle_time = 0.05;   // s: a robot is never called stalled before this
+  const double stall_speed =
+      0.01;  // m/s: a robot this slow and not there is blocked
+  const double settle_time =
+      0.05;  // s: a robot is never called stalled before this
   const int n = num_robots();
   for (int s = 0; s < max_steps; ++s) {
     const auto t0 = std::chrono::steady_clock::now();
     mj_step(model_.get(), data_.get());
-    physics_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    physics_seconds_ +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+            .count();
     ++mj_steps_;
     ++stats.substeps;
     const double elapsed = (s + 1) * dt;
@@ -96,7 +108,8 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(const std::function<void(double)
     for (int i = 0; i < n; ++i) {
       if ((RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2) continue;
       all_arrived = false;
-      if (elapsed < settle_time || RobotVelocity(i).squaredNorm() > stall_speed * stall_speed) {
+      if (elapsed < settle_time ||
+          RobotVelocity(i).squaredNorm() > stall_speed * stall_speed) {
         all_settled = false;
         break;
       }
@@ -119,13 +132,15 @@ bool Simulation::RayClear(const Vec2& from, const Vec2& to) const {
   int geom = -1;
   // Static geoms included (obstacles are static bodies); the ray length is
   // |vec|, so a hit before 1 lies between the two points.
-  const mjtNum x = mj_ray(model_.get(), data_.get(), pnt, vec, groups, 1, -1, &geom);
+  const mjtNum x =
+      mj_ray(model_.get(), data_.get(), pnt, vec, groups, 1, -1, &geom);
   return x < 0.0 || x >= 1.0;
 }
 
-void Sense(const Simulation& sim, const SensorModel& sensor, const std::vector<Vec2>& robots,
-           const std::vector<Vec2>& targets, const std::vector<std::uint8_t>& active,
-           std::vector<Rng>* rngs, std::vector<std::vector<Measurement>>* out) {
+void Sense(const Simulation& sim, const SensorModel& sensor,
+           const std::vector<Vec2>& robots, const std::vector<Vec2>& targets,
+           const std::vector<std::uint8_t>& active, std::vector<Rng>* rngs,
+           std::vector<std::vector<Measurement>>* out) {
   const int n = static_cast<int>(robots.size());
   out->resize(n);
   const double range2 = sensor.range * sensor.range;
@@ -137,7 +152,8 @@ void Sense(const Simulation& sim, const SensorModel& sensor, const std::vector<V
       const Vec2 rel = targets[k] - robots[i];
       const double d2 = rel.squaredNorm();
       if (d2 > range2) continue;
-      if (sensor.line_of_sight && !sim.RayClear(robots[i], targets[k])) continue;
+      if (sensor.line_of_sight && !sim.RayClear(robots[i], targets[k]))
+        continue;
       Rng& rng = (*rngs)[i];
       const double sd = sensor.Std(std::sqrt(d2));
       Measurement m;

@@ -9,8 +9,11 @@
 namespace aia {
 namespace {
 
-bool DiscFree(const Vec2& c, double r, const Vec2& ws, const std::vector<Box>& obstacles) {
-  if (c.x() - r < 0.0 || c.y() - r < 0.0 || c.x() + r > ws.x() || c.y() + r > ws.y()) return false;
+bool DiscFree(const Vec2& c, double r, const Vec2& ws,
+              const std::vector<Box>& obstacles) {
+  if (c.x() - r < 0.0 || c.y() - r < 0.0 || c.x() + r > ws.x() ||
+      c.y() + r > ws.y())
+    return false;
   const double r2 = r * r;
   for (const Box& b : obstacles) {
     if (PointBoxDistanceSq(c, b) <= r2) return false;
@@ -18,7 +21,8 @@ bool DiscFree(const Vec2& c, double r, const Vec2& ws, const std::vector<Box>& o
   return true;
 }
 
-bool SweepFree(const Vec2& a, const Vec2& b, double r, const std::vector<Box>& obstacles) {
+bool SweepFree(const Vec2& a, const Vec2& b, double r,
+               const std::vector<Box>& obstacles) {
   for (const Box& box : obstacles) {
     if (SegmentBoxDistance(a, b, box) <= r) return false;
   }
@@ -42,10 +46,14 @@ Lattice::Lattice(const Vec2& workspace, double step, double radius,
   const double reach = radius + step;  // covers the point and its move segments
   for (int b = 0; b < static_cast<int>(obstacles.size()); ++b) {
     const Box& box = obstacles[b];
-    const int x0 = std::max(0, static_cast<int>(std::floor((box.lo.x() - reach) / step)));
-    const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((box.hi.x() + reach) / step)));
-    const int y0 = std::max(0, static_cast<int>(std::floor((box.lo.y() - reach) / step)));
-    const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((box.hi.y() + reach) / step)));
+    const int x0 =
+        std::max(0, static_cast<int>(std::floor((box.lo.x() - reach) / step)));
+    const int x1 = std::min(
+        nx_ - 1, static_cast<int>(std::floor((box.hi.x() + reach) / step)));
+    const int y0 =
+        std::max(0, static_cast<int>(std::floor((box.lo.y() - reach) / step)));
+    const int y1 = std::min(
+        ny_ - 1, static_cast<int>(std::floor((box.hi.y() + reach) / step)));
     for (int iy = y0; iy <= y1; ++iy)
       for (int ix = x0; ix <= x1; ++ix) near[Index(ix, iy)].push_back(b);
   }
@@ -98,9 +106,11 @@ Lattice::Lattice(const Vec2& workspace, double step, double radius,
   num_components_ = static_cast<int>(sizes.size());
   std::vector<int> order(sizes.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return sizes[a] > sizes[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return sizes[a] > sizes[b]; });
   std::vector<int> rank(sizes.size());
-  for (size_t r = 0; r < order.size(); ++r) rank[order[r]] = static_cast<int>(r);
+  for (size_t r = 0; r < order.size(); ++r)
+    rank[order[r]] = static_cast<int>(r);
   for (int& c : component_)
     if (c >= 0) c = rank[c];
 }
@@ -112,8 +122,10 @@ int Lattice::NumValidMoves(int idx) const {
 }
 
 int Lattice::NearestPoint(const Vec2& p) const {
-  const int ix = std::clamp(static_cast<int>(std::floor(p.x() / step_)), 0, nx_ - 1);
-  const int iy = std::clamp(static_cast<int>(std::floor(p.y() / step_)), 0, ny_ - 1);
+  const int ix =
+      std::clamp(static_cast<int>(std::floor(p.x() / step_)), 0, nx_ - 1);
+  const int iy =
+      std::clamp(static_cast<int>(std::floor(p.y() / step_)), 0, ny_ - 1);
   return Index(ix, iy);
 }
 
@@ -170,7 +182,8 @@ void BfsDistances(const Lattice& lattice, const int* sources, int num_sources,
   }
 }
 
-Move StepDownField(const Lattice& lattice, const std::vector<int>& dist, int from) {
+Move StepDownField(const Lattice& lattice, const std::vector<int>& dist,
+                   int from) {
   const int d = dist[from];
   if (d <= 0) return Move::kStay;
   for (Move m : kMoves) {
@@ -180,7 +193,8 @@ Move StepDownField(const Lattice& lattice, const std::vector<int>& dist, int fro
   return Move::kStay;
 }
 
-Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng, bool* replaced) {
+Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng,
+                    bool* replaced) {
   *replaced = false;
   if (wanted != Move::kStay && lattice.Valid(from, wanted)) return wanted;
   Move valid[kNumMoves];

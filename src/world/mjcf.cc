@@ -24,15 +24,34 @@ std::array<float, 3> RobotColor(int robot) {
   const double x = c * (1.0 - std::fabs(std::fmod(hp, 2.0) - 1.0));
   double r = 0, g = 0, b = 0;
   switch (static_cast<int>(hp) % 6) {
-    case 0: r = c; g = x; break;
-    case 1: r = x; g = c; break;
-    case 2: g = c; b = x; break;
-    case 3: g = x; b = c; break;
-    case 4: r = x; b = c; break;
-    default: r = c; b = x; break;
+    case 0:
+      r = c;
+      g = x;
+      break;
+    case 1:
+      r = x;
+      g = c;
+      break;
+    case 2:
+      g = c;
+      b = x;
+      break;
+    case 3:
+      g = x;
+      b = c;
+      break;
+    case 4:
+      r = x;
+      b = c;
+      break;
+    default:
+      r = c;
+      b = x;
+      break;
   }
   const double m = v - c;
-  return {static_cast<float>(r + m), static_cast<float>(g + m), static_cast<float>(b + m)};
+  return {static_cast<float>(r + m), static_cast<float>(g + m),
+          static_cast<float>(b + m)};
 }
 
 std::string MakeMjcf(const World& world, const Scenario& s) {
@@ -44,27 +63,34 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
   std::ostringstream x;
   x << "<mujoco model=\"" << (s.name.empty() ? "aia" : s.name) << "\">\n";
   x << "  <compiler angle=\"radian\"/>\n";
-  x << "  <option timestep=\"" << Num(s.physics.timestep) << "\" gravity=\"0 0 0\"/>\n";
+  x << "  <option timestep=\"" << Num(s.physics.timestep)
+    << "\" gravity=\"0 0 0\"/>\n";
   // MuJoCo 2.2 allocates njmax x njmax: size it from the robot count.
-  x << "  <size njmax=\"" << 8 * n + 500 << "\" nconmax=\"" << 2 * n + 100 << "\"/>\n";
-  x << "  <visual>\n    <global offwidth=\"" << s.render.width << "\" offheight=\""
-    << s.render.height << "\" fovy=\"45\"/>\n";
-  x << "    <quality shadowsize=\"2048\"/>\n    <map znear=\"0.01\"/>\n  </visual>\n";
+  x << "  <size njmax=\"" << 8 * n + 500 << "\" nconmax=\"" << 2 * n + 100
+    << "\"/>\n";
+  x << "  <visual>\n    <global offwidth=\"" << s.render.width
+    << "\" offheight=\"" << s.render.height << "\" fovy=\"45\"/>\n";
+  x << "    <quality shadowsize=\"2048\"/>\n    <map znear=\"0.01\"/>\n  "
+       "</visual>\n";
   x << "  <asset>\n"
-       "    <texture name=\"floor\" type=\"2d\" builtin=\"checker\" rgb1=\"0.93 0.93 0.93\" "
+       "    <texture name=\"floor\" type=\"2d\" builtin=\"checker\" "
+       "rgb1=\"0.93 0.93 0.93\" "
        "rgb2=\"0.87 0.87 0.87\" width=\"64\" height=\"64\"/>\n"
-    << "    <material name=\"floor\" texture=\"floor\" texrepeat=\"" << Num(W / 2) << " "
-    << Num(H / 2) << "\"/>\n"
+    << "    <material name=\"floor\" texture=\"floor\" texrepeat=\""
+    << Num(W / 2) << " " << Num(H / 2) << "\"/>\n"
     << "    <material name=\"obstacle\" rgba=\"0.35 0.37 0.42 1\"/>\n"
     << "  </asset>\n";
   x << "  <default>\n"
-       "    <geom contype=\"1\" conaffinity=\"1\" friction=\"0.2 0.005 0.0001\"/>\n"
+       "    <geom contype=\"1\" conaffinity=\"1\" friction=\"0.2 0.005 "
+       "0.0001\"/>\n"
        "  </default>\n";
   x << "  <worldbody>\n";
-  x << "    <light pos=\"" << Num(W / 2) << " " << Num(H / 2) << " " << Num(2 * std::max(W, H))
+  x << "    <light pos=\"" << Num(W / 2) << " " << Num(H / 2) << " "
+    << Num(2 * std::max(W, H))
     << "\" dir=\"0 0 -1\" directional=\"true\" diffuse=\"0.6 0.6 0.6\"/>\n";
-  x << "    <geom name=\"floor\" type=\"plane\" pos=\"" << Num(W / 2) << " " << Num(H / 2)
-    << " 0\" size=\"" << Num(W / 2) << " " << Num(H / 2) << " 0.1\" material=\"floor\" "
+  x << "    <geom name=\"floor\" type=\"plane\" pos=\"" << Num(W / 2) << " "
+    << Num(H / 2) << " 0\" size=\"" << Num(W / 2) << " " << Num(H / 2)
+    << " 0.1\" material=\"floor\" "
     << "contype=\"0\" conaffinity=\"0\" group=\"" << kGroupFloor << "\"/>\n";
   // Border walls, outside the workspace.
   const double t = 0.1;
@@ -76,17 +102,19 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
                          {-t / 2, H / 2, t / 2, H / 2},
                          {W + t / 2, H / 2, t / 2, H / 2}};
   for (int i = 0; i < 4; ++i) {
-    x << "    <body name=\"wall" << i << "\" pos=\"" << Num(walls[i].cx) << " " << Num(walls[i].cy)
-      << " " << Num(h) << "\"><geom type=\"box\" size=\"" << Num(walls[i].sx) << " "
-      << Num(walls[i].sy) << " " << Num(h) << "\" material=\"obstacle\" group=\""
-      << kGroupObstacle << "\"/></body>\n";
+    x << "    <body name=\"wall" << i << "\" pos=\"" << Num(walls[i].cx) << " "
+      << Num(walls[i].cy) << " " << Num(h) << "\"><geom type=\"box\" size=\""
+      << Num(walls[i].sx) << " " << Num(walls[i].sy) << " " << Num(h)
+      << "\" material=\"obstacle\" group=\"" << kGroupObstacle
+      << "\"/></body>\n";
   }
   for (size_t b = 0; b < world.obstacles.size(); ++b) {
     const Box& box = world.obstacles[b];
     const Vec2 c = box.Center(), half = 0.5 * box.Size();
-    x << "    <body name=\"obstacle" << b << "\" pos=\"" << Num(c.x()) << " " << Num(c.y()) << " "
-      << Num(h) << "\"><geom type=\"box\" size=\"" << Num(half.x()) << " " << Num(half.y())
-      << " " << Num(h) << "\" material=\"obstacle\" group=\"" << kGroupObstacle
+    x << "    <body name=\"obstacle" << b << "\" pos=\"" << Num(c.x()) << " "
+      << Num(c.y()) << " " << Num(h) << "\"><geom type=\"box\" size=\""
+      << Num(half.x()) << " " << Num(half.y()) << " " << Num(h)
+      << "\" material=\"obstacle\" group=\"" << kGroupObstacle
       << "\"/></body>\n";
   }
   for (int i = 0; i < n; ++i) {
@@ -94,28 +122,36 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
     const auto c = RobotColor(i);
     // qpos (and ctrl) are displacements from the start, so that the file at
     // rest (ctrl = 0) holds every robot at its start in MuJoCo's own tools.
-    x << "    <body name=\"robot" << i << "\" pos=\"" << Num(p.x()) << " " << Num(p.y()) << " "
-      << Num(kRobotHalfHeight + 0.001) << "\">\n"
-      << "      <joint name=\"robot" << i << "_x\" type=\"slide\" axis=\"1 0 0\" damping=\"" << Num(damping) << "\"/>\n"
-      << "      <joint name=\"robot" << i << "_y\" type=\"slide\" axis=\"0 1 0\" damping=\"" << Num(damping) << "\"/>\n"
-      << "      <geom type=\"cylinder\" size=\"" << Num(world.robot_radius) << " "
-      << Num(kRobotHalfHeight) << "\" mass=\"" << Num(mass) << "\" rgba=\"" << c[0] << " "
-      << c[1] << " " << c[2] << " 1\" group=\"" << kGroupAgent << "\"/>\n"
+    x << "    <body name=\"robot" << i << "\" pos=\"" << Num(p.x()) << " "
+      << Num(p.y()) << " " << Num(kRobotHalfHeight + 0.001) << "\">\n"
+      << "      <joint name=\"robot" << i
+      << "_x\" type=\"slide\" axis=\"1 0 0\" damping=\"" << Num(damping)
+      << "\"/>\n"
+      << "      <joint name=\"robot" << i
+      << "_y\" type=\"slide\" axis=\"0 1 0\" damping=\"" << Num(damping)
+      << "\"/>\n"
+      << "      <geom type=\"cylinder\" size=\"" << Num(world.robot_radius)
+      << " " << Num(kRobotHalfHeight) << "\" mass=\"" << Num(mass)
+      << "\" rgba=\"" << c[0] << " " << c[1] << " " << c[2] << " 1\" group=\""
+      << kGroupAgent << "\"/>\n"
       << "    </body>\n";
   }
   for (int k = 0; k < world.NumTargets(); ++k) {
     const Vec2 p = world.targets[k].Position();
-    x << "    <body name=\"target" << k << "\" mocap=\"true\" pos=\"" << Num(p.x()) << " "
-      << Num(p.y()) << " 0.08\"><geom type=\"sphere\" size=\"0.1\" rgba=\"0.85 0.1 0.1 1\" "
-      << "contype=\"0\" conaffinity=\"0\" group=\"" << kGroupAgent << "\"/></body>\n";
+    x << "    <body name=\"target" << k << "\" mocap=\"true\" pos=\""
+      << Num(p.x()) << " " << Num(p.y())
+      << " 0.08\"><geom type=\"sphere\" size=\"0.1\" rgba=\"0.85 0.1 0.1 1\" "
+      << "contype=\"0\" conaffinity=\"0\" group=\"" << kGroupAgent
+      << "\"/></body>\n";
   }
   x << "  </worldbody>\n";
   if (n > 0) {
     x << "  <actuator>\n";
     for (int i = 0; i < n; ++i) {
       for (const char* axis : {"x", "y"}) {
-        x << "    <position name=\"robot" << i << "_" << axis << "\" joint=\"robot" << i << "_"
-          << axis << "\" kp=\"" << Num(s.physics.kp) << "\"/>\n";
+        x << "    <position name=\"robot" << i << "_" << axis
+          << "\" joint=\"robot" << i << "_" << axis << "\" kp=\""
+          << Num(s.physics.kp) << "\"/>\n";
       }
     }
     x << "  </actuator>\n";

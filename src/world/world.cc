@@ -18,7 +18,8 @@ std::string Fmt(const Vec2& v) {
   return os.str();
 }
 
-[[noreturn]] void Fail(const Scenario& s, const std::string& key, const std::string& what) {
+[[noreturn]] void Fail(const Scenario& s, const std::string& key,
+                       const std::string& what) {
   throw InputError(s.file, s.LineOf(key), key, what);
 }
 
@@ -40,22 +41,31 @@ std::vector<Box> RandomBoxes(const Scenario& s, Rng& rng) {
 std::vector<Box> MapBoxes(const Scenario& s) {
   const std::string key = "workspace.obstacles.map";
   cv::Mat img = cv::imread(s.workspace.map, cv::IMREAD_GRAYSCALE);
-  if (img.empty()) Fail(s, key, "cannot decode image '" + s.workspace.map + "' (PGM or PNG expected)");
+  if (img.empty())
+    Fail(s, key,
+         "cannot decode image '" + s.workspace.map + "' (PGM or PNG expected)");
   if (img.depth() != CV_8U) img.convertTo(img, CV_8U, 1.0 / 256.0);
-  std::vector<std::uint8_t> gray(img.begin<std::uint8_t>(), img.end<std::uint8_t>());
-  return BoxesFromImage(gray, img.cols, img.rows, s.workspace.size, s.workspace.map_threshold);
+  std::vector<std::uint8_t> gray(img.begin<std::uint8_t>(),
+                                 img.end<std::uint8_t>());
+  return BoxesFromImage(gray, img.cols, img.rows, s.workspace.size,
+                        s.workspace.map_threshold);
 }
 
-Grid<std::uint8_t> Rasterize(const Vec2& size, double cell, const std::vector<Box>& boxes) {
-  const int nx = std::max(1, static_cast<int>(std::ceil(size.x() / cell - 1e-9)));
-  const int ny = std::max(1, static_cast<int>(std::ceil(size.y() / cell - 1e-9)));
+Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
+                             const std::vector<Box>& boxes) {
+  const int nx =
+      std::max(1, static_cast<int>(std::ceil(size.x() / cell - 1e-9)));
+  const int ny =
+      std::max(1, static_cast<int>(std::ceil(size.y() / cell - 1e-9)));
   Grid<std::uint8_t> grid(nx, ny, cell, 0);
   for (const Box& b : boxes) {
     // Cells whose interior overlaps the box.
     const int x0 = std::max(0, static_cast<int>(std::floor(b.lo.x() / cell)));
     const int y0 = std::max(0, static_cast<int>(std::floor(b.lo.y() / cell)));
-    const int x1 = std::min(nx - 1, static_cast<int>(std::ceil(b.hi.x() / cell)) - 1);
-    const int y1 = std::min(ny - 1, static_cast<int>(std::ceil(b.hi.y() / cell)) - 1);
+    const int x1 =
+        std::min(nx - 1, static_cast<int>(std::ceil(b.hi.x() / cell)) - 1);
+    const int y1 =
+        std::min(ny - 1, static_cast<int>(std::ceil(b.hi.y() / cell)) - 1);
     for (int iy = y0; iy <= y1; ++iy)
       for (int ix = x0; ix <= x1; ++ix) grid(ix, iy) = 1;
   }
@@ -64,8 +74,8 @@ Grid<std::uint8_t> Rasterize(const Vec2& size, double cell, const std::vector<Bo
 
 }  // namespace
 
-std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols, int rows,
-                                const Vec2& size, double threshold) {
+std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
+                                int rows, const Vec2& size, double threshold) {
   AIA_CHECK(static_cast<int>(gray.size()) == cols * rows);
   const double px = size.x() / cols, py = size.y() / rows;
   const double cut = threshold * 255.0;
@@ -111,10 +121,12 @@ std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
   boxes.reserve(done.size());
   for (const Run& d : done) {
     // Image row 0 is the top of the map.
-    boxes.push_back({Vec2(d.x0 * px, size.y() - d.y1 * py), Vec2(d.x1 * px, size.y() - d.y0 * py)});
+    boxes.push_back({Vec2(d.x0 * px, size.y() - d.y1 * py),
+                     Vec2(d.x1 * px, size.y() - d.y0 * py)});
   }
   std::sort(boxes.begin(), boxes.end(), [](const Box& a, const Box& b) {
-    return std::make_pair(a.lo.y(), a.lo.x()) < std::make_pair(b.lo.y(), b.lo.x());
+    return std::make_pair(a.lo.y(), a.lo.x()) <
+           std::make_pair(b.lo.y(), b.lo.x());
   });
   return boxes;
 }
@@ -126,20 +138,33 @@ void World::BuildIndex() {
   buckets_.assign(static_cast<size_t>(bx_) * by_, {});
   for (int b = 0; b < static_cast<int>(obstacles.size()); ++b) {
     const Box& box = obstacles[b];
-    const int x0 = std::clamp(static_cast<int>(std::floor(box.lo.x() / bucket_)), 0, bx_ - 1);
-    const int x1 = std::clamp(static_cast<int>(std::floor(box.hi.x() / bucket_)), 0, bx_ - 1);
-    const int y0 = std::clamp(static_cast<int>(std::floor(box.lo.y() / bucket_)), 0, by_ - 1);
-    const int y1 = std::clamp(static_cast<int>(std::floor(box.hi.y() / bucket_)), 0, by_ - 1);
+    const int x0 = std::clamp(
+        static_cast<int>(std::floor(box.lo.x() / bucket_)), 0, bx_ - 1);
+    const int x1 = std::clamp(
+        static_cast<int>(std::floor(box.hi.x() / bucket_)), 0, bx_ - 1);
+    const int y0 = std::clamp(
+        static_cast<int>(std::floor(box.lo.y() / bucket_)), 0, by_ - 1);
+    const int y1 = std::clamp(
+        static_cast<int>(std::floor(box.hi.y() / bucket_)), 0, by_ - 1);
     for (int iy = y0; iy <= y1; ++iy)
-      for (int ix = x0; ix <= x1; ++ix) buckets_[static_cast<size_t>(iy) * bx_ + ix].push_back(b);
+      for (int ix = x0; ix <= x1; ++ix)
+        buckets_[static_cast<size_t>(iy) * bx_ + ix].push_back(b);
   }
 }
 
 bool World::LineOfSight(const Vec2& a, const Vec2& b) const {
-  const int x0 = std::clamp(static_cast<int>(std::floor(std::min(a.x(), b.x()) / bucket_)), 0, bx_ - 1);
-  const int x1 = std::clamp(static_cast<int>(std::floor(std::max(a.x(), b.x()) / bucket_)), 0, bx_ - 1);
-  const int y0 = std::clamp(static_cast<int>(std::floor(std::min(a.y(), b.y()) / bucket_)), 0, by_ - 1);
-  const int y1 = std::clamp(static_cast<int>(std::floor(std::max(a.y(), b.y()) / bucket_)), 0, by_ - 1);
+  const int x0 =
+      std::clamp(static_cast<int>(std::floor(std::min(a.x(), b.x()) / bucket_)),
+                 0, bx_ - 1);
+  const int x1 =
+      std::clamp(static_cast<int>(std::floor(std::max(a.x(), b.x()) / bucket_)),
+                 0, bx_ - 1);
+  const int y0 =
+      std::clamp(static_cast<int>(std::floor(std::min(a.y(), b.y()) / bucket_)),
+                 0, by_ - 1);
+  const int y1 =
+      std::clamp(static_cast<int>(std::floor(std::max(a.y(), b.y()) / bucket_)),
+                 0, by_ - 1);
   for (int iy = y0; iy <= y1; ++iy) {
     for (int ix = x0; ix <= x1; ++ix) {
       for (int bi : buckets_[static_cast<size_t>(iy) * bx_ + ix]) {
@@ -151,7 +176,8 @@ bool World::LineOfSight(const Vec2& a, const Vec2& b) const {
 }
 
 bool World::PointFree(const Vec2& p) const {
-  if (p.x() < 0.0 || p.y() < 0.0 || p.x() > size.x() || p.y() > size.y()) return false;
+  if (p.x() < 0.0 || p.y() < 0.0 || p.x() > size.x() || p.y() > size.y())
+    return false;
   for (const Box& b : obstacles)
     if (b.Contains(p)) return false;
   return true;
@@ -189,17 +215,23 @@ World World::Build(const Scenario& s) {
       const Vec2& p = s.robots.start[i];
       for (const Box& b : w.obstacles) {
         if (PointBoxDistanceSq(p, b) < s.robots.radius * s.robots.radius)
-          Fail(s, key, "start " + Fmt(p) + " is inside an obstacle (the robot disc touches the box " +
-                           Fmt(b.lo) + "-" + Fmt(b.hi) + ")");
+          Fail(s, key,
+               "start " + Fmt(p) +
+                   " is inside an obstacle (the robot disc touches the box " +
+                   Fmt(b.lo) + "-" + Fmt(b.hi) + ")");
       }
       const int idx = lat.NearestPoint(p);
       if (!lat.Free(idx))
-        Fail(s, key, "start " + Fmt(p) + " snaps to lattice point " + Fmt(lat.Point(idx)) +
-                         ", which is not free (obstacle or wall within the robot radius)");
+        Fail(s, key,
+             "start " + Fmt(p) + " snaps to lattice point " +
+                 Fmt(lat.Point(idx)) +
+                 ", which is not free (obstacle or wall within the robot "
+                 "radius)");
       for (int j = 0; j < i; ++j) {
         if (w.robot_starts[j] == idx)
-          Fail(s, key, "start " + Fmt(p) + " snaps to the same lattice point " +
-                           Fmt(lat.Point(idx)) + " as robot " + std::to_string(j));
+          Fail(s, key,
+               "start " + Fmt(p) + " snaps to the same lattice point " +
+                   Fmt(lat.Point(idx)) + " as robot " + std::to_string(j));
       }
       w.robot_starts.push_back(idx);
     }
@@ -209,10 +241,12 @@ World World::Build(const Scenario& s) {
     std::vector<int> pool;
     for (int idx = 0; idx < lat.size(); ++idx)
       if (lat.Free(idx) && lat.components()[idx] == 0) pool.push_back(idx);
-    if (lat.NumFree() == 0) Fail(s, "robots.count", "the workspace has no free lattice point");
+    if (lat.NumFree() == 0)
+      Fail(s, "robots.count", "the workspace has no free lattice point");
     if (n > static_cast<int>(pool.size()))
       Fail(s, "robots.count",
-           std::to_string(n) + " robots but only " + std::to_string(pool.size()) +
+           std::to_string(n) + " robots but only " +
+               std::to_string(pool.size()) +
                " free lattice points in the largest connected region (" +
                std::to_string(lat.NumFree()) + " free in all)");
     Rng rng(s.seed, "starts");
@@ -232,12 +266,14 @@ World World::Build(const Scenario& s) {
     t.x0 = Eigen::VectorXd::Zero(d);
     t.x0.head<2>() = pos;
     if (d == 4 && cfg) t.x0.tail<2>() = cfg->velocity;
-    const double sigma = (cfg && cfg->prior_sigma) ? *cfg->prior_sigma : s.targets.prior_sigma;
+    const double sigma =
+        (cfg && cfg->prior_sigma) ? *cfg->prior_sigma : s.targets.prior_sigma;
     t.prior_cov = sigma * sigma * Eigen::MatrixXd::Identity(d, d);
     // Default prior mean: the truth plus an offset drawn from
     // N(0, prior_offset^2 I), redrawn (a few times) until the mean lies in free
     // space: the robots know the map, so their prior puts its mean there. Drawn
-    // even when a mean is given, so the other targets' draws do not depend on it.
+    // even when a mean is given, so the other targets' draws do not depend on
+    // it.
     const double offset = s.targets.prior_offset;
     t.prior_mean = t.x0;
     for (int attempt = 0; attempt < 20; ++attempt) {
@@ -252,11 +288,13 @@ World World::Build(const Scenario& s) {
   };
   if (!s.targets.list.empty()) {
     for (size_t k = 0; k < s.targets.list.size(); ++k) {
-      const std::string key = "targets.list[" + std::to_string(k) + "].position";
+      const std::string key =
+          "targets.list[" + std::to_string(k) + "].position";
       const Vec2& p = s.targets.list[k].position;
       if (!w.PointFree(p)) {
         if (p.x() < 0 || p.y() < 0 || p.x() > w.size.x() || p.y() > w.size.y())
-          Fail(s, key, "target " + Fmt(p) + " is outside the workspace " + Fmt(w.size));
+          Fail(s, key,
+               "target " + Fmt(p) + " is outside the workspace " + Fmt(w.size));
         Fail(s, key, "target " + Fmt(p) + " is inside an obstacle");
       }
       add_target(p, &s.targets.list[k]);
@@ -274,13 +312,17 @@ World World::Build(const Scenario& s) {
     const double reach = 0.9 * s.sensor.range;
     const double clearance = 0.05;
     auto observable = [&](const Vec2& p) {
-      const int cx = lat.Ix(lat.NearestPoint(p)), cy = lat.Iy(lat.NearestPoint(p));
+      const int cx = lat.Ix(lat.NearestPoint(p)),
+                cy = lat.Iy(lat.NearestPoint(p));
       const int k = static_cast<int>(std::ceil(reach / lat.step())) + 1;
-      for (int iy = std::max(0, cy - k); iy <= std::min(lat.ny() - 1, cy + k); ++iy)
-        for (int ix = std::max(0, cx - k); ix <= std::min(lat.nx() - 1, cx + k); ++ix) {
+      for (int iy = std::max(0, cy - k); iy <= std::min(lat.ny() - 1, cy + k);
+           ++iy)
+        for (int ix = std::max(0, cx - k); ix <= std::min(lat.nx() - 1, cx + k);
+             ++ix) {
           const int idx = lat.Index(ix, iy);
           if (!reachable[idx] || (lat.Point(idx) - p).norm() > reach) continue;
-          if (!s.sensor.line_of_sight || w.LineOfSight(lat.Point(idx), p)) return true;
+          if (!s.sensor.line_of_sight || w.LineOfSight(lat.Point(idx), p))
+            return true;
         }
       return false;
     };
@@ -299,7 +341,8 @@ World World::Build(const Scenario& s) {
       if (!placed)
         Fail(s, "targets.count",
              "cannot place target " + std::to_string(k) +
-                 " where the robots could observe it (the free space is too small or cut off)");
+                 " where the robots could observe it (the free space is too "
+                 "small or cut off)");
     }
   }
 
@@ -308,7 +351,8 @@ World World::Build(const Scenario& s) {
   for (const FailureConfig& f : s.communication.failures) {
     RobotFailure rf;
     rf.step = f.step;
-    rf.robot = f.robot >= 0 ? f.robot : static_cast<int>(fail_rng.UniformInt(n));
+    rf.robot =
+        f.robot >= 0 ? f.robot : static_cast<int>(fail_rng.UniformInt(n));
     w.failures.push_back(rf);
   }
   return w;

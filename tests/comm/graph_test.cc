@@ -1,6 +1,6 @@
-#include <gtest/gtest.h>
-
 #include "aia/comm/graph.h"
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 
@@ -40,9 +40,11 @@ TEST(CommTest, PacketLossDeletesPoissonManyDirectedEdges) {
   for (int t = 0; t < steps; ++t) {
     net.Update(t, pos);
     int edges = 0;
-    for (int i = 0; i < n; ++i) edges += static_cast<int>(net.Neighbors(i).size());
+    for (int i = 0; i < n; ++i)
+      edges += static_cast<int>(net.Neighbors(i).size());
     EXPECT_EQ(edges + static_cast<int>(net.Lost().size()), n * (n - 1));
-    for (auto [i, j] : net.Lost()) {  // a lost edge is really gone, one way only
+    for (auto [i, j] :
+         net.Lost()) {  // a lost edge is really gone, one way only
       const auto& nb = net.Neighbors(i);
       EXPECT_EQ(std::count(nb.begin(), nb.end(), j), 0);
     }

@@ -17,7 +17,8 @@ TEST(RngTest, SameSeedAndStreamGiveSameNumbers) {
 }
 
 TEST(RngTest, StreamsDiffer) {
-  Rng a(42, "sensor", 3), b(42, "sensor", 4), c(42, "policy", 3), d(43, "sensor", 3);
+  Rng a(42, "sensor", 3), b(42, "sensor", 4), c(42, "policy", 3),
+      d(43, "sensor", 3);
   const auto x = a.Next();
   EXPECT_NE(x, b.Next());
   EXPECT_NE(x, c.Next());
@@ -66,7 +67,7 @@ TEST(GeometryTest, SegmentBoxTests) {
   EXPECT_TRUE(SegmentIntersectsBox({0, 1.5}, {3, 1.5}, b));
   EXPECT_FALSE(SegmentIntersectsBox({0, 2.5}, {3, 2.5}, b));
   EXPECT_FALSE(SegmentIntersectsBox({0, 0}, {0.9, 0.9}, b));  // stops short
-  EXPECT_TRUE(SegmentIntersectsBox({0, 0}, {3, 3}, b));       // diagonal through
+  EXPECT_TRUE(SegmentIntersectsBox({0, 0}, {3, 3}, b));  // diagonal through
   EXPECT_DOUBLE_EQ(SegmentBoxDistance({0, 2.5}, {3, 2.5}, b), 0.5);
   EXPECT_DOUBLE_EQ(SegmentBoxDistance({0, 1.5}, {3, 1.5}, b), 0.0);
   // A vertical segment beside the box: closest to the box's right edge.

@@ -1,12 +1,12 @@
+#include "aia/planning/expert.h"
+
 #include <gtest/gtest.h>
 
 #include <limits>
 
 #include "aia/core/error.h"
-
 #include "aia/estimation/filter.h"
 #include "aia/planning/decsb.h"
-#include "aia/planning/expert.h"
 #include "aia/planning/information.h"
 #include "support/test_support.h"
 
@@ -26,7 +26,8 @@ struct Team {
   CommNetwork comm;
   std::vector<int> positions;
 
-  explicit Team(const std::string& yaml, CommParams cp = {}) : scenario(ScenarioFromYaml(yaml)) {
+  explicit Team(const std::string& yaml, CommParams cp = {})
+      : scenario(ScenarioFromYaml(yaml)) {
     world = World::Build(scenario);
     std::vector<TargetModel> models(world.NumTargets());
     std::vector<Eigen::VectorXd> means;
@@ -80,8 +81,9 @@ TEST(ExpertTest, PlanReplayedThroughTheCentralizedFilterMeetsEps) {
     ASSERT_TRUE(plan.found);
     ASSERT_EQ(static_cast<int>(plan.configs.size()), plan.depth + 1);
     EXPECT_EQ(plan.configs[0], run.positions);
-    // Replay: every move valid, the centralized filter fed with the measurements
-    // the planner predicts (at the means) meets eps exactly at step F*.
+    // Replay: every move valid, the centralized filter fed with the
+    // measurements the planner predicts (at the means) meets eps exactly at
+    // step F*.
     const Lattice& lat = run.world.lattice;
     BeliefSet central = run.central;
     for (int d = 1; d <= plan.depth; ++d) {
@@ -104,7 +106,8 @@ TEST(ExpertTest, PlanReplayedThroughTheCentralizedFilterMeetsEps) {
       CentralUpdate(z, p, &central);
       bool all = true;
       for (int k = 0; k < run.world.NumTargets(); ++k) {
-        EXPECT_NEAR(central.DetCovariance(0, k), plan.det[d][k], 1e-9 * plan.det[d][k]);
+        EXPECT_NEAR(central.DetCovariance(0, k), plan.det[d][k],
+                    1e-9 * plan.det[d][k]);
         all = all && central.DetCovariance(0, k) <= run.scenario.mission.eps;
       }
       EXPECT_EQ(all, d == plan.depth) << "depth " << d;
@@ -141,8 +144,9 @@ TEST(ExpertTest, SameSeedSamePlan) {
 }
 
 TEST(ExpertTest, AlreadyLocalizedTeamNeedsNoMove) {
-  Team team("robots: {count: 1, start: [[5.25, 5.25]]}\n"
-            "targets: {list: [{position: [6.0, 5.25], prior_sigma: 0.01}]}\n");
+  Team team(
+      "robots: {count: 1, start: [[5.25, 5.25]]}\n"
+      "targets: {list: [{position: [6.0, 5.25], prior_sigma: 0.01}]}\n");
   const SamplingPlan plan = Solve(team, 100);
   EXPECT_TRUE(plan.found);
   EXPECT_EQ(plan.depth, 0);
@@ -151,8 +155,10 @@ TEST(ExpertTest, AlreadyLocalizedTeamNeedsNoMove) {
 TEST(ExpertTest, ShortestPlanForOneRobotOneTarget) {
   // One robot 4.5 m left of a target in the open: it must come within 2 m
   // (sensor range): five moves right end 2.0 m away, so F* = 5.
-  Team team("robots: {count: 1, start: [[5.25, 5.25]]}\n"
-            "targets: {list: [{position: [9.75, 5.25], prior_mean: [9.75, 5.25]}]}\n");
+  Team team(
+      "robots: {count: 1, start: [[5.25, 5.25]]}\n"
+      "targets: {list: [{position: [9.75, 5.25], prior_mean: [9.75, "
+      "5.25]}]}\n");
   const SamplingPlan plan = Solve(team, 2000);
   ASSERT_TRUE(plan.found);
   EXPECT_EQ(plan.depth, 5);
@@ -160,7 +166,8 @@ TEST(ExpertTest, ShortestPlanForOneRobotOneTarget) {
 
 TEST(ExpertTest, BadParameterIsAnInputError) {
   Scenario s = ScenarioFromYaml(
-      "robots: {count: 1}\ntargets: {count: 1}\npolicy:\n  name: expert\n  p_v: 1.5\n");
+      "robots: {count: 1}\ntargets: {count: 1}\npolicy:\n  name: expert\n  "
+      "p_v: 1.5\n");
   EXPECT_THROW(ExpertParams(s), InputError);
 }
 
@@ -169,7 +176,8 @@ TEST(DecSbTest, WithoutEdgesEachRobotPlansAlone) {
   // ones it would choose as the only robot in the world (same belief, same
   // position, same random stream).
   const std::string yaml =
-      "seed: 4\nrobots: {count: 3, start: [[2.25, 2.25], [10.25, 10.25], [17.25, 3.25]]}\n"
+      "seed: 4\nrobots: {count: 3, start: [[2.25, 2.25], [10.25, 10.25], "
+      "[17.25, 3.25]]}\n"
       "targets: {count: 5}\n";
   CommParams none;
   none.range_limited = true;

@@ -25,7 +25,8 @@ struct PolicyFixture {
   CommNetwork comm;
   std::vector<int> positions;
 
-  explicit PolicyFixture(const std::string& yaml) : scenario(ScenarioFromYaml(yaml)) {
+  explicit PolicyFixture(const std::string& yaml)
+      : scenario(ScenarioFromYaml(yaml)) {
     world = World::Build(scenario);
     std::vector<TargetModel> models;
     std::vector<Eigen::VectorXd> means;
@@ -60,13 +61,16 @@ struct PolicyFixture {
 };
 
 TEST(InformationTest, PredictedPrecisionHonoursRangeAndSight) {
-  PolicyFixture s("robots: {count: 1, start: [[1.25, 1.25]]}\ntargets: {count: 1}\n"
-          "workspace: {obstacles: {boxes: [{center: [5, 5], size: [0.4, 4]}]}}\n");
+  PolicyFixture s(
+      "robots: {count: 1, start: [[1.25, 1.25]]}\ntargets: {count: 1}\n"
+      "workspace: {obstacles: {boxes: [{center: [5, 5], size: [0.4, 4]}]}}\n");
   // 1.5 m in the open: 1 / (0.01 + 0.05 * 1.5)^2.
-  EXPECT_NEAR(PredictedPrecision(s.world, s.sensor, {2, 8}, {3.5, 8}), 1.0 / (0.085 * 0.085),
-              1e-9);
-  EXPECT_EQ(PredictedPrecision(s.world, s.sensor, {2, 8}, {4.5, 8}), 0.0);  // 2.5 m
-  EXPECT_EQ(PredictedPrecision(s.world, s.sensor, {4.2, 5}, {5.8, 5}), 0.0);  // behind the wall
+  EXPECT_NEAR(PredictedPrecision(s.world, s.sensor, {2, 8}, {3.5, 8}),
+              1.0 / (0.085 * 0.085), 1e-9);
+  EXPECT_EQ(PredictedPrecision(s.world, s.sensor, {2, 8}, {4.5, 8}),
+            0.0);  // 2.5 m
+  EXPECT_EQ(PredictedPrecision(s.world, s.sensor, {4.2, 5}, {5.8, 5}),
+            0.0);  // behind the wall
 }
 
 TEST(InformationTest, LogDetAfterMeasurementByHand) {
@@ -82,8 +86,9 @@ TEST(InformationTest, LogDetAfterMeasurementByHand) {
 }
 
 TEST(RandomPolicyTest, ReturnsValidMovesAndIsReproducible) {
-  PolicyFixture s("seed: 2\nrobots: {count: 8}\ntargets: {count: 3}\n"
-          "workspace: {obstacles: {random: {count: 30}}}\n");
+  PolicyFixture s(
+      "seed: 2\nrobots: {count: 8}\ntargets: {count: 3}\n"
+      "workspace: {obstacles: {random: {count: 30}}}\n");
   RandomPolicy a(s.scenario), b(s.scenario);
   a.Reset(s.world, 5);
   b.Reset(s.world, 5);
@@ -92,15 +97,17 @@ TEST(RandomPolicyTest, ReturnsValidMovesAndIsReproducible) {
     a.Decide(s.Context(), &ma);
     b.Decide(s.Context(), &mb);
     EXPECT_EQ(ma, mb);
-    for (int i = 0; i < 8; ++i) EXPECT_TRUE(s.world.lattice.Valid(s.positions[i], ma[i]));
+    for (int i = 0; i < 8; ++i)
+      EXPECT_TRUE(s.world.lattice.Valid(s.positions[i], ma[i]));
   }
 }
 
 TEST(GreedyPolicyTest, MovesTowardANearbyTarget) {
   // Target 2.25 m to the right of the robot, prior mean on it: only the move
   // right brings it into range.
-  PolicyFixture s("robots: {count: 1, start: [[5.25, 5.25]]}\n"
-          "targets: {list: [{position: [7.5, 5.25], prior_mean: [7.5, 5.25]}]}\n");
+  PolicyFixture s(
+      "robots: {count: 1, start: [[5.25, 5.25]]}\n"
+      "targets: {list: [{position: [7.5, 5.25], prior_mean: [7.5, 5.25]}]}\n");
   GreedyPolicy g(s.scenario);
   g.Reset(s.world, 1);
   std::vector<Move> m(1);
@@ -111,10 +118,12 @@ TEST(GreedyPolicyTest, MovesTowardANearbyTarget) {
 TEST(GreedyPolicyTest, FallsBackToShortestPathTowardTheNearestTarget) {
   // Far from every target: no move gains, so the robot walks a shortest
   // lattice path toward the nearer target (the left one), around a wall.
-  PolicyFixture s("robots: {count: 1, start: [[10.25, 10.25]]}\n"
-          "targets: {list: [{position: [2.0, 10.25], prior_mean: [2.0, 10.25]},"
-          " {position: [19.5, 19.5], prior_mean: [19.5, 19.5]}]}\n"
-          "workspace: {obstacles: {boxes: [{center: [8.0, 10.0], size: [0.4, 3.0]}]}}\n");
+  PolicyFixture s(
+      "robots: {count: 1, start: [[10.25, 10.25]]}\n"
+      "targets: {list: [{position: [2.0, 10.25], prior_mean: [2.0, 10.25]},"
+      " {position: [19.5, 19.5], prior_mean: [19.5, 19.5]}]}\n"
+      "workspace: {obstacles: {boxes: [{center: [8.0, 10.0], size: [0.4, "
+      "3.0]}]}}\n");
   GreedyPolicy g(s.scenario);
   g.Reset(s.world, 1);
   std::vector<Move> m(1);
@@ -123,9 +132,11 @@ TEST(GreedyPolicyTest, FallsBackToShortestPathTowardTheNearestTarget) {
   std::vector<int> goals;
   for (int q = 0; q < s.world.lattice.size(); ++q)
     if (s.world.lattice.Free(q) &&
-        PredictedPrecision(s.world, s.sensor, s.world.lattice.Point(q), {2.0, 10.25}) > 0)
+        PredictedPrecision(s.world, s.sensor, s.world.lattice.Point(q),
+                           {2.0, 10.25}) > 0)
       goals.push_back(q);
-  BfsDistances(s.world.lattice, goals.data(), static_cast<int>(goals.size()), &dist, &queue);
+  BfsDistances(s.world.lattice, goals.data(), static_cast<int>(goals.size()),
+               &dist, &queue);
   for (int step = 0; step < 40 && dist[s.positions[0]] > 0; ++step) {
     const int before = dist[s.positions[0]];
     g.Decide(s.Context(), &m);
@@ -140,9 +151,10 @@ TEST(GreedyPolicyTest, FallsBackToShortestPathTowardTheNearestTarget) {
 TEST(GreedyPolicyTest, IgnoresTargetsAlreadyBelowEps) {
   // The near target is already localized in the robot's belief, the far one
   // is not: the robot heads for the far one (down), not the near one (right).
-  PolicyFixture s("robots: {count: 1, start: [[10.25, 10.25]]}\n"
-          "targets: {list: [{position: [12.5, 10.25], prior_mean: [12.5, 10.25]},"
-          " {position: [10.25, 2.0], prior_mean: [10.25, 2.0]}]}\n");
+  PolicyFixture s(
+      "robots: {count: 1, start: [[10.25, 10.25]]}\n"
+      "targets: {list: [{position: [12.5, 10.25], prior_mean: [12.5, 10.25]},"
+      " {position: [10.25, 2.0], prior_mean: [10.25, 2.0]}]}\n");
   s.beliefs.Omega(0, 0) *= 100.0;  // det Sigma = 1e-4 <= eps
   s.beliefs.Xi(0, 0) *= 100.0;
   GreedyPolicy g(s.scenario);
@@ -156,7 +168,8 @@ TEST(RegistryTest, UnknownNameListsTheValidOnes) {
   const PolicyRegistry r = BuiltinPolicies();
   EXPECT_TRUE(r.Has("random"));
   EXPECT_TRUE(r.Has("greedy"));
-  Scenario s = ScenarioFromYaml("robots: {count: 1}\ntargets: {count: 1}\npolicy: {name: nope}\n");
+  Scenario s = ScenarioFromYaml(
+      "robots: {count: 1}\ntargets: {count: 1}\npolicy: {name: nope}\n");
   try {
     r.Create("nope", s);
     FAIL();
@@ -169,7 +182,8 @@ TEST(RegistryTest, UnknownNameListsTheValidOnes) {
 
 TEST(RegistryTest, UnknownPolicyParameterIsAnError) {
   Scenario s = ScenarioFromYaml(
-      "robots: {count: 1}\ntargets: {count: 1}\npolicy:\n  name: greedy\n  budget: 3\n");
+      "robots: {count: 1}\ntargets: {count: 1}\npolicy:\n  name: greedy\n  "
+      "budget: 3\n");
   try {
     BuiltinPolicies().Create("greedy", s);
     FAIL();

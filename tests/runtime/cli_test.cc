@@ -40,7 +40,8 @@ Expectation ReadExpectation(const std::string& path) {
 std::vector<std::string> BadFiles() {
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(SourcePath("tests/data/bad")))
-    if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
+    if (entry.path().extension() == ".yaml")
+      files.push_back(entry.path().string());
   std::sort(files.begin(), files.end());
   return files;
 }
@@ -54,33 +55,46 @@ TEST_P(BadInputTest, PrintsFileLineKeyAndExitsWith2) {
   const std::string out = testing::MakeTempDir("aia_bad_");
   const auto r = RunAia({"run", file, "--out", out, "--quiet"});
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  const std::string prefix =
-      "error: " + file + (e.line > 0 ? ":" + std::to_string(e.line) : "") + ": " + e.key + ": ";
-  EXPECT_EQ(r.err.rfind(prefix, 0), 0u) << "stderr: " << r.err << "expected prefix: " << prefix;
+  const std::string prefix = "error: " + file +
+                             (e.line > 0 ? ":" + std::to_string(e.line) : "") +
+                             ": " + e.key + ": ";
+  EXPECT_EQ(r.err.rfind(prefix, 0), 0u)
+      << "stderr: " << r.err << "expected prefix: " << prefix;
   EXPECT_NE(r.err.find(e.substring), std::string::npos) << r.err;
-  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1)
+      << "one line: " << r.err;
   EXPECT_FALSE(fs::exists(out + "/summary.json"));
   fs::remove_all(out);
 }
 
 INSTANTIATE_TEST_SUITE_P(Corpus, BadInputTest, ::testing::ValuesIn(BadFiles()),
-                         [](const auto& info) { return fs::path(info.param).stem().string(); });
+                         [](const auto& info) {
+                           return fs::path(info.param).stem().string();
+                         });
 
 TEST(CliTest, MissingScenarioFile) {
   const auto r = RunAia({"run", "/nonexistent/none.yaml", "--quiet"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err.rfind("error: /nonexistent/none.yaml: (file): cannot read file", 0), 0u) << r.err;
+  EXPECT_EQ(
+      r.err.rfind("error: /nonexistent/none.yaml: (file): cannot read file", 0),
+      0u)
+      << r.err;
 }
 
 TEST(CliTest, UnknownPolicyFlagListsValidNames) {
-  const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--policy", "nope", "--quiet"});
+  const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"),
+                         "--policy", "nope", "--quiet"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--policy: unknown policy 'nope' (valid: random, greedy"), std::string::npos)
+  EXPECT_NE(
+      r.err.find("--policy: unknown policy 'nope' (valid: random, greedy"),
+      std::string::npos)
       << r.err;
 }
 
 TEST(CliTest, UnknownFlagAndMissingArgumentExitWith2) {
-  EXPECT_EQ(RunAia({"run", SourcePath("scenarios/default.yaml"), "--bogus"}).exit_code, 2);
+  EXPECT_EQ(RunAia({"run", SourcePath("scenarios/default.yaml"), "--bogus"})
+                .exit_code,
+            2);
   EXPECT_EQ(RunAia({"run"}).exit_code, 2);
   EXPECT_EQ(RunAia({}).exit_code, 2);
   EXPECT_EQ(RunAia({"bench", "--sizes", "10by10"}).exit_code, 2);
@@ -100,7 +114,8 @@ TEST(CliTest, HelpOnEveryCommand) {
 std::vector<std::string> ScenarioFiles() {
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(SourcePath("scenarios")))
-    if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
+    if (entry.path().extension() == ".yaml")
+      files.push_back(entry.path().string());
   std::sort(files.begin(), files.end());
   return files;
 }
@@ -109,7 +124,8 @@ class ScenarioFileTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ScenarioFileTest, RunsAFewSteps) {
   const std::string out = testing::MakeTempDir("aia_scn_");
-  const auto r = RunAia({"run", GetParam(), "--max-steps", "3", "--out", out, "--quiet"});
+  const auto r =
+      RunAia({"run", GetParam(), "--max-steps", "3", "--out", out, "--quiet"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string summary = ReadFile(out + "/summary.json");
   EXPECT_NE(summary.find("\"steps\""), std::string::npos);
@@ -118,26 +134,33 @@ TEST_P(ScenarioFileTest, RunsAFewSteps) {
   fs::remove_all(out);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenarios, ScenarioFileTest, ::testing::ValuesIn(ScenarioFiles()),
-                         [](const auto& info) { return fs::path(info.param).stem().string(); });
+INSTANTIATE_TEST_SUITE_P(Scenarios, ScenarioFileTest,
+                         ::testing::ValuesIn(ScenarioFiles()),
+                         [](const auto& info) {
+                           return fs::path(info.param).stem().string();
+                         });
 
 std::string WithoutWallTime(const std::string& json) {
-  return std::regex_replace(json, std::regex("\"wall_s\": [^\n]*"), "\"wall_s\": X");
+  return std::regex_replace(json, std::regex("\"wall_s\": [^\n]*"),
+                            "\"wall_s\": X");
 }
 
 TEST(CliTest, SameScenarioAndSeedGiveByteIdenticalResults) {
-  const std::string a = testing::MakeTempDir("aia_det_"), b = testing::MakeTempDir("aia_det_");
+  const std::string a = testing::MakeTempDir("aia_det_"),
+                    b = testing::MakeTempDir("aia_det_");
   for (const auto& dir : {a, b}) {
-    const auto r = RunAia({"run", SourcePath("scenarios/robustness.yaml"), "--policy", "greedy",
-                           "--max-steps", "40", "--out", dir, "--quiet"});
+    const auto r =
+        RunAia({"run", SourcePath("scenarios/robustness.yaml"), "--policy",
+                "greedy", "--max-steps", "40", "--out", dir, "--quiet"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   EXPECT_EQ(ReadFile(a + "/trace.csv"), ReadFile(b + "/trace.csv"));
   EXPECT_EQ(WithoutWallTime(ReadFile(a + "/summary.json")),
             WithoutWallTime(ReadFile(b + "/summary.json")));
   // A different seed gives a different mission.
-  const auto r = RunAia({"run", SourcePath("scenarios/robustness.yaml"), "--seed", "99",
-                         "--max-steps", "40", "--out", b, "--quiet"});
+  const auto r =
+      RunAia({"run", SourcePath("scenarios/robustness.yaml"), "--seed", "99",
+              "--max-steps", "40", "--out", b, "--quiet"});
   ASSERT_EQ(r.exit_code, 0);
   EXPECT_NE(ReadFile(a + "/trace.csv"), ReadFile(b + "/trace.csv"));
   fs::remove_all(a);

@@ -1,6 +1,7 @@
+#include "aia/runtime/episode.h"
+
 #include <gtest/gtest.h>
 
-#include "aia/runtime/episode.h"
 #include "aia/runtime/mission.h"
 #include "support/test_support.h"
 
@@ -24,11 +25,13 @@ TEST_P(PolicyContractTest, ReachesSuccessOnASmallScenario) {
   while (!e->done()) {
     e->Step();
     // Every robot is always on a free lattice point.
-    for (int idx : e->robot_lattice()) EXPECT_TRUE(e->world().lattice.Free(idx));
+    for (int idx : e->robot_lattice())
+      EXPECT_TRUE(e->world().lattice.Free(idx));
   }
   EXPECT_TRUE(e->success()) << GetParam() << " after " << e->step() << " steps";
   EXPECT_EQ(e->flowtime(), e->step());
-  for (int k = 0; k < e->world().NumTargets(); ++k) EXPECT_LE(e->MinDet(k), s.mission.eps);
+  for (int k = 0; k < e->world().NumTargets(); ++k)
+    EXPECT_LE(e->MinDet(k), s.mission.eps);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllPolicies, PolicyContractTest,
@@ -37,8 +40,10 @@ INSTANTIATE_TEST_SUITE_P(AllPolicies, PolicyContractTest,
 
 TEST(EpisodeTest, FailedRobotStopsMovingAndSensing) {
   Scenario s = ScenarioFromYaml(
-      "seed: 2\nrobots: {count: 3}\ntargets: {count: 4}\nmission: {max_steps: 30}\n"
-      "communication: {failures: [{robot: 1, step: 5}]}\npolicy: {name: random}\n");
+      "seed: 2\nrobots: {count: 3}\ntargets: {count: 4}\nmission: {max_steps: "
+      "30}\n"
+      "communication: {failures: [{robot: 1, step: 5}]}\npolicy: {name: "
+      "random}\n");
   auto e = MakeEpisode(s, AllPolicies());
   Vec2 at_failure;
   while (!e->done()) {
@@ -57,7 +62,8 @@ TEST(EpisodeTest, StepZeroIsThePriorFusedWithFirstMeasurements) {
   // the prior information plus one measurement: Omega = I + r I.
   Scenario s = ScenarioFromYaml(
       "robots: {count: 1, start: [[5.25, 5.25]]}\n"
-      "targets: {list: [{position: [6.25, 5.25], prior_mean: [6.25, 5.25]}]}\n");
+      "targets: {list: [{position: [6.25, 5.25], prior_mean: [6.25, "
+      "5.25]}]}\n");
   s.policy.name = "random";
   auto e = MakeEpisode(s, AllPolicies());
   ASSERT_EQ(e->measurements()[0].size(), 1u);
@@ -73,9 +79,11 @@ TEST(EpisodeTest, StepZeroIsThePriorFusedWithFirstMeasurements) {
 TEST(EpisodeTest, TrackingMissionRunsItsWholeHorizon) {
   Scenario s = ScenarioFromYaml(
       "robots: {count: 1, start: [[5.25, 5.25]]}\n"
-      "targets:\n  list:\n    - position: [6.0, 5.25]\n      prior_mean: [6.0, 5.25]\n"
+      "targets:\n  list:\n    - position: [6.0, 5.25]\n      prior_mean: [6.0, "
+      "5.25]\n"
       "      dynamics: {A: [[1, 0], [0, 1]], b: [0.02, 0.0], q: 0.0001}\n"
-      "mission: {max_steps: 12, stop_at_success: false}\npolicy: {name: greedy}\n");
+      "mission: {max_steps: 12, stop_at_success: false}\npolicy: {name: "
+      "greedy}\n");
   auto e = MakeEpisode(s, AllPolicies());
   const Vec2 start = e->target_positions()[0];
   while (!e->done()) e->Step();

@@ -15,15 +15,17 @@ Scenario WallScenario() {
   return ScenarioFromYaml(
       "robots:\n  count: 2\n  start: [[3.75, 5.25], [3.75, 12.25]]\n"
       "targets:\n  list:\n"
-      "    - {position: [6.0, 5.25]}\n"     // 2.25 m away, behind the wall
-      "    - {position: [5.25, 12.25]}\n"   // 1.5 m away, in the open
-      "    - {position: [3.75, 15.0]}\n"    // 2.75 m from robot 1: out of range
-      "    - {position: [5.25, 5.25]}\n"    // 1.5 m, inside?  no: beside the wall
-      "workspace: {obstacles: {boxes: [{center: [4.9, 5.0], size: [0.4, 4.0]}]}}\n");
+      "    - {position: [6.0, 5.25]}\n"    // 2.25 m away, behind the wall
+      "    - {position: [5.25, 12.25]}\n"  // 1.5 m away, in the open
+      "    - {position: [3.75, 15.0]}\n"   // 2.75 m from robot 1: out of range
+      "    - {position: [5.25, 5.25]}\n"  // 1.5 m, inside?  no: beside the wall
+      "workspace: {obstacles: {boxes: [{center: [4.9, 5.0], size: [0.4, "
+      "4.0]}]}}\n");
 }
 
 TEST(SimulationTest, ModelIsSizedFromTheRobotCount) {
-  const Scenario s = ScenarioFromYaml("robots: {count: 7}\ntargets: {count: 2}\n");
+  const Scenario s =
+      ScenarioFromYaml("robots: {count: 7}\ntargets: {count: 2}\n");
   const World w = World::Build(s);
   Simulation sim(w, s);
   EXPECT_EQ(sim.model()->njmax, 8 * 7 + 500);
@@ -31,38 +33,45 @@ TEST(SimulationTest, ModelIsSizedFromTheRobotCount) {
   EXPECT_EQ(sim.model()->nu, 14);
   EXPECT_EQ(sim.model()->nmocap, 2);
   for (int i = 0; i < 7; ++i)
-    EXPECT_LT((sim.RobotPosition(i) - w.lattice.Point(w.robot_starts[i])).norm(), 1e-9);
+    EXPECT_LT(
+        (sim.RobotPosition(i) - w.lattice.Point(w.robot_starts[i])).norm(),
+        1e-9);
 }
 
 TEST(SimulationTest, RobotTracksItsWaypoint) {
-  const Scenario s = ScenarioFromYaml("robots: {count: 1, start: [[5.25, 5.25]]}\n"
-                                      "targets: {count: 1}\n");
+  const Scenario s = ScenarioFromYaml(
+      "robots: {count: 1, start: [[5.25, 5.25]]}\n"
+      "targets: {count: 1}\n");
   const World w = World::Build(s);
   Simulation sim(w, s);
   sim.SetWaypoint(0, {5.75, 5.25});
   const PhysicsStepStats st = sim.AdvanceToWaypoints();
   EXPECT_TRUE(st.all_arrived);
   EXPECT_FALSE(st.timed_out);
-  EXPECT_LT((sim.RobotPosition(0) - Vec2(5.75, 5.25)).norm(), s.physics.tolerance);
+  EXPECT_LT((sim.RobotPosition(0) - Vec2(5.75, 5.25)).norm(),
+            s.physics.tolerance);
 }
 
 TEST(SimulationTest, ContactsKeepRobotsApart) {
   // Both robots are sent to the same point: real contacts stop them short.
   const Scenario s = ScenarioFromYaml(
-      "robots: {count: 2, start: [[5.25, 5.25], [6.25, 5.25]]}\ntargets: {count: 1}\n");
+      "robots: {count: 2, start: [[5.25, 5.25], [6.25, 5.25]]}\ntargets: "
+      "{count: 1}\n");
   const World w = World::Build(s);
   Simulation sim(w, s);
   sim.SetWaypoint(0, {5.75, 5.25});
   sim.SetWaypoint(1, {5.75, 5.25});
   const PhysicsStepStats st = sim.AdvanceToWaypoints();
   EXPECT_FALSE(st.all_arrived);
-  EXPECT_GT((sim.RobotPosition(0) - sim.RobotPosition(1)).norm(), 2 * 0.15 - 0.02);
+  EXPECT_GT((sim.RobotPosition(0) - sim.RobotPosition(1)).norm(),
+            2 * 0.15 - 0.02);
 }
 
 TEST(SimulationTest, RobotDoesNotPassThroughAnObstacle) {
   const Scenario s = ScenarioFromYaml(
       "robots: {count: 1, start: [[4.25, 5.25]]}\ntargets: {count: 1}\n"
-      "workspace: {obstacles: {boxes: [{center: [5.0, 5.25], size: [0.4, 2.0]}]}}\n");
+      "workspace: {obstacles: {boxes: [{center: [5.0, 5.25], size: [0.4, "
+      "2.0]}]}}\n");
   const World w = World::Build(s);
   Simulation sim(w, s);
   sim.SetWaypoint(0, {5.75, 5.25});  // beyond the box: the world rule forbids
@@ -108,7 +117,8 @@ TEST(SensingTest, RayClearMatchesWorldLineOfSight) {
   for (int trial = 0; trial < 200; ++trial) {
     const Vec2 a(rng.Uniform(0.5, 9.5), rng.Uniform(0.5, 9.5));
     const Vec2 b(rng.Uniform(0.5, 9.5), rng.Uniform(0.5, 9.5));
-    EXPECT_EQ(sim.RayClear(a, b), w.LineOfSight(a, b)) << a.transpose() << " -> " << b.transpose();
+    EXPECT_EQ(sim.RayClear(a, b), w.LineOfSight(a, b))
+        << a.transpose() << " -> " << b.transpose();
   }
 }
 

@@ -22,7 +22,8 @@ Scenario ScenarioFromYaml(const std::string& yaml, const std::string& name) {
 }
 
 std::string MakeTempDir(const std::string& prefix) {
-  std::string templ = (std::filesystem::temp_directory_path() / (prefix + "XXXXXX")).string();
+  std::string templ =
+      (std::filesystem::temp_directory_path() / (prefix + "XXXXXX")).string();
   char* dir = mkdtemp(templ.data());
   if (dir == nullptr) std::abort();
   return dir;
@@ -39,8 +40,10 @@ namespace {
 std::string Quote(const std::string& s) {
   std::string out = "'";
   for (char c : s) {
-    if (c == '\'') out += "'\\''";
-    else out += c;
+    if (c == '\'')
+      out += "'\\''";
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -49,7 +52,8 @@ std::string Quote(const std::string& s) {
 CommandResult RunCommand(const std::string& command_line) {
   const std::string dir = MakeTempDir("aia_cmd_");
   const std::string out_path = dir + "/out", err_path = dir + "/err";
-  const std::string full = command_line + " >" + out_path + " 2>" + err_path + " </dev/null";
+  const std::string full =
+      command_line + " >" + out_path + " 2>" + err_path + " </dev/null";
   const int status = std::system(full.c_str());
   CommandResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -9,11 +9,13 @@
 
 namespace aia::testing {
 
-// Absolute path of a file in the source tree, e.g. SourcePath("scenarios/default.yaml").
+// Absolute path of a file in the source tree, e.g.
+// SourcePath("scenarios/default.yaml").
 std::string SourcePath(const std::string& relative);
 
 // Parses a scenario given as YAML text (errors name `name`).
-Scenario ScenarioFromYaml(const std::string& yaml, const std::string& name = "test.yaml");
+Scenario ScenarioFromYaml(const std::string& yaml,
+                          const std::string& name = "test.yaml");
 
 // A fresh empty directory under the system temp dir.
 std::string MakeTempDir(const std::string& prefix);

@@ -1,3 +1,5 @@
+#include "aia/world/world.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -7,7 +9,6 @@
 #include "aia/core/error.h"
 #include "aia/world/lattice.h"
 #include "aia/world/mjcf.h"
-#include "aia/world/world.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -63,7 +64,8 @@ TEST(LatticeTest, BfsDistancesByHand) {
   BfsDistances(lat, &src, 1, &dist, &queue);
   const int expected[3][3] = {{0, 1, 2}, {1, -1, 3}, {2, 3, 4}};  // [iy][ix]
   for (int iy = 0; iy < 3; ++iy)
-    for (int ix = 0; ix < 3; ++ix) EXPECT_EQ(dist[lat.Index(ix, iy)], expected[iy][ix]);
+    for (int ix = 0; ix < 3; ++ix)
+      EXPECT_EQ(dist[lat.Index(ix, iy)], expected[iy][ix]);
   // Walking down the field from the far corner reaches the source in 4 moves.
   int p = lat.Index(2, 2);
   for (int k = 0; k < 4; ++k) p = lat.Next(p, StepDownField(lat, dist, p));
@@ -75,7 +77,8 @@ TEST(LatticeTest, NearestFreeSkipsBlockedPoints) {
   Lattice lat({2.0, 2.0}, 0.5, 0.15, {Box{{0.6, 0.6}, {0.9, 0.9}}});
   const int idx = lat.NearestFree({0.8, 0.74});
   EXPECT_TRUE(lat.Free(idx));
-  EXPECT_NEAR((lat.Point(idx) - Vec2(0.8, 0.74)).norm(), 0.5 - 0.05 + 0.0, 0.06);
+  EXPECT_NEAR((lat.Point(idx) - Vec2(0.8, 0.74)).norm(), 0.5 - 0.05 + 0.0,
+              0.06);
 }
 
 TEST(WorldRuleTest, InvalidMoveIsReplacedByAValidOne) {
@@ -96,8 +99,9 @@ TEST(WorldRuleTest, InvalidMoveIsReplacedByAValidOne) {
 
 TEST(WorldRuleTest, NoValidMoveMeansStay) {
   // A single free point boxed in on every side.
-  Lattice lat({1.5, 1.5}, 0.5, 0.15, {Box{{0, 0}, {1.5, 0.45}}, Box{{0, 1.05}, {1.5, 1.5}},
-                                      Box{{0, 0}, {0.45, 1.5}}, Box{{1.05, 0}, {1.5, 1.5}}});
+  Lattice lat({1.5, 1.5}, 0.5, 0.15,
+              {Box{{0, 0}, {1.5, 0.45}}, Box{{0, 1.05}, {1.5, 1.5}},
+               Box{{0, 0}, {0.45, 1.5}}, Box{{1.05, 0}, {1.5, 1.5}}});
   const int c = lat.Index(1, 1);
   ASSERT_TRUE(lat.Free(c));
   ASSERT_EQ(lat.NumValidMoves(c), 0);
@@ -110,9 +114,9 @@ TEST(WorldRuleTest, NoValidMoveMeansStay) {
 TEST(BoxesFromImageTest, MergesDarkPixelsIntoBoxes) {
   // 4 x 3 image, row 0 on top; a 2 x 2 dark square at columns 1-2, rows 0-1
   // and one dark pixel at column 0, row 2. Pixel = 1 m on a 4 x 3 m workspace.
-  const std::vector<std::uint8_t> img = {255, 0, 0, 255,  //
-                                         255, 0, 0, 255,  //
-                                         0, 255, 255, 255};
+  const std::vector<std::uint8_t> img = {255, 0,   0,   255,  //
+                                         255, 0,   0,   255,  //
+                                         0,   255, 255, 255};
   auto boxes = BoxesFromImage(img, 4, 3, {4.0, 3.0}, 0.5);
   ASSERT_EQ(boxes.size(), 2u);
   // Sorted by (lo.y, lo.x): the single pixel (bottom row) first.
@@ -129,7 +133,8 @@ TEST(WorldTest, SameSeedSameWorldAndDifferentSeedDifferentWorld) {
   Scenario s = ScenarioFromYaml(yaml);
   const World a = World::Build(s), b = World::Build(s);
   ASSERT_EQ(a.obstacles.size(), 20u);
-  for (size_t i = 0; i < a.obstacles.size(); ++i) EXPECT_EQ(a.obstacles[i].lo, b.obstacles[i].lo);
+  for (size_t i = 0; i < a.obstacles.size(); ++i)
+    EXPECT_EQ(a.obstacles[i].lo, b.obstacles[i].lo);
   EXPECT_EQ(a.robot_starts, b.robot_starts);
   s.seed = 5;
   const World c = World::Build(s);
@@ -157,7 +162,8 @@ TEST(WorldTest, RandomStartsAndTargetsAreValid) {
       for (int idx = 0; idx < w.lattice.size() && !observable; ++idx) {
         if (!w.lattice.Free(idx) || w.lattice.components()[idx] != 0) continue;
         const Vec2 p = w.lattice.Point(idx);
-        observable = (p - t.Position()).norm() <= 2.0 && w.LineOfSight(p, t.Position());
+        observable =
+            (p - t.Position()).norm() <= 2.0 && w.LineOfSight(p, t.Position());
       }
       EXPECT_TRUE(observable);
     }
@@ -177,7 +183,8 @@ TEST(WorldTest, LineOfSightAgainstBoxes) {
 
 TEST(WorldTest, StartInsideAnObstacleIsAnErrorAtItsLine) {
   const std::string yaml =
-      "robots:\n  count: 2\n  start: [[1.25, 1.25], [5.25, 5.25]]\ntargets: {count: 1}\n"
+      "robots:\n  count: 2\n  start: [[1.25, 1.25], [5.25, 5.25]]\ntargets: "
+      "{count: 1}\n"
       "workspace: {obstacles: {boxes: [{center: [5, 5], size: [1, 1]}]}}\n";
   Scenario s = ScenarioFromYaml(yaml);
   try {
@@ -186,7 +193,8 @@ TEST(WorldTest, StartInsideAnObstacleIsAnErrorAtItsLine) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "robots.start[1]");
     EXPECT_EQ(e.line(), 3);
-    EXPECT_NE(e.message().find("inside an obstacle"), std::string::npos) << e.message();
+    EXPECT_NE(e.message().find("inside an obstacle"), std::string::npos)
+        << e.message();
   }
 }
 
@@ -210,9 +218,10 @@ TEST(WorldTest, TargetInsideAnObstacleIsAnError) {
 }
 
 TEST(WorldTest, MapImageBecomesObstacles) {
-  const Scenario s = ScenarioFromYaml("robots: {count: 3}\ntargets: {count: 3}\n"
-                                      "workspace: {obstacles: {map: " +
-                                      testing::SourcePath("scenarios/maps/office.pgm") + "}}\n");
+  const Scenario s = ScenarioFromYaml(
+      "robots: {count: 3}\ntargets: {count: 3}\n"
+      "workspace: {obstacles: {map: " +
+      testing::SourcePath("scenarios/maps/office.pgm") + "}}\n");
   const World w = World::Build(s);
   EXPECT_GT(w.obstacles.size(), 5u);
   // The map's wall above the corridor: pixel row 44 of 100 -> y = 20 - 8.9 m.
@@ -229,7 +238,8 @@ TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
   const std::string path = dir + "/model.xml";
   std::ofstream(path) << MakeMjcf(w, s);
   // mujoco-testxml loads the file, saves it and compares both compiled models.
-  const auto r = testing::RunCommand("cd " + dir + " && mujoco-testxml model.xml");
+  const auto r =
+      testing::RunCommand("cd " + dir + " && mujoco-testxml model.xml");
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("Max difference : 0"), std::string::npos) << r.out;
   std::filesystem::remove_all(dir);

@@ -28,8 +28,8 @@ struct ScheduledFailure {
 class CommNetwork {
  public:
   CommNetwork() = default;
-  CommNetwork(const CommParams& params, int num_robots, std::vector<ScheduledFailure> failures,
-              std::uint64_t seed);
+  CommNetwork(const CommParams& params, int num_robots,
+              std::vector<ScheduledFailure> failures, std::uint64_t seed);
 
   // Builds this step's graph from the robots' positions. Call once per step,
   // with increasing steps; packet loss draws from the network's own stream.
@@ -38,7 +38,9 @@ class CommNetwork {
   int size() const { return n_; }
   // Robots whose messages robot i received this step (i excluded), ascending.
   const std::vector<int>& Neighbors(int i) const { return neighbors_[i]; }
-  const std::vector<std::vector<int>>& AllNeighbors() const { return neighbors_; }
+  const std::vector<std::vector<int>>& AllNeighbors() const {
+    return neighbors_;
+  }
   bool Active(int i) const { return active_[i] != 0; }
   const std::vector<std::uint8_t>& active() const { return active_; }
   int NumActive() const;

@@ -8,16 +8,15 @@ namespace aia::internal {
                               const char* msg);
 }  // namespace aia::internal
 
-#define AIA_CHECK(cond)                                                   \
-  do {                                                                    \
-    if (!(cond)) ::aia::internal::CheckFailed(#cond, __FILE__, __LINE__, \
-                                              "");                       \
+#define AIA_CHECK(cond)                                                       \
+  do {                                                                        \
+    if (!(cond)) ::aia::internal::CheckFailed(#cond, __FILE__, __LINE__, ""); \
   } while (false)
 
-#define AIA_CHECK_MSG(cond, msg)                                          \
-  do {                                                                    \
-    if (!(cond)) ::aia::internal::CheckFailed(#cond, __FILE__, __LINE__, \
-                                              (msg));                    \
+#define AIA_CHECK_MSG(cond, msg)                                      \
+  do {                                                                \
+    if (!(cond))                                                      \
+      ::aia::internal::CheckFailed(#cond, __FILE__, __LINE__, (msg)); \
   } while (false)
 
 #endif  // AIA_CORE_CHECK_H_

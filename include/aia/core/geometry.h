@@ -20,7 +20,8 @@ struct Box {
   Vec2 Center() const { return 0.5 * (lo + hi); }
   Vec2 Size() const { return hi - lo; }
   bool Contains(const Vec2& p) const {
-    return p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() && p.y() <= hi.y();
+    return p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() &&
+           p.y() <= hi.y();
   }
 };
 
@@ -34,7 +35,8 @@ double SegmentBoxDistance(const Vec2& a, const Vec2& b, const Box& box);
 bool SegmentIntersectsBox(const Vec2& a, const Vec2& b, const Box& box);
 
 // Whether the open segment (a, b) meets any box in the list.
-bool SegmentBlocked(const Vec2& a, const Vec2& b, const std::vector<Box>& boxes);
+bool SegmentBlocked(const Vec2& a, const Vec2& b,
+                    const std::vector<Box>& boxes);
 
 }  // namespace aia
 

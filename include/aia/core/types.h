@@ -15,30 +15,46 @@ using Mat2 = Eigen::Matrix2d;
 // A robot's decision. The paper's admissible set U = {left, right, up, down};
 // kStay is only what the world applies when no move is valid (or the robot has
 // failed), never a policy's choice.
-enum class Move : std::uint8_t { kLeft = 0, kRight = 1, kUp = 2, kDown = 3, kStay = 4 };
+enum class Move : std::uint8_t {
+  kLeft = 0,
+  kRight = 1,
+  kUp = 2,
+  kDown = 3,
+  kStay = 4
+};
 
 inline constexpr int kNumMoves = 4;  // |U|
-inline constexpr std::array<Move, kNumMoves> kMoves = {Move::kLeft, Move::kRight,
-                                                       Move::kUp, Move::kDown};
+inline constexpr std::array<Move, kNumMoves> kMoves = {
+    Move::kLeft, Move::kRight, Move::kUp, Move::kDown};
 
 // Lattice offset of a move, in lattice units (x to the right, y up).
 inline constexpr std::array<int, 2> MoveDelta(Move m) {
   switch (m) {
-    case Move::kLeft: return {-1, 0};
-    case Move::kRight: return {1, 0};
-    case Move::kUp: return {0, 1};
-    case Move::kDown: return {0, -1};
-    default: return {0, 0};
+    case Move::kLeft:
+      return {-1, 0};
+    case Move::kRight:
+      return {1, 0};
+    case Move::kUp:
+      return {0, 1};
+    case Move::kDown:
+      return {0, -1};
+    default:
+      return {0, 0};
   }
 }
 
 inline constexpr std::string_view MoveName(Move m) {
   switch (m) {
-    case Move::kLeft: return "left";
-    case Move::kRight: return "right";
-    case Move::kUp: return "up";
-    case Move::kDown: return "down";
-    default: return "stay";
+    case Move::kLeft:
+      return "left";
+    case Move::kRight:
+      return "right";
+    case Move::kUp:
+      return "up";
+    case Move::kDown:
+      return "down";
+    default:
+      return "stay";
   }
 }
 

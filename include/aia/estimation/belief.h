@@ -1,7 +1,8 @@
 // Gaussian beliefs over the hidden state x = [x_1; ...; x_M] in information
 // form, block diagonal per target (SPEC sections 4-5). All robots' beliefs are
 // stored in one row-major matrix, one row per robot, so that DKF fusion is one
-// dense product W * B over contiguous memory and never touches a 2M x 2M matrix.
+// dense product W * B over contiguous memory and never touches a 2M x 2M
+// matrix.
 #ifndef AIA_ESTIMATION_BELIEF_H_
 #define AIA_ESTIMATION_BELIEF_H_
 
@@ -34,7 +35,9 @@ class BeliefLayout {
   const TargetModel& model(int k) const { return models_[k]; }
   int dim(int k) const { return models_[k].dim; }
   int omega_offset(int k) const { return offsets_[k]; }
-  int xi_offset(int k) const { return offsets_[k] + models_[k].dim * models_[k].dim; }
+  int xi_offset(int k) const {
+    return offsets_[k] + models_[k].dim * models_[k].dim;
+  }
   bool all_static() const { return all_static_; }
 
  private:
@@ -47,7 +50,8 @@ class BeliefLayout {
 // Beliefs of `rows` agents (robots, or one row for the centralized filter).
 class BeliefSet {
  public:
-  using Storage = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  using Storage =
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
   BeliefSet() = default;
   BeliefSet(const BeliefLayout* layout, int rows);

@@ -2,7 +2,8 @@
 // section 5, written per target block:
 //   predict:  Sigma^- = A Sigma A' + Q,  mu^- = A mu + b
 //   fuse:     Omega_i = sum_{j in N_i + i} kappa_ij Omega_j^- + Z_i,
-//             xi_i    = sum_{j in N_i + i} kappa_ij xi_j^-    + M' R_i^-1 (y_i + p_i)
+//             xi_i    = sum_{j in N_i + i} kappa_ij xi_j^-    + M' R_i^-1 (y_i
+//             + p_i)
 //   central:  Omega   = Omega^- + sum_i Z_i
 // with Z_i = M' R_i^-1 M for the targets robot i sees.
 #ifndef AIA_ESTIMATION_FILTER_H_
@@ -22,20 +23,20 @@ void Predict(BeliefSet* beliefs);
 
 // Adds one robot's measurements (taken at position p) to one row:
 // Omega^k += r I on the position block, xi^k += r (y + p).
-void AddMeasurements(const std::vector<Measurement>& z, const Vec2& p, BeliefSet* beliefs,
-                     int row);
+void AddMeasurements(const std::vector<Measurement>& z, const Vec2& p,
+                     BeliefSet* beliefs, int row);
 
 // DKF weights: W(i,i) = kappa_self and W(i,j) = (1 - kappa_self) / |N_i| for j
 // in N_i; an isolated robot keeps W(i,i) = 1. neighbors[i] lists the robots
 // whose messages robot i received this step (i itself excluded).
-void FusionWeights(const std::vector<std::vector<int>>& neighbors, double kappa_self,
-                   Eigen::MatrixXd* W);
+void FusionWeights(const std::vector<std::vector<int>>& neighbors,
+                   double kappa_self, Eigen::MatrixXd* W);
 
 // out = W * predicted, then each robot's own measurements are added.
 // `out` must not alias `predicted`. No allocation once `out` has its size.
 void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
-          const std::vector<std::vector<Measurement>>& z, const std::vector<Vec2>& positions,
-          BeliefSet* out);
+          const std::vector<std::vector<Measurement>>& z,
+          const std::vector<Vec2>& positions, BeliefSet* out);
 
 // The centralized filter: one row, every robot's measurements added.
 void CentralUpdate(const std::vector<std::vector<Measurement>>& z,

@@ -20,14 +20,16 @@ class DecSbPolicy : public Policy {
   explicit DecSbPolicy(const Scenario& scenario);
   std::string_view name() const override { return "decsb"; }
   void Reset(const World& world, std::uint64_t seed) override;
-  PolicyStatus Decide(const DecisionContext& ctx, std::vector<Move>* moves) override;
+  PolicyStatus Decide(const DecisionContext& ctx,
+                      std::vector<Move>* moves) override;
 
  private:
   SamplingParams params_;
   SamplingTree tree_;
   std::vector<Rng> rngs_;
-  std::vector<std::vector<int>> plans_;  // each robot's last plan (lattice points)
-  std::vector<int> next_;                // the planned next position each robot announces
+  std::vector<std::vector<int>>
+      plans_;              // each robot's last plan (lattice points)
+  std::vector<int> next_;  // the planned next position each robot announces
   std::vector<double> extra_;
 };
 

@@ -28,7 +28,8 @@ class ExpertPolicy : public Policy {
   explicit ExpertPolicy(const Scenario& scenario);
   std::string_view name() const override { return "expert"; }
   void Reset(const World& world, std::uint64_t seed) override;
-  PolicyStatus Decide(const DecisionContext& ctx, std::vector<Move>* moves) override;
+  PolicyStatus Decide(const DecisionContext& ctx,
+                      std::vector<Move>* moves) override;
 
   // The plan being executed (for tools and tests).
   const SamplingPlan& plan() const { return plan_; }
@@ -41,8 +42,8 @@ class ExpertPolicy : public Policy {
   SamplingTree tree_;
   Rng rng_;
   SamplingPlan plan_;
-  int index_ = 0;          // position of the team in plan_.configs
-  bool team_best_ = false; // plan_ was made on the team's best local beliefs
+  int index_ = 0;           // position of the team in plan_.configs
+  bool team_best_ = false;  // plan_ was made on the team's best local beliefs
   int replans_ = 0;
   std::unique_ptr<BeliefSet> best_rows_;  // scratch for team-best roots
 };

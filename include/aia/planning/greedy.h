@@ -22,7 +22,8 @@ class GreedyPolicy : public Policy {
   explicit GreedyPolicy(const Scenario& scenario);
   std::string_view name() const override { return "greedy"; }
   void Reset(const World& world, std::uint64_t seed) override;
-  PolicyStatus Decide(const DecisionContext& ctx, std::vector<Move>* moves) override;
+  PolicyStatus Decide(const DecisionContext& ctx,
+                      std::vector<Move>* moves) override;
 
  private:
   // BFS toward the nearest observation point of an unlocalized target;

@@ -16,8 +16,8 @@
 namespace aia {
 
 // r such that Z = r M'M, or 0 when no measurement is predicted.
-inline double PredictedPrecision(const World& world, const SensorModel& sensor, const Vec2& p,
-                                 const Vec2& mu) {
+inline double PredictedPrecision(const World& world, const SensorModel& sensor,
+                                 const Vec2& p, const Vec2& mu) {
   const double d = (mu - p).norm();
   if (!sensor.InRange(d)) return 0.0;
   if (sensor.line_of_sight && !world.LineOfSight(p, mu)) return 0.0;
@@ -35,13 +35,15 @@ inline double LogDetSigma2(double a, double b, double c, double r) {
 // size so that planners allocate nothing per step.
 struct PredictedBlock {
   int dim = 2;
-  Eigen::Matrix4d omega = Eigen::Matrix4d::Identity();  // top-left dim x dim used
-  Vec2 mu{0.0, 0.0};                                     // predicted position mean
-  double logdet_sigma = 0.0;                             // log det Sigma^-
+  Eigen::Matrix4d omega =
+      Eigen::Matrix4d::Identity();  // top-left dim x dim used
+  Vec2 mu{0.0, 0.0};                // predicted position mean
+  double logdet_sigma = 0.0;        // log det Sigma^-
 };
 
 // Predicts block k of `row` one step ahead (identity for static targets).
-void PredictBlock(const BeliefSet& beliefs, int row, int k, PredictedBlock* out);
+void PredictBlock(const BeliefSet& beliefs, int row, int k,
+                  PredictedBlock* out);
 
 // log det Sigma after adding r I to the position block of `block.omega`.
 double LogDetSigmaAfter(const PredictedBlock& block, double r);

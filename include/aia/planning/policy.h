@@ -29,13 +29,14 @@ enum class PolicyStatus {
 // expert alone may read `central` and every robot's position.
 struct DecisionContext {
   int step = 0;
-  const World* world = nullptr;            // map and lattice, known to every robot
+  const World* world = nullptr;  // map and lattice, known to every robot
   const SensorModel* sensor = nullptr;
   double eps = 0.1;
   const std::vector<int>* positions = nullptr;  // lattice index of each robot
-  const CommNetwork* comm = nullptr;       // this step's graph and the active robots
-  const BeliefSet* beliefs = nullptr;      // robot i's fused (posterior) belief in row i
-  const BeliefSet* central = nullptr;      // the centralized filter, one row
+  const CommNetwork* comm = nullptr;  // this step's graph and the active robots
+  const BeliefSet* beliefs =
+      nullptr;  // robot i's fused (posterior) belief in row i
+  const BeliefSet* central = nullptr;  // the centralized filter, one row
 };
 
 class Policy {
@@ -48,7 +49,8 @@ class Policy {
   // Writes one move per robot into `moves` (size = number of robots). Moves of
   // inactive robots are ignored. A returned move may be invalid; the world
   // rule replaces it (and counts it).
-  virtual PolicyStatus Decide(const DecisionContext& ctx, std::vector<Move>* moves) = 0;
+  virtual PolicyStatus Decide(const DecisionContext& ctx,
+                              std::vector<Move>* moves) = 0;
 };
 
 }  // namespace aia

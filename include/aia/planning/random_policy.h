@@ -12,14 +12,16 @@ namespace aia {
 
 // Throws InputError (at the key's line) for any `policy.<key>` parameter not
 // in `allowed`.
-void CheckPolicyParams(const Scenario& scenario, const std::vector<std::string>& allowed);
+void CheckPolicyParams(const Scenario& scenario,
+                       const std::vector<std::string>& allowed);
 
 class RandomPolicy : public Policy {
  public:
   explicit RandomPolicy(const Scenario& scenario);
   std::string_view name() const override { return "random"; }
   void Reset(const World& world, std::uint64_t seed) override;
-  PolicyStatus Decide(const DecisionContext& ctx, std::vector<Move>* moves) override;
+  PolicyStatus Decide(const DecisionContext& ctx,
+                      std::vector<Move>* moves) override;
 
  private:
   std::vector<Rng> rngs_;  // one stream per robot

@@ -20,11 +20,13 @@ using PolicyFactory = std::function<std::unique_ptr<Policy>(const Scenario&)>;
 
 class PolicyRegistry {
  public:
-  void Add(const std::string& name, const std::string& description, PolicyFactory factory);
+  void Add(const std::string& name, const std::string& description,
+           PolicyFactory factory);
   bool Has(const std::string& name) const;
   // Throws InputError naming the valid policies when `name` is unknown
   // (file and line of `policy.name` in the scenario when it came from there).
-  std::unique_ptr<Policy> Create(const std::string& name, const Scenario& scenario) const;
+  std::unique_ptr<Policy> Create(const std::string& name,
+                                 const Scenario& scenario) const;
   std::vector<std::string> Names() const;
   std::string Description(const std::string& name) const;
   // "random, greedy, ..." for messages.

@@ -32,12 +32,13 @@
 namespace aia {
 
 struct SamplingParams {
-  double p_v = 0.9;           // f_V: probability of expanding a deepest node
-  double p_u = 0.9;           // f_U: probability of following the assigned target's field
-  long anytime = 5000;        // iterations after the first goal
+  double p_v = 0.9;  // f_V: probability of expanding a deepest node
+  double p_u =
+      0.9;  // f_U: probability of following the assigned target's field
+  long anytime = 5000;           // iterations after the first goal
   long max_iterations = 200000;  // iterations before giving up on a goal
-  long max_nodes = 2000000;   // arena cap (memory guard)
-  int max_depth = 0;          // 0: unlimited; else nodes this deep are not expanded
+  long max_nodes = 2000000;      // arena cap (memory guard)
+  int max_depth = 0;  // 0: unlimited; else nodes this deep are not expanded
   // f_U's assignment: with this probability the globally nearest robot-target
   // pairs are matched first, else robots pick in a random order.
   double p_sorted = 0.5;
@@ -49,9 +50,9 @@ struct SamplingProblem {
   const World* world = nullptr;
   const SensorModel* sensor = nullptr;
   double eps = 0.1;
-  std::vector<int> start;                 // lattice index per robot
-  std::vector<std::uint8_t> active;       // inactive robots neither move nor sense
-  const BeliefSet* belief = nullptr;      // root information
+  std::vector<int> start;             // lattice index per robot
+  std::vector<std::uint8_t> active;   // inactive robots neither move nor sense
+  const BeliefSet* belief = nullptr;  // root information
   int belief_row = 0;
   // Extra information per target added to every child at depth 1 (Dec-SB:
   // what the neighbours' planned next positions will measure), as r of r M'M.
@@ -59,9 +60,9 @@ struct SamplingProblem {
 };
 
 struct SamplingPlan {
-  bool found = false;         // a goal node was reached
-  int depth = 0;              // F*: number of moves of the returned path
-  double cost = 0.0;          // J of the returned path
+  bool found = false;  // a goal node was reached
+  int depth = 0;       // F*: number of moves of the returned path
+  double cost = 0.0;   // J of the returned path
   // Joint configuration per depth, (depth + 1) x robots; row 0 is the start.
   std::vector<std::vector<int>> configs;
   // Planned det Sigma_k per depth, (depth + 1) x targets.
@@ -78,7 +79,8 @@ class SamplingTree {
  public:
   // Solves from scratch; reuses its arena between calls (no reallocation once
   // it has grown).
-  SamplingPlan Solve(const SamplingProblem& problem, const SamplingParams& params, Rng& rng);
+  SamplingPlan Solve(const SamplingProblem& problem,
+                     const SamplingParams& params, Rng& rng);
 
  private:
   struct TargetInfo {
@@ -101,23 +103,25 @@ class SamplingTree {
   std::vector<Eigen::MatrixXd> A_, Q_;
   std::vector<Eigen::VectorXd> b_;
   std::vector<std::vector<Vec2>> means_;  // [depth][k] position means
-  std::vector<Eigen::VectorXd> full_mean_;  // working state for mean propagation
-  std::vector<std::vector<int>> field_;   // [k] BFS distance to k's observation region
+  std::vector<Eigen::VectorXd>
+      full_mean_;  // working state for mean propagation
+  std::vector<std::vector<int>>
+      field_;  // [k] BFS distance to k's observation region
   // Static targets observable from each lattice point: CSR (target, r).
   std::vector<int> obs_begin_;
   std::vector<std::pair<int, double>> obs_;
   bool any_moving_ = false;
 
   // Arena.
-  std::vector<int> pos_;         // nodes x n
-  std::vector<double> info_;     // nodes x stride
+  std::vector<int> pos_;      // nodes x n
+  std::vector<double> info_;  // nodes x stride
   std::vector<int> parent_, depth_, unloc_;
   std::vector<double> cost_, det_sum_;
   std::vector<std::vector<int>> levels_;  // expandable nodes per depth
   // Scratch.
   std::vector<int> assigned_, order_, child_pos_, taken_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
-  std::vector<double> lower_;             // per node: lower bound of the total cost
+  std::vector<double> lower_;  // per node: lower bound of the total cost
   std::vector<double> scratch_info_;
   std::vector<int> bfs_queue_;
 };

@@ -26,6 +26,10 @@ struct BenchOptions {
   std::uint64_t seed = 1;
   std::string policy = "random";
   bool skip_testspeed = false;
+  // --expert: time the expert's solve from the initial state instead, over
+  // `seeds` generated worlds per size (seeds seed .. seed + seeds - 1).
+  bool expert = false;
+  int seeds = 20;
 };
 
 int RunBench(const BenchOptions& options);

@@ -66,9 +66,13 @@ class Episode {
   const std::vector<Vec2>& robot_positions() const { return robot_pos_; }
   const std::vector<int>& robot_lattice() const { return robot_idx_; }
   const std::vector<Vec2>& target_positions() const { return target_pos_; }
-  const std::vector<std::vector<Measurement>>& measurements() const { return z_; }
+  const std::vector<std::vector<Measurement>>& measurements() const {
+    return z_;
+  }
   // det Sigma_i^k of robot i's fused belief, row-major N x M.
-  double Det(int robot, int target) const { return det_[robot * num_targets_ + target]; }
+  double Det(int robot, int target) const {
+    return det_[robot * num_targets_ + target];
+  }
   // min over active robots of det Sigma_i^k.
   double MinDet(int target) const { return min_det_[target]; }
   const PhaseTimes& times() const { return times_; }

@@ -17,7 +17,8 @@ struct EvalOptions {
   std::vector<std::string> sizes{"10x10", "20x20"};
   int seeds = 100;
   std::uint64_t seed_base = 0;
-  std::vector<std::string> policies;  // empty: every registered policy but the expert
+  std::vector<std::string>
+      policies;  // empty: every registered policy but the expert
   std::string out_dir;
   int threads = 0;  // 0: all cores
   bool progress = true;
@@ -39,7 +40,8 @@ struct EvalRow {
 std::vector<EvalRow> ReadRuns(const std::string& path);
 
 // summary.csv text from rows, sizes and policies in the given order.
-std::string SummaryCsv(const std::vector<EvalRow>& rows, const std::vector<std::string>& sizes,
+std::string SummaryCsv(const std::vector<EvalRow>& rows,
+                       const std::vector<std::string>& sizes,
                        const std::vector<std::string>& policies);
 
 int RunEval(const EvalOptions& options);

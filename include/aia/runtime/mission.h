@@ -22,11 +22,12 @@ struct ScenarioOverrides {
   std::optional<std::uint64_t> seed;
   std::optional<int> max_steps;
 };
-void ApplyOverrides(const ScenarioOverrides& overrides, const PolicyRegistry& registry,
-                    Scenario* scenario);
+void ApplyOverrides(const ScenarioOverrides& overrides,
+                    const PolicyRegistry& registry, Scenario* scenario);
 
 // Builds the episode for a scenario with its policy from the registry.
-std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario, const PolicyRegistry& registry);
+std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
+                                     const PolicyRegistry& registry);
 
 // The outcome of a finished episode.
 struct MissionSummary {
@@ -39,7 +40,8 @@ struct MissionSummary {
   int flowtime = -1;  // -1: not reached
   int steps = 0;
   long invalid_moves = 0;
-  double localized_share = 0.0;  // share of steps (0..steps) with every target localized
+  double localized_share =
+      0.0;  // share of steps (0..steps) with every target localized
   double wall_s = 0.0;
 };
 MissionSummary Summarize(const Episode& episode, double wall_s);

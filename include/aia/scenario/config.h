@@ -32,21 +32,23 @@ struct WorkspaceConfig {
   // Obstacles: any combination of the three sources.
   std::optional<RandomObstaclesConfig> random;
   std::vector<BoxConfig> boxes;
-  std::string map;  // absolute path of a PGM/PNG image (dark = occupied), or empty
-  double map_threshold = 0.5;  // pixels darker than this fraction of white are occupied
+  std::string
+      map;  // absolute path of a PGM/PNG image (dark = occupied), or empty
+  double map_threshold =
+      0.5;  // pixels darker than this fraction of white are occupied
 };
 
 struct RobotsConfig {
   int count = 0;  // required
   double radius = 0.15;
-  double step = 0.5;         // lattice spacing and move length, metres
-  std::vector<Vec2> start;   // empty: random free lattice points
+  double step = 0.5;        // lattice spacing and move length, metres
+  std::vector<Vec2> start;  // empty: random free lattice points
 };
 
 struct SensorConfig {
   double range = 2.0;
-  double eta = 0.05;    // noise std grows by eta per metre of distance
-  double sigma0 = 0.01; // noise std at zero distance
+  double eta = 0.05;     // noise std grows by eta per metre of distance
+  double sigma0 = 0.01;  // noise std at zero distance
   bool line_of_sight = true;
 };
 
@@ -63,16 +65,17 @@ struct DynamicsConfig {
 
 struct TargetConfig {
   Vec2 position{0.0, 0.0};
-  Vec2 velocity{0.0, 0.0};  // initial velocity; used when the state has dimension 4
-  std::optional<Vec2> prior_mean;     // default: truth plus a draw from the prior
+  Vec2 velocity{0.0,
+                0.0};  // initial velocity; used when the state has dimension 4
+  std::optional<Vec2> prior_mean;  // default: truth plus a draw from the prior
   std::optional<double> prior_sigma;  // default: TargetsConfig::prior_sigma
   DynamicsConfig dynamics;
 };
 
 struct TargetsConfig {
-  int count = 0;                    // random static targets (when `list` is empty)
-  std::vector<TargetConfig> list;   // explicit targets
-  double prior_sigma = 1.0;         // prior std per coordinate
+  int count = 0;  // random static targets (when `list` is empty)
+  std::vector<TargetConfig> list;  // explicit targets
+  double prior_sigma = 1.0;        // prior std per coordinate
   // Std (metres) of a default prior mean's offset from the truth: targets
   // without `prior_mean` get truth + N(0, prior_offset^2 I).
   double prior_offset = 0.5;
@@ -95,7 +98,8 @@ struct CommunicationConfig {
   CommMode mode = CommMode::kFull;
   double range = 4.0;  // r_com for kRange
   double kappa_self = 0.75;
-  double packet_loss_lambda = 0.0;  // Poisson mean of directed edges lost per step
+  double packet_loss_lambda =
+      0.0;  // Poisson mean of directed edges lost per step
   std::vector<FailureConfig> failures;
 };
 
@@ -107,11 +111,11 @@ struct PolicyConfig {
 };
 
 struct PhysicsConfig {
-  double timestep = 0.005;     // seconds
-  double kp = 200.0;           // waypoint actuator stiffness, N/m
-  double robot_mass = 0.25;    // kg; with kp gives the tracking bandwidth
-  double tolerance = 0.01;     // metres: a robot has arrived within this
-  double step_timeout = 1.0;   // seconds of simulated time per decision step
+  double timestep = 0.005;    // seconds
+  double kp = 200.0;          // waypoint actuator stiffness, N/m
+  double robot_mass = 0.25;   // kg; with kp gives the tracking bandwidth
+  double tolerance = 0.01;    // metres: a robot has arrived within this
+  double step_timeout = 1.0;  // seconds of simulated time per decision step
 };
 
 struct RenderConfig {
@@ -136,11 +140,13 @@ struct Scenario {
   PhysicsConfig physics;
   RenderConfig render;
 
-  std::string file;                  // the YAML file it came from ("" if built in code)
-  std::map<std::string, int> lines;  // dotted key -> 1-based line, e.g. "robots.start[2]"
+  std::string file;  // the YAML file it came from ("" if built in code)
+  std::map<std::string, int>
+      lines;  // dotted key -> 1-based line, e.g. "robots.start[2]"
 
   int NumTargets() const {
-    return targets.list.empty() ? targets.count : static_cast<int>(targets.list.size());
+    return targets.list.empty() ? targets.count
+                                : static_cast<int>(targets.list.size());
   }
   // Line of a key, or of its nearest recorded parent, or 0.
   int LineOf(const std::string& key) const;

@@ -35,7 +35,7 @@ using MjDataPtr = std::unique_ptr<mjData, MjDataDeleter>;
 MjModelPtr CompileMjcf(const std::string& xml);
 
 struct PhysicsStepStats {
-  int substeps = 0;       // mj_step calls
+  int substeps = 0;  // mj_step calls
   bool all_arrived = false;
   bool timed_out = false;
 };
@@ -61,7 +61,8 @@ class Simulation {
   // nearly still, or every robot that has not arrived has stalled (blocked by
   // a contact), or the step timeout passes. `on_substep(elapsed_seconds)` runs
   // after each mj_step (targets' mocap interpolation, video frames).
-  PhysicsStepStats AdvanceToWaypoints(const std::function<void(double)>& on_substep = {});
+  PhysicsStepStats AdvanceToWaypoints(
+      const std::function<void(double)>& on_substep = {});
 
   // Whether the segment between two points at sensor height meets no obstacle
   // (mj_ray against the obstacle geom group only).
@@ -78,7 +79,8 @@ class Simulation {
   PhysicsConfig physics_;
   std::vector<Vec2> starts_;
   std::vector<Vec2> waypoints_;
-  std::vector<int> qpos_adr_;  // per robot: qpos index of its x joint (y follows)
+  std::vector<int>
+      qpos_adr_;  // per robot: qpos index of its x joint (y follows)
   std::vector<int> qvel_adr_;
   std::vector<int> ctrl_adr_;
   std::vector<int> mocap_id_;
@@ -92,9 +94,10 @@ class Simulation {
 // no obstacle. y = pos_k - p_i + v with v ~ N(0, (sigma0 + eta d)^2 I) drawn at
 // the true distance d; the recorded precision is computed from |y|, as the
 // filter does not know d.
-void Sense(const Simulation& sim, const SensorModel& sensor, const std::vector<Vec2>& robots,
-           const std::vector<Vec2>& targets, const std::vector<std::uint8_t>& active,
-           std::vector<Rng>* rngs, std::vector<std::vector<Measurement>>* out);
+void Sense(const Simulation& sim, const SensorModel& sensor,
+           const std::vector<Vec2>& robots, const std::vector<Vec2>& targets,
+           const std::vector<std::uint8_t>& active, std::vector<Rng>* rngs,
+           std::vector<std::vector<Measurement>>* out);
 
 }  // namespace aia
 

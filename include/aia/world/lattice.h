@@ -1,8 +1,8 @@
-// The motion lattice (SPEC section 2): points at ((i + 0.5) step, (j + 0.5) step),
-// moves of one step left/right/up/down. A point is free when a robot disc of
-// the given radius there touches no obstacle; a move is valid when both ends
-// are free and the disc swept along it touches no obstacle either (so a thin
-// wall between two free points is not crossed).
+// The motion lattice (SPEC section 2): points at ((i + 0.5) step, (j + 0.5)
+// step), moves of one step left/right/up/down. A point is free when a robot
+// disc of the given radius there touches no obstacle; a move is valid when both
+// ends are free and the disc swept along it touches no obstacle either (so a
+// thin wall between two free points is not crossed).
 #ifndef AIA_WORLD_LATTICE_H_
 #define AIA_WORLD_LATTICE_H_
 
@@ -19,7 +19,8 @@ namespace aia {
 class Lattice {
  public:
   Lattice() = default;
-  Lattice(const Vec2& workspace, double step, double radius, const std::vector<Box>& obstacles);
+  Lattice(const Vec2& workspace, double step, double radius,
+          const std::vector<Box>& obstacles);
 
   int nx() const { return nx_; }
   int ny() const { return ny_; }
@@ -29,13 +30,17 @@ class Lattice {
   int Index(int ix, int iy) const { return iy * nx_ + ix; }
   int Ix(int idx) const { return idx % nx_; }
   int Iy(int idx) const { return idx / nx_; }
-  Vec2 Point(int idx) const { return {(Ix(idx) + 0.5) * step_, (Iy(idx) + 0.5) * step_}; }
+  Vec2 Point(int idx) const {
+    return {(Ix(idx) + 0.5) * step_, (Iy(idx) + 0.5) * step_};
+  }
   bool Free(int idx) const { return free_[idx] != 0; }
   int NumFree() const { return num_free_; }
 
   // Destination of a move from `idx`, or -1 when the move is invalid.
   int Next(int idx, Move m) const {
-    return m == Move::kStay ? idx : next_[static_cast<size_t>(idx) * kNumMoves + static_cast<int>(m)];
+    return m == Move::kStay ? idx
+                            : next_[static_cast<size_t>(idx) * kNumMoves +
+                                    static_cast<int>(m)];
   }
   bool Valid(int idx, Move m) const { return Next(idx, m) >= 0; }
   int NumValidMoves(int idx) const;
@@ -69,12 +74,14 @@ void BfsDistances(const Lattice& lattice, const int* sources, int num_sources,
 // The first move of a shortest path down a distance field from `from`: the
 // valid move to a point whose distance is one less (lowest move index first).
 // kStay when `from` is a source or cannot reach one.
-Move StepDownField(const Lattice& lattice, const std::vector<int>& dist, int from);
+Move StepDownField(const Lattice& lattice, const std::vector<int>& dist,
+                   int from);
 
 // The world rule (SPEC section 2), the same for every policy: an invalid move
 // is replaced by a uniformly random valid one; with none the robot stays.
 // Sets *replaced when the wanted move was not applied as is.
-Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng, bool* replaced);
+Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng,
+                    bool* replaced);
 
 }  // namespace aia
 

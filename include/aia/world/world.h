@@ -17,7 +17,8 @@
 namespace aia {
 
 struct TargetInstance {
-  Eigen::VectorXd x0;          // true initial state (position, or position and velocity)
+  Eigen::VectorXd
+      x0;  // true initial state (position, or position and velocity)
   Eigen::VectorXd prior_mean;  // mu_0
   Eigen::MatrixXd prior_cov;   // Sigma_0
   DynamicsConfig dynamics;
@@ -37,7 +38,8 @@ class World {
   static World Build(const Scenario& scenario);
 
   Vec2 size{20.0, 20.0};
-  std::vector<Box> obstacles;  // inside the workspace; border walls are implicit
+  std::vector<Box>
+      obstacles;  // inside the workspace; border walls are implicit
   Grid<std::uint8_t> occupancy;  // 1 where a cell overlaps an obstacle
   Lattice lattice;
   double robot_radius = 0.15;
@@ -65,8 +67,8 @@ class World {
 // Merges the dark pixels of a grayscale image into axis-aligned boxes scaled
 // to the workspace (row 0 of the image is the top, y = size.y()). Pixels
 // darker than threshold * 255 are occupied.
-std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols, int rows,
-                                const Vec2& size, double threshold);
+std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
+                                int rows, const Vec2& size, double threshold);
 
 }  // namespace aia
 
