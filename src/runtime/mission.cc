@@ -23,9 +23,9 @@ void ApplyOverrides(const ScenarioOverrides& o, const PolicyRegistry& registry,
       throw InputError("command line", 0, "--policy",
                        "unknown policy '" + *o.policy +
                            "' (valid: " + registry.NameList() + ")");
+    // Parameters in the file belong to the policy it named.
+    if (*o.policy != s->policy.name) s->policy.params.clear();
     s->policy.name = *o.policy;
-    // Parameters in the file belonged to the policy it named.
-    s->policy.params.clear();
   }
   if (o.seed) s->seed = *o.seed;
   if (o.max_steps) {

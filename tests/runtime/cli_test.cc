@@ -39,9 +39,12 @@ Expectation ReadExpectation(const std::string& path) {
 
 std::vector<std::string> BadFiles() {
   std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(SourcePath("tests/data/bad")))
-    if (entry.path().extension() == ".yaml")
-      files.push_back(entry.path().string());
+  // tests/data/bad: rejected by the loader; tests/data/bad_world: loads,
+  // but the world or the policy refuses it.
+  for (const char* dir : {"tests/data/bad", "tests/data/bad_world"})
+    for (const auto& entry : fs::directory_iterator(SourcePath(dir)))
+      if (entry.path().extension() == ".yaml")
+        files.push_back(entry.path().string());
   std::sort(files.begin(), files.end());
   return files;
 }
@@ -69,7 +72,9 @@ TEST_P(BadInputTest, PrintsFileLineKeyAndExitsWith2) {
 
 INSTANTIATE_TEST_SUITE_P(Corpus, BadInputTest, ::testing::ValuesIn(BadFiles()),
                          [](const auto& info) {
-                           return fs::path(info.param).stem().string();
+                           const fs::path p(info.param);
+                           return p.parent_path().filename().string() + "_" +
+                                  p.stem().string();
                          });
 
 TEST(CliTest, MissingScenarioFile) {

@@ -25,6 +25,10 @@ struct TargetInstance {
   Vec2 Position() const { return x0.head<2>(); }
 };
 
+// Robots, targets and obstacle boxes together, at most (MuJoCo's memory for
+// its broad phase grows with the square of this).
+inline constexpr int kMaxBodies = 5000;
+
 struct RobotFailure {
   int robot = 0;
   int step = 0;
