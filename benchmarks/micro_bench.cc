@@ -1,0 +1,77 @@
+// Micro-benchmarks of the per-step kernels (Google Benchmark):
+//   build/benchmarks/aia_micro_bench [--benchmark_filter=Fuse]
+// Whole decision steps are timed by `aia bench`.
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+#include "aia/comm/graph.h"
+#include "aia/estimation/filter.h"
+#include "aia/planning/expert.h"
+#include "aia/runtime/bench.h"
+#include "aia/runtime/episode.h"
+#include "aia/runtime/mission.h"
+
+namespace aia {
+namespace {
+
+// DKF fusion of N robots x N static targets over a full graph with packet
+// loss, a few measurements per robot.
+void BM_Fuse(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::vector<TargetModel> models(n);
+  BeliefLayout layout(models);
+  BeliefSet predicted(&layout, n), fused(&layout, n);
+  std::vector<Eigen::VectorXd> means(n, Eigen::Vector2d(5, 5));
+  std::vector<Eigen::MatrixXd> covs(n, Eigen::Matrix2d::Identity());
+  predicted.SetPrior(means, covs);
+  fused.SetPrior(means, covs);
+  CommParams cp;
+  cp.loss_lambda = 1.0;
+  CommNetwork comm(cp, n, {}, 1);
+  std::vector<Vec2> pos(n, Vec2(1, 1));
+  comm.Update(0, pos);
+  Eigen::MatrixXd W;
+  FusionWeights(comm.AllNeighbors(), 0.75, &W);
+  std::vector<std::vector<Measurement>> z(n);
+  for (int i = 0; i < n; ++i)
+    for (int k = i % 7; k < n; k += 17) z[i].push_back({k, Vec2(0.5, 0.5), 50.0});
+  for (auto _ : state) {
+    Fuse(predicted, W, z, pos, &fused);
+    benchmark::DoNotOptimize(fused.data().data());
+  }
+}
+BENCHMARK(BM_Fuse)->Arg(10)->Arg(80)->Unit(benchmark::kMicrosecond);
+
+// The expert's solve from the initial state of a generated world.
+void BM_ExpertSolve(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Scenario s = GeneratedScenario(n, n, 1);
+  s.policy.name = "random";
+  auto episode = MakeEpisode(s, AllPolicies());
+  const SamplingProblem problem = ExpertProblem(episode->Context());
+  SamplingTree tree;
+  SamplingParams params;
+  for (auto _ : state) {
+    Rng rng(1, "policy.expert");
+    benchmark::DoNotOptimize(tree.Solve(problem, params, rng).depth);
+  }
+}
+BENCHMARK(BM_ExpertSolve)->Arg(10)->Arg(40)->Arg(80)->Unit(benchmark::kMillisecond);
+
+// One decision step of the random policy, physics included.
+void BM_DecisionStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Scenario s = GeneratedScenario(n, n, 1);
+  s.policy.name = "random";
+  s.mission.stop_at_success = false;
+  s.mission.max_steps = 1 << 30;
+  auto episode = MakeEpisode(s, AllPolicies());
+  for (auto _ : state) episode->Step();
+}
+BENCHMARK(BM_DecisionStep)->Arg(10)->Arg(80)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace aia
+
+BENCHMARK_MAIN();
