@@ -9,8 +9,8 @@
 #include "aia/runtime/bench.h"
 #include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
-#include "aia/runtime/render_mission.h"
 #include "aia/runtime/plan_command.h"
+#include "aia/runtime/render_mission.h"
 
 namespace {
 
@@ -51,24 +51,37 @@ int main(int argc, char** argv) {
   aia::RenderOptions render;
   int width = 0, height = 0, fps = 0, heatmap = -1;
   CLI::App* render_cmd = app.add_subcommand(
-      "render", "render one mission as an H.264 MP4 (headless), with belief overlays");
-  render_cmd->add_option("scenario", render.scenario_path, "scenario YAML file")->required();
-  render_cmd->add_option("--out", render.out_file, "the video, FILE.mp4 (FILE.summary.json and "
-                                                   "FILE.trace.csv are written next to it)")
+      "render",
+      "render one mission as an H.264 MP4 (headless), with belief overlays");
+  render_cmd->add_option("scenario", render.scenario_path, "scenario YAML file")
+      ->required();
+  render_cmd
+      ->add_option("--out", render.out_file,
+                   "the video, FILE.mp4 (FILE.summary.json and "
+                   "FILE.trace.csv are written next to it)")
       ->required();
   AddOverrides(render_cmd, &render.overrides, &policy, &seed, &max_steps);
-  render_cmd->add_option("--width", width, "image width in pixels, even (default render.width)");
-  render_cmd->add_option("--height", height, "image height in pixels, even (default render.height)");
+  render_cmd->add_option("--width", width,
+                         "image width in pixels, even (default render.width)");
+  render_cmd->add_option(
+      "--height", height,
+      "image height in pixels, even (default render.height)");
   render_cmd->add_option("--fps", fps,
-                         "frames per second of simulated time and of the video (default render.fps)");
-  render_cmd->add_option("--heatmap", heatmap,
-                         "robot whose uncertainty heatmap is drawn, -1 for none "
-                         "(default render.follow_robot)");
-  render_cmd->add_option("--frames", render.frames_dir, "also write frames as PNG into this folder");
-  render_cmd->add_option("--frames-every", render.frames_every,
-                         "with --frames: write every k-th frame")
+                         "frames per second of simulated time and of the video "
+                         "(default render.fps)");
+  render_cmd->add_option(
+      "--heatmap", heatmap,
+      "robot whose uncertainty heatmap is drawn, -1 for none "
+      "(default render.follow_robot)");
+  render_cmd->add_option("--frames", render.frames_dir,
+                         "also write frames as PNG into this folder");
+  render_cmd
+      ->add_option("--frames-every", render.frames_every,
+                   "with --frames: write every k-th frame")
       ->capture_default_str();
-  render_cmd->add_option("--hold", render.hold_seconds, "seconds the final frame is held")
+  render_cmd
+      ->add_option("--hold", render.hold_seconds,
+                   "seconds the final frame is held")
       ->capture_default_str();
   render_cmd->add_flag("--quiet", quiet, "no progress line");
 

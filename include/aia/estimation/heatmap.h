@@ -1,0 +1,56 @@
+// The uncertainty heatmap of SPEC section 8 (channel 4 of I-GBNet's input,
+// and the translucent layer of `aia render --heatmap`): robot i's fused
+// belief projected onto a grid over the workspace,
+//   H(c) = sum_k w_k exp(-1/2 (c - mu_k)' (Sigma_k + s^2 I)^-1 (c - mu_k)),
+//   w_k  = clamp(log(det Sigma_k / eps) / log(det Sigma_0^k / eps), 0, 1),
+// with mu_k and Sigma_k the position part of robot i's belief about target k
+// and Sigma_0^k its prior. A localized target (det Sigma_k <= eps) leaves no
+// heat, an unexplored one (det Sigma_k = det Sigma_0^k) full heat: a peak of
+// height 1 at its mean. s (about half the sensor range) widens every Gaussian
+// so that a sharp but not yet localized estimate still covers a few cells.
+#ifndef AIA_ESTIMATION_HEATMAP_H_
+#define AIA_ESTIMATION_HEATMAP_H_
+
+#include <vector>
+
+#include "aia/core/grid.h"
+#include "aia/core/types.h"
+#include "aia/estimation/belief.h"
+
+namespace aia {
+
+struct HeatmapParams {
+  double eps = 0.1;   // the mission's threshold on det Sigma
+  double blur = 1.0;  // s, metres (about half the sensor range)
+  // Each Gaussian is evaluated only where its exponent is above
+  // -cutoff^2 / 2 (inside `cutoff` standard deviations of Sigma + s^2 I):
+  // 4 drops terms below exp(-8) = 3.4e-4 of the peak.
+  double cutoff = 4.0;
+};
+
+// w_k from log det Sigma_k and log det Sigma_0^k (logs keep it finite where
+// det itself under- or overflows). If the prior is itself at or below eps,
+// the weight is 1 above eps and 0 at or below it.
+double HeatWeight(double log_det, double log_det_prior, double eps);
+
+// A grid of `cell`-metre cells covering a workspace of the given size
+// (ceil(size / cell) cells per axis), zero-filled.
+Grid<float> MakeHeatmapGrid(const Vec2& size, double cell);
+
+// Adds weight * exp(-1/2 (c - mu)' (sigma + s^2 I)^-1 (c - mu)) to each cell
+// centre c within the cut-off window.
+void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
+                     double blur, double cutoff, Grid<float>* out);
+
+// H for row `row` of `beliefs` into `out`, which must already be sized (its
+// cells are those of the projection; see MakeHeatmapGrid). log_det_prior[k]
+// is log det Sigma_0^k of target k's whole prior block. The weight uses the
+// det of the whole block (what the mission judges against eps), the shape
+// the position marginal. Allocates nothing.
+void ProjectHeatmap(const BeliefSet& beliefs, int row,
+                    const std::vector<double>& log_det_prior,
+                    const HeatmapParams& params, Grid<float>* out);
+
+}  // namespace aia
+
+#endif  // AIA_ESTIMATION_HEATMAP_H_

@@ -1,0 +1,49 @@
+// `aia render`: one mission as an H.264 MP4, frames taken from the physics
+// every 1/fps seconds of simulated time, so motion is as smooth as the
+// simulation; optionally every k-th frame as PNG. The mission runs and ends
+// exactly as under `aia run` (same seed, same outcome); its summary and trace
+// are written next to the video.
+#ifndef AIA_RUNTIME_RENDER_MISSION_H_
+#define AIA_RUNTIME_RENDER_MISSION_H_
+
+#include <optional>
+#include <string>
+
+#include "aia/runtime/mission.h"
+
+namespace aia {
+
+struct RenderOptions {
+  std::string scenario_path;
+  ScenarioOverrides overrides;
+  std::string out_file;  // FILE.mp4; its directory is created
+  // Overrides of the scenario's render section.
+  std::optional<int> width, height, fps;
+  std::optional<int> heatmap_robot;  // -1: none; default render.follow_robot
+  std::string frames_dir;            // non-empty: PNG frames written here
+  int frames_every = 1;              // write video frames 0, k, 2k, ... as PNG
+  double hold_seconds = 1.0;         // the final frame is held this long
+  bool progress = true;
+};
+
+struct RenderResult {
+  MissionSummary mission;
+  std::string video;  // the MP4's path
+  std::string codec;  // "avc1" (H.264) or "mp4v"
+  int frames = 0;     // frames in the video
+  int fps = 30;
+  int width = 0, height = 0;
+  double video_seconds = 0.0;      // frames / fps
+  double frames_per_second = 0.0;  // rendering speed: frames per wall second
+  int png_frames = 0;
+};
+
+// Renders the mission; writes FILE.mp4, and next to it FILE_STEM.summary.json
+// (the `aia run` summary plus a "video" object) and FILE_STEM.trace.csv.
+// Throws InputError for bad input (flags, scenario, an output path that
+// cannot be written).
+RenderResult RenderMission(const RenderOptions& options);
+
+}  // namespace aia
+
+#endif  // AIA_RUNTIME_RENDER_MISSION_H_

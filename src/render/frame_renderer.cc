@@ -1,0 +1,442 @@
+#include "aia/render/frame_renderer.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "aia/core/check.h"
+#include "aia/world/mjcf.h"
+
+namespace aia {
+namespace {
+
+// OpenCV draws in fixed point with kShift fractional bits: sub-pixel overlays.
+constexpr int kShift = 4;
+constexpr double kOne = 1 << kShift;
+constexpr double kPi = 3.14159265358979323846;
+
+// Continuous pixel coordinates (TopDownView) -> OpenCV fixed point, whose
+// integer points are pixel centres.
+// Clamped far outside any image, so that a wild estimate cannot overflow.
+cv::Point Fixed(const Vec2& px) {
+  constexpr double kFar = 1e6;
+  return {cvRound((std::clamp(px.x(), -kFar, kFar) - 0.5) * kOne),
+          cvRound((std::clamp(px.y(), -kFar, kFar) - 0.5) * kOne)};
+}
+int FixedLength(double pixels) { return cvRound(pixels * kOne); }
+
+cv::Scalar RobotBgr(int robot, double shade = 1.0) {
+  const std::array<float, 3> c = RobotColor(robot);
+  return {255.0 * shade * c[2], 255.0 * shade * c[1], 255.0 * shade * c[0]};
+}
+
+const cv::Scalar kLocalized(40, 160, 40);    // green: det Sigma <= eps
+const cv::Scalar kUnlocalized(30, 30, 215);  // red: prior-sized uncertainty
+const cv::Scalar kNearly(0, 150, 250);       // orange: just above eps
+const cv::Scalar kEdge(150, 90, 40);         // delivered message
+const cv::Scalar kLost(0, 0, 230);           // lost message
+const cv::Scalar kFailed(90, 90, 90);
+const cv::Scalar kBlack(20, 20, 20);
+
+// Above eps the colour runs from orange (w ~ 0) to red (w = 1).
+cv::Scalar TargetColor(const TargetOverlay& t, double eps) {
+  if (t.det <= eps) return kLocalized;
+  const double w = std::clamp(t.weight, 0.0, 1.0);
+  return kNearly * (1.0 - w) + kUnlocalized * w;
+}
+
+void DashedLine(cv::Mat* image, const Vec2& a, const Vec2& b,
+                const cv::Scalar& color, int thickness, double dash,
+                double gap) {
+  const Vec2 d = b - a;
+  const double length = d.norm();
+  if (length < 1e-9) return;
+  const Vec2 u = d / length;
+  for (double s = 0.0; s < length; s += dash + gap) {
+    const double e = std::min(length, s + dash);
+    cv::line(*image, Fixed(a + s * u), Fixed(a + e * u), color, thickness,
+             cv::LINE_AA, kShift);
+  }
+}
+
+}  // namespace
+
+int HudBandPixels(int image_height) {
+  return std::max(12, static_cast<int>(std::lround(0.055 * image_height)));
+}
+
+FrameRenderer::FrameRenderer(const Simulation& sim, const World& world,
+                             const FrameSettings& settings)
+    : sim_(sim),
+      settings_(settings),
+      scene_(sim.model(), settings.scene),
+      view_(world.size, settings.scene.width, settings.scene.height,
+            sim.model()->vis.global.fovy, HudBandPixels(settings.scene.height),
+            kObstacleHeight),
+      robot_radius_(world.robot_radius),
+      trails_(world.NumRobots()) {
+  view_.SetCamera(&camera_);
+  // The workspace's floor rectangle in whole pixels, for the heatmap layer.
+  const Vec2 top_left = view_.ToPixel({0.0, world.size.y()});
+  const Vec2 bottom_right = view_.ToPixel({world.size.x(), 0.0});
+  const int x0 = static_cast<int>(std::lround(top_left.x()));
+  const int y0 = static_cast<int>(std::lround(top_left.y()));
+  const int x1 = static_cast<int>(std::lround(bottom_right.x()));
+  const int y1 = static_cast<int>(std::lround(bottom_right.y()));
+  heat_rect_ = cv::Rect(x0, y0, std::max(1, x1 - x0), std::max(1, y1 - y0)) &
+               cv::Rect(0, 0, settings.scene.width, settings.scene.height);
+  // The margin right of the walls' tops.
+  const int right = static_cast<int>(std::ceil(
+      view_.ToPixel({world.size.x() + 0.3, 0.0}, kObstacleHeight).x()));
+  const int room = settings.scene.width - right;
+  if (room >= 72) {
+    const int pad = std::max(3, room / 16);
+    legend_room_ = cv::Rect(right + pad, view_.band_px() + pad, room - 2 * pad,
+                            settings.scene.height - view_.band_px() - 2 * pad);
+  }
+  BuildLegend(false);
+}
+
+void FrameRenderer::BuildLegend(bool heat) {
+  legend_heat_ = heat;
+  if (legend_room_.empty()) return;
+  legend_rect_ = legend_room_;
+  const double unit = std::max(1.0, view_.height() / 480.0);
+  const int thin = static_cast<int>(std::lround(unit));
+  const int thick = static_cast<int>(std::lround(2 * unit));
+  const int row = std::max(12, static_cast<int>(std::lround(18 * unit)));
+  const int icon = static_cast<int>(std::lround(1.3 * row));
+  const int pad = std::max(3, row / 4);
+  const char* labels[] = {"robot",        "sensing range", "message",
+                          "lost message", "target",        "det > eps",
+                          "det <= eps",   "failed robot",  "heat"};
+  const int rows = heat ? 9 : 8;
+  const int font = cv::FONT_HERSHEY_SIMPLEX;
+  const int text_room = legend_rect_.width - icon - 3 * pad;
+  double scale = row / 42.0;
+  int baseline = 0;
+  for (int i = 0; i < rows; ++i) {
+    const cv::Size size = cv::getTextSize(labels[i], font, scale, 1, &baseline);
+    if (size.width > text_room)
+      scale *= static_cast<double>(text_room) / size.width;
+  }
+  const int height = std::min(legend_room_.height, rows * row + 2 * pad);
+  legend_rect_.height = height;
+  legend_.create(height, legend_rect_.width, CV_8UC3);
+  legend_.setTo(cv::Scalar(236, 236, 236));
+  cv::rectangle(legend_, cv::Rect(0, 0, legend_.cols, legend_.rows),
+                cv::Scalar(150, 150, 150), 1);
+  for (int i = 0; i < rows; ++i) {
+    const double cy = pad + (i + 0.5) * row;
+    const double cx = pad + 0.5 * icon;
+    const Vec2 c(cx + 0.5, cy + 0.5);  // continuous coordinates of the centre
+    const cv::Point p = Fixed(c);
+    const double r = 0.36 * row;
+    const Vec2 left(pad + 0.5, cy + 0.5), right(pad + icon + 0.5, cy + 0.5);
+    switch (i) {
+      case 0:
+        cv::circle(legend_, p, FixedLength(0.22 * row), RobotBgr(0), cv::FILLED,
+                   cv::LINE_AA, kShift);
+        cv::circle(legend_, p, FixedLength(0.22 * row), kBlack, thin,
+                   cv::LINE_AA, kShift);
+        break;
+      case 1:
+        cv::circle(legend_, p, FixedLength(r),
+                   RobotBgr(3) * 0.25 + cv::Scalar(236, 236, 236) * 0.75,
+                   cv::FILLED, cv::LINE_AA, kShift);
+        cv::circle(legend_, p, FixedLength(r), RobotBgr(3, 0.8), thin,
+                   cv::LINE_AA, kShift);
+        break;
+      case 2:
+        cv::line(legend_, Fixed(left), Fixed(right), kEdge, thin, cv::LINE_AA,
+                 kShift);
+        break;
+      case 3:
+        DashedLine(&legend_, left, right, kLost, thin, 5 * unit, 4 * unit);
+        break;
+      case 4:
+        cv::circle(legend_, p, FixedLength(0.12 * row), cv::Scalar(25, 25, 217),
+                   cv::FILLED, cv::LINE_AA, kShift);
+        cv::circle(legend_, p, FixedLength(0.26 * row), kBlack, thin,
+                   cv::LINE_AA, kShift);
+        break;
+      case 5:
+      case 6: {
+        const cv::Scalar color = i == 5 ? kUnlocalized : kLocalized;
+        cv::ellipse(legend_, p,
+                    cv::Size(FixedLength(0.46 * icon), FixedLength(r)), 0.0,
+                    0.0, 360.0, color, thick, cv::LINE_AA, kShift);
+        const int arm = FixedLength(0.12 * row);
+        cv::line(legend_, p + cv::Point(-arm, -arm), p + cv::Point(arm, arm),
+                 color, thick, cv::LINE_AA, kShift);
+        cv::line(legend_, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm),
+                 color, thick, cv::LINE_AA, kShift);
+        break;
+      }
+      case 7: {
+        cv::circle(legend_, p, FixedLength(0.2 * row), kFailed, cv::FILLED,
+                   cv::LINE_AA, kShift);
+        const int arm = FixedLength(0.3 * row);
+        cv::line(legend_, p + cv::Point(-arm, -arm), p + cv::Point(arm, arm),
+                 kFailed, thick, cv::LINE_AA, kShift);
+        cv::line(legend_, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm),
+                 kFailed, thick, cv::LINE_AA, kShift);
+        break;
+      }
+      default: {
+        // The heat scale, H from 0 (left) to 1, as DrawHeatmap blends it.
+        const int x0 = pad, w = icon, y0 = static_cast<int>(cy - 0.3 * row);
+        const int h = std::max(2, static_cast<int>(0.6 * row));
+        cv::Mat value(1, w, CV_8U), shade, color;
+        for (int x = 0; x < w; ++x)
+          value.at<unsigned char>(0, x) =
+              static_cast<unsigned char>(255 * x / std::max(1, w - 1));
+        value.convertTo(shade, CV_8U, 0.55, 0.2 * 255.0);
+        cv::applyColorMap(shade, color, cv::COLORMAP_INFERNO);
+        for (int x = 0; x < w; ++x) {
+          const double a =
+              settings_.heat_alpha * value.at<unsigned char>(0, x) / 255.0;
+          const cv::Vec3b c3 = color.at<cv::Vec3b>(0, x);
+          const cv::Scalar blended(a * c3[0] + (1 - a) * 236,
+                                   a * c3[1] + (1 - a) * 236,
+                                   a * c3[2] + (1 - a) * 236);
+          cv::line(legend_, {x0 + x, y0}, {x0 + x, y0 + h - 1}, blended, 1);
+        }
+        break;
+      }
+    }
+    const cv::Size size = cv::getTextSize(labels[i], font, scale, 1, &baseline);
+    cv::putText(
+        legend_, labels[i],
+        cv::Point(pad * 2 + icon, static_cast<int>(cy + 0.5 * size.height)),
+        font, scale, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
+  }
+}
+
+void FrameRenderer::AddTrailPoints(const std::vector<Vec2>& robots) {
+  AIA_CHECK(robots.size() == trails_.size());
+  for (size_t i = 0; i < robots.size(); ++i) {
+    std::deque<Vec2>& trail = trails_[i];
+    if (!trail.empty() && (trail.back() - robots[i]).squaredNorm() < 1e-8)
+      continue;
+    trail.push_back(robots[i]);
+    if (settings_.trail_steps > 0)
+      while (static_cast<int>(trail.size()) > settings_.trail_steps + 1)
+        trail.pop_front();
+  }
+}
+
+void FrameRenderer::SetHeatmap(const Grid<float>* heat) {
+  if (heat == nullptr || heat_rect_.empty()) {
+    heat_bgr_.release();
+    heat_alpha_.release();
+    if (legend_heat_) BuildLegend(false);
+    return;
+  }
+  // Grid row 0 is y = 0 (the bottom of the image): flip, clamp, then resample
+  // the cells onto the workspace's pixels.
+  // A read-only view: cv::Mat has no const constructor.
+  const cv::Mat cells(heat->ny(), heat->nx(), CV_32F,
+                      const_cast<float*>(heat->data().data()));
+  cv::Mat flipped, resized, value, shade;
+  cv::flip(cells, flipped, 0);
+  cv::resize(flipped, resized, heat_rect_.size(), 0, 0, cv::INTER_LINEAR);
+  resized.convertTo(value, CV_8U, 255.0);  // saturates H to [0, 1]
+  // Inferno from violet (low heat) to orange (H >= 1): its pale yellow top
+  // would vanish on the light floor. Opacity grows with H.
+  value.convertTo(shade, CV_8U, 0.55, 0.2 * 255.0);
+  cv::applyColorMap(shade, heat_bgr_, cv::COLORMAP_INFERNO);
+  value.convertTo(heat_alpha_, CV_8U, settings_.heat_alpha);
+  if (!legend_heat_) BuildLegend(true);
+}
+
+void FrameRenderer::DrawHeatmap(cv::Mat* image) const {
+  if (heat_bgr_.empty()) return;
+  cv::Mat roi = (*image)(heat_rect_);
+  for (int r = 0; r < roi.rows; ++r) {
+    unsigned char* dst = roi.ptr<unsigned char>(r);
+    const unsigned char* src = heat_bgr_.ptr<unsigned char>(r);
+    const unsigned char* alpha = heat_alpha_.ptr<unsigned char>(r);
+    for (int c = 0; c < roi.cols; ++c) {
+      const unsigned a = alpha[c];
+      if (a == 0) continue;
+      for (int ch = 0; ch < 3; ++ch) {
+        const int i = 3 * c + ch;
+        dst[i] = static_cast<unsigned char>(
+            (src[i] * a + dst[i] * (255u - a) + 127u) / 255u);
+      }
+    }
+  }
+}
+
+const cv::Mat& FrameRenderer::Render(const FrameOverlay& overlay) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  scene_.Render(sim_.data(), camera_, &frame_);
+  const auto t1 = Clock::now();
+  DrawHeatmap(&frame_);
+  DrawOverlay(overlay, &frame_);
+  if (!legend_.empty()) legend_.copyTo(frame_(legend_rect_));
+  scene_seconds_ += std::chrono::duration<double>(t1 - t0).count();
+  overlay_seconds_ += std::chrono::duration<double>(Clock::now() - t1).count();
+  return frame_;
+}
+
+void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
+  const int n = static_cast<int>(o.robots.size());
+  AIA_CHECK(n == static_cast<int>(trails_.size()) &&
+            o.active.size() == o.robots.size());
+  // Line widths and marker sizes grow with the image; 1 px at 480 rows.
+  const double unit = std::max(1.0, view_.height() / 480.0);
+  const int thin = static_cast<int>(std::lround(unit));
+  const int thick = static_cast<int>(std::lround(2 * unit));
+  const double floor_scale = view_.Scale(0.0);
+  const double robot_px = robot_radius_ * view_.Scale(2 * kRobotHalfHeight);
+
+  pixels_.resize(n);
+  for (int i = 0; i < n; ++i) pixels_[i] = Fixed(view_.ToPixel(o.robots[i]));
+
+  // Translucent layers over the world below the heads-up band: sensing discs,
+  // then delivered messages.
+  const cv::Rect world_rect(0, view_.band_px(), image->cols,
+                            image->rows - view_.band_px());
+  cv::Mat world = (*image)(world_rect);
+  const cv::Point band_offset(0, FixedLength(view_.band_px()));
+  const int range_px = FixedLength(o.sensor_range * floor_scale);
+  world.copyTo(layer_);
+  for (int i = 0; i < n; ++i)
+    if (o.active[i])
+      cv::circle(layer_, pixels_[i] - band_offset, range_px, RobotBgr(i),
+                 cv::FILLED, cv::LINE_AA, kShift);
+  cv::addWeighted(layer_, 0.18, world, 0.82, 0.0, world);
+  if (o.neighbors != nullptr) {
+    world.copyTo(layer_);
+    const auto& nb = *o.neighbors;
+    // Anti-aliased lines cost about 5x plain ones; past a few hundred edges
+    // (a full graph of 25 robots) the web is a haze and plain lines do.
+    size_t directed = 0;
+    for (const auto& list : nb) directed += list.size();
+    const int line_type = directed <= 600 ? cv::LINE_AA : cv::LINE_8;
+    const int edge_width =
+        std::max(1, static_cast<int>(std::lround(0.75 * unit)));
+    for (int i = 0; i < static_cast<int>(nb.size()); ++i) {
+      for (int j : nb[i]) {
+        // An undirected line per pair that exchanged anything; once per pair.
+        const bool both = std::binary_search(nb[j].begin(), nb[j].end(), i);
+        if (both && j < i) continue;
+        cv::line(layer_, pixels_[i] - band_offset, pixels_[j] - band_offset,
+                 kEdge, edge_width, line_type, kShift);
+      }
+    }
+    cv::addWeighted(layer_, 0.7, world, 0.3, 0.0, world);
+  }
+  for (int i = 0; i < n; ++i)
+    if (o.active[i])
+      cv::circle(*image, pixels_[i], range_px, RobotBgr(i, 0.8), thin,
+                 cv::LINE_AA, kShift);
+
+  // Lost messages: red dashes from sender to receiver, shifted to the right
+  // of that direction so that the two directions of a pair stay apart.
+  if (o.lost != nullptr) {
+    for (const auto& [receiver, sender] : *o.lost) {
+      const Vec2 a = view_.ToPixel(o.robots[sender]),
+                 b = view_.ToPixel(o.robots[receiver]);
+      Vec2 d = b - a;
+      if (d.norm() < 1e-9) continue;
+      d.normalize();
+      const Vec2 side = 1.5 * unit * Vec2(-d.y(), d.x());
+      DashedLine(image, a + side, b + side, kLost, thin, 5 * unit, 4 * unit);
+    }
+  }
+
+  // Trails: the recorded decision-step positions, closed by the position now.
+  std::vector<cv::Point> polyline;
+  for (int i = 0; i < n; ++i) {
+    polyline.clear();
+    for (const Vec2& p : trails_[i])
+      polyline.push_back(Fixed(view_.ToPixel(p)));
+    polyline.push_back(pixels_[i]);
+    if (polyline.size() >= 2)
+      cv::polylines(*image, polyline, false, RobotBgr(i, 0.7), thin,
+                    cv::LINE_AA, kShift);
+  }
+
+  // Targets: the best estimate's 2-sigma ellipse, a cross at its mean joined
+  // to the truth, and a ring around the true position.
+  const int max_axis = 4 * std::max(image->cols, image->rows);
+  for (const TargetOverlay& t : o.targets) {
+    const cv::Scalar color = TargetColor(t, o.eps);
+    const cv::Point mean = Fixed(view_.ToPixel(t.mean));
+    const cv::Point truth = Fixed(view_.ToPixel(t.truth, 0.08));
+    cv::line(*image, mean, truth, color, thin, cv::LINE_AA, kShift);
+    const Eigen::SelfAdjointEigenSolver<Mat2> eig(0.5 *
+                                                  (t.cov + t.cov.transpose()));
+    const Eigen::Vector2d lambda =
+        eig.eigenvalues().cwiseMax(0.0);  // ascending
+    const Eigen::Vector2d major = eig.eigenvectors().col(1);
+    // 2 sigma along each principal axis; the image's y runs down, so the
+    // world's counter-clockwise angle is clockwise on screen.
+    const double a =
+        std::min<double>(max_axis, 2.0 * std::sqrt(lambda[1]) * floor_scale);
+    const double b =
+        std::min<double>(max_axis, 2.0 * std::sqrt(lambda[0]) * floor_scale);
+    const double angle = -std::atan2(major.y(), major.x()) * 180.0 / kPi;
+    cv::ellipse(*image, mean, cv::Size(FixedLength(a), FixedLength(b)), angle,
+                0.0, 360.0, color, thick, cv::LINE_AA, kShift);
+    const int arm = FixedLength(3.0 * unit);
+    cv::line(*image, mean + cv::Point(-arm, -arm), mean + cv::Point(arm, arm),
+             color, thick, cv::LINE_AA, kShift);
+    cv::line(*image, mean + cv::Point(-arm, arm), mean + cv::Point(arm, -arm),
+             color, thick, cv::LINE_AA, kShift);
+    cv::circle(*image, truth,
+               FixedLength(std::max(4.0 * unit, 0.16 * floor_scale)), kBlack,
+               thin, cv::LINE_AA, kShift);
+  }
+
+  // Robots: a dark ring around MuJoCo's disc; a failed robot greyed and
+  // crossed.
+  for (int i = 0; i < n; ++i) {
+    const cv::Point p = Fixed(view_.ToPixel(o.robots[i], 2 * kRobotHalfHeight));
+    const int ring = FixedLength(std::max(robot_px + unit, 3.0 * unit));
+    if (o.active[i]) {
+      cv::circle(*image, p, ring, kBlack, thin, cv::LINE_AA, kShift);
+      continue;
+    }
+    cv::circle(*image, p, ring, kFailed, cv::FILLED, cv::LINE_AA, kShift);
+    const int arm = FixedLength(std::max(2.0 * robot_px, 5.0 * unit));
+    cv::line(*image, p + cv::Point(-arm, -arm), p + cv::Point(arm, arm),
+             kFailed, thick, cv::LINE_AA, kShift);
+    cv::line(*image, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm),
+             kFailed, thick, cv::LINE_AA, kShift);
+  }
+
+  // The heads-up line, in the band kept free above the workspace.
+  const int band = view_.band_px();
+  cv::rectangle(*image, cv::Rect(0, 0, image->cols, band),
+                cv::Scalar(32, 32, 32), cv::FILLED);
+  char text[256];
+  int len = std::snprintf(
+      text, sizeof(text), "step %d/%d   localized %d/%zu   %s   seed %llu",
+      o.step, o.max_steps, o.localized, o.targets.size(), o.policy.c_str(),
+      static_cast<unsigned long long>(o.seed));
+  if (o.heatmap_robot >= 0 && len > 0 && len < static_cast<int>(sizeof(text)))
+    std::snprintf(text + len, sizeof(text) - len, "   heatmap: robot %d",
+                  o.heatmap_robot);
+  const int font = cv::FONT_HERSHEY_SIMPLEX;
+  int baseline = 0;
+  // Text about half the band high, narrowed if the line would not fit.
+  double font_scale = band / 50.0;
+  const cv::Size size = cv::getTextSize(text, font, font_scale, 1, &baseline);
+  const int margin = band / 3;
+  if (size.width > image->cols - 2 * margin)
+    font_scale *= static_cast<double>(image->cols - 2 * margin) / size.width;
+  const cv::Size fitted = cv::getTextSize(text, font, font_scale, 1, &baseline);
+  cv::putText(*image, text, cv::Point(margin, (band + fitted.height) / 2), font,
+              font_scale, cv::Scalar(235, 235, 235), 1, cv::LINE_AA);
+}
+
+}  // namespace aia

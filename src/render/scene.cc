@@ -1,0 +1,123 @@
+#include "aia/render/scene.h"
+
+#include <GL/osmesa.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "aia/core/check.h"
+
+namespace aia {
+
+void OsMesaDeleter::operator()(osmesa_context* context) const {
+  OSMesaDestroyContext(context);
+}
+
+void MjvSceneDeleter::operator()(mjvScene* scene) const {
+  mjv_freeScene(scene);
+  delete scene;
+}
+
+void MjrContextDeleter::operator()(mjrContext* context) const {
+  mjr_freeContext(context);
+  delete context;
+}
+
+SceneRenderer::SceneRenderer(const mjModel* model,
+                             const SceneSettings& settings)
+    : settings_(settings) {
+  AIA_CHECK(model != nullptr && settings.width > 0 && settings.height > 0);
+  model_ = MjModelPtr(mj_copyModel(nullptr, model));
+  AIA_CHECK(model_ != nullptr);
+  mjVisual& vis = model_->vis;
+  vis.global.offwidth = settings.width;
+  vis.global.offheight = settings.height;
+  vis.quality.offsamples = settings.samples;
+  // The generated model lights the floor with a directional light from above;
+  // a softer headlight keeps the light floor from saturating to white.
+  vis.headlight.ambient[0] = vis.headlight.ambient[1] =
+      vis.headlight.ambient[2] = 0.25f;
+  vis.headlight.diffuse[0] = vis.headlight.diffuse[1] =
+      vis.headlight.diffuse[2] = 0.2f;
+  vis.headlight.specular[0] = vis.headlight.specular[1] =
+      vis.headlight.specular[2] = 0.0f;
+  // A plane's third size is only the spacing of its render grid: MuJoCo draws
+  // the floor as (size / spacing)^2 quads, 40 000 for the generated 0.1 m,
+  // which halves the frame rate under software GL and changes no pixel (the
+  // lights are directional). A 4 x 4 grid renders the same image.
+  for (int g = 0; g < model_->ngeom; ++g) {
+    if (model_->geom_type[g] != mjGEOM_PLANE) continue;
+    mjtNum* size = model_->geom_size + 3 * g;
+    size[2] = std::max(size[2], 0.5 * std::max(size[0], size[1]));
+  }
+  // Robots and targets are a few pixels across seen from above: 16-gons do,
+  // and with 80 robots this more than doubles the frame rate.
+  vis.quality.numslices = std::min(vis.quality.numslices, 16);
+  vis.quality.numstacks = std::min(vis.quality.numstacks, 8);
+
+  gl_ = OsMesaPtr(OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 0, nullptr));
+  if (!gl_) throw std::runtime_error("cannot create an OSMesa context");
+  gl_buffer_.resize(static_cast<size_t>(settings.width) * settings.height * 4);
+  if (!OSMesaMakeCurrent(gl_.get(), gl_buffer_.data(), GL_UNSIGNED_BYTE,
+                         settings.width, settings.height))
+    throw std::runtime_error("cannot make the OSMesa context current");
+
+  scene_ = MjvScenePtr(new mjvScene);
+  mjv_defaultScene(scene_.get());
+  mjv_makeScene(model_.get(), scene_.get(), model_->ngeom + 100);
+  scene_->flags[mjRND_SHADOW] = settings.shadows ? 1 : 0;
+  scene_->flags[mjRND_REFLECTION] = 0;
+  scene_->flags[mjRND_SKYBOX] = 0;
+
+  context_ = MjrContextPtr(new mjrContext);
+  mjr_defaultContext(context_.get());
+  mjr_makeContext(model_.get(), context_.get(), mjFONTSCALE_100);
+  mjr_setBuffer(mjFB_OFFSCREEN, context_.get());
+  if (context_->currentBuffer != mjFB_OFFSCREEN ||
+      context_->offWidth < settings.width ||
+      context_->offHeight < settings.height)
+    throw std::runtime_error("MuJoCo's offscreen buffer is not available (" +
+                             std::to_string(context_->offWidth) + "x" +
+                             std::to_string(context_->offHeight) + ")");
+  mjv_defaultOption(&option_);
+  mjv_defaultCamera(&camera_);
+  rgb_.resize(static_cast<size_t>(settings.width) * settings.height * 3);
+}
+
+SceneRenderer::~SceneRenderer() {
+  // MuJoCo frees its GL objects in whatever context is current: make it ours.
+  if (gl_)
+    OSMesaMakeCurrent(gl_.get(), gl_buffer_.data(), GL_UNSIGNED_BYTE,
+                      settings_.width, settings_.height);
+}
+
+void SceneRenderer::Render(const mjData* data, const mjvCamera& camera,
+                           cv::Mat* bgr) {
+  const int w = settings_.width, h = settings_.height;
+  AIA_CHECK(
+      OSMesaMakeCurrent(gl_.get(), gl_buffer_.data(), GL_UNSIGNED_BYTE, w, h));
+  mjr_setBuffer(mjFB_OFFSCREEN, context_.get());
+  camera_ = camera;
+  // mjv_updateScene takes mjData* but only reads the state (it borrows and
+  // returns MuJoCo's scratch stack); the simulation is not changed.
+  mjv_updateScene(model_.get(), const_cast<mjData*>(data), &option_, nullptr,
+                  &camera_, mjCAT_ALL, scene_.get());
+  const mjrRect viewport = {0, 0, w, h};
+  mjr_render(viewport, scene_.get(), context_.get());
+  mjr_readPixels(rgb_.data(), nullptr, viewport, context_.get());
+  bgr->create(h, w, CV_8UC3);
+  // GL rows run bottom to top; OpenCV's top to bottom, in BGR order.
+  const size_t row_bytes = static_cast<size_t>(w) * 3;
+  for (int r = 0; r < h; ++r) {
+    const unsigned char* src = rgb_.data() + (h - 1 - r) * row_bytes;
+    unsigned char* dst = bgr->ptr<unsigned char>(r);
+    for (int c = 0; c < w; ++c) {
+      dst[3 * c + 0] = src[3 * c + 2];
+      dst[3 * c + 1] = src[3 * c + 1];
+      dst[3 * c + 2] = src[3 * c + 0];
+    }
+  }
+}
+
+}  // namespace aia

@@ -1,0 +1,178 @@
+// The heatmap of SPEC section 8 against values worked out by hand.
+#include "aia/estimation/heatmap.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+namespace aia {
+namespace {
+
+// One static 2-D target, prior N(mu0, Sigma0), whose belief row 0 is set to
+// N(mu, Sigma) directly in information form.
+struct OneTarget {
+  BeliefLayout layout{std::vector<TargetModel>(1)};
+  BeliefSet beliefs{&layout, 1};
+  void Set(const Vec2& mu, const Mat2& sigma) {
+    const Mat2 omega = sigma.inverse();
+    beliefs.Omega(0, 0) = omega;
+    beliefs.Xi(0, 0) = omega * mu;
+  }
+};
+
+TEST(HeatWeightTest, ByHand) {
+  const double eps = 0.01;
+  const double prior = std::log(1.0);  // det Sigma0 = 1
+  // log(0.1 / 0.01) / log(1 / 0.01) = 1 / 2.
+  EXPECT_NEAR(HeatWeight(std::log(0.1), prior, eps), 0.5, 1e-12);
+  EXPECT_NEAR(HeatWeight(std::log(1.0), prior, eps), 1.0, 1e-12);  // unexplored
+  EXPECT_NEAR(HeatWeight(std::log(3.0), prior, eps), 1.0,
+              1e-12);  // worse than the prior
+  EXPECT_EQ(HeatWeight(std::log(0.01), prior, eps), 0.0);  // at eps
+  EXPECT_EQ(HeatWeight(std::log(1e-5), prior, eps), 0.0);  // localized
+  // A prior already at or below eps: all or nothing.
+  EXPECT_EQ(HeatWeight(std::log(0.02), std::log(0.005), eps), 1.0);
+  EXPECT_EQ(HeatWeight(std::log(0.002), std::log(0.005), eps), 0.0);
+}
+
+TEST(HeatmapTest, MakeHeatmapGridCoversTheWorkspace) {
+  const Grid<float> g = MakeHeatmapGrid({20.0, 10.0}, 0.1);
+  EXPECT_EQ(g.nx(), 200);
+  EXPECT_EQ(g.ny(), 100);
+  EXPECT_EQ(MakeHeatmapGrid({20.0, 10.05}, 0.1).ny(), 101);
+  for (float v : g.data()) ASSERT_EQ(v, 0.0f);
+}
+
+TEST(HeatmapTest, SingleTargetCellValuesByHand) {
+  OneTarget t;
+  // mu at the centre of cell (10, 10) of a 0.5 m grid; Sigma = diag(0.5, 0.2):
+  // det 0.1, so with eps = 0.01 and det Sigma0 = 1 the weight is 1/2; with
+  // s = 1, Sigma + s^2 I = diag(1.5, 1.2).
+  t.Set({5.25, 5.25}, Vec2(0.5, 0.2).asDiagonal());
+  HeatmapParams params;
+  params.eps = 0.01;
+  params.blur = 1.0;
+  Grid<float> grid(20, 20, 0.5);
+  ProjectHeatmap(t.beliefs, 0, {0.0}, params, &grid);
+  EXPECT_NEAR(grid(10, 10), 0.5, 1e-6);
+  EXPECT_NEAR(grid(12, 10), 0.5 * std::exp(-0.5 * 1.0 / 1.5),
+              1e-6);  // 1 m in x: 0.358266
+  EXPECT_NEAR(grid(10, 11), 0.5 * std::exp(-0.5 * 0.25 / 1.2),
+              1e-6);  // 0.5 m in y: 0.450538
+  EXPECT_NEAR(grid(8, 12), 0.5 * std::exp(-0.5 * (1.0 / 1.5 + 1.0 / 1.2)),
+              1e-6);
+  // Symmetric about the mean.
+  EXPECT_FLOAT_EQ(grid(8, 10), grid(12, 10));
+  EXPECT_FLOAT_EQ(grid(10, 7), grid(10, 13));
+}
+
+TEST(HeatmapTest, CorrelatedCovarianceByHand) {
+  OneTarget t;
+  Mat2 sigma;
+  sigma << 0.5, 0.3, 0.3, 0.5;  // det 0.16
+  t.Set({5.25, 5.25}, sigma);
+  HeatmapParams params;
+  params.eps = 0.01;
+  params.blur = 1.0;
+  Grid<float> grid(20, 20, 0.5);
+  ProjectHeatmap(t.beliefs, 0, {std::log(0.16)}, params,
+                 &grid);  // the prior: weight 1
+  // S = [[1.5, 0.3], [0.3, 1.5]], det 2.16, S^-1 = [[1.5, -0.3], [-0.3, 1.5]]
+  // / 2.16. d = (1, 1): d' S^-1 d = 2.4 / 2.16; d = (1, -1): 3.6 / 2.16.
+  EXPECT_NEAR(grid(10, 10), 1.0, 1e-6);
+  EXPECT_NEAR(grid(12, 12), std::exp(-0.5 * 2.4 / 2.16), 1e-6);
+  EXPECT_NEAR(grid(12, 8), std::exp(-0.5 * 3.6 / 2.16), 1e-6);
+  EXPECT_GT(grid(12, 12), grid(12, 8));  // heat stretches along the correlation
+}
+
+TEST(HeatmapTest, LocalizedTargetLeavesNoHeat) {
+  OneTarget t;
+  t.Set({5.0, 5.0}, 0.01 * Mat2::Identity());  // det 1e-4 <= eps 1e-3
+  HeatmapParams params;
+  params.eps = 1e-3;
+  Grid<float> grid(20, 20, 0.5, 7.0f);  // stale values are overwritten
+  ProjectHeatmap(t.beliefs, 0, {0.0}, params, &grid);
+  for (float v : grid.data()) ASSERT_EQ(v, 0.0f);
+}
+
+TEST(HeatmapTest, UnexploredTargetHasFullWeightAtItsMean) {
+  OneTarget t;
+  const Mat2 prior = Mat2::Identity();
+  t.Set({3.25, 6.75}, prior);  // still the prior
+  HeatmapParams params;
+  params.eps = 0.1;
+  params.blur = 1.0;
+  Grid<float> grid(20, 20, 0.5);
+  ProjectHeatmap(t.beliefs, 0, {std::log(prior.determinant())}, params, &grid);
+  EXPECT_NEAR(grid(6, 13), 1.0, 1e-6);
+  float peak = 0.0f;
+  for (float v : grid.data()) peak = std::max(peak, v);
+  EXPECT_NEAR(peak, 1.0f, 1e-6);
+}
+
+TEST(HeatmapTest, CutOffWindowAndTargetsAdd) {
+  OneTarget t;
+  t.Set({2.25, 2.25}, 0.25 * Mat2::Identity());
+  HeatmapParams params;
+  params.eps = 0.001;
+  params.blur = 0.5;  // S = 0.5 I: sigma 0.707 m, cut-off at 4 sigma = 2.83 m
+  Grid<float> grid(40, 40, 0.25);
+  ProjectHeatmap(t.beliefs, 0, {std::log(0.0625)}, params, &grid);
+  for (int iy = 0; iy < grid.ny(); ++iy)
+    for (int ix = 0; ix < grid.nx(); ++ix) {
+      const double d = (grid.CellCenter(ix, iy) - Vec2(2.25, 2.25)).norm();
+      const double exact = std::exp(-0.5 * d * d / 0.5);
+      if (d > 2.9)
+        ASSERT_EQ(grid(ix, iy), 0.0f) << ix << "," << iy;
+      else if (d < 2.8)
+        ASSERT_NEAR(grid(ix, iy), exact, 1e-6) << ix << "," << iy;
+    }
+  // Two Gaussians add.
+  Grid<float> twice(40, 40, 0.25);
+  AddGaussianHeat({2.25, 2.25}, 0.25 * Mat2::Identity(), 1.0, 0.5, 4.0, &twice);
+  AddGaussianHeat({2.25, 2.25}, 0.25 * Mat2::Identity(), 0.5, 0.5, 4.0, &twice);
+  EXPECT_NEAR(twice(8, 8), 1.5 * grid(8, 8), 1e-6);
+  // A mean far outside the grid touches nothing.
+  AddGaussianHeat({-100.0, 500.0}, Mat2::Identity(), 1.0, 0.5, 4.0, &twice);
+  EXPECT_NEAR(twice(8, 8), 1.5 * grid(8, 8), 1e-6);
+}
+
+TEST(HeatmapTest, FourDimensionalTargetUsesThePositionMarginal) {
+  TargetModel model;
+  model.dim = 4;
+  model.A = Eigen::MatrixXd::Identity(4, 4);
+  model.b = Eigen::VectorXd::Zero(4);
+  model.Q = Eigen::MatrixXd::Zero(4, 4);
+  BeliefLayout layout({model});
+  BeliefSet beliefs(&layout, 1);
+  Eigen::Matrix4d sigma = Eigen::Matrix4d::Identity();
+  sigma(0, 2) = sigma(2, 0) = 0.5;  // position x correlated with velocity x
+  Eigen::Vector4d mu(5.25, 5.25, 1.0, 0.0);
+  beliefs.Omega(0, 0) = sigma.inverse();
+  beliefs.Xi(0, 0) = sigma.inverse() * mu;
+  HeatmapParams params;
+  params.eps = 1e-3;
+  params.blur = 1.0;
+  Grid<float> grid(20, 20, 0.5);
+  ProjectHeatmap(beliefs, 0, {std::log(sigma.determinant())}, params, &grid);
+  // Position marginal I: S = 2 I. 1 m in x: exp(-1/4).
+  EXPECT_NEAR(grid(10, 10), 1.0, 1e-6);
+  EXPECT_NEAR(grid(12, 10), std::exp(-0.25), 1e-6);
+}
+
+TEST(HeatmapTest, ReusesTheGridWithoutAllocating) {
+  OneTarget t;
+  t.Set({5.0, 5.0}, Mat2::Identity());
+  HeatmapParams params;
+  Grid<float> grid(200, 200, 0.1);
+  const float* storage = grid.data().data();
+  for (int i = 0; i < 3; ++i)
+    ProjectHeatmap(t.beliefs, 0, {0.0}, params, &grid);
+  EXPECT_EQ(grid.data().data(), storage);
+  EXPECT_EQ(grid.size(), 200u * 200u);
+}
+
+}  // namespace
+}  // namespace aia

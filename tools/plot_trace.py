@@ -1,0 +1,188 @@
+#!/usr/bin/python3
+"""Plots det Sigma over time from an aia trace.csv (the paper's figures 3c/3d).
+
+Left panel, per robot: the sum over targets of robot i's det Sigma_i^k (the
+paper's per-node sum, its figures 3c and 5a); failed robots dashed. Right
+panel, per target: min over robots of det Sigma_i^k, the team's uncertainty,
+which the mission judges against eps (figure 3d). Both on a log scale, with
+the threshold eps as a dashed line.
+
+eps comes from --eps, else from the summary next to the trace: PREFIX.summary.json
+for PREFIX.trace.csv (written by `aia render`), else summary.json in the same
+folder (written by `aia run`).
+
+Usage:
+  tools/plot_trace.py renders/default/trace.csv --out renders/default/trace.png
+
+Later plots follow the same pattern: a function FIGURE(trace, summary, args)
+that returns a matplotlib figure, registered in FIGURES and picked with
+--figure; the helpers below (robot_color, load_trace, load_summary) are
+importable by other scripts under tools/.
+"""
+
+import argparse
+import colorsys
+import csv
+import json
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")  # headless
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def robot_color(i):
+    """Robot i's colour, the same as in the MJCF and the videos (world/mjcf.cc)."""
+    h = (0.08 + i * 0.61803398875) % 1.0
+    return colorsys.hsv_to_rgb(h, 0.75, 0.9)
+
+
+class Trace:
+    """trace.csv as arrays: steps (T,), min_det (T, M), det (T, N, M)."""
+
+    def __init__(self, steps, min_det, det):
+        self.steps = steps
+        self.min_det = min_det
+        self.det = det
+
+    @property
+    def num_robots(self):
+        return self.det.shape[1]
+
+    @property
+    def num_targets(self):
+        return self.det.shape[2]
+
+
+def load_trace(path):
+    """Reads step,target,min_det,det_r0..det_r{N-1} rows into a Trace."""
+    with open(path, newline="") as f:
+        reader = csv.reader(f)
+        header = next(reader, None)
+        if header is None or header[:3] != ["step", "target", "min_det"]:
+            raise ValueError(f"{path}: not an aia trace (header {header})")
+        robots = [h for h in header[3:] if h.startswith("det_r")]
+        rows = [r for r in reader if r]
+    if not rows:
+        raise ValueError(f"{path}: no rows")
+    steps = sorted({int(r[0]) for r in rows})
+    targets = sorted({int(r[1]) for r in rows})
+    index = {s: n for n, s in enumerate(steps)}
+    min_det = np.full((len(steps), len(targets)), np.nan)
+    det = np.full((len(steps), len(robots), len(targets)), np.nan)
+    for r in rows:
+        t, k = index[int(r[0])], int(r[1])
+        min_det[t, k] = float(r[2])
+        det[t, :, k] = [float(x) for x in r[3:3 + len(robots)]]
+    return Trace(np.array(steps), min_det, det)
+
+
+def summary_path(trace_path):
+    """The summary written with a trace, or None."""
+    folder, name = os.path.split(trace_path)
+    candidates = []
+    if name.endswith(".trace.csv"):
+        candidates.append(os.path.join(folder, name[: -len(".trace.csv")] + ".summary.json"))
+    candidates.append(os.path.join(folder, "summary.json"))
+    for c in candidates:
+        if os.path.isfile(c):
+            return c
+    return None
+
+
+def load_summary(trace_path, explicit=None):
+    path = explicit or summary_path(trace_path)
+    if path is None:
+        return {}
+    with open(path) as f:
+        return json.load(f)
+
+
+def _threshold(ax, eps):
+    if eps is not None:
+        ax.axhline(eps, color="tab:blue", linestyle="--", linewidth=1.2, label=f"eps = {eps:g}")
+
+
+def figure_uncertainty(trace, summary, args):
+    """det Sigma per robot (sum over targets) and per target (min over robots)."""
+    eps = args.eps if args.eps is not None else summary.get("eps")
+    failed = set(summary.get("failed_robots", []))
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), sharex=True)
+
+    per_robot = np.nansum(trace.det, axis=2)  # (T, N)
+    for i in range(trace.num_robots):
+        ax_kw = dict(color=robot_color(i), linewidth=1.2)
+        if i in failed:
+            ax_kw.update(linestyle="--", label=f"robot {i} (failed)")
+        elif trace.num_robots <= 12:
+            ax_kw["label"] = f"robot {i}"
+        left.plot(trace.steps, per_robot[:, i], **ax_kw)
+    _threshold(left, eps)
+    left.set_title(r"per robot $i$: sum over targets $k$ of $\det \Sigma_i^k$", fontsize=10)
+
+    cmap = plt.get_cmap("tab10" if trace.num_targets <= 10 else "viridis")
+    for k in range(trace.num_targets):
+        color = cmap(k if trace.num_targets <= 10 else k / max(1, trace.num_targets - 1))
+        label = f"target {k}" if trace.num_targets <= 12 else None
+        right.plot(trace.steps, trace.min_det[:, k], color=color, linewidth=1.2, label=label)
+    _threshold(right, eps)
+    right.set_title(r"per target $k$: min over robots $i$ of $\det \Sigma_i^k$", fontsize=10)
+
+    for ax in (left, right):
+        ax.set_yscale("log")
+        ax.set_xlabel("decision step t")
+        ax.grid(True, which="major", alpha=0.3)
+        handles, _ = ax.get_legend_handles_labels()
+        if handles:
+            ax.legend(fontsize=7, ncol=2, loc="best", framealpha=0.8)
+    left.set_ylabel(r"$\det \Sigma$")
+    title = args.title
+    if title is None and summary:
+        title = "{scenario}: {policy}, seed {seed}, {robots} robots, {targets} targets".format(
+            **{k: summary.get(k, "?") for k in ("scenario", "policy", "seed", "robots", "targets")})
+        if summary.get("success"):
+            title += f", localized at step {summary.get('flowtime')}"
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+FIGURES = {"uncertainty": figure_uncertainty}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        description="Plot det Sigma over time from an aia trace.csv (per robot and per "
+        "target, log scale, with the eps line).")
+    parser.add_argument("trace", help="trace.csv written by `aia run` or `aia render`")
+    parser.add_argument("--out", help="PNG to write (default: the trace's name with .png)")
+    parser.add_argument("--figure", choices=sorted(FIGURES), default="uncertainty",
+                        help="which figure (default: uncertainty)")
+    parser.add_argument("--summary", help="summary JSON (default: found next to the trace)")
+    parser.add_argument("--eps", type=float, help="threshold line (default: eps from the summary)")
+    parser.add_argument("--title", help="figure title (default: from the summary)")
+    parser.add_argument("--dpi", type=int, default=120, help="resolution (default: 120)")
+    args = parser.parse_args(argv)
+
+    try:
+        trace = load_trace(args.trace)
+        summary = load_summary(args.trace, args.summary)
+    except (OSError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    out = args.out or os.path.splitext(args.trace)[0] + ".png"
+    fig = FIGURES[args.figure](trace, summary, args)
+    folder = os.path.dirname(out)
+    if folder:
+        os.makedirs(folder, exist_ok=True)
+    fig.savefig(out, dpi=args.dpi)
+    print(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
