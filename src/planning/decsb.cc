@@ -89,15 +89,8 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
     Move move =
         path.size() >= 2 ? MoveBetween(lattice, path[0], path[1]) : Move::kStay;
     if (move == Move::kStay) {  // nothing left to gain within the horizon
-      Move valid[kNumMoves];
-      int count = 0;
-      for (Move v : kMoves)
-        if (lattice.Valid(path[0], v)) valid[count++] = v;
-      if (count == 0) {
-        status = PolicyStatus::kNoValidMove;
-        continue;
-      }
-      move = valid[rngs_[i].UniformInt(count)];
+      move = RandomValidMove(lattice, path[0], rngs_[i]);
+      if (move == Move::kStay) status = PolicyStatus::kNoValidMove;
     }
     (*moves)[i] = move;
   }

@@ -124,11 +124,7 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
     if (m == Move::kStay && ctx.comm->Active(i)) {
       // Nothing planned for this robot (depth-0 plan or no valid move): any
       // valid move, as the world rule would pick.
-      Move valid[kNumMoves];
-      int count = 0;
-      for (Move v : kMoves)
-        if (lattice.Valid((*ctx.positions)[i], v)) valid[count++] = v;
-      if (count > 0) m = valid[rng_.UniformInt(count)];
+      m = RandomValidMove(lattice, (*ctx.positions)[i], rng_);
     }
     (*moves)[i] = m;
   }

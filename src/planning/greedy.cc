@@ -71,13 +71,7 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
       continue;
     }
     Move m = TowardNearestTarget(ctx, i);
-    if (m == Move::kStay) {  // nothing left to find: wander
-      Move valid[kNumMoves];
-      int count = 0;
-      for (Move v : kMoves)
-        if (lattice.Valid(p, v)) valid[count++] = v;
-      m = valid[rng.UniformInt(count)];
-    }
+    if (m == Move::kStay) m = RandomValidMove(lattice, p, rng);  // wander
     (*moves)[i] = m;
   }
   return status;

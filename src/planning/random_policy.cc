@@ -36,17 +36,9 @@ PolicyStatus RandomPolicy::Decide(const DecisionContext& ctx,
   const Lattice& lattice = ctx.world->lattice;
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
-    Move valid[kNumMoves];
-    int count = 0;
-    const int p = (*ctx.positions)[i];
-    for (Move m : kMoves)
-      if (lattice.Valid(p, m)) valid[count++] = m;
-    if (count == 0) {
-      (*moves)[i] = Move::kStay;
-      if (ctx.comm->Active(i)) status = PolicyStatus::kNoValidMove;
-      continue;
-    }
-    (*moves)[i] = valid[rngs_[i].UniformInt(count)];
+    (*moves)[i] = RandomValidMove(lattice, (*ctx.positions)[i], rngs_[i]);
+    if ((*moves)[i] == Move::kStay && ctx.comm->Active(i))
+      status = PolicyStatus::kNoValidMove;
   }
   return status;
 }

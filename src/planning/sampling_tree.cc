@@ -372,13 +372,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
           }
         }
       }
-      if (move == Move::kStay) {
-        Move valid[kNumMoves];
-        int count = 0;
-        for (Move m : kMoves)
-          if (lattice.Valid(q, m)) valid[count++] = m;
-        if (count > 0) move = valid[rng.UniformInt(count)];
-      }
+      if (move == Move::kStay) move = RandomValidMove(lattice, q, rng);
       child_pos_[i] = lattice.Next(q, move);
     }
     const int child = AddNode(node, child_pos_.data());

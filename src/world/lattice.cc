@@ -197,13 +197,16 @@ Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng,
                     bool* replaced) {
   *replaced = false;
   if (wanted != Move::kStay && lattice.Valid(from, wanted)) return wanted;
+  *replaced = true;
+  return RandomValidMove(lattice, from, rng);
+}
+
+Move RandomValidMove(const Lattice& lattice, int from, Rng& rng) {
   Move valid[kNumMoves];
   int count = 0;
   for (Move m : kMoves)
     if (lattice.Valid(from, m)) valid[count++] = m;
-  *replaced = true;
-  if (count == 0) return Move::kStay;
-  return valid[rng.UniformInt(count)];
+  return count == 0 ? Move::kStay : valid[rng.UniformInt(count)];
 }
 
 }  // namespace aia

@@ -8,6 +8,7 @@
 #include "aia/estimation/filter.h"
 #include "aia/planning/decsb.h"
 #include "aia/planning/information.h"
+#include "support/team_fixture.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -15,50 +16,7 @@ namespace {
 
 using testing::ScenarioFromYaml;
 
-// A world, the prior beliefs (one row per robot and the centralized row) and
-// a full communication graph.
-struct Team {
-  Scenario scenario;
-  World world;
-  SensorModel sensor;
-  BeliefLayout layout;
-  BeliefSet beliefs, central;
-  CommNetwork comm;
-  std::vector<int> positions;
-
-  explicit Team(const std::string& yaml, CommParams cp = {})
-      : scenario(ScenarioFromYaml(yaml)) {
-    world = World::Build(scenario);
-    std::vector<TargetModel> models(world.NumTargets());
-    std::vector<Eigen::VectorXd> means;
-    std::vector<Eigen::MatrixXd> covs;
-    for (const auto& t : world.targets) {
-      means.push_back(t.prior_mean);
-      covs.push_back(t.prior_cov);
-    }
-    layout = BeliefLayout(models);
-    beliefs = BeliefSet(&layout, world.NumRobots());
-    central = BeliefSet(&layout, 1);
-    beliefs.SetPrior(means, covs);
-    central.SetPrior(means, covs);
-    comm = CommNetwork(cp, world.NumRobots(), {}, 1);
-    positions = world.robot_starts;
-    std::vector<Vec2> p;
-    for (int idx : positions) p.push_back(world.lattice.Point(idx));
-    comm.Update(0, p);
-  }
-  DecisionContext Context() const {
-    DecisionContext c;
-    c.world = &world;
-    c.sensor = &sensor;
-    c.eps = scenario.mission.eps;
-    c.positions = &positions;
-    c.comm = &comm;
-    c.beliefs = &beliefs;
-    c.central = &central;
-    return c;
-  }
-};
+using Team = testing::TeamFixture;
 
 const char* kTen =
     "seed: 3\nrobots: {count: 6}\ntargets: {count: 6}\n"

@@ -8,6 +8,7 @@
 #include "aia/planning/information.h"
 #include "aia/planning/random_policy.h"
 #include "aia/planning/registry.h"
+#include "support/team_fixture.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -15,50 +16,7 @@ namespace {
 
 using testing::ScenarioFromYaml;
 
-// A fixture holding everything a DecisionContext points to.
-struct PolicyFixture {
-  Scenario scenario;
-  World world;
-  SensorModel sensor;
-  BeliefLayout layout;
-  BeliefSet beliefs, central;
-  CommNetwork comm;
-  std::vector<int> positions;
-
-  explicit PolicyFixture(const std::string& yaml)
-      : scenario(ScenarioFromYaml(yaml)) {
-    world = World::Build(scenario);
-    std::vector<TargetModel> models;
-    std::vector<Eigen::VectorXd> means;
-    std::vector<Eigen::MatrixXd> covs;
-    for (const auto& t : world.targets) {
-      models.push_back(TargetModel{});
-      means.push_back(t.prior_mean);
-      covs.push_back(t.prior_cov);
-    }
-    layout = BeliefLayout(models);
-    beliefs = BeliefSet(&layout, world.NumRobots());
-    central = BeliefSet(&layout, 1);
-    beliefs.SetPrior(means, covs);
-    central.SetPrior(means, covs);
-    comm = CommNetwork({}, world.NumRobots(), {}, 1);
-    positions = world.robot_starts;
-    std::vector<Vec2> p;
-    for (int idx : positions) p.push_back(world.lattice.Point(idx));
-    comm.Update(0, p);
-  }
-  DecisionContext Context() const {
-    DecisionContext c;
-    c.world = &world;
-    c.sensor = &sensor;
-    c.eps = scenario.mission.eps;
-    c.positions = &positions;
-    c.comm = &comm;
-    c.beliefs = &beliefs;
-    c.central = &central;
-    return c;
-  }
-};
+using PolicyFixture = testing::TeamFixture;
 
 TEST(InformationTest, PredictedPrecisionHonoursRangeAndSight) {
   PolicyFixture s(

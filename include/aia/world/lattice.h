@@ -77,6 +77,9 @@ void BfsDistances(const Lattice& lattice, const int* sources, int num_sources,
 Move StepDownField(const Lattice& lattice, const std::vector<int>& dist,
                    int from);
 
+// A uniformly random valid move from `from`, or kStay when there is none.
+Move RandomValidMove(const Lattice& lattice, int from, Rng& rng);
+
 // The world rule (SPEC section 2), the same for every policy: an invalid move
 // is replaced by a uniformly random valid one; with none the robot stays.
 // Sets *replaced when the wanted move was not applied as is.
