@@ -140,7 +140,7 @@ int RunEval(const EvalOptions& o) {
   std::vector<std::pair<int, int>> dims;
   for (const auto& s : o.sizes) dims.push_back(ParseSize(s, "--sizes"));
 
-  MakeDirs(o.out_dir);
+  MakeOutputDir(o.out_dir, "--out");
   const std::string runs_path = o.out_dir + "/runs.csv";
   // Resume: keep the rows already there, rewritten cleanly (a row cut short
   // by an interruption is dropped and run again).

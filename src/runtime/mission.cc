@@ -35,6 +35,15 @@ void ApplyOverrides(const ScenarioOverrides& o, const PolicyRegistry& registry,
   }
 }
 
+void MakeOutputDir(const std::string& dir, const std::string& flag) {
+  if (dir.empty()) return;
+  try {
+    MakeDirs(dir);
+  } catch (const std::exception& e) {
+    throw InputError("command line", 0, flag, e.what());
+  }
+}
+
 std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
                                      const PolicyRegistry& registry) {
   return std::make_unique<Episode>(
@@ -148,7 +157,7 @@ MissionSummary RunMission(const RunOptions& options) {
 
   const auto t0 = std::chrono::steady_clock::now();
   auto episode = MakeEpisode(scenario, registry);
-  MakeDirs(out);
+  MakeOutputDir(out, "--out");
   TraceWriter trace(out + "/trace.csv", episode->world().NumRobots());
   trace.Write(*episode);
   ProgressLine progress(options.progress);

@@ -81,16 +81,6 @@ void ApplyRenderOptions(const RenderOptions& o, Scenario* s) {
     throw InputError("command line", 0, "--hold", "must be in [0, 60] seconds");
 }
 
-void MakeOutputDir(const std::string& dir, const std::string& flag) {
-  if (dir.empty()) return;
-  try {
-    MakeDirs(dir);
-  } catch (const std::exception& e) {
-    throw InputError("command line", 0, flag,
-                     "cannot create directory '" + dir + "': " + e.what());
-  }
-}
-
 // The overlay's per-step part (beliefs change only when a step ends).
 void UpdateTargets(const Episode& e, const std::vector<double>& log_det_prior,
                    FrameOverlay* o) {

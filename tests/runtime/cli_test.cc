@@ -105,8 +105,16 @@ TEST(CliTest, UnknownFlagAndMissingArgumentExitWith2) {
   EXPECT_EQ(RunAia({"bench", "--sizes", "10by10"}).exit_code, 2);
 }
 
+TEST(CliTest, UncreatableOutputFolderIsBadInput) {
+  const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--out",
+                         "/proc/aia-no-such-dir/out", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("error: command line: --out: cannot create directory", 0), 0u)
+      << r.err;
+}
+
 TEST(CliTest, HelpOnEveryCommand) {
-  for (const std::string cmd : {"", "run", "bench"}) {
+  for (const std::string cmd : {"", "run", "render", "plan", "eval", "bench"}) {
     std::vector<std::string> args;
     if (!cmd.empty()) args.push_back(cmd);
     args.push_back("--help");

@@ -25,6 +25,10 @@ struct ScenarioOverrides {
 void ApplyOverrides(const ScenarioOverrides& overrides,
                     const PolicyRegistry& registry, Scenario* scenario);
 
+// Creates an output folder named by a flag; InputError (exit code 2) naming
+// the flag when it cannot be created.
+void MakeOutputDir(const std::string& dir, const std::string& flag);
+
 // Builds the episode for a scenario with its policy from the registry.
 std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
                                      const PolicyRegistry& registry);
