@@ -35,7 +35,8 @@ void BM_Fuse(benchmark::State& state) {
   FusionWeights(comm.AllNeighbors(), 0.75, &W);
   std::vector<std::vector<Measurement>> z(n);
   for (int i = 0; i < n; ++i)
-    for (int k = i % 7; k < n; k += 17) z[i].push_back({k, Vec2(0.5, 0.5), 50.0});
+    for (int k = i % 7; k < n; k += 17)
+      z[i].push_back({k, Vec2(0.5, 0.5), 50.0});
   for (auto _ : state) {
     Fuse(predicted, W, z, pos, &fused);
     benchmark::DoNotOptimize(fused.data().data());
@@ -57,7 +58,11 @@ void BM_ExpertSolve(benchmark::State& state) {
     benchmark::DoNotOptimize(tree.Solve(problem, params, rng).depth);
   }
 }
-BENCHMARK(BM_ExpertSolve)->Arg(10)->Arg(40)->Arg(80)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ExpertSolve)
+    ->Arg(10)
+    ->Arg(40)
+    ->Arg(80)
+    ->Unit(benchmark::kMillisecond);
 
 // One decision step of the random policy, physics included.
 void BM_DecisionStep(benchmark::State& state) {

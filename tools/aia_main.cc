@@ -16,13 +16,17 @@ namespace {
 
 void AddOverrides(CLI::App* cmd, aia::ScenarioOverrides* o, std::string* policy,
                   std::uint64_t* seed, int* max_steps) {
-  cmd->add_option("--policy", *policy, "policy name (overrides the scenario's policy.name)");
-  cmd->add_option("--seed", *seed, "random seed (overrides the scenario's seed)");
-  cmd->add_option("--max-steps", *max_steps, "decision steps at most (overrides mission.max_steps)");
+  cmd->add_option("--policy", *policy,
+                  "policy name (overrides the scenario's policy.name)");
+  cmd->add_option("--seed", *seed,
+                  "random seed (overrides the scenario's seed)");
+  cmd->add_option("--max-steps", *max_steps,
+                  "decision steps at most (overrides mission.max_steps)");
   (void)o;
 }
 
-void ResolveOverrides(CLI::App* cmd, const std::string& policy, std::uint64_t seed, int max_steps,
+void ResolveOverrides(CLI::App* cmd, const std::string& policy,
+                      std::uint64_t seed, int max_steps,
                       aia::ScenarioOverrides* o) {
   if (cmd->count("--policy")) o->policy = policy;
   if (cmd->count("--seed")) o->seed = seed;
@@ -42,10 +46,13 @@ int main(int argc, char** argv) {
 
   aia::RunOptions run;
   bool quiet = false;
-  CLI::App* run_cmd = app.add_subcommand("run", "run one mission; write summary.json and trace.csv");
-  run_cmd->add_option("scenario", run.scenario_path, "scenario YAML file")->required();
+  CLI::App* run_cmd = app.add_subcommand(
+      "run", "run one mission; write summary.json and trace.csv");
+  run_cmd->add_option("scenario", run.scenario_path, "scenario YAML file")
+      ->required();
   AddOverrides(run_cmd, &run.overrides, &policy, &seed, &max_steps);
-  run_cmd->add_option("--out", run.out_dir, "output directory (default: renders/<scenario name>)");
+  run_cmd->add_option("--out", run.out_dir,
+                      "output directory (default: renders/<scenario name>)");
   run_cmd->add_flag("--quiet", quiet, "no progress line");
 
   aia::RenderOptions render;
@@ -86,48 +93,71 @@ int main(int argc, char** argv) {
   render_cmd->add_flag("--quiet", quiet, "no progress line");
 
   aia::BenchOptions bench;
-  CLI::App* bench_cmd =
-      app.add_subcommand("bench", "decision steps per second and where a step's time goes");
-  bench_cmd->add_option("--sizes", bench.sizes, "robots x targets, e.g. 10x10,80x80")
+  CLI::App* bench_cmd = app.add_subcommand(
+      "bench", "decision steps per second and where a step's time goes");
+  bench_cmd
+      ->add_option("--sizes", bench.sizes, "robots x targets, e.g. 10x10,80x80")
       ->delimiter(',')
       ->capture_default_str();
-  bench_cmd->add_option("--steps", bench.steps, "decision steps per run")->capture_default_str();
-  bench_cmd->add_option("--repeats", bench.repeats, "runs per size (median reported)")
+  bench_cmd->add_option("--steps", bench.steps, "decision steps per run")
       ->capture_default_str();
-  bench_cmd->add_option("--seed", bench.seed, "seed of the generated worlds")->capture_default_str();
-  bench_cmd->add_option("--policy", bench.policy, "policy to time")->capture_default_str();
+  bench_cmd
+      ->add_option("--repeats", bench.repeats,
+                   "runs per size (median reported)")
+      ->capture_default_str();
+  bench_cmd->add_option("--seed", bench.seed, "seed of the generated worlds")
+      ->capture_default_str();
+  bench_cmd->add_option("--policy", bench.policy, "policy to time")
+      ->capture_default_str();
   bench_cmd->add_flag("--no-testspeed", bench.skip_testspeed,
                       "do not run mujoco-testspeed for comparison");
   bench_cmd->add_flag("--expert", bench.expert,
                       "time the expert's solve (C-SB) instead of episodes");
-  bench_cmd->add_option("--seeds", bench.seeds, "with --expert: worlds per size")
+  bench_cmd
+      ->add_option("--seeds", bench.seeds, "with --expert: worlds per size")
       ->capture_default_str();
 
   aia::PlanOptions plan;
   long budget = 0;
-  CLI::App* plan_cmd =
-      app.add_subcommand("plan", "the expert (C-SB) alone: its plan, F*, solve time, nodes");
-  plan_cmd->add_option("scenario", plan.scenario_path, "scenario YAML file")->required();
-  plan_cmd->add_option("--seed", seed, "random seed (overrides the scenario's seed)");
-  plan_cmd->add_option("--budget", budget,
-                       "anytime budget: sampling iterations after the first goal (default: "
-                       "the scenario's policy.anytime, else 5000)");
-  plan_cmd->add_option("--out", plan.out, "write the plan as JSON to this file");
+  CLI::App* plan_cmd = app.add_subcommand(
+      "plan", "the expert (C-SB) alone: its plan, F*, solve time, nodes");
+  plan_cmd->add_option("scenario", plan.scenario_path, "scenario YAML file")
+      ->required();
+  plan_cmd->add_option("--seed", seed,
+                       "random seed (overrides the scenario's seed)");
+  plan_cmd->add_option(
+      "--budget", budget,
+      "anytime budget: sampling iterations after the first goal (default: "
+      "the scenario's policy.anytime, else 5000)");
+  plan_cmd->add_option("--out", plan.out,
+                       "write the plan as JSON to this file");
 
   aia::EvalOptions eval;
-  CLI::App* eval_cmd = app.add_subcommand(
-      "eval", "success rate and flowtime increase against the expert on generated worlds");
-  eval_cmd->add_option("--sizes", eval.sizes, "robots x targets, e.g. 10x10,20x20")
+  CLI::App* eval_cmd =
+      app.add_subcommand("eval",
+                         "success rate and flowtime increase against the "
+                         "expert on generated worlds");
+  eval_cmd
+      ->add_option("--sizes", eval.sizes, "robots x targets, e.g. 10x10,20x20")
       ->delimiter(',')
       ->capture_default_str();
-  eval_cmd->add_option("--seeds", eval.seeds, "worlds per size")->capture_default_str();
-  eval_cmd->add_option("--seed-base", eval.seed_base, "first seed (seeds B .. B+n-1)")
+  eval_cmd->add_option("--seeds", eval.seeds, "worlds per size")
       ->capture_default_str();
-  eval_cmd->add_option("--policies", eval.policies,
-                       "policies to score (default: every registered one but the expert)")
+  eval_cmd
+      ->add_option("--seed-base", eval.seed_base,
+                   "first seed (seeds B .. B+n-1)")
+      ->capture_default_str();
+  eval_cmd
+      ->add_option(
+          "--policies", eval.policies,
+          "policies to score (default: every registered one but the expert)")
       ->delimiter(',');
-  eval_cmd->add_option("--out", eval.out_dir, "output folder (runs.csv, summary.csv)")->required();
-  eval_cmd->add_option("--threads", eval.threads, "worker threads (0: all cores)")
+  eval_cmd
+      ->add_option("--out", eval.out_dir,
+                   "output folder (runs.csv, summary.csv)")
+      ->required();
+  eval_cmd
+      ->add_option("--threads", eval.threads, "worker threads (0: all cores)")
       ->capture_default_str();
   eval_cmd->add_flag("--quiet", quiet, "no progress line");
 

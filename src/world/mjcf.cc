@@ -67,9 +67,12 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
     << "\" gravity=\"0 0 0\"/>\n";
   // MuJoCo 2.2 allocates njmax x njmax: size it from the robot count.
   // The stack MuJoCo sizes by default is too small for thousands of bodies.
-  const int bodies = n + world.NumTargets() + static_cast<int>(world.obstacles.size());
-  x << "  <size njmax=\"" << 8 * n + 500 << "\" nconmax=\"" << 2 * n + 100 << "\"";
-  if (bodies > 200) x << " nstack=\"" << 200000 + static_cast<long>(bodies) * bodies << "\"";
+  const int bodies =
+      n + world.NumTargets() + static_cast<int>(world.obstacles.size());
+  x << "  <size njmax=\"" << 8 * n + 500 << "\" nconmax=\"" << 2 * n + 100
+    << "\"";
+  if (bodies > 200)
+    x << " nstack=\"" << 200000 + static_cast<long>(bodies) * bodies << "\"";
   x << "/>\n";
   x << "  <visual>\n    <global offwidth=\"" << s.render.width
     << "\" offheight=\"" << s.render.height << "\" fovy=\"45\"/>\n";

@@ -351,10 +351,10 @@ World World::Build(const Scenario& s) {
   const int bodies = n + w.NumTargets() + static_cast<int>(w.obstacles.size());
   if (bodies > kMaxBodies)
     Fail(s, s.targets.list.empty() ? "targets.count" : "targets.list",
-         std::to_string(n) + " robots, " + std::to_string(w.NumTargets()) + " targets and " +
-             std::to_string(w.obstacles.size()) + " obstacle boxes make " +
-             std::to_string(bodies) + " bodies; aia simulates at most " +
-             std::to_string(kMaxBodies));
+         std::to_string(n) + " robots, " + std::to_string(w.NumTargets()) +
+             " targets and " + std::to_string(w.obstacles.size()) +
+             " obstacle boxes make " + std::to_string(bodies) +
+             " bodies; aia simulates at most " + std::to_string(kMaxBodies));
 
   // Failures: "random" picks a robot from the seed's own stream.
   Rng fail_rng(s.seed, "failures");

@@ -109,7 +109,8 @@ TEST(CliTest, UncreatableOutputFolderIsBadInput) {
   const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--out",
                          "/proc/aia-no-such-dir/out", "--quiet"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err.rfind("error: command line: --out: cannot create directory", 0), 0u)
+  EXPECT_EQ(
+      r.err.rfind("error: command line: --out: cannot create directory", 0), 0u)
       << r.err;
 }
 

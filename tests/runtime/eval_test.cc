@@ -59,10 +59,11 @@ TEST(EvalTest, RunsResumeAndDoNotDependOnThreads) {
     if (r.success) EXPECT_LE(r.flowtime, 3 * std::max(r.fstar, 1));
   }
   // The eval plot reads the summary (skipped without Debian's matplotlib).
-  if (testing::RunCommand("/usr/bin/python3 -c 'import matplotlib'").exit_code == 0) {
-    const auto plot = testing::RunCommand("/usr/bin/python3 " +
-                                          testing::SourcePath("tools/plot_eval.py") + " " + a +
-                                          "/summary.csv --out " + a + "/eval.png");
+  if (testing::RunCommand("/usr/bin/python3 -c 'import matplotlib'")
+          .exit_code == 0) {
+    const auto plot = testing::RunCommand(
+        "/usr/bin/python3 " + testing::SourcePath("tools/plot_eval.py") + " " +
+        a + "/summary.csv --out " + a + "/eval.png");
     EXPECT_EQ(plot.exit_code, 0) << plot.err;
     EXPECT_TRUE(std::filesystem::exists(a + "/eval.png"));
   }
