@@ -195,13 +195,17 @@ void Predict(BeliefSet* beliefs) {
     for (int k = 0; k < layout.num_targets(); ++k) {
       const TargetModel& model = layout.model(k);
       if (model.is_static) continue;
-      double* block = row + layout.omega_offset(k);
-      if (model.dim == 2) {
-        PredictBlock<2>(model, block);
-      } else {
-        PredictBlock<4>(model, block);
-      }
+      PredictInformationBlock(model, row + layout.omega_offset(k));
     }
+  }
+}
+
+void PredictInformationBlock(const TargetModel& model, double* block) {
+  if (model.is_static) return;
+  if (model.dim == 2) {
+    PredictBlock<2>(model, block);
+  } else {
+    PredictBlock<4>(model, block);
   }
 }
 

@@ -2,6 +2,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
+
+#include "aia/estimation/filter.h"
 
 namespace aia {
 
@@ -9,40 +12,24 @@ void PredictBlock(const BeliefSet& beliefs, int row, int k,
                   PredictedBlock* out) {
   const TargetModel& model = beliefs.layout().model(k);
   const int d = model.dim;
+  // The filter's own time update, on a copy of the block.
+  double block[4 * 4 + 4];
+  const double* from =
+      beliefs.data().row(row).data() + beliefs.layout().omega_offset(k);
+  std::copy(from, from + d * d + d, block);
+  PredictInformationBlock(model, block);
   out->dim = d;
-  const auto omega = beliefs.Omega(row, k);
-  const auto xi = beliefs.Xi(row, k);
+  out->omega.setIdentity();
   if (d == 2) {
-    Eigen::Matrix2d om = omega;
-    Eigen::Vector2d x = xi;
-    Eigen::Matrix2d sigma = om.inverse();
-    Eigen::Vector2d mu = sigma * x;
-    if (!model.is_static) {
-      const Eigen::Matrix2d A = model.A;
-      sigma = A * sigma * A.transpose() + Eigen::Matrix2d(model.Q);
-      mu = A * mu + Eigen::Vector2d(model.b);
-      om = sigma.inverse();
-      om = 0.5 * (om + om.transpose()).eval();
-    }
-    out->omega.setIdentity();
+    const Eigen::Map<const Eigen::Matrix2d> om(block);
     out->omega.topLeftCorner<2, 2>() = om;
-    out->mu = mu;
-    out->logdet_sigma = -std::log(om.determinant());
-    return;
+    out->mu = om.inverse() * Eigen::Map<const Eigen::Vector2d>(block + 4);
+  } else {
+    const Eigen::Map<const Eigen::Matrix4d> om(block);
+    out->omega = om;
+    out->mu =
+        om.llt().solve(Eigen::Map<const Eigen::Vector4d>(block + 16)).head<2>();
   }
-  Eigen::Matrix4d om = omega;
-  Eigen::Vector4d x = xi;
-  Eigen::Matrix4d sigma = om.inverse();
-  Eigen::Vector4d mu = sigma * x;
-  if (!model.is_static) {
-    const Eigen::Matrix4d A = model.A;
-    sigma = A * sigma * A.transpose() + Eigen::Matrix4d(model.Q);
-    mu = A * mu + Eigen::Vector4d(model.b);
-    om = sigma.inverse();
-    om = 0.5 * (om + om.transpose()).eval();
-  }
-  out->omega = om;
-  out->mu = mu.head<2>();
   out->logdet_sigma = LogDetSigmaAfter(*out, 0.0);
 }
 

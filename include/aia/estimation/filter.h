@@ -21,6 +21,10 @@ namespace aia {
 // One time update of every row (identity for static targets).
 void Predict(BeliefSet* beliefs);
 
+// The time update of one target block stored as Omega (dim x dim,
+// column-major) followed by xi (dim), in place; identity for static targets.
+void PredictInformationBlock(const TargetModel& model, double* block);
+
 // Adds one robot's measurements (taken at position p) to one row:
 // Omega^k += r I on the position block, xi^k += r (y + p).
 void AddMeasurements(const std::vector<Measurement>& z, const Vec2& p,
