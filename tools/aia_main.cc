@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
   plan_cmd->add_option(
       "--budget", budget,
       "anytime budget: sampling iterations after the first goal (default: "
-      "the scenario's policy.anytime, else 5000)");
+      "the scenario's policy.anytime, else 20000)");
   plan_cmd->add_option("--out", plan.out,
                        "write the plan as JSON to this file");
 

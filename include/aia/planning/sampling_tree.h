@@ -35,7 +35,7 @@ struct SamplingParams {
   double p_v = 0.9;  // f_V: probability of expanding a deepest node
   double p_u =
       0.9;  // f_U: probability of following the assigned target's field
-  long anytime = 5000;           // iterations after the first goal
+  long anytime = 20000;          // iterations after the first goal
   long max_iterations = 200000;  // iterations before giving up on a goal
   long max_nodes = 2000000;      // arena cap (memory guard)
   int max_depth = 0;  // 0: unlimited; else nodes this deep are not expanded
