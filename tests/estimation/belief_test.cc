@@ -12,14 +12,7 @@
 namespace aia {
 namespace {
 
-TargetModel Model(int dim) {
-  TargetModel m;
-  m.dim = dim;
-  m.A = Eigen::MatrixXd::Identity(dim, dim);
-  m.b = Eigen::VectorXd::Zero(dim);
-  m.Q = Eigen::MatrixXd::Zero(dim, dim);
-  return m;
-}
+TargetModel Model(int dim) { return TargetModel::Static(dim); }
 
 Eigen::MatrixXd RandomSpd(int dim, Rng* rng) {
   Eigen::MatrixXd a(dim, dim);

@@ -18,14 +18,7 @@ namespace {
 using Graph = std::vector<std::vector<int>>;
 using Measurements = std::vector<std::vector<Measurement>>;
 
-TargetModel StaticModel(int dim) {
-  TargetModel m;
-  m.dim = dim;
-  m.A = Eigen::MatrixXd::Identity(dim, dim);
-  m.b = Eigen::VectorXd::Zero(dim);
-  m.Q = Eigen::MatrixXd::Zero(dim, dim);
-  return m;
-}
+TargetModel StaticModel(int dim) { return TargetModel::Static(dim); }
 
 // Constant velocity, state (px, py, vx, vy), unit time step, noise on v.
 TargetModel ConstantVelocity(double q) {

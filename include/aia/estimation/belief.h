@@ -21,6 +21,16 @@ struct TargetModel {
   Eigen::VectorXd b = Eigen::VectorXd::Zero(2);
   Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(2, 2);
   bool is_static = true;  // A = I, b = 0, Q = 0: prediction is the identity
+
+  // A static target (A = I, b = 0, Q = 0) of dimension 2 or 4.
+  static TargetModel Static(int dim) {
+    TargetModel m;
+    m.dim = dim;
+    m.A = Eigen::MatrixXd::Identity(dim, dim);
+    m.b = Eigen::VectorXd::Zero(dim);
+    m.Q = Eigen::MatrixXd::Zero(dim, dim);
+    return m;
+  }
 };
 
 // Where each target's block lives inside a belief row: Omega (dim x dim,
