@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Behaviour lock: every scenario in scenarios/ with every built-in policy must
+# give byte-identical trace.csv and summary.json (wall time aside) to the
+# recorded ones in tests/golden/ (the summaries verbatim, the traces by
+# SHA-256, since they are large).
+#
+#   tools/golden.sh check [AIA]   compare (the test suite runs this)
+#   tools/golden.sh write [AIA]   record anew, after a deliberate change
+#
+# AIA defaults to build/aia. Runs from the repository root, with relative
+# scenario paths, so that summary.json's scenario_file is the same anywhere.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mode=${1:-check}
+aia=${2:-build/aia}
+golden=tests/golden
+policies=(random greedy expert decsb)
+[ "$mode" = check ] || [ "$mode" = write ] || {
+  echo "usage: tools/golden.sh check|write [AIA]" >&2
+  exit 2
+}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# The run's summary without its wall time.
+normalize() { sed -E 's/("wall_s": )[-0-9.eE+]+/\10/' "$1"; }
+
+failed=0
+sums="$work/traces.sha256"
+: >"$sums"
+for scenario in scenarios/*.yaml; do
+  name=$(basename "$scenario" .yaml)
+  for policy in "${policies[@]}"; do
+    out="$work/$name.$policy"
+    "$aia" run "$scenario" --policy "$policy" --out "$out" --quiet >/dev/null
+    normalize "$out/summary.json" >"$work/$name.$policy.summary.json"
+    (cd "$out" && sha256sum trace.csv | sed "s|trace.csv|$name.$policy.trace.csv|") >>"$sums"
+    if [ "$mode" = check ]; then
+      if ! cmp -s "$work/$name.$policy.summary.json" "$golden/$name.$policy.summary.json"; then
+        echo "DIFFERS: $name with $policy: summary.json" >&2
+        diff "$golden/$name.$policy.summary.json" "$work/$name.$policy.summary.json" >&2 || true
+        failed=1
+      fi
+    fi
+  done
+done
+if [ "$mode" = write ]; then
+  mkdir -p "$golden"
+  cp "$work"/*.summary.json "$sums" "$golden/"
+  echo "recorded $(wc -l <"$sums") runs in $golden/"
+  exit 0
+fi
+if ! diff "$golden/traces.sha256" "$sums" >&2; then
+  echo "DIFFERS: trace.csv of the runs above (< recorded, > now)" >&2
+  failed=1
+fi
+[ "$failed" = 0 ] && echo "all $(wc -l <"$sums") runs match $golden/"
+exit "$failed"
