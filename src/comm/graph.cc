@@ -7,7 +7,7 @@
 namespace aia {
 
 CommNetwork::CommNetwork(const CommParams& params, int num_robots,
-                         std::vector<ScheduledFailure> failures,
+                         std::vector<RobotFailure> failures,
                          std::uint64_t seed)
     : params_(params),
       n_(num_robots),
@@ -34,7 +34,7 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
     if (!active_[i]) continue;
     for (int j = 0; j < n_; ++j) {
       if (j == i || !active_[j]) continue;
-      if (params_.range_limited &&
+      if (params_.mode == CommMode::kRange &&
           (positions[i] - positions[j]).squaredNorm() > r2)
         continue;
       edges_.push_back({i, j});
@@ -43,8 +43,8 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
   // Packet loss: Poisson(lambda) distinct directed edges, uniformly chosen.
   lost_.clear();
   drop_.assign(edges_.size(), 0);
-  if (params_.loss_lambda > 0.0) {
-    const int k = std::min<int>(rng_.Poisson(params_.loss_lambda),
+  if (params_.packet_loss_lambda > 0.0) {
+    const int k = std::min<int>(rng_.Poisson(params_.packet_loss_lambda),
                                 static_cast<int>(edges_.size()));
     for (int c = 0; c < k; ++c) {
       // Floyd's algorithm would also do; rejection is fine for k << edges.

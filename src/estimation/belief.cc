@@ -56,14 +56,14 @@ BeliefLayout::BeliefLayout(std::vector<TargetModel> models)
     : models_(std::move(models)) {
   offsets_.reserve(models_.size());
   for (const TargetModel& m : models_) {
-    AIA_CHECK_MSG(m.dim == 2 || m.dim == 4,
-                  "target state dimension must be 2 or 4");
-    AIA_CHECK(m.A.rows() == m.dim && m.A.cols() == m.dim);
-    AIA_CHECK(m.b.size() == m.dim);
-    AIA_CHECK(m.Q.rows() == m.dim && m.Q.cols() == m.dim);
+    const int d = m.dim();
+    AIA_CHECK_MSG(d == 2 || d == 4, "target state dimension must be 2 or 4");
+    AIA_CHECK(m.A.cols() == d && m.b.size() == d && m.q >= 0.0);
     offsets_.push_back(stride_);
-    stride_ += m.dim * m.dim + m.dim;
-    all_static_ = all_static_ && m.is_static;
+    dims_.push_back(d);
+    static_.push_back(m.IsStatic() ? 1 : 0);
+    stride_ += d * d + d;
+    all_static_ = all_static_ && m.IsStatic();
   }
 }
 
@@ -164,6 +164,47 @@ void BeliefSet::CopyRow(int row, const BeliefSet& from, int from_row) {
   AIA_CHECK(row >= 0 && row < rows() && from_row >= 0 &&
             from_row < from.rows());
   data_.row(row) = from.data_.row(from_row);
+}
+
+void TeamBestRows(const std::vector<double>& det, int num_targets,
+                  const std::vector<std::uint8_t>& active,
+                  std::vector<int>* best) {
+  const int rows = static_cast<int>(active.size());
+  AIA_CHECK(static_cast<int>(det.size()) == rows * num_targets);
+  best->assign(num_targets, -1);
+  for (int k = 0; k < num_targets; ++k) {
+    int b = -1;
+    for (int i = 0; i < rows; ++i) {
+      if (!active[i]) continue;
+      if (b < 0 || det[static_cast<size_t>(i) * num_targets + k] <
+                       det[static_cast<size_t>(b) * num_targets + k])
+        b = i;
+    }
+    (*best)[k] = b;
+  }
+}
+
+void TeamBestRows(const BeliefSet& beliefs,
+                  const std::vector<std::uint8_t>& active,
+                  std::vector<int>* best) {
+  const int m = beliefs.layout().num_targets();
+  AIA_CHECK(static_cast<int>(active.size()) == beliefs.rows());
+  std::vector<double> det(static_cast<size_t>(beliefs.rows()) * m);
+  for (int i = 0; i < beliefs.rows(); ++i)
+    for (int k = 0; k < m; ++k)
+      det[static_cast<size_t>(i) * m + k] = beliefs.DetCovariance(i, k);
+  TeamBestRows(det, m, active, best);
+}
+
+void TeamBestBelief(const BeliefSet& beliefs, const std::vector<int>& best,
+                    BeliefSet* out) {
+  const int m = beliefs.layout().num_targets();
+  AIA_CHECK(static_cast<int>(best.size()) == m && out->rows() == 1);
+  for (int k = 0; k < m; ++k) {
+    const int row = best[k] < 0 ? 0 : best[k];
+    out->Omega(0, k) = beliefs.Omega(row, k);
+    out->Xi(0, k) = beliefs.Xi(row, k);
+  }
 }
 
 }  // namespace aia

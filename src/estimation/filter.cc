@@ -35,24 +35,32 @@ MatD<D> InverseSpd(const MatD<D>& m) {
   }
 }
 
-// x_{t+1|t} for one target block, through the moment form: the information
-// form has no cheaper exact time update when A is not the identity.
+// Omega_{t+1|t} = (A Sigma A' + q I)^-1 from Sigma = Omega_{t|t}^-1, through
+// the moment form: the information form has no cheaper exact time update
+// when A is not the identity.
+template <int D>
+void PredictOmega(const TargetModel& model, const MatD<D>& sigma,
+                  Eigen::Map<MatD<D>> omega) {
+  const Eigen::Map<const MatD<D>> a(model.A.data());
+  const MatD<D> sigma_pred =
+      a * sigma * a.transpose() + model.q * MatD<D>::Identity();
+  const MatD<D> omega_pred = InverseSpd<D>(sigma_pred);
+  // The DKF sums these blocks across robots every step; any asymmetry left
+  // here would be carried (and compounded by prediction) forever.
+  omega = 0.5 * (omega_pred + omega_pred.transpose());
+}
+
+// x_{t+1|t} for one target block: Omega as above, xi = Omega (A mu + b).
 template <int D>
 void PredictBlock(const TargetModel& model, double* block) {
   Eigen::Map<MatD<D>> omega(block);
   Eigen::Map<VecD<D>> xi(block + D * D);
   const Eigen::Map<const MatD<D>> a(model.A.data());
   const Eigen::Map<const VecD<D>> b(model.b.data());
-  const Eigen::Map<const MatD<D>> q(model.Q.data());
-
   const MatD<D> sigma = InverseSpd<D>(omega);
   const VecD<D> mu = sigma * xi;
-  const MatD<D> sigma_pred = a * sigma * a.transpose() + q;
+  PredictOmega<D>(model, sigma, omega);
   const VecD<D> mu_pred = a * mu + b;
-  const MatD<D> omega_pred = InverseSpd<D>(sigma_pred);
-  // The DKF sums these blocks across robots every step; any asymmetry left
-  // here would be carried (and compounded by prediction) forever.
-  omega = 0.5 * (omega_pred + omega_pred.transpose());
   xi = omega * mu_pred;
 }
 
@@ -193,19 +201,27 @@ void Predict(BeliefSet* beliefs) {
   for (int r = 0; r < beliefs->rows(); ++r) {
     double* row = data.data() + r * data.cols();
     for (int k = 0; k < layout.num_targets(); ++k) {
-      const TargetModel& model = layout.model(k);
-      if (model.is_static) continue;
-      PredictInformationBlock(model, row + layout.omega_offset(k));
+      if (layout.is_static(k)) continue;
+      PredictInformationBlock(layout.model(k), row + layout.omega_offset(k));
     }
   }
 }
 
 void PredictInformationBlock(const TargetModel& model, double* block) {
-  if (model.is_static) return;
-  if (model.dim == 2) {
+  if (model.dim() == 2) {
     PredictBlock<2>(model, block);
   } else {
     PredictBlock<4>(model, block);
+  }
+}
+
+void PredictInformationMatrix(const TargetModel& model, double* omega) {
+  if (model.dim() == 2) {
+    Eigen::Map<MatD<2>> m(omega);
+    PredictOmega<2>(model, InverseSpd<2>(m), m);
+  } else {
+    Eigen::Map<MatD<4>> m(omega);
+    PredictOmega<4>(model, InverseSpd<4>(m), m);
   }
 }
 

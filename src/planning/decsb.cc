@@ -1,53 +1,35 @@
 #include "aia/planning/decsb.h"
 
-#include "aia/core/error.h"
-#include "aia/planning/expert.h"
 #include "aia/planning/information.h"
-#include "aia/planning/random_policy.h"
 
 namespace aia {
 
-DecSbPolicy::DecSbPolicy(const Scenario& scenario) {
-  CheckPolicyParams(scenario, {"p_v", "p_u", "horizon", "iterations"});
-  // Reuse the expert's checked readers for the shared keys.
-  Scenario shared = scenario;
-  shared.policy.params.erase("horizon");
-  shared.policy.params.erase("iterations");
-  params_ = ExpertParams(shared);
-  const auto& p = scenario.policy.params;
-  params_.max_depth = 15;
-  params_.max_iterations = 300;
-  if (auto it = p.find("horizon"); it != p.end()) {
-    if (it->second < 1 || it->second > 1000 ||
-        it->second != static_cast<int>(it->second))
-      throw InputError(scenario.file, scenario.LineOf("policy.horizon"),
-                       "policy.horizon", "must be an integer in [1, 1000]");
-    params_.max_depth = static_cast<int>(it->second);
-  }
-  if (auto it = p.find("iterations"); it != p.end()) {
-    if (it->second < 1 || it->second > 1e7 ||
-        it->second != static_cast<long>(it->second))
-      throw InputError(scenario.file, scenario.LineOf("policy.iterations"),
-                       "policy.iterations",
-                       "must be an integer in [1, 10000000]");
-    params_.max_iterations = static_cast<long>(it->second);
-  }
+SamplingParams DecSbParams::Sampling() const {
+  SamplingParams p;
+  p.p_v = p_v;
+  p.p_u = p_u;
+  p.max_depth = horizon;
+  p.max_iterations = iterations;
   // A robot's tree stops at the horizon; a goal (its own belief below eps
   // everywhere) ends the search early, with a short anytime polish.
-  params_.anytime = params_.max_iterations / 4;
+  p.anytime = iterations / 4;
+  return p;
 }
 
-void DecSbPolicy::Reset(const World& world, std::uint64_t seed) {
+DecSbPolicy::DecSbPolicy(const DecSbParams& params)
+    : params_(params.Sampling()) {}
+
+void DecSbPolicy::Reset(const Map&, int num_robots, int, std::uint64_t seed) {
   rngs_.clear();
-  for (int i = 0; i < world.NumRobots(); ++i)
+  for (int i = 0; i < num_robots; ++i)
     rngs_.emplace_back(seed, "policy.decsb", i);
-  plans_.assign(world.NumRobots(), {});
-  next_.assign(world.NumRobots(), -1);
+  plans_.assign(num_robots, {});
+  next_.assign(num_robots, -1);
 }
 
 PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
                                  std::vector<Move>* moves) {
-  const Lattice& lattice = ctx.world->lattice;
+  const Lattice& lattice = ctx.map->lattice();
   const int n = static_cast<int>(moves->size());
   const int m = ctx.beliefs->layout().num_targets();
   // What each robot announces this step: the position after its next move,
@@ -70,11 +52,11 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
       if (next_[j] < 0) continue;
       const Vec2 q = lattice.Point(next_[j]);
       for (int k = 0; k < m; ++k)
-        extra_[k] += PredictedPrecision(*ctx.world, *ctx.sensor, q,
+        extra_[k] += PredictedPrecision(*ctx.map, *ctx.sensor, q,
                                         ctx.beliefs->PositionMean(i, k));
     }
     SamplingProblem problem;
-    problem.world = ctx.world;
+    problem.map = ctx.map;
     problem.sensor = ctx.sensor;
     problem.eps = ctx.eps;
     problem.start = {(*ctx.positions)[i]};

@@ -2,47 +2,25 @@
 
 #include <cmath>
 
-#include "aia/core/error.h"
-#include "aia/planning/random_policy.h"
+#include "aia/core/check.h"
 
 namespace aia {
-namespace {
 
-double Param(const Scenario& s, const std::string& key, double fallback,
-             double lo, double hi, bool integer) {
-  const auto it = s.policy.params.find(key);
-  if (it == s.policy.params.end()) return fallback;
-  const double v = it->second;
-  const std::string full = "policy." + key;
-  if (!(v >= lo && v <= hi) || (integer && v != std::floor(v))) {
-    throw InputError(s.file, s.LineOf(full), full,
-                     std::string("must be ") +
-                         (integer ? "an integer" : "a number") + " in [" +
-                         std::to_string(lo) + ", " + std::to_string(hi) +
-                         "], got " + std::to_string(v));
-  }
-  return v;
-}
-
-}  // namespace
-
-SamplingParams ExpertParams(const Scenario& s) {
-  CheckPolicyParams(s,
-                    {"p_v", "p_u", "anytime", "max_iterations", "max_nodes"});
+SamplingParams ExpertParams::Sampling() const {
   SamplingParams p;
-  p.p_v = Param(s, "p_v", p.p_v, 0.0, 1.0, false);
-  p.p_u = Param(s, "p_u", p.p_u, 0.0, 1.0, false);
-  p.anytime = static_cast<long>(Param(s, "anytime", p.anytime, 0, 1e9, true));
-  p.max_iterations = static_cast<long>(
-      Param(s, "max_iterations", p.max_iterations, 1, 1e10, true));
-  p.max_nodes =
-      static_cast<long>(Param(s, "max_nodes", p.max_nodes, 2, 1e9, true));
+  p.p_v = p_v;
+  p.p_u = p_u;
+  p.anytime = anytime;
+  p.max_iterations = max_iterations;
+  p.max_nodes = max_nodes;
   return p;
 }
 
 SamplingProblem ExpertProblem(const DecisionContext& ctx) {
+  AIA_CHECK_MSG(ctx.central != nullptr,
+                "the expert plans on the centralized belief");
   SamplingProblem p;
-  p.world = ctx.world;
+  p.map = ctx.map;
   p.sensor = ctx.sensor;
   p.eps = ctx.eps;
   p.start = *ctx.positions;
@@ -52,10 +30,10 @@ SamplingProblem ExpertProblem(const DecisionContext& ctx) {
   return p;
 }
 
-ExpertPolicy::ExpertPolicy(const Scenario& scenario)
-    : params_(ExpertParams(scenario)) {}
+ExpertPolicy::ExpertPolicy(const ExpertParams& params)
+    : params_(params.Sampling()) {}
 
-void ExpertPolicy::Reset(const World&, std::uint64_t seed) {
+void ExpertPolicy::Reset(const Map&, int, int, std::uint64_t seed) {
   rng_ = Rng(seed, "policy.expert");
   plan_ = SamplingPlan{};
   index_ = 0;
@@ -82,7 +60,7 @@ bool ExpertPolicy::NeedsReplan(const DecisionContext& ctx) const {
 
 PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
                                   std::vector<Move>* moves) {
-  const Lattice& lattice = ctx.world->lattice;
+  const Lattice& lattice = ctx.map->lattice();
   if (NeedsReplan(ctx)) {
     SamplingProblem problem = ExpertProblem(ctx);
     // When the centralized belief is already below eps everywhere but no
@@ -95,20 +73,11 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
     team_best_ = central_done;
     if (team_best_) {
       const BeliefSet& b = *ctx.beliefs;
-      if (!best_rows_ || best_rows_->data().cols() != b.data().cols())
-        best_rows_ = std::make_unique<BeliefSet>(&b.layout(), 1);
-      for (int k = 0; k < b.layout().num_targets(); ++k) {
-        int best = -1;
-        for (int i = 0; i < b.rows(); ++i) {
-          if (!ctx.comm->Active(i)) continue;
-          if (best < 0 || b.DetCovariance(i, k) < b.DetCovariance(best, k))
-            best = i;
-        }
-        if (best < 0) best = 0;
-        best_rows_->Omega(0, k) = b.Omega(best, k);
-        best_rows_->Xi(0, k) = b.Xi(best, k);
-      }
-      problem.belief = best_rows_.get();
+      if (!best_belief_ || best_belief_->data().cols() != b.data().cols())
+        best_belief_ = std::make_unique<BeliefSet>(&b.layout(), 1);
+      TeamBestRows(b, ctx.comm->active(), &best_rows_);
+      TeamBestBelief(b, best_rows_, best_belief_.get());
+      problem.belief = best_belief_.get();
     }
     plan_ = tree_.Solve(problem, params_, rng_);
     index_ = 0;

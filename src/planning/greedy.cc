@@ -3,24 +3,19 @@
 #include <algorithm>
 #include <cmath>
 
-#include "aia/planning/random_policy.h"
-
 namespace aia {
 
-GreedyPolicy::GreedyPolicy(const Scenario& scenario) {
-  CheckPolicyParams(scenario, {});
-}
-
-void GreedyPolicy::Reset(const World& world, std::uint64_t seed) {
+void GreedyPolicy::Reset(const Map&, int num_robots, int num_targets,
+                         std::uint64_t seed) {
   rngs_.clear();
-  for (int i = 0; i < world.NumRobots(); ++i)
+  for (int i = 0; i < num_robots; ++i)
     rngs_.emplace_back(seed, "policy.greedy", i);
-  blocks_.assign(world.NumTargets(), {});
+  blocks_.assign(num_targets, {});
 }
 
 PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
                                   std::vector<Move>* moves) {
-  const Lattice& lattice = ctx.world->lattice;
+  const Lattice& lattice = ctx.map->lattice();
   const SensorModel& sensor = *ctx.sensor;
   const double log_eps = std::log(ctx.eps);
   const double reach = sensor.range + lattice.step();
@@ -47,7 +42,7 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
         const PredictedBlock& b = blocks_[k];
         if (b.logdet_sigma <= log_eps) continue;
         if ((b.mu - here).squaredNorm() > reach * reach) continue;
-        const double r = PredictedPrecision(*ctx.world, sensor, there, b.mu);
+        const double r = PredictedPrecision(*ctx.map, sensor, there, b.mu);
         if (r <= 0.0) continue;
         gain += b.logdet_sigma - std::max(LogDetSigmaAfter(b, r), log_eps);
       }
@@ -78,7 +73,7 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
 }
 
 Move GreedyPolicy::TowardNearestTarget(const DecisionContext& ctx, int robot) {
-  const Lattice& lattice = ctx.world->lattice;
+  const Lattice& lattice = ctx.map->lattice();
   const SensorModel& sensor = *ctx.sensor;
   const double log_eps = std::log(ctx.eps);
   const int p = (*ctx.positions)[robot];
@@ -114,7 +109,7 @@ Move GreedyPolicy::TowardNearestTarget(const DecisionContext& ctx, int robot) {
         const int q = lattice.Index(ix, iy);
         const int d = dist_[q];
         if (d < 1 || (best >= 0 && d >= best_dist)) continue;
-        if (PredictedPrecision(*ctx.world, sensor, lattice.Point(q), b.mu) <=
+        if (PredictedPrecision(*ctx.map, sensor, lattice.Point(q), b.mu) <=
             0.0)
           continue;
         best = q;

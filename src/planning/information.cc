@@ -11,13 +11,13 @@ namespace aia {
 void PredictBlock(const BeliefSet& beliefs, int row, int k,
                   PredictedBlock* out) {
   const TargetModel& model = beliefs.layout().model(k);
-  const int d = model.dim;
+  const int d = model.dim();
   // The filter's own time update, on a copy of the block.
   double block[4 * 4 + 4];
   const double* from =
       beliefs.data().row(row).data() + beliefs.layout().omega_offset(k);
   std::copy(from, from + d * d + d, block);
-  PredictInformationBlock(model, block);
+  if (!beliefs.layout().is_static(k)) PredictInformationBlock(model, block);
   out->dim = d;
   out->omega.setIdentity();
   if (d == 2) {

@@ -8,67 +8,84 @@
 
 namespace aia {
 
-void PolicyRegistry::Add(const std::string& name,
-                         const std::string& description,
-                         PolicyFactory factory) {
-  for (auto& e : entries_) {
-    if (e.name == name) {
-      e.description = description;
-      e.factory = std::move(factory);
+std::string_view PolicyStatusName(PolicyStatus status) {
+  switch (status) {
+    case PolicyStatus::kOk:
+      return "ok";
+    case PolicyStatus::kNoValidMove:
+      return "no_valid_move";
+    case PolicyStatus::kBudgetExhausted:
+      return "budget_exhausted";
+  }
+  return "unknown";
+}
+
+void PolicyRegistry::Put(Entry entry) {
+  for (Entry& e : entries_) {
+    if (e.info.name == entry.info.name) {
+      e = std::move(entry);
       return;
     }
   }
-  entries_.push_back({name, description, std::move(factory)});
+  entries_.push_back(std::move(entry));
 }
 
 bool PolicyRegistry::Has(const std::string& name) const {
-  for (const auto& e : entries_)
-    if (e.name == name) return true;
+  for (const Entry& e : entries_)
+    if (e.info.name == name) return true;
   return false;
-}
-
-std::unique_ptr<Policy> PolicyRegistry::Create(const std::string& name,
-                                               const Scenario& scenario) const {
-  for (const auto& e : entries_)
-    if (e.name == name) return e.factory(scenario);
-  throw InputError(scenario.file, scenario.LineOf("policy.name"), "policy.name",
-                   "unknown policy '" + name + "' (valid: " + NameList() + ")");
 }
 
 std::vector<std::string> PolicyRegistry::Names() const {
   std::vector<std::string> names;
-  for (const auto& e : entries_) names.push_back(e.name);
+  for (const Entry& e : entries_) names.push_back(e.info.name);
   return names;
 }
 
-std::string PolicyRegistry::Description(const std::string& name) const {
-  for (const auto& e : entries_)
-    if (e.name == name) return e.description;
-  return {};
+std::string PolicyRegistry::NameList() const {
+  return field_text::Join(Names());
 }
 
-std::string PolicyRegistry::NameList() const {
-  std::string out;
-  for (const auto& e : entries_) out += (out.empty() ? "" : ", ") + e.name;
+std::vector<PolicyInfo> PolicyRegistry::Describe() const {
+  std::vector<PolicyInfo> out;
+  for (const Entry& e : entries_) out.push_back(e.info);
   return out;
+}
+
+std::shared_ptr<const PolicySpec> PolicyRegistry::Resolve(
+    const Scenario& scenario) const {
+  const std::string& name = scenario.policy.name;
+  for (const Entry& e : entries_)
+    if (e.info.name == name) return e.resolve(scenario);
+  std::string what = "unknown policy '" + name + "'";
+  const std::string closest = field_text::ClosestName(name, Names());
+  if (!closest.empty()) what += " (did you mean `" + closest + "`?)";
+  throw scenario.ErrorAt("policy.name", what + " (valid: " + NameList() + ")");
 }
 
 PolicyRegistry BuiltinPolicies() {
   PolicyRegistry r;
-  r.Add("random", "a uniformly random valid move per robot (Random-Walker)",
-        [](const Scenario& s) { return std::make_unique<RandomPolicy>(s); });
-  r.Add("greedy",
-        "one-step largest drop of the robot's own log det, else BFS to the "
-        "nearest unlocalized target",
-        [](const Scenario& s) { return std::make_unique<GreedyPolicy>(s); });
-  r.Add("expert",
-        "C-SB: centralized sampling-based tree over the team and the "
-        "centralized filter",
-        [](const Scenario& s) { return std::make_unique<ExpertPolicy>(s); });
-  r.Add("decsb",
-        "Dec-SB: one receding-horizon sampling tree per robot on its own DKF "
-        "belief",
-        [](const Scenario& s) { return std::make_unique<DecSbPolicy>(s); });
+  r.Add<NoParams>(
+      "random", "a uniformly random valid move per robot (Random-Walker)",
+      false, [](const NoParams&) { return std::make_unique<RandomPolicy>(); });
+  r.Add<NoParams>(
+      "greedy",
+      "one-step largest drop of the robot's own log det, else a shortest path "
+      "to the nearest unlocalized target",
+      false, [](const NoParams&) { return std::make_unique<GreedyPolicy>(); });
+  r.Add<ExpertParams>(
+      "expert",
+      "C-SB: centralized sampling-based tree over the team and the "
+      "centralized filter",
+      true, [](const ExpertParams& p) {
+        return std::make_unique<ExpertPolicy>(p);
+      });
+  r.Add<DecSbParams>(
+      "decsb",
+      "Dec-SB: one receding-horizon sampling tree per robot on its own DKF "
+      "belief",
+      false,
+      [](const DecSbParams& p) { return std::make_unique<DecSbPolicy>(p); });
   return r;
 }
 

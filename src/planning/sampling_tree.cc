@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "aia/core/check.h"
+#include "aia/estimation/filter.h"
 #include "aia/planning/information.h"
 #include "aia/world/lattice.h"
 
@@ -61,7 +62,8 @@ const Vec2& SamplingTree::MeanAt(int depth, int k) {
   while (static_cast<int>(means_.size()) <= depth) {
     std::vector<Vec2> next(m_);
     for (int j = 0; j < m_; ++j) {
-      if (!targets_[j].is_static) full_mean_[j] = A_[j] * full_mean_[j] + b_[j];
+      if (!targets_[j].is_static)
+        full_mean_[j] = models_[j]->A * full_mean_[j] + models_[j]->b;
       next[j] = full_mean_[j].head<2>();
     }
     means_.push_back(std::move(next));
@@ -73,27 +75,23 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   problem_ = &p;
   const BeliefSet& belief = *p.belief;
   const BeliefLayout& layout = belief.layout();
-  const Lattice& lattice = p.world->lattice;
+  const Lattice& lattice = p.map->lattice();
   n_ = static_cast<int>(p.start.size());
   m_ = layout.num_targets();
   targets_.assign(m_, {});
-  A_.assign(m_, {});
-  Q_.assign(m_, {});
-  b_.assign(m_, {});
+  models_.assign(m_, nullptr);
   full_mean_.assign(m_, {});
   stride_ = 0;
   any_moving_ = false;
   means_.assign(1, std::vector<Vec2>(m_));
   for (int k = 0; k < m_; ++k) {
     const TargetModel& model = layout.model(k);
-    targets_[k] = {model.dim, stride_, model.is_static};
-    stride_ += PackedSize(model.dim);
-    A_[k] = model.A;
-    Q_[k] = model.Q;
-    b_[k] = model.b;
+    targets_[k] = {layout.dim(k), stride_, layout.is_static(k)};
+    stride_ += PackedSize(layout.dim(k));
+    models_[k] = &model;
     full_mean_[k] = belief.Mean(p.belief_row, k);
     means_[0][k] = full_mean_[k].head<2>();
-    any_moving_ = any_moving_ || !model.is_static;
+    any_moving_ = any_moving_ || !layout.is_static(k);
   }
   // Observation regions at the root means and BFS fields toward them.
   field_.assign(m_, {});
@@ -112,7 +110,7 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
         const int q = lattice.Index(ix, iy);
         if (!lattice.Free(q)) continue;
         const double r =
-            PredictedPrecision(*p.world, *p.sensor, lattice.Point(q), mu);
+            PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), mu);
         if (r <= 0.0) continue;
         region.push_back(q);
         if (targets_[k].is_static) per_point[q].push_back({k, r});
@@ -163,21 +161,20 @@ int SamplingTree::AddNode(int parent, const int* positions) {
   } else {
     const double* from = info_.data() + static_cast<size_t>(parent) * stride_;
     std::copy(from, from + stride_, info);
-    // Time update of the moving targets (static ones are unchanged).
+    // Time update of the moving targets (static ones are unchanged): the
+    // filter's own, on the unpacked block.
     if (any_moving_) {
       for (int k = 0; k < m_; ++k) {
         if (targets_[k].is_static) continue;
         double* blk = info + targets_[k].offset;
         if (targets_[k].dim == 2) {
-          const Eigen::Matrix2d A = A_[k];
-          Eigen::Matrix2d sigma = A * Unpack<2>(blk).inverse() * A.transpose() +
-                                  Eigen::Matrix2d(Q_[k]);
-          Pack<2>(Eigen::Matrix2d(sigma.inverse()), blk);
+          Eigen::Matrix2d omega = Unpack<2>(blk);
+          PredictInformationMatrix(*models_[k], omega.data());
+          Pack<2>(omega, blk);
         } else {
-          const Eigen::Matrix4d A = A_[k];
-          Eigen::Matrix4d sigma = A * Unpack<4>(blk).inverse() * A.transpose() +
-                                  Eigen::Matrix4d(Q_[k]);
-          Pack<4>(Eigen::Matrix4d(sigma.inverse()), blk);
+          Eigen::Matrix4d omega = Unpack<4>(blk);
+          PredictInformationMatrix(*models_[k], omega.data());
+          Pack<4>(omega, blk);
         }
       }
     }
@@ -190,11 +187,11 @@ int SamplingTree::AddNode(int parent, const int* positions) {
         AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, r);
       }
       if (any_moving_) {
-        const Vec2 here = p.world->lattice.Point(q);
+        const Vec2 here = p.map->lattice().Point(q);
         for (int k = 0; k < m_; ++k) {
           if (targets_[k].is_static) continue;
           const double r =
-              PredictedPrecision(*p.world, *p.sensor, here, MeanAt(depth, k));
+              PredictedPrecision(*p.map, *p.sensor, here, MeanAt(depth, k));
           if (r > 0.0)
             AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, r);
         }
@@ -303,10 +300,10 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
 SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
                                  const SamplingParams& params, Rng& rng) {
   const auto t0 = std::chrono::steady_clock::now();
-  AIA_CHECK(problem.world && problem.sensor && problem.belief);
+  AIA_CHECK(problem.map && problem.sensor && problem.belief);
   AIA_CHECK(problem.active.size() == problem.start.size());
   Prepare(problem);
-  const Lattice& lattice = problem.world->lattice;
+  const Lattice& lattice = problem.map->lattice();
   SamplingPlan plan;
 
   const int root = AddNode(-1, problem.start.data());

@@ -69,20 +69,21 @@ int HudBandPixels(int image_height) {
   return std::max(12, static_cast<int>(std::lround(0.055 * image_height)));
 }
 
-FrameRenderer::FrameRenderer(const Simulation& sim, const World& world,
+FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
                              const FrameSettings& settings)
     : sim_(sim),
       settings_(settings),
       scene_(sim.model(), settings.scene),
-      view_(world.size, settings.scene.width, settings.scene.height,
+      view_(map.size(), settings.scene.width, settings.scene.height,
             sim.model()->vis.global.fovy, HudBandPixels(settings.scene.height),
             kObstacleHeight),
-      robot_radius_(world.robot_radius),
-      trails_(world.NumRobots()) {
+      robot_radius_(map.robot_radius()),
+      trails_(sim.num_robots()) {
+  const Vec2& size = map.size();
   view_.SetCamera(&camera_);
   // The workspace's floor rectangle in whole pixels, for the heatmap layer.
-  const Vec2 top_left = view_.ToPixel({0.0, world.size.y()});
-  const Vec2 bottom_right = view_.ToPixel({world.size.x(), 0.0});
+  const Vec2 top_left = view_.ToPixel({0.0, size.y()});
+  const Vec2 bottom_right = view_.ToPixel({size.x(), 0.0});
   const int x0 = static_cast<int>(std::lround(top_left.x()));
   const int y0 = static_cast<int>(std::lround(top_left.y()));
   const int x1 = static_cast<int>(std::lround(bottom_right.x()));
@@ -91,7 +92,7 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const World& world,
                cv::Rect(0, 0, settings.scene.width, settings.scene.height);
   // The margin right of the walls' tops.
   const int right = static_cast<int>(std::ceil(
-      view_.ToPixel({world.size.x() + 0.3, 0.0}, kObstacleHeight).x()));
+      view_.ToPixel({size.x() + 0.3, 0.0}, kObstacleHeight).x()));
   const int room = settings.scene.width - right;
   if (room >= 72) {
     const int pad = std::max(3, room / 16);

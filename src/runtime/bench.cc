@@ -12,36 +12,11 @@
 #include <string>
 
 #include "aia/core/error.h"
+#include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/plan_command.h"
 
 namespace aia {
-
-Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed) {
-  Scenario s;
-  s.name =
-      "generated_" + std::to_string(robots) + "x" + std::to_string(targets);
-  s.seed = seed;
-  s.workspace.random = RandomObstaclesConfig{};
-  s.robots.count = robots;
-  s.targets.count = targets;
-  return s;
-}
-
-std::pair<int, int> ParseSize(const std::string& text,
-                              const std::string& flag) {
-  static const std::regex re("^([0-9]{1,5})x([0-9]{1,5})$");
-  std::smatch m;
-  if (!std::regex_match(text, m, re))
-    throw InputError(
-        "command line", 0, flag,
-        "'" + text + "' is not a size ROBOTSxTARGETS such as 10x10");
-  const int n = std::stoi(m[1]), k = std::stoi(m[2]);
-  if (n < 1 || k < 1)
-    throw InputError("command line", 0, flag,
-                     "'" + text + "': robots and targets must be >= 1");
-  return {n, k};
-}
 
 namespace {
 
@@ -87,8 +62,8 @@ int RunExpertBench(const BenchOptions& o) {
     std::vector<double> secs, fstar, nodes, arena;
     int found = 0;
     for (int k = 0; k < o.seeds; ++k) {
-      const SamplingPlan plan =
-          PlanFromStart(GeneratedScenario(n, m, o.seed + k));
+      const SamplingPlan plan = PlanFromStart(
+          BuildInstance(GeneratedScenario(n, m, o.seed + k)), ExpertParams{});
       secs.push_back(plan.seconds);
       fstar.push_back(plan.depth);
       nodes.push_back(static_cast<double>(plan.nodes));
@@ -126,17 +101,19 @@ int RunBench(const BenchOptions& o) {
               "rest", "mj_step%", "mj_step/s", "testspeed/s");
   for (const std::string& size_text : o.sizes) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
-    Scenario s = GeneratedScenario(n, m, o.seed);
-    ScenarioOverrides ov;
+    CommandOverrides ov;
     ov.policy = o.policy;
-    ApplyOverrides(ov, registry, &s);
+    Scenario s =
+        WithOverrides(GeneratedScenario(n, m, o.seed), ov.ToOverrides(registry));
     s.mission.max_steps = o.steps;
     s.mission.stop_at_success = false;
+    const std::shared_ptr<const PolicySpec> policy = registry.Resolve(s);
+    const std::shared_ptr<const Instance> instance = BuildInstance(s);
     std::vector<double> rate, ms, phys, sens, fus, pol, rest, share, mjrate;
     std::string mjcf;
     for (int r = 0; r < o.repeats; ++r) {
-      auto episode = MakeEpisode(s, registry);
-      while (!episode->done()) episode->Step();
+      auto episode = std::make_unique<Episode>(instance, policy->Create());
+      episode->Run();
       const PhaseTimes& t = episode->times();
       const int steps = episode->step();
       rate.push_back(steps / t.total);

@@ -23,46 +23,35 @@ constexpr double kTargetMotionSeconds = 0.25;
 
 BeliefLayout MakeBeliefLayout(const World& world) {
   std::vector<TargetModel> models;
-  for (const TargetInstance& t : world.targets) {
-    TargetModel m;
-    m.dim = t.dynamics.dim();
-    m.A = t.dynamics.A;
-    m.b = t.dynamics.b;
-    m.Q = t.dynamics.q * Eigen::MatrixXd::Identity(m.dim, m.dim);
-    m.is_static = t.dynamics.IsStatic();
-    models.push_back(std::move(m));
-  }
+  for (const TargetPrior& p : world.priors) models.push_back(p.model);
   return BeliefLayout(std::move(models));
 }
 
-SensorModel MakeSensorModel(const SensorConfig& c) {
-  SensorModel s;
-  s.range = c.range;
-  s.eta = c.eta;
-  s.sigma0 = c.sigma0;
-  s.line_of_sight = c.line_of_sight;
-  return s;
-}
+Episode::Episode(std::shared_ptr<const Instance> instance,
+                 std::unique_ptr<Policy> policy)
+    : Episode(instance, std::move(policy), instance->scenario.mission) {}
 
-Episode::Episode(const Scenario& scenario, std::unique_ptr<Policy> policy)
-    : scenario_(scenario),
-      world_(World::Build(scenario)),
+Episode::Episode(std::shared_ptr<const Instance> instance,
+                 std::unique_ptr<Policy> policy, const MissionConfig& mission)
+    : instance_(std::move(instance)),
+      mission_(mission),
+      sim_(instance_->physics),
       policy_(std::move(policy)),
-      sensor_(MakeSensorModel(scenario.sensor)),
-      layout_(MakeBeliefLayout(world_)),
-      target_rng_(scenario.seed, "targets.motion") {
+      layout_(MakeBeliefLayout(instance_->world)),
+      target_rng_(instance_->scenario.seed, "targets.motion") {
   AIA_CHECK(policy_ != nullptr);
-  sim_ = std::make_unique<Simulation>(world_, scenario_);
-  const int n = world_.NumRobots();
-  num_targets_ = world_.NumTargets();
+  const Scenario& scenario = instance_->scenario;
+  const World& world = instance_->world;
+  const int n = world.NumRobots();
+  num_targets_ = world.NumTargets();
 
   std::vector<Eigen::VectorXd> means;
   std::vector<Eigen::MatrixXd> covs;
-  for (const TargetInstance& t : world_.targets) {
-    means.push_back(t.prior_mean);
-    covs.push_back(t.prior_cov);
-    target_state_.push_back(t.x0);
-    target_pos_.push_back(t.Position());
+  for (int k = 0; k < num_targets_; ++k) {
+    means.push_back(world.priors[k].mean);
+    covs.push_back(world.priors[k].cov);
+    target_state_.push_back(world.truth.targets[k]);
+    target_pos_.push_back(world.TargetStart(k));
   }
   target_prev_ = target_pos_;
   predicted_ = BeliefSet(&layout_, n);
@@ -72,53 +61,61 @@ Episode::Episode(const Scenario& scenario, std::unique_ptr<Policy> policy)
   fused_.SetPrior(means, covs);
   central_.SetPrior(means, covs);
 
-  CommParams cp;
-  cp.range_limited = scenario_.communication.mode == CommMode::kRange;
-  cp.range = scenario_.communication.range;
-  cp.loss_lambda = scenario_.communication.packet_loss_lambda;
-  std::vector<ScheduledFailure> failures;
-  for (const RobotFailure& f : world_.failures)
-    failures.push_back({f.robot, f.step});
-  comm_ = CommNetwork(cp, n, failures, scenario_.seed);
+  comm_ = CommNetwork(scenario.communication, n, world.truth.failures,
+                      scenario.seed);
 
   for (int i = 0; i < n; ++i) {
-    sensor_rngs_.emplace_back(scenario_.seed, "sensor", i);
-    rule_rngs_.emplace_back(scenario_.seed, "world_rule", i);
-    robot_pos_.push_back(sim_->RobotPosition(i));
-    robot_idx_.push_back(world_.robot_starts[i]);
+    sensor_rngs_.emplace_back(scenario.seed, "sensor", i);
+    rule_rngs_.emplace_back(scenario.seed, "world_rule", i);
+    robot_pos_.push_back(sim_.RobotPosition(i));
+    robot_idx_.push_back(world.robot_starts[i]);
   }
   moves_.assign(n, Move::kStay);
+  applied_.assign(n, Move::kStay);
   det_.assign(static_cast<size_t>(n) * num_targets_, 1.0);
   min_det_.assign(num_targets_, 1.0);
-  policy_->Reset(world_, scenario_.seed);
+  best_.assign(num_targets_, -1);
+  policy_->Reset(world.map, n, num_targets_, scenario.seed);
   Observe();  // step 0: measurements at the starts, fused with the prior
 }
 
+void Episode::AddObserver(StepObserver* observer) {
+  AIA_CHECK(observer != nullptr);
+  observers_.push_back(observer);
+}
+
+void Episode::Run() {
+  for (StepObserver* o : observers_) o->OnStart(*this);
+  while (!done()) Step();
+  for (StepObserver* o : observers_) o->OnEnd(*this);
+}
+
 bool Episode::done() const {
-  if (step_ >= scenario_.mission.max_steps) return true;
-  if (success() && scenario_.mission.stop_at_success) return true;
+  if (step_ >= mission_.max_steps) return true;
+  if (success() && mission_.stop_at_success) return true;
   return comm_.NumActive() == 0;
 }
 
 int Episode::NumLocalized() const {
   int count = 0;
   for (int k = 0; k < num_targets_; ++k)
-    count += min_det_[k] <= scenario_.mission.eps ? 1 : 0;
+    count += min_det_[k] <= mission_.eps ? 1 : 0;
   return count;
 }
 
 void Episode::MoveTargets() {
+  const World& world = instance_->world;
   for (int k = 0; k < num_targets_; ++k) {
-    const DynamicsConfig& dyn = world_.targets[k].dynamics;
+    const TargetModel& model = layout_.model(k);
     target_prev_[k] = target_pos_[k];
-    if (dyn.IsStatic()) continue;
+    if (layout_.is_static(k)) continue;
     Eigen::VectorXd& x = target_state_[k];
-    Eigen::VectorXd next = dyn.A * x + dyn.b;
-    const double sd = std::sqrt(dyn.q);
+    Eigen::VectorXd next = model.A * x + model.b;
+    const double sd = std::sqrt(model.q);
     for (int c = 0; c < next.size(); ++c) next[c] += sd * target_rng_.Normal();
     // The truth stays in the workspace (the filter's model does not know this).
-    next[0] = std::clamp(next[0], 0.0, world_.size.x());
-    next[1] = std::clamp(next[1], 0.0, world_.size.y());
+    next[0] = std::clamp(next[0], 0.0, world.map.size().x());
+    next[1] = std::clamp(next[1], 0.0, world.map.size().y());
     x = next;
     target_pos_[k] = x.head<2>();
   }
@@ -127,9 +124,9 @@ void Episode::MoveTargets() {
 DecisionContext Episode::Context() const {
   DecisionContext ctx;
   ctx.step = step_;
-  ctx.world = &world_;
-  ctx.sensor = &sensor_;
-  ctx.eps = scenario_.mission.eps;
+  ctx.map = &instance_->world.map;
+  ctx.sensor = &instance_->scenario.sensor;
+  ctx.eps = mission_.eps;
   ctx.positions = &robot_idx_;
   ctx.comm = &comm_;
   ctx.beliefs = &fused_;
@@ -137,59 +134,70 @@ DecisionContext Episode::Context() const {
   return ctx;
 }
 
-void Episode::Step(const SubstepHook& hook) {
+void Episode::Step() {
   if (done()) return;
   const auto t_step = Clock::now();
-  const int n = world_.NumRobots();
-  const Lattice& lattice = world_.lattice;
+  const int n = instance_->world.NumRobots();
+  const Lattice& lattice = instance_->world.map.lattice();
 
   // The policy decides on what the robots know now; the world rule applies.
   auto t0 = Clock::now();
   const DecisionContext ctx = Context();
-  policy_->Decide(ctx, &moves_);
+  DecisionContext given = ctx;
+  if (!policy_->centralized()) given.central = nullptr;
+  const PolicyStatus status = policy_->Decide(given, &moves_);
+  ++stats_.statuses[static_cast<int>(status)];
   for (int i = 0; i < n; ++i) {
     if (!comm_.Active(i)) {
-      sim_->SetWaypoint(i, robot_pos_[i]);  // a failed robot stops where it is
+      applied_[i] = Move::kStay;
+      sim_.SetWaypoint(i, robot_pos_[i]);  // a failed robot stops where it is
       continue;
     }
     bool replaced = false;
     const Move m = ApplyWorldRule(lattice, robot_idx_[i], moves_[i],
                                   rule_rngs_[i], &replaced);
     invalid_moves_ += replaced ? 1 : 0;
-    sim_->SetWaypoint(i, lattice.Point(lattice.Next(robot_idx_[i], m)));
+    applied_[i] = m;
+    sim_.SetWaypoint(i, lattice.Point(lattice.Next(robot_idx_[i], m)));
   }
   times_.policy += Since(t0);
+  const Decision decision{moves_, applied_, status};
+  for (StepObserver* o : observers_) o->OnDecision(*this, ctx, decision);
 
   // Targets move and robots drive to their waypoints.
   MoveTargets();
-  const double physics_before = sim_->physics_seconds();
-  Simulation& sim = *sim_;
-  sim.AdvanceToWaypoints([&](double elapsed) {
+  const double physics_before = sim_.physics_seconds();
+  const PhysicsStepStats physics = sim_.AdvanceToWaypoints([&](double elapsed) {
     const double f = std::min(1.0, elapsed / kTargetMotionSeconds);
     for (int k = 0; k < num_targets_; ++k)
-      sim.SetTargetPosition(
+      sim_.SetTargetPosition(
           k, target_prev_[k] + f * (target_pos_[k] - target_prev_[k]));
-    if (hook) hook(*this, elapsed);
+    for (StepObserver* o : observers_) o->OnSubstep(*this, elapsed);
   });
+  stats_.substeps += physics.substeps;
+  stats_.sim_seconds += physics.substeps * sim_.model()->opt.timestep;
+  if (physics.timed_out) ++stats_.physics_timeouts;
+  if (!physics.all_arrived && !physics.timed_out) ++stats_.stalled_steps;
   for (int k = 0; k < num_targets_; ++k)
-    sim.SetTargetPosition(k, target_pos_[k]);
-  times_.physics += sim.physics_seconds() - physics_before;
+    sim_.SetTargetPosition(k, target_pos_[k]);
+  times_.physics += sim_.physics_seconds() - physics_before;
   ++step_;
   for (int i = 0; i < n; ++i) {
-    robot_pos_[i] = sim.RobotPosition(i);
+    robot_pos_[i] = sim_.RobotPosition(i);
     const int idx = lattice.NearestFree(robot_pos_[i]);
     if (idx >= 0) robot_idx_[i] = idx;
   }
   Observe();
   times_.total += Since(t_step);
+  for (StepObserver* o : observers_) o->OnStep(*this);
 }
 
 void Episode::Observe() {
-  const int n = world_.NumRobots();
+  const int n = instance_->world.NumRobots();
   auto t0 = Clock::now();
   comm_.Update(step_, robot_pos_);
-  Sense(*sim_, sensor_, robot_pos_, target_pos_, comm_.active(), &sensor_rngs_,
-        &z_);
+  Sense(sim_, instance_->scenario.sensor, robot_pos_, target_pos_,
+        comm_.active(), &sensor_rngs_, &z_);
   times_.sensing += Since(t0);
 
   t0 = Clock::now();
@@ -200,22 +208,23 @@ void Episode::Observe() {
     Predict(&predicted_);
     Predict(&central_);
   }
-  FusionWeights(comm_.AllNeighbors(), scenario_.communication.kappa_self,
+  FusionWeights(comm_.AllNeighbors(), instance_->scenario.communication.kappa_self,
                 &weights_);
   Fuse(predicted_, weights_, z_, robot_pos_, &fused_);
   CentralUpdate(z_, robot_pos_, &central_);
 
-  // Judge the mission on the active robots.
+  // Judge the mission on the active robots' best estimates.
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < num_targets_; ++k)
+      det_[static_cast<size_t>(i) * num_targets_ + k] =
+          fused_.DetCovariance(i, k);
+  TeamBestRows(det_, num_targets_, comm_.active(), &best_);
   bool all = true;
   for (int k = 0; k < num_targets_; ++k) {
-    double best = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < n; ++i) {
-      const double d = fused_.DetCovariance(i, k);
-      det_[static_cast<size_t>(i) * num_targets_ + k] = d;
-      if (comm_.Active(i)) best = std::min(best, d);
-    }
-    min_det_[k] = best;
-    if (!(best <= scenario_.mission.eps)) all = false;
+    const int b = best_[k];
+    min_det_[k] = b < 0 ? std::numeric_limits<double>::infinity()
+                        : det_[static_cast<size_t>(b) * num_targets_ + k];
+    if (!(min_det_[k] <= mission_.eps)) all = false;
   }
   all_localized_ = all;
   if (all) {

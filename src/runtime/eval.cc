@@ -10,13 +10,15 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <thread>
 
 #include "aia/core/error.h"
 #include "aia/core/io.h"
-#include "aia/runtime/bench.h"
+#include "aia/runtime/episode.h"
+#include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/plan_command.h"
 
@@ -25,16 +27,6 @@ namespace {
 
 constexpr const char* kHeader =
     "size,seed,policy,success,flowtime,fstar,wall_s";
-
-std::string FormatRow(const EvalRow& r) {
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%.4f\n", r.size.c_str(),
-                static_cast<unsigned long long>(r.seed), r.policy.c_str(),
-                r.success ? 1 : 0,
-                r.flowtime >= 0 ? std::to_string(r.flowtime).c_str() : "",
-                r.fstar, r.wall_s);
-  return buf;
-}
 
 bool ParseRow(const std::string& line, EvalRow* r) {
   std::vector<std::string> f;
@@ -62,7 +54,218 @@ bool ParseRow(const std::string& line, EvalRow* r) {
 // all localized at the start) counted as 1 so that the ratio is defined.
 int Horizon(int fstar) { return 3 * std::max(fstar, 1); }
 
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+      .count();
+}
+
+// The policy keys of the registry's declarations: "policy.p_v" -> "p_v".
+std::set<std::string> DeclaredParams(const PolicyRegistry& registry,
+                                     const std::string& policy) {
+  std::set<std::string> out;
+  for (const PolicyInfo& info : registry.Describe())
+    if (info.name == policy)
+      for (const FieldDoc& d : info.params) out.insert(d.key.substr(7));
+  return out;
+}
+
+// DIR/effective.yaml: the instances' scenario and each policy's parameters.
+// Policy lines read "#   NAME: {...}".
+std::string EffectiveText(const EvalSetup& setup) {
+  std::string text =
+      "# aia eval: the scenario of every instance, overrides applied. Per\n"
+      "# instance, robots.count and targets.count are its size and seed its\n"
+      "# seed (--sizes, --seeds, --seed-base); the expert gives F*, and each\n"
+      "# policy runs with these parameters:\n";
+  text += "#   expert (F*): " + ShowNode(setup.expert->Params(), 100000) + "\n";
+  for (const auto& p : setup.policies)
+    text += "#   " + p->name() + ": " + ShowNode(p->Params(), 100000) + "\n";
+  Scenario s = WithOverrides(GeneratedScenario(1, 1, 0), setup.overrides);
+  s.policy.name = "expert";
+  s.policy.params = setup.expert->Params();
+  return text + EffectiveYaml(s, "");
+}
+
+// Why an existing DIR/effective.yaml does not fit this run, or "".
+std::string Mismatch(const std::string& old_text, const std::string& new_text) {
+  const auto split = [](const std::string& text) {
+    std::map<std::string, std::string> policies;
+    std::string body;
+    std::istringstream in(text);
+    std::string line;
+    static const std::regex kPolicy(R"(#   ([^:]+): (.*))");
+    while (std::getline(in, line)) {
+      std::smatch m;
+      if (std::regex_match(line, m, kPolicy)) {
+        policies[m[1]] = m[2];
+      } else if (line.rfind("#", 0) != 0) {
+        body += line + "\n";
+      }
+    }
+    return std::make_pair(body, policies);
+  };
+  const auto [old_body, old_policies] = split(old_text);
+  const auto [new_body, new_policies] = split(new_text);
+  if (old_body != new_body) return "the scenario differs (--set)";
+  for (const auto& [name, params] : new_policies) {
+    const auto it = old_policies.find(name);
+    if (it != old_policies.end() && it->second != params)
+      return name + "'s parameters differ";
+  }
+  return "";
+}
+
 }  // namespace
+
+Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed) {
+  Scenario s;
+  s.name =
+      "generated_" + std::to_string(robots) + "x" + std::to_string(targets);
+  s.seed = seed;
+  s.workspace.obstacles.random = RandomObstaclesConfig{};
+  s.robots.count = robots;
+  s.targets.count = targets;
+  return s;
+}
+
+std::pair<int, int> ParseSize(const std::string& text,
+                              const std::string& flag) {
+  static const std::regex re("^([0-9]{1,5})x([0-9]{1,5})$");
+  std::smatch m;
+  if (!std::regex_match(text, m, re))
+    throw InputError(
+        "command line", 0, flag,
+        "'" + text + "' is not a size ROBOTSxTARGETS such as 10x10");
+  const int n = std::stoi(m[1]), k = std::stoi(m[2]);
+  if (n < 1 || k < 1)
+    throw InputError("command line", 0, flag,
+                     "'" + text + "': robots and targets must be >= 1");
+  return {n, k};
+}
+
+std::vector<EvalInstance> EnumerateInstances(
+    const std::vector<std::string>& sizes, int seeds,
+    std::uint64_t seed_base) {
+  std::vector<EvalInstance> out;
+  for (const std::string& size : sizes) {
+    const auto [n, m] = ParseSize(size, "--sizes");
+    for (int s = 0; s < seeds; ++s)
+      out.push_back({size, n, m, seed_base + static_cast<std::uint64_t>(s)});
+  }
+  return out;
+}
+
+EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
+                        const std::vector<std::string>& sets,
+                        const PolicyRegistry& registry) {
+  EvalSetup setup;
+  std::vector<Override> policy_sets;
+  for (const std::string& text : sets) {
+    const Override o = ParseSetFlag(text);
+    const std::string key = "--set " + o.path;
+    if (o.path == "seed" || o.path == "robots.count" ||
+        o.path == "targets.count") {
+      throw InputError("command line", 0, key,
+                       "is set by each instance (--sizes, --seeds, "
+                       "--seed-base), not by --set");
+    }
+    if (o.path == "policy.name")
+      throw InputError("command line", 0, key,
+                       "the evaluated policies are given by --policies");
+    if (o.path.rfind("policy.", 0) == 0 && o.path != "policy.model") {
+      policy_sets.push_back(o);
+    } else {
+      setup.overrides.push_back(o);
+    }
+  }
+  // Checked now, once, rather than on every instance.
+  const Scenario base = WithOverrides(GeneratedScenario(1, 1, 0),
+                                      setup.overrides);
+  std::set<std::string> used;
+  const auto resolve = [&](const std::string& name) {
+    const std::set<std::string> declared = DeclaredParams(registry, name);
+    std::vector<Override> own;
+    for (const Override& o : policy_sets) {
+      if (declared.count(o.path.substr(7))) {
+        own.push_back(o);
+        used.insert(o.path);
+      }
+    }
+    Scenario s = base;
+    s.policy.name = name;
+    return registry.Resolve(WithOverrides(s, own));
+  };
+  setup.expert = resolve("expert");
+  for (const std::string& p : policies) {
+    if (!registry.Has(p))
+      throw InputError(
+          "command line", 0, "--policies",
+          "unknown policy '" + p + "' (valid: " + registry.NameList() + ")");
+    setup.policies.push_back(resolve(p));
+  }
+  for (const Override& o : policy_sets) {
+    if (!used.count(o.path)) {
+      std::string names = "expert";
+      for (const std::string& p : policies) names += ", " + p;
+      throw InputError("command line", 0, "--set " + o.path,
+                       "no policy of this evaluation (" + names +
+                           ") has the parameter `" + o.path.substr(7) +
+                           "` (aia policies lists them)");
+    }
+  }
+  return setup;
+}
+
+Scenario InstanceScenario(const EvalInstance& instance,
+                          const EvalSetup& setup) {
+  return WithOverrides(
+      GeneratedScenario(instance.robots, instance.targets, instance.seed),
+      setup.overrides);
+}
+
+std::vector<EvalRow> RunInstance(const EvalInstance& inst,
+                                 const EvalSetup& setup,
+                                 const std::vector<std::string>& policies) {
+  const std::shared_ptr<const Instance> instance =
+      BuildInstance(InstanceScenario(inst, setup));
+  const SamplingPlan plan =
+      PlanFromStart(instance, *ParamsOf<ExpertParams>(*setup.expert));
+  const int fstar = plan.found ? plan.depth : -1;
+  std::vector<EvalRow> rows;
+  for (const auto& spec : setup.policies) {
+    if (!policies.empty() &&
+        std::find(policies.begin(), policies.end(), spec->name()) ==
+            policies.end())
+      continue;
+    EvalRow row;
+    row.size = inst.size;
+    row.seed = inst.seed;
+    row.policy = spec->name();
+    row.fstar = fstar;
+    if (fstar >= 0) {
+      const auto t0 = std::chrono::steady_clock::now();
+      MissionConfig mission = instance->scenario.mission;
+      mission.max_steps = Horizon(fstar);
+      Episode episode(instance, spec->Create(), mission);
+      episode.Run();
+      row.success = episode.success();
+      row.flowtime = episode.flowtime();
+      row.wall_s = SecondsSince(t0);
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+std::string FormatRow(const EvalRow& r) {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%.4f\n", r.size.c_str(),
+                static_cast<unsigned long long>(r.seed), r.policy.c_str(),
+                r.success ? 1 : 0,
+                r.flowtime >= 0 ? std::to_string(r.flowtime).c_str() : "",
+                r.fstar, r.wall_s);
+  return buf;
+}
 
 std::vector<EvalRow> ReadRuns(const std::string& path) {
   std::vector<EvalRow> rows;
@@ -81,8 +284,7 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& policies) {
   std::string out =
       "size,policy,instances,success_rate,flowtime_increase,mean_flowtime,mean_"
-      "fstar,"
-      "no_expert_plan\n";
+      "fstar,no_expert_plan\n";
   for (const auto& size : sizes) {
     for (const auto& policy : policies) {
       int n = 0, ok = 0, no_plan = 0;
@@ -131,16 +333,23 @@ int RunEval(const EvalOptions& o) {
     for (const auto& name : registry.Names())
       if (name != "expert") policies.push_back(name);
   }
-  for (const auto& p : policies) {
-    if (!registry.Has(p))
-      throw InputError(
-          "command line", 0, "--policies",
-          "unknown policy '" + p + "' (valid: " + registry.NameList() + ")");
-  }
-  std::vector<std::pair<int, int>> dims;
-  for (const auto& s : o.sizes) dims.push_back(ParseSize(s, "--sizes"));
+  const std::vector<EvalInstance> instances =
+      EnumerateInstances(o.sizes, o.seeds, o.seed_base);
+  const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry);
 
   MakeOutputDir(o.out_dir, "--out");
+  // Finished rows are kept only for the same configuration.
+  const std::string effective_path = o.out_dir + "/effective.yaml";
+  const std::string effective = EffectiveText(setup);
+  if (std::ifstream old(effective_path); old) {
+    std::stringstream text;
+    text << old.rdbuf();
+    const std::string why = Mismatch(text.str(), effective);
+    if (!why.empty())
+      throw InputError("command line", 0, "--out",
+                       o.out_dir + " holds results of another configuration (" +
+                           why + "; see its effective.yaml): use a new folder");
+  }
   const std::string runs_path = o.out_dir + "/runs.csv";
   // Resume: keep the rows already there, rewritten cleanly (a row cut short
   // by an interruption is dropped and run again).
@@ -152,22 +361,20 @@ int RunEval(const EvalOptions& o) {
     for (const auto& r : rows) text += FormatRow(r);
     WriteFileAtomic(runs_path, text);
   }
+  WriteFileAtomic(effective_path, effective);
 
-  struct Instance {
-    size_t size_index;
-    std::uint64_t seed;
+  struct Work {
+    const EvalInstance* instance;
     std::vector<std::string> todo;
   };
-  std::vector<Instance> work;
+  std::vector<Work> work;
   int total_runs = 0;
-  for (size_t si = 0; si < o.sizes.size(); ++si) {
-    for (int s = 0; s < o.seeds; ++s) {
-      Instance inst{si, o.seed_base + static_cast<std::uint64_t>(s), {}};
-      for (const auto& p : policies)
-        if (!done.count({o.sizes[si], inst.seed, p})) inst.todo.push_back(p);
-      total_runs += static_cast<int>(inst.todo.size());
-      if (!inst.todo.empty()) work.push_back(std::move(inst));
-    }
+  for (const EvalInstance& inst : instances) {
+    Work w{&inst, {}};
+    for (const auto& p : policies)
+      if (!done.count({inst.size, inst.seed, p})) w.todo.push_back(p);
+    total_runs += static_cast<int>(w.todo.size());
+    if (!w.todo.empty()) work.push_back(std::move(w));
   }
   std::printf(
       "aia eval: %zu sizes x %d seeds x %zu policies; %zu rows already done, "
@@ -186,46 +393,24 @@ int RunEval(const EvalOptions& o) {
     while (true) {
       const size_t w = next.fetch_add(1);
       if (w >= work.size()) return;
-      const Instance& inst = work[w];
       try {
-        const auto [n, m] = dims[inst.size_index];
-        Scenario scenario = GeneratedScenario(n, m, inst.seed);
-        const SamplingPlan plan = PlanFromStart(scenario);
-        const int fstar = plan.found ? plan.depth : -1;
-        for (const auto& policy : inst.todo) {
-          EvalRow row;
-          row.size = o.sizes[inst.size_index];
-          row.seed = inst.seed;
-          row.policy = policy;
-          row.fstar = fstar;
-          if (fstar >= 0) {
-            const auto t0 = std::chrono::steady_clock::now();
-            Scenario s = scenario;
-            s.policy.name = policy;
-            s.mission.max_steps = Horizon(fstar);
-            auto episode = MakeEpisode(s, registry);
-            while (!episode->done()) episode->Step();
-            row.success = episode->success();
-            row.flowtime = episode->flowtime();
-            row.wall_s = std::chrono::duration<double>(
-                             std::chrono::steady_clock::now() - t0)
-                             .count();
-          }
+        const std::vector<EvalRow> result =
+            RunInstance(*work[w].instance, setup, work[w].todo);
+        std::lock_guard<std::mutex> lock(mu);
+        for (const EvalRow& row : result) {
           const std::string line = FormatRow(row);
-          std::lock_guard<std::mutex> lock(mu);
           if (::write(fd, line.data(), line.size()) !=
               static_cast<ssize_t>(line.size()))
             throw std::runtime_error("cannot append to " + runs_path);
           rows.push_back(row);
           ++finished;
-          char buf[200];
-          std::snprintf(buf, sizeof(buf),
-                        "[aia eval] %d/%d runs  (last: %s seed %llu %s)",
-                        finished, total_runs, row.size.c_str(),
-                        static_cast<unsigned long long>(row.seed),
-                        row.policy.c_str());
-          progress.Update(buf);
         }
+        char buf[200];
+        std::snprintf(buf, sizeof(buf),
+                      "[aia eval] %d/%d runs  (last: %s seed %llu)", finished,
+                      total_runs, work[w].instance->size.c_str(),
+                      static_cast<unsigned long long>(work[w].instance->seed));
+        progress.Update(buf);
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mu);
         if (first_error.empty()) first_error = e.what();
@@ -274,8 +459,8 @@ int RunEval(const EvalOptions& o) {
   const std::string summary = SummaryCsv(in_range, o.sizes, policies);
   WriteFileAtomic(o.out_dir + "/summary.csv", summary);
   std::printf("%s", summary.c_str());
-  std::printf("wrote %s and %s/summary.csv\n", runs_path.c_str(),
-              o.out_dir.c_str());
+  std::printf("wrote %s, %s/summary.csv and %s\n", runs_path.c_str(),
+              o.out_dir.c_str(), effective_path.c_str());
   return 0;
 }
 

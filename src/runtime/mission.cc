@@ -1,9 +1,6 @@
 #include "aia/runtime/mission.h"
 
-#include <unistd.h>
-
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -13,26 +10,41 @@
 #include "aia/scenario/loader.h"
 
 namespace aia {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+      .count();
+}
+
+constexpr char kEffectiveHeader[] =
+    "# The effective scenario of this result: every key with its value,\n"
+    "# defaults filled in, command-line overrides and the policy's parameters\n"
+    "# applied. `aia run` reads it back to the same mission.\n";
+
+}  // namespace
 
 PolicyRegistry AllPolicies() { return BuiltinPolicies(); }
 
-void ApplyOverrides(const ScenarioOverrides& o, const PolicyRegistry& registry,
-                    Scenario* s) {
-  if (o.policy) {
-    if (!registry.Has(*o.policy))
+std::vector<Override> CommandOverrides::ToOverrides(
+    const PolicyRegistry& registry) const {
+  std::vector<Override> out;
+  if (policy) {
+    if (!registry.Has(*policy)) {
+      std::string what = "unknown policy '" + *policy + "'";
+      const std::string closest =
+          field_text::ClosestName(*policy, registry.Names());
+      if (!closest.empty()) what += " (did you mean `" + closest + "`?)";
       throw InputError("command line", 0, "--policy",
-                       "unknown policy '" + *o.policy +
-                           "' (valid: " + registry.NameList() + ")");
-    // Parameters in the file belong to the policy it named.
-    if (*o.policy != s->policy.name) s->policy.params.clear();
-    s->policy.name = *o.policy;
+                       what + " (valid: " + registry.NameList() + ")");
+    }
+    out.push_back({"--policy", "policy.name", *policy});
   }
-  if (o.seed) s->seed = *o.seed;
-  if (o.max_steps) {
-    if (*o.max_steps < 1)
-      throw InputError("command line", 0, "--max-steps", "must be at least 1");
-    s->mission.max_steps = *o.max_steps;
-  }
+  if (seed) out.push_back({"--seed", "seed", std::to_string(*seed)});
+  if (max_steps)
+    out.push_back({"--max-steps", "mission.max_steps", std::to_string(*max_steps)});
+  for (const std::string& s : sets) out.push_back(ParseSetFlag(s));
+  return out;
 }
 
 void MakeOutputDir(const std::string& dir, const std::string& flag) {
@@ -44,10 +56,20 @@ void MakeOutputDir(const std::string& dir, const std::string& flag) {
   }
 }
 
-std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
-                                     const PolicyRegistry& registry) {
-  return std::make_unique<Episode>(
-      scenario, registry.Create(scenario.policy.name, scenario));
+PreparedMission PrepareMission(Scenario scenario,
+                               const PolicyRegistry& registry) {
+  PreparedMission m;
+  m.started = std::chrono::steady_clock::now();
+  m.policy = registry.Resolve(scenario);
+  m.instance = BuildInstance(scenario);
+  m.scenario = std::move(scenario);
+  return m;
+}
+
+Scenario EffectiveScenario(const PreparedMission& mission) {
+  Scenario s = mission.scenario;
+  s.policy.params = mission.policy->Params();
+  return s;
 }
 
 MissionSummary Summarize(const Episode& e, double wall_s) {
@@ -78,8 +100,8 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   j["flowtime"] = s.flowtime >= 0 ? nlohmann::ordered_json(s.flowtime)
                                   : nlohmann::ordered_json();
   j["steps"] = s.steps;
-  j["max_steps"] = e.scenario().mission.max_steps;
-  j["eps"] = e.scenario().mission.eps;
+  j["max_steps"] = e.mission().max_steps;
+  j["eps"] = e.mission().eps;
   j["invalid_moves"] = s.invalid_moves;
   j["localized_share"] = s.localized_share;
   j["localized_at_end"] = e.NumLocalized();
@@ -95,99 +117,86 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   return j.dump(2) + "\n";
 }
 
-struct TraceWriter::Impl {
-  AtomicFile file;
-  std::string row;
-  explicit Impl(const std::string& path) : file(path) {}
-};
-
-TraceWriter::TraceWriter(const std::string& path, int num_robots)
-    : impl_(std::make_shared<Impl>(path)) {
-  std::string header = "step,target,min_det";
-  for (int i = 0; i < num_robots; ++i) header += ",det_r" + std::to_string(i);
-  header += "\n";
-  std::fputs(header.c_str(), impl_->file.get());
+MissionRunner::MissionRunner(const PreparedMission& mission,
+                             std::string prefix, std::string label,
+                             bool progress,
+                             std::function<std::string()> progress_extra)
+    : mission_(mission), prefix_(std::move(prefix)) {
+  episode_ = std::make_unique<Episode>(mission.instance,
+                                       mission.policy->Create());
+  trace_ = std::make_unique<TraceObserver>(prefix_ + "trace.csv",
+                                           episode_->world().NumRobots());
+  estimate_ = std::make_unique<EstimateObserver>(prefix_ + "estimate.csv");
+  progress_ = std::make_unique<ProgressObserver>(std::move(label), progress,
+                                                 std::move(progress_extra));
+  episode_->AddObserver(trace_.get());
+  episode_->AddObserver(estimate_.get());
+  episode_->AddObserver(progress_.get());
 }
 
-void TraceWriter::Write(const Episode& e) {
-  const int n = e.world().NumRobots();
-  char buf[64];
-  for (int k = 0; k < e.world().NumTargets(); ++k) {
-    std::string& row = impl_->row;
-    row.clear();
-    std::snprintf(buf, sizeof(buf), "%d,%d,%.6e", e.step(), k, e.MinDet(k));
-    row += buf;
-    for (int i = 0; i < n; ++i) {
-      std::snprintf(buf, sizeof(buf), ",%.6e", e.Det(i, k));
-      row += buf;
-    }
-    row += '\n';
-    std::fwrite(row.data(), 1, row.size(), impl_->file.get());
-  }
-}
+MissionRunner::~MissionRunner() = default;
 
-void TraceWriter::Commit() { impl_->file.Commit(); }
+MissionSummary MissionRunner::Run() {
+  Episode& e = *episode_;
+  e.Run();
+  const MissionSummary summary = Summarize(e, SecondsSince(mission_.started));
 
-ProgressLine::ProgressLine(bool enabled)
-    : enabled_(enabled && ::isatty(STDERR_FILENO)) {}
+  WriteFileAtomic(prefix_ + "effective.yaml",
+                  EffectiveYaml(EffectiveScenario(mission_), kEffectiveHeader));
 
-void ProgressLine::Update(const std::string& text) {
-  if (!enabled_) return;
-  std::string line = "\r" + text;
-  if (text.size() < last_width_)
-    line += std::string(last_width_ - text.size(), ' ');
-  last_width_ = text.size();
-  std::fputs(line.c_str(), stderr);
-  std::fflush(stderr);
-}
-
-void ProgressLine::Finish() {
-  if (enabled_ && last_width_ > 0) std::fputs("\n", stderr);
-  last_width_ = 0;
+  nlohmann::ordered_json d;
+  nlohmann::ordered_json statuses;
+  for (int s = 0; s < kNumPolicyStatuses; ++s)
+    statuses[std::string(PolicyStatusName(static_cast<PolicyStatus>(s)))] =
+        e.stats().statuses[s];
+  d["policy_status"] = statuses;
+  const EpisodeStats& st = e.stats();
+  d["physics"] = {{"steps", e.step()},
+                  {"timeouts", st.physics_timeouts},
+                  {"stalled_steps", st.stalled_steps},
+                  {"substeps", st.substeps},
+                  {"sim_seconds", st.sim_seconds}};
+  nlohmann::ordered_json per_target = nlohmann::ordered_json::array();
+  for (int k = 0; k < estimate_->num_targets(); ++k)
+    per_target.push_back(
+        {{"rmse_m", estimate_->rmse(k)}, {"mean_nees", estimate_->mean_nees(k)}});
+  d["estimate"] = {{"rmse_m", estimate_->rmse()},
+                   {"mean_nees", estimate_->mean_nees()},
+                   {"targets", per_target}};
+  const PhaseTimes& t = e.times();
+  d["wall_seconds"] = {{"physics", t.physics},
+                       {"sensing", t.sensing},
+                       {"fusion", t.fusion},
+                       {"policy", t.policy},
+                       {"steps", t.total},
+                       {"total", summary.wall_s}};
+  WriteFileAtomic(prefix_ + "diagnostics.json", d.dump(2) + "\n");
+  return summary;
 }
 
 MissionSummary RunMission(const RunOptions& options) {
   const PolicyRegistry registry = AllPolicies();
-  Scenario scenario = LoadScenario(options.scenario_path);
-  ApplyOverrides(options.overrides, registry, &scenario);
+  PreparedMission mission = PrepareMission(
+      LoadScenario(options.scenario_path,
+                   options.overrides.ToOverrides(registry)),
+      registry);
   std::string out = options.out_dir;
   if (out.empty())
     out = "renders/" +
           std::filesystem::path(options.scenario_path).stem().string();
-
-  const auto t0 = std::chrono::steady_clock::now();
-  auto episode = MakeEpisode(scenario, registry);
   MakeOutputDir(out, "--out");
-  TraceWriter trace(out + "/trace.csv", episode->world().NumRobots());
-  trace.Write(*episode);
-  ProgressLine progress(options.progress);
-  const int m = episode->world().NumTargets();
-  while (!episode->done()) {
-    episode->Step();
-    trace.Write(*episode);
-    char buf[160];
-    std::snprintf(buf, sizeof(buf), "[aia run] %s  step %d/%d  localized %d/%d",
-                  std::string(episode->policy().name()).c_str(),
-                  episode->step(), scenario.mission.max_steps,
-                  episode->NumLocalized(), m);
-    progress.Update(buf);
-  }
-  progress.Finish();
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-          .count();
-  trace.Commit();
-  const MissionSummary summary = Summarize(*episode, wall);
-  WriteFileAtomic(out + "/summary.json", SummaryJson(summary, *episode));
+
+  MissionRunner runner(mission, out + "/", "aia run", options.progress);
+  const MissionSummary summary = runner.Run();
+  WriteFileAtomic(out + "/summary.json", SummaryJson(summary, runner.episode()));
   std::printf(
       "%s: policy %s, seed %llu: %s in %d steps (%d robots, %d targets, %ld "
-      "invalid moves), "
-      "%.2f s -> %s/\n",
-      scenario.name.c_str(), summary.policy.c_str(),
+      "invalid moves), %.2f s -> %s/\n",
+      mission.scenario.name.c_str(), summary.policy.c_str(),
       static_cast<unsigned long long>(summary.seed),
       summary.success ? "success" : "no success",
       summary.success ? summary.flowtime : summary.steps, summary.robots,
-      summary.targets, summary.invalid_moves, wall, out.c_str());
+      summary.targets, summary.invalid_moves, summary.wall_s, out.c_str());
   return summary;
 }
 

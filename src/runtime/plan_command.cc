@@ -3,12 +3,14 @@
 #include <sys/resource.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "aia/core/check.h"
 #include "aia/core/error.h"
 #include "aia/core/io.h"
-#include "aia/planning/expert.h"
 #include "aia/planning/random_policy.h"
+#include "aia/runtime/episode.h"
 #include "aia/scenario/loader.h"
 
 namespace aia {
@@ -19,31 +21,34 @@ double PeakRssMiB() {
   return u.ru_maxrss / 1024.0;  // Linux reports KiB
 }
 
-SamplingPlan PlanFromStart(const Scenario& scenario,
+SamplingPlan PlanFromStart(std::shared_ptr<const Instance> instance,
+                           const ExpertParams& params,
                            std::optional<long> budget) {
-  Scenario s = scenario;
-  // The plan is made on the initial state; the episode's own policy is not
-  // used, so build it with the cheapest one and keep the expert's keys.
-  const auto params_source = s;
-  s.policy.name = "random";
-  s.policy.params.clear();
-  Episode episode(s, std::make_unique<RandomPolicy>(s));
-  Scenario expert = params_source;
-  if (expert.policy.name != "expert") expert.policy.params.clear();
-  SamplingParams params = ExpertParams(expert);
-  if (budget) params.anytime = *budget;
+  // The plan is made on the state at step 0, which does not depend on the
+  // policy: any policy will do to set up the episode.
+  const std::uint64_t seed = instance->scenario.seed;
+  const Episode episode(std::move(instance), std::make_unique<RandomPolicy>());
+  SamplingParams sampling = params.Sampling();
+  if (budget) sampling.anytime = *budget;
   SamplingTree tree;
-  Rng rng(scenario.seed, "policy.expert");
-  return tree.Solve(ExpertProblem(episode.Context()), params, rng);
+  Rng rng(seed, "policy.expert");
+  return tree.Solve(ExpertProblem(episode.Context()), sampling, rng);
 }
 
 int RunPlanCommand(const PlanOptions& o) {
-  Scenario scenario = LoadScenario(o.scenario_path);
-  ApplyOverrides(o.overrides, AllPolicies(), &scenario);
   if (o.budget && *o.budget < 0)
     throw InputError("command line", 0, "--budget", "must be >= 0");
-  const SamplingPlan plan = PlanFromStart(scenario, o.budget);
-  const World world = World::Build(scenario);
+  const PolicyRegistry registry = AllPolicies();
+  CommandOverrides overrides = o.overrides;
+  overrides.policy = "expert";
+  const PreparedMission mission = PrepareMission(
+      LoadScenario(o.scenario_path, overrides.ToOverrides(registry)), registry);
+  // The expert's parameters as resolved (and range-checked) by the registry.
+  const ExpertParams* params = ParamsOf<ExpertParams>(*mission.policy);
+  AIA_CHECK(params != nullptr);
+  const SamplingPlan plan = PlanFromStart(mission.instance, *params, o.budget);
+  const World& world = mission.instance->world;
+  const Scenario& scenario = mission.scenario;
   std::printf("%s: seed %llu, %d robots, %d targets\n", scenario.name.c_str(),
               static_cast<unsigned long long>(scenario.seed), world.NumRobots(),
               world.NumTargets());
@@ -55,8 +60,7 @@ int RunPlanCommand(const PlanOptions& o) {
   }
   std::printf(
       "solve %.3f s, %ld nodes, %ld iterations (first goal at %ld), arena %.1f "
-      "MiB, "
-      "peak RSS %.1f MiB\n",
+      "MiB, peak RSS %.1f MiB\n",
       plan.seconds, plan.nodes, plan.iterations, plan.first_goal_iteration,
       plan.arena_bytes / 1048576.0, PeakRssMiB());
   if (!o.out.empty()) {
@@ -74,14 +78,28 @@ int RunPlanCommand(const PlanOptions& o) {
     for (size_t d = 0; d < plan.configs.size(); ++d) {
       nlohmann::ordered_json robots = nlohmann::ordered_json::array();
       for (int idx : plan.configs[d]) {
-        const Vec2 p = world.lattice.Point(idx);
+        const Vec2 p = world.map.lattice().Point(idx);
         robots.push_back({p.x(), p.y()});
       }
       steps.push_back({{"step", d}, {"robots", robots}, {"det", plan.det[d]}});
     }
     j["plan"] = steps;
+    const std::filesystem::path out(o.out);
+    MakeOutputDir(out.parent_path().string(), "--out");
     WriteFileAtomic(o.out, j.dump(1) + "\n");
-    std::printf("plan written to %s\n", o.out.c_str());
+    Scenario effective = EffectiveScenario(mission);
+    if (o.budget) {
+      effective.policy.params.Set(
+          "anytime", ConfigNode::Scalar(std::to_string(*o.budget)));
+    }
+    const std::string side =
+        (out.parent_path() / (out.stem().string() + ".effective.yaml")).string();
+    WriteFileAtomic(side, EffectiveYaml(effective,
+                                        "# The effective scenario of this plan "
+                                        "(aia plan; the expert's parameters\n"
+                                        "# below, --budget included).\n"));
+    std::printf("plan written to %s (scenario: %s)\n", o.out.c_str(),
+                side.c_str());
   }
   return 0;
 }

@@ -27,10 +27,9 @@ MjModelPtr CompileMjcf(const std::string& xml) {
   return MjModelPtr(m);
 }
 
-Simulation::Simulation(const World& world, const Scenario& scenario)
+PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario)
     : mjcf_(MakeMjcf(world, scenario)), physics_(scenario.physics) {
   model_ = CompileMjcf(mjcf_);
-  data_ = MjDataPtr(mj_makeData(model_.get()));
   const int n = world.NumRobots();
   for (int i = 0; i < n; ++i) {
     const std::string robot = "robot" + std::to_string(i);
@@ -39,45 +38,54 @@ Simulation::Simulation(const World& world, const Scenario& scenario)
     const int ax =
         mj_name2id(model_.get(), mjOBJ_ACTUATOR, (robot + "_x").c_str());
     AIA_CHECK(jx >= 0 && ax >= 0);
-    starts_.push_back(world.lattice.Point(world.robot_starts[i]));
+    starts_.push_back(world.map.lattice().Point(world.robot_starts[i]));
     qpos_adr_.push_back(model_->jnt_qposadr[jx]);
     qvel_adr_.push_back(model_->jnt_dofadr[jx]);
     ctrl_adr_.push_back(ax);
   }
-  waypoints_ = starts_;
-  num_targets_ = world.NumTargets();
-  for (int k = 0; k < num_targets_; ++k) {
+  for (int k = 0; k < world.NumTargets(); ++k) {
     const int body = mj_name2id(model_.get(), mjOBJ_BODY,
                                 ("target" + std::to_string(k)).c_str());
     AIA_CHECK(body >= 0 && model_->body_mocapid[body] >= 0);
     mocap_id_.push_back(model_->body_mocapid[body]);
   }
-  mj_forward(model_.get(), data_.get());
 }
 
+Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
+    : model_(std::move(model)) {
+  AIA_CHECK(model_ != nullptr);
+  data_ = MjDataPtr(mj_makeData(model_->model()));
+  waypoints_ = model_->starts_;
+  mj_forward(model_->model(), data_.get());
+}
+
+Simulation::Simulation(const World& world, const Scenario& scenario)
+    : Simulation(std::make_shared<const PhysicsModel>(world, scenario)) {}
+
 Vec2 Simulation::RobotPosition(int i) const {
-  const mjtNum* q = data_->qpos + qpos_adr_[i];
-  return starts_[i] + Vec2(q[0], q[1]);
+  const mjtNum* q = data_->qpos + model_->qpos_adr_[i];
+  return model_->starts_[i] + Vec2(q[0], q[1]);
 }
 
 Vec2 Simulation::RobotVelocity(int i) const {
-  const mjtNum* v = data_->qvel + qvel_adr_[i];
+  const mjtNum* v = data_->qvel + model_->qvel_adr_[i];
   return {v[0], v[1]};
 }
 
 void Simulation::SetWaypoint(int i, const Vec2& p) {
   waypoints_[i] = p;
-  data_->ctrl[ctrl_adr_[i]] = p.x() - starts_[i].x();
-  data_->ctrl[ctrl_adr_[i] + 1] = p.y() - starts_[i].y();
+  const Vec2& start = model_->starts_[i];
+  data_->ctrl[model_->ctrl_adr_[i]] = p.x() - start.x();
+  data_->ctrl[model_->ctrl_adr_[i] + 1] = p.y() - start.y();
 }
 
 Vec2 Simulation::TargetPosition(int k) const {
-  const mjtNum* p = data_->mocap_pos + 3 * mocap_id_[k];
+  const mjtNum* p = data_->mocap_pos + 3 * model_->mocap_id_[k];
   return {p[0], p[1]};
 }
 
 void Simulation::SetTargetPosition(int k, const Vec2& p) {
-  mjtNum* q = data_->mocap_pos + 3 * mocap_id_[k];
+  mjtNum* q = data_->mocap_pos + 3 * model_->mocap_id_[k];
   q[0] = p.x();
   q[1] = p.y();
 }
@@ -85,10 +93,12 @@ void Simulation::SetTargetPosition(int k, const Vec2& p) {
 PhysicsStepStats Simulation::AdvanceToWaypoints(
     const std::function<void(double)>& on_substep) {
   PhysicsStepStats stats;
-  const double dt = model_->opt.timestep;
+  const mjModel* m = model_->model();
+  const PhysicsConfig& physics = model_->physics();
+  const double dt = m->opt.timestep;
   const int max_steps =
-      std::max(1, static_cast<int>(std::ceil(physics_.step_timeout / dt)));
-  const double tol2 = physics_.tolerance * physics_.tolerance;
+      std::max(1, static_cast<int>(std::ceil(physics.step_timeout / dt)));
+  const double tol2 = physics.tolerance * physics.tolerance;
   const double stall_speed =
       0.01;  // m/s: a robot this slow and not there is blocked
   const double settle_time =
@@ -96,7 +106,7 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
   const int n = num_robots();
   for (int s = 0; s < max_steps; ++s) {
     const auto t0 = std::chrono::steady_clock::now();
-    mj_step(model_.get(), data_.get());
+    mj_step(m, data_.get());
     physics_seconds_ +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
             .count();
@@ -133,7 +143,7 @@ bool Simulation::RayClear(const Vec2& from, const Vec2& to) const {
   // Static geoms included (obstacles are static bodies); the ray length is
   // |vec|, so a hit before 1 lies between the two points.
   const mjtNum x =
-      mj_ray(model_.get(), data_.get(), pnt, vec, groups, 1, -1, &geom);
+      mj_ray(model_->model(), data_.get(), pnt, vec, groups, 1, -1, &geom);
   return x < 0.0 || x >= 1.0;
 }
 

@@ -56,7 +56,7 @@ std::array<float, 3> RobotColor(int robot) {
 
 std::string MakeMjcf(const World& world, const Scenario& s) {
   const int n = world.NumRobots();
-  const double W = world.size.x(), H = world.size.y();
+  const double W = world.map.size().x(), H = world.map.size().y();
   const double mass = s.physics.robot_mass;
   const double damping = 2.0 * std::sqrt(s.physics.kp * mass);  // critical
   const double h = kObstacleHeight / 2;
@@ -68,7 +68,7 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
   // MuJoCo 2.2 allocates njmax x njmax: size it from the robot count.
   // The stack MuJoCo sizes by default is too small for thousands of bodies.
   const int bodies =
-      n + world.NumTargets() + static_cast<int>(world.obstacles.size());
+      n + world.NumTargets() + static_cast<int>(world.map.obstacles().size());
   x << "  <size njmax=\"" << 8 * n + 500 << "\" nconmax=\"" << 2 * n + 100
     << "\"";
   if (bodies > 200)
@@ -114,8 +114,8 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
       << "\" material=\"obstacle\" group=\"" << kGroupObstacle
       << "\"/></body>\n";
   }
-  for (size_t b = 0; b < world.obstacles.size(); ++b) {
-    const Box& box = world.obstacles[b];
+  for (size_t b = 0; b < world.map.obstacles().size(); ++b) {
+    const Box& box = world.map.obstacles()[b];
     const Vec2 c = box.Center(), half = 0.5 * box.Size();
     x << "    <body name=\"obstacle" << b << "\" pos=\"" << Num(c.x()) << " "
       << Num(c.y()) << " " << Num(h) << "\"><geom type=\"box\" size=\""
@@ -124,7 +124,7 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
       << "\"/></body>\n";
   }
   for (int i = 0; i < n; ++i) {
-    const Vec2 p = world.lattice.Point(world.robot_starts[i]);
+    const Vec2 p = world.map.lattice().Point(world.robot_starts[i]);
     const auto c = RobotColor(i);
     // qpos (and ctrl) are displacements from the start, so that the file at
     // rest (ctrl = 0) holds every robot at its start in MuJoCo's own tools.
@@ -136,14 +136,14 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
       << "      <joint name=\"robot" << i
       << "_y\" type=\"slide\" axis=\"0 1 0\" damping=\"" << Num(damping)
       << "\"/>\n"
-      << "      <geom type=\"cylinder\" size=\"" << Num(world.robot_radius)
+      << "      <geom type=\"cylinder\" size=\"" << Num(world.map.robot_radius())
       << " " << Num(kRobotHalfHeight) << "\" mass=\"" << Num(mass)
       << "\" rgba=\"" << c[0] << " " << c[1] << " " << c[2] << " 1\" group=\""
       << kGroupAgent << "\"/>\n"
       << "    </body>\n";
   }
   for (int k = 0; k < world.NumTargets(); ++k) {
-    const Vec2 p = world.targets[k].Position();
+    const Vec2 p = world.TargetStart(k);
     x << "    <body name=\"target" << k << "\" mocap=\"true\" pos=\""
       << Num(p.x()) << " " << Num(p.y())
       << " 0.08\"><geom type=\"sphere\" size=\"0.1\" rgba=\"0.85 0.1 0.1 1\" "

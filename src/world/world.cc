@@ -8,6 +8,7 @@
 #include "aia/core/check.h"
 #include "aia/core/error.h"
 #include "aia/core/rng.h"
+#include "aia/world/map.h"
 
 namespace aia {
 namespace {
@@ -20,11 +21,11 @@ std::string Fmt(const Vec2& v) {
 
 [[noreturn]] void Fail(const Scenario& s, const std::string& key,
                        const std::string& what) {
-  throw InputError(s.file, s.LineOf(key), key, what);
+  throw s.ErrorAt(key, what);
 }
 
 std::vector<Box> RandomBoxes(const Scenario& s, Rng& rng) {
-  const RandomObstaclesConfig& r = *s.workspace.random;
+  const RandomObstaclesConfig& r = *s.workspace.obstacles.random;
   const Vec2& ws = s.workspace.size;
   std::vector<Box> boxes;
   boxes.reserve(r.count);
@@ -40,36 +41,15 @@ std::vector<Box> RandomBoxes(const Scenario& s, Rng& rng) {
 
 std::vector<Box> MapBoxes(const Scenario& s) {
   const std::string key = "workspace.obstacles.map";
-  cv::Mat img = cv::imread(s.workspace.map, cv::IMREAD_GRAYSCALE);
+  const std::string& map = s.workspace.obstacles.map;
+  cv::Mat img = cv::imread(map, cv::IMREAD_GRAYSCALE);
   if (img.empty())
-    Fail(s, key,
-         "cannot decode image '" + s.workspace.map + "' (PGM or PNG expected)");
+    Fail(s, key, "cannot decode image '" + map + "' (PGM or PNG expected)");
   if (img.depth() != CV_8U) img.convertTo(img, CV_8U, 1.0 / 256.0);
   std::vector<std::uint8_t> gray(img.begin<std::uint8_t>(),
                                  img.end<std::uint8_t>());
   return BoxesFromImage(gray, img.cols, img.rows, s.workspace.size,
-                        s.workspace.map_threshold);
-}
-
-Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
-                             const std::vector<Box>& boxes) {
-  const int nx =
-      std::max(1, static_cast<int>(std::ceil(size.x() / cell - 1e-9)));
-  const int ny =
-      std::max(1, static_cast<int>(std::ceil(size.y() / cell - 1e-9)));
-  Grid<std::uint8_t> grid(nx, ny, cell, 0);
-  for (const Box& b : boxes) {
-    // Cells whose interior overlaps the box.
-    const int x0 = std::max(0, static_cast<int>(std::floor(b.lo.x() / cell)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(b.lo.y() / cell)));
-    const int x1 =
-        std::min(nx - 1, static_cast<int>(std::ceil(b.hi.x() / cell)) - 1);
-    const int y1 =
-        std::min(ny - 1, static_cast<int>(std::ceil(b.hi.y() / cell)) - 1);
-    for (int iy = y0; iy <= y1; ++iy)
-      for (int ix = x0; ix <= x1; ++ix) grid(ix, iy) = 1;
-  }
-  return grid;
+                        s.workspace.obstacles.map_threshold);
 }
 
 }  // namespace
@@ -131,81 +111,25 @@ std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
   return boxes;
 }
 
-void World::BuildIndex() {
-  bucket_ = 1.0;
-  bx_ = std::max(1, static_cast<int>(std::ceil(size.x() / bucket_)));
-  by_ = std::max(1, static_cast<int>(std::ceil(size.y() / bucket_)));
-  buckets_.assign(static_cast<size_t>(bx_) * by_, {});
-  for (int b = 0; b < static_cast<int>(obstacles.size()); ++b) {
-    const Box& box = obstacles[b];
-    const int x0 = std::clamp(
-        static_cast<int>(std::floor(box.lo.x() / bucket_)), 0, bx_ - 1);
-    const int x1 = std::clamp(
-        static_cast<int>(std::floor(box.hi.x() / bucket_)), 0, bx_ - 1);
-    const int y0 = std::clamp(
-        static_cast<int>(std::floor(box.lo.y() / bucket_)), 0, by_ - 1);
-    const int y1 = std::clamp(
-        static_cast<int>(std::floor(box.hi.y() / bucket_)), 0, by_ - 1);
-    for (int iy = y0; iy <= y1; ++iy)
-      for (int ix = x0; ix <= x1; ++ix)
-        buckets_[static_cast<size_t>(iy) * bx_ + ix].push_back(b);
-  }
-}
-
-bool World::LineOfSight(const Vec2& a, const Vec2& b) const {
-  const int x0 =
-      std::clamp(static_cast<int>(std::floor(std::min(a.x(), b.x()) / bucket_)),
-                 0, bx_ - 1);
-  const int x1 =
-      std::clamp(static_cast<int>(std::floor(std::max(a.x(), b.x()) / bucket_)),
-                 0, bx_ - 1);
-  const int y0 =
-      std::clamp(static_cast<int>(std::floor(std::min(a.y(), b.y()) / bucket_)),
-                 0, by_ - 1);
-  const int y1 =
-      std::clamp(static_cast<int>(std::floor(std::max(a.y(), b.y()) / bucket_)),
-                 0, by_ - 1);
-  for (int iy = y0; iy <= y1; ++iy) {
-    for (int ix = x0; ix <= x1; ++ix) {
-      for (int bi : buckets_[static_cast<size_t>(iy) * bx_ + ix]) {
-        if (SegmentIntersectsBox(a, b, obstacles[bi])) return false;
-      }
-    }
-  }
-  return true;
-}
-
-bool World::PointFree(const Vec2& p) const {
-  if (p.x() < 0.0 || p.y() < 0.0 || p.x() > size.x() || p.y() > size.y())
-    return false;
-  for (const Box& b : obstacles)
-    if (b.Contains(p)) return false;
-  return true;
-}
-
 World World::Build(const Scenario& s) {
   World w;
-  w.size = s.workspace.size;
-  w.robot_radius = s.robots.radius;
-
-  // Obstacles.
-  if (s.workspace.random) {
+  // Obstacles: random, then explicit boxes, then the map's.
+  std::vector<Box> obstacles;
+  if (s.workspace.obstacles.random) {
     Rng rng(s.seed, "obstacles");
     const auto boxes = RandomBoxes(s, rng);
-    w.obstacles.insert(w.obstacles.end(), boxes.begin(), boxes.end());
+    obstacles.insert(obstacles.end(), boxes.begin(), boxes.end());
   }
-  for (size_t i = 0; i < s.workspace.boxes.size(); ++i) {
-    const BoxConfig& b = s.workspace.boxes[i];
-    w.obstacles.push_back(Box::FromCenterSize(b.center, b.size));
-  }
-  if (!s.workspace.map.empty()) {
+  for (const BoxConfig& b : s.workspace.obstacles.boxes)
+    obstacles.push_back(Box::FromCenterSize(b.center, b.size));
+  if (!s.workspace.obstacles.map.empty()) {
     const auto boxes = MapBoxes(s);
-    w.obstacles.insert(w.obstacles.end(), boxes.begin(), boxes.end());
+    obstacles.insert(obstacles.end(), boxes.begin(), boxes.end());
   }
-  w.BuildIndex();
-  w.occupancy = Rasterize(w.size, s.workspace.cell, w.obstacles);
-  w.lattice = Lattice(w.size, s.robots.step, s.robots.radius, w.obstacles);
-  const Lattice& lat = w.lattice;
+  w.map = Map(s.workspace.size, std::move(obstacles), s.workspace.cell,
+              s.robots.step, s.robots.radius);
+  const Map& map = w.map;
+  const Lattice& lat = map.lattice();
   const int n = s.robots.count;
 
   // Robot starts.
@@ -213,7 +137,7 @@ World World::Build(const Scenario& s) {
     for (int i = 0; i < n; ++i) {
       const std::string key = "robots.start[" + std::to_string(i) + "]";
       const Vec2& p = s.robots.start[i];
-      for (const Box& b : w.obstacles) {
+      for (const Box& b : map.obstacles()) {
         if (PointBoxDistanceSq(p, b) < s.robots.radius * s.robots.radius)
           Fail(s, key,
                "start " + Fmt(p) +
@@ -260,41 +184,43 @@ World World::Build(const Scenario& s) {
   // Targets.
   Rng prior_rng(s.seed, "priors");
   auto add_target = [&](const Vec2& pos, const TargetConfig* cfg) {
-    TargetInstance t;
-    t.dynamics = cfg ? cfg->dynamics : DynamicsConfig{};
-    const int d = t.dynamics.dim();
-    t.x0 = Eigen::VectorXd::Zero(d);
-    t.x0.head<2>() = pos;
-    if (d == 4 && cfg) t.x0.tail<2>() = cfg->velocity;
+    TargetPrior prior;
+    prior.model = cfg ? cfg->dynamics : TargetModel{};
+    const int d = prior.model.dim();
+    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(d);
+    x0.head<2>() = pos;
+    if (d == 4 && cfg) x0.tail<2>() = cfg->velocity;
     const double sigma =
         (cfg && cfg->prior_sigma) ? *cfg->prior_sigma : s.targets.prior_sigma;
-    t.prior_cov = sigma * sigma * Eigen::MatrixXd::Identity(d, d);
+    prior.cov = sigma * sigma * Eigen::MatrixXd::Identity(d, d);
     // Default prior mean: the truth plus an offset drawn from
     // N(0, prior_offset^2 I), redrawn (a few times) until the mean lies in free
     // space: the robots know the map, so their prior puts its mean there. Drawn
     // even when a mean is given, so the other targets' draws do not depend on
     // it.
     const double offset = s.targets.prior_offset;
-    t.prior_mean = t.x0;
+    prior.mean = x0;
     for (int attempt = 0; attempt < 20; ++attempt) {
       Eigen::VectorXd draw(d);
       for (int c = 0; c < d; ++c) draw[c] = offset * prior_rng.Normal();
-      t.prior_mean = t.x0 + draw;
-      if (w.PointFree(t.prior_mean.head<2>())) break;
-      t.prior_mean = t.x0;
+      prior.mean = x0 + draw;
+      if (map.PointFree(prior.mean.head<2>())) break;
+      prior.mean = x0;
     }
-    if (cfg && cfg->prior_mean) t.prior_mean.head<2>() = *cfg->prior_mean;
-    w.targets.push_back(std::move(t));
+    if (cfg && cfg->prior_mean) prior.mean.head<2>() = *cfg->prior_mean;
+    w.priors.push_back(std::move(prior));
+    w.truth.targets.push_back(std::move(x0));
   };
   if (!s.targets.list.empty()) {
     for (size_t k = 0; k < s.targets.list.size(); ++k) {
       const std::string key =
           "targets.list[" + std::to_string(k) + "].position";
       const Vec2& p = s.targets.list[k].position;
-      if (!w.PointFree(p)) {
-        if (p.x() < 0 || p.y() < 0 || p.x() > w.size.x() || p.y() > w.size.y())
+      if (!map.PointFree(p)) {
+        const Vec2& size = map.size();
+        if (p.x() < 0 || p.y() < 0 || p.x() > size.x() || p.y() > size.y())
           Fail(s, key,
-               "target " + Fmt(p) + " is outside the workspace " + Fmt(w.size));
+               "target " + Fmt(p) + " is outside the workspace " + Fmt(size));
         Fail(s, key, "target " + Fmt(p) + " is inside an obstacle");
       }
       add_target(p, &s.targets.list[k]);
@@ -321,7 +247,7 @@ World World::Build(const Scenario& s) {
              ++ix) {
           const int idx = lat.Index(ix, iy);
           if (!reachable[idx] || (lat.Point(idx) - p).norm() > reach) continue;
-          if (!s.sensor.line_of_sight || w.LineOfSight(lat.Point(idx), p))
+          if (!s.sensor.line_of_sight || map.LineOfSight(lat.Point(idx), p))
             return true;
         }
       return false;
@@ -329,10 +255,10 @@ World World::Build(const Scenario& s) {
     for (int k = 0; k < s.targets.count; ++k) {
       bool placed = false;
       for (int attempt = 0; attempt < 10000 && !placed; ++attempt) {
-        const Vec2 p(rng.Uniform(clearance, w.size.x() - clearance),
-                     rng.Uniform(clearance, w.size.y() - clearance));
+        const Vec2 p(rng.Uniform(clearance, map.size().x() - clearance),
+                     rng.Uniform(clearance, map.size().y() - clearance));
         bool clear = true;
-        for (const Box& b : w.obstacles)
+        for (const Box& b : map.obstacles())
           if (PointBoxDistanceSq(p, b) < clearance * clearance) clear = false;
         if (!clear || !observable(p)) continue;
         add_target(p, nullptr);
@@ -348,22 +274,22 @@ World World::Build(const Scenario& s) {
 
   // MuJoCo's broad phase needs stack memory quadratic in the number of
   // geoms (the MJCF sizes it so): keep models to a size that fits.
-  const int bodies = n + w.NumTargets() + static_cast<int>(w.obstacles.size());
+  const int bodies =
+      n + w.NumTargets() + static_cast<int>(map.obstacles().size());
   if (bodies > kMaxBodies)
     Fail(s, s.targets.list.empty() ? "targets.count" : "targets.list",
          std::to_string(n) + " robots, " + std::to_string(w.NumTargets()) +
-             " targets and " + std::to_string(w.obstacles.size()) +
+             " targets and " + std::to_string(map.obstacles().size()) +
              " obstacle boxes make " + std::to_string(bodies) +
              " bodies; aia simulates at most " + std::to_string(kMaxBodies));
 
   // Failures: "random" picks a robot from the seed's own stream.
   Rng fail_rng(s.seed, "failures");
-  for (const FailureConfig& f : s.communication.failures) {
-    RobotFailure rf;
-    rf.step = f.step;
-    rf.robot =
-        f.robot >= 0 ? f.robot : static_cast<int>(fail_rng.UniformInt(n));
-    w.failures.push_back(rf);
+  for (const RobotFailure& f : s.communication.failures) {
+    RobotFailure resolved = f;
+    if (f.robot == RobotFailure::kRandomRobot)
+      resolved.robot = static_cast<int>(fail_rng.UniformInt(n));
+    w.truth.failures.push_back(resolved);
   }
   return w;
 }

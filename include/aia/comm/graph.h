@@ -5,31 +5,72 @@
 #ifndef AIA_COMM_GRAPH_H_
 #define AIA_COMM_GRAPH_H_
 
+#include <array>
 #include <cstdint>
 #include <utility>
 #include <vector>
 
+#include "aia/core/fields.h"
 #include "aia/core/rng.h"
 #include "aia/core/types.h"
 
 namespace aia {
 
-struct CommParams {
-  bool range_limited = false;  // false: every pair of active robots talks
-  double range = 4.0;          // r_com when range_limited
-  double loss_lambda = 0.0;    // Poisson mean of directed edges lost per step
+enum class CommMode { kFull, kRange };
+constexpr std::array<EnumName<CommMode>, 2> EnumNames(CommMode) {
+  return {{{CommMode::kFull, "full"}, {CommMode::kRange, "range"}}};
+}
+
+// A robot isolated for good from a step on: it stops moving, sensing and
+// talking, and the mission is judged on the others.
+struct RobotFailure {
+  static constexpr int kRandomRobot = -1;
+  int robot = kRandomRobot;  // kRandomRobot: drawn from the scenario seed
+  int step = 0;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(robot)
+                 .In(AtLeast(0))
+                 .Keyword("random", kRandomRobot)
+                 .Doc("the robot's index, or random (drawn from the seed)"));
+    a->Visit(AIA_FIELD(step).In(AtLeast(0)).Doc(
+        "decision step from which it is isolated"));
+  }
 };
 
-struct ScheduledFailure {
-  int robot = 0;
-  int step = 0;  // isolated from this step on, for good
+// Declared once: the scenario's `communication:` section and what the graph
+// and the DKF use.
+struct CommParams {
+  CommMode mode = CommMode::kFull;
+  double range = 4.0;
+  double kappa_self = 0.75;
+  double packet_loss_lambda = 0.0;
+  std::vector<RobotFailure> failures;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(mode).Doc(
+        "full: every pair of active robots talks; range: pairs within range"));
+    a->Visit(AIA_FIELD(range).In(kPositive).Doc("r_com of range mode, metres"));
+    a->Visit(AIA_FIELD(kappa_self)
+                 .In(kHalfOpenUnit)
+                 .Doc("DKF self weight; the neighbours share 1 - kappa_self "
+                      "equally"));
+    a->Visit(AIA_FIELD(packet_loss_lambda)
+                 .In(kNonNegative)
+                 .Doc("Poisson mean of directed edges lost per step"));
+    a->Visit(AIA_FIELD(failures).Doc(
+        "robots that fail: isolated for good from their step on"));
+  }
 };
 
 class CommNetwork {
  public:
   CommNetwork() = default;
+  // `failures` are the scenario's, resolved: every robot index given.
   CommNetwork(const CommParams& params, int num_robots,
-              std::vector<ScheduledFailure> failures, std::uint64_t seed);
+              std::vector<RobotFailure> failures, std::uint64_t seed);
 
   // Builds this step's graph from the robots' positions. Call once per step,
   // with increasing steps; packet loss draws from the network's own stream.
@@ -50,7 +91,7 @@ class CommNetwork {
  private:
   CommParams params_;
   int n_ = 0;
-  std::vector<ScheduledFailure> failures_;
+  std::vector<RobotFailure> failures_;
   Rng rng_;
   std::vector<std::uint8_t> active_;
   std::vector<std::vector<int>> neighbors_;

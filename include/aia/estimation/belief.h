@@ -7,31 +7,13 @@
 #define AIA_ESTIMATION_BELIEF_H_
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "aia/core/types.h"
+#include "aia/estimation/target_model.h"
 
 namespace aia {
-
-// Linear-Gaussian model of one target: x(t+1) = A x(t) + b + w, w ~ N(0, Q).
-// The measured part is the position, the first two coordinates (M = [I 0]).
-struct TargetModel {
-  int dim = 2;  // 2 (position) or 4 (position, velocity)
-  Eigen::MatrixXd A = Eigen::MatrixXd::Identity(2, 2);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(2);
-  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(2, 2);
-  bool is_static = true;  // A = I, b = 0, Q = 0: prediction is the identity
-
-  // A static target (A = I, b = 0, Q = 0) of dimension 2 or 4.
-  static TargetModel Static(int dim) {
-    TargetModel m;
-    m.dim = dim;
-    m.A = Eigen::MatrixXd::Identity(dim, dim);
-    m.b = Eigen::VectorXd::Zero(dim);
-    m.Q = Eigen::MatrixXd::Zero(dim, dim);
-    return m;
-  }
-};
 
 // Where each target's block lives inside a belief row: Omega (dim x dim,
 // column-major) followed by xi (dim).
@@ -43,16 +25,17 @@ class BeliefLayout {
   int num_targets() const { return static_cast<int>(models_.size()); }
   int stride() const { return stride_; }  // doubles per belief row
   const TargetModel& model(int k) const { return models_[k]; }
-  int dim(int k) const { return models_[k].dim; }
+  int dim(int k) const { return dims_[k]; }
   int omega_offset(int k) const { return offsets_[k]; }
-  int xi_offset(int k) const {
-    return offsets_[k] + models_[k].dim * models_[k].dim;
-  }
+  int xi_offset(int k) const { return offsets_[k] + dims_[k] * dims_[k]; }
+  // Whether target k is static (its time update is the identity).
+  bool is_static(int k) const { return static_[k] != 0; }
   bool all_static() const { return all_static_; }
 
  private:
   std::vector<TargetModel> models_;
-  std::vector<int> offsets_;
+  std::vector<int> offsets_, dims_;
+  std::vector<char> static_;
   int stride_ = 0;
   bool all_static_ = true;
 };
@@ -99,6 +82,23 @@ class BeliefSet {
   const BeliefLayout* layout_ = nullptr;
   Storage data_;
 };
+
+// The team's best estimate of each target: for target k, the active row with
+// the smallest det Sigma_k (the lowest index among equals), or -1 when no row
+// is active. `det` holds det Sigma of every row and target, row-major
+// (rows x num_targets). One definition for the mission's success test, the
+// video's estimates and the expert's team-best root.
+void TeamBestRows(const std::vector<double>& det, int num_targets,
+                  const std::vector<std::uint8_t>& active,
+                  std::vector<int>* best);
+// The same, computing det Sigma from the beliefs.
+void TeamBestRows(const BeliefSet& beliefs,
+                  const std::vector<std::uint8_t>& active,
+                  std::vector<int>* best);
+// One row holding, for each target k, the block of row best[k] (row 0 when
+// best[k] is -1).
+void TeamBestBelief(const BeliefSet& beliefs, const std::vector<int>& best,
+                    BeliefSet* out);
 
 }  // namespace aia
 

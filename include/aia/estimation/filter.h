@@ -22,8 +22,13 @@ namespace aia {
 void Predict(BeliefSet* beliefs);
 
 // The time update of one target block stored as Omega (dim x dim,
-// column-major) followed by xi (dim), in place; identity for static targets.
+// column-major) followed by xi (dim), in place. Callers skip static targets
+// (BeliefLayout::is_static), whose update is the identity.
 void PredictInformationBlock(const TargetModel& model, double* block);
+
+// The same for Omega alone (dim x dim, column-major), for planners that
+// predict covariance without means (the separation principle).
+void PredictInformationMatrix(const TargetModel& model, double* omega);
 
 // Adds one robot's measurements (taken at position p) to one row:
 // Omega^k += r I on the position block, xi^k += r (y + p).

@@ -3,15 +3,30 @@
 #ifndef AIA_ESTIMATION_SENSOR_MODEL_H_
 #define AIA_ESTIMATION_SENSOR_MODEL_H_
 
+#include "aia/core/fields.h"
 #include "aia/core/types.h"
 
 namespace aia {
 
+// Declared once: the scenario's `sensor:` section and what sensing, the
+// filter and the planners use.
 struct SensorModel {
   double range = 2.0;
   double eta = 0.05;
   double sigma0 = 0.01;
   bool line_of_sight = true;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(range).In(kPositive).Doc(
+        "sensing range, metres: a target farther away is not measured"));
+    a->Visit(AIA_FIELD(eta).In(kNonNegative).Doc(
+        "noise std grows by eta per metre: R = (sigma0 + eta d)^2 I"));
+    a->Visit(AIA_FIELD(sigma0).In(kPositive).Doc(
+        "noise std at zero distance, metres"));
+    a->Visit(AIA_FIELD(line_of_sight).Doc(
+        "obstacles block sensing (a ray against the obstacles, mj_ray)"));
+  }
 
   // Noise standard deviation at distance `dist`.
   double Std(double dist) const { return sigma0 + eta * dist; }

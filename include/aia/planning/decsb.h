@@ -9,17 +9,42 @@
 
 #include <vector>
 
+#include "aia/core/fields.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/sampling_tree.h"
-#include "aia/scenario/config.h"
 
 namespace aia {
 
+// Dec-SB's declared parameters.
+struct DecSbParams {
+  double p_v = 0.9;
+  double p_u = 0.9;
+  int horizon = 15;
+  long iterations = 300;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(p_v).In(kUnit).Doc(
+        "f_V: probability of growing the newest branch"));
+    a->Visit(AIA_FIELD(p_u).In(kUnit).Doc(
+        "f_U: probability of stepping toward the assigned target"));
+    a->Visit(AIA_FIELD(horizon).In(Between(1, 1000)).Doc(
+        "receding horizon, moves"));
+    a->Visit(AIA_FIELD(iterations)
+                 .In(Between(1, 1e7))
+                 .Doc("sampling iterations per robot per step (a goal ends "
+                      "the search early, after a quarter as many more)"));
+  }
+
+  SamplingParams Sampling() const;
+};
+
 class DecSbPolicy : public Policy {
  public:
-  explicit DecSbPolicy(const Scenario& scenario);
+  explicit DecSbPolicy(const DecSbParams& params);
   std::string_view name() const override { return "decsb"; }
-  void Reset(const World& world, std::uint64_t seed) override;
+  void Reset(const Map& map, int num_robots, int num_targets,
+             std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,
                       std::vector<Move>* moves) override;
 

@@ -13,15 +13,14 @@
 #include "aia/core/rng.h"
 #include "aia/planning/information.h"
 #include "aia/planning/policy.h"
-#include "aia/scenario/config.h"
 
 namespace aia {
 
 class GreedyPolicy : public Policy {
  public:
-  explicit GreedyPolicy(const Scenario& scenario);
   std::string_view name() const override { return "greedy"; }
-  void Reset(const World& world, std::uint64_t seed) override;
+  void Reset(const Map& map, int num_robots, int num_targets,
+             std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,
                       std::vector<Move>* moves) override;
 

@@ -11,16 +11,16 @@
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
-#include "aia/world/world.h"
+#include "aia/world/map.h"
 
 namespace aia {
 
 // r such that Z = r M'M, or 0 when no measurement is predicted.
-inline double PredictedPrecision(const World& world, const SensorModel& sensor,
+inline double PredictedPrecision(const Map& map, const SensorModel& sensor,
                                  const Vec2& p, const Vec2& mu) {
   const double d = (mu - p).norm();
   if (!sensor.InRange(d)) return 0.0;
-  if (sensor.line_of_sight && !world.LineOfSight(p, mu)) return 0.0;
+  if (sensor.line_of_sight && !map.LineOfSight(p, mu)) return 0.0;
   return sensor.Precision(d);
 }
 

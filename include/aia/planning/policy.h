@@ -13,7 +13,7 @@
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
-#include "aia/world/world.h"
+#include "aia/world/map.h"
 
 namespace aia {
 
@@ -22,30 +22,39 @@ enum class PolicyStatus {
   kNoValidMove,      // some robot had no valid move and stays
   kBudgetExhausted,  // a planner ran out of budget and returned its best effort
 };
+inline constexpr int kNumPolicyStatuses = 3;
+std::string_view PolicyStatusName(PolicyStatus status);
 
-// What is known at one decision step. Distributed policies (random, greedy,
-// Dec-SB, I-GBNet) compute robot i's move from robot i's own row of `beliefs`,
-// `comm->Neighbors(i)` and those neighbours' positions and rows only; the
-// expert alone may read `central` and every robot's position.
+// What is known at one decision step, and nothing more: the map (no target
+// truth, no failure schedule: those are not in it), the sensor model, the
+// robots' lattice points, this step's graph and the fused beliefs.
+// Distributed policies (random, greedy, Dec-SB, I-GBNet) compute robot i's
+// move from robot i's own row of `beliefs`, `comm->Neighbors(i)` and those
+// neighbours' positions and rows; for them `central` is null. Only a
+// centralized policy (the expert) is given the centralized filter.
 struct DecisionContext {
   int step = 0;
-  const World* world = nullptr;  // map and lattice, known to every robot
+  const Map* map = nullptr;
   const SensorModel* sensor = nullptr;
   double eps = 0.1;
   const std::vector<int>* positions = nullptr;  // lattice index of each robot
   const CommNetwork* comm = nullptr;  // this step's graph and the active robots
-  const BeliefSet* beliefs =
-      nullptr;  // robot i's fused (posterior) belief in row i
-  const BeliefSet* central = nullptr;  // the centralized filter, one row
+  const BeliefSet* beliefs = nullptr;  // robot i's fused belief in row i
+  const BeliefSet* central = nullptr;  // the centralized filter; null unless
+                                       // the policy is centralized
 };
 
 class Policy {
  public:
   virtual ~Policy() = default;
   virtual std::string_view name() const = 0;
+  // Whether the policy decides for the whole team from the centralized
+  // belief (the expert). Distributed policies are not given it.
+  virtual bool centralized() const { return false; }
   // Called once per episode, before the first decision. `seed` is the
   // episode's seed; policies derive their own named streams from it.
-  virtual void Reset(const World& world, std::uint64_t seed) = 0;
+  virtual void Reset(const Map& map, int num_robots, int num_targets,
+                     std::uint64_t seed) = 0;
   // Writes one move per robot into `moves` (size = number of robots). Moves of
   // inactive robots are ignored. A returned move may be invalid; the world
   // rule replaces it (and counts it).

@@ -1,48 +1,188 @@
-// The explicit policy registry: name -> factory. No static self-registration
-// (linkers drop unreferenced objects from static libraries); higher layers
-// (learning) add their policies with Add().
+// The explicit policy registry: name -> declared parameters and factory, as
+// OMPL's planners declare theirs (`declareParam`). No static
+// self-registration (linkers drop unreferenced objects from static
+// libraries); higher layers (learning) add their policies with Add().
+//
+// Each policy's parameters are a struct that declares its fields once
+// (core/fields.h): typed, range-checked, with defaults and docs. Resolve()
+// reads the scenario's `policy:` keys into it, with the usual
+// `FILE:LINE: key: what` errors, and returns a PolicySpec: the checked
+// parameters and any shared resource (a learned model), ready to make one
+// policy per episode without loading anything again.
 #ifndef AIA_PLANNING_REGISTRY_H_
 #define AIA_PLANNING_REGISTRY_H_
 
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "aia/core/field_io.h"
 #include "aia/planning/policy.h"
 #include "aia/scenario/config.h"
 
 namespace aia {
 
-// Builds a policy for a scenario; may throw InputError for bad policy
-// parameters (citing the scenario's file and line).
-using PolicyFactory = std::function<std::unique_ptr<Policy>(const Scenario&)>;
+// A policy as `aia policies` lists it.
+struct PolicyInfo {
+  std::string name;
+  std::string description;
+  bool centralized = false;
+  std::vector<FieldDoc> params;  // keys "policy.<param>"
+};
+
+// A policy with checked parameters (and its loaded resource), shared
+// read-only by the episodes that use it.
+class PolicySpec {
+ public:
+  PolicySpec(std::string name, bool centralized)
+      : name_(std::move(name)), centralized_(centralized) {}
+  virtual ~PolicySpec() = default;
+
+  const std::string& name() const { return name_; }
+  bool centralized() const { return centralized_; }
+  // A fresh policy for one episode.
+  virtual std::unique_ptr<Policy> Create() const = 0;
+  // Every parameter with its value, defaults included (for effective.yaml).
+  virtual ConfigNode Params() const = 0;
+
+ private:
+  std::string name_;
+  bool centralized_;
+};
+
+// A policy without parameters declares this.
+struct NoParams {
+  template <typename Archive>
+  void Serialize(Archive*) {}
+};
 
 class PolicyRegistry {
  public:
+  template <typename Params>
+  using Factory = std::function<std::unique_ptr<Policy>(const Params&)>;
+  template <typename Params, typename Resource>
+  using Loader = std::function<std::shared_ptr<const Resource>(
+      const Params&, const PolicyConfig&)>;
+  template <typename Params, typename Resource>
+  using ResourceFactory = std::function<std::unique_ptr<Policy>(
+      const Params&, std::shared_ptr<const Resource>)>;
+
+  // A policy whose parameters are the struct `Params`.
+  template <typename Params>
   void Add(const std::string& name, const std::string& description,
-           PolicyFactory factory);
+           bool centralized, Factory<Params> make);
+
+  // A policy that also needs a shared, read-only resource (a learned model):
+  // `load` runs once per Resolve() (once per process for a command), and
+  // every policy Create()d from the spec shares what it returned.
+  template <typename Params, typename Resource>
+  void Add(const std::string& name, const std::string& description,
+           bool centralized, Loader<Params, Resource> load,
+           ResourceFactory<Params, Resource> make);
+
   bool Has(const std::string& name) const;
-  // Throws InputError naming the valid policies when `name` is unknown
-  // (file and line of `policy.name` in the scenario when it came from there).
-  std::unique_ptr<Policy> Create(const std::string& name,
-                                 const Scenario& scenario) const;
   std::vector<std::string> Names() const;
-  std::string Description(const std::string& name) const;
   // "random, greedy, ..." for messages.
   std::string NameList() const;
+  std::vector<PolicyInfo> Describe() const;
+
+  // The scenario's policy with its parameters read and checked: an unknown
+  // policy name (at policy.name, listing the valid ones), an unknown
+  // parameter or a value out of range is an InputError at its key's line.
+  std::shared_ptr<const PolicySpec> Resolve(const Scenario& scenario) const;
 
  private:
   struct Entry {
-    std::string name;
-    std::string description;
-    PolicyFactory factory;
+    PolicyInfo info;
+    std::function<std::shared_ptr<const PolicySpec>(const Scenario&)> resolve;
   };
+  void Put(Entry entry);
+
+  template <typename Params>
+  static Params ReadParams(const std::string& name, const Scenario& scenario);
+
   std::vector<Entry> entries_;
 };
 
-// random, greedy (and later expert, decsb).
+// random, greedy, expert, decsb.
 PolicyRegistry BuiltinPolicies();
+
+// --- Implementation ---------------------------------------------------------
+
+namespace internal {
+
+template <typename P>
+class TypedPolicySpec : public PolicySpec {
+ public:
+  using Make = std::function<std::unique_ptr<Policy>(const P&)>;
+  TypedPolicySpec(std::string name, bool centralized, P params, Make make)
+      : PolicySpec(std::move(name), centralized),
+        params_(std::move(params)),
+        make_(std::move(make)) {}
+  std::unique_ptr<Policy> Create() const override { return make_(params_); }
+  ConfigNode Params() const override {
+    return FieldWriter::WriteStruct(params_);
+  }
+  const P& params() const { return params_; }
+
+ private:
+  const P params_;
+  Make make_;
+};
+
+}  // namespace internal
+
+// A spec's checked parameters, when they are a P (else nullptr).
+template <typename P>
+const P* ParamsOf(const PolicySpec& spec) {
+  const auto* typed = dynamic_cast<const internal::TypedPolicySpec<P>*>(&spec);
+  return typed ? &typed->params() : nullptr;
+}
+
+template <typename Params>
+Params PolicyRegistry::ReadParams(const std::string& name,
+                                  const Scenario& scenario) {
+  Params params;
+  ReadOptions options;
+  options.file = scenario.file.empty() ? "(generated scenario)" : scenario.file;
+  options.unknown_key_lead = "unknown parameter for policy '" + name + "'";
+  ReadFields(scenario.policy.params, options, "policy", &params);
+  return params;
+}
+
+template <typename Params>
+void PolicyRegistry::Add(const std::string& name,
+                         const std::string& description, bool centralized,
+                         Factory<Params> make) {
+  Entry e;
+  e.info = {name, description, centralized, FieldDocs::Of(Params{}, "policy")};
+  e.resolve = [name, centralized,
+               make](const Scenario& s) -> std::shared_ptr<const PolicySpec> {
+    return std::make_shared<internal::TypedPolicySpec<Params>>(
+        name, centralized, ReadParams<Params>(name, s), make);
+  };
+  Put(std::move(e));
+}
+
+template <typename Params, typename Resource>
+void PolicyRegistry::Add(const std::string& name,
+                         const std::string& description, bool centralized,
+                         Loader<Params, Resource> load,
+                         ResourceFactory<Params, Resource> make) {
+  Entry e;
+  e.info = {name, description, centralized, FieldDocs::Of(Params{}, "policy")};
+  e.resolve = [name, centralized, load,
+               make](const Scenario& s) -> std::shared_ptr<const PolicySpec> {
+    const Params params = ReadParams<Params>(name, s);
+    std::shared_ptr<const Resource> resource = load(params, s.policy);
+    return std::make_shared<internal::TypedPolicySpec<Params>>(
+        name, centralized, params,
+        [make, resource](const Params& p) { return make(p, resource); });
+  };
+  Put(std::move(e));
+}
 
 }  // namespace aia
 

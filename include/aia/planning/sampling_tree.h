@@ -27,7 +27,7 @@
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
 #include "aia/planning/policy.h"
-#include "aia/world/world.h"
+#include "aia/world/map.h"
 
 namespace aia {
 
@@ -47,7 +47,7 @@ struct SamplingParams {
 // A problem for the tree: the team (or one robot), where it stands and what
 // it believes.
 struct SamplingProblem {
-  const World* world = nullptr;
+  const Map* map = nullptr;
   const SensorModel* sensor = nullptr;
   double eps = 0.1;
   std::vector<int> start;             // lattice index per robot
@@ -100,8 +100,7 @@ class SamplingTree {
   const SamplingProblem* problem_ = nullptr;
   int n_ = 0, m_ = 0, stride_ = 0;
   std::vector<TargetInfo> targets_;
-  std::vector<Eigen::MatrixXd> A_, Q_;
-  std::vector<Eigen::VectorXd> b_;
+  std::vector<const TargetModel*> models_;
   std::vector<std::vector<Vec2>> means_;  // [depth][k] position means
   std::vector<Eigen::VectorXd>
       full_mean_;  // working state for mean propagation

@@ -22,7 +22,7 @@
 #include "aia/render/scene.h"
 #include "aia/render/view.h"
 #include "aia/sim/simulation.h"
-#include "aia/world/world.h"
+#include "aia/world/map.h"
 
 namespace aia {
 
@@ -71,9 +71,9 @@ int HudBandPixels(int image_height);
 
 class FrameRenderer {
  public:
-  // Renders `sim`'s model (the world gives the workspace to frame). Throws
+  // Renders `sim`'s model (the map gives the workspace to frame). Throws
   // std::runtime_error when no GL context can be made.
-  FrameRenderer(const Simulation& sim, const World& world,
+  FrameRenderer(const Simulation& sim, const Map& map,
                 const FrameSettings& settings);
 
   // Appends each robot's position to its trail (once per decision step; the

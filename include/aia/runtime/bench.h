@@ -12,13 +12,6 @@
 
 namespace aia {
 
-// The generated worlds of the experiments (SPEC section 9): 20 x 20 m, random
-// obstacles, N robots and M random static targets, all drawn from `seed`.
-Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed);
-
-// "10x10" -> (10, 10); throws InputError on anything else.
-std::pair<int, int> ParseSize(const std::string& text, const std::string& flag);
-
 struct BenchOptions {
   std::vector<std::string> sizes{"10x10", "80x80"};
   int steps = 60;

@@ -1,11 +1,14 @@
 // The episode loop: one mission from start to success or max_steps. Each
 // decision step reads like MuJoCo MPC's testspeed: the policy decides, the
 // world rule checks the moves, targets move, physics runs, robots sense, the
-// graph updates, beliefs predict and fuse, success is judged.
+// graph updates, beliefs predict and fuse, success is judged. What else a
+// command needs (result files, metrics, video, datasets) watches the loop as
+// a StepObserver, after Drake's simulator monitors: `aia run` and
+// `aia render` share this one loop.
 #ifndef AIA_RUNTIME_EPISODE_H_
 #define AIA_RUNTIME_EPISODE_H_
 
-#include <functional>
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -14,6 +17,7 @@
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
 #include "aia/planning/policy.h"
+#include "aia/runtime/instance.h"
 #include "aia/scenario/config.h"
 #include "aia/sim/simulation.h"
 #include "aia/world/world.h"
@@ -29,22 +33,73 @@ struct PhaseTimes {
   double total = 0.0;    // whole steps, the rest included
 };
 
-// The target models of the filter, from the world's targets.
+// What happened besides the outcome: kept, not dropped.
+struct EpisodeStats {
+  // Decisions per PolicyStatus (indexed by its value).
+  std::array<long, kNumPolicyStatuses> statuses{};
+  long physics_timeouts = 0;  // steps whose physics hit physics.step_timeout
+  long stalled_steps = 0;  // steps that ended with a robot blocked short of
+                           // its waypoint (a contact), before the timeout
+  long substeps = 0;       // mj_step calls
+  double sim_seconds = 0.0;  // simulated time
+};
+
+// The target models of the filter, from the world's priors.
 BeliefLayout MakeBeliefLayout(const World& world);
-SensorModel MakeSensorModel(const SensorConfig& config);
+
+class Episode;
+
+// One decision: what the policy wanted, what the world applied (an invalid
+// move replaced by the world rule; kStay for failed robots), and its status.
+struct Decision {
+  const std::vector<Move>& wanted;
+  const std::vector<Move>& applied;
+  PolicyStatus status;
+};
+
+// Watches an episode. Called on the loop's thread, in the order added; the
+// episode's state is read-only to it.
+class StepObserver {
+ public:
+  virtual ~StepObserver() = default;
+  // Once, from Run(), before the first step: the state at step 0 (the prior
+  // fused with the measurements at the starts).
+  virtual void OnStart(const Episode& /*episode*/) {}
+  // After every decision, before anything moves. `context` is the whole
+  // team's (the centralized belief included, whatever the acting policy
+  // was given), so that an observer can ask another policy what it would
+  // have done (dataset labels).
+  virtual void OnDecision(const Episode& /*episode*/,
+                          const DecisionContext& /*context*/,
+                          const Decision& /*decision*/) {}
+  // After each physics substep; `elapsed`: simulated seconds into the step.
+  virtual void OnSubstep(const Episode& /*episode*/, double /*elapsed*/) {}
+  // After each step's sensing, fusion and judging.
+  virtual void OnStep(const Episode& /*episode*/) {}
+  // Once, from Run(), when the episode is done.
+  virtual void OnEnd(const Episode& /*episode*/) {}
+};
 
 class Episode {
  public:
-  // Called after each physics substep with the seconds since the step began
-  // (for video frames).
-  using SubstepHook = std::function<void(const Episode&, double elapsed)>;
+  // Sets up the physics and the beliefs on a shared instance, with the
+  // instance's mission settings or `mission`, and takes the first
+  // measurements (step 0).
+  Episode(std::shared_ptr<const Instance> instance,
+          std::unique_ptr<Policy> policy);
+  Episode(std::shared_ptr<const Instance> instance,
+          std::unique_ptr<Policy> policy, const MissionConfig& mission);
+  // Beliefs point into the episode (their layout): it stays where it is.
+  Episode(const Episode&) = delete;
+  Episode& operator=(const Episode&) = delete;
 
-  // Builds the world, the physics and the beliefs, and takes the first
-  // measurements (step 0). Throws InputError for invalid scenarios.
-  Episode(const Scenario& scenario, std::unique_ptr<Policy> policy);
+  // Observers are not owned and must outlive the episode's use of them.
+  void AddObserver(StepObserver* observer);
 
+  // OnStart, steps until done(), OnEnd.
+  void Run();
   // One decision step. Does nothing once done().
-  void Step(const SubstepHook& hook = {});
+  void Step();
   bool done() const;
 
   int step() const { return step_; }
@@ -55,17 +110,23 @@ class Episode {
   long invalid_moves() const { return invalid_moves_; }
   int NumLocalized() const;
 
-  const Scenario& scenario() const { return scenario_; }
-  const World& world() const { return world_; }
-  const Simulation& sim() const { return *sim_; }
+  const Instance& instance() const { return *instance_; }
+  const Scenario& scenario() const { return instance_->scenario; }
+  const MissionConfig& mission() const { return mission_; }
+  const World& world() const { return instance_->world; }
+  const Simulation& sim() const { return sim_; }
   const Policy& policy() const { return *policy_; }
   const CommNetwork& comm() const { return comm_; }
   const BeliefSet& beliefs() const { return fused_; }
   const BeliefSet& central() const { return central_; }
-  const SensorModel& sensor() const { return sensor_; }
+  const SensorModel& sensor() const { return scenario().sensor; }
   const std::vector<Vec2>& robot_positions() const { return robot_pos_; }
   const std::vector<int>& robot_lattice() const { return robot_idx_; }
+  // Ground truth, for scoring and video: the targets' positions and states.
   const std::vector<Vec2>& target_positions() const { return target_pos_; }
+  const std::vector<Eigen::VectorXd>& target_states() const {
+    return target_state_;
+  }
   const std::vector<std::vector<Measurement>>& measurements() const {
     return z_;
   }
@@ -73,10 +134,15 @@ class Episode {
   double Det(int robot, int target) const {
     return det_[robot * num_targets_ + target];
   }
+  // The team's best estimate of target k (estimation/belief.h): the active
+  // robot whose belief has the smallest det Sigma_k, or -1 if none is active.
+  int BestRobot(int target) const { return best_[target]; }
   // min over active robots of det Sigma_i^k.
   double MinDet(int target) const { return min_det_[target]; }
   const PhaseTimes& times() const { return times_; }
-  // What a policy sees at the current step.
+  const EpisodeStats& stats() const { return stats_; }
+  // The whole team's view of the current step (the centralized belief
+  // included); the policy is given the same without it unless centralized.
   DecisionContext Context() const;
   Policy& mutable_policy() { return *policy_; }
 
@@ -84,11 +150,10 @@ class Episode {
   void Observe();  // sense, exchange, fuse, judge (the second half of a step)
   void MoveTargets();
 
-  Scenario scenario_;
-  World world_;
-  std::unique_ptr<Simulation> sim_;
+  std::shared_ptr<const Instance> instance_;
+  MissionConfig mission_;
+  Simulation sim_;
   std::unique_ptr<Policy> policy_;
-  SensorModel sensor_;
   BeliefLayout layout_;
   BeliefSet predicted_, fused_, central_;
   CommNetwork comm_;
@@ -98,9 +163,11 @@ class Episode {
   std::vector<Vec2> robot_pos_, target_pos_, target_prev_;
   std::vector<Eigen::VectorXd> target_state_;
   std::vector<int> robot_idx_;
-  std::vector<Move> moves_;
+  std::vector<Move> moves_, applied_;
   std::vector<std::vector<Measurement>> z_;
   std::vector<double> det_, min_det_;
+  std::vector<int> best_;
+  std::vector<StepObserver*> observers_;
   int num_targets_ = 0;
   int step_ = 0;
   int flowtime_ = -1;
@@ -108,6 +175,7 @@ class Episode {
   int localized_steps_ = 0;
   long invalid_moves_ = 0;
   PhaseTimes times_;
+  EpisodeStats stats_;
 };
 
 }  // namespace aia

@@ -1,28 +1,63 @@
-// `aia eval`: the scalability experiment of SPEC section 9. For each size and
-// seed it generates the world, runs the expert for F*, runs each policy to
-// success or 3 F* steps, and writes DIR/runs.csv (one row per instance and
-// policy) and DIR/summary.csv (per size and policy: success rate and mean
-// flowtime increase, a failure counting F = 3 F*). Instances run in parallel;
-// finished rows are kept, so an interrupted eval resumes where it stopped.
+// `aia eval`: the scalability experiment of SPEC section 9, in three pieces
+// so that a sweep can be spread over processes (a later MPI driver only
+// hands out instances):
+//   1. EnumerateInstances: every (size, seed) of the experiment;
+//   2. RunInstance: one instance, a pure function of the instance and the
+//      setup: the world is built once, the expert's F* computed, then each
+//      policy runs to success or 3 F* steps on that same world;
+//   3. SummaryCsv: rows merged into success rates and flowtime increases.
+// RunEval drives them on a thread pool, writing DIR/runs.csv (one row per
+// instance and policy, appended as they finish, so an interrupted eval
+// resumes), DIR/summary.csv and DIR/effective.yaml.
 #ifndef AIA_RUNTIME_EVAL_H_
 #define AIA_RUNTIME_EVAL_H_
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "aia/planning/expert.h"
+#include "aia/planning/registry.h"
+#include "aia/scenario/config.h"
+#include "aia/scenario/loader.h"
+
 namespace aia {
 
-struct EvalOptions {
-  std::vector<std::string> sizes{"10x10", "20x20"};
-  int seeds = 100;
-  std::uint64_t seed_base = 0;
-  std::vector<std::string>
-      policies;  // empty: every registered policy but the expert
-  std::string out_dir;
-  int threads = 0;  // 0: all cores
-  bool progress = true;
+// The generated worlds of the experiments (SPEC section 9): 20 x 20 m, 30
+// random boxes, N robots and M random static targets, all drawn from `seed`.
+Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed);
+
+// "10x10" -> (10, 10); throws InputError naming `flag` on anything else.
+std::pair<int, int> ParseSize(const std::string& text, const std::string& flag);
+
+// One world of the experiment.
+struct EvalInstance {
+  std::string size;  // as given, e.g. "10x10"
+  int robots = 0;
+  int targets = 0;
+  std::uint64_t seed = 0;
 };
+
+// Sizes in the given order, seeds seed_base .. seed_base + seeds - 1.
+std::vector<EvalInstance> EnumerateInstances(
+    const std::vector<std::string>& sizes, int seeds, std::uint64_t seed_base);
+
+// What every instance shares: the scenario overrides, the evaluated policies
+// (resolved once: parameters checked, resources loaded) and the expert that
+// gives F*.
+struct EvalSetup {
+  std::vector<Override> overrides;  // scenario keys other than policy.*
+  std::vector<std::shared_ptr<const PolicySpec>> policies;
+  std::shared_ptr<const PolicySpec> expert;
+};
+
+// `sets` are --set flags: policy.<param> goes to every policy (the expert of
+// F* included) that declares the parameter, and is bad input if none does;
+// seed, robots.count and targets.count belong to the instances.
+EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
+                        const std::vector<std::string>& sets,
+                        const PolicyRegistry& registry);
 
 // One row of runs.csv.
 struct EvalRow {
@@ -35,6 +70,19 @@ struct EvalRow {
   double wall_s = 0.0;
 };
 
+// The scenario of an instance: the generated one with the setup's overrides.
+Scenario InstanceScenario(const EvalInstance& instance,
+                          const EvalSetup& setup);
+
+// Runs `policies` (a subset of setup.policies, by name; empty: all) on one
+// instance, in that order. Rows do not depend on anything else (wall_s
+// aside).
+std::vector<EvalRow> RunInstance(const EvalInstance& instance,
+                                 const EvalSetup& setup,
+                                 const std::vector<std::string>& policies = {});
+
+// runs.csv rows and their text.
+std::string FormatRow(const EvalRow& row);
 // Parses runs.csv (rows that do not parse are dropped, e.g. a line cut short
 // by an interruption).
 std::vector<EvalRow> ReadRuns(const std::string& path);
@@ -43,6 +91,18 @@ std::vector<EvalRow> ReadRuns(const std::string& path);
 std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& sizes,
                        const std::vector<std::string>& policies);
+
+struct EvalOptions {
+  std::vector<std::string> sizes{"10x10", "20x20"};
+  int seeds = 100;
+  std::uint64_t seed_base = 0;
+  std::vector<std::string>
+      policies;  // empty: every registered policy but the expert
+  std::vector<std::string> sets;  // --set key.path=value
+  std::string out_dir;
+  int threads = 0;  // 0: all cores
+  bool progress = true;
+};
 
 int RunEval(const EvalOptions& options);
 

@@ -1,37 +1,65 @@
-// `aia run`: one mission from a scenario file to summary.json and trace.csv.
+// One mission from a scenario file to result files, shared by `aia run` and
+// `aia render` (which adds its video observer to the same loop):
+//   PREFIX summary.json     the outcome (unchanged format, see README)
+//   PREFIX trace.csv        det Sigma per step, target and robot
+//   PREFIX estimate.csv     the best estimate's error and NEES per step
+//   PREFIX effective.yaml   the scenario as run: every key, defaults filled in,
+//                           overrides and the policy's parameters applied
+//   PREFIX diagnostics.json policy statuses, physics timeouts, RMSE and NEES,
+//                           wall time per phase
+// with PREFIX "DIR/" for `aia run` and "DIR/STEM." for `aia render`.
 #ifndef AIA_RUNTIME_MISSION_H_
 #define AIA_RUNTIME_MISSION_H_
 
+#include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
-#include "aia/scenario/config.h"
+#include "aia/runtime/instance.h"
+#include "aia/runtime/observers.h"
+#include "aia/scenario/loader.h"
 
 namespace aia {
 
 // Every policy aia knows (planning's built-ins plus the learned ones).
 PolicyRegistry AllPolicies();
 
-// Command-line overrides of a scenario. An unknown policy name is an
-// InputError naming the flag and the valid names.
-struct ScenarioOverrides {
+// The scenario flags of the mission commands, in the order they apply:
+// --policy, --seed, --max-steps, then each --set.
+struct CommandOverrides {
   std::optional<std::string> policy;
   std::optional<std::uint64_t> seed;
   std::optional<int> max_steps;
+  std::vector<std::string> sets;  // "key.path=value"
+
+  // As scenario overrides; InputError (naming the flag) for an unknown
+  // policy or a malformed --set.
+  std::vector<Override> ToOverrides(const PolicyRegistry& registry) const;
 };
-void ApplyOverrides(const ScenarioOverrides& overrides,
-                    const PolicyRegistry& registry, Scenario* scenario);
 
 // Creates an output folder named by a flag; InputError (exit code 2) naming
 // the flag when it cannot be created.
 void MakeOutputDir(const std::string& dir, const std::string& flag);
 
-// Builds the episode for a scenario with its policy from the registry.
-std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
-                                     const PolicyRegistry& registry);
+// A mission ready to run: the scenario as overridden, its policy resolved
+// (parameters checked, resources loaded) and its instance built.
+struct PreparedMission {
+  Scenario scenario;
+  std::shared_ptr<const PolicySpec> policy;
+  std::shared_ptr<const Instance> instance;
+  std::chrono::steady_clock::time_point started;
+};
+// `scenario` is modified by nothing after this; InputError for bad input.
+PreparedMission PrepareMission(Scenario scenario,
+                               const PolicyRegistry& registry);
+
+// The scenario with the resolved policy's parameters written in full.
+Scenario EffectiveScenario(const PreparedMission& mission);
 
 // The outcome of a finished episode.
 struct MissionSummary {
@@ -49,42 +77,43 @@ struct MissionSummary {
   double wall_s = 0.0;
 };
 MissionSummary Summarize(const Episode& episode, double wall_s);
+// summary.json's text.
 std::string SummaryJson(const MissionSummary& summary, const Episode& episode);
 
-// Streams trace.csv: one row per step and target: step, target, min over
-// active robots of det Sigma, and each robot's det Sigma.
-class TraceWriter {
+// Runs a prepared mission with the standard observers (trace, estimate,
+// progress) and any added ones, then writes the result files but
+// summary.json (the caller's, which may add to it) under `prefix`.
+class MissionRunner {
  public:
-  explicit TraceWriter(const std::string& path, int num_robots);
-  void Write(const Episode& episode);
-  void Commit();
+  MissionRunner(const PreparedMission& mission, std::string prefix,
+                std::string label, bool progress,
+                std::function<std::string()> progress_extra = {});
+  ~MissionRunner();
+
+  Episode& episode() { return *episode_; }
+  void AddObserver(StepObserver* observer) { episode_->AddObserver(observer); }
+  // Runs to the end and writes trace.csv, estimate.csv, effective.yaml and
+  // diagnostics.json; returns the summary.
+  MissionSummary Run();
 
  private:
-  struct Impl;
-  std::shared_ptr<Impl> impl_;
-};
-
-// A progress line on stderr, drawn only when stderr is a terminal.
-class ProgressLine {
- public:
-  explicit ProgressLine(bool enabled);
-  void Update(const std::string& text);
-  void Finish();
-
- private:
-  bool enabled_;
-  size_t last_width_ = 0;
+  const PreparedMission& mission_;
+  std::string prefix_;
+  std::unique_ptr<Episode> episode_;
+  std::unique_ptr<TraceObserver> trace_;
+  std::unique_ptr<EstimateObserver> estimate_;
+  std::unique_ptr<ProgressObserver> progress_;
 };
 
 struct RunOptions {
   std::string scenario_path;
-  ScenarioOverrides overrides;
+  CommandOverrides overrides;
   std::string out_dir;  // empty: renders/<scenario file stem>
   bool progress = true;
 };
 
-// Runs the mission, writes DIR/summary.json and DIR/trace.csv atomically and
-// prints a one-line result. Throws InputError for bad input.
+// `aia run`: runs the mission, writes the result files under DIR/ and prints
+// a one-line result. Throws InputError for bad input.
 MissionSummary RunMission(const RunOptions& options);
 
 }  // namespace aia

@@ -6,23 +6,26 @@
 #include <optional>
 #include <string>
 
+#include "aia/planning/expert.h"
 #include "aia/planning/sampling_tree.h"
+#include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
 
 namespace aia {
 
 struct PlanOptions {
   std::string scenario_path;
-  ScenarioOverrides overrides;  // --seed
-  std::optional<long> budget;   // anytime iterations after the first goal
-  std::string out;              // plan.json path; empty: none
+  // --seed and --set; the policy is the expert (its parameters: the file's
+  // when the file names the expert, else the defaults, then --set policy.*).
+  CommandOverrides overrides;
+  std::optional<long> budget;  // anytime iterations after the first goal
+  std::string out;             // plan.json path; empty: none
 };
 
-// The expert's plan from the initial state of a scenario (step 0: the prior
-// fused with the first measurements), with the scenario's expert parameters
-// (the policy: keys, whatever policy the scenario names) and the seed's
-// "policy.expert" stream.
-SamplingPlan PlanFromStart(const Scenario& scenario,
+// The expert's plan from the initial state of an instance (step 0: the prior
+// fused with the first measurements), on the seed's "policy.expert" stream.
+SamplingPlan PlanFromStart(std::shared_ptr<const Instance> instance,
+                           const ExpertParams& params,
                            std::optional<long> budget = {});
 
 // Peak resident memory of this process so far, in MiB.

@@ -15,11 +15,12 @@ namespace aia {
 
 struct RenderOptions {
   std::string scenario_path;
-  ScenarioOverrides overrides;
+  CommandOverrides overrides;
   std::string out_file;  // FILE.mp4; its directory is created
-  // Overrides of the scenario's render section.
+  // Overrides of the scenario's render section (applied like --set, after
+  // the mission flags).
   std::optional<int> width, height, fps;
-  std::optional<int> heatmap_robot;  // -1: none; default render.follow_robot
+  std::optional<int> heatmap_robot;  // render.follow_robot; -1: none
   std::string frames_dir;            // non-empty: PNG frames written here
   int frames_every = 1;              // write video frames 0, k, 2k, ... as PNG
   double hold_seconds = 1.0;         // the final frame is held this long
@@ -38,8 +39,9 @@ struct RenderResult {
   int png_frames = 0;
 };
 
-// Renders the mission; writes FILE.mp4, and next to it FILE_STEM.summary.json
-// (the `aia run` summary plus a "video" object) and FILE_STEM.trace.csv.
+// Renders the mission; writes FILE.mp4, and next to it the result files of
+// `aia run` named FILE_STEM.summary.json (plus a "video" object),
+// FILE_STEM.trace.csv, FILE_STEM.effective.yaml, ... (runtime/mission.h).
 // Throws InputError for bad input (flags, scenario, an output path that
 // cannot be written).
 RenderResult RenderMission(const RenderOptions& options);

@@ -1,17 +1,27 @@
-// Typed configuration of one mission, filled from a scenario YAML file
-// (SPEC section 10). Every default lives here, as a default member value, and
-// nowhere else. docs/scenarios.md documents each key.
+// Typed configuration of one mission, one section per struct. Every field is
+// declared once, in its struct's Serialize(): its key (the member's name), its
+// default (the member's initializer), its allowed values and its meaning.
+// The loader, the effective.yaml writer and the key table of
+// docs/scenarios.md (`aia schema`) are generic walks over these declarations.
+// Sections used at run time by lower modules are their own structs: the
+// sensor (estimation's SensorModel), target dynamics (TargetModel) and
+// communication (comm's CommParams).
 #ifndef AIA_SCENARIO_CONFIG_H_
 #define AIA_SCENARIO_CONFIG_H_
 
-#include <Eigen/Core>
 #include <cstdint>
-#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "aia/comm/graph.h"
+#include "aia/core/config_node.h"
+#include "aia/core/error.h"
+#include "aia/core/field_io.h"
+#include "aia/core/fields.h"
 #include "aia/core/types.h"
+#include "aia/estimation/sensor_model.h"
+#include "aia/estimation/target_model.h"
 
 namespace aia {
 
@@ -19,136 +29,267 @@ struct RandomObstaclesConfig {
   int count = 30;
   Vec2 min_size{0.4, 0.4};
   Vec2 max_size{2.0, 2.0};
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(count).In(AtLeast(0)).Doc("number of boxes"));
+    a->Visit(AIA_FIELD(min_size)
+                 .In(kPositive)
+                 .Shape("[width, height]")
+                 .Doc("smallest box, metres"));
+    a->Visit(AIA_FIELD(max_size)
+                 .In(kPositive)
+                 .Shape("[width, height]")
+                 .Doc("largest box, metres; sizes are uniform in between"));
+  }
+  void Validate(const FieldChecker& check);
 };
 
 struct BoxConfig {
   Vec2 center{0.0, 0.0};
   Vec2 size{1.0, 1.0};
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(center).Doc("metres"));
+    a->Visit(AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc(
+        "metres"));
+  }
+};
+
+// Any combination of the three sources.
+struct ObstaclesConfig {
+  std::optional<RandomObstaclesConfig> random;
+  std::vector<BoxConfig> boxes;
+  std::string map;  // absolute path of a PGM/PNG image, or empty
+  double map_threshold = 0.5;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(random).Doc(
+        "axis-aligned boxes of uniform random size placed uniformly in the "
+        "workspace (an empty `random:` takes the defaults)"));
+    a->Visit(AIA_FIELD(boxes).Doc("explicit boxes"));
+    a->Visit(AIA_FIELD(map).Path().Doc(
+        "PGM or PNG image scaled to the workspace, row 0 at the top; dark "
+        "runs are merged into boxes"));
+    a->Visit(AIA_FIELD(map_threshold)
+                 .In(kOpenUnit)
+                 .Doc("map pixels darker than this fraction of white are "
+                      "occupied"));
+  }
+  // The map exists and is a file (it is decoded when the world is built).
+  void Validate(const FieldChecker& check);
 };
 
 struct WorkspaceConfig {
-  Vec2 size{20.0, 20.0};  // metres
-  double cell = 0.1;      // occupancy grid cell, metres
-  // Obstacles: any combination of the three sources.
-  std::optional<RandomObstaclesConfig> random;
-  std::vector<BoxConfig> boxes;
-  std::string
-      map;  // absolute path of a PGM/PNG image (dark = occupied), or empty
-  double map_threshold =
-      0.5;  // pixels darker than this fraction of white are occupied
+  Vec2 size{20.0, 20.0};
+  double cell = 0.1;
+  ObstaclesConfig obstacles;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc(
+        "metres"));
+    a->Visit(AIA_FIELD(cell).In(kPositive).Doc("occupancy-grid cell, metres"));
+    a->Visit(AIA_FIELD(obstacles));
+  }
+  void Validate(const FieldChecker& check);
 };
 
 struct RobotsConfig {
   int count = 0;  // required
   double radius = 0.15;
-  double step = 0.5;        // lattice spacing and move length, metres
+  double step = 0.5;
   std::vector<Vec2> start;  // empty: random free lattice points
-};
 
-struct SensorConfig {
-  double range = 2.0;
-  double eta = 0.05;     // noise std grows by eta per metre of distance
-  double sigma0 = 0.01;  // noise std at zero distance
-  bool line_of_sight = true;
-};
-
-// x(t+1) = A x(t) + b + w, w ~ N(0, q I). The state is the target's position
-// (dimension 2) or position and velocity [px, py, vx, vy] (dimension 4).
-struct DynamicsConfig {
-  Eigen::MatrixXd A = Eigen::MatrixXd::Identity(2, 2);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(2);
-  double q = 0.0;
-
-  int dim() const { return static_cast<int>(A.rows()); }
-  bool IsStatic() const;
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(count)
+                 .In(AtLeast(1))
+                 .Required("the number of robots, an integer >= 1")
+                 .Doc("number of robots"));
+    a->Visit(AIA_FIELD(radius).In(kPositive).Doc(
+        "robot disc, metres; below step / 2"));
+    a->Visit(AIA_FIELD(step).In(kPositive).Doc(
+        "lattice spacing and move length, metres; lattice points sit at "
+        "(i + 0.5) step"));
+    a->Visit(AIA_FIELD(start).Doc(
+        "one [x, y] per robot, each snapped to its nearest lattice point "
+        "(free, not shared); none: distinct random free points of the "
+        "largest connected region"));
+  }
+  void Validate(const FieldChecker& check);
 };
 
 struct TargetConfig {
   Vec2 position{0.0, 0.0};
-  Vec2 velocity{0.0,
-                0.0};  // initial velocity; used when the state has dimension 4
-  std::optional<Vec2> prior_mean;  // default: truth plus a draw from the prior
-  std::optional<double> prior_sigma;  // default: TargetsConfig::prior_sigma
-  DynamicsConfig dynamics;
+  Vec2 velocity{0.0, 0.0};  // used when the state has dimension 4
+  std::optional<Vec2> prior_mean;     // none: truth plus a draw
+  std::optional<double> prior_sigma;  // none: TargetsConfig::prior_sigma
+  TargetModel dynamics;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(position)
+                 .Required("the target's true position [x, y]")
+                 .Doc("true initial position"));
+    a->Visit(AIA_FIELD(velocity).Shape("[vx, vy]").Doc(
+        "true initial velocity; only with 4x4 dynamics"));
+    a->Visit(AIA_FIELD(prior_mean).Doc(
+        "mu_0; none: the truth plus N(0, prior_offset^2 I)"));
+    a->Visit(AIA_FIELD(prior_sigma).In(kPositive).Doc(
+        "prior std; none: targets.prior_sigma"));
+    a->Visit(AIA_FIELD(dynamics).Doc("static when not given"));
+  }
+  void Validate(const FieldChecker& check);
 };
 
 struct TargetsConfig {
   int count = 0;  // random static targets (when `list` is empty)
-  std::vector<TargetConfig> list;  // explicit targets
-  double prior_sigma = 1.0;        // prior std per coordinate
-  // Std (metres) of a default prior mean's offset from the truth: targets
-  // without `prior_mean` get truth + N(0, prior_offset^2 I).
+  std::vector<TargetConfig> list;
+  double prior_sigma = 1.0;
   double prior_offset = 0.5;
+
+  int Num() const {
+    return list.empty() ? count : static_cast<int>(list.size());
+  }
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(count).In(AtLeast(0)).Doc(
+        "random static targets, each in free space and observable (within 0.9 "
+        "of the range, in sight) from a point the robots can reach; with "
+        "`list` it must equal the list's length"));
+    a->Visit(AIA_FIELD(list).Doc("explicit targets"));
+    a->Visit(AIA_FIELD(prior_sigma).In(kPositive).Doc(
+        "prior std per coordinate: Sigma_0 = prior_sigma^2 I"));
+    a->Visit(AIA_FIELD(prior_offset).In(kNonNegative).Doc(
+        "std of a default prior mean around the truth: mu_0 = x + N(0, "
+        "prior_offset^2 I), redrawn until it lies in free space"));
+  }
+  // count and list agree; at least one target.
+  void Validate(const FieldChecker& check);
 };
 
 struct MissionConfig {
-  double eps = 0.1;  // success: for every target, min_i det Sigma_i^k <= eps
+  double eps = 0.1;
   int max_steps = 400;
   bool stop_at_success = true;
-};
 
-struct FailureConfig {
-  int robot = -1;  // -1: a robot drawn at random (from the scenario seed)
-  int step = 0;
-};
-
-enum class CommMode { kFull, kRange };
-
-struct CommunicationConfig {
-  CommMode mode = CommMode::kFull;
-  double range = 4.0;  // r_com for kRange
-  double kappa_self = 0.75;
-  double packet_loss_lambda =
-      0.0;  // Poisson mean of directed edges lost per step
-  std::vector<FailureConfig> failures;
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(eps).In(kPositive).Doc(
+        "success: every target has some active robot with det Sigma <= eps"));
+    a->Visit(AIA_FIELD(max_steps).In(AtLeast(1)).Doc(
+        "decision steps at most (--max-steps)"));
+    a->Visit(AIA_FIELD(stop_at_success).Doc(
+        "false: a tracking mission runs its whole horizon, scored by "
+        "localized_share"));
+  }
 };
 
 struct PolicyConfig {
   std::string name = "greedy";
   std::string model;  // absolute path, for learned policies
-  // Expert (C-SB) settings; used by later issues.
-  std::map<std::string, double> params;
+  // The named policy's parameters as written; the policy registry reads and
+  // checks them against the policy's declared parameters (`aia policies`).
+  ConfigNode params;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(name)
+                 .NonEmpty()
+                 .Expect("a policy name such as greedy")
+                 .Doc("the decision maker (`aia policies`); --policy"));
+    a->Visit(AIA_FIELD(model).Path().Doc("model file of learned policies"));
+    a->Visit(AIA_FIELD(params).Rest().Doc(
+        "the named policy's parameters, listed by `aia policies`"));
+  }
 };
 
 struct PhysicsConfig {
-  double timestep = 0.005;    // seconds
-  double kp = 200.0;          // waypoint actuator stiffness, N/m
-  double robot_mass = 0.25;   // kg; with kp gives the tracking bandwidth
-  double tolerance = 0.01;    // metres: a robot has arrived within this
-  double step_timeout = 1.0;  // seconds of simulated time per decision step
+  double timestep = 0.005;
+  double kp = 200.0;
+  double robot_mass = 0.25;
+  double tolerance = 0.01;
+  double step_timeout = 1.0;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(timestep).In(kPositive).Doc("MuJoCo timestep, seconds"));
+    a->Visit(AIA_FIELD(kp).In(kPositive).Doc(
+        "waypoint actuator stiffness, N/m (critically damped)"));
+    a->Visit(AIA_FIELD(robot_mass).In(kPositive).Doc("kg"));
+    a->Visit(AIA_FIELD(tolerance).In(kPositive).Doc(
+        "a robot has arrived within this distance of its waypoint, metres"));
+    a->Visit(AIA_FIELD(step_timeout).In(kPositive).Doc(
+        "simulated seconds a decision step may last"));
+  }
 };
 
 struct RenderConfig {
   int width = 640;
   int height = 480;
   int fps = 30;
-  int follow_robot = -1;  // robot whose uncertainty heatmap is drawn; -1: none
+  int follow_robot = -1;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(width).In(AtLeast(1)).Doc(
+        "video width, pixels (even, 16 to 8192)"));
+    a->Visit(AIA_FIELD(height).In(AtLeast(1)).Doc(
+        "video height, pixels (even, 16 to 8192)"));
+    a->Visit(AIA_FIELD(fps).In(AtLeast(1)).Doc(
+        "frames per second of simulated time, at most 1 / physics.timestep"));
+    a->Visit(AIA_FIELD(follow_robot).In(AtLeast(-1)).Doc(
+        "robot whose uncertainty heatmap `aia render` draws; -1 none"));
+  }
 };
 
-// One mission. `file` and `lines` let later stages (world validation, policy
-// lookup) report errors at the line of the offending key.
+// One mission. `file` and `sources` let later stages (the world, the policy
+// registry) report errors at the line of the offending key.
 struct Scenario {
   std::string name = "scenario";
   std::uint64_t seed = 0;
   WorkspaceConfig workspace;
   RobotsConfig robots;
-  SensorConfig sensor;
+  SensorModel sensor;
   TargetsConfig targets;
   MissionConfig mission;
-  CommunicationConfig communication;
+  CommParams communication;
   PolicyConfig policy;
   PhysicsConfig physics;
   RenderConfig render;
 
-  std::string file;  // the YAML file it came from ("" if built in code)
-  std::map<std::string, int>
-      lines;  // dotted key -> 1-based line, e.g. "robots.start[2]"
+  std::string file;    // the YAML file it came from ("" if built in code)
+  KeySources sources;  // where each key came from (lines, --set flags)
 
-  int NumTargets() const {
-    return targets.list.empty() ? targets.count
-                                : static_cast<int>(targets.list.size());
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(name).Doc("label used in outputs"));
+    a->Visit(AIA_FIELD(seed).Doc(
+        "seed of every random stream (obstacles, starts, targets, priors, "
+        "sensor noise, packet loss, policies); --seed"));
+    a->Visit(AIA_FIELD(workspace));
+    a->Visit(AIA_FIELD(robots));
+    a->Visit(AIA_FIELD(sensor));
+    a->Visit(AIA_FIELD(targets));
+    a->Visit(AIA_FIELD(mission));
+    a->Visit(AIA_FIELD(communication));
+    a->Visit(AIA_FIELD(policy));
+    a->Visit(AIA_FIELD(physics));
+    a->Visit(AIA_FIELD(render));
   }
-  // Line of a key, or of its nearest recorded parent, or 0.
+  // Checks across sections: positions inside the workspace, robot indices
+  // below robots.count, random boxes no larger than the workspace.
+  void Validate(const FieldChecker& check);
+
+  int NumTargets() const { return targets.Num(); }
+  // The error about `key`, at its line (or its nearest given parent's), or
+  // naming the command-line flag that set it.
+  InputError ErrorAt(const std::string& key, const std::string& what) const;
+  // Line of a key, or of its nearest given parent, or 0.
   int LineOf(const std::string& key) const;
 };
 

@@ -37,19 +37,49 @@ MjModelPtr CompileMjcf(const std::string& xml);
 struct PhysicsStepStats {
   int substeps = 0;  // mj_step calls
   bool all_arrived = false;
-  bool timed_out = false;
+  bool timed_out = false;  // the step timeout passed first
 };
 
+// The compiled MuJoCo model of a world: generated once per instance and
+// shared, read-only, by every simulation of it (mj_step takes the model as
+// const), so that the runs of several policies on one world compile it once.
+class PhysicsModel {
+ public:
+  // Generates the world's MJCF and compiles it; throws std::runtime_error
+  // with MuJoCo's message if it does not compile.
+  PhysicsModel(const World& world, const Scenario& scenario);
+
+  const mjModel* model() const { return model_.get(); }
+  const std::string& mjcf() const { return mjcf_; }
+  const PhysicsConfig& physics() const { return physics_; }
+  int num_robots() const { return static_cast<int>(starts_.size()); }
+  int num_targets() const { return static_cast<int>(mocap_id_.size()); }
+
+ private:
+  friend class Simulation;
+  std::string mjcf_;
+  MjModelPtr model_;
+  PhysicsConfig physics_;
+  std::vector<Vec2> starts_;
+  std::vector<int> qpos_adr_;  // per robot: qpos index of its x joint (y next)
+  std::vector<int> qvel_adr_;
+  std::vector<int> ctrl_adr_;
+  std::vector<int> mocap_id_;
+};
+
+// One simulation of a model: its own mjData, stepped explicitly.
 class Simulation {
  public:
+  explicit Simulation(std::shared_ptr<const PhysicsModel> model);
+  // Compiles a model of its own.
   Simulation(const World& world, const Scenario& scenario);
 
-  int num_robots() const { return static_cast<int>(starts_.size()); }
-  int num_targets() const { return num_targets_; }
-  const mjModel* model() const { return model_.get(); }
+  int num_robots() const { return model_->num_robots(); }
+  int num_targets() const { return model_->num_targets(); }
+  const mjModel* model() const { return model_->model(); }
   mjData* data() { return data_.get(); }
   const mjData* data() const { return data_.get(); }
-  const std::string& mjcf() const { return mjcf_; }
+  const std::string& mjcf() const { return model_->mjcf(); }
 
   Vec2 RobotPosition(int i) const;
   Vec2 RobotVelocity(int i) const;
@@ -73,18 +103,9 @@ class Simulation {
   long mj_steps() const { return mj_steps_; }
 
  private:
-  std::string mjcf_;
-  MjModelPtr model_;
+  std::shared_ptr<const PhysicsModel> model_;
   MjDataPtr data_;
-  PhysicsConfig physics_;
-  std::vector<Vec2> starts_;
   std::vector<Vec2> waypoints_;
-  std::vector<int>
-      qpos_adr_;  // per robot: qpos index of its x joint (y follows)
-  std::vector<int> qvel_adr_;
-  std::vector<int> ctrl_adr_;
-  std::vector<int> mocap_id_;
-  int num_targets_ = 0;
   double physics_seconds_ = 0.0;
   long mj_steps_ = 0;
 };

@@ -1,0 +1,92 @@
+// The step observers every mission command attaches (runtime/episode.h):
+// the trace of det Sigma, the estimate's error against the truth, and the
+// progress line.
+#ifndef AIA_RUNTIME_OBSERVERS_H_
+#define AIA_RUNTIME_OBSERVERS_H_
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "aia/runtime/episode.h"
+
+namespace aia {
+
+// Streams trace.csv, atomically (committed at the end): one row per step and
+// target: step, target, min over active robots of det Sigma, and each
+// robot's det Sigma.
+class TraceObserver : public StepObserver {
+ public:
+  TraceObserver(const std::string& path, int num_robots);
+  ~TraceObserver() override;
+  void OnStart(const Episode& e) override { Write(e); }
+  void OnStep(const Episode& e) override { Write(e); }
+  void OnEnd(const Episode& e) override;
+
+ private:
+  void Write(const Episode& e);
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Scores the team's best estimate of each target (the belief of the active
+// robot with the smallest det Sigma_k) against the truth, every step: the
+// position error |mu - x| and the normalized estimation error squared
+// NEES = (x - mu)' Omega (x - mu) over the target's whole state (about its
+// dimension on average for a consistent filter). Streams estimate.csv (step,
+// target, robot, error_m, nees) when given a path.
+class EstimateObserver : public StepObserver {
+ public:
+  explicit EstimateObserver(const std::string& csv_path = "");
+  ~EstimateObserver() override;
+  void OnStart(const Episode& e) override { Score(e); }
+  void OnStep(const Episode& e) override { Score(e); }
+  void OnEnd(const Episode& e) override;
+
+  // Over every step and target so far: sqrt(mean error^2), and mean NEES.
+  double rmse() const;
+  double mean_nees() const;
+  // Per target.
+  double rmse(int target) const;
+  double mean_nees(int target) const;
+  int num_targets() const { return static_cast<int>(sum_sq_.size()); }
+
+ private:
+  void Score(const Episode& e);
+  std::vector<double> sum_sq_, sum_nees_;
+  long samples_ = 0;  // steps scored
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// A progress line on stderr, drawn only when stderr is a terminal.
+class ProgressLine {
+ public:
+  explicit ProgressLine(bool enabled);
+  void Update(const std::string& text);
+  void Finish();
+
+ private:
+  bool enabled_;
+  size_t last_width_ = 0;
+};
+
+// "[aia run] greedy  step 12/400  localized 3/10" after every step, plus
+// `extra()` when given (frames rendered, ...).
+class ProgressObserver : public StepObserver {
+ public:
+  ProgressObserver(std::string label, bool enabled,
+                   std::function<std::string()> extra = {});
+  void OnStep(const Episode& e) override;
+  void OnEnd(const Episode& e) override;
+
+ private:
+  std::string label_;
+  ProgressLine line_;
+  std::function<std::string()> extra_;
+};
+
+}  // namespace aia
+
+#endif  // AIA_RUNTIME_OBSERVERS_H_

@@ -1,0 +1,334 @@
+#include "aia/core/field_io.h"
+
+#include <algorithm>
+#include <charconv>
+#include <filesystem>
+#include <iomanip>
+#include <locale>
+#include <regex>
+#include <sstream>
+#include <system_error>
+
+namespace aia {
+
+std::string FormatNumber(double x) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << std::setprecision(12) << x;
+  return out.str();
+}
+
+std::string FormatPair(double x, double y) {
+  return "[" + FormatNumber(x) + ", " + FormatNumber(y) + "]";
+}
+
+std::string NumberRange::Describe(bool plural) const {
+  const std::string noun = plural ? "numbers" : "number";
+  if (lo == -kInfinity && hi == kInfinity) return noun;
+  if (lo == 0.0 && hi == kInfinity)
+    return (lo_open ? "positive " : "non-negative ") + noun;
+  if (hi == kInfinity) return noun + (lo_open ? " > " : " >= ") + FormatNumber(lo);
+  if (lo == -kInfinity)
+    return noun + (hi_open ? " < " : " <= ") + FormatNumber(hi);
+  return noun + " in " + (lo_open ? "(" : "[") + FormatNumber(lo) + ", " +
+         FormatNumber(hi) + (hi_open ? ")" : "]");
+}
+
+std::string NumberRange::DescribeInteger() const {
+  if (lo == -kInfinity && hi == kInfinity) return "an integer";
+  if (hi == kInfinity) return "an integer >= " + FormatNumber(lo);
+  if (lo == -kInfinity) return "an integer <= " + FormatNumber(hi);
+  return "an integer in [" + FormatNumber(lo) + ", " + FormatNumber(hi) + "]";
+}
+
+InputError KeyError(const std::string& file, const KeySources& sources,
+                    const std::string& key, const std::string& what,
+                    bool at_value) {
+  std::string k = key;
+  while (true) {
+    const auto it = sources.find(k);
+    if (it != sources.end()) {
+      const KeySource& s = it->second;
+      if (!s.origin.empty()) {
+        return InputError("command line", 0,
+                          s.origin == "--set" ? "--set " + key : s.origin,
+                          what);
+      }
+      return InputError(file, at_value && k == key ? s.value_line : s.key_line,
+                        key, what);
+    }
+    if (k.empty()) break;
+    // Up one level: "a.b[2]" -> "a.b", "a[1].c" -> "a[1]", "a" -> "".
+    const std::string::size_type cut = k.find_last_of(".[");
+    k.resize(cut == std::string::npos ? 0 : cut);
+  }
+  return InputError(file, 0, key, what);
+}
+
+namespace field_text {
+
+std::optional<double> ParseReal(const ConfigNode& node) {
+  if (!node.IsPlainScalar()) return std::nullopt;
+  static const std::regex kReal(
+      R"([-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?)");
+  static const std::regex kNonFinite(R"([-+]?\.?(inf|infinity)|\.?nan)",
+                                     std::regex::icase);
+  const std::string& s = node.scalar;
+  const bool negative = !s.empty() && s[0] == '-';
+  if (std::regex_match(s, kNonFinite)) {
+    if (s.find_first_of("nN") != std::string::npos &&
+        s.find_first_of("aA") != std::string::npos) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    return negative ? -kInfinity : kInfinity;
+  }
+  if (!std::regex_match(s, kReal)) return std::nullopt;
+  const char* begin = s.data() + (s[0] == '+' ? 1 : 0);
+  double x = 0.0;
+  const auto [end, ec] = std::from_chars(begin, s.data() + s.size(), x);
+  if (ec == std::errc::result_out_of_range) {
+    // Too large (1e999) is not finite; too small (1e-999) is zero.
+    const std::string::size_type e = s.find_first_of("eE");
+    if (e != std::string::npos && s[e + 1] == '-') return 0.0;
+    return negative ? -kInfinity : kInfinity;
+  }
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  return x;
+}
+
+namespace {
+
+template <typename T>
+std::optional<T> ParseWhole(const ConfigNode& node) {
+  static const std::regex kInteger("[-+]?[0-9]+");
+  if (!node.IsPlainScalar() || !std::regex_match(node.scalar, kInteger))
+    return std::nullopt;
+  const std::string& s = node.scalar;
+  const char* begin = s.data() + (s[0] == '+' ? 1 : 0);
+  T x{};
+  const auto [end, ec] = std::from_chars(begin, s.data() + s.size(), x);
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  return x;
+}
+
+}  // namespace
+
+std::optional<long long> ParseInteger(const ConfigNode& node) {
+  return ParseWhole<long long>(node);
+}
+
+std::optional<std::uint64_t> ParseUnsigned(const ConfigNode& node) {
+  return ParseWhole<std::uint64_t>(node);
+}
+
+std::string ShortestReal(double x) {
+  char buf[64];
+  const auto result = std::to_chars(buf, buf + sizeof(buf), x);
+  AIA_CHECK(result.ec == std::errc());
+  return std::string(buf, result.ptr);
+}
+
+std::string CountWord(std::size_t n) {
+  static const char* const kWords[] = {"no", "one", "two", "three", "four"};
+  return n < 5 ? kWords[n] : std::to_string(n);
+}
+
+std::string Join(const std::vector<std::string>& items,
+                 const std::string& separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    out += (i ? separator : "") + items[i];
+  return out;
+}
+
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1,
+                         diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string ClosestName(const std::string& name,
+                        const std::vector<std::string>& names) {
+  std::string best;
+  std::size_t best_distance = 3;  // more edits than two is not a typo
+  for (const std::string& n : names) {
+    const std::size_t d = EditDistance(name, n);
+    if (d < best_distance) {
+      best = n;
+      best_distance = d;
+    }
+  }
+  return best;
+}
+
+std::string RangeSuffix(const NumberRange& r, bool integer) {
+  if (r.lo == -kInfinity && r.hi == kInfinity) return "";
+  if (r.hi == kInfinity) {
+    if (r.lo == 0.0 && !integer) return r.lo_open ? " > 0" : " >= 0";
+    return (r.lo_open ? " > " : " >= ") + FormatNumber(r.lo);
+  }
+  if (r.lo == -kInfinity)
+    return (r.hi_open ? " < " : " <= ") + FormatNumber(r.hi);
+  return std::string(" in ") + (r.lo_open ? "(" : "[") + FormatNumber(r.lo) +
+         ", " + FormatNumber(r.hi) + (r.hi_open ? ")" : "]");
+}
+
+}  // namespace field_text
+
+void FieldReader::Fail(const ConfigNode& node, const std::string& key,
+                       const std::string& what) const {
+  if (!node.origin.empty()) {
+    throw InputError("command line", 0,
+                     node.origin == "--set" ? "--set " + key : node.origin,
+                     what);
+  }
+  throw InputError(options_.file, node.line, key.empty() ? "(document)" : key,
+                   what);
+}
+
+void FieldReader::FailUnknownKey(const ConfigNode::Entry& entry,
+                                 const std::string& key,
+                                 const std::vector<std::string>& names) const {
+  const bool custom = !options_.unknown_key_lead.empty();
+  std::string what = custom ? options_.unknown_key_lead : "unknown key";
+  const std::string closest = field_text::ClosestName(entry.key, names);
+  if (!closest.empty()) what += " (did you mean `" + closest + "`?)";
+  if (custom) {
+    what += " (valid: " +
+            (names.empty() ? std::string("none") : field_text::Join(names)) +
+            ")";
+  } else {
+    const std::string::size_type dot = key.find_last_of('.');
+    what += dot == std::string::npos
+                ? "; valid top-level keys: "
+                : "; valid keys under " + key.substr(0, dot) + ": ";
+    what += field_text::Join(names);
+  }
+  ConfigNode at = entry.value;  // blamed at the key's line
+  at.line = entry.key_line;
+  Fail(at, key, what);
+}
+
+void FieldReader::Record(const std::string& key, int key_line,
+                         const ConfigNode& value) {
+  KeySource s;
+  s.key_line = key_line;
+  s.value_line = value.IsNull() || value.line <= 0 ? key_line : value.line;
+  s.origin = value.origin;
+  sources_[key] = s;
+  nodes_[key] = &value;
+}
+
+std::string FieldReader::ResolvePath(const std::string& text) const {
+  namespace fs = std::filesystem;
+  fs::path path(text);
+  if (path.is_relative()) path = fs::path(options_.base_dir) / path;
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(path, ec);
+  return (ec ? path : absolute).lexically_normal().string();
+}
+
+double FieldReader::ReadReal(const ConfigNode& node, const std::string& key,
+                             const NumberRange& range,
+                             std::string_view expect) const {
+  const std::optional<double> x = field_text::ParseReal(node);
+  if (x && !std::isfinite(*x)) FailExpected(node, key, "a finite number");
+  if (!x || !range.Contains(*x)) {
+    FailExpected(node, key,
+                 expect.empty() ? "a " + range.Describe(false)
+                                : std::string(expect));
+  }
+  return *x;
+}
+
+long long FieldReader::ReadInteger(const ConfigNode& node,
+                                   const std::string& key,
+                                   const NumberRange& range,
+                                   std::string_view expect,
+                                   std::string_view keyword,
+                                   long long keyword_value, long long lo,
+                                   long long hi) const {
+  if (!keyword.empty() && node.IsPlainScalar() && node.scalar == keyword)
+    return keyword_value;
+  const std::optional<long long> x = field_text::ParseInteger(node);
+  if (!x || *x < lo || *x > hi ||
+      !range.Contains(static_cast<double>(*x))) {
+    std::string expected = expect.empty() ? range.DescribeInteger()
+                                          : std::string(expect);
+    if (expect.empty() && !keyword.empty())
+      expected += " or " + std::string(keyword);
+    FailExpected(node, key, expected);
+  }
+  return *x;
+}
+
+Eigen::VectorXd FieldReader::ReadNumbers(const ConfigNode& node,
+                                         const std::string& key,
+                                         std::size_t size,
+                                         const NumberRange& range,
+                                         std::string_view shape) const {
+  const std::string suffix = shape.empty() ? "" : " " + std::string(shape);
+  const std::string expected =
+      size > 0 ? field_text::CountWord(size) + " " +
+                     range.Describe(size != 1) + suffix
+               : "a list of " + range.Describe(true);
+  if (!node.IsList() || (size > 0 && node.items.size() != size))
+    FailExpected(node, key, expected);
+  Eigen::VectorXd out(static_cast<Eigen::Index>(node.items.size()));
+  for (std::size_t i = 0; i < node.items.size(); ++i) {
+    const std::optional<double> x = field_text::ParseReal(node.items[i]);
+    if (x && !std::isfinite(*x)) {
+      FailExpected(node, key,
+                   size > 0 ? "finite numbers" + suffix
+                            : std::string("a list of finite numbers"));
+    }
+    if (!x || !range.Contains(*x)) FailExpected(node, key, expected);
+    out[static_cast<Eigen::Index>(i)] = *x;
+  }
+  return out;
+}
+
+Eigen::MatrixXd FieldReader::ReadMatrix(const ConfigNode& node,
+                                        const std::string& key) const {
+  const std::string expected =
+      "a matrix given as a list of rows of numbers, e.g. [[1, 0], [0, 1]]";
+  if (!node.IsList() || node.items.empty()) FailExpected(node, key, expected);
+  const std::size_t rows = node.items.size();
+  const std::size_t cols =
+      node.items[0].IsList() ? node.items[0].items.size() : 0;
+  if (cols == 0) FailExpected(node, key, expected);
+  Eigen::MatrixXd m(rows, cols);
+  for (std::size_t i = 0; i < rows; ++i) {
+    const ConfigNode& row = node.items[i];
+    if (!row.IsList()) FailExpected(node, key, expected);
+    if (row.items.size() != cols) {
+      Fail(node, key,
+           "rows must all have the same length; row " + std::to_string(i) +
+               " has " + std::to_string(row.items.size()) +
+               " entries but row 0 has " + std::to_string(cols) + ", got " +
+               ShowNode(node));
+    }
+    for (std::size_t j = 0; j < cols; ++j) {
+      const std::optional<double> x = field_text::ParseReal(row.items[j]);
+      if (!x || !std::isfinite(*x)) {
+        Fail(node, key,
+             "entries must be finite numbers, got " + ShowNode(row.items[j]) +
+                 " in row " + std::to_string(i));
+      }
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = *x;
+    }
+  }
+  return m;
+}
+
+}  // namespace aia

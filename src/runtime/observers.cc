@@ -1,0 +1,144 @@
+#include "aia/runtime/observers.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "aia/core/io.h"
+
+namespace aia {
+
+struct TraceObserver::Impl {
+  AtomicFile file;
+  std::string row;
+  explicit Impl(const std::string& path) : file(path) {}
+};
+
+TraceObserver::TraceObserver(const std::string& path, int num_robots)
+    : impl_(std::make_unique<Impl>(path)) {
+  std::string header = "step,target,min_det";
+  for (int i = 0; i < num_robots; ++i) header += ",det_r" + std::to_string(i);
+  header += "\n";
+  std::fputs(header.c_str(), impl_->file.get());
+}
+
+TraceObserver::~TraceObserver() = default;
+
+void TraceObserver::Write(const Episode& e) {
+  const int n = e.world().NumRobots();
+  char buf[64];
+  for (int k = 0; k < e.world().NumTargets(); ++k) {
+    std::string& row = impl_->row;
+    row.clear();
+    std::snprintf(buf, sizeof(buf), "%d,%d,%.6e", e.step(), k, e.MinDet(k));
+    row += buf;
+    for (int i = 0; i < n; ++i) {
+      std::snprintf(buf, sizeof(buf), ",%.6e", e.Det(i, k));
+      row += buf;
+    }
+    row += '\n';
+    std::fwrite(row.data(), 1, row.size(), impl_->file.get());
+  }
+}
+
+void TraceObserver::OnEnd(const Episode&) { impl_->file.Commit(); }
+
+struct EstimateObserver::Impl {
+  AtomicFile file;
+  explicit Impl(const std::string& path) : file(path) {
+    std::fputs("step,target,robot,error_m,nees\n", file.get());
+  }
+};
+
+EstimateObserver::EstimateObserver(const std::string& csv_path) {
+  if (!csv_path.empty()) impl_ = std::make_unique<Impl>(csv_path);
+}
+
+EstimateObserver::~EstimateObserver() = default;
+
+void EstimateObserver::Score(const Episode& e) {
+  const int m = e.world().NumTargets();
+  if (sum_sq_.empty()) {
+    sum_sq_.assign(m, 0.0);
+    sum_nees_.assign(m, 0.0);
+  }
+  const BeliefSet& b = e.beliefs();
+  for (int k = 0; k < m; ++k) {
+    // With every robot failed, robot 0's belief (kept, predicted alone).
+    const int robot = std::max(0, e.BestRobot(k));
+    const Eigen::VectorXd err = e.target_states()[k] - b.Mean(robot, k);
+    const double error = err.head<2>().norm();
+    const double nees = err.dot(b.Omega(robot, k) * err);
+    sum_sq_[k] += error * error;
+    sum_nees_[k] += nees;
+    if (impl_) {
+      std::fprintf(impl_->file.get(), "%d,%d,%d,%.6e,%.6e\n", e.step(), k,
+                   robot, error, nees);
+    }
+  }
+  ++samples_;
+}
+
+void EstimateObserver::OnEnd(const Episode&) {
+  if (impl_) impl_->file.Commit();
+}
+
+double EstimateObserver::rmse(int k) const {
+  return samples_ ? std::sqrt(sum_sq_[k] / samples_) : 0.0;
+}
+
+double EstimateObserver::mean_nees(int k) const {
+  return samples_ ? sum_nees_[k] / samples_ : 0.0;
+}
+
+double EstimateObserver::rmse() const {
+  double s = 0.0;
+  for (double v : sum_sq_) s += v;
+  return samples_ && !sum_sq_.empty()
+             ? std::sqrt(s / (samples_ * static_cast<double>(sum_sq_.size())))
+             : 0.0;
+}
+
+double EstimateObserver::mean_nees() const {
+  double s = 0.0;
+  for (double v : sum_nees_) s += v;
+  return samples_ && !sum_nees_.empty()
+             ? s / (samples_ * static_cast<double>(sum_nees_.size()))
+             : 0.0;
+}
+
+ProgressLine::ProgressLine(bool enabled)
+    : enabled_(enabled && ::isatty(STDERR_FILENO)) {}
+
+void ProgressLine::Update(const std::string& text) {
+  if (!enabled_) return;
+  std::string line = "\r" + text;
+  if (text.size() < last_width_)
+    line += std::string(last_width_ - text.size(), ' ');
+  last_width_ = text.size();
+  std::fputs(line.c_str(), stderr);
+  std::fflush(stderr);
+}
+
+void ProgressLine::Finish() {
+  if (enabled_ && last_width_ > 0) std::fputs("\n", stderr);
+  last_width_ = 0;
+}
+
+ProgressObserver::ProgressObserver(std::string label, bool enabled,
+                                   std::function<std::string()> extra)
+    : label_(std::move(label)), line_(enabled), extra_(std::move(extra)) {}
+
+void ProgressObserver::OnStep(const Episode& e) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "[%s] %s  step %d/%d  localized %d/%d",
+                label_.c_str(), std::string(e.policy().name()).c_str(),
+                e.step(), e.mission().max_steps, e.NumLocalized(),
+                e.world().NumTargets());
+  line_.Update(extra_ ? std::string(buf) + "  " + extra_() : std::string(buf));
+}
+
+void ProgressObserver::OnEnd(const Episode&) { line_.Finish(); }
+
+}  // namespace aia

@@ -1,0 +1,302 @@
+#include "aia/scenario/yaml.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "aia/core/error.h"
+
+namespace aia {
+namespace {
+
+// More values than this is not a scenario: a few nested YAML aliases expand
+// to billions of nodes.
+constexpr long kMaxNodes = 1000000;
+
+// yaml-cpp marks an empty value (`key:`) at the next token, often on a later
+// line, so an empty value is blamed on the line of its key instead.
+int LineOf(const YAML::Node& node, int fallback) {
+  if (node.IsNull() || node.Mark().line < 0) return fallback;
+  return node.Mark().line + 1;
+}
+
+class Converter {
+ public:
+  Converter(std::string file, std::string origin)
+      : file_(std::move(file)), origin_(std::move(origin)) {}
+
+  ConfigNode Convert(const YAML::Node& node, const std::string& key,
+                     int fallback_line) {
+    if (++count_ > kMaxNodes) {
+      Fail(0, "(yaml)",
+           "the document holds more than " + std::to_string(kMaxNodes) +
+               " values (aliases expanded); a scenario is far smaller");
+    }
+    ConfigNode out;
+    out.line = LineOf(node, fallback_line);
+    out.origin = origin_;
+    switch (node.Type()) {
+      case YAML::NodeType::Scalar: {
+        out.kind = ConfigNode::Kind::kScalar;
+        out.scalar = node.Scalar();
+        // Plain scalars get the tag "?", quoted ones "!".
+        const std::string& tag = node.Tag();
+        if (tag == "?" || tag.empty()) {
+          out.style = ConfigNode::Style::kPlain;
+        } else if (tag == "!") {
+          out.style = ConfigNode::Style::kQuoted;
+        } else {
+          out.style = ConfigNode::Style::kTagged;
+          const std::string core = "tag:yaml.org,2002:";
+          out.tag = tag.rfind(core, 0) == 0 ? "!!" + tag.substr(core.size())
+                                            : tag;
+        }
+        break;
+      }
+      case YAML::NodeType::Sequence:
+        out.kind = ConfigNode::Kind::kList;
+        for (std::size_t i = 0; i < node.size(); ++i)
+          out.items.push_back(Convert(node[i], ItemKey(key, i), out.line));
+        break;
+      case YAML::NodeType::Map: {
+        out.kind = ConfigNode::Kind::kMap;
+        for (const auto& kv : node) {
+          const int key_line = LineOf(kv.first, out.line);
+          if (!kv.first.IsScalar()) {
+            ConfigNode shown = Convert(kv.first, key, key_line);
+            Fail(key_line, key.empty() ? "(document)" : key,
+                 "keys must be names, got " + ShowNode(shown));
+          }
+          const std::string name = kv.first.Scalar();
+          const std::string child = ChildKey(key, name);
+          for (const ConfigNode::Entry& e : out.entries) {
+            if (e.key == name) {
+              Fail(key_line, child,
+                   "duplicate key (first given at line " +
+                       std::to_string(e.key_line) + "); give each key once");
+            }
+          }
+          out.entries.push_back(
+              {name, key_line, Convert(kv.second, child, key_line)});
+        }
+        break;
+      }
+      default:
+        out.kind = ConfigNode::Kind::kNull;
+    }
+    return out;
+  }
+
+ private:
+  [[noreturn]] void Fail(int line, const std::string& key,
+                         const std::string& what) const {
+    if (!origin_.empty()) throw InputError("command line", 0, origin_, what);
+    throw InputError(file_, line, key, what);
+  }
+
+  std::string file_, origin_;
+  long count_ = 0;
+};
+
+InputError YamlError(const YAML::Exception& e, const std::string& file) {
+  const bool has_mark = e.mark.line >= 0;
+  return InputError(
+      file, has_mark ? e.mark.line + 1 : 0, "(yaml)",
+      "invalid YAML: " + e.msg +
+          (has_mark ? " (column " + std::to_string(e.mark.column + 1) + ")"
+                    : ""));
+}
+
+// --- Emitting --------------------------------------------------------------
+
+constexpr std::size_t kLineWidth = 80;
+
+bool LooksLikeNumberOrWord(const std::string& s) {
+  static const std::regex kSpecial(
+      R"([-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?|[-+]?\.?(inf|infinity)|\.?nan|true|false|null|yes|no|on|off|y|n|~)",
+      std::regex::icase);
+  return std::regex_match(s, kSpecial);
+}
+
+// Whether a string can be written without quotes and read back as itself.
+bool SafePlain(const std::string& s) {
+  if (s.empty() || s.front() == ' ' || s.back() == ' ') return false;
+  const char first = s.front();
+  if (!(std::isalnum(static_cast<unsigned char>(first)) || first == '_' ||
+        first == '/' || first == '.'))
+    return false;
+  for (const char c : s) {
+    const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '_' ||
+                    c == '.' || c == '/' || c == '-' || c == ' ' || c == '+';
+    if (!ok) return false;
+  }
+  return !LooksLikeNumberOrWord(s);
+}
+
+std::string DoubleQuoted(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (u < 0x20 || u == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\x%02x", u);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string ScalarText(const ConfigNode& n) {
+  switch (n.style) {
+    case ConfigNode::Style::kPlain:
+      return n.scalar;
+    case ConfigNode::Style::kTagged:
+      return n.tag + " " + DoubleQuoted(n.scalar);
+    default:
+      return SafePlain(n.scalar) ? n.scalar : DoubleQuoted(n.scalar);
+  }
+}
+
+std::string KeyText(const std::string& key) {
+  return SafePlain(key) && key.find(' ') == std::string::npos
+             ? key
+             : DoubleQuoted(key);
+}
+
+std::string Flow(const ConfigNode& n) {
+  switch (n.kind) {
+    case ConfigNode::Kind::kScalar:
+      return ScalarText(n);
+    case ConfigNode::Kind::kList: {
+      std::string out = "[";
+      for (std::size_t i = 0; i < n.items.size(); ++i)
+        out += (i ? ", " : "") + Flow(n.items[i]);
+      return out + "]";
+    }
+    case ConfigNode::Kind::kMap: {
+      std::string out = "{";
+      for (std::size_t i = 0; i < n.entries.size(); ++i)
+        out += (i ? ", " : "") + KeyText(n.entries[i].key) + ": " +
+               Flow(n.entries[i].value);
+      return out + "}";
+    }
+    default:
+      return "null";
+  }
+}
+
+// Mappings nested in a value read better as blocks; lists of numbers and
+// small mappings of scalars as one flow line.
+bool PrefersFlow(const ConfigNode& n) {
+  if (n.IsMap()) {
+    for (const auto& e : n.entries)
+      if (e.value.IsMap() || (e.value.IsList() && !e.value.items.empty() &&
+                              e.value.items[0].IsMap()))
+        return false;
+    return true;
+  }
+  if (n.IsList()) {
+    for (const ConfigNode& item : n.items)
+      if (!item.IsScalar() && !(item.IsList() && PrefersFlow(item)))
+        return false;
+    return true;
+  }
+  return true;
+}
+
+void Block(const ConfigNode& n, std::size_t indent, std::string* out);
+
+// `prefix` ("key:" or "-") followed by the value, inline or below.
+void Value(const std::string& prefix, const ConfigNode& v, std::size_t indent,
+           std::string* out) {
+  const std::string pad(indent, ' ');
+  if (v.IsScalar() || v.IsNull() ||
+      (v.IsMap() && v.entries.empty()) || (v.IsList() && v.items.empty())) {
+    *out += pad + prefix + " " + Flow(v) + "\n";
+    return;
+  }
+  const std::string flow = Flow(v);
+  if (PrefersFlow(v) && indent + prefix.size() + 1 + flow.size() <= kLineWidth) {
+    *out += pad + prefix + " " + flow + "\n";
+    return;
+  }
+  if (v.IsMap()) {
+    *out += pad + prefix + "\n";
+    Block(v, indent + 2, out);
+    return;
+  }
+  *out += pad + prefix + "\n";
+  for (const ConfigNode& item : v.items) {
+    const std::string item_flow = Flow(item);
+    if (!item.IsMap() || item.entries.empty() ||
+        indent + 4 + item_flow.size() <= kLineWidth) {
+      *out += pad + "  - " + item_flow + "\n";
+      continue;
+    }
+    // A long mapping item: its first key on the "- " line, the rest below.
+    std::string body;
+    Block(item, indent + 4, &body);
+    body.replace(0, indent + 4, pad + "  - ");
+    *out += body;
+  }
+}
+
+void Block(const ConfigNode& n, std::size_t indent, std::string* out) {
+  for (const ConfigNode::Entry& e : n.entries)
+    Value(KeyText(e.key) + ":", e.value, indent, out);
+}
+
+}  // namespace
+
+ConfigNode ParseYaml(const std::string& text, const std::string& file) {
+  std::vector<YAML::Node> docs;
+  try {
+    docs = YAML::LoadAll(text);
+  } catch (const YAML::Exception& e) {
+    throw YamlError(e, file);
+  }
+  // YAML::Load would silently drop every document after the first.
+  if (docs.size() > 1) {
+    throw InputError(file, LineOf(docs[1], 0), "(yaml)",
+                     "a scenario file holds one YAML document, found " +
+                         std::to_string(docs.size()) + " (separated by ---)");
+  }
+  if (docs.empty()) return ConfigNode{};
+  return Converter(file, "").Convert(docs[0], "", 0);
+}
+
+ConfigNode ParseYamlValue(const std::string& text, const std::string& flag) {
+  YAML::Node node;
+  try {
+    node = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError("command line", 0, flag,
+                     "invalid YAML value '" + text + "': " + e.msg);
+  }
+  ConfigNode out = Converter("command line", flag).Convert(node, "", 0);
+  out.SetOrigin(flag);
+  return out;
+}
+
+std::string EmitYaml(const ConfigNode& node) {
+  std::string out;
+  if (node.IsMap()) {
+    Block(node, 0, &out);
+  } else {
+    out = Flow(node) + "\n";
+  }
+  return out;
+}
+
+}  // namespace aia

@@ -1,0 +1,91 @@
+#include "aia/world/map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace aia {
+namespace {
+
+Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
+                             const std::vector<Box>& boxes) {
+  const int nx =
+      std::max(1, static_cast<int>(std::ceil(size.x() / cell - 1e-9)));
+  const int ny =
+      std::max(1, static_cast<int>(std::ceil(size.y() / cell - 1e-9)));
+  Grid<std::uint8_t> grid(nx, ny, cell, 0);
+  for (const Box& b : boxes) {
+    // Cells whose interior overlaps the box.
+    const int x0 = std::max(0, static_cast<int>(std::floor(b.lo.x() / cell)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(b.lo.y() / cell)));
+    const int x1 =
+        std::min(nx - 1, static_cast<int>(std::ceil(b.hi.x() / cell)) - 1);
+    const int y1 =
+        std::min(ny - 1, static_cast<int>(std::ceil(b.hi.y() / cell)) - 1);
+    for (int iy = y0; iy <= y1; ++iy)
+      for (int ix = x0; ix <= x1; ++ix) grid(ix, iy) = 1;
+  }
+  return grid;
+}
+
+}  // namespace
+
+Map::Map(const Vec2& size, std::vector<Box> obstacles, double cell,
+         double step, double robot_radius)
+    : size_(size),
+      obstacles_(std::move(obstacles)),
+      occupancy_(Rasterize(size, cell, obstacles_)),
+      lattice_(size, step, robot_radius, obstacles_),
+      robot_radius_(robot_radius) {
+  bucket_ = 1.0;
+  bx_ = std::max(1, static_cast<int>(std::ceil(size_.x() / bucket_)));
+  by_ = std::max(1, static_cast<int>(std::ceil(size_.y() / bucket_)));
+  buckets_.assign(static_cast<size_t>(bx_) * by_, {});
+  for (int b = 0; b < static_cast<int>(obstacles_.size()); ++b) {
+    const Box& box = obstacles_[b];
+    const int x0 = std::clamp(
+        static_cast<int>(std::floor(box.lo.x() / bucket_)), 0, bx_ - 1);
+    const int x1 = std::clamp(
+        static_cast<int>(std::floor(box.hi.x() / bucket_)), 0, bx_ - 1);
+    const int y0 = std::clamp(
+        static_cast<int>(std::floor(box.lo.y() / bucket_)), 0, by_ - 1);
+    const int y1 = std::clamp(
+        static_cast<int>(std::floor(box.hi.y() / bucket_)), 0, by_ - 1);
+    for (int iy = y0; iy <= y1; ++iy)
+      for (int ix = x0; ix <= x1; ++ix)
+        buckets_[static_cast<size_t>(iy) * bx_ + ix].push_back(b);
+  }
+}
+
+bool Map::LineOfSight(const Vec2& a, const Vec2& b) const {
+  const int x0 =
+      std::clamp(static_cast<int>(std::floor(std::min(a.x(), b.x()) / bucket_)),
+                 0, bx_ - 1);
+  const int x1 =
+      std::clamp(static_cast<int>(std::floor(std::max(a.x(), b.x()) / bucket_)),
+                 0, bx_ - 1);
+  const int y0 =
+      std::clamp(static_cast<int>(std::floor(std::min(a.y(), b.y()) / bucket_)),
+                 0, by_ - 1);
+  const int y1 =
+      std::clamp(static_cast<int>(std::floor(std::max(a.y(), b.y()) / bucket_)),
+                 0, by_ - 1);
+  for (int iy = y0; iy <= y1; ++iy) {
+    for (int ix = x0; ix <= x1; ++ix) {
+      for (int bi : buckets_[static_cast<size_t>(iy) * bx_ + ix]) {
+        if (SegmentIntersectsBox(a, b, obstacles_[bi])) return false;
+      }
+    }
+  }
+  return true;
+}
+
+bool Map::PointFree(const Vec2& p) const {
+  if (p.x() < 0.0 || p.y() < 0.0 || p.x() > size_.x() || p.y() > size_.y())
+    return false;
+  for (const Box& b : obstacles_)
+    if (b.Contains(p)) return false;
+  return true;
+}
+
+}  // namespace aia
