@@ -10,6 +10,7 @@
 #include "aia/planning/expert.h"
 #include "aia/runtime/bench.h"
 #include "aia/runtime/episode.h"
+#include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
 
 namespace aia {
@@ -27,7 +28,7 @@ void BM_Fuse(benchmark::State& state) {
   predicted.SetPrior(means, covs);
   fused.SetPrior(means, covs);
   CommParams cp;
-  cp.loss_lambda = 1.0;
+  cp.packet_loss_lambda = 1.0;
   CommNetwork comm(cp, n, {}, 1);
   std::vector<Vec2> pos(n, Vec2(1, 1));
   comm.Update(0, pos);

@@ -47,6 +47,12 @@ std::vector<Override> CommandOverrides::ToOverrides(
   return out;
 }
 
+std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
+                                     const PolicyRegistry& registry) {
+  return std::make_unique<Episode>(BuildInstance(scenario),
+                                   registry.Resolve(scenario)->Create());
+}
+
 void MakeOutputDir(const std::string& dir, const std::string& flag) {
   if (dir.empty()) return;
   try {

@@ -19,7 +19,7 @@ TEST(CommTest, FullGraphConnectsEveryPair) {
 
 TEST(CommTest, RangeGraphByHand) {
   CommParams p;
-  p.range_limited = true;
+  p.mode = CommMode::kRange;
   p.range = 4.0;
   CommNetwork net(p, 3, {}, 1);
   // 0 -- 1 are 3 m apart, 1 -- 2 are 4 m apart (in range), 0 -- 2 are 7 m.
@@ -31,7 +31,7 @@ TEST(CommTest, RangeGraphByHand) {
 
 TEST(CommTest, PacketLossDeletesPoissonManyDirectedEdges) {
   CommParams p;
-  p.loss_lambda = 1.0;
+  p.packet_loss_lambda = 1.0;
   const int n = 6;
   CommNetwork net(p, n, {}, 7);
   const std::vector<Vec2> pos(n, Vec2(0, 0));
@@ -71,7 +71,7 @@ TEST(CommTest, FailedRobotIsIsolatedForGood) {
 
 TEST(CommTest, SameSeedSameLosses) {
   CommParams p;
-  p.loss_lambda = 2.0;
+  p.packet_loss_lambda = 2.0;
   CommNetwork a(p, 5, {}, 3), b(p, 5, {}, 3);
   const std::vector<Vec2> pos(5, Vec2(0, 0));
   for (int t = 0; t < 50; ++t) {

@@ -28,9 +28,12 @@ Eigen::VectorXd RandomVector(int dim, Rng* rng) {
 
 TEST(BeliefLayoutTest, BlocksArePackedOmegaThenXi) {
   TargetModel moving = Model(4);
-  moving.is_static = false;
+  moving.A(0, 2) = 1.0;
   const BeliefLayout layout({Model(2), moving, Model(2)});
   ASSERT_EQ(layout.num_targets(), 3);
+  EXPECT_TRUE(layout.is_static(0));
+  EXPECT_FALSE(layout.is_static(1));
+  EXPECT_FALSE(layout.all_static());
   // 2x2 + 2 = 6, 4x4 + 4 = 20, 6.
   EXPECT_EQ(layout.omega_offset(0), 0);
   EXPECT_EQ(layout.xi_offset(0), 4);

@@ -20,14 +20,12 @@ using Measurements = std::vector<std::vector<Measurement>>;
 
 TargetModel StaticModel(int dim) { return TargetModel::Static(dim); }
 
-// Constant velocity, state (px, py, vx, vy), unit time step, noise on v.
+// Constant velocity, state (px, py, vx, vy), unit time step, noise q I.
 TargetModel ConstantVelocity(double q) {
   TargetModel m = StaticModel(4);
   m.A(0, 2) = 1.0;
   m.A(1, 3) = 1.0;
-  m.Q(2, 2) = q;
-  m.Q(3, 3) = q;
-  m.is_static = false;
+  m.q = q;
   return m;
 }
 
@@ -130,8 +128,7 @@ TEST(FilterTest, PredictTwoDimensionalDriftByHand) {
   TargetModel m = StaticModel(2);
   m.A << 1.0, 1.0, 0.0, 1.0;
   m.b << 0.5, -1.0;
-  m.Q = Eigen::Matrix2d::Identity();
-  m.is_static = false;
+  m.q = 1.0;
   const BeliefLayout layout({m});
   BeliefSet beliefs(&layout, 2);
   // Sigma = diag(1, 2), mu = (1, 2)  ->  Omega = diag(1, 0.5), xi = (1, 1).
@@ -158,18 +155,18 @@ TEST(FilterTest, PredictConstantVelocityByHand) {
   beliefs.SetPrior({Eigen::Vector4d(0.0, 0.0, 1.0, 2.0)},
                    {Eigen::Matrix4d::Identity()});
   Predict(&beliefs);
-  // Per axis (p, v): A = [1 1; 0 1], A A' = [2 1; 1 1], + Q = [2 1; 1 1.5],
-  // det = 2, so Omega' = [1.5 -1; -1 2] / 2 = [0.75 -0.5; -0.5 1].
+  // Per axis (p, v): A = [1 1; 0 1], A A' = [2 1; 1 1], + q I =
+  // [2.5 1; 1 1.5], det = 2.75, so Omega' = [1.5 -1; -1 2.5] / 2.75.
   // mu' = (0 + 1, 0 + 2, 1, 2); per axis xi' = Omega' (p, v):
-  //   x: (0.75 - 0.5, -0.5 + 1) = (0.25, 0.5),  y: (1.5 - 1, -1 + 2) = (0.5,
-  //   1).
+  //   x: (1.5 - 1, -1 + 2.5) / 2.75 = (0.5, 1.5) / 2.75,
+  //   y: (3 - 2, -2 + 5) / 2.75 = (1, 3) / 2.75.
   Eigen::Matrix4d omega = Eigen::Matrix4d::Zero();
-  omega(0, 0) = omega(1, 1) = 0.75;
-  omega(2, 2) = omega(3, 3) = 1.0;
-  omega(0, 2) = omega(2, 0) = omega(1, 3) = omega(3, 1) = -0.5;
+  omega(0, 0) = omega(1, 1) = 1.5 / 2.75;
+  omega(2, 2) = omega(3, 3) = 2.5 / 2.75;
+  omega(0, 2) = omega(2, 0) = omega(1, 3) = omega(3, 1) = -1.0 / 2.75;
   EXPECT_TRUE(beliefs.Omega(0, 0).isApprox(omega, 1e-14));
-  EXPECT_TRUE(
-      beliefs.Xi(0, 0).isApprox(Eigen::Vector4d(0.25, 0.5, 0.5, 1.0), 1e-14));
+  EXPECT_TRUE(beliefs.Xi(0, 0).isApprox(
+      Eigen::Vector4d(0.5, 1.0, 1.5, 3.0) / 2.75, 1e-14));
   EXPECT_TRUE(
       beliefs.Mean(0, 0).isApprox(Eigen::Vector4d(1.0, 2.0, 1.0, 2.0), 1e-14));
   EXPECT_EQ(beliefs.Omega(0, 0), beliefs.Omega(0, 0).transpose());
@@ -181,8 +178,7 @@ TEST(FilterTest, PredictKeepsOmegaExactlySymmetric) {
   Rng rng(2);
   TargetModel drift = StaticModel(2);
   drift.A << 0.9, 0.3, -0.2, 1.1;
-  drift.Q = 0.01 * Eigen::Matrix2d::Identity();
-  drift.is_static = false;
+  drift.q = 0.01;
   TargetModel cv = ConstantVelocity(0.05);
   cv.A(2, 0) = 0.1;  // no special structure
   const BeliefLayout layout({drift, cv});
@@ -440,8 +436,7 @@ TEST(FilterTest, CovariancesStaySpdOverManySteps) {
   TargetModel drift = StaticModel(2);
   drift.A << 0.999, 0.02, -0.02, 0.999;
   drift.b << 0.05, 0.0;
-  drift.Q = 1e-3 * Eigen::Matrix2d::Identity();
-  drift.is_static = false;
+  drift.q = 1e-3;
   const std::vector<TargetModel> models = {
       ConstantVelocity(0.01), StaticModel(2), drift, ConstantVelocity(1e-4),
       StaticModel(2)};
@@ -473,8 +468,8 @@ TEST(FilterTest, CovariancesStaySpdOverManySteps) {
     for (int k = 0; k < m; ++k) {
       const TargetModel& tm = layout.model(k);
       truth[k] = tm.A * truth[k] + tm.b;
-      for (int d = 0; d < tm.dim; ++d)
-        truth[k](d) += std::sqrt(tm.Q(d, d)) * rng.Normal();
+      for (int d = 0; d < tm.dim(); ++d)
+        truth[k](d) += std::sqrt(tm.q) * rng.Normal();
     }
     Measurements z(n);
     for (int i = 0; i < n; ++i) {

@@ -140,11 +140,7 @@ TEST(HeatmapTest, CutOffWindowAndTargetsAdd) {
 }
 
 TEST(HeatmapTest, FourDimensionalTargetUsesThePositionMarginal) {
-  TargetModel model;
-  model.dim = 4;
-  model.A = Eigen::MatrixXd::Identity(4, 4);
-  model.b = Eigen::VectorXd::Zero(4);
-  model.Q = Eigen::MatrixXd::Zero(4, 4);
+  const TargetModel model = TargetModel::Static(4);
   BeliefLayout layout({model});
   BeliefSet beliefs(&layout, 1);
   Eigen::Matrix4d sigma = Eigen::Matrix4d::Identity();

@@ -8,6 +8,7 @@
 #include "aia/estimation/filter.h"
 #include "aia/planning/decsb.h"
 #include "aia/planning/information.h"
+#include "aia/planning/registry.h"
 #include "support/team_fixture.h"
 #include "support/test_support.h"
 
@@ -42,7 +43,7 @@ TEST(ExpertTest, PlanReplayedThroughTheCentralizedFilterMeetsEps) {
     // Replay: every move valid, the centralized filter fed with the
     // measurements the planner predicts (at the means) meets eps exactly at
     // step F*.
-    const Lattice& lat = run.world.lattice;
+    const Lattice& lat = run.world.map.lattice();
     BeliefSet central = run.central;
     for (int d = 1; d <= plan.depth; ++d) {
       std::vector<std::vector<Measurement>> z(run.world.NumRobots());
@@ -56,7 +57,7 @@ TEST(ExpertTest, PlanReplayedThroughTheCentralizedFilterMeetsEps) {
         p[i] = lat.Point(b);
         for (int k = 0; k < run.world.NumTargets(); ++k) {
           const Vec2 mu = central.PositionMean(0, k);
-          const double r = PredictedPrecision(run.world, run.sensor, p[i], mu);
+          const double r = PredictedPrecision(run.world.map, run.sensor, p[i], mu);
           // y chosen so that the mean stays put: y + p = mu.
           if (r > 0) z[i].push_back({k, mu - p[i], r});
         }
@@ -126,7 +127,13 @@ TEST(ExpertTest, BadParameterIsAnInputError) {
   Scenario s = ScenarioFromYaml(
       "robots: {count: 1}\ntargets: {count: 1}\npolicy:\n  name: expert\n  "
       "p_v: 1.5\n");
-  EXPECT_THROW(ExpertParams(s), InputError);
+  try {
+    BuiltinPolicies().Resolve(s);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "test.yaml:5: policy.p_v: must be a number in [0, 1], got 1.5");
+  }
 }
 
 TEST(DecSbTest, WithoutEdgesEachRobotPlansAlone) {
@@ -138,23 +145,24 @@ TEST(DecSbTest, WithoutEdgesEachRobotPlansAlone) {
       "[17.25, 3.25]]}\n"
       "targets: {count: 5}\n";
   CommParams none;
-  none.range_limited = true;
+  none.mode = CommMode::kRange;
   none.range = 1e-6;
   Team team(yaml, none);
-  DecSbPolicy together(team.scenario);
-  together.Reset(team.world, 11);
+  DecSbPolicy together{DecSbParams{}};
+  together.Reset(team.world.map, 3, team.world.NumTargets(), 11);
   std::vector<Move> moves(3);
   together.Decide(team.Context(), &moves);
   for (int i = 0; i < 3; ++i) {
     // The same robot alone: a one-robot view with its own belief row.
-    DecSbPolicy alone(team.scenario);
-    alone.Reset(team.world, 11);
+    DecSbPolicy alone{DecSbParams{}};
+    alone.Reset(team.world.map, 3, team.world.NumTargets(), 11);
     std::vector<Move> one(3, Move::kStay);
     // The others have failed: they neither plan nor send anything.
     Team solo = team;
     CommNetwork only(none, 3, {{(i + 1) % 3, 0}, {(i + 2) % 3, 0}}, 1);
     std::vector<Vec2> p;
-    for (int idx : solo.positions) p.push_back(solo.world.lattice.Point(idx));
+    for (int idx : solo.positions)
+      p.push_back(solo.world.map.lattice().Point(idx));
     only.Update(0, p);
     solo.comm = only;
     alone.Decide(solo.Context(), &one);

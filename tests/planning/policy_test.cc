@@ -23,11 +23,11 @@ TEST(InformationTest, PredictedPrecisionHonoursRangeAndSight) {
       "robots: {count: 1, start: [[1.25, 1.25]]}\ntargets: {count: 1}\n"
       "workspace: {obstacles: {boxes: [{center: [5, 5], size: [0.4, 4]}]}}\n");
   // 1.5 m in the open: 1 / (0.01 + 0.05 * 1.5)^2.
-  EXPECT_NEAR(PredictedPrecision(s.world, s.sensor, {2, 8}, {3.5, 8}),
+  EXPECT_NEAR(PredictedPrecision(s.world.map, s.sensor, {2, 8}, {3.5, 8}),
               1.0 / (0.085 * 0.085), 1e-9);
-  EXPECT_EQ(PredictedPrecision(s.world, s.sensor, {2, 8}, {4.5, 8}),
+  EXPECT_EQ(PredictedPrecision(s.world.map, s.sensor, {2, 8}, {4.5, 8}),
             0.0);  // 2.5 m
-  EXPECT_EQ(PredictedPrecision(s.world, s.sensor, {4.2, 5}, {5.8, 5}),
+  EXPECT_EQ(PredictedPrecision(s.world.map, s.sensor, {4.2, 5}, {5.8, 5}),
             0.0);  // behind the wall
 }
 
@@ -47,16 +47,16 @@ TEST(RandomPolicyTest, ReturnsValidMovesAndIsReproducible) {
   PolicyFixture s(
       "seed: 2\nrobots: {count: 8}\ntargets: {count: 3}\n"
       "workspace: {obstacles: {random: {count: 30}}}\n");
-  RandomPolicy a(s.scenario), b(s.scenario);
-  a.Reset(s.world, 5);
-  b.Reset(s.world, 5);
+  RandomPolicy a, b;
+  a.Reset(s.world.map, 8, s.world.NumTargets(), 5);
+  b.Reset(s.world.map, 8, s.world.NumTargets(), 5);
   std::vector<Move> ma(8), mb(8);
   for (int t = 0; t < 20; ++t) {
     a.Decide(s.Context(), &ma);
     b.Decide(s.Context(), &mb);
     EXPECT_EQ(ma, mb);
     for (int i = 0; i < 8; ++i)
-      EXPECT_TRUE(s.world.lattice.Valid(s.positions[i], ma[i]));
+      EXPECT_TRUE(s.world.map.lattice().Valid(s.positions[i], ma[i]));
   }
 }
 
@@ -66,8 +66,8 @@ TEST(GreedyPolicyTest, MovesTowardANearbyTarget) {
   PolicyFixture s(
       "robots: {count: 1, start: [[5.25, 5.25]]}\n"
       "targets: {list: [{position: [7.5, 5.25], prior_mean: [7.5, 5.25]}]}\n");
-  GreedyPolicy g(s.scenario);
-  g.Reset(s.world, 1);
+  GreedyPolicy g;
+  g.Reset(s.world.map, 1, s.world.NumTargets(), 1);
   std::vector<Move> m(1);
   g.Decide(s.Context(), &m);
   EXPECT_EQ(m[0], Move::kRight);
@@ -82,23 +82,23 @@ TEST(GreedyPolicyTest, FallsBackToShortestPathTowardTheNearestTarget) {
       " {position: [19.5, 19.5], prior_mean: [19.5, 19.5]}]}\n"
       "workspace: {obstacles: {boxes: [{center: [8.0, 10.0], size: [0.4, "
       "3.0]}]}}\n");
-  GreedyPolicy g(s.scenario);
-  g.Reset(s.world, 1);
+  GreedyPolicy g;
+  g.Reset(s.world.map, 1, s.world.NumTargets(), 1);
   std::vector<Move> m(1);
   std::vector<int> dist, queue;
   // BFS distance to the points that observe the left target.
   std::vector<int> goals;
-  for (int q = 0; q < s.world.lattice.size(); ++q)
-    if (s.world.lattice.Free(q) &&
-        PredictedPrecision(s.world, s.sensor, s.world.lattice.Point(q),
+  for (int q = 0; q < s.world.map.lattice().size(); ++q)
+    if (s.world.map.lattice().Free(q) &&
+        PredictedPrecision(s.world.map, s.sensor, s.world.map.lattice().Point(q),
                            {2.0, 10.25}) > 0)
       goals.push_back(q);
-  BfsDistances(s.world.lattice, goals.data(), static_cast<int>(goals.size()),
+  BfsDistances(s.world.map.lattice(), goals.data(), static_cast<int>(goals.size()),
                &dist, &queue);
   for (int step = 0; step < 40 && dist[s.positions[0]] > 0; ++step) {
     const int before = dist[s.positions[0]];
     g.Decide(s.Context(), &m);
-    const int next = s.world.lattice.Next(s.positions[0], m[0]);
+    const int next = s.world.map.lattice().Next(s.positions[0], m[0]);
     ASSERT_GE(next, 0) << "greedy chose an invalid move";
     s.positions[0] = next;
     EXPECT_EQ(dist[next], before - 1);  // every step is on a shortest path
@@ -115,8 +115,8 @@ TEST(GreedyPolicyTest, IgnoresTargetsAlreadyBelowEps) {
       " {position: [10.25, 2.0], prior_mean: [10.25, 2.0]}]}\n");
   s.beliefs.Omega(0, 0) *= 100.0;  // det Sigma = 1e-4 <= eps
   s.beliefs.Xi(0, 0) *= 100.0;
-  GreedyPolicy g(s.scenario);
-  g.Reset(s.world, 1);
+  GreedyPolicy g;
+  g.Reset(s.world.map, 1, s.world.NumTargets(), 1);
   std::vector<Move> m(1);
   g.Decide(s.Context(), &m);
   EXPECT_EQ(m[0], Move::kDown);
@@ -129,7 +129,7 @@ TEST(RegistryTest, UnknownNameListsTheValidOnes) {
   Scenario s = ScenarioFromYaml(
       "robots: {count: 1}\ntargets: {count: 1}\npolicy: {name: nope}\n");
   try {
-    r.Create("nope", s);
+    r.Resolve(s);
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "policy.name");
@@ -143,11 +143,12 @@ TEST(RegistryTest, UnknownPolicyParameterIsAnError) {
       "robots: {count: 1}\ntargets: {count: 1}\npolicy:\n  name: greedy\n  "
       "budget: 3\n");
   try {
-    BuiltinPolicies().Create("greedy", s);
+    BuiltinPolicies().Resolve(s);
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "policy.budget");
     EXPECT_EQ(e.line(), 5);
+    EXPECT_EQ(e.message(), "unknown parameter for policy 'greedy' (valid: none)");
   }
 }
 

@@ -71,7 +71,7 @@ class FrameRendererTest : public ::testing::Test {
 };
 
 TEST_F(FrameRendererTest, LostMessagesAreRedDashes) {
-  FrameRenderer renderer(sim_, world_, settings_);
+  FrameRenderer renderer(sim_, world_.map, settings_);
   const std::vector<std::vector<int>> neighbors = {
       {}, {0}};  // 1 heard 0; 0 lost 1's message
   const std::vector<std::pair<int, int>> lost = {{0, 1}};
@@ -109,7 +109,7 @@ TEST_F(FrameRendererTest, LostMessagesAreRedDashes) {
 }
 
 TEST_F(FrameRendererTest, FailedRobotIsGreyedOut) {
-  FrameRenderer renderer(sim_, world_, settings_);
+  FrameRenderer renderer(sim_, world_.map, settings_);
   const Vec2 p = overlay_.robots[1];
   const int active =
       Count(renderer.Render(overlay_), renderer.view(), p, 5.0, Grey);
@@ -120,7 +120,7 @@ TEST_F(FrameRendererTest, FailedRobotIsGreyedOut) {
 }
 
 TEST_F(FrameRendererTest, EllipseIsGreenAtOrBelowEpsAndRedAbove) {
-  FrameRenderer renderer(sim_, world_, settings_);
+  FrameRenderer renderer(sim_, world_.map, settings_);
   const Vec2 mean = overlay_.targets[0].mean;
   const double radius = 0.4 * renderer.view().Scale() + 3.0;
   cv::Mat image = renderer.Render(overlay_).clone();
@@ -134,7 +134,7 @@ TEST_F(FrameRendererTest, EllipseIsGreenAtOrBelowEpsAndRedAbove) {
 }
 
 TEST_F(FrameRendererTest, HeatmapTintsOnlyWhereThereIsHeat) {
-  FrameRenderer renderer(sim_, world_, settings_);
+  FrameRenderer renderer(sim_, world_.map, settings_);
   const cv::Mat plain = renderer.Render(overlay_).clone();
   Grid<float> heat(20, 20, 0.5, 0.0f);  // the 10 x 10 m workspace
   for (int iy = 0; iy < 6; ++iy)

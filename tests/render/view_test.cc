@@ -61,7 +61,7 @@ TEST(TopDownViewTest, ObstacleCornersAndTargetLandWhereTheMapSays) {
   settings.width = kWidth;
   settings.height = kHeight;
   SceneRenderer renderer(sim.model(), settings);
-  const TopDownView view(world.size, kWidth, kHeight,
+  const TopDownView view(world.map.size(), kWidth, kHeight,
                          sim.model()->vis.global.fovy, HudBandPixels(kHeight),
                          kObstacleHeight);
   mjvCamera camera;
@@ -73,8 +73,8 @@ TEST(TopDownViewTest, ObstacleCornersAndTargetLandWhereTheMapSays) {
   cv::Mat gray;
   cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
 
-  ASSERT_EQ(world.obstacles.size(), 2u);
-  for (const Box& box : world.obstacles) {
+  ASSERT_EQ(world.map.obstacles().size(), 2u);
+  for (const Box& box : world.map.obstacles()) {
     // Seen in perspective, the box covers the projections of its eight
     // corners: its top face and the sides that face the camera.
     double u0 = 1e9, u1 = -1e9, v0 = 1e9, v1 = -1e9;

@@ -26,7 +26,7 @@ TEST_P(PolicyContractTest, ReachesSuccessOnASmallScenario) {
     e->Step();
     // Every robot is always on a free lattice point.
     for (int idx : e->robot_lattice())
-      EXPECT_TRUE(e->world().lattice.Free(idx));
+      EXPECT_TRUE(e->world().map.lattice().Free(idx));
   }
   EXPECT_TRUE(e->success()) << GetParam() << " after " << e->step() << " steps";
   EXPECT_EQ(e->flowtime(), e->step());

@@ -34,7 +34,7 @@ TEST(SimulationTest, ModelIsSizedFromTheRobotCount) {
   EXPECT_EQ(sim.model()->nmocap, 2);
   for (int i = 0; i < 7; ++i)
     EXPECT_LT(
-        (sim.RobotPosition(i) - w.lattice.Point(w.robot_starts[i])).norm(),
+        (sim.RobotPosition(i) - w.map.lattice().Point(w.robot_starts[i])).norm(),
         1e-9);
 }
 
@@ -117,7 +117,7 @@ TEST(SensingTest, RayClearMatchesWorldLineOfSight) {
   for (int trial = 0; trial < 200; ++trial) {
     const Vec2 a(rng.Uniform(0.5, 9.5), rng.Uniform(0.5, 9.5));
     const Vec2 b(rng.Uniform(0.5, 9.5), rng.Uniform(0.5, 9.5));
-    EXPECT_EQ(sim.RayClear(a, b), w.LineOfSight(a, b))
+    EXPECT_EQ(sim.RayClear(a, b), w.map.LineOfSight(a, b))
         << a.transpose() << " -> " << b.transpose();
   }
 }

@@ -15,7 +15,8 @@
 namespace aia::testing {
 
 // A world, the prior beliefs (one row per robot and the centralized row) and
-// a communication graph (full by default). Copies share the original's
+// a communication graph (full by default). Context() is the whole team's,
+// the centralized belief included (what the expert is given). Copies share the original's
 // belief layout, so the original must outlive them.
 struct TeamFixture {
   Scenario scenario;
@@ -29,12 +30,13 @@ struct TeamFixture {
   explicit TeamFixture(const std::string& yaml, CommParams cp = {})
       : scenario(ScenarioFromYaml(yaml)) {
     world = World::Build(scenario);
-    std::vector<TargetModel> models(world.NumTargets());
+    std::vector<TargetModel> models;
     std::vector<Eigen::VectorXd> means;
     std::vector<Eigen::MatrixXd> covs;
-    for (const auto& t : world.targets) {
-      means.push_back(t.prior_mean);
-      covs.push_back(t.prior_cov);
+    for (const TargetPrior& p : world.priors) {
+      models.push_back(p.model);
+      means.push_back(p.mean);
+      covs.push_back(p.cov);
     }
     layout = BeliefLayout(models);
     beliefs = BeliefSet(&layout, world.NumRobots());
@@ -44,12 +46,12 @@ struct TeamFixture {
     comm = CommNetwork(cp, world.NumRobots(), {}, 1);
     positions = world.robot_starts;
     std::vector<Vec2> p;
-    for (int idx : positions) p.push_back(world.lattice.Point(idx));
+    for (int idx : positions) p.push_back(world.map.lattice().Point(idx));
     comm.Update(0, p);
   }
   DecisionContext Context() const {
     DecisionContext c;
-    c.world = &world;
+    c.map = &world.map;
     c.sensor = &sensor;
     c.eps = scenario.mission.eps;
     c.positions = &positions;

@@ -132,13 +132,13 @@ TEST(WorldTest, SameSeedSameWorldAndDifferentSeedDifferentWorld) {
       "workspace: {obstacles: {random: {count: 20}}}\n";
   Scenario s = ScenarioFromYaml(yaml);
   const World a = World::Build(s), b = World::Build(s);
-  ASSERT_EQ(a.obstacles.size(), 20u);
-  for (size_t i = 0; i < a.obstacles.size(); ++i)
-    EXPECT_EQ(a.obstacles[i].lo, b.obstacles[i].lo);
+  ASSERT_EQ(a.map.obstacles().size(), 20u);
+  for (size_t i = 0; i < a.map.obstacles().size(); ++i)
+    EXPECT_EQ(a.map.obstacles()[i].lo, b.map.obstacles()[i].lo);
   EXPECT_EQ(a.robot_starts, b.robot_starts);
   s.seed = 5;
   const World c = World::Build(s);
-  EXPECT_NE(a.obstacles[0].lo, c.obstacles[0].lo);
+  EXPECT_NE(a.map.obstacles()[0].lo, c.map.obstacles()[0].lo);
 }
 
 TEST(WorldTest, RandomStartsAndTargetsAreValid) {
@@ -149,21 +149,23 @@ TEST(WorldTest, RandomStartsAndTargetsAreValid) {
     s.seed = seed;
     const World w = World::Build(s);
     std::set<int> seen;
+    const Lattice& lattice = w.map.lattice();
     for (int idx : w.robot_starts) {
-      EXPECT_TRUE(w.lattice.Free(idx));
-      EXPECT_EQ(w.lattice.components()[idx], 0);  // all in the largest region
+      EXPECT_TRUE(lattice.Free(idx));
+      EXPECT_EQ(lattice.components()[idx], 0);  // all in the largest region
       EXPECT_TRUE(seen.insert(idx).second);
     }
-    for (const auto& t : w.targets) {
-      EXPECT_TRUE(w.PointFree(t.Position()));
-      EXPECT_TRUE(w.PointFree(t.prior_mean.head<2>()));
+    for (int k = 0; k < w.NumTargets(); ++k) {
+      const Vec2 truth = w.TargetStart(k);
+      EXPECT_TRUE(w.map.PointFree(truth));
+      EXPECT_TRUE(w.map.PointFree(w.priors[k].mean.head<2>()));
       // Observable from a reachable lattice point.
       bool observable = false;
-      for (int idx = 0; idx < w.lattice.size() && !observable; ++idx) {
-        if (!w.lattice.Free(idx) || w.lattice.components()[idx] != 0) continue;
-        const Vec2 p = w.lattice.Point(idx);
+      for (int idx = 0; idx < lattice.size() && !observable; ++idx) {
+        if (!lattice.Free(idx) || lattice.components()[idx] != 0) continue;
+        const Vec2 p = lattice.Point(idx);
         observable =
-            (p - t.Position()).norm() <= 2.0 && w.LineOfSight(p, t.Position());
+            (p - truth).norm() <= 2.0 && w.map.LineOfSight(p, truth);
       }
       EXPECT_TRUE(observable);
     }
@@ -175,10 +177,10 @@ TEST(WorldTest, LineOfSightAgainstBoxes) {
       "robots: {count: 1, start: [[1.25, 1.25]]}\ntargets: {count: 1}\n"
       "workspace: {obstacles: {boxes: [{center: [5, 5], size: [1, 4]}]}}\n");
   const World w = World::Build(s);
-  EXPECT_FALSE(w.LineOfSight({3, 5}, {7, 5}));
-  EXPECT_TRUE(w.LineOfSight({3, 8}, {7, 8}));
-  EXPECT_FALSE(w.PointFree({5, 5}));
-  EXPECT_TRUE(w.PointFree({3, 3}));
+  EXPECT_FALSE(w.map.LineOfSight({3, 5}, {7, 5}));
+  EXPECT_TRUE(w.map.LineOfSight({3, 8}, {7, 8}));
+  EXPECT_FALSE(w.map.PointFree({5, 5}));
+  EXPECT_TRUE(w.map.PointFree({3, 3}));
 }
 
 TEST(WorldTest, StartInsideAnObstacleIsAnErrorAtItsLine) {
@@ -223,10 +225,10 @@ TEST(WorldTest, MapImageBecomesObstacles) {
       "workspace: {obstacles: {map: " +
       testing::SourcePath("scenarios/maps/office.pgm") + "}}\n");
   const World w = World::Build(s);
-  EXPECT_GT(w.obstacles.size(), 5u);
+  EXPECT_GT(w.map.obstacles().size(), 5u);
   // The map's wall above the corridor: pixel row 44 of 100 -> y = 20 - 8.9 m.
-  EXPECT_FALSE(w.PointFree({2.0, 11.1}));
-  EXPECT_TRUE(w.PointFree({2.0, 10.0}));
+  EXPECT_FALSE(w.map.PointFree({2.0, 11.1}));
+  EXPECT_TRUE(w.map.PointFree({2.0, 10.0}));
 }
 
 TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {

@@ -42,6 +42,11 @@ struct CommandOverrides {
   std::vector<Override> ToOverrides(const PolicyRegistry& registry) const;
 };
 
+// An episode of a scenario with its policy from the registry (a convenience
+// for tests and tools; commands share instances and resolved policies).
+std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
+                                     const PolicyRegistry& registry);
+
 // Creates an output folder named by a flag; InputError (exit code 2) naming
 // the flag when it cannot be created.
 void MakeOutputDir(const std::string& dir, const std::string& flag);
