@@ -208,8 +208,11 @@ std::vector<FieldDoc> ScenarioKeys() { return FieldDocs::Of(Scenario{}); }
 std::string FieldTable(const std::vector<FieldDoc>& rows) {
   std::string out = "| key | type | default | meaning |\n|---|---|---|---|\n";
   for (const FieldDoc& r : rows) {
+    const bool word = r.default_value.empty() ||
+                      r.default_value == "required" ||
+                      r.default_value == "none";
     out += "| `" + Cell(r.key) + "` | " + Cell(r.type) + " | " +
-           (r.default_value.empty() ? "" : "`" + Cell(r.default_value) + "`") +
+           (word ? r.default_value : "`" + Cell(r.default_value) + "`") +
            " | " + Cell(r.doc) + " |\n";
   }
   return out;

@@ -562,5 +562,26 @@ TEST(FuseTest, SizesTheOutputOnceThenReusesIt) {
   EXPECT_EQ(out.data().data(), storage);
 }
 
+
+// The planners' covariance-only time update is the filter's own: the same
+// Omega, exactly, as the full block update.
+TEST(FilterTest, PredictInformationMatrixIsTheBlockUpdatesOmega) {
+  Rng rng(41);
+  TargetModel drift = StaticModel(2);
+  drift.A << 0.9, 0.3, -0.2, 1.1;
+  drift.q = 0.02;
+  for (const TargetModel& model : {drift, ConstantVelocity(0.05)}) {
+    const int d = model.dim();
+    const Eigen::MatrixXd omega = RandomSpd(d, &rng);
+    std::vector<double> block(d * d + d, 0.0), matrix(d * d);
+    std::copy(omega.data(), omega.data() + d * d, block.begin());
+    std::copy(omega.data(), omega.data() + d * d, matrix.begin());
+    for (int i = 0; i < d; ++i) block[d * d + i] = rng.Normal();
+    PredictInformationBlock(model, block.data());
+    PredictInformationMatrix(model, matrix.data());
+    for (int i = 0; i < d * d; ++i) EXPECT_EQ(matrix[i], block[i]) << i;
+  }
+}
+
 }  // namespace
 }  // namespace aia

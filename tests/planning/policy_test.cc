@@ -4,6 +4,8 @@
 
 #include "aia/core/error.h"
 #include "aia/estimation/filter.h"
+#include "aia/planning/decsb.h"
+#include "aia/planning/expert.h"
 #include "aia/planning/greedy.h"
 #include "aia/planning/information.h"
 #include "aia/planning/random_policy.h"
@@ -150,6 +152,125 @@ TEST(RegistryTest, UnknownPolicyParameterIsAnError) {
     EXPECT_EQ(e.line(), 5);
     EXPECT_EQ(e.message(), "unknown parameter for policy 'greedy' (valid: none)");
   }
+}
+
+
+TEST(RegistryTest, ParametersAreTypedCheckedAndWrittenBackInFull) {
+  Scenario s = ScenarioFromYaml(
+      "robots: {count: 1}\ntargets: {count: 1}\n"
+      "policy: {name: expert, p_v: 0.5, anytime: 300}\n");
+  const auto spec = BuiltinPolicies().Resolve(s);
+  EXPECT_EQ(spec->name(), "expert");
+  EXPECT_TRUE(spec->centralized());
+  const ExpertParams* p = ParamsOf<ExpertParams>(*spec);
+  ASSERT_NE(p, nullptr);
+  EXPECT_EQ(p->p_v, 0.5);
+  EXPECT_EQ(p->anytime, 300);
+  EXPECT_EQ(p->p_u, ExpertParams{}.p_u);  // the default
+  EXPECT_EQ(ParamsOf<DecSbParams>(*spec), nullptr);
+  // Every parameter, defaults included, for effective.yaml.
+  const ConfigNode params = spec->Params();
+  std::vector<std::string> keys;
+  for (const auto& e : params.entries) keys.push_back(e.key);
+  EXPECT_EQ(keys, (std::vector<std::string>{"p_v", "p_u", "anytime",
+                                            "max_iterations", "max_nodes"}));
+  EXPECT_EQ(params.Find("p_v")->scalar, "0.5");
+  EXPECT_FALSE(spec->Create()->name().empty());
+}
+
+TEST(RegistryTest, WrongTypesAndMisspeltParametersAreInputErrors) {
+  const auto error = [](const std::string& policy) {
+    try {
+      BuiltinPolicies().Resolve(ScenarioFromYaml(
+          "robots: {count: 1}\ntargets: {count: 1}\npolicy: " + policy + "\n"));
+    } catch (const InputError& e) {
+      return e.Format();
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error("{name: decsb, horizon: 2.5}"),
+            "test.yaml:3: policy.horizon: must be an integer in [1, 1000], "
+            "got 2.5");
+  EXPECT_EQ(error("{name: decsb, iterations: \"300\"}"),
+            "test.yaml:3: policy.iterations: must be an integer in [1, "
+            "10000000], got \"300\"");
+  EXPECT_EQ(error("{name: expert, p_uu: 0.5}"),
+            "test.yaml:3: policy.p_uu: unknown parameter for policy 'expert' "
+            "(did you mean `p_u`?) (valid: p_v, p_u, anytime, "
+            "max_iterations, max_nodes)");
+  EXPECT_EQ(error("{name: grdy}"),
+            "test.yaml:3: policy.name: unknown policy 'grdy' (did you mean "
+            "`greedy`?) (valid: random, greedy, expert, decsb)");
+}
+
+TEST(RegistryTest, DescribeListsEveryPolicyWithItsParameters) {
+  const std::vector<PolicyInfo> info = BuiltinPolicies().Describe();
+  ASSERT_EQ(info.size(), 4u);
+  EXPECT_EQ(info[2].name, "expert");
+  EXPECT_TRUE(info[2].centralized);
+  EXPECT_FALSE(info[3].centralized);
+  ASSERT_EQ(info[3].params.size(), 4u);
+  EXPECT_EQ(info[3].params[2].key, "policy.horizon");
+  EXPECT_EQ(info[3].params[2].type, "integer in [1, 1000]");
+  EXPECT_EQ(info[3].params[2].default_value, "15");
+  EXPECT_TRUE(info[0].params.empty());
+}
+
+// A stand-in for a learned policy: its model is a shared resource, loaded
+// once when the policy is resolved and shared by every policy made from it.
+struct ToyModel {
+  int weights = 0;
+};
+struct ToyParams {
+  int scale = 2;
+  template <typename A>
+  void Serialize(A* a) {
+    a->Visit(AIA_FIELD(scale).In(AtLeast(1)).Doc("a parameter"));
+  }
+};
+class ToyPolicy : public RandomPolicy {
+ public:
+  explicit ToyPolicy(std::shared_ptr<const ToyModel> model)
+      : model_(std::move(model)) {}
+  std::shared_ptr<const ToyModel> model_;
+};
+
+TEST(RegistryTest, SharedResourceIsLoadedOncePerResolve) {
+  PolicyRegistry r;
+  int loads = 0;
+  r.Add<ToyParams, ToyModel>(
+      "toy", "a policy with a model", false,
+      [&loads](const ToyParams& p, const PolicyConfig& config) {
+        ++loads;
+        EXPECT_EQ(config.name, "toy");
+        return std::make_shared<const ToyModel>(ToyModel{p.scale * 10});
+      },
+      [](const ToyParams&, std::shared_ptr<const ToyModel> model) {
+        return std::make_unique<ToyPolicy>(std::move(model));
+      });
+  const auto spec = r.Resolve(ScenarioFromYaml(
+      "robots: {count: 1}\ntargets: {count: 1}\npolicy: {name: toy, scale: "
+      "3}\n"));
+  EXPECT_EQ(loads, 1);
+  std::vector<std::unique_ptr<Policy>> episodes;
+  for (int i = 0; i < 3; ++i) episodes.push_back(spec->Create());
+  EXPECT_EQ(loads, 1);
+  const auto* a = static_cast<const ToyPolicy*>(episodes[0].get());
+  const auto* b = static_cast<const ToyPolicy*>(episodes[2].get());
+  EXPECT_EQ(a->model_.get(), b->model_.get());
+  EXPECT_EQ(a->model_->weights, 30);
+}
+
+TEST(TeamBestTest, ActiveRowWithTheSmallestDetLowestIndexFirst) {
+  // Two targets, three robots; robot 1 has failed.
+  const std::vector<double> det = {0.5, 0.2,   // robot 0
+                                   0.1, 0.1,   // robot 1 (inactive)
+                                   0.5, 0.3};  // robot 2
+  std::vector<int> best;
+  TeamBestRows(det, 2, {1, 0, 1}, &best);
+  EXPECT_EQ(best, (std::vector<int>{0, 0}));  // a tie on target 0 goes to 0
+  TeamBestRows(det, 2, {0, 0, 0}, &best);
+  EXPECT_EQ(best, (std::vector<int>{-1, -1}));
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <set>
 
 #include "support/test_support.h"
 
@@ -115,7 +116,8 @@ TEST(CliTest, UncreatableOutputFolderIsBadInput) {
 }
 
 TEST(CliTest, HelpOnEveryCommand) {
-  for (const std::string cmd : {"", "run", "render", "plan", "eval", "bench"}) {
+  for (const std::string cmd :
+       {"", "run", "render", "plan", "eval", "bench", "policies", "schema"}) {
     std::vector<std::string> args;
     if (!cmd.empty()) args.push_back(cmd);
     args.push_back("--help");
@@ -179,6 +181,153 @@ TEST(CliTest, SameScenarioAndSeedGiveByteIdenticalResults) {
   EXPECT_NE(ReadFile(a + "/trace.csv"), ReadFile(b + "/trace.csv"));
   fs::remove_all(a);
   fs::remove_all(b);
+}
+
+
+// The text between `<!-- BEGIN name -->` and `<!-- END name -->`.
+std::string Section(const std::string& doc, const std::string& name) {
+  const std::string begin = "<!-- BEGIN " + name + " -->\n";
+  const std::size_t a = doc.find(begin);
+  const std::size_t b = doc.find("<!-- END " + name + " -->");
+  if (a == std::string::npos || b == std::string::npos) return "(missing)";
+  return doc.substr(a + begin.size(), b - a - begin.size());
+}
+
+std::string TrimEnd(std::string s) {
+  while (!s.empty() && s.back() == '\n') s.pop_back();
+  return s;
+}
+
+TEST(CliTest, DocsTablesAreTheDeclarations) {
+  const std::string doc = ReadFile(SourcePath("docs/scenarios.md"));
+  for (const std::string cmd : {"schema", "policies"}) {
+    const auto r = RunAia({cmd, "--markdown"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(TrimEnd(Section(doc, "aia " + cmd + " --markdown")),
+              TrimEnd(r.out))
+        << "docs/scenarios.md is out of date: run tools/update_docs.sh";
+  }
+}
+
+TEST(CliTest, PoliciesListsEveryPolicyWithItsParameters) {
+  const auto r = RunAia({"policies"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* text :
+       {"random (distributed)", "greedy (distributed)", "expert (centralized)",
+        "decsb (distributed)", "policy.p_v", "policy.anytime", "20000",
+        "policy.horizon", "integer in [1, 1000]"})
+    EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r.out;
+}
+
+TEST(CliTest, RunWritesItsResultFiles) {
+  const std::string out = testing::MakeTempDir("aia_files_");
+  const auto r =
+      RunAia({"run", SourcePath("scenarios/tracking.yaml"), "--max-steps", "6",
+              "--out", out, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::set<std::string> files;
+  for (const auto& entry : fs::directory_iterator(out))
+    files.insert(entry.path().filename().string());
+  EXPECT_EQ(files, (std::set<std::string>{"summary.json", "trace.csv",
+                                          "estimate.csv", "effective.yaml",
+                                          "diagnostics.json"}));
+  const std::string estimate = ReadFile(out + "/estimate.csv");
+  EXPECT_EQ(estimate.rfind("step,target,robot,error_m,nees\n", 0), 0u);
+  EXPECT_EQ(std::count(estimate.begin(), estimate.end(), '\n'), 1 + 7 * 2);
+  const std::string diagnostics = ReadFile(out + "/diagnostics.json");
+  for (const char* key : {"\"policy_status\"", "\"no_valid_move\"",
+                          "\"timeouts\"", "\"rmse_m\"", "\"mean_nees\""})
+    EXPECT_NE(diagnostics.find(key), std::string::npos) << key;
+  fs::remove_all(out);
+}
+
+std::string WithoutFileAndWallTime(const std::string& json) {
+  return std::regex_replace(
+      WithoutWallTime(json), std::regex("\"scenario_file\": [^\n]*"),
+      "\"scenario_file\": X");
+}
+
+TEST(CliTest, EffectiveYamlRepeatsTheMission) {
+  const std::string a = testing::MakeTempDir("aia_eff_"),
+                    b = testing::MakeTempDir("aia_eff_");
+  auto r = RunAia({"run", SourcePath("scenarios/robustness.yaml"), "--policy",
+                   "decsb", "--max-steps", "25", "--set",
+                   "communication.packet_loss_lambda=2", "--set",
+                   "policy.horizon=6", "--out", a, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string effective = ReadFile(a + "/effective.yaml");
+  EXPECT_NE(effective.find("packet_loss_lambda: 2"), std::string::npos);
+  EXPECT_NE(effective.find("horizon: 6"), std::string::npos);
+  EXPECT_NE(effective.find("iterations: 300"), std::string::npos);  // default
+  r = RunAia({"run", a + "/effective.yaml", "--out", b, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(a + "/trace.csv"), ReadFile(b + "/trace.csv"));
+  EXPECT_EQ(WithoutFileAndWallTime(ReadFile(a + "/summary.json")),
+            WithoutFileAndWallTime(ReadFile(b + "/summary.json")));
+  EXPECT_EQ(ReadFile(a + "/effective.yaml"), ReadFile(b + "/effective.yaml"));
+  fs::remove_all(a);
+  fs::remove_all(b);
+}
+
+TEST(CliTest, SetWorksOnRunRenderAndPlan) {
+  const std::string out = testing::MakeTempDir("aia_set_");
+  auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--set",
+                   "mission.max_steps=3", "--set", "sensor.range=3", "--out",
+                   out + "/run", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(ReadFile(out + "/run/summary.json").find("\"max_steps\": 3"),
+            std::string::npos);
+  EXPECT_NE(ReadFile(out + "/run/effective.yaml").find("range: 3"),
+            std::string::npos);
+  r = RunAia({"render", SourcePath("scenarios/tracking.yaml"), "--out",
+              out + "/v.mp4", "--set", "mission.max_steps=2", "--set",
+              "render.width=64", "--height", "48", "--hold", "0", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(ReadFile(out + "/v.summary.json").find("\"width\": 64"),
+            std::string::npos);
+  r = RunAia({"plan", SourcePath("scenarios/default.yaml"), "--set",
+              "policy.anytime=50", "--out", out + "/plan.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(ReadFile(out + "/plan.effective.yaml").find("anytime: 50"),
+            std::string::npos);
+  fs::remove_all(out);
+}
+
+TEST(CliTest, BadSetIsBadInputOnEveryCommand) {
+  const std::string out = testing::MakeTempDir("aia_badset_");
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", scenario, "--set", "robots.cuont=1", "--out", out},
+       "error: command line: --set robots.cuont: unknown key (did you mean "
+       "`count`?)"},
+      {{"run", scenario, "--set", "mission.eps", "--out", out},
+       "error: command line: --set: 'mission.eps' is not key.path=value"},
+      {{"run", scenario, "--set", "policy.p_v=0.5", "--out", out},
+       "error: command line: --set policy.p_v: unknown parameter for policy "
+       "'greedy'"},
+      {{"render", scenario, "--out", out + "/v.mp4", "--set", "render.fps=0"},
+       "error: command line: --set render.fps: must be an integer >= 1"},
+      {{"plan", scenario, "--set", "policy.p_vv=1"},
+       "error: command line: --set policy.p_vv: unknown parameter for policy "
+       "'expert' (did you mean `p_v`?)"},
+      {{"plan", scenario, "--set", "policy.p_v=2"},
+       "error: command line: --set policy.p_v: must be a number in [0, 1]"},
+      {{"eval", "--sizes", "2x2", "--seeds", "1", "--set", "sensor.rang=3",
+        "--out", out},
+       "error: command line: --set sensor.rang: unknown key (did you mean "
+       "`range`?)"},
+  };
+  for (const auto& [args, prefix] : cases) {
+    std::vector<std::string> a = args;
+    a.push_back("--quiet");
+    if (a[0] == "plan") a.pop_back();
+    const auto r = RunAia(a);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(r.err.rfind(prefix, 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out + "/summary.json"));
+  fs::remove_all(out);
 }
 
 }  // namespace

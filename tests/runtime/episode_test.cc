@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 
 #include "aia/runtime/mission.h"
+#include "aia/runtime/observers.h"
+
+#include <algorithm>
+#include <type_traits>
 #include "support/test_support.h"
 
 namespace aia {
@@ -90,6 +94,176 @@ TEST(EpisodeTest, TrackingMissionRunsItsWholeHorizon) {
   EXPECT_EQ(e->step(), 12);
   EXPECT_GT((e->target_positions()[0] - start).x(), 0.1);  // drifted right
   EXPECT_GT(e->localized_steps(), 0);
+}
+
+
+// Records what each callback saw.
+class CountingObserver : public StepObserver {
+ public:
+  void OnStart(const Episode& e) override {
+    ++starts;
+    EXPECT_EQ(e.step(), 0);
+  }
+  void OnDecision(const Episode& e, const DecisionContext& ctx,
+                  const Decision& d) override {
+    ++decisions;
+    EXPECT_EQ(ctx.step, e.step());
+    // The whole team's context, whatever the acting policy was given.
+    EXPECT_NE(ctx.central, nullptr);
+    EXPECT_EQ(d.wanted.size(), d.applied.size());
+    statuses.push_back(d.status);
+  }
+  void OnSubstep(const Episode&, double elapsed) override {
+    ++substeps;
+    EXPECT_GT(elapsed, 0.0);
+  }
+  void OnStep(const Episode&) override { ++steps; }
+  void OnEnd(const Episode& e) override {
+    ++ends;
+    EXPECT_TRUE(e.done());
+  }
+  int starts = 0, decisions = 0, substeps = 0, steps = 0, ends = 0;
+  std::vector<PolicyStatus> statuses;
+};
+
+TEST(EpisodeObserverTest, EveryCallbackOnceInItsPlace) {
+  Scenario s = ScenarioFromYaml(kSmall);
+  s.policy.name = "greedy";
+  s.mission.max_steps = 7;
+  s.mission.stop_at_success = false;
+  auto e = MakeEpisode(s, AllPolicies());
+  CountingObserver a, b;
+  e->AddObserver(&a);
+  e->AddObserver(&b);
+  e->Run();
+  for (const CountingObserver* o : {&a, &b}) {
+    EXPECT_EQ(o->starts, 1);
+    EXPECT_EQ(o->ends, 1);
+    EXPECT_EQ(o->decisions, 7);
+    EXPECT_EQ(o->steps, 7);
+    EXPECT_EQ(o->substeps, e->stats().substeps);
+  }
+  // Statuses are recorded, not dropped.
+  long recorded = 0;
+  for (long n : e->stats().statuses) recorded += n;
+  EXPECT_EQ(recorded, 7);
+  EXPECT_EQ(e->stats().statuses[static_cast<int>(PolicyStatus::kOk)],
+            std::count(a.statuses.begin(), a.statuses.end(), PolicyStatus::kOk));
+  EXPECT_GT(e->stats().sim_seconds, 0.0);
+}
+
+// A policy that records whether it was given the centralized belief.
+class ProbePolicy : public Policy {
+ public:
+  explicit ProbePolicy(bool centralized) : centralized_(centralized) {}
+  std::string_view name() const override { return "probe"; }
+  bool centralized() const override { return centralized_; }
+  void Reset(const Map&, int, int, std::uint64_t) override {}
+  PolicyStatus Decide(const DecisionContext& ctx,
+                      std::vector<Move>* moves) override {
+    central_seen.push_back(ctx.central);
+    moves->assign(moves->size(), Move::kLeft);
+    return PolicyStatus::kOk;
+  }
+  std::vector<const BeliefSet*> central_seen;
+
+ private:
+  bool centralized_;
+};
+
+TEST(EpisodeTest, OnlyACentralizedPolicyIsGivenTheCentralizedBelief) {
+  Scenario s = ScenarioFromYaml(kSmall);
+  s.mission.max_steps = 3;
+  s.mission.stop_at_success = false;
+  const auto instance = BuildInstance(s);
+  for (const bool centralized : {false, true}) {
+    auto policy = std::make_unique<ProbePolicy>(centralized);
+    ProbePolicy* probe = policy.get();
+    Episode e(instance, std::move(policy));
+    e.Run();
+    ASSERT_EQ(probe->central_seen.size(), 3u);
+    for (const BeliefSet* central : probe->central_seen)
+      EXPECT_EQ(central, centralized ? &e.central() : nullptr);
+  }
+  EXPECT_TRUE(AllPolicies().Resolve([&] {
+    Scenario x = s;
+    x.policy.name = "expert";
+    return x;
+  }())->centralized());
+}
+
+// What a dataset recorder does: while one policy acts, ask another (the
+// expert) what it would have done in the same state.
+class LabellingObserver : public StepObserver {
+ public:
+  explicit LabellingObserver(std::unique_ptr<Policy> teacher)
+      : teacher_(std::move(teacher)) {}
+  void OnStart(const Episode& e) override {
+    teacher_->Reset(e.world().map, e.world().NumRobots(),
+                    e.world().NumTargets(), e.scenario().seed);
+  }
+  void OnDecision(const Episode&, const DecisionContext& ctx,
+                  const Decision& d) override {
+    std::vector<Move> labels(d.wanted.size());
+    teacher_->Decide(ctx, &labels);
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+      ++samples;
+      agree += labels[i] == d.wanted[i] ? 1 : 0;
+    }
+  }
+  int samples = 0, agree = 0;
+
+ private:
+  std::unique_ptr<Policy> teacher_;
+};
+
+TEST(EpisodeObserverTest, AnObserverCanLabelStatesWithAnotherPolicy) {
+  Scenario s = ScenarioFromYaml(kSmall);
+  s.policy.name = "random";
+  s.mission.max_steps = 5;
+  s.mission.stop_at_success = false;
+  auto e = MakeEpisode(s, AllPolicies());
+  Scenario expert = s;
+  expert.policy.name = "expert";
+  LabellingObserver labeller(AllPolicies().Resolve(expert)->Create());
+  e->AddObserver(&labeller);
+  e->Run();
+  EXPECT_EQ(labeller.samples, 5 * 3);
+  EXPECT_LT(labeller.agree, labeller.samples);  // the random walker is no expert
+}
+
+TEST(EpisodeTest, EpisodesShareOneInstanceAndMatchAFreshOne) {
+  Scenario s = ScenarioFromYaml(kSmall);
+  const auto shared = BuildInstance(s);
+  const PolicyRegistry registry = AllPolicies();
+  for (const std::string name : {"greedy", "decsb", "greedy"}) {
+    Scenario p = s;
+    p.policy.name = name;
+    Episode on_shared(shared, registry.Resolve(p)->Create());
+    on_shared.Run();
+    auto fresh = MakeEpisode(p, registry);
+    fresh->Run();
+    EXPECT_EQ(on_shared.flowtime(), fresh->flowtime()) << name;
+    for (int k = 0; k < fresh->world().NumTargets(); ++k)
+      EXPECT_EQ(on_shared.MinDet(k), fresh->MinDet(k)) << name;
+  }
+  static_assert(!std::is_copy_constructible_v<Episode> &&
+                !std::is_move_constructible_v<Episode>);
+}
+
+TEST(EstimateObserverTest, ErrorAndNeesByHandAtTheStart) {
+  // No robot sees the target: the estimate is the prior, mean 0.3 m right of
+  // the truth with Sigma = 0.5^2 I, so the error is 0.3 and
+  // NEES = 0.3^2 / 0.25 = 0.36.
+  Scenario s = ScenarioFromYaml(
+      "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+      "targets: {list: [{position: [10, 10], prior_mean: [10.3, 10], "
+      "prior_sigma: 0.5}]}\nmission: {max_steps: 1}\n");
+  auto e = MakeEpisode(s, AllPolicies());
+  EstimateObserver scores;
+  scores.OnStart(*e);
+  EXPECT_NEAR(scores.rmse(), 0.3, 1e-12);
+  EXPECT_NEAR(scores.mean_nees(0), 0.36, 1e-12);
 }
 
 }  // namespace

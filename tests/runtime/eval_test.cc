@@ -5,7 +5,10 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <tuple>
 
+#include "aia/planning/decsb.h"
+#include "aia/runtime/mission.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -81,6 +84,97 @@ TEST(EvalTest, BadFlagsExitWith2) {
   r = RunAia({"eval", "--policies", "greedy,nope", "--out", dir});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("unknown policy 'nope'"), std::string::npos) << r.err;
+  std::filesystem::remove_all(dir);
+}
+
+
+TEST(EvalPiecesTest, EnumerateRunOneInstanceAndMerge) {
+  const std::vector<EvalInstance> all =
+      EnumerateInstances({"2x2", "3x1"}, 2, 7);
+  ASSERT_EQ(all.size(), 4u);
+  EXPECT_EQ(all[3].size, "3x1");
+  EXPECT_EQ(all[3].robots, 3);
+  EXPECT_EQ(all[3].targets, 1);
+  EXPECT_EQ(all[3].seed, 8u);
+  const PolicyRegistry registry = AllPolicies();
+  const EvalSetup setup = MakeEvalSetup({"greedy", "random"}, {}, registry);
+  // A pure function of the instance: the same rows twice, wall time aside;
+  // a subset of the policies gives the subset of the rows.
+  const std::vector<EvalRow> a = RunInstance(all[0], setup);
+  const std::vector<EvalRow> b = RunInstance(all[0], setup);
+  const std::vector<EvalRow> only = RunInstance(all[0], setup, {"random"});
+  ASSERT_EQ(a.size(), 2u);
+  ASSERT_EQ(only.size(), 1u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].policy, setup.policies[i]->name());
+    EXPECT_EQ(std::make_tuple(a[i].success, a[i].flowtime, a[i].fstar),
+              std::make_tuple(b[i].success, b[i].flowtime, b[i].fstar));
+  }
+  EXPECT_EQ(only[0].flowtime, a[1].flowtime);
+  const std::string csv = SummaryCsv(a, {"2x2"}, {"greedy", "random"});
+  EXPECT_NE(csv.find("2x2,greedy,1,"), std::string::npos) << csv;
+}
+
+TEST(EvalPiecesTest, SetReachesTheInstancesAndThePoliciesThatDeclareIt) {
+  const PolicyRegistry registry = AllPolicies();
+  const EvalSetup setup = MakeEvalSetup(
+      {"greedy", "decsb"}, {"sensor.range=3", "policy.horizon=5",
+                            "policy.anytime=100"},
+      registry);
+  EXPECT_EQ(InstanceScenario({"2x2", 2, 2, 4}, setup).sensor.range, 3.0);
+  EXPECT_EQ(InstanceScenario({"2x2", 2, 2, 4}, setup).seed, 4u);
+  EXPECT_EQ(ParamsOf<DecSbParams>(*setup.policies[1])->horizon, 5);
+  EXPECT_EQ(ParamsOf<ExpertParams>(*setup.expert)->anytime, 100);
+  const auto error = [&](const std::string& set) {
+    try {
+      MakeEvalSetup({"greedy"}, {set}, registry);
+    } catch (const InputError& e) {
+      return e.Format();
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error("policy.horizon=5"),
+            "command line: --set policy.horizon: no policy of this evaluation "
+            "(expert, greedy) has the parameter `horizon` (aia policies lists "
+            "them)");
+  EXPECT_EQ(error("seed=3").rfind("command line: --set seed: is set by each "
+                                  "instance",
+                                  0),
+            0u);
+  EXPECT_EQ(error("robots.count=3").rfind("command line: --set robots.count:", 0),
+            0u);
+}
+
+TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
+  const std::string dir = testing::MakeTempDir("aia_eval_");
+  const auto eval = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"eval", "--sizes", "2x1", "--seeds", "2",
+                                     "--policies", "greedy", "--out", dir,
+                                     "--quiet"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunAia(args);
+  };
+  ASSERT_EQ(eval({"--set", "sensor.range=3"}).exit_code, 0);
+  const std::string effective = ReadFile(dir + "/effective.yaml");
+  EXPECT_NE(effective.find("range: 3"), std::string::npos) << effective;
+  EXPECT_NE(effective.find("#   greedy: {}"), std::string::npos) << effective;
+  // The same configuration resumes (nothing left to run) ...
+  auto r = eval({"--set", "sensor.range=3"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 rows already done, 0 to run"), std::string::npos);
+  // ... another does not mix its rows in.
+  r = eval({});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("holds results of another configuration (the scenario "
+                       "differs"),
+            std::string::npos)
+      << r.err;
+  // Adding a policy to the same configuration is fine.
+  r = RunAia({"eval", "--sizes", "2x1", "--seeds", "2", "--policies",
+              "greedy,random", "--set", "sensor.range=3", "--out", dir,
+              "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 rows already done, 2 to run"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 

@@ -535,3 +535,129 @@ TEST(LoaderTest, TargetPriorOffsetIsReadable) {
 
 }  // namespace
 }  // namespace aia
+
+namespace aia {
+namespace {
+
+// Every scenario written back as its effective YAML reads back to the same
+// scenario (the same YAML again), defaults and all.
+TEST(EffectiveYamlTest, ReadsBackToTheSameScenario) {
+  const std::string dir = testing::MakeTempDir("aia_effective_");
+  std::vector<std::string> files;
+  for (const auto& entry :
+       fs::directory_iterator(testing::SourcePath("scenarios")))
+    if (entry.path().extension() == ".yaml") files.push_back(entry.path());
+  WriteFile(dir, "maps/maze.pgm", "P2\n1 1\n255\n0\n");
+  files.push_back(WriteFile(dir, "demo.yaml", kFullExample));
+  ASSERT_GE(files.size(), 6u);
+  for (const std::string& file : files) {
+    SCOPED_TRACE(file);
+    const Scenario s = LoadScenario(file);
+    const std::string yaml = EffectiveYaml(s, "# header\n");
+    EXPECT_EQ(yaml.rfind("# header\nname: ", 0), 0u);
+    const std::string path = WriteFile(dir, "effective.yaml", yaml);
+    const Scenario back = LoadScenario(path);
+    EXPECT_EQ(EffectiveYaml(back, "# header\n"), yaml);
+    EXPECT_EQ(back.seed, s.seed);
+    EXPECT_EQ(back.NumTargets(), s.NumTargets());
+  }
+  fs::remove_all(dir);
+}
+
+InputError OverrideError(const std::vector<Override>& overrides) {
+  try {
+    ParseScenario(kMinimal, "m.yaml", ".", overrides);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error";
+  return InputError("", 0, "", "");
+}
+
+TEST(OverrideTest, SetChangesKeysAtAnyDepth) {
+  const Scenario s = ParseScenario(
+      kMinimal, "m.yaml", ".",
+      {ParseSetFlag("mission.eps=0.05"), ParseSetFlag("workspace.size=[30, 25]"),
+       ParseSetFlag("communication.failures=[{robot: 1, step: 4}]"),
+       ParseSetFlag("communication.failures[0].step=6"),
+       {"--seed", "seed", "42"}});
+  EXPECT_EQ(s.mission.eps, 0.05);
+  EXPECT_EQ(s.workspace.size, Vec2(30, 25));
+  ASSERT_EQ(s.communication.failures.size(), 1u);
+  EXPECT_EQ(s.communication.failures[0].step, 6);
+  EXPECT_EQ(s.seed, 42u);
+  EXPECT_EQ(s.robots.count, 2);  // the file's
+}
+
+TEST(OverrideTest, BadOverridesNameTheirFlag) {
+  EXPECT_EQ(OverrideError({ParseSetFlag("robots.cuont=3")}).Format(),
+            "command line: --set robots.cuont: unknown key (did you mean "
+            "`count`?); valid keys under robots: count, radius, step, start");
+  EXPECT_EQ(OverrideError({ParseSetFlag("mission.eps=-1")}).Format(),
+            "command line: --set mission.eps: must be a positive number, got "
+            "-1");
+  EXPECT_EQ(OverrideError({{"--max-steps", "mission.max_steps", "0"}}).Format(),
+            "command line: --max-steps: must be an integer >= 1, got 0");
+  EXPECT_EQ(OverrideError({ParseSetFlag("targets.list[2].position=[1, 1]")})
+                .Format(),
+            "command line: --set targets.list[2].position: targets.list is "
+            "not given, so it has no targets.list[2]");
+  EXPECT_EQ(OverrideError({ParseSetFlag("robots.count.x=1")}).message(),
+            "robots.count is not a mapping, so it has no key `x`");
+  // A key path that the file does not give yet is made, then checked.
+  EXPECT_EQ(OverrideError({ParseSetFlag("mission.eps.x=1")}).message(),
+            "must be a positive number, got {x: 1}");
+  // A start outside the workspace set on the command line.
+  EXPECT_EQ(OverrideError({ParseSetFlag("robots.start=[[1, 1], [50, 1]]")})
+                .Format(),
+            "command line: --set robots.start[1]: must lie inside the "
+            "workspace [0, 20] x [0, 20], got [50, 1]");
+  for (const char* bad : {"novalue", "=3", "a..b=1", "a.[1]=2", "a b=1"}) {
+    try {
+      ParseSetFlag(bad);
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.Format().rfind("command line: --set: ", 0), 0u) << e.Format();
+    }
+  }
+}
+
+TEST(OverrideTest, ANewPolicyDropsTheFilesParametersButKeepsSetOnes) {
+  const std::string yaml =
+      std::string(kMinimal) + "policy: {name: expert, p_v: 0.3}\n";
+  const Scenario same = ParseScenario(
+      yaml, "m.yaml", ".", {{"--policy", "policy.name", "expert"}});
+  ASSERT_NE(same.policy.params.Find("p_v"), nullptr);
+  const Scenario other = ParseScenario(
+      yaml, "m.yaml", ".",
+      {{"--policy", "policy.name", "decsb"}, ParseSetFlag("policy.horizon=4")});
+  EXPECT_EQ(other.policy.name, "decsb");
+  EXPECT_EQ(other.policy.params.Find("p_v"), nullptr);
+  ASSERT_NE(other.policy.params.Find("horizon"), nullptr);
+  EXPECT_EQ(other.policy.params.Find("horizon")->origin, "--set");
+}
+
+TEST(OverrideTest, WithOverridesRereadsACodeBuiltScenario) {
+  Scenario s;
+  s.robots.count = 3;
+  s.targets.count = 2;
+  const Scenario t = WithOverrides(s, {ParseSetFlag("sensor.range=3.5")});
+  EXPECT_EQ(t.sensor.range, 3.5);
+  EXPECT_EQ(t.robots.count, 3);
+  EXPECT_EQ(EffectiveYaml(WithOverrides(s, {}), ""), EffectiveYaml(s, ""));
+}
+
+TEST(SchemaTest, EveryKeyIsDocumented) {
+  const std::vector<FieldDoc> rows = ScenarioKeys();
+  ASSERT_GT(rows.size(), 40u);
+  bool has_nested = false;
+  for (const FieldDoc& r : rows) {
+    EXPECT_FALSE(r.doc.empty()) << r.key;
+    EXPECT_FALSE(r.type.empty()) << r.key;
+    has_nested = has_nested || r.key == "targets.list[i].dynamics.q";
+  }
+  EXPECT_TRUE(has_nested);
+}
+
+}  // namespace
+}  // namespace aia

@@ -25,6 +25,7 @@
 #include "aia/core/config_node.h"
 #include "aia/core/error.h"
 #include "aia/core/fields.h"
+#include "aia/core/types.h"
 
 namespace aia {
 
@@ -596,6 +597,7 @@ class FieldDocs {
     }
     if constexpr (std::is_same_v<T, std::string>) {
       if (f.path && f.value->empty()) return "none";
+      return f.value->empty() ? "\"\"" : *f.value;
     }
     const std::optional<ConfigNode> node = FieldWriter::Write(*f.value, f);
     if (!node) return "none";

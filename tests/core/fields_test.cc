@@ -1,0 +1,249 @@
+// The field archives on a small struct: every kind of field read strictly,
+// written back, documented and found by address.
+#include "aia/core/field_io.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+
+namespace aia {
+namespace {
+
+enum class Shape { kRound, kSquare };
+constexpr std::array<EnumName<Shape>, 2> EnumNames(Shape) {
+  return {{{Shape::kRound, "round"}, {Shape::kSquare, "square"}}};
+}
+
+struct Inner {
+  int count = 1;
+  Vec2 at{0.0, 0.0};
+  template <typename A>
+  void Serialize(A* a) {
+    a->Visit(AIA_FIELD(count).In(AtLeast(0)).Doc("how many"));
+    a->Visit(AIA_FIELD(at).Doc("where"));
+  }
+};
+
+struct Outer {
+  double rate = 0.5;
+  int who = -1;
+  bool on = true;
+  std::string label = "x";
+  Shape shape = Shape::kRound;
+  std::optional<Inner> extra;
+  std::vector<Inner> items;
+  Inner inner;
+  int needed = 0;
+  ConfigNode rest;
+  int validated = 0;
+
+  template <typename A>
+  void Serialize(A* a) {
+    a->Visit(AIA_FIELD(rate).In(kHalfOpenUnit).Doc("a rate"));
+    a->Visit(AIA_FIELD(who).In(AtLeast(0)).Keyword("anyone", -1).Doc("who"));
+    a->Visit(AIA_FIELD(on));
+    a->Visit(AIA_FIELD(label));
+    a->Visit(AIA_FIELD(shape));
+    a->Visit(AIA_FIELD(extra));
+    a->Visit(AIA_FIELD(items));
+    a->Visit(AIA_FIELD(inner));
+    a->Visit(AIA_FIELD(needed).Required("a number we need"));
+    a->Visit(AIA_FIELD(rest).Rest());
+  }
+  void Validate(const FieldChecker& check) {
+    ++validated;
+    if (!items.empty() && items[0].count > inner.count)
+      check.Fail(items[0].count, "must not exceed inner.count, got " +
+                                     check.Shown(items[0].count));
+  }
+};
+
+ConfigNode Scalar(const std::string& text, int line) {
+  ConfigNode n = ConfigNode::Scalar(text);
+  n.line = line;
+  return n;
+}
+
+// {needed: 3, ...} with one key per line from line 1.
+ConfigNode Doc(std::vector<std::pair<std::string, ConfigNode>> entries) {
+  ConfigNode map = ConfigNode::Map();
+  int line = 1;
+  for (auto& [k, v] : entries) {
+    if (v.line == 0) v.line = line;
+    map.entries.push_back({k, line++, std::move(v)});
+  }
+  return map;
+}
+
+Outer Read(const ConfigNode& node) {
+  Outer out;
+  ReadOptions options;
+  options.file = "f.yaml";
+  ReadFields(node, options, "", &out);
+  return out;
+}
+
+InputError ErrorOf(const ConfigNode& node) {
+  try {
+    Read(node);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error";
+  return InputError("", 0, "", "");
+}
+
+TEST(FieldReaderTest, ReadsEveryKindOfField) {
+  ConfigNode items = ConfigNode::List();
+  items.items.push_back(Doc({{"count", Scalar("0", 0)}}));
+  ConfigNode at = ConfigNode::List();
+  at.items = {Scalar("1.5", 0), Scalar("-2", 0)};
+  const Outer o = Read(Doc({{"rate", Scalar("1", 0)},
+                            {"who", Scalar("anyone", 0)},
+                            {"on", Scalar("false", 0)},
+                            {"label", ConfigNode::Scalar("5", ConfigNode::Style::kQuoted)},
+                            {"shape", Scalar("square", 0)},
+                            {"extra", ConfigNode{}},
+                            {"items", items},
+                            {"inner", Doc({{"at", at}})},
+                            {"needed", Scalar("3", 0)},
+                            {"colour", Scalar("red", 0)}}));
+  EXPECT_EQ(o.rate, 1.0);
+  EXPECT_EQ(o.who, -1);
+  EXPECT_FALSE(o.on);
+  EXPECT_EQ(o.label, "5");
+  EXPECT_EQ(o.shape, Shape::kSquare);
+  ASSERT_TRUE(o.extra.has_value());  // an empty value: all defaults
+  EXPECT_EQ(o.extra->count, 1);
+  ASSERT_EQ(o.items.size(), 1u);
+  EXPECT_EQ(o.items[0].count, 0);
+  EXPECT_EQ(o.inner.at, Vec2(1.5, -2.0));
+  EXPECT_EQ(o.needed, 3);
+  ASSERT_EQ(o.rest.entries.size(), 1u);  // unknown keys kept by Rest()
+  EXPECT_EQ(o.rest.entries[0].key, "colour");
+  EXPECT_EQ(o.validated, 1);
+}
+
+TEST(FieldReaderTest, ErrorsNameTheKeyLineAndWhatIsAllowed) {
+  EXPECT_EQ(ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"rate", Scalar("0", 0)}}))
+                .Format(),
+            "f.yaml:2: rate: must be a number in (0, 1], got 0");
+  EXPECT_EQ(ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"who", Scalar("-2", 0)}}))
+                .message(),
+            "must be an integer >= 0 or anyone, got -2");
+  EXPECT_EQ(
+      ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"shape", Scalar("oval", 0)}}))
+          .message(),
+      "must be round or square, got oval");
+  EXPECT_EQ(
+      ErrorOf(Doc({{"needed", ConfigNode::Scalar("1", ConfigNode::Style::kQuoted)}}))
+          .message(),
+      "must be an integer, got \"1\"");
+  EXPECT_EQ(ErrorOf(Doc({})).Format(),
+            "f.yaml: needed: is required: a number we need");
+  EXPECT_EQ(ErrorOf(Doc({{"needed", Scalar("1", 0)},
+                         {"inner", Doc({{"cuont", Scalar("1", 0)}})}}))
+                .message(),
+            "unknown key (did you mean `count`?); valid keys under inner: "
+            "count, at");
+}
+
+TEST(FieldReaderTest, ValidateBlamesTheFieldItReports) {
+  ConfigNode items = ConfigNode::List();
+  items.items.push_back(Doc({{"count", Scalar("7", 4)}}));
+  items.items[0].line = 4;
+  const InputError e =
+      ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"items", items}}));
+  EXPECT_EQ(e.key(), "items[0].count");
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.message(), "must not exceed inner.count, got 7");
+}
+
+TEST(FieldReaderTest, CommandLineValuesAreBlamedOnTheirFlag) {
+  ConfigNode rate = Scalar("2", 0);
+  rate.origin = "--set";
+  EXPECT_EQ(ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"rate", rate}})).Format(),
+            "command line: --set rate: must be a number in (0, 1], got 2");
+}
+
+TEST(FieldWriterTest, WritesEveryFieldAndReadsBackTheSame) {
+  Outer o;
+  o.rate = 0.1;
+  o.who = 4;
+  o.label = "true";  // a string that YAML would read as a boolean
+  o.items = {Inner{}, Inner{2, {3, 4}}};
+  o.needed = 9;
+  const ConfigNode node = FieldWriter::WriteStruct(o);
+  EXPECT_EQ(node.Find("rate")->scalar, "0.1");
+  EXPECT_EQ(node.Find("who")->scalar, "4");
+  EXPECT_EQ(node.Find("label")->style, ConfigNode::Style::kQuoted);
+  EXPECT_EQ(node.Find("extra"), nullptr);  // nullopt is not written
+  const Outer back = Read(node);
+  EXPECT_EQ(back.rate, o.rate);
+  EXPECT_EQ(back.label, "true");
+  ASSERT_EQ(back.items.size(), 2u);
+  EXPECT_EQ(back.items[1].at, Vec2(3, 4));
+  Outer keyword;
+  keyword.needed = 1;
+  EXPECT_EQ(FieldWriter::WriteStruct(keyword).Find("who")->scalar, "anyone");
+}
+
+TEST(FieldDocsTest, OneRowPerKeyWithTypeAndDefault) {
+  const std::vector<FieldDoc> rows = FieldDocs::Of(Outer{});
+  std::vector<std::string> keys;
+  for (const FieldDoc& r : rows) keys.push_back(r.key);
+  EXPECT_EQ(keys, (std::vector<std::string>{
+                      "rate", "who", "on", "label", "shape", "extra",
+                      "extra.count", "extra.at", "items", "items[i].count",
+                      "items[i].at", "inner.count", "inner.at", "needed",
+                      "<parameter>"}));
+  EXPECT_EQ(rows[0].type, "number in (0, 1]");
+  EXPECT_EQ(rows[0].default_value, "0.5");
+  EXPECT_EQ(rows[1].type, "integer >= 0 or anyone");
+  EXPECT_EQ(rows[1].default_value, "anyone");
+  EXPECT_EQ(rows[4].type, "round | square");
+  EXPECT_EQ(rows[5].default_value, "none");
+  EXPECT_EQ(rows[13].default_value, "required");
+}
+
+TEST(FieldFinderTest, FindsNestedMembersByAddress) {
+  Outer o;
+  o.items.resize(3);
+  FieldFinder f(&o.items[2].at, typeid(Vec2));
+  ASSERT_TRUE(f.Find(&o, "root"));
+  EXPECT_EQ(f.key(), "root.items[2].at");
+  // The same address as another type is not a match: a struct and its
+  // first member.
+  FieldFinder g(&o.inner, typeid(Inner));
+  ASSERT_TRUE(g.Find(&o, ""));
+  EXPECT_EQ(g.key(), "inner");
+  FieldFinder h(&o.inner.count, typeid(int));
+  ASSERT_TRUE(h.Find(&o, ""));
+  EXPECT_EQ(h.key(), "inner.count");
+}
+
+TEST(KeyErrorTest, BlamesTheNearestGivenKey) {
+  KeySources sources;
+  sources["a"] = {2, 3, ""};
+  sources["a.b"] = {4, 5, ""};
+  sources["c"] = {6, 6, "--seed"};
+  EXPECT_EQ(KeyError("f", sources, "a.b", "x").line(), 4);
+  EXPECT_EQ(KeyError("f", sources, "a.b", "x", true).line(), 5);
+  EXPECT_EQ(KeyError("f", sources, "a.z[1]", "x").line(), 2);
+  EXPECT_EQ(KeyError("f", sources, "q", "x").line(), 0);
+  EXPECT_EQ(KeyError("f", sources, "c.d", "x").Format(),
+            "command line: --seed: x");
+}
+
+TEST(FieldTextTest, ShortestRealReadsBackExactly) {
+  for (double x : {0.1, 1.0 / 3.0, 1e-300, 123456789.125, -0.0, 4e-4}) {
+    const std::string text = field_text::ShortestReal(x);
+    const std::optional<double> back =
+        field_text::ParseReal(ConfigNode::Scalar(text));
+    ASSERT_TRUE(back.has_value()) << text;
+    EXPECT_EQ(*back, x) << text;
+  }
+}
+
+}  // namespace
+}  // namespace aia
