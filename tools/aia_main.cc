@@ -2,9 +2,9 @@
 // flags and returns what runs it; main() parses, runs the chosen one, and
 // turns bad input into `error: FILE:LINE: key: what` and exit code 2.
 #include <CLI/CLI.hpp>
+#include <array>
 #include <cstdio>
 #include <exception>
-#include <array>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -41,7 +41,8 @@ struct MissionFlags {
     if (with_policy)
       c->add_option("--policy", policy,
                     "policy name (overrides the scenario's policy.name)");
-    c->add_option("--seed", seed, "random seed (overrides the scenario's seed)");
+    c->add_option("--seed", seed,
+                  "random seed (overrides the scenario's seed)");
     if (with_max_steps)
       c->add_option("--max-steps", max_steps,
                     "decision steps at most (overrides mission.max_steps)");
@@ -222,7 +223,8 @@ Action AddPoliciesCommand(CLI::App& app) {
   auto markdown = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "policies", "every policy with its parameters (type, default, meaning)");
-  cmd->add_flag("--markdown", *markdown, "as the Markdown of docs/scenarios.md");
+  cmd->add_flag("--markdown", *markdown,
+                "as the Markdown of docs/scenarios.md");
   return [=]() {
     if (!cmd->parsed()) return -1;
     std::fputs(aia::PolicyCatalog(aia::AllPolicies(), *markdown).c_str(),
@@ -235,7 +237,8 @@ Action AddSchemaCommand(CLI::App& app) {
   auto markdown = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "schema", "every scenario key with its type, default and meaning");
-  cmd->add_flag("--markdown", *markdown, "as the Markdown of docs/scenarios.md");
+  cmd->add_flag("--markdown", *markdown,
+                "as the Markdown of docs/scenarios.md");
   return [=]() {
     if (!cmd->parsed()) return -1;
     std::fputs(aia::ScenarioSchema(*markdown).c_str(), stdout);
@@ -250,8 +253,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "aia 0.1.0");
   const std::vector<Action> commands = {
-      AddRunCommand(app),      AddRenderCommand(app), AddPlanCommand(app),
-      AddEvalCommand(app),     AddBenchCommand(app),  AddPoliciesCommand(app),
+      AddRunCommand(app),   AddRenderCommand(app), AddPlanCommand(app),
+      AddEvalCommand(app),  AddBenchCommand(app),  AddPoliciesCommand(app),
       AddSchemaCommand(app)};
   try {
     app.parse(argc, argv);

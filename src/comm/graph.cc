@@ -7,8 +7,7 @@
 namespace aia {
 
 CommNetwork::CommNetwork(const CommParams& params, int num_robots,
-                         std::vector<RobotFailure> failures,
-                         std::uint64_t seed)
+                         std::vector<RobotFailure> failures, std::uint64_t seed)
     : params_(params),
       n_(num_robots),
       failures_(std::move(failures)),

@@ -27,7 +27,8 @@ std::string NumberRange::Describe(bool plural) const {
   if (lo == -kInfinity && hi == kInfinity) return noun;
   if (lo == 0.0 && hi == kInfinity)
     return (lo_open ? "positive " : "non-negative ") + noun;
-  if (hi == kInfinity) return noun + (lo_open ? " > " : " >= ") + FormatNumber(lo);
+  if (hi == kInfinity)
+    return noun + (lo_open ? " > " : " >= ") + FormatNumber(lo);
   if (lo == -kInfinity)
     return noun + (hi_open ? " < " : " <= ") + FormatNumber(hi);
   return noun + " in " + (lo_open ? "(" : "[") + FormatNumber(lo) + ", " +
@@ -244,27 +245,23 @@ double FieldReader::ReadReal(const ConfigNode& node, const std::string& key,
   const std::optional<double> x = field_text::ParseReal(node);
   if (x && !std::isfinite(*x)) FailExpected(node, key, "a finite number");
   if (!x || !range.Contains(*x)) {
-    FailExpected(node, key,
-                 expect.empty() ? "a " + range.Describe(false)
-                                : std::string(expect));
+    FailExpected(
+        node, key,
+        expect.empty() ? "a " + range.Describe(false) : std::string(expect));
   }
   return *x;
 }
 
-long long FieldReader::ReadInteger(const ConfigNode& node,
-                                   const std::string& key,
-                                   const NumberRange& range,
-                                   std::string_view expect,
-                                   std::string_view keyword,
-                                   long long keyword_value, long long lo,
-                                   long long hi) const {
+long long FieldReader::ReadInteger(
+    const ConfigNode& node, const std::string& key, const NumberRange& range,
+    std::string_view expect, std::string_view keyword, long long keyword_value,
+    long long lo, long long hi) const {
   if (!keyword.empty() && node.IsPlainScalar() && node.scalar == keyword)
     return keyword_value;
   const std::optional<long long> x = field_text::ParseInteger(node);
-  if (!x || *x < lo || *x > hi ||
-      !range.Contains(static_cast<double>(*x))) {
-    std::string expected = expect.empty() ? range.DescribeInteger()
-                                          : std::string(expect);
+  if (!x || *x < lo || *x > hi || !range.Contains(static_cast<double>(*x))) {
+    std::string expected =
+        expect.empty() ? range.DescribeInteger() : std::string(expect);
     if (expect.empty() && !keyword.empty())
       expected += " or " + std::string(keyword);
     FailExpected(node, key, expected);
@@ -278,10 +275,9 @@ Eigen::VectorXd FieldReader::ReadNumbers(const ConfigNode& node,
                                          const NumberRange& range,
                                          std::string_view shape) const {
   const std::string suffix = shape.empty() ? "" : " " + std::string(shape);
-  const std::string expected =
-      size > 0 ? field_text::CountWord(size) + " " +
-                     range.Describe(size != 1) + suffix
-               : "a list of " + range.Describe(true);
+  const std::string expected = size > 0 ? field_text::CountWord(size) + " " +
+                                              range.Describe(size != 1) + suffix
+                                        : "a list of " + range.Describe(true);
   if (!node.IsList() || (size > 0 && node.items.size() != size))
     FailExpected(node, key, expected);
   Eigen::VectorXd out(static_cast<Eigen::Index>(node.items.size()));

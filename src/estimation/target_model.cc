@@ -36,7 +36,8 @@ void TargetModel::Validate(const FieldChecker& check) {
   if (dim() != 2 && dim() != 4) {
     check.Fail(A,
                "must be 2x2 (state [px, py]) or 4x4 (state [px, py, vx, vy]), "
-               "got " + got);
+               "got " +
+                   got);
   }
   if (!check.Given(b)) {
     b = Eigen::VectorXd::Zero(dim());

@@ -6,16 +6,6 @@
 
 namespace aia {
 
-SamplingParams ExpertParams::Sampling() const {
-  SamplingParams p;
-  p.p_v = p_v;
-  p.p_u = p_u;
-  p.anytime = anytime;
-  p.max_iterations = max_iterations;
-  p.max_nodes = max_nodes;
-  return p;
-}
-
 SamplingProblem ExpertProblem(const DecisionContext& ctx) {
   AIA_CHECK_MSG(ctx.central != nullptr,
                 "the expert plans on the centralized belief");
@@ -30,8 +20,7 @@ SamplingProblem ExpertProblem(const DecisionContext& ctx) {
   return p;
 }
 
-ExpertPolicy::ExpertPolicy(const ExpertParams& params)
-    : params_(params.Sampling()) {}
+ExpertPolicy::ExpertPolicy(const ExpertParams& params) : params_(params) {}
 
 void ExpertPolicy::Reset(const Map&, int, int, std::uint64_t seed) {
   rng_ = Rng(seed, "policy.expert");

@@ -109,8 +109,7 @@ Move GreedyPolicy::TowardNearestTarget(const DecisionContext& ctx, int robot) {
         const int q = lattice.Index(ix, iy);
         const int d = dist_[q];
         if (d < 1 || (best >= 0 && d >= best_dist)) continue;
-        if (PredictedPrecision(*ctx.map, sensor, lattice.Point(q), b.mu) <=
-            0.0)
+        if (PredictedPrecision(*ctx.map, sensor, lattice.Point(q), b.mu) <= 0.0)
           continue;
         best = q;
         best_dist = d;

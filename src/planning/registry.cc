@@ -77,9 +77,8 @@ PolicyRegistry BuiltinPolicies() {
       "expert",
       "C-SB: centralized sampling-based tree over the team and the "
       "centralized filter",
-      true, [](const ExpertParams& p) {
-        return std::make_unique<ExpertPolicy>(p);
-      });
+      true,
+      [](const ExpertParams& p) { return std::make_unique<ExpertPolicy>(p); });
   r.Add<DecSbParams>(
       "decsb",
       "Dec-SB: one receding-horizon sampling tree per robot on its own DKF "

@@ -91,8 +91,8 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
   heat_rect_ = cv::Rect(x0, y0, std::max(1, x1 - x0), std::max(1, y1 - y0)) &
                cv::Rect(0, 0, settings.scene.width, settings.scene.height);
   // The margin right of the walls' tops.
-  const int right = static_cast<int>(std::ceil(
-      view_.ToPixel({size.x() + 0.3, 0.0}, kObstacleHeight).x()));
+  const int right = static_cast<int>(
+      std::ceil(view_.ToPixel({size.x() + 0.3, 0.0}, kObstacleHeight).x()));
   const int room = settings.scene.width - right;
   if (room >= 72) {
     const int pad = std::max(3, room / 16);

@@ -103,8 +103,8 @@ int RunBench(const BenchOptions& o) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
     CommandOverrides ov;
     ov.policy = o.policy;
-    Scenario s =
-        WithOverrides(GeneratedScenario(n, m, o.seed), ov.ToOverrides(registry));
+    Scenario s = WithOverrides(GeneratedScenario(n, m, o.seed),
+                               ov.ToOverrides(registry));
     s.mission.max_steps = o.steps;
     s.mission.stop_at_success = false;
     const std::shared_ptr<const PolicySpec> policy = registry.Resolve(s);

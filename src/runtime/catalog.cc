@@ -33,10 +33,10 @@ std::string PolicyCatalog(const PolicyRegistry& registry, bool markdown) {
   for (const PolicyInfo& p : registry.Describe()) {
     const std::string scope = p.centralized ? "centralized" : "distributed";
     if (markdown) {
-      out += "### `" + p.name + "` (" + scope + ")\n\n" + p.description +
-             ".\n\n";
-      out += p.params.empty() ? "No parameters.\n\n"
-                              : FieldTable(p.params) + "\n";
+      out +=
+          "### `" + p.name + "` (" + scope + ")\n\n" + p.description + ".\n\n";
+      out +=
+          p.params.empty() ? "No parameters.\n\n" : FieldTable(p.params) + "\n";
     } else {
       out += p.name + " (" + scope + "): " + p.description + "\n";
       out += p.params.empty() ? "  no parameters\n" : Columns(p.params, "  ");

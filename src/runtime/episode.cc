@@ -208,8 +208,8 @@ void Episode::Observe() {
     Predict(&predicted_);
     Predict(&central_);
   }
-  FusionWeights(comm_.AllNeighbors(), instance_->scenario.communication.kappa_self,
-                &weights_);
+  FusionWeights(comm_.AllNeighbors(),
+                instance_->scenario.communication.kappa_self, &weights_);
   Fuse(predicted_, weights_, z_, robot_pos_, &fused_);
   CentralUpdate(z_, robot_pos_, &central_);
 

@@ -144,8 +144,7 @@ std::pair<int, int> ParseSize(const std::string& text,
 }
 
 std::vector<EvalInstance> EnumerateInstances(
-    const std::vector<std::string>& sizes, int seeds,
-    std::uint64_t seed_base) {
+    const std::vector<std::string>& sizes, int seeds, std::uint64_t seed_base) {
   std::vector<EvalInstance> out;
   for (const std::string& size : sizes) {
     const auto [n, m] = ParseSize(size, "--sizes");
@@ -179,8 +178,8 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
     }
   }
   // Checked now, once, rather than on every instance.
-  const Scenario base = WithOverrides(GeneratedScenario(1, 1, 0),
-                                      setup.overrides);
+  const Scenario base =
+      WithOverrides(GeneratedScenario(1, 1, 0), setup.overrides);
   std::set<std::string> used;
   const auto resolve = [&](const std::string& name) {
     const std::set<std::string> declared = DeclaredParams(registry, name);
@@ -233,9 +232,8 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
   const int fstar = plan.found ? plan.depth : -1;
   std::vector<EvalRow> rows;
   for (const auto& spec : setup.policies) {
-    if (!policies.empty() &&
-        std::find(policies.begin(), policies.end(), spec->name()) ==
-            policies.end())
+    if (!policies.empty() && std::find(policies.begin(), policies.end(),
+                                       spec->name()) == policies.end())
       continue;
     EvalRow row;
     row.size = inst.size;

@@ -42,7 +42,8 @@ std::vector<Override> CommandOverrides::ToOverrides(
   }
   if (seed) out.push_back({"--seed", "seed", std::to_string(*seed)});
   if (max_steps)
-    out.push_back({"--max-steps", "mission.max_steps", std::to_string(*max_steps)});
+    out.push_back(
+        {"--max-steps", "mission.max_steps", std::to_string(*max_steps)});
   for (const std::string& s : sets) out.push_back(ParseSetFlag(s));
   return out;
 }
@@ -123,13 +124,12 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   return j.dump(2) + "\n";
 }
 
-MissionRunner::MissionRunner(const PreparedMission& mission,
-                             std::string prefix, std::string label,
-                             bool progress,
+MissionRunner::MissionRunner(const PreparedMission& mission, std::string prefix,
+                             std::string label, bool progress,
                              std::function<std::string()> progress_extra)
     : mission_(mission), prefix_(std::move(prefix)) {
-  episode_ = std::make_unique<Episode>(mission.instance,
-                                       mission.policy->Create());
+  episode_ =
+      std::make_unique<Episode>(mission.instance, mission.policy->Create());
   trace_ = std::make_unique<TraceObserver>(prefix_ + "trace.csv",
                                            episode_->world().NumRobots());
   estimate_ = std::make_unique<EstimateObserver>(prefix_ + "estimate.csv");
@@ -164,28 +164,25 @@ MissionSummary MissionRunner::Run() {
                   {"sim_seconds", st.sim_seconds}};
   nlohmann::ordered_json per_target = nlohmann::ordered_json::array();
   for (int k = 0; k < estimate_->num_targets(); ++k)
-    per_target.push_back(
-        {{"rmse_m", estimate_->rmse(k)}, {"mean_nees", estimate_->mean_nees(k)}});
+    per_target.push_back({{"rmse_m", estimate_->rmse(k)},
+                          {"mean_nees", estimate_->mean_nees(k)}});
   d["estimate"] = {{"rmse_m", estimate_->rmse()},
                    {"mean_nees", estimate_->mean_nees()},
                    {"targets", per_target}};
   const PhaseTimes& t = e.times();
-  d["wall_seconds"] = {{"physics", t.physics},
-                       {"sensing", t.sensing},
-                       {"fusion", t.fusion},
-                       {"policy", t.policy},
-                       {"steps", t.total},
-                       {"total", summary.wall_s}};
+  d["wall_seconds"] = {{"physics", t.physics}, {"sensing", t.sensing},
+                       {"fusion", t.fusion},   {"policy", t.policy},
+                       {"steps", t.total},     {"total", summary.wall_s}};
   WriteFileAtomic(prefix_ + "diagnostics.json", d.dump(2) + "\n");
   return summary;
 }
 
 MissionSummary RunMission(const RunOptions& options) {
   const PolicyRegistry registry = AllPolicies();
-  PreparedMission mission = PrepareMission(
-      LoadScenario(options.scenario_path,
-                   options.overrides.ToOverrides(registry)),
-      registry);
+  PreparedMission mission =
+      PrepareMission(LoadScenario(options.scenario_path,
+                                  options.overrides.ToOverrides(registry)),
+                     registry);
   std::string out = options.out_dir;
   if (out.empty())
     out = "renders/" +
@@ -194,7 +191,8 @@ MissionSummary RunMission(const RunOptions& options) {
 
   MissionRunner runner(mission, out + "/", "aia run", options.progress);
   const MissionSummary summary = runner.Run();
-  WriteFileAtomic(out + "/summary.json", SummaryJson(summary, runner.episode()));
+  WriteFileAtomic(out + "/summary.json",
+                  SummaryJson(summary, runner.episode()));
   std::printf(
       "%s: policy %s, seed %llu: %s in %d steps (%d robots, %d targets, %ld "
       "invalid moves), %.2f s -> %s/\n",

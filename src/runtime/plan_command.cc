@@ -28,7 +28,7 @@ SamplingPlan PlanFromStart(std::shared_ptr<const Instance> instance,
   // policy: any policy will do to set up the episode.
   const std::uint64_t seed = instance->scenario.seed;
   const Episode episode(std::move(instance), std::make_unique<RandomPolicy>());
-  SamplingParams sampling = params.Sampling();
+  SamplingParams sampling = params;
   if (budget) sampling.anytime = *budget;
   SamplingTree tree;
   Rng rng(seed, "policy.expert");
@@ -93,7 +93,8 @@ int RunPlanCommand(const PlanOptions& o) {
           "anytime", ConfigNode::Scalar(std::to_string(*o.budget)));
     }
     const std::string side =
-        (out.parent_path() / (out.stem().string() + ".effective.yaml")).string();
+        (out.parent_path() / (out.stem().string() + ".effective.yaml"))
+            .string();
     WriteFileAtomic(side, EffectiveYaml(effective,
                                         "# The effective scenario of this plan "
                                         "(aia plan; the expert's parameters\n"

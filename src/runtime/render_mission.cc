@@ -201,8 +201,8 @@ class VideoObserver : public StepObserver {
 
 RenderResult RenderMission(const RenderOptions& options) {
   const PolicyRegistry registry = AllPolicies();
-  Scenario scenario = LoadScenario(options.scenario_path,
-                                   RenderOverrides(options, registry));
+  Scenario scenario =
+      LoadScenario(options.scenario_path, RenderOverrides(options, registry));
   CheckRenderSection(scenario, options);
 
   const fs::path out(options.out_file);
@@ -256,8 +256,8 @@ RenderResult RenderMission(const RenderOptions& options) {
   r.frames_per_second = r.frames / wall;
   r.png_frames = filming.png_frames();
 
-  nlohmann::ordered_json j = nlohmann::ordered_json::parse(
-      SummaryJson(summary, runner.episode()));
+  nlohmann::ordered_json j =
+      nlohmann::ordered_json::parse(SummaryJson(summary, runner.episode()));
   nlohmann::ordered_json v;
   v["file"] = out.filename().string();
   v["codec"] = r.codec;

@@ -13,8 +13,7 @@ std::string RobotIndexText(int count) {
 }
 
 bool Inside(const Vec2& p, const Vec2& size) {
-  return p.x() >= 0.0 && p.y() >= 0.0 && p.x() <= size.x() &&
-         p.y() <= size.y();
+  return p.x() >= 0.0 && p.y() >= 0.0 && p.x() <= size.x() && p.y() <= size.y();
 }
 
 }  // namespace
@@ -127,8 +126,8 @@ void Scenario::Validate(const FieldChecker& check) {
   for (const RobotFailure& f : communication.failures) {
     if (f.robot >= robots.count) {
       check.Fail(f.robot, "must be a robot index in " +
-                              RobotIndexText(robots.count) + " or random, got " +
-                              check.Shown(f.robot));
+                              RobotIndexText(robots.count) +
+                              " or random, got " + check.Shown(f.robot));
     }
   }
   if (render.follow_robot >= robots.count) {

@@ -48,7 +48,8 @@ std::string FlagKey(const Override& o, const std::string& key) {
 }
 
 std::vector<Step> ParsePath(const Override& o) {
-  static const std::regex kSegment(R"(([A-Za-z_][A-Za-z0-9_]*)((\[[0-9]{1,9}\])*))");
+  static const std::regex kSegment(
+      R"(([A-Za-z_][A-Za-z0-9_]*)((\[[0-9]{1,9}\])*))");
   std::vector<Step> steps;
   std::size_t begin = 0;
   while (true) {
@@ -109,8 +110,7 @@ void Apply(const Override& o, ConfigNode* root) {
       }
       if (!node->IsMap()) {
         throw InputError("command line", 0, FlagKey(o, o.path),
-                         (key.empty() ? std::string("the document")
-                                      : key) +
+                         (key.empty() ? std::string("the document") : key) +
                              " is not a mapping, so it has no key `" +
                              step.name + "`");
       }
@@ -126,9 +126,9 @@ void Apply(const Override& o, ConfigNode* root) {
       if (!node->IsList() || step.index >= node->items.size()) {
         throw InputError(
             "command line", 0, FlagKey(o, o.path),
-            node->IsList()   ? key + " has " +
-                                   std::to_string(node->items.size()) +
-                                   " entries, so it has no " + item
+            node->IsList()
+                ? key + " has " + std::to_string(node->items.size()) +
+                      " entries, so it has no " + item
             : node->IsNull() ? key + " is not given, so it has no " + item
                              : key + " is not a list, so it has no " + item);
       }
@@ -155,7 +155,8 @@ Scenario Read(const ConfigNode& root, const std::string& file,
 
 std::string Cell(const std::string& text) {
   std::string out;
-  for (const char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+  for (const char c : text)
+    out += c == '|' ? std::string("\\|") : std::string(1, c);
   return out;
 }
 
@@ -164,9 +165,9 @@ std::string Cell(const std::string& text) {
 Override ParseSetFlag(const std::string& text) {
   const std::size_t eq = text.find('=');
   if (eq == std::string::npos || eq == 0) {
-    throw InputError("command line", 0, "--set",
-                     "'" + text +
-                         "' is not key.path=value (e.g. --set mission.eps=0.05)");
+    throw InputError(
+        "command line", 0, "--set",
+        "'" + text + "' is not key.path=value (e.g. --set mission.eps=0.05)");
   }
   Override o{"--set", text.substr(0, eq), text.substr(eq + 1)};
   ParsePath(o);  // reports a malformed path now

@@ -50,8 +50,8 @@ class Converter {
         } else {
           out.style = ConfigNode::Style::kTagged;
           const std::string core = "tag:yaml.org,2002:";
-          out.tag = tag.rfind(core, 0) == 0 ? "!!" + tag.substr(core.size())
-                                            : tag;
+          out.tag =
+              tag.rfind(core, 0) == 0 ? "!!" + tag.substr(core.size()) : tag;
         }
         break;
       }
@@ -221,13 +221,14 @@ void Block(const ConfigNode& n, std::size_t indent, std::string* out);
 void Value(const std::string& prefix, const ConfigNode& v, std::size_t indent,
            std::string* out) {
   const std::string pad(indent, ' ');
-  if (v.IsScalar() || v.IsNull() ||
-      (v.IsMap() && v.entries.empty()) || (v.IsList() && v.items.empty())) {
+  if (v.IsScalar() || v.IsNull() || (v.IsMap() && v.entries.empty()) ||
+      (v.IsList() && v.items.empty())) {
     *out += pad + prefix + " " + Flow(v) + "\n";
     return;
   }
   const std::string flow = Flow(v);
-  if (PrefersFlow(v) && indent + prefix.size() + 1 + flow.size() <= kLineWidth) {
+  if (PrefersFlow(v) &&
+      indent + prefix.size() + 1 + flow.size() <= kLineWidth) {
     *out += pad + prefix + " " + flow + "\n";
     return;
   }

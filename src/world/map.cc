@@ -30,8 +30,8 @@ Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
 
 }  // namespace
 
-Map::Map(const Vec2& size, std::vector<Box> obstacles, double cell,
-         double step, double robot_radius)
+Map::Map(const Vec2& size, std::vector<Box> obstacles, double cell, double step,
+         double robot_radius)
     : size_(size),
       obstacles_(std::move(obstacles)),
       occupancy_(Rasterize(size, cell, obstacles_)),

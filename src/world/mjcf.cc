@@ -136,10 +136,10 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
       << "      <joint name=\"robot" << i
       << "_y\" type=\"slide\" axis=\"0 1 0\" damping=\"" << Num(damping)
       << "\"/>\n"
-      << "      <geom type=\"cylinder\" size=\"" << Num(world.map.robot_radius())
-      << " " << Num(kRobotHalfHeight) << "\" mass=\"" << Num(mass)
-      << "\" rgba=\"" << c[0] << " " << c[1] << " " << c[2] << " 1\" group=\""
-      << kGroupAgent << "\"/>\n"
+      << "      <geom type=\"cylinder\" size=\""
+      << Num(world.map.robot_radius()) << " " << Num(kRobotHalfHeight)
+      << "\" mass=\"" << Num(mass) << "\" rgba=\"" << c[0] << " " << c[1] << " "
+      << c[2] << " 1\" group=\"" << kGroupAgent << "\"/>\n"
       << "    </body>\n";
   }
   for (int k = 0; k < world.NumTargets(); ++k) {

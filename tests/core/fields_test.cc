@@ -1,10 +1,10 @@
 // The field archives on a small struct: every kind of field read strictly,
 // written back, documented and found by address.
-#include "aia/core/field_io.h"
-
 #include <gtest/gtest.h>
 
 #include <array>
+
+#include "aia/core/field_io.h"
 
 namespace aia {
 namespace {
@@ -98,16 +98,17 @@ TEST(FieldReaderTest, ReadsEveryKindOfField) {
   items.items.push_back(Doc({{"count", Scalar("0", 0)}}));
   ConfigNode at = ConfigNode::List();
   at.items = {Scalar("1.5", 0), Scalar("-2", 0)};
-  const Outer o = Read(Doc({{"rate", Scalar("1", 0)},
-                            {"who", Scalar("anyone", 0)},
-                            {"on", Scalar("false", 0)},
-                            {"label", ConfigNode::Scalar("5", ConfigNode::Style::kQuoted)},
-                            {"shape", Scalar("square", 0)},
-                            {"extra", ConfigNode{}},
-                            {"items", items},
-                            {"inner", Doc({{"at", at}})},
-                            {"needed", Scalar("3", 0)},
-                            {"colour", Scalar("red", 0)}}));
+  const Outer o =
+      Read(Doc({{"rate", Scalar("1", 0)},
+                {"who", Scalar("anyone", 0)},
+                {"on", Scalar("false", 0)},
+                {"label", ConfigNode::Scalar("5", ConfigNode::Style::kQuoted)},
+                {"shape", Scalar("square", 0)},
+                {"extra", ConfigNode{}},
+                {"items", items},
+                {"inner", Doc({{"at", at}})},
+                {"needed", Scalar("3", 0)},
+                {"colour", Scalar("red", 0)}}));
   EXPECT_EQ(o.rate, 1.0);
   EXPECT_EQ(o.who, -1);
   EXPECT_FALSE(o.on);
@@ -135,10 +136,10 @@ TEST(FieldReaderTest, ErrorsNameTheKeyLineAndWhatIsAllowed) {
       ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"shape", Scalar("oval", 0)}}))
           .message(),
       "must be round or square, got oval");
-  EXPECT_EQ(
-      ErrorOf(Doc({{"needed", ConfigNode::Scalar("1", ConfigNode::Style::kQuoted)}}))
-          .message(),
-      "must be an integer, got \"1\"");
+  EXPECT_EQ(ErrorOf(Doc({{"needed", ConfigNode::Scalar(
+                                        "1", ConfigNode::Style::kQuoted)}}))
+                .message(),
+            "must be an integer, got \"1\"");
   EXPECT_EQ(ErrorOf(Doc({})).Format(),
             "f.yaml: needed: is required: a number we need");
   EXPECT_EQ(ErrorOf(Doc({{"needed", Scalar("1", 0)},
@@ -192,11 +193,11 @@ TEST(FieldDocsTest, OneRowPerKeyWithTypeAndDefault) {
   const std::vector<FieldDoc> rows = FieldDocs::Of(Outer{});
   std::vector<std::string> keys;
   for (const FieldDoc& r : rows) keys.push_back(r.key);
-  EXPECT_EQ(keys, (std::vector<std::string>{
-                      "rate", "who", "on", "label", "shape", "extra",
-                      "extra.count", "extra.at", "items", "items[i].count",
-                      "items[i].at", "inner.count", "inner.at", "needed",
-                      "<parameter>"}));
+  EXPECT_EQ(keys,
+            (std::vector<std::string>{
+                "rate", "who", "on", "label", "shape", "extra", "extra.count",
+                "extra.at", "items", "items[i].count", "items[i].at",
+                "inner.count", "inner.at", "needed", "<parameter>"}));
   EXPECT_EQ(rows[0].type, "number in (0, 1]");
   EXPECT_EQ(rows[0].default_value, "0.5");
   EXPECT_EQ(rows[1].type, "integer >= 0 or anyone");

@@ -562,7 +562,6 @@ TEST(FuseTest, SizesTheOutputOnceThenReusesIt) {
   EXPECT_EQ(out.data().data(), storage);
 }
 
-
 // The planners' covariance-only time update is the filter's own: the same
 // Omega, exactly, as the full block update.
 TEST(FilterTest, PredictInformationMatrixIsTheBlockUpdatesOmega) {

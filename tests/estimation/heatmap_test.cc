@@ -1,4 +1,5 @@
-// The heatmap of SPEC section 8 against values worked out by hand.
+// The heatmap (docs/rendering.md, The heatmap) against values worked out by
+// hand.
 #include "aia/estimation/heatmap.h"
 
 #include <gtest/gtest.h>

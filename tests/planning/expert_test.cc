@@ -57,7 +57,8 @@ TEST(ExpertTest, PlanReplayedThroughTheCentralizedFilterMeetsEps) {
         p[i] = lat.Point(b);
         for (int k = 0; k < run.world.NumTargets(); ++k) {
           const Vec2 mu = central.PositionMean(0, k);
-          const double r = PredictedPrecision(run.world.map, run.sensor, p[i], mu);
+          const double r =
+              PredictedPrecision(run.world.map, run.sensor, p[i], mu);
           // y chosen so that the mean stays put: y + p = mu.
           if (r > 0) z[i].push_back({k, mu - p[i], r});
         }

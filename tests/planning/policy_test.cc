@@ -92,11 +92,11 @@ TEST(GreedyPolicyTest, FallsBackToShortestPathTowardTheNearestTarget) {
   std::vector<int> goals;
   for (int q = 0; q < s.world.map.lattice().size(); ++q)
     if (s.world.map.lattice().Free(q) &&
-        PredictedPrecision(s.world.map, s.sensor, s.world.map.lattice().Point(q),
-                           {2.0, 10.25}) > 0)
+        PredictedPrecision(s.world.map, s.sensor,
+                           s.world.map.lattice().Point(q), {2.0, 10.25}) > 0)
       goals.push_back(q);
-  BfsDistances(s.world.map.lattice(), goals.data(), static_cast<int>(goals.size()),
-               &dist, &queue);
+  BfsDistances(s.world.map.lattice(), goals.data(),
+               static_cast<int>(goals.size()), &dist, &queue);
   for (int step = 0; step < 40 && dist[s.positions[0]] > 0; ++step) {
     const int before = dist[s.positions[0]];
     g.Decide(s.Context(), &m);
@@ -150,10 +150,10 @@ TEST(RegistryTest, UnknownPolicyParameterIsAnError) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "policy.budget");
     EXPECT_EQ(e.line(), 5);
-    EXPECT_EQ(e.message(), "unknown parameter for policy 'greedy' (valid: none)");
+    EXPECT_EQ(e.message(),
+              "unknown parameter for policy 'greedy' (valid: none)");
   }
 }
-
 
 TEST(RegistryTest, ParametersAreTypedCheckedAndWrittenBackInFull) {
   Scenario s = ScenarioFromYaml(

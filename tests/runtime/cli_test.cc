@@ -183,7 +183,6 @@ TEST(CliTest, SameScenarioAndSeedGiveByteIdenticalResults) {
   fs::remove_all(b);
 }
 
-
 // The text between `<!-- BEGIN name -->` and `<!-- END name -->`.
 std::string Section(const std::string& doc, const std::string& name) {
   const std::string begin = "<!-- BEGIN " + name + " -->\n";
@@ -221,16 +220,15 @@ TEST(CliTest, PoliciesListsEveryPolicyWithItsParameters) {
 
 TEST(CliTest, RunWritesItsResultFiles) {
   const std::string out = testing::MakeTempDir("aia_files_");
-  const auto r =
-      RunAia({"run", SourcePath("scenarios/tracking.yaml"), "--max-steps", "6",
-              "--out", out, "--quiet"});
+  const auto r = RunAia({"run", SourcePath("scenarios/tracking.yaml"),
+                         "--max-steps", "6", "--out", out, "--quiet"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::set<std::string> files;
   for (const auto& entry : fs::directory_iterator(out))
     files.insert(entry.path().filename().string());
-  EXPECT_EQ(files, (std::set<std::string>{"summary.json", "trace.csv",
-                                          "estimate.csv", "effective.yaml",
-                                          "diagnostics.json"}));
+  EXPECT_EQ(files,
+            (std::set<std::string>{"summary.json", "trace.csv", "estimate.csv",
+                                   "effective.yaml", "diagnostics.json"}));
   const std::string estimate = ReadFile(out + "/estimate.csv");
   EXPECT_EQ(estimate.rfind("step,target,robot,error_m,nees\n", 0), 0u);
   EXPECT_EQ(std::count(estimate.begin(), estimate.end(), '\n'), 1 + 7 * 2);
@@ -242,9 +240,9 @@ TEST(CliTest, RunWritesItsResultFiles) {
 }
 
 std::string WithoutFileAndWallTime(const std::string& json) {
-  return std::regex_replace(
-      WithoutWallTime(json), std::regex("\"scenario_file\": [^\n]*"),
-      "\"scenario_file\": X");
+  return std::regex_replace(WithoutWallTime(json),
+                            std::regex("\"scenario_file\": [^\n]*"),
+                            "\"scenario_file\": X");
 }
 
 TEST(CliTest, EffectiveYamlRepeatsTheMission) {

@@ -2,11 +2,11 @@
 
 #include <gtest/gtest.h>
 
-#include "aia/runtime/mission.h"
-#include "aia/runtime/observers.h"
-
 #include <algorithm>
 #include <type_traits>
+
+#include "aia/runtime/mission.h"
+#include "aia/runtime/observers.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -96,7 +96,6 @@ TEST(EpisodeTest, TrackingMissionRunsItsWholeHorizon) {
   EXPECT_GT(e->localized_steps(), 0);
 }
 
-
 // Records what each callback saw.
 class CountingObserver : public StepObserver {
  public:
@@ -147,8 +146,9 @@ TEST(EpisodeObserverTest, EveryCallbackOnceInItsPlace) {
   long recorded = 0;
   for (long n : e->stats().statuses) recorded += n;
   EXPECT_EQ(recorded, 7);
-  EXPECT_EQ(e->stats().statuses[static_cast<int>(PolicyStatus::kOk)],
-            std::count(a.statuses.begin(), a.statuses.end(), PolicyStatus::kOk));
+  EXPECT_EQ(
+      e->stats().statuses[static_cast<int>(PolicyStatus::kOk)],
+      std::count(a.statuses.begin(), a.statuses.end(), PolicyStatus::kOk));
   EXPECT_GT(e->stats().sim_seconds, 0.0);
 }
 
@@ -185,11 +185,13 @@ TEST(EpisodeTest, OnlyACentralizedPolicyIsGivenTheCentralizedBelief) {
     for (const BeliefSet* central : probe->central_seen)
       EXPECT_EQ(central, centralized ? &e.central() : nullptr);
   }
-  EXPECT_TRUE(AllPolicies().Resolve([&] {
-    Scenario x = s;
-    x.policy.name = "expert";
-    return x;
-  }())->centralized());
+  EXPECT_TRUE(AllPolicies()
+                  .Resolve([&] {
+                    Scenario x = s;
+                    x.policy.name = "expert";
+                    return x;
+                  }())
+                  ->centralized());
 }
 
 // What a dataset recorder does: while one policy acts, ask another (the
@@ -229,7 +231,8 @@ TEST(EpisodeObserverTest, AnObserverCanLabelStatesWithAnotherPolicy) {
   e->AddObserver(&labeller);
   e->Run();
   EXPECT_EQ(labeller.samples, 5 * 3);
-  EXPECT_LT(labeller.agree, labeller.samples);  // the random walker is no expert
+  EXPECT_LT(labeller.agree,
+            labeller.samples);  // the random walker is no expert
 }
 
 TEST(EpisodeTest, EpisodesShareOneInstanceAndMatchAFreshOne) {

@@ -87,7 +87,6 @@ TEST(EvalTest, BadFlagsExitWith2) {
   std::filesystem::remove_all(dir);
 }
 
-
 TEST(EvalPiecesTest, EnumerateRunOneInstanceAndMerge) {
   const std::vector<EvalInstance> all =
       EnumerateInstances({"2x2", "3x1"}, 2, 7);
@@ -118,9 +117,8 @@ TEST(EvalPiecesTest, EnumerateRunOneInstanceAndMerge) {
 TEST(EvalPiecesTest, SetReachesTheInstancesAndThePoliciesThatDeclareIt) {
   const PolicyRegistry registry = AllPolicies();
   const EvalSetup setup = MakeEvalSetup(
-      {"greedy", "decsb"}, {"sensor.range=3", "policy.horizon=5",
-                            "policy.anytime=100"},
-      registry);
+      {"greedy", "decsb"},
+      {"sensor.range=3", "policy.horizon=5", "policy.anytime=100"}, registry);
   EXPECT_EQ(InstanceScenario({"2x2", 2, 2, 4}, setup).sensor.range, 3.0);
   EXPECT_EQ(InstanceScenario({"2x2", 2, 2, 4}, setup).seed, 4u);
   EXPECT_EQ(ParamsOf<DecSbParams>(*setup.policies[1])->horizon, 5);
@@ -141,16 +139,17 @@ TEST(EvalPiecesTest, SetReachesTheInstancesAndThePoliciesThatDeclareIt) {
                                   "instance",
                                   0),
             0u);
-  EXPECT_EQ(error("robots.count=3").rfind("command line: --set robots.count:", 0),
-            0u);
+  EXPECT_EQ(
+      error("robots.count=3").rfind("command line: --set robots.count:", 0),
+      0u);
 }
 
 TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
   const std::string dir = testing::MakeTempDir("aia_eval_");
   const auto eval = [&](const std::vector<std::string>& extra) {
-    std::vector<std::string> args = {"eval", "--sizes", "2x1", "--seeds", "2",
-                                     "--policies", "greedy", "--out", dir,
-                                     "--quiet"};
+    std::vector<std::string> args = {"eval", "--sizes",    "2x1",    "--seeds",
+                                     "2",    "--policies", "greedy", "--out",
+                                     dir,    "--quiet"};
     args.insert(args.end(), extra.begin(), extra.end());
     return RunAia(args);
   };

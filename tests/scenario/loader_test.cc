@@ -17,9 +17,9 @@ namespace fs = std::filesystem;
 
 constexpr char kMinimal[] = "robots: {count: 2}\ntargets: {count: 3}\n";
 
-// The example of SPEC section 10, made consistent: the SPEC's own example
-// gives 2 start positions for 10 robots and both `count: 10` and a list of 2
-// targets, each of which the loader rejects.
+// An example with every key at once, consistent. The example it comes from
+// gave 2 start positions for 10 robots and both `count: 10` and a list of 2
+// targets, each of which the loader rejects (SpecExampleAsWrittenIsRejected).
 constexpr char kFullExample[] = R"(name: demo
 seed: 7
 workspace:
@@ -203,7 +203,7 @@ TEST(LoaderTest, FullSpecExampleParsesWithAllValues) {
 }
 
 TEST(LoaderTest, SpecExampleAsWrittenIsRejected) {
-  // The SPEC's example gives 2 start positions for 10 robots.
+  // As first written: 2 start positions for 10 robots.
   const std::string dir = testing::MakeTempDir("aia_scenario_");
   WriteFile(dir, "maps/maze.pgm", "P2\n1 1\n255\n0\n");
   std::string yaml = kFullExample;
@@ -577,7 +577,8 @@ InputError OverrideError(const std::vector<Override>& overrides) {
 TEST(OverrideTest, SetChangesKeysAtAnyDepth) {
   const Scenario s = ParseScenario(
       kMinimal, "m.yaml", ".",
-      {ParseSetFlag("mission.eps=0.05"), ParseSetFlag("workspace.size=[30, 25]"),
+      {ParseSetFlag("mission.eps=0.05"),
+       ParseSetFlag("workspace.size=[30, 25]"),
        ParseSetFlag("communication.failures=[{robot: 1, step: 4}]"),
        ParseSetFlag("communication.failures[0].step=6"),
        {"--seed", "seed", "42"}});
@@ -598,20 +599,20 @@ TEST(OverrideTest, BadOverridesNameTheirFlag) {
             "-1");
   EXPECT_EQ(OverrideError({{"--max-steps", "mission.max_steps", "0"}}).Format(),
             "command line: --max-steps: must be an integer >= 1, got 0");
-  EXPECT_EQ(OverrideError({ParseSetFlag("targets.list[2].position=[1, 1]")})
-                .Format(),
-            "command line: --set targets.list[2].position: targets.list is "
-            "not given, so it has no targets.list[2]");
+  EXPECT_EQ(
+      OverrideError({ParseSetFlag("targets.list[2].position=[1, 1]")}).Format(),
+      "command line: --set targets.list[2].position: targets.list is "
+      "not given, so it has no targets.list[2]");
   EXPECT_EQ(OverrideError({ParseSetFlag("robots.count.x=1")}).message(),
             "robots.count is not a mapping, so it has no key `x`");
   // A key path that the file does not give yet is made, then checked.
   EXPECT_EQ(OverrideError({ParseSetFlag("mission.eps.x=1")}).message(),
             "must be a positive number, got {x: 1}");
   // A start outside the workspace set on the command line.
-  EXPECT_EQ(OverrideError({ParseSetFlag("robots.start=[[1, 1], [50, 1]]")})
-                .Format(),
-            "command line: --set robots.start[1]: must lie inside the "
-            "workspace [0, 20] x [0, 20], got [50, 1]");
+  EXPECT_EQ(
+      OverrideError({ParseSetFlag("robots.start=[[1, 1], [50, 1]]")}).Format(),
+      "command line: --set robots.start[1]: must lie inside the "
+      "workspace [0, 20] x [0, 20], got [50, 1]");
   for (const char* bad : {"novalue", "=3", "a..b=1", "a.[1]=2", "a b=1"}) {
     try {
       ParseSetFlag(bad);
@@ -625,8 +626,8 @@ TEST(OverrideTest, BadOverridesNameTheirFlag) {
 TEST(OverrideTest, ANewPolicyDropsTheFilesParametersButKeepsSetOnes) {
   const std::string yaml =
       std::string(kMinimal) + "policy: {name: expert, p_v: 0.3}\n";
-  const Scenario same = ParseScenario(
-      yaml, "m.yaml", ".", {{"--policy", "policy.name", "expert"}});
+  const Scenario same = ParseScenario(yaml, "m.yaml", ".",
+                                      {{"--policy", "policy.name", "expert"}});
   ASSERT_NE(same.policy.params.Find("p_v"), nullptr);
   const Scenario other = ParseScenario(
       yaml, "m.yaml", ".",

@@ -33,9 +33,9 @@ TEST(SimulationTest, ModelIsSizedFromTheRobotCount) {
   EXPECT_EQ(sim.model()->nu, 14);
   EXPECT_EQ(sim.model()->nmocap, 2);
   for (int i = 0; i < 7; ++i)
-    EXPECT_LT(
-        (sim.RobotPosition(i) - w.map.lattice().Point(w.robot_starts[i])).norm(),
-        1e-9);
+    EXPECT_LT((sim.RobotPosition(i) - w.map.lattice().Point(w.robot_starts[i]))
+                  .norm(),
+              1e-9);
 }
 
 TEST(SimulationTest, RobotTracksItsWaypoint) {

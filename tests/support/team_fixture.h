@@ -16,8 +16,8 @@ namespace aia::testing {
 
 // A world, the prior beliefs (one row per robot and the centralized row) and
 // a communication graph (full by default). Context() is the whole team's,
-// the centralized belief included (what the expert is given). Copies share the original's
-// belief layout, so the original must outlive them.
+// the centralized belief included (what the expert is given). Copies share the
+// original's belief layout, so the original must outlive them.
 struct TeamFixture {
   Scenario scenario;
   World world;

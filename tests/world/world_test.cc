@@ -164,8 +164,7 @@ TEST(WorldTest, RandomStartsAndTargetsAreValid) {
       for (int idx = 0; idx < lattice.size() && !observable; ++idx) {
         if (!lattice.Free(idx) || lattice.components()[idx] != 0) continue;
         const Vec2 p = lattice.Point(idx);
-        observable =
-            (p - truth).norm() <= 2.0 && w.map.LineOfSight(p, truth);
+        observable = (p - truth).norm() <= 2.0 && w.map.LineOfSight(p, truth);
       }
       EXPECT_TRUE(observable);
     }

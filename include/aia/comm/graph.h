@@ -1,7 +1,7 @@
-// The communication graph of one decision step (SPEC section 6): full or
-// range-limited, minus the directed edges lost to packet loss, minus every
-// edge of a failed robot. Directed: an edge (i <- j) means robot i received
-// robot j's message this step.
+// The communication graph of one decision step (docs/design.md, Communication):
+// full or range-limited, minus the directed edges lost to packet loss, minus
+// every edge of a failed robot. Directed: an edge (i <- j) means robot i
+// received robot j's message this step.
 #ifndef AIA_COMM_GRAPH_H_
 #define AIA_COMM_GRAPH_H_
 
@@ -34,8 +34,9 @@ struct RobotFailure {
                  .In(AtLeast(0))
                  .Keyword("random", kRandomRobot)
                  .Doc("the robot's index, or random (drawn from the seed)"));
-    a->Visit(AIA_FIELD(step).In(AtLeast(0)).Doc(
-        "decision step from which it is isolated"));
+    a->Visit(AIA_FIELD(step)
+                 .In(AtLeast(0))
+                 .Doc("decision step from which it is isolated"));
   }
 };
 

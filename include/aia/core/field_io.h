@@ -120,7 +120,8 @@ class FieldFinder {
 
   template <typename T>
   void Visit(const Field<T>& f) {
-    if (!found_ && !f.rest) Check(f.value, ChildKey(prefix_, std::string(f.name)));
+    if (!found_ && !f.rest)
+      Check(f.value, ChildKey(prefix_, std::string(f.name)));
   }
 
  private:
@@ -341,8 +342,9 @@ void FieldReader::ReadValue(const ConfigNode& node, const std::string& key,
     // The full unsigned range (seeds).
     const std::optional<std::uint64_t> u = field_text::ParseUnsigned(node);
     if (!u) {
-      FailExpected(node, key,
-                   f.expect.empty() ? "an integer >= 0" : std::string(f.expect));
+      FailExpected(
+          node, key,
+          f.expect.empty() ? "an integer >= 0" : std::string(f.expect));
     }
     *out = *u;
   } else if constexpr (internal::kIsInteger<T>) {
@@ -477,7 +479,8 @@ class FieldWriter {
       using U = typename T::value_type;
       ConfigNode list = ConfigNode::List();
       for (const U& item : v) {
-        std::optional<ConfigNode> n = Write<U>(item, f.template For<U>(nullptr));
+        std::optional<ConfigNode> n =
+            Write<U>(item, f.template For<U>(nullptr));
         if (n) list.items.push_back(std::move(*n));
       }
       return list;

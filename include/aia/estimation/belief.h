@@ -1,8 +1,8 @@
 // Gaussian beliefs over the hidden state x = [x_1; ...; x_M] in information
-// form, block diagonal per target (SPEC sections 4-5). All robots' beliefs are
-// stored in one row-major matrix, one row per robot, so that DKF fusion is one
-// dense product W * B over contiguous memory and never touches a 2M x 2M
-// matrix.
+// form, block diagonal per target (docs/design.md, Estimation). All robots'
+// beliefs are stored in one row-major matrix, one row per robot, so that DKF
+// fusion is one dense product W * B over contiguous memory and never touches a
+// 2M x 2M matrix.
 #ifndef AIA_ESTIMATION_BELIEF_H_
 #define AIA_ESTIMATION_BELIEF_H_
 

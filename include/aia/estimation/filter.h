@@ -1,9 +1,9 @@
-// The information filter and the distributed Kalman filter (DKF) of SPEC
-// section 5, written per target block:
-//   predict:  Sigma^- = A Sigma A' + Q,  mu^- = A mu + b
+// The information filter and the distributed Kalman filter (DKF;
+// docs/design.md, Estimation), written per target block:
+//   predict:  Sigma^- = A Sigma A' + q I,  mu^- = A mu + b
 //   fuse:     Omega_i = sum_{j in N_i + i} kappa_ij Omega_j^- + Z_i,
-//             xi_i    = sum_{j in N_i + i} kappa_ij xi_j^-    + M' R_i^-1 (y_i
-//             + p_i)
+//             xi_i    = sum_{j in N_i + i} kappa_ij xi_j^-
+//                       + M' R_i^-1 (y_i + p_i)
 //   central:  Omega   = Omega^- + sum_i Z_i
 // with Z_i = M' R_i^-1 M for the targets robot i sees.
 #ifndef AIA_ESTIMATION_FILTER_H_

@@ -1,6 +1,6 @@
-// The uncertainty heatmap of SPEC section 8 (channel 4 of I-GBNet's input,
-// and the translucent layer of `aia render --heatmap`): robot i's fused
-// belief projected onto a grid over the workspace,
+// The uncertainty heatmap (docs/rendering.md, The heatmap) (channel 4 of
+// I-GBNet's input, and the translucent layer of `aia render --heatmap`): robot
+// i's fused belief projected onto a grid over the workspace,
 //   H(c) = sum_k w_k exp(-1/2 (c - mu_k)' (Sigma_k + s^2 I)^-1 (c - mu_k)),
 //   w_k  = clamp(log(det Sigma_k / eps) / log(det Sigma_0^k / eps), 0, 1),
 // with mu_k and Sigma_k the position part of robot i's belief about target k

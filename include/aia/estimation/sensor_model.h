@@ -1,4 +1,4 @@
-// The range-limited, distance-scaled position sensor of SPEC section 4:
+// The range-limited, distance-scaled position sensor (docs/design.md, Sensing):
 // y = pos_k - p_i + v, v ~ N(0, R), R = (sigma0 + eta * dist)^2 I.
 #ifndef AIA_ESTIMATION_SENSOR_MODEL_H_
 #define AIA_ESTIMATION_SENSOR_MODEL_H_
@@ -20,12 +20,15 @@ struct SensorModel {
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(range).In(kPositive).Doc(
         "sensing range, metres: a target farther away is not measured"));
-    a->Visit(AIA_FIELD(eta).In(kNonNegative).Doc(
-        "noise std grows by eta per metre: R = (sigma0 + eta d)^2 I"));
+    a->Visit(
+        AIA_FIELD(eta)
+            .In(kNonNegative)
+            .Doc("noise std grows by eta per metre: R = (sigma0 + eta d)^2 I"));
     a->Visit(AIA_FIELD(sigma0).In(kPositive).Doc(
         "noise std at zero distance, metres"));
-    a->Visit(AIA_FIELD(line_of_sight).Doc(
-        "obstacles block sensing (a ray against the obstacles, mj_ray)"));
+    a->Visit(AIA_FIELD(line_of_sight)
+                 .Doc("obstacles block sensing (a ray against the obstacles, "
+                      "mj_ray)"));
   }
 
   // Noise standard deviation at distance `dist`.

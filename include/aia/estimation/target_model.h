@@ -1,5 +1,5 @@
-// Linear-Gaussian model of one target (SPEC section 4), declared once: it is
-// both the scenario's `dynamics:` section and what the filter and the
+// Linear-Gaussian model of one target (docs/design.md, Sensing), declared once:
+// it is both the scenario's `dynamics:` section and what the filter and the
 // planners predict with.
 //   x(t+1) = A x(t) + b + w,  w ~ N(0, q I),
 // with the state x = [px, py] (A 2x2) or [px, py, vx, vy] (A 4x4). The
@@ -31,8 +31,9 @@ struct TargetModel {
     a->Visit(AIA_FIELD(A).Doc(
         "state transition: 2x2 for a state [px, py], 4x4 for [px, py, vx, "
         "vy]; the identity with b = 0 and q = 0 is a static target"));
-    a->Visit(AIA_FIELD(b).Doc("constant drift, one entry per row of A (zero "
-                              "when not given)"));
+    a->Visit(
+        AIA_FIELD(b).Doc("constant drift, one entry per row of A (zero "
+                         "when not given)"));
     a->Visit(AIA_FIELD(q).In(kNonNegative).Doc("process noise: w ~ N(0, q I)"));
   }
   // A square, 2x2 or 4x4; b sized to A (zero when not given).

@@ -1,4 +1,4 @@
-// Dec-SB (Tzes et al. 2021; SPEC section 7): each robot grows its own
+// Dec-SB (Tzes et al. 2021; docs/design.md, Policies): each robot grows its own
 // sampling tree over its own moves and its own DKF belief, with a receding
 // horizon. Per step, neighbours exchange nothing but their beliefs (through
 // the DKF) and their planned next positions: a robot counts what its
@@ -17,8 +17,8 @@ namespace aia {
 
 // Dec-SB's declared parameters.
 struct DecSbParams {
-  double p_v = 0.9;
-  double p_u = 0.9;
+  double p_v = SamplingParams{}.p_v;
+  double p_u = SamplingParams{}.p_u;
   int horizon = 15;
   long iterations = 300;
 
@@ -28,8 +28,8 @@ struct DecSbParams {
         "f_V: probability of growing the newest branch"));
     a->Visit(AIA_FIELD(p_u).In(kUnit).Doc(
         "f_U: probability of stepping toward the assigned target"));
-    a->Visit(AIA_FIELD(horizon).In(Between(1, 1000)).Doc(
-        "receding horizon, moves"));
+    a->Visit(
+        AIA_FIELD(horizon).In(Between(1, 1000)).Doc("receding horizon, moves"));
     a->Visit(AIA_FIELD(iterations)
                  .In(Between(1, 1e7))
                  .Doc("sampling iterations per robot per step (a goal ends "

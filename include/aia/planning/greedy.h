@@ -1,9 +1,9 @@
-// A myopic reference policy from the literature (SPEC section 7). Each robot
-// takes the move with the largest one-step drop of its own summed log det,
-// predicted with the Riccati map at its current means. Only the part of the
-// drop above eps counts (a target already below eps in the robot's belief
-// gains nothing), so a robot does not linger at localized targets. Where no
-// move gains anything, it steps along a shortest lattice path toward the
+// A myopic reference policy from the literature (docs/design.md, Policies).
+// Each robot takes the move with the largest one-step drop of its own summed
+// log det, predicted with the Riccati map at its current means. Only the part
+// of the drop above eps counts (a target already below eps in the robot's
+// belief gains nothing), so a robot does not linger at localized targets. Where
+// no move gains anything, it steps along a shortest lattice path toward the
 // nearest target its own belief still holds above eps.
 #ifndef AIA_PLANNING_GREEDY_H_
 #define AIA_PLANNING_GREEDY_H_

@@ -1,6 +1,6 @@
-// The planners' measurement prediction (SPEC section 4): a robot at p is
-// predicted to measure a target believed at mu when |mu - p| <= range and the
-// line of sight is free, with precision 1 / (sigma0 + eta |mu - p|)^2.
+// The planners' measurement prediction (docs/design.md, Sensing): a robot at p
+// is predicted to measure a target believed at mu when |mu - p| <= range and
+// the line of sight is free, with precision 1 / (sigma0 + eta |mu - p|)^2.
 // Measurements are not needed to predict covariance (separation principle).
 #ifndef AIA_PLANNING_INFORMATION_H_
 #define AIA_PLANNING_INFORMATION_H_

@@ -1,6 +1,6 @@
-// The sampling-based tree search of C-SB (Kantaros et al. 2019; SPEC section
-// 7), shared by the expert (the whole team, the centralized filter) and Dec-SB
-// (one robot, its own DKF belief).
+// The sampling-based tree search of C-SB (Kantaros et al. 2019; docs/design.md,
+// Policies), shared by the expert (the whole team, the centralized filter) and
+// Dec-SB (one robot, its own DKF belief).
 //
 // A node is (joint lattice configuration, per-target information blocks,
 // accumulated cost J = sum_t sum_k det Sigma_k, depth, parent). Each iteration
@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "aia/core/fields.h"
 #include "aia/core/rng.h"
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
@@ -31,17 +32,39 @@
 
 namespace aia {
 
+// The tree's settings. The ones a user may set are declared (they are the
+// expert's parameters, `policy:` keys); max_depth and p_sorted are set by the
+// planners that use the tree.
 struct SamplingParams {
-  double p_v = 0.9;  // f_V: probability of expanding a deepest node
-  double p_u =
-      0.9;  // f_U: probability of following the assigned target's field
-  long anytime = 20000;          // iterations after the first goal
-  long max_iterations = 200000;  // iterations before giving up on a goal
-  long max_nodes = 2000000;      // arena cap (memory guard)
+  double p_v = 0.9;
+  double p_u = 0.9;
+  long anytime = 20000;
+  long max_iterations = 200000;
+  long max_nodes = 2000000;
   int max_depth = 0;  // 0: unlimited; else nodes this deep are not expanded
   // f_U's assignment: with this probability the globally nearest robot-target
   // pairs are matched first, else robots pick in a random order.
   double p_sorted = 0.5;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(p_v).In(kUnit).Doc(
+        "f_V: probability of growing the newest branch (its deepest node) "
+        "rather than a node of a uniformly drawn level"));
+    a->Visit(AIA_FIELD(p_u).In(kUnit).Doc(
+        "f_U: probability that a robot steps along the BFS field toward its "
+        "assigned target rather than at random"));
+    a->Visit(AIA_FIELD(anytime)
+                 .In(Between(0, 1e9))
+                 .Doc("sampling iterations after the first goal (`aia plan "
+                      "--budget`)"));
+    a->Visit(AIA_FIELD(max_iterations)
+                 .In(Between(1, 1e10))
+                 .Doc("iterations allowed before a first goal"));
+    a->Visit(AIA_FIELD(max_nodes)
+                 .In(Between(2, 1e9))
+                 .Doc("tree size cap (memory guard)"));
+  }
 };
 
 // A problem for the tree: the team (or one robot), where it stands and what

@@ -1,5 +1,5 @@
 // One video frame of a mission: the MuJoCo scene seen from straight above,
-// with the state that physics does not show drawn over it (issue 3): sensing
+// with the state that physics does not show drawn over it: sensing
 // discs, this step's communication edges (lost packets red and dashed),
 // trails, each target's truth and the team's best estimate with its 2-sigma
 // ellipse coloured by det Sigma against eps, failed robots, an optional

@@ -1,5 +1,5 @@
-// Headless MuJoCo rendering through OSMesa (no X server, PLATFORM.md): a
-// software GL context, MuJoCo's scene and render context, and read-back of
+// Headless MuJoCo rendering through OSMesa (no X server, no GPU): a software
+// GL context, MuJoCo's scene and render context, and read-back of
 // the offscreen buffer as an OpenCV BGR image, top row first.
 #ifndef AIA_RENDER_SCENE_H_
 #define AIA_RENDER_SCENE_H_
@@ -32,8 +32,9 @@ using MjrContextPtr = std::unique_ptr<mjrContext, MjrContextDeleter>;
 struct SceneSettings {
   int width = 640;
   int height = 480;
-  // Shadows cost about two thirds of the frame rate (PLATFORM.md) and add
-  // little to a view from straight above.
+  // Shadows cost about two thirds of the frame rate (measured at 640x480
+  // under OSMesa: 34 frames/s with them, 97 without) and add little to a
+  // view from straight above.
   bool shadows = false;
   // Multisampling of MuJoCo's offscreen buffer. 4x costs about 4x the render
   // time under software GL; seen from above, box edges are axis-aligned and

@@ -1,4 +1,4 @@
-// An H.264 MP4 written through OpenCV's FFMPEG backend (PLATFORM.md), to a
+// An H.264 MP4 written through OpenCV's FFMPEG backend, to a
 // temporary name in the same directory and renamed into place by Commit(),
 // so an interrupted render never leaves a truncated video under the final name.
 #ifndef AIA_RENDER_VIDEO_H_

@@ -38,10 +38,10 @@ struct EpisodeStats {
   // Decisions per PolicyStatus (indexed by its value).
   std::array<long, kNumPolicyStatuses> statuses{};
   long physics_timeouts = 0;  // steps whose physics hit physics.step_timeout
-  long stalled_steps = 0;  // steps that ended with a robot blocked short of
-                           // its waypoint (a contact), before the timeout
-  long substeps = 0;       // mj_step calls
-  double sim_seconds = 0.0;  // simulated time
+  long stalled_steps = 0;     // steps that ended with a robot blocked short of
+                              // its waypoint (a contact), before the timeout
+  long substeps = 0;          // mj_step calls
+  double sim_seconds = 0.0;   // simulated time
 };
 
 // The target models of the filter, from the world's priors.

@@ -1,5 +1,5 @@
-// `aia eval`: the scalability experiment of SPEC section 9, in three pieces
-// so that a sweep can be spread over processes (a later MPI driver only
+// `aia eval`: the scalability experiment (docs/design.md, Evaluation), in three
+// pieces so that a sweep can be spread over processes (a later MPI driver only
 // hands out instances):
 //   1. EnumerateInstances: every (size, seed) of the experiment;
 //   2. RunInstance: one instance, a pure function of the instance and the
@@ -24,8 +24,9 @@
 
 namespace aia {
 
-// The generated worlds of the experiments (SPEC section 9): 20 x 20 m, 30
-// random boxes, N robots and M random static targets, all drawn from `seed`.
+// The generated worlds of the experiments (docs/design.md, Evaluation): 20 x 20
+// m, 30 random boxes, N robots and M random static targets, all drawn from
+// `seed`.
 Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed);
 
 // "10x10" -> (10, 10); throws InputError naming `flag` on anything else.
@@ -71,8 +72,7 @@ struct EvalRow {
 };
 
 // The scenario of an instance: the generated one with the setup's overrides.
-Scenario InstanceScenario(const EvalInstance& instance,
-                          const EvalSetup& setup);
+Scenario InstanceScenario(const EvalInstance& instance, const EvalSetup& setup);
 
 // Runs `policies` (a subset of setup.policies, by name; empty: all) on one
 // instance, in that order. Rows do not depend on anything else (wall_s

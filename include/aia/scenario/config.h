@@ -52,8 +52,8 @@ struct BoxConfig {
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(center).Doc("metres"));
-    a->Visit(AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc(
-        "metres"));
+    a->Visit(
+        AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc("metres"));
   }
 };
 
@@ -89,8 +89,8 @@ struct WorkspaceConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc(
-        "metres"));
+    a->Visit(
+        AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc("metres"));
     a->Visit(AIA_FIELD(cell).In(kPositive).Doc("occupancy-grid cell, metres"));
     a->Visit(AIA_FIELD(obstacles));
   }
@@ -124,7 +124,7 @@ struct RobotsConfig {
 
 struct TargetConfig {
   Vec2 position{0.0, 0.0};
-  Vec2 velocity{0.0, 0.0};  // used when the state has dimension 4
+  Vec2 velocity{0.0, 0.0};            // used when the state has dimension 4
   std::optional<Vec2> prior_mean;     // none: truth plus a draw
   std::optional<double> prior_sigma;  // none: TargetsConfig::prior_sigma
   TargetModel dynamics;
@@ -134,12 +134,14 @@ struct TargetConfig {
     a->Visit(AIA_FIELD(position)
                  .Required("the target's true position [x, y]")
                  .Doc("true initial position"));
-    a->Visit(AIA_FIELD(velocity).Shape("[vx, vy]").Doc(
-        "true initial velocity; only with 4x4 dynamics"));
-    a->Visit(AIA_FIELD(prior_mean).Doc(
-        "mu_0; none: the truth plus N(0, prior_offset^2 I)"));
-    a->Visit(AIA_FIELD(prior_sigma).In(kPositive).Doc(
-        "prior std; none: targets.prior_sigma"));
+    a->Visit(AIA_FIELD(velocity)
+                 .Shape("[vx, vy]")
+                 .Doc("true initial velocity; only with 4x4 dynamics"));
+    a->Visit(AIA_FIELD(prior_mean)
+                 .Doc("mu_0; none: the truth plus N(0, prior_offset^2 I)"));
+    a->Visit(AIA_FIELD(prior_sigma)
+                 .In(kPositive)
+                 .Doc("prior std; none: targets.prior_sigma"));
     a->Visit(AIA_FIELD(dynamics).Doc("static when not given"));
   }
   void Validate(const FieldChecker& check);
@@ -157,16 +159,23 @@ struct TargetsConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(count).In(AtLeast(0)).Doc(
-        "random static targets, each in free space and observable (within 0.9 "
-        "of the range, in sight) from a point the robots can reach; with "
-        "`list` it must equal the list's length"));
+    a->Visit(AIA_FIELD(count)
+                 .In(AtLeast(0))
+                 .Doc("random static targets, each in free space and "
+                      "observable (within 0.9 "
+                      "of the range, in sight) from a point the robots can "
+                      "reach; with "
+                      "`list` it must equal the list's length"));
     a->Visit(AIA_FIELD(list).Doc("explicit targets"));
-    a->Visit(AIA_FIELD(prior_sigma).In(kPositive).Doc(
-        "prior std per coordinate: Sigma_0 = prior_sigma^2 I"));
-    a->Visit(AIA_FIELD(prior_offset).In(kNonNegative).Doc(
-        "std of a default prior mean around the truth: mu_0 = x + N(0, "
-        "prior_offset^2 I), redrawn until it lies in free space"));
+    a->Visit(AIA_FIELD(prior_sigma)
+                 .In(kPositive)
+                 .Doc("prior std per coordinate: Sigma_0 = prior_sigma^2 I"));
+    a->Visit(
+        AIA_FIELD(prior_offset)
+            .In(kNonNegative)
+            .Doc(
+                "std of a default prior mean around the truth: mu_0 = x + N(0, "
+                "prior_offset^2 I), redrawn until it lies in free space"));
   }
   // count and list agree; at least one target.
   void Validate(const FieldChecker& check);
@@ -181,11 +190,13 @@ struct MissionConfig {
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(eps).In(kPositive).Doc(
         "success: every target has some active robot with det Sigma <= eps"));
-    a->Visit(AIA_FIELD(max_steps).In(AtLeast(1)).Doc(
-        "decision steps at most (--max-steps)"));
-    a->Visit(AIA_FIELD(stop_at_success).Doc(
-        "false: a tracking mission runs its whole horizon, scored by "
-        "localized_share"));
+    a->Visit(AIA_FIELD(max_steps)
+                 .In(AtLeast(1))
+                 .Doc("decision steps at most (--max-steps)"));
+    a->Visit(
+        AIA_FIELD(stop_at_success)
+            .Doc("false: a tracking mission runs its whole horizon, scored by "
+                 "localized_share"));
   }
 };
 
@@ -223,8 +234,9 @@ struct PhysicsConfig {
     a->Visit(AIA_FIELD(robot_mass).In(kPositive).Doc("kg"));
     a->Visit(AIA_FIELD(tolerance).In(kPositive).Doc(
         "a robot has arrived within this distance of its waypoint, metres"));
-    a->Visit(AIA_FIELD(step_timeout).In(kPositive).Doc(
-        "simulated seconds a decision step may last"));
+    a->Visit(AIA_FIELD(step_timeout)
+                 .In(kPositive)
+                 .Doc("simulated seconds a decision step may last"));
   }
 };
 
@@ -236,14 +248,21 @@ struct RenderConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(width).In(AtLeast(1)).Doc(
-        "video width, pixels (even, 16 to 8192)"));
-    a->Visit(AIA_FIELD(height).In(AtLeast(1)).Doc(
-        "video height, pixels (even, 16 to 8192)"));
-    a->Visit(AIA_FIELD(fps).In(AtLeast(1)).Doc(
-        "frames per second of simulated time, at most 1 / physics.timestep"));
-    a->Visit(AIA_FIELD(follow_robot).In(AtLeast(-1)).Doc(
-        "robot whose uncertainty heatmap `aia render` draws; -1 none"));
+    a->Visit(AIA_FIELD(width)
+                 .In(AtLeast(1))
+                 .Doc("video width, pixels (even, 16 to 8192)"));
+    a->Visit(AIA_FIELD(height)
+                 .In(AtLeast(1))
+                 .Doc("video height, pixels (even, 16 to 8192)"));
+    a->Visit(AIA_FIELD(fps)
+                 .In(AtLeast(1))
+                 .Doc("frames per second of simulated time, at most 1 / "
+                      "physics.timestep"));
+    a->Visit(
+        AIA_FIELD(follow_robot)
+            .In(AtLeast(-1))
+            .Doc(
+                "robot whose uncertainty heatmap `aia render` draws; -1 none"));
   }
 };
 

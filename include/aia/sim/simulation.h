@@ -1,8 +1,8 @@
-// The physics of a mission (SPEC section 3): a MuJoCo model generated from the
-// world, robots that track lattice waypoints with position actuators and real
-// contacts, targets as mocap bodies, and ray sensing against obstacles. No
-// process-wide MuJoCo callbacks: the caller sets waypoints and this class
-// calls mj_step explicitly.
+// The physics of a mission (docs/design.md, Physics): a MuJoCo model generated
+// from the world, robots that track lattice waypoints with position actuators
+// and real contacts, targets as mocap bodies, and ray sensing against
+// obstacles. No process-wide MuJoCo callbacks: the caller sets waypoints and
+// this class calls mj_step explicitly.
 #ifndef AIA_SIM_SIMULATION_H_
 #define AIA_SIM_SIMULATION_H_
 
@@ -110,11 +110,11 @@ class Simulation {
   long mj_steps_ = 0;
 };
 
-// One round of sensing (SPEC section 4): robot i (if active) measures target k
-// when it is within range and, with line of sight on, a ray between them meets
-// no obstacle. y = pos_k - p_i + v with v ~ N(0, (sigma0 + eta d)^2 I) drawn at
-// the true distance d; the recorded precision is computed from |y|, as the
-// filter does not know d.
+// One round of sensing (docs/design.md, Sensing): robot i (if active) measures
+// target k when it is within range and, with line of sight on, a ray between
+// them meets no obstacle. y = pos_k - p_i + v with v ~ N(0, (sigma0 + eta d)^2
+// I) drawn at the true distance d; the recorded precision is computed from |y|,
+// as the filter does not know d.
 void Sense(const Simulation& sim, const SensorModel& sensor,
            const std::vector<Vec2>& robots, const std::vector<Vec2>& targets,
            const std::vector<std::uint8_t>& active, std::vector<Rng>* rngs,

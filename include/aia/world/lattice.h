@@ -1,8 +1,8 @@
-// The motion lattice (SPEC section 2): points at ((i + 0.5) step, (j + 0.5)
-// step), moves of one step left/right/up/down. A point is free when a robot
-// disc of the given radius there touches no obstacle; a move is valid when both
-// ends are free and the disc swept along it touches no obstacle either (so a
-// thin wall between two free points is not crossed).
+// The motion lattice (docs/design.md, World): points at ((i + 0.5) step, (j +
+// 0.5) step), moves of one step left/right/up/down. A point is free when a
+// robot disc of the given radius there touches no obstacle; a move is valid
+// when both ends are free and the disc swept along it touches no obstacle
+// either (so a thin wall between two free points is not crossed).
 #ifndef AIA_WORLD_LATTICE_H_
 #define AIA_WORLD_LATTICE_H_
 
@@ -80,8 +80,8 @@ Move StepDownField(const Lattice& lattice, const std::vector<int>& dist,
 // A uniformly random valid move from `from`, or kStay when there is none.
 Move RandomValidMove(const Lattice& lattice, int from, Rng& rng);
 
-// The world rule (SPEC section 2), the same for every policy: an invalid move
-// is replaced by a uniformly random valid one; with none the robot stays.
+// The world rule (docs/design.md, World), the same for every policy: an invalid
+// move is replaced by a uniformly random valid one; with none the robot stays.
 // Sets *replaced when the wanted move was not applied as is.
 Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng,
                     bool* replaced);

@@ -1,7 +1,8 @@
-// MJCF generation (SPEC section 3): floor, border walls, obstacles as static
-// bodies, robots as bodies on two slide joints driven by position actuators
-// (critically damped), targets as collision-free mocap bodies. The file loads
-// in MuJoCo's own tools (mujoco-testxml, mujoco-compile, mujoco-simulate).
+// MJCF generation (docs/design.md, Physics): floor, border walls, obstacles as
+// static bodies, robots as bodies on two slide joints driven by position
+// actuators (critically damped), targets as collision-free mocap bodies. The
+// file loads in MuJoCo's own tools (mujoco-testxml, mujoco-compile,
+// mujoco-simulate).
 #ifndef AIA_WORLD_MJCF_H_
 #define AIA_WORLD_MJCF_H_
 
