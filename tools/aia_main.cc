@@ -216,6 +216,11 @@ Action AddBenchCommand(CLI::App& app) {
                 "time the expert's solve (C-SB) instead of episodes");
   cmd->add_option("--seeds", bench->seeds, "with --expert: worlds per size")
       ->capture_default_str();
+  cmd->add_option("--set", bench->sets,
+                  "override a key of the generated scenarios, e.g. --set "
+                  "sensor.range=3 (repeatable)")
+      ->take_all()
+      ->expected(1);
   return [=]() { return cmd->parsed() ? aia::RunBench(*bench) : -1; };
 }
 

@@ -172,15 +172,16 @@ void TeamBestRows(const std::vector<double>& det, int num_targets,
   const int rows = static_cast<int>(active.size());
   AIA_CHECK(static_cast<int>(det.size()) == rows * num_targets);
   best->assign(num_targets, -1);
-  for (int k = 0; k < num_targets; ++k) {
-    int b = -1;
-    for (int i = 0; i < rows; ++i) {
-      if (!active[i]) continue;
-      if (b < 0 || det[static_cast<size_t>(i) * num_targets + k] <
-                       det[static_cast<size_t>(b) * num_targets + k])
-        b = i;
+  int* b = best->data();
+  // Row by row, so that `det` is read in order (at 80 x 80 a column walk
+  // misses the cache on every read and takes twice the time).
+  for (int i = 0; i < rows; ++i) {
+    if (!active[i]) continue;
+    const double* row = det.data() + static_cast<size_t>(i) * num_targets;
+    for (int k = 0; k < num_targets; ++k) {
+      if (b[k] < 0 || row[k] < det[static_cast<size_t>(b[k]) * num_targets + k])
+        b[k] = i;
     }
-    (*best)[k] = b;
   }
 }
 

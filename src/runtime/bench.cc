@@ -57,13 +57,16 @@ int RunExpertBench(const BenchOptions& o) {
   std::printf("%-8s %10s %10s %8s %8s %10s %12s %12s %10s\n", "size",
               "median_s", "worst_s", "F*_med", "found", "nodes_med",
               "arena_MiB", "arena_worst", "RSS_MiB");
+  const EvalSetup setup = MakeEvalSetup({}, o.sets, AllPolicies());
+  const ExpertParams& expert = *ParamsOf<ExpertParams>(*setup.expert);
   for (const std::string& size_text : o.sizes) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
     std::vector<double> secs, fstar, nodes, arena;
     int found = 0;
     for (int k = 0; k < o.seeds; ++k) {
       const SamplingPlan plan = PlanFromStart(
-          BuildInstance(GeneratedScenario(n, m, o.seed + k)), ExpertParams{});
+          BuildInstance(InstanceScenario({size_text, n, m, o.seed + k}, setup)),
+          expert);
       secs.push_back(plan.seconds);
       fstar.push_back(plan.depth);
       nodes.push_back(static_cast<double>(plan.nodes));
@@ -92,7 +95,7 @@ int RunBench(const BenchOptions& o) {
     throw InputError("command line", 0, "--steps", "must be at least 1");
   if (o.repeats < 1)
     throw InputError("command line", 0, "--repeats", "must be at least 1");
-  const PolicyRegistry registry = AllPolicies();
+  const EvalSetup setup = MakeEvalSetup({o.policy}, o.sets, AllPolicies());
   std::printf(
       "aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
       o.policy.c_str(), o.steps, o.repeats);
@@ -101,13 +104,10 @@ int RunBench(const BenchOptions& o) {
               "rest", "mj_step%", "mj_step/s", "testspeed/s");
   for (const std::string& size_text : o.sizes) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
-    CommandOverrides ov;
-    ov.policy = o.policy;
-    Scenario s = WithOverrides(GeneratedScenario(n, m, o.seed),
-                               ov.ToOverrides(registry));
+    Scenario s = InstanceScenario({size_text, n, m, o.seed}, setup);
     s.mission.max_steps = o.steps;
     s.mission.stop_at_success = false;
-    const std::shared_ptr<const PolicySpec> policy = registry.Resolve(s);
+    const std::shared_ptr<const PolicySpec>& policy = setup.policies[0];
     const std::shared_ptr<const Instance> instance = BuildInstance(s);
     std::vector<double> rate, ms, phys, sens, fus, pol, rest, share, mjrate;
     std::string mjcf;

@@ -77,6 +77,7 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   best_.assign(num_targets_, -1);
   policy_->Reset(world.map, n, num_targets_, scenario.seed);
   Observe();  // step 0: measurements at the starts, fused with the prior
+  times_ = PhaseTimes{};  // phase times are those of the decision steps
 }
 
 void Episode::AddObserver(StepObserver* observer) {

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <cstdio>
 
@@ -44,6 +45,23 @@ void TraceObserver::Write(const Episode& e) {
 
 void TraceObserver::OnEnd(const Episode&) { impl_->file.Commit(); }
 
+namespace {
+
+// |mu - x| of the position and (x - mu)' Omega (x - mu), on fixed-size
+// blocks (no allocation per step).
+template <int D>
+void ErrorAndNees(const BeliefSet& b, int robot, int k,
+                  const Eigen::VectorXd& x, double* error, double* nees) {
+  const Eigen::Matrix<double, D, D> omega = b.Omega(robot, k);
+  const Eigen::Matrix<double, D, 1> xi = b.Xi(robot, k);
+  const Eigen::Matrix<double, D, 1> err =
+      x.head<D>() - omega.llt().solve(xi);
+  *error = err.template head<2>().norm();
+  *nees = err.dot(omega * err);
+}
+
+}  // namespace
+
 struct EstimateObserver::Impl {
   AtomicFile file;
   explicit Impl(const std::string& path) : file(path) {
@@ -67,9 +85,13 @@ void EstimateObserver::Score(const Episode& e) {
   for (int k = 0; k < m; ++k) {
     // With every robot failed, robot 0's belief (kept, predicted alone).
     const int robot = std::max(0, e.BestRobot(k));
-    const Eigen::VectorXd err = e.target_states()[k] - b.Mean(robot, k);
-    const double error = err.head<2>().norm();
-    const double nees = err.dot(b.Omega(robot, k) * err);
+    const Eigen::VectorXd& x = e.target_states()[k];
+    double error = 0.0, nees = 0.0;
+    if (x.size() == 2) {
+      ErrorAndNees<2>(b, robot, k, x, &error, &nees);
+    } else {
+      ErrorAndNees<4>(b, robot, k, x, &error, &nees);
+    }
     sum_sq_[k] += error * error;
     sum_nees_[k] += nees;
     if (impl_) {

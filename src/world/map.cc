@@ -43,33 +43,28 @@ Map::Map(const Vec2& size, std::vector<Box> obstacles, double cell, double step,
   buckets_.assign(static_cast<size_t>(bx_) * by_, {});
   for (int b = 0; b < static_cast<int>(obstacles_.size()); ++b) {
     const Box& box = obstacles_[b];
-    const int x0 = std::clamp(
-        static_cast<int>(std::floor(box.lo.x() / bucket_)), 0, bx_ - 1);
-    const int x1 = std::clamp(
-        static_cast<int>(std::floor(box.hi.x() / bucket_)), 0, bx_ - 1);
-    const int y0 = std::clamp(
-        static_cast<int>(std::floor(box.lo.y() / bucket_)), 0, by_ - 1);
-    const int y1 = std::clamp(
-        static_cast<int>(std::floor(box.hi.y() / bucket_)), 0, by_ - 1);
+    int x0, x1, y0, y1;
+    BucketRange(box.lo, box.hi, &x0, &x1, &y0, &y1);
     for (int iy = y0; iy <= y1; ++iy)
       for (int ix = x0; ix <= x1; ++ix)
         buckets_[static_cast<size_t>(iy) * bx_ + ix].push_back(b);
   }
 }
 
+void Map::BucketRange(const Vec2& lo, const Vec2& hi, int* x0, int* x1,
+                      int* y0, int* y1) const {
+  const auto bucket = [this](double v, int n) {
+    return std::clamp(static_cast<int>(std::floor(v / bucket_)), 0, n - 1);
+  };
+  *x0 = bucket(lo.x(), bx_);
+  *x1 = bucket(hi.x(), bx_);
+  *y0 = bucket(lo.y(), by_);
+  *y1 = bucket(hi.y(), by_);
+}
+
 bool Map::LineOfSight(const Vec2& a, const Vec2& b) const {
-  const int x0 =
-      std::clamp(static_cast<int>(std::floor(std::min(a.x(), b.x()) / bucket_)),
-                 0, bx_ - 1);
-  const int x1 =
-      std::clamp(static_cast<int>(std::floor(std::max(a.x(), b.x()) / bucket_)),
-                 0, bx_ - 1);
-  const int y0 =
-      std::clamp(static_cast<int>(std::floor(std::min(a.y(), b.y()) / bucket_)),
-                 0, by_ - 1);
-  const int y1 =
-      std::clamp(static_cast<int>(std::floor(std::max(a.y(), b.y()) / bucket_)),
-                 0, by_ - 1);
+  int x0, x1, y0, y1;
+  BucketRange(a.cwiseMin(b), a.cwiseMax(b), &x0, &x1, &y0, &y1);
   for (int iy = y0; iy <= y1; ++iy) {
     for (int ix = x0; ix <= x1; ++ix) {
       for (int bi : buckets_[static_cast<size_t>(iy) * bx_ + ix]) {

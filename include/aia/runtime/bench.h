@@ -23,6 +23,9 @@ struct BenchOptions {
   // `seeds` generated worlds per size (seeds seed .. seed + seeds - 1).
   bool expert = false;
   int seeds = 20;
+  // --set key.path=value, applied to every generated scenario (after its
+  // size and seed).
+  std::vector<std::string> sets;
 };
 
 int RunBench(const BenchOptions& options);

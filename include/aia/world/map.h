@@ -44,6 +44,10 @@ class Map {
   Grid<std::uint8_t> occupancy_;
   Lattice lattice_;
   double robot_radius_ = 0.15;
+  // The buckets covering the rectangle [lo, hi], clamped to the grid.
+  void BucketRange(const Vec2& lo, const Vec2& hi, int* x0, int* x1, int* y0,
+                   int* y1) const;
+
   // Boxes bucketed on a coarse grid for LineOfSight.
   double bucket_ = 1.0;
   int bx_ = 0, by_ = 0;
