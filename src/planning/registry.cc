@@ -57,10 +57,14 @@ std::shared_ptr<const PolicySpec> PolicyRegistry::Resolve(
   const std::string& name = scenario.policy.name;
   for (const Entry& e : entries_)
     if (e.info.name == name) return e.resolve(scenario);
+  throw scenario.ErrorAt("policy.name", UnknownPolicy(name));
+}
+
+std::string PolicyRegistry::UnknownPolicy(const std::string& name) const {
   std::string what = "unknown policy '" + name + "'";
   const std::string closest = field_text::ClosestName(name, Names());
   if (!closest.empty()) what += " (did you mean `" + closest + "`?)";
-  throw scenario.ErrorAt("policy.name", what + " (valid: " + NameList() + ")");
+  return what + " (valid: " + NameList() + ")";
 }
 
 PolicyRegistry BuiltinPolicies() {

@@ -95,7 +95,11 @@ int RunBench(const BenchOptions& o) {
     throw InputError("command line", 0, "--steps", "must be at least 1");
   if (o.repeats < 1)
     throw InputError("command line", 0, "--repeats", "must be at least 1");
-  const EvalSetup setup = MakeEvalSetup({o.policy}, o.sets, AllPolicies());
+  const PolicyRegistry registry = AllPolicies();
+  if (!registry.Has(o.policy))
+    throw InputError("command line", 0, "--policy",
+                     registry.UnknownPolicy(o.policy));
+  const EvalSetup setup = MakeEvalSetup({o.policy}, o.sets, registry);
   std::printf(
       "aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
       o.policy.c_str(), o.steps, o.repeats);

@@ -197,9 +197,8 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
   setup.expert = resolve("expert");
   for (const std::string& p : policies) {
     if (!registry.Has(p))
-      throw InputError(
-          "command line", 0, "--policies",
-          "unknown policy '" + p + "' (valid: " + registry.NameList() + ")");
+      throw InputError("command line", 0, "--policies",
+                       registry.UnknownPolicy(p));
     setup.policies.push_back(resolve(p));
   }
   for (const Override& o : policy_sets) {

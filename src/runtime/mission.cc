@@ -30,14 +30,9 @@ std::vector<Override> CommandOverrides::ToOverrides(
     const PolicyRegistry& registry) const {
   std::vector<Override> out;
   if (policy) {
-    if (!registry.Has(*policy)) {
-      std::string what = "unknown policy '" + *policy + "'";
-      const std::string closest =
-          field_text::ClosestName(*policy, registry.Names());
-      if (!closest.empty()) what += " (did you mean `" + closest + "`?)";
+    if (!registry.Has(*policy))
       throw InputError("command line", 0, "--policy",
-                       what + " (valid: " + registry.NameList() + ")");
-    }
+                       registry.UnknownPolicy(*policy));
     out.push_back({"--policy", "policy.name", *policy});
   }
   if (seed) out.push_back({"--seed", "seed", std::to_string(*seed)});

@@ -86,6 +86,8 @@ class PolicyRegistry {
   std::vector<std::string> Names() const;
   // "random, greedy, ..." for messages.
   std::string NameList() const;
+  // "unknown policy 'grdy' (did you mean `greedy`?) (valid: ...)".
+  std::string UnknownPolicy(const std::string& name) const;
   std::vector<PolicyInfo> Describe() const;
 
   // The scenario's policy with its parameters read and checked: an unknown
