@@ -54,8 +54,7 @@ void ErrorAndNees(const BeliefSet& b, int robot, int k,
                   const Eigen::VectorXd& x, double* error, double* nees) {
   const Eigen::Matrix<double, D, D> omega = b.Omega(robot, k);
   const Eigen::Matrix<double, D, 1> xi = b.Xi(robot, k);
-  const Eigen::Matrix<double, D, 1> err =
-      x.head<D>() - omega.llt().solve(xi);
+  const Eigen::Matrix<double, D, 1> err = x.head<D>() - omega.llt().solve(xi);
   *error = err.template head<2>().norm();
   *nees = err.dot(omega * err);
 }

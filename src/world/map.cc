@@ -51,8 +51,8 @@ Map::Map(const Vec2& size, std::vector<Box> obstacles, double cell, double step,
   }
 }
 
-void Map::BucketRange(const Vec2& lo, const Vec2& hi, int* x0, int* x1,
-                      int* y0, int* y1) const {
+void Map::BucketRange(const Vec2& lo, const Vec2& hi, int* x0, int* x1, int* y0,
+                      int* y1) const {
   const auto bucket = [this](double v, int n) {
     return std::clamp(static_cast<int>(std::floor(v / bucket_)), 0, n - 1);
   };
