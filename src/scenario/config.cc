@@ -140,8 +140,7 @@ void Scenario::Validate(const FieldChecker& check) {
 
 InputError Scenario::ErrorAt(const std::string& key,
                              const std::string& what) const {
-  return KeyError(file.empty() ? "(generated scenario)" : file, sources, key,
-                  what);
+  return KeyError(ErrorFile(), sources, key, what);
 }
 
 int Scenario::LineOf(const std::string& key) const {

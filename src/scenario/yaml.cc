@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "aia/core/error.h"
+#include "aia/core/field_io.h"
 
 namespace aia {
 namespace {
@@ -113,11 +114,12 @@ InputError YamlError(const YAML::Exception& e, const std::string& file) {
 
 constexpr std::size_t kLineWidth = 80;
 
+// Numbers as the readers parse them (core/field_io.h), and YAML's words.
 bool LooksLikeNumberOrWord(const std::string& s) {
-  static const std::regex kSpecial(
-      R"([-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?|[-+]?\.?(inf|infinity)|\.?nan|true|false|null|yes|no|on|off|y|n|~)",
-      std::regex::icase);
-  return std::regex_match(s, kSpecial);
+  static const std::regex kWord("true|false|null|yes|no|on|off|y|n|~",
+                                std::regex::icase);
+  return field_text::ParseReal(ConfigNode::Scalar(s)).has_value() ||
+         std::regex_match(s, kWord);
 }
 
 // Whether a string can be written without quotes and read back as itself.

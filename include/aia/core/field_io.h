@@ -1,8 +1,8 @@
 // The archives that walk field declarations (core/fields.h):
 //   FieldReader  ConfigNode -> struct, strict, with `FILE:LINE: key: what`
 //                errors and "did you mean" hints;
-//   WriteFields  struct -> ConfigNode (the effective configuration);
-//   DocumentFields  struct -> one row per key (type, default, meaning);
+//   FieldWriter  struct -> ConfigNode (the effective configuration);
+//   FieldDocs    struct -> one row per key (type, default, meaning);
 //   FieldFinder  the dotted key of a member, for errors raised later.
 // One generic implementation per archive serves every struct: scenarios,
 // sensor and communication settings, target dynamics, policy parameters.
@@ -569,11 +569,12 @@ class FieldDocs {
                        std::string(f.doc)});
       return;
     }
-    FieldDoc row{key, TypeText(f), DefaultText(f), std::string(f.doc)};
     if constexpr (internal::HasSerialize<T>::value) {
-      Nested(*f.value, key);  // a section: its keys only
+      Nested(*f.value, key);  // a section: its keys only, no row of its own
       return;
-    } else if constexpr (internal::IsOptional<T>::value) {
+    }
+    FieldDoc row{key, TypeText(f), DefaultText(f), std::string(f.doc)};
+    if constexpr (internal::IsOptional<T>::value) {
       using U = typename T::value_type;
       if constexpr (internal::HasSerialize<U>::value) {
         rows_.push_back(std::move(row));

@@ -148,7 +148,7 @@ Params PolicyRegistry::ReadParams(const std::string& name,
                                   const Scenario& scenario) {
   Params params;
   ReadOptions options;
-  options.file = scenario.file.empty() ? "(generated scenario)" : scenario.file;
+  options.file = scenario.ErrorFile();
   options.unknown_key_lead = "unknown parameter for policy '" + name + "'";
   ReadFields(scenario.policy.params, options, "policy", &params);
   return params;

@@ -305,6 +305,10 @@ struct Scenario {
   void Validate(const FieldChecker& check);
 
   int NumTargets() const { return targets.Num(); }
+  // The file errors name: `file`, or "(generated scenario)".
+  std::string ErrorFile() const {
+    return file.empty() ? "(generated scenario)" : file;
+  }
   // The error about `key`, at its line (or its nearest given parent's), or
   // naming the command-line flag that set it.
   InputError ErrorAt(const std::string& key, const std::string& what) const;
