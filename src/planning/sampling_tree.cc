@@ -58,6 +58,26 @@ double SamplingTree::BlockDet(const double* packed, int k) const {
   return 1.0 / Unpack<4>(p).determinant();
 }
 
+// Moving targets' aims and fields are kept per span of this many depths (the
+// predicted mean at the span's middle), for at most kMaxBuckets spans.
+constexpr int kBucket = 4;
+constexpr int kMaxBuckets = 64;
+
+// The tours' legs are the tree's own fields, walked.
+class SamplingTree::Legs : public LegOracle {
+ public:
+  explicit Legs(SamplingTree* tree) : tree_(tree) {}
+  Leg Compute(int from, int t, int k) override {
+    return tree_->ComputeLeg(from, t, k);
+  }
+  bool TimeVarying(int k) const override {
+    return !tree_->targets_[k].is_static;
+  }
+
+ private:
+  SamplingTree* tree_;
+};
+
 const Vec2& SamplingTree::MeanAt(int depth, int k) {
   while (static_cast<int>(means_.size()) <= depth) {
     std::vector<Vec2> next(m_);
@@ -69,6 +89,112 @@ const Vec2& SamplingTree::MeanAt(int depth, int k) {
     means_.push_back(std::move(next));
   }
   return means_[depth][k];
+}
+
+int SamplingTree::Bucket(int depth, int k) const {
+  if (targets_[k].is_static) return 0;
+  return std::min(depth / kBucket, kMaxBuckets - 1);
+}
+
+void SamplingTree::RegionOf(const Vec2& x,
+                            std::vector<std::pair<int, double>>* region) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  const int span =
+      static_cast<int>(std::ceil(p.sensor->range / lattice.step())) + 1;
+  region->clear();
+  const int c = lattice.NearestPoint(x);
+  for (int iy = std::max(0, lattice.Iy(c) - span);
+       iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy) {
+    for (int ix = std::max(0, lattice.Ix(c) - span);
+         ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
+      const int q = lattice.Index(ix, iy);
+      if (!lattice.Free(q) || reach_[q] < 0) continue;
+      const double r = PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), x);
+      if (r > 0.0) region->push_back({q, r});
+    }
+  }
+}
+
+bool SamplingTree::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
+                           const std::vector<int>* missed, Vec2* aim,
+                           std::vector<std::pair<int, double>>* region) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  auto searched = [&](const Vec2& x) {
+    if (!missed) return false;
+    for (int q : *missed) {
+      const Vec2 at = lattice.Point(q);
+      if (p.sensor->InRange((x - at).norm()) &&
+          (!p.sensor->line_of_sight || p.map->LineOfSight(at, x)))
+        return true;
+    }
+    return false;
+  };
+  // The mean first, then rings of the prior at growing Mahalanobis radius:
+  // on the first ring with candidates, the one whose region is nearest to a
+  // robot.
+  Eigen::LLT<Eigen::Matrix2d> llt(cov);
+  const Eigen::Matrix2d l = llt.info() == Eigen::Success
+                                ? Eigen::Matrix2d(llt.matrixL())
+                                : Eigen::Matrix2d::Identity();
+  const double sigma = std::sqrt(std::max(cov(0, 0), cov(1, 1)));
+  constexpr int kRings = 16;        // to 4 sigma
+  constexpr double kRingStep = 0.25;
+  for (int ring = 0; ring <= kRings; ++ring) {
+    const double rho = ring * kRingStep;
+    const int count =
+        ring == 0 ? 1
+                  : std::clamp(static_cast<int>(std::ceil(
+                                   2.0 * M_PI * rho * sigma / lattice.step())),
+                               8, 64);
+    int best = std::numeric_limits<int>::max();
+    for (int a = 0; a < count; ++a) {
+      const double theta = 2.0 * M_PI * a / count;
+      const Vec2 x = mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta));
+      if (!p.map->PointFree(x) || searched(x)) continue;
+      RegionOf(x, &trial_region_);
+      int near = std::numeric_limits<int>::max();
+      for (const auto& [q, r] : trial_region_) near = std::min(near, reach_[q]);
+      if (trial_region_.empty() || near >= best) continue;
+      best = near;
+      *aim = x;
+      region->swap(trial_region_);
+    }
+    if (best != std::numeric_limits<int>::max()) return true;
+  }
+  *aim = mean;
+  region->clear();
+  return false;
+}
+
+SamplingTree::AimSlot& SamplingTree::Slot(int depth, int k) {
+  AimSlot& slot = slots_[k][Bucket(depth, k)];
+  if (slot.ready) return slot;
+  const SamplingProblem& p = *problem_;
+  const int b = Bucket(depth, k);
+  const Vec2 mean =
+      targets_[k].is_static ? means_[0][k] : MeanAt(b * kBucket + kBucket / 2, k);
+  const Eigen::MatrixXd sigma =
+      p.belief->Covariance(p.belief_row, k).topLeftCorner(2, 2);
+  const std::vector<int>* missed =
+      (targets_[k].is_static && static_cast<int>(p.missed.size()) > k)
+          ? &p.missed[k]
+          : nullptr;
+  FindAim(mean, Eigen::Matrix2d(sigma), missed, &slot.point, &region_);
+  slot.at_mean = !targets_[k].is_static && slot.point == mean;
+  std::vector<int> sources;
+  sources.reserve(region_.size());
+  for (const auto& [q, r] : region_) sources.push_back(q);
+  BfsDistances(p.map->lattice(), sources.data(),
+               static_cast<int>(sources.size()), &slot.field, &bfs_queue_);
+  slot.ready = true;
+  return slot;
+}
+
+Vec2 SamplingTree::MeasurePoint(int depth, int k) {
+  const AimSlot& slot = Slot(depth, k);
+  return slot.at_mean ? MeanAt(depth, k) : slot.point;
 }
 
 void SamplingTree::Prepare(const SamplingProblem& p) {
@@ -93,31 +219,21 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
     means_[0][k] = full_mean_[k].head<2>();
     any_moving_ = any_moving_ || !layout.is_static(k);
   }
-  // Observation regions at the root means and BFS fields toward them.
-  field_.assign(m_, {});
+  // What the active robots can reach.
+  std::vector<int> sources;
+  for (int i = 0; i < n_; ++i)
+    if (p.active[i]) sources.push_back(p.start[i]);
+  BfsDistances(lattice, sources.data(), static_cast<int>(sources.size()),
+               &reach_, &bfs_queue_);
+  // Aims, observation regions and fields of the static targets now; moving
+  // targets' per span of depths, when first asked for.
+  slots_.assign(m_, {});
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
-  const int span =
-      static_cast<int>(std::ceil(p.sensor->range / lattice.step())) + 1;
-  std::vector<int> region;
   for (int k = 0; k < m_; ++k) {
-    region.clear();
-    const Vec2 mu = means_[0][k];
-    const int c = lattice.NearestPoint(mu);
-    for (int iy = std::max(0, lattice.Iy(c) - span);
-         iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy) {
-      for (int ix = std::max(0, lattice.Ix(c) - span);
-           ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
-        const int q = lattice.Index(ix, iy);
-        if (!lattice.Free(q)) continue;
-        const double r =
-            PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), mu);
-        if (r <= 0.0) continue;
-        region.push_back(q);
-        if (targets_[k].is_static) per_point[q].push_back({k, r});
-      }
-    }
-    BfsDistances(lattice, region.data(), static_cast<int>(region.size()),
-                 &field_[k], &bfs_queue_);
+    slots_[k].assign(targets_[k].is_static ? 1 : kMaxBuckets, AimSlot{});
+    if (!targets_[k].is_static) continue;
+    Slot(0, k);
+    for (const auto& [q, r] : region_) per_point[q].push_back({k, r});
   }
   obs_begin_.assign(lattice.size() + 1, 0);
   obs_.clear();
@@ -136,9 +252,19 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   det_sum_.clear();
   lower_.clear();
   for (auto& level : levels_) level.clear();
+  goals_.clear();
+  best_ = -1;
+  j_min_ = kInf;
+  tol_ = kGoalTolerance * p.eps;
+  first_goal_iteration_ = -1;
+  iteration_ = 0;
+  tours_.clear();
+  makespan_tours_.clear();
+  tour_makespan_ = 0;
   assigned_.assign(n_, -1);
   child_pos_.assign(n_, 0);
   taken_.assign(m_, 0);
+  open_.assign(m_, 0);
   scratch_info_.assign(stride_, 0.0);
 }
 
@@ -190,8 +316,8 @@ int SamplingTree::AddNode(int parent, const int* positions) {
         const Vec2 here = p.map->lattice().Point(q);
         for (int k = 0; k < m_; ++k) {
           if (targets_[k].is_static) continue;
-          const double r =
-              PredictedPrecision(*p.map, *p.sensor, here, MeanAt(depth, k));
+          const double r = PredictedPrecision(*p.map, *p.sensor, here,
+                                              MeasurePoint(depth, k));
           if (r > 0.0)
             AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, r);
         }
@@ -217,9 +343,10 @@ int SamplingTree::AddNode(int parent, const int* positions) {
     if (!targets_[k].is_static) continue;
     if (depth == 0 && !p.extra_at_depth1.empty() && p.extra_at_depth1[k] > 0.0)
       continue;
+    const std::vector<int>& field = slots_[k][0].field;
     int reach = std::numeric_limits<int>::max();
     for (int i = 0; i < n_; ++i) {
-      const int f = p.active[i] ? field_[k][positions[i]] : -1;
+      const int f = p.active[i] ? field[positions[i]] : -1;
       if (f >= 0) reach = std::min(reach, f);
     }
     if (reach != std::numeric_limits<int>::max() && reach > 1)
@@ -235,12 +362,55 @@ int SamplingTree::AddNode(int parent, const int* positions) {
   return id;
 }
 
+void SamplingTree::MarkOpen(int node) {
+  const double* info = Info(node);
+  for (int k = 0; k < m_; ++k)
+    open_[k] = BlockDet(info, k) > problem_->eps ? 1 : 0;
+}
+
+int SamplingTree::NearestOpen(int q, int depth) {
+  int best = -1, best_d = std::numeric_limits<int>::max();
+  for (int k = 0; k < m_; ++k) {
+    if (!open_[k]) continue;
+    const int d = FieldAt(depth, k)[q];
+    if (d >= 0 && d < best_d) {
+      best = k;
+      best_d = d;
+    }
+  }
+  return best;
+}
+
+int SamplingTree::NextInTour(const std::vector<int>& tour) const {
+  for (int k : tour)
+    if (open_[k]) return k;
+  return -1;
+}
+
+Move SamplingTree::StepToward(int q, int k, int depth, Rng* rng) {
+  const Lattice& lattice = problem_->map->lattice();
+  if (k >= 0) {
+    const std::vector<int>& f = FieldAt(depth, k);
+    if (f[q] > 0) return StepDownField(lattice, f, q);
+    if (f[q] == 0) {  // in the region already: stay inside it if possible
+      for (Move m : kMoves) {
+        const int v = lattice.Next(q, m);
+        if (v >= 0 && f[v] == 0) return m;
+      }
+    }
+  }
+  if (rng) return RandomValidMove(lattice, q, *rng);
+  for (Move m : kMoves)
+    if (lattice.Valid(q, m)) return m;
+  return Move::kStay;
+}
+
 void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   const SamplingProblem& p = *problem_;
-  const double* info = info_.data() + static_cast<size_t>(node) * stride_;
-  const int* pos = pos_.data() + static_cast<size_t>(node) * n_;
-  for (int k = 0; k < m_; ++k)
-    taken_[k] = BlockDet(info, k) > p.eps ? 0 : 2;  // 2: localized
+  const int* pos = Pos(node);
+  const int depth = depth_[node] + 1;
+  MarkOpen(node);
+  for (int k = 0; k < m_; ++k) taken_[k] = open_[k] ? 0 : 2;  // 2: localized
   std::fill(assigned_.begin(), assigned_.end(), -1);
   if (sorted) {
     // Globally nearest robot-target pairs first (greedy matching).
@@ -249,7 +419,7 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
       if (!p.active[i]) continue;
       for (int k = 0; k < m_; ++k) {
         if (taken_[k] != 0) continue;
-        const int d = field_[k][pos[i]];
+        const int d = FieldAt(depth, k)[pos[i]];
         if (d >= 0) pairs_.push_back({d, i * m_ + k});
       }
     }
@@ -270,7 +440,7 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
     for (int i : order_) {
       int best = -1, best_d = std::numeric_limits<int>::max();
       for (int k = 0; k < m_; ++k) {
-        const int d = field_[k][pos[i]];
+        const int d = FieldAt(depth, k)[pos[i]];
         if (taken_[k] == 0 && d >= 0 && d < best_d) {
           best = k;
           best_d = d;
@@ -282,19 +452,240 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
       }
     }
   }
-  // Robots left over (more robots than open targets) head for the nearest
-  // unlocalized target anyway.
+  // Robots left over (more robots than open targets) follow the idle rule:
+  // toward the nearest unlocalized target.
+  for (int i = 0; i < n_; ++i)
+    if (p.active[i] && assigned_[i] < 0)
+      assigned_[i] = NearestOpen(pos[i], depth);
+}
+
+Leg SamplingTree::ComputeLeg(int from, int t, int k) {
+  const Lattice& lattice = problem_->map->lattice();
+  const int cap = lattice.size();
+  int cur = from;
+  for (int s = 0; s <= cap; ++s) {
+    const int here = FieldAt(t + s, k)[cur];
+    if (here < 0) return {};
+    // Arrived (at the root a robot in the region still needs a step).
+    if (here == 0 && t + s > 0) return {s, cur};
+    const Move m = StepToward(cur, k, t + s + 1, nullptr);
+    if (m == Move::kStay) return {};
+    cur = lattice.Next(cur, m);
+  }
+  return {};
+}
+
+void SamplingTree::PlanTours() {
+  const SamplingProblem& p = *problem_;
+  std::vector<int> starts(n_, -1), targets;
+  for (int i = 0; i < n_; ++i)
+    if (p.active[i]) starts[i] = p.start[i];
+  std::vector<double> weight(m_, 0.0);
+  MarkOpen(0);
+  for (int k = 0; k < m_; ++k) {
+    if (!open_[k]) continue;
+    targets.push_back(k);
+    weight[k] = BlockDet(Info(0), k);
+  }
+  Legs legs(this);
+  TourSettings settings;
+  settings.budget = tour_budget_;
+  settings.objective = TourObjective::kLatency;
+  const Tours latency = tour_planner_.Plan(starts, targets, weight, settings, legs);
+  tours_ = latency.order;
+  tour_makespan_ = latency.makespan;
+  settings.objective = TourObjective::kMakespan;
+  makespan_tours_ =
+      tour_planner_.Plan(starts, targets, weight, settings, legs).order;
+}
+
+void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  const int* from = Pos(node);
+  const int depth = depth_[node] + 1;
+  const double* info = Info(node);
+  if (kind == RolloutKind::kNearest) {
+    Rng unused(0);
+    Assign(node, /*sorted=*/true, unused);
+  } else {
+    MarkOpen(node);
+  }
   for (int i = 0; i < n_; ++i) {
-    if (!p.active[i] || assigned_[i] >= 0) continue;
-    int any_d = std::numeric_limits<int>::max();
-    for (int k = 0; k < m_; ++k) {
-      const int d = taken_[k] == 2 ? -1 : field_[k][pos[i]];
-      if (d >= 0 && d < any_d) {
-        assigned_[i] = k;
-        any_d = d;
+    const int q = from[i];
+    child_pos_[i] = q;
+    if (!p.active[i]) continue;
+    int k = -1;
+    if (kind == RolloutKind::kNearest) {
+      k = assigned_[i];
+    } else if (kind == RolloutKind::kGreedy) {
+      // The neighbour that lowers the unlocalized targets' log det most, as
+      // the greedy policy; else toward the nearest one.
+      double best_gain = 0.0;
+      int best_q = -1;
+      for (Move m : kMoves) {
+        const int v = lattice.Next(q, m);
+        if (v < 0) continue;
+        double gain = 0.0;
+        const Vec2 there = lattice.Point(v);
+        for (int k2 = 0; k2 < m_; ++k2) {
+          if (!open_[k2]) continue;
+          double r = 0.0;
+          if (targets_[k2].is_static) {
+            for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o)
+              if (obs_[o].first == k2) r = obs_[o].second;
+          } else {
+            r = PredictedPrecision(*p.map, *p.sensor, there,
+                                   MeasurePoint(depth, k2));
+          }
+          if (r <= 0.0) continue;
+          const double before = BlockDet(info, k2);
+          std::copy(info, info + stride_, scratch_info_.begin());
+          AddPositionPrecision(scratch_info_.data() + targets_[k2].offset,
+                               targets_[k2].dim, r);
+          const double after = BlockDet(scratch_info_.data(), k2);
+          gain += std::log(before) - std::log(std::max(after, p.eps));
+        }
+        if (gain > best_gain) {
+          best_gain = gain;
+          best_q = v;
+        }
       }
+      if (best_q >= 0) {
+        child_pos_[i] = best_q;
+        continue;
+      }
+      k = NearestOpen(q, depth);
+    } else {
+      const auto& tours =
+          kind == RolloutKind::kTours ? tours_ : makespan_tours_;
+      k = NextInTour(tours[i]);
+      if (k < 0) k = NearestOpen(q, depth);
+    }
+    const Move m = StepToward(q, k, depth, nullptr);
+    if (m != Move::kStay) child_pos_[i] = lattice.Next(q, m);
+  }
+}
+
+bool SamplingTree::Expandable(int v, const SamplingParams& params) const {
+  if (unloc_[v] == 0) return false;
+  if (params.max_depth > 0 && depth_[v] >= params.max_depth) return false;
+  if (best_ < 0) return true;
+  // A descendant must beat j_min_ by more than the tolerance, or come within
+  // it at a shorter horizon than the selected goal's.
+  if (lower_[v] >= j_min_ + tol_) return false;
+  return lower_[v] < j_min_ - tol_ || depth_[v] + 1 < depth_[best_];
+}
+
+void SamplingTree::Select() {
+  // The shortest goal within the tolerance of the cheapest (then the
+  // cheaper); goals beyond it can never be selected again.
+  size_t kept = 0;
+  best_ = -1;
+  for (int g : goals_) {
+    if (cost_[g] > j_min_ + tol_) continue;
+    goals_[kept++] = g;
+    if (best_ < 0 || depth_[g] < depth_[best_] ||
+        (depth_[g] == depth_[best_] && cost_[g] < cost_[best_]))
+      best_ = g;
+  }
+  goals_.resize(kept);
+}
+
+void SamplingTree::Register(int child, const SamplingParams& params) {
+  last_ = child;
+  if (unloc_[child] < unloc_[effort_] ||
+      (unloc_[child] == unloc_[effort_] &&
+       det_sum_[child] < det_sum_[effort_]))
+    effort_ = child;
+  if (unloc_[child] == 0) {
+    if (best_ < 0) first_goal_iteration_ = iteration_;
+    if (cost_[child] <= j_min_ + tol_) {
+      j_min_ = std::min(j_min_, cost_[child]);
+      goals_.push_back(child);
+      Select();
+    }
+  } else if (Expandable(child, params)) {
+    const int d = depth_[child];
+    if (static_cast<int>(levels_.size()) <= d) levels_.resize(d + 1);
+    levels_[d].push_back(child);
+  }
+}
+
+int SamplingTree::Rollout(RolloutKind kind, const SamplingParams& params) {
+  const Lattice& lattice = problem_->map->lattice();
+  const int cap = params.max_depth > 0 ? params.max_depth
+                                       : 2 * (lattice.nx() + lattice.ny()) *
+                                             std::max(1, m_);
+  int v = 0;
+  while (unloc_[v] > 0 && depth_[v] < cap &&
+         static_cast<long>(parent_.size()) < params.max_nodes) {
+    RolloutMoves(v, kind);
+    const int child = AddNode(v, child_pos_.data());
+    Register(child, params);
+    v = child;
+  }
+  return v;
+}
+
+void SamplingTree::UsefulUntil(const std::vector<int>& path,
+                               std::vector<int>* until) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  until->assign(n_, 0);
+  for (size_t d = 1; d < path.size(); ++d) {
+    MarkOpen(path[d - 1]);
+    const int* pos = Pos(path[d]);
+    for (int i = 0; i < n_; ++i) {
+      if (!p.active[i]) continue;
+      bool useful = false;
+      for (int o = obs_begin_[pos[i]]; o < obs_begin_[pos[i] + 1]; ++o)
+        useful = useful || open_[obs_[o].first];
+      for (int k = 0; k < m_ && !useful && any_moving_; ++k)
+        useful = open_[k] && !targets_[k].is_static &&
+                 PredictedPrecision(*p.map, *p.sensor, lattice.Point(pos[i]),
+                                    MeasurePoint(static_cast<int>(d), k)) > 0.0;
+      if (useful) (*until)[i] = static_cast<int>(d);
     }
   }
+}
+
+int SamplingTree::RewriteIdle(int end) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  std::vector<int> path(depth_[end] + 1);
+  for (int v = end; v >= 0; v = parent_[v]) path[depth_[v]] = v;
+  std::vector<int> until;
+  UsefulUntil(path, &until);
+  bool idle = false;
+  for (int i = 0; i < n_; ++i)
+    idle = idle || (p.active[i] && until[i] < depth_[end]);
+  if (!idle) return end;
+  // Replay: robots with useful work left keep their moves, the others head
+  // for the nearest target the team has not localized. Information only
+  // grows, so every target is localized no later than on the original path,
+  // and J is no larger.
+  int v = 0;
+  for (int d = 1; d <= depth_[end] && unloc_[v] > 0; ++d) {
+    MarkOpen(v);
+    const int* from = Pos(v);
+    const int* planned = Pos(path[d]);
+    for (int i = 0; i < n_; ++i) {
+      child_pos_[i] = from[i];
+      if (!p.active[i]) continue;
+      if (d <= until[i]) {
+        child_pos_[i] = planned[i];
+        continue;
+      }
+      const Move m = StepToward(from[i], NearestOpen(from[i], d), d, nullptr);
+      if (m != Move::kStay) child_pos_[i] = lattice.Next(from[i], m);
+    }
+    v = AddNode(v, child_pos_.data());
+  }
+  if (unloc_[v] != 0 || cost_[v] > cost_[end] + tol_ ||
+      depth_[v] > depth_[end])
+    return end;  // cannot happen (see above); kept as a guard
+  return v;
 }
 
 SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
@@ -302,6 +693,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   const auto t0 = std::chrono::steady_clock::now();
   AIA_CHECK(problem.map && problem.sensor && problem.belief);
   AIA_CHECK(problem.active.size() == problem.start.size());
+  tour_budget_ = params.tour_budget;
   Prepare(problem);
   const Lattice& lattice = problem.map->lattice();
   SamplingPlan plan;
@@ -309,35 +701,65 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   const int root = AddNode(-1, problem.start.data());
   if (levels_.empty()) levels_.resize(1);
   levels_[0].push_back(root);
-  int best = unloc_[root] == 0 ? root : -1;
-  double best_cost = best >= 0 ? 0.0 : kInf;
-  int effort = root;  // best-effort node when no goal is found
-  int last = root;    // the newest node: the tip of the branch being grown
-  long it = 0, since_goal = 0;
-  auto expandable = [&](int v) {
-    return unloc_[v] > 0 && lower_[v] < best_cost &&
-           (params.max_depth <= 0 || depth_[v] < params.max_depth);
-  };
-  while (best != root) {
-    if (best >= 0 && since_goal >= params.anytime) break;
-    if (best < 0 && it >= params.max_iterations) break;
+  effort_ = root;
+  last_ = root;
+  if (unloc_[root] == 0) {
+    goals_.push_back(root);
+    j_min_ = 0.0;
+    best_ = root;
+  }
+  // The lower bound on the horizon.
+  MarkOpen(root);
+  for (int k = 0; k < m_; ++k) {
+    if (!open_[k]) continue;
+    int nearest = -1;
+    if (targets_[k].is_static) {
+      for (int i = 0; i < n_; ++i) {
+        const int f = problem.active[i] ? slots_[k][0].field[problem.start[i]] : -1;
+        if (f >= 0 && (nearest < 0 || f < nearest)) nearest = f;
+      }
+    }
+    plan.bound = std::max(plan.bound, std::max(nearest, 1));
+  }
+
+  // Seeded rollouts.
+  if (params.routing && best_ != root) {
+    PlanTours();
+    const std::pair<RolloutKind, const char*> kinds[] = {
+        {RolloutKind::kTours, "tours"},
+        {RolloutKind::kMakespanTours, "makespan_tours"},
+        {RolloutKind::kNearest, "nearest"},
+        {RolloutKind::kGreedy, "greedy"}};
+    for (const auto& [kind, name] : kinds) {
+      const int end = Rollout(kind, params);
+      plan.rollouts.push_back(
+          {name, unloc_[end] == 0, depth_[end], cost_[end]});
+    }
+    last_ = root;
+  }
+
+  long since_goal = 0;
+  long& it = iteration_;
+  while (best_ != root) {
+    if (best_ >= 0 && since_goal >= params.anytime) break;
+    if (best_ < 0 && it >= params.max_iterations) break;
     if (static_cast<long>(parent_.size()) >= params.max_nodes) break;
     ++it;
-    if (best >= 0) ++since_goal;
+    if (best_ >= 0) ++since_goal;
     // f_V: with probability p_V the deepest node of the branch being grown
     // (the newest node), so that each branch is rolled out to a goal; else a
     // node from a uniformly drawn level (shallow levels get their share, which
     // is where different plans branch off).
     int node = -1;
-    if (last >= 0 && rng.Uniform() < params.p_v && expandable(last)) {
-      node = last;
+    if (rng.Uniform() < params.p_v && Expandable(last_, params)) {
+      node = last_;
     } else {
       while (!levels_.empty() && levels_.back().empty()) levels_.pop_back();
       if (levels_.empty()) break;  // nothing left worth expanding
       auto& level = levels_[rng.UniformInt(levels_.size())];
       if (!level.empty()) {
         const size_t j = rng.UniformInt(level.size());
-        if (expandable(level[j])) {
+        if (Expandable(level[j], params)) {
           node = level[j];
         } else {  // pruned for good: the bound only tightens
           level[j] = level.back();
@@ -346,73 +768,66 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
       }
     }
     if (node < 0) continue;
-    // f_U.
-    Assign(node, rng.Uniform() < params.p_sorted, rng);
-    const int* from = pos_.data() + static_cast<size_t>(node) * n_;
+    // f_U: the tours, or a nearest-first assignment.
+    const bool follow_tours =
+        !tours_.empty() && rng.Uniform() < params.p_tour;
+    if (follow_tours) {
+      MarkOpen(node);
+      for (int i = 0; i < n_; ++i) {
+        if (!problem.active[i]) continue;
+        assigned_[i] = NextInTour(tours_[i]);
+        if (assigned_[i] < 0)
+          assigned_[i] = NearestOpen(Pos(node)[i], depth_[node] + 1);
+      }
+    } else {
+      Assign(node, rng.Uniform() < params.p_sorted, rng);
+    }
+    const int* from = Pos(node);
     for (int i = 0; i < n_; ++i) {
       const int q = from[i];
       child_pos_[i] = q;
       if (!problem.active[i]) continue;
-      Move move = Move::kStay;
       const int k = assigned_[i];
-      if (k >= 0 && rng.Uniform() < params.p_u) {
-        const std::vector<int>& f = field_[k];
-        if (f[q] > 0) {
-          move = StepDownField(lattice, f, q);
-        } else {  // in the region already: stay inside it if possible
-          for (Move m : kMoves) {
-            const int v = lattice.Next(q, m);
-            if (v >= 0 && f[v] == 0) {
-              move = m;
-              break;
-            }
-          }
-        }
-      }
-      if (move == Move::kStay) move = RandomValidMove(lattice, q, rng);
+      const Move move = (k >= 0 && rng.Uniform() < params.p_u)
+                            ? StepToward(q, k, depth_[node] + 1, &rng)
+                            : RandomValidMove(lattice, q, rng);
       child_pos_[i] = lattice.Next(q, move);
+      if (child_pos_[i] < 0) child_pos_[i] = q;
     }
-    const int child = AddNode(node, child_pos_.data());
-    last = child;
-    if (unloc_[child] < unloc_[effort] ||
-        (unloc_[child] == unloc_[effort] && det_sum_[child] < det_sum_[effort]))
-      effort = child;
-    if (unloc_[child] == 0) {
-      if (cost_[child] < best_cost) {
-        if (best < 0) plan.first_goal_iteration = it;
-        best = child;
-        best_cost = cost_[child];
-      }
-    } else if (expandable(child)) {
-      const int d = depth_[child];
-      if (static_cast<int>(levels_.size()) <= d) levels_.resize(d + 1);
-      levels_[d].push_back(child);
-    }
+    Register(AddNode(node, child_pos_.data()), params);
   }
 
-  plan.found = best >= 0;
-  const int end = plan.found ? best : effort;
+  plan.found = best_ >= 0;
+  plan.best_cost = plan.found ? j_min_ : 0.0;
+  int end = plan.found ? best_ : effort_;
+  if (plan.found && params.routing) end = RewriteIdle(end);
   plan.status = plan.found ? PolicyStatus::kOk : PolicyStatus::kBudgetExhausted;
   plan.depth = depth_[end];
   plan.cost = cost_[end];
   plan.configs.assign(plan.depth + 1, std::vector<int>(n_));
   plan.det.assign(plan.depth + 1, std::vector<double>(m_));
+  std::vector<int> path(plan.depth + 1);
   for (int v = end; v >= 0; v = parent_[v]) {
     const int d = depth_[v];
+    path[d] = v;
     std::copy(pos_.begin() + static_cast<size_t>(v) * n_,
               pos_.begin() + static_cast<size_t>(v + 1) * n_,
               plan.configs[d].begin());
-    for (int k = 0; k < m_; ++k)
-      plan.det[d][k] =
-          BlockDet(info_.data() + static_cast<size_t>(v) * stride_, k);
+    for (int k = 0; k < m_; ++k) plan.det[d][k] = BlockDet(Info(v), k);
   }
+  UsefulUntil(path, &plan.useful_until);
+  plan.aims.resize(m_);
+  for (int k = 0; k < m_; ++k) plan.aims[k] = MeasurePoint(0, k);
+  plan.tour_makespan = tour_makespan_;
   plan.nodes = static_cast<long>(parent_.size());
   plan.iterations = it;
+  plan.first_goal_iteration = first_goal_iteration_;
   plan.arena_bytes =
       pos_.capacity() * sizeof(int) + info_.capacity() * sizeof(double) +
       (parent_.capacity() + depth_.capacity() + unloc_.capacity()) *
           sizeof(int) +
-      (cost_.capacity() + det_sum_.capacity()) * sizeof(double);
+      (cost_.capacity() + det_sum_.capacity() + lower_.capacity()) *
+          sizeof(double);
   plan.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
           .count();

@@ -53,7 +53,10 @@ int RunPlanCommand(const PlanOptions& o) {
               static_cast<unsigned long long>(scenario.seed), world.NumRobots(),
               world.NumTargets());
   if (plan.found) {
-    std::printf("F* = %d steps, cost J = %.6g\n", plan.depth, plan.cost);
+    std::printf(
+        "F* = %d steps (lower bound %d, F*/bound %.3f), cost J = %.6g\n",
+        plan.depth, plan.bound,
+        static_cast<double>(plan.depth) / std::max(plan.bound, 1), plan.cost);
   } else {
     std::printf("no plan meets eps within the budget (best effort: %d steps)\n",
                 plan.depth);
@@ -63,13 +66,31 @@ int RunPlanCommand(const PlanOptions& o) {
       "MiB, peak RSS %.1f MiB\n",
       plan.seconds, plan.nodes, plan.iterations, plan.first_goal_iteration,
       plan.arena_bytes / 1048576.0, PeakRssMiB());
+  if (!plan.rollouts.empty()) {
+    std::string seeds;
+    for (const RolloutResult& r : plan.rollouts)
+      seeds += " " + r.name + " " +
+               (r.found ? std::to_string(r.depth) : std::string("-"));
+    std::printf("seeded rollouts (steps):%s\n", seeds.c_str());
+  }
   if (!o.out.empty()) {
     nlohmann::ordered_json j;
     j["scenario"] = scenario.name;
     j["seed"] = scenario.seed;
     j["found"] = plan.found;
     j["flowtime"] = plan.depth;
+    j["bound"] = plan.bound;
     j["cost"] = plan.cost;
+    j["best_cost"] = plan.best_cost;
+    nlohmann::ordered_json rollouts = nlohmann::ordered_json::object();
+    for (const RolloutResult& r : plan.rollouts)
+      rollouts[r.name] = {{"found", r.found}, {"steps", r.depth},
+                          {"cost", r.cost}};
+    j["rollouts"] = rollouts;
+    j["useful_until"] = plan.useful_until;
+    nlohmann::ordered_json aims = nlohmann::ordered_json::array();
+    for (const Vec2& a : plan.aims) aims.push_back({a.x(), a.y()});
+    j["aims"] = aims;
     j["nodes"] = plan.nodes;
     j["iterations"] = plan.iterations;
     j["first_goal_iteration"] = plan.first_goal_iteration;

@@ -20,6 +20,8 @@
 #define AIA_PLANNING_SAMPLING_TREE_H_
 
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "aia/core/fields.h"
@@ -28,6 +30,7 @@
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
 #include "aia/planning/policy.h"
+#include "aia/planning/tours.h"
 #include "aia/world/map.h"
 
 namespace aia {
@@ -41,10 +44,15 @@ struct SamplingParams {
   long anytime = 20000;
   long max_iterations = 200000;
   long max_nodes = 2000000;
+  double p_tour = 0.5;
+  long tour_budget = 20000;
   int max_depth = 0;  // 0: unlimited; else nodes this deep are not expanded
   // f_U's assignment: with this probability the globally nearest robot-target
   // pairs are matched first, else robots pick in a random order.
   double p_sorted = 0.5;
+  // Tours, seeded rollouts and the idle rewrite (the expert); Dec-SB's short
+  // single-robot trees go without.
+  bool routing = true;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -61,11 +69,26 @@ struct SamplingParams {
     a->Visit(AIA_FIELD(max_iterations)
                  .In(Between(1, 1e10))
                  .Doc("iterations allowed before a first goal"));
+    a->Visit(AIA_FIELD(p_tour).In(kUnit).Doc(
+        "f_U: probability that the robots follow the best tours (each toward "
+        "the next target of its tour not yet localized) rather than a "
+        "nearest-first assignment"));
+    a->Visit(AIA_FIELD(tour_budget)
+                 .In(Between(0, 1e8))
+                 .Doc("route evaluations for the tours' local search "
+                      "(relocate, swap, 2-opt)"));
     a->Visit(AIA_FIELD(max_nodes)
                  .In(Between(2, 1e9))
                  .Doc("tree size cap (memory guard)"));
   }
 };
+
+// Goal paths whose J is within this fraction of eps of the cheapest one
+// count as equally good, and the shortest of them is returned. One step of
+// one unlocalized target's latency adds more than eps to J, so this only
+// ever trades the leftovers of localized targets (about 1e-3 per target and
+// step with the default sensor) for a shorter horizon.
+inline constexpr double kGoalTolerance = 0.1;
 
 // A problem for the tree: the team (or one robot), where it stands and what
 // it believes.
@@ -80,12 +103,35 @@ struct SamplingProblem {
   // Extra information per target added to every child at depth 1 (Dec-SB:
   // what the neighbours' planned next positions will measure), as r of r M'M.
   std::vector<double> extra_at_depth1;
+  // Per static target, lattice points from which a robot was predicted to
+  // measure it and did not (empty or one list per target): the prior there
+  // is ruled out, and the target is planned where it has not been searched.
+  std::vector<std::vector<int>> missed;
+};
+
+// A deterministic rollout seeded into the tree.
+struct RolloutResult {
+  std::string name;  // "tours", "makespan_tours", "nearest", "greedy"
+  bool found = false;
+  int depth = 0;
+  double cost = 0.0;
 };
 
 struct SamplingPlan {
   bool found = false;  // a goal node was reached
   int depth = 0;       // F*: number of moves of the returned path
   double cost = 0.0;   // J of the returned path
+  double best_cost = 0.0;  // J of the cheapest goal found (cost is within
+                           // kGoalTolerance * eps of it)
+  // A lower bound on the horizon: the farthest unlocalized static target's
+  // observation region from its nearest active robot (at least 1).
+  int bound = 0;
+  // Per robot, the last depth at which it makes a measurement that counts (of
+  // a target not yet below eps); its later moves follow the idle rule.
+  std::vector<int> useful_until;
+  std::vector<Vec2> aims;  // per target, where it is planned at the root
+  std::vector<RolloutResult> rollouts;
+  int tour_makespan = 0;  // of the latency tours, on the tours' own model
   // Joint configuration per depth, (depth + 1) x robots; row 0 is the start.
   std::vector<std::vector<int>> configs;
   // Planned det Sigma_k per depth, (depth + 1) x targets.
@@ -111,13 +157,51 @@ class SamplingTree {
     int offset = 0;  // into a node's packed information
     bool is_static = true;
   };
+  // Where a target is planned for a span of depths, and the BFS field toward
+  // the lattice points that see it there.
+  struct AimSlot {
+    bool ready = false;
+    bool at_mean = true;  // the predicted mean itself (else `point`)
+    Vec2 point{0.0, 0.0};
+    std::vector<int> field;
+  };
+  enum class RolloutKind { kTours, kMakespanTours, kNearest, kGreedy };
+  class Legs;
+
   void Prepare(const SamplingProblem& problem);
   int AddNode(int parent, const int* positions);
   double BlockDet(const double* packed, int k) const;
+  const double* Info(int node) const {
+    return info_.data() + static_cast<size_t>(node) * stride_;
+  }
+  const int* Pos(int node) const {
+    return pos_.data() + static_cast<size_t>(node) * n_;
+  }
+  void MarkOpen(int node);  // open_[k]: det Sigma_k > eps at the node
   void Assign(int node, bool sorted, Rng& rng);
-  // cost + a lower bound of the cost still to come (admissible).
-  double LowerBound(int node) const;
+  int NearestOpen(int q, int depth);
+  int NextInTour(const std::vector<int>& tour) const;
+  Move StepToward(int q, int k, int depth, Rng* rng);
+  int Bucket(int depth, int k) const;
+  AimSlot& Slot(int depth, int k);
+  const std::vector<int>& FieldAt(int depth, int k) {
+    return Slot(depth, k).field;
+  }
+  Vec2 MeasurePoint(int depth, int k);
+  bool FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
+               const std::vector<int>* missed, Vec2* aim,
+               std::vector<std::pair<int, double>>* region);
+  void RegionOf(const Vec2& x, std::vector<std::pair<int, double>>* region);
   const Vec2& MeanAt(int depth, int k);
+  Leg ComputeLeg(int from, int t, int k);
+  void PlanTours();
+  int Rollout(RolloutKind kind, const SamplingParams& params);
+  void RolloutMoves(int node, RolloutKind kind);
+  void Register(int child, const SamplingParams& params);
+  bool Expandable(int v, const SamplingParams& params) const;
+  void Select();
+  void UsefulUntil(const std::vector<int>& path, std::vector<int>* until);
+  int RewriteIdle(int end);
 
   // Problem data.
   const SamplingProblem* problem_ = nullptr;
@@ -127,8 +211,8 @@ class SamplingTree {
   std::vector<std::vector<Vec2>> means_;  // [depth][k] position means
   std::vector<Eigen::VectorXd>
       full_mean_;  // working state for mean propagation
-  std::vector<std::vector<int>>
-      field_;  // [k] BFS distance to k's observation region
+  std::vector<std::vector<AimSlot>> slots_;  // [k][bucket]
+  std::vector<int> reach_;  // BFS distance from the nearest active robot
   // Static targets observable from each lattice point: CSR (target, r).
   std::vector<int> obs_begin_;
   std::vector<std::pair<int, double>> obs_;
@@ -140,8 +224,21 @@ class SamplingTree {
   std::vector<int> parent_, depth_, unloc_;
   std::vector<double> cost_, det_sum_;
   std::vector<std::vector<int>> levels_;  // expandable nodes per depth
+  // Search state.
+  std::vector<int> goals_;  // goal nodes within the tolerance of j_min_
+  double j_min_ = 0.0, tol_ = 0.0;
+  int best_ = -1, effort_ = 0, last_ = 0;
+  long first_goal_iteration_ = -1, iteration_ = 0;
+  // Tours.
+  std::vector<std::vector<int>> tours_, makespan_tours_;
+  int tour_makespan_ = 0;
+  long tour_budget_ = 0;
+  TourPlanner tour_planner_;
   // Scratch.
   std::vector<int> assigned_, order_, child_pos_, taken_;
+  std::vector<char> open_;
+  const std::vector<std::vector<int>>* rollout_tours_ = nullptr;
+  std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
   std::vector<double> lower_;  // per node: lower bound of the total cost
   std::vector<double> scratch_info_;

@@ -1,0 +1,92 @@
+// Multi-robot tours over observation regions (docs/design.md, Policies): what
+// a routing solver knows about the expert's problem, given to its sampling
+// tree as seed branches and as f_U's bias.
+//
+// With static targets and a sensor that localizes a target with one
+// measurement, the expert's problem is multi-robot routing: every target's
+// observation region must be visited, and J is (nearly) the sum over targets
+// of det Sigma_k times the step at which the region is reached. A tour is an
+// ordered target list per robot; its legs come from the tree's BFS fields
+// (LegOracle). Tours are built by regret insertion and improved by relocate,
+// swap and 2-opt moves under a deterministic evaluation budget.
+#ifndef AIA_PLANNING_TOURS_H_
+#define AIA_PLANNING_TOURS_H_
+
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace aia {
+
+// One leg of a route: the number of steps from a lattice point to target k's
+// observation region, leaving at step t, and the point where it ends.
+struct Leg {
+  int steps = -1;  // -1: the region cannot be reached from there
+  int end = -1;
+};
+
+class LegOracle {
+ public:
+  virtual ~LegOracle() = default;
+  virtual Leg Compute(int from, int t, int k) = 0;
+  // Whether legs toward k depend on the departure step (moving targets).
+  virtual bool TimeVarying(int k) const = 0;
+};
+
+// What a set of tours optimizes: kLatency is the weighted sum of arrival
+// steps (J's routing part); kMakespan is the last arrival (F*), with the
+// latency sum as a small tie-breaker.
+enum class TourObjective { kLatency, kMakespan };
+
+struct TourSettings {
+  TourObjective objective = TourObjective::kLatency;
+  long budget = 20000;  // route evaluations allowed for the local search
+};
+
+struct Tours {
+  std::vector<std::vector<int>> order;  // per robot, target ids in visit order
+  std::vector<int> unassigned;          // targets no robot can reach
+  double latency = 0.0;                 // sum_k weight_k * arrival_k
+  int makespan = 0;                     // the last arrival
+  long evaluations = 0;                 // route evaluations spent
+};
+
+class TourPlanner {
+ public:
+  // starts: lattice point per robot (inactive robots left out by the caller
+  // get empty tours: pass -1); targets: the ids to visit; weight: per target
+  // id, the cost of one step of its latency.
+  Tours Plan(const std::vector<int>& starts, const std::vector<int>& targets,
+             const std::vector<double>& weight, const TourSettings& settings,
+             LegOracle& legs);
+
+ private:
+  struct RouteValue {
+    double latency = 0.0;
+    int makespan = 0;
+    bool feasible = true;
+  };
+  RouteValue Evaluate(int robot, const std::vector<int>& route);
+  void Summarize(const std::vector<RouteValue>& values);
+  double Objective(const std::vector<RouteValue>& values);
+  double ObjectiveWith(const std::vector<RouteValue>& values, int a,
+                       const RouteValue& va, int b,
+                       const RouteValue& vb) const;
+  Leg CachedLeg(int from, int t, int k);
+
+  LegOracle* legs_ = nullptr;
+  const std::vector<int>* starts_ = nullptr;
+  const std::vector<double>* weight_ = nullptr;
+  TourObjective objective_ = TourObjective::kLatency;
+  long evaluations_ = 0;
+  double weight_sum_ = 0.0;
+  double latency_ = 0.0;                       // sum over routes
+  std::array<std::pair<int, int>, 3> top_{};  // largest (makespan, robot)
+  std::unordered_map<std::uint64_t, Leg> cache_;
+};
+
+}  // namespace aia
+
+#endif  // AIA_PLANNING_TOURS_H_

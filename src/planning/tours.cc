@@ -1,0 +1,294 @@
+#include "aia/planning/tours.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace aia {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+Leg TourPlanner::CachedLeg(int from, int t, int k) {
+  const std::uint64_t when =
+      legs_->TimeVarying(k) ? static_cast<std::uint64_t>(t) + 1 : 0;
+  const std::uint64_t key = (static_cast<std::uint64_t>(from) << 40) ^
+                            (when << 20) ^ static_cast<std::uint64_t>(k);
+  auto it = cache_.find(key);
+  if (it != cache_.end()) return it->second;
+  const Leg leg = legs_->Compute(from, t, k);
+  cache_.emplace(key, leg);
+  return leg;
+}
+
+TourPlanner::RouteValue TourPlanner::Evaluate(int robot,
+                                              const std::vector<int>& route) {
+  ++evaluations_;
+  RouteValue v;
+  int t = 0, cur = (*starts_)[robot];
+  if (cur < 0) {
+    v.feasible = route.empty();
+    return v;
+  }
+  for (int k : route) {
+    const Leg leg = CachedLeg(cur, t, k);
+    if (leg.steps < 0) {
+      v.feasible = false;
+      return v;
+    }
+    // A robot that starts in an unlocalized target's region still needs a
+    // step to measure it again.
+    t += (t == 0) ? std::max(leg.steps, 1) : leg.steps;
+    cur = leg.end;
+    v.latency += (*weight_)[k] * t;
+  }
+  v.makespan = t;
+  return v;
+}
+
+void TourPlanner::Summarize(const std::vector<RouteValue>& values) {
+  latency_ = 0.0;
+  top_.fill({0, -1});
+  for (int i = 0; i < static_cast<int>(values.size()); ++i) {
+    latency_ += values[i].latency;
+    std::pair<int, int> v{values[i].makespan, i};
+    for (auto& slot : top_)
+      if (v.first > slot.first || slot.second < 0) std::swap(v, slot);
+  }
+}
+
+double TourPlanner::Objective(const std::vector<RouteValue>& values) {
+  Summarize(values);
+  return ObjectiveWith(values, -1, {}, -1, {});
+}
+
+double TourPlanner::ObjectiveWith(const std::vector<RouteValue>& values, int a,
+                                  const RouteValue& va, int b,
+                                  const RouteValue& vb) const {
+  // Routes other than a and b are unchanged (and feasible): their totals
+  // come from Summarize.
+  double latency = latency_;
+  int makespan = 0;
+  for (const auto& [span, robot] : top_) {
+    if (robot >= 0 && robot != a && robot != b) {
+      makespan = span;
+      break;
+    }
+  }
+  if (a >= 0) {
+    if (!va.feasible) return kInf;
+    latency += va.latency - values[a].latency;
+    makespan = std::max(makespan, va.makespan);
+  }
+  if (b >= 0) {
+    if (!vb.feasible) return kInf;
+    latency += vb.latency - values[b].latency;
+    makespan = std::max(makespan, vb.makespan);
+  }
+  if (objective_ == TourObjective::kLatency) return latency + 1e-9 * makespan;
+  // Lexicographic: the makespan, then the latency (a fraction below 1).
+  return makespan + 0.5 * latency / (weight_sum_ * (makespan + 1.0) + 1e-300);
+}
+
+Tours TourPlanner::Plan(const std::vector<int>& starts,
+                        const std::vector<int>& targets,
+                        const std::vector<double>& weight,
+                        const TourSettings& settings, LegOracle& legs) {
+  legs_ = &legs;
+  starts_ = &starts;
+  weight_ = &weight;
+  objective_ = settings.objective;
+  evaluations_ = 0;
+  cache_.clear();
+  const int n = static_cast<int>(starts.size());
+  Tours tours;
+  tours.order.assign(n, {});
+  std::vector<RouteValue> values(n);
+  weight_sum_ = 0.0;
+  for (int k : targets) weight_sum_ += weight[k];
+  Summarize(values);
+  std::vector<int> robots;
+  for (int i = 0; i < n; ++i)
+    if (starts[i] >= 0) robots.push_back(i);
+  if (robots.empty()) {
+    tours.unassigned = targets;
+    return tours;
+  }
+
+  // Regret-2 insertion: the target whose best insertion is cheapest compared
+  // with its best insertion in another robot's route goes first.
+  std::vector<int> remaining = targets;
+  std::vector<int> trial;
+  while (!remaining.empty()) {
+    int pick = -1, pick_robot = -1, pick_pos = -1;
+    double pick_key = -kInf, pick_best = kInf;
+    RouteValue pick_value;
+    for (size_t r = 0; r < remaining.size(); ++r) {
+      const int k = remaining[r];
+      double best1 = kInf, best2 = kInf;
+      int robot1 = -1, pos1 = -1;
+      RouteValue value1;
+      for (int i : robots) {
+        double robot_best = kInf;
+        int robot_pos = -1;
+        RouteValue robot_value;
+        const std::vector<int>& route = tours.order[i];
+        for (size_t p = 0; p <= route.size(); ++p) {
+          trial = route;
+          trial.insert(trial.begin() + p, k);
+          const RouteValue v = Evaluate(i, trial);
+          const double obj = ObjectiveWith(values, i, v, -1, {});
+          if (obj < robot_best) {
+            robot_best = obj;
+            robot_pos = static_cast<int>(p);
+            robot_value = v;
+          }
+        }
+        if (robot_best < best1) {
+          best2 = best1;
+          best1 = robot_best;
+          robot1 = i;
+          pos1 = robot_pos;
+          value1 = robot_value;
+        } else if (robot_best < best2) {
+          best2 = robot_best;
+        }
+      }
+      if (best1 == kInf) continue;
+      const double key = robots.size() > 1 ? best2 - best1 : -best1;
+      if (key > pick_key || (key == pick_key && best1 < pick_best)) {
+        pick_key = key;
+        pick_best = best1;
+        pick = static_cast<int>(r);
+        pick_robot = robot1;
+        pick_pos = pos1;
+        pick_value = value1;
+      }
+    }
+    if (pick < 0) {  // nothing left that any robot can reach
+      tours.unassigned = remaining;
+      break;
+    }
+    std::vector<int>& route = tours.order[pick_robot];
+    route.insert(route.begin() + pick_pos, remaining[pick]);
+    values[pick_robot] = pick_value;
+    Summarize(values);
+    remaining.erase(remaining.begin() + pick);
+  }
+
+  // Local search: relocate, swap, 2-opt; first improvement, until no move
+  // improves or the budget is spent.
+  double current = Objective(values);
+  const double tol = 1e-12;
+  auto spent = [&] { return evaluations_ >= settings.budget; };
+  std::vector<int> ra, rb;
+  bool improved = true;
+  while (improved && !spent()) {
+    improved = false;
+    // Relocate one target to any position of any route.
+    for (int i : robots) {
+      for (size_t p = 0; p < tours.order[i].size() && !improved && !spent();
+           ++p) {
+        const int k = tours.order[i][p];
+        ra = tours.order[i];
+        ra.erase(ra.begin() + p);
+        const RouteValue va = Evaluate(i, ra);
+        for (int j : robots) {
+          const std::vector<int>& base = (j == i) ? ra : tours.order[j];
+          for (size_t q = 0; q <= base.size() && !improved && !spent(); ++q) {
+            if (j == i && q == p) continue;
+            rb = base;
+            rb.insert(rb.begin() + q, k);
+            const RouteValue vb = Evaluate(j, rb);
+            const double obj = (j == i) ? ObjectiveWith(values, i, vb, -1, {})
+                                        : ObjectiveWith(values, i, va, j, vb);
+            if (obj < current - tol) {
+              if (j == i) {
+                tours.order[i] = rb;
+                values[i] = vb;
+              } else {
+                tours.order[i] = ra;
+                values[i] = va;
+                tours.order[j] = rb;
+                values[j] = vb;
+              }
+              current = Objective(values);
+              improved = true;
+            }
+          }
+          if (improved) break;
+        }
+      }
+      if (improved) break;
+    }
+    if (improved) continue;
+    // Swap two targets (in one route or two).
+    for (size_t a = 0; a < robots.size() && !improved && !spent(); ++a) {
+      const int i = robots[a];
+      for (size_t b = a; b < robots.size() && !improved && !spent(); ++b) {
+        const int j = robots[b];
+        for (size_t p = 0; p < tours.order[i].size() && !improved; ++p) {
+          for (size_t q = (i == j) ? p + 1 : 0;
+               q < tours.order[j].size() && !improved && !spent(); ++q) {
+            ra = tours.order[i];
+            if (i == j) {
+              std::swap(ra[p], ra[q]);
+              const RouteValue va = Evaluate(i, ra);
+              const double obj = ObjectiveWith(values, i, va, -1, {});
+              if (obj < current - tol) {
+                tours.order[i] = ra;
+                values[i] = va;
+                current = Objective(values);
+                improved = true;
+              }
+            } else {
+              rb = tours.order[j];
+              std::swap(ra[p], rb[q]);
+              const RouteValue va = Evaluate(i, ra), vb = Evaluate(j, rb);
+              const double obj = ObjectiveWith(values, i, va, j, vb);
+              if (obj < current - tol) {
+                tours.order[i] = ra;
+                values[i] = va;
+                tours.order[j] = rb;
+                values[j] = vb;
+                current = Objective(values);
+                improved = true;
+              }
+            }
+          }
+        }
+      }
+    }
+    if (improved) continue;
+    // 2-opt: reverse a stretch of one route.
+    for (int i : robots) {
+      const size_t len = tours.order[i].size();
+      for (size_t p = 0; p + 1 < len && !improved && !spent(); ++p) {
+        for (size_t q = p + 2; q <= len && !improved && !spent(); ++q) {
+          ra = tours.order[i];
+          std::reverse(ra.begin() + p, ra.begin() + q);
+          const RouteValue va = Evaluate(i, ra);
+          const double obj = ObjectiveWith(values, i, va, -1, {});
+          if (obj < current - tol) {
+            tours.order[i] = ra;
+            values[i] = va;
+            current = Objective(values);
+            improved = true;
+          }
+        }
+      }
+      if (improved) break;
+    }
+  }
+
+  for (int i : robots) {
+    tours.latency += values[i].latency;
+    tours.makespan = std::max(tours.makespan, values[i].makespan);
+  }
+  tours.evaluations = evaluations_;
+  return tours;
+}
+
+}  // namespace aia
