@@ -10,6 +10,7 @@ SamplingParams DecSbParams::Sampling() const {
   p.p_u = p_u;
   p.max_depth = horizon;
   p.max_iterations = iterations;
+  p.routing = false;
   // A robot's tree stops at the horizon; a goal (its own belief below eps
   // everywhere) ends the search early, with a short anytime polish.
   p.anytime = iterations / 4;

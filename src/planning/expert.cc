@@ -1,8 +1,10 @@
 #include "aia/planning/expert.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "aia/core/check.h"
+#include "aia/planning/information.h"
 
 namespace aia {
 
@@ -28,6 +30,41 @@ void ExpertPolicy::Reset(const Map&, int, int, std::uint64_t seed) {
   index_ = 0;
   replans_ = 0;
   team_best_ = false;
+  missed_.clear();
+  last_det_.clear();
+}
+
+void ExpertPolicy::RecordMisses(const DecisionContext& ctx) {
+  const BeliefSet& central = *ctx.central;
+  const int m = central.layout().num_targets();
+  const Lattice& lattice = ctx.map->lattice();
+  const bool comparable = !team_best_ &&
+                          static_cast<int>(plan_.aims.size()) == m &&
+                          static_cast<int>(last_det_.size()) == m;
+  missed_.resize(m);
+  last_det_.resize(m);
+  for (int k = 0; k < m; ++k) {
+    const double det = central.DetCovariance(0, k);
+    const double before = last_det_[k];
+    last_det_[k] = det;
+    if (!comparable || !central.layout().is_static(k) || det <= ctx.eps)
+      continue;
+    if (det < before * (1.0 - 1e-9)) {  // measured: the search is over
+      missed_[k].clear();
+      continue;
+    }
+    // Nothing measured this step: every robot with the aim in sight missed.
+    for (int i = 0; i < static_cast<int>(ctx.positions->size()); ++i) {
+      const int q = (*ctx.positions)[i];
+      if (!ctx.comm->Active(i) ||
+          PredictedPrecision(*ctx.map, *ctx.sensor, lattice.Point(q),
+                             plan_.aims[k]) <= 0.0)
+        continue;
+      std::vector<int>& tried = missed_[k];
+      if (std::find(tried.begin(), tried.end(), q) == tried.end())
+        tried.push_back(q);
+    }
+  }
 }
 
 bool ExpertPolicy::NeedsReplan(const DecisionContext& ctx) const {
@@ -50,8 +87,10 @@ bool ExpertPolicy::NeedsReplan(const DecisionContext& ctx) const {
 PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
                                   std::vector<Move>* moves) {
   const Lattice& lattice = ctx.map->lattice();
+  RecordMisses(ctx);
   if (NeedsReplan(ctx)) {
     SamplingProblem problem = ExpertProblem(ctx);
+    problem.missed = missed_;
     // When the centralized belief is already below eps everywhere but no
     // single robot's is (the DKF lags the centralized filter), plan on the
     // team's best local beliefs instead, so that targets get re-measured.

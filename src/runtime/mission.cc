@@ -132,7 +132,9 @@ MissionRunner::MissionRunner(const PreparedMission& mission, std::string prefix,
                                                  std::move(progress_extra));
   episode_->AddObserver(trace_.get());
   episode_->AddObserver(estimate_.get());
+  moves_ = std::make_unique<MoveObserver>();
   episode_->AddObserver(progress_.get());
+  episode_->AddObserver(moves_.get());
 }
 
 MissionRunner::~MissionRunner() = default;
@@ -157,6 +159,9 @@ MissionSummary MissionRunner::Run() {
                   {"stalled_steps", st.stalled_steps},
                   {"substeps", st.substeps},
                   {"sim_seconds", st.sim_seconds}};
+  d["moves"] = {{"total", moves_->moves()},
+                {"reversals", moves_->reversals()},
+                {"longest_reversal_run", moves_->longest_reversal_run()}};
   nlohmann::ordered_json per_target = nlohmann::ordered_json::array();
   for (int k = 0; k < estimate_->num_targets(); ++k)
     per_target.push_back({{"rmse_m", estimate_->rmse(k)},

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -161,5 +162,31 @@ void ProgressObserver::OnStep(const Episode& e) {
 }
 
 void ProgressObserver::OnEnd(const Episode&) { line_.Finish(); }
+
+void MoveObserver::OnStart(const Episode& e) {
+  last_.assign(e.world().NumRobots(), Move::kStay);
+  run_.assign(e.world().NumRobots(), 0);
+  moves_ = reversals_ = 0;
+  longest_run_ = 0;
+}
+
+void MoveObserver::OnDecision(const Episode&, const DecisionContext&,
+                              const Decision& decision) {
+  for (size_t i = 0; i < decision.applied.size(); ++i) {
+    const Move m = decision.applied[i];
+    if (m == Move::kStay) continue;  // failed robots
+    ++moves_;
+    const int a = static_cast<int>(m), b = static_cast<int>(last_[i]);
+    // kLeft/kRight and kUp/kDown are 0/1 and 2/3.
+    const bool reversal = last_[i] != Move::kStay && a != b && a / 2 == b / 2;
+    if (reversal) {
+      ++reversals_;
+      longest_run_ = std::max(longest_run_, ++run_[i]);
+    } else {
+      run_[i] = 0;
+    }
+    last_[i] = m;
+  }
+}
 
 }  // namespace aia

@@ -181,7 +181,31 @@ World World::Build(const Scenario& s) {
     }
   }
 
-  // Targets.
+  // Targets are placed, and prior means drawn, where some lattice point that
+  // a robot can reach sees them (in range and in sight).
+  std::vector<char> reachable(lat.size(), 0);
+  for (int idx = 0; idx < lat.size(); ++idx) {
+    if (!lat.Free(idx)) continue;
+    for (int r : w.robot_starts)
+      if (lat.components()[idx] == lat.components()[r]) reachable[idx] = 1;
+  }
+  const double reach = 0.9 * s.sensor.range;
+  const double clearance = 0.05;
+  auto observable = [&](const Vec2& p) {
+    const int cx = lat.Ix(lat.NearestPoint(p)),
+              cy = lat.Iy(lat.NearestPoint(p));
+    const int k = static_cast<int>(std::ceil(reach / lat.step())) + 1;
+    for (int iy = std::max(0, cy - k); iy <= std::min(lat.ny() - 1, cy + k);
+         ++iy)
+      for (int ix = std::max(0, cx - k); ix <= std::min(lat.nx() - 1, cx + k);
+           ++ix) {
+        const int idx = lat.Index(ix, iy);
+        if (!reachable[idx] || (lat.Point(idx) - p).norm() > reach) continue;
+        if (!s.sensor.line_of_sight || map.LineOfSight(lat.Point(idx), p))
+          return true;
+      }
+    return false;
+  };
   Rng prior_rng(s.seed, "priors");
   auto add_target = [&](const Vec2& pos, const TargetConfig* cfg) {
     TargetPrior prior;
@@ -195,7 +219,8 @@ World World::Build(const Scenario& s) {
     prior.cov = sigma * sigma * Eigen::MatrixXd::Identity(d, d);
     // Default prior mean: the truth plus an offset drawn from
     // N(0, prior_offset^2 I), redrawn (a few times) until the mean lies in free
-    // space: the robots know the map, so their prior puts its mean there. Drawn
+    // space where a reachable point sees it: the robots know the map, so their
+    // prior puts its mean where the target could be observed. Drawn
     // even when a mean is given, so the other targets' draws do not depend on
     // it.
     const double offset = s.targets.prior_offset;
@@ -204,7 +229,9 @@ World World::Build(const Scenario& s) {
       Eigen::VectorXd draw(d);
       for (int c = 0; c < d; ++c) draw[c] = offset * prior_rng.Normal();
       prior.mean = x0 + draw;
-      if (map.PointFree(prior.mean.head<2>())) break;
+      if (map.PointFree(prior.mean.head<2>()) &&
+          observable(prior.mean.head<2>()))
+        break;
       prior.mean = x0;
     }
     if (cfg && cfg->prior_mean) prior.mean.head<2>() = *cfg->prior_mean;
@@ -229,29 +256,6 @@ World World::Build(const Scenario& s) {
     // Random static targets in free space, each observable (in range and in
     // sight) from some lattice point that the robots can reach.
     Rng rng(s.seed, "targets");
-    std::vector<char> reachable(lat.size(), 0);
-    for (int idx = 0; idx < lat.size(); ++idx) {
-      if (!lat.Free(idx)) continue;
-      for (int r : w.robot_starts)
-        if (lat.components()[idx] == lat.components()[r]) reachable[idx] = 1;
-    }
-    const double reach = 0.9 * s.sensor.range;
-    const double clearance = 0.05;
-    auto observable = [&](const Vec2& p) {
-      const int cx = lat.Ix(lat.NearestPoint(p)),
-                cy = lat.Iy(lat.NearestPoint(p));
-      const int k = static_cast<int>(std::ceil(reach / lat.step())) + 1;
-      for (int iy = std::max(0, cy - k); iy <= std::min(lat.ny() - 1, cy + k);
-           ++iy)
-        for (int ix = std::max(0, cx - k); ix <= std::min(lat.nx() - 1, cx + k);
-             ++ix) {
-          const int idx = lat.Index(ix, iy);
-          if (!reachable[idx] || (lat.Point(idx) - p).norm() > reach) continue;
-          if (!s.sensor.line_of_sight || map.LineOfSight(lat.Point(idx), p))
-            return true;
-        }
-      return false;
-    };
     for (int k = 0; k < s.targets.count; ++k) {
       bool placed = false;
       for (int attempt = 0; attempt < 10000 && !placed; ++attempt) {

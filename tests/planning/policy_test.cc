@@ -172,8 +172,9 @@ TEST(RegistryTest, ParametersAreTypedCheckedAndWrittenBackInFull) {
   const ConfigNode params = spec->Params();
   std::vector<std::string> keys;
   for (const auto& e : params.entries) keys.push_back(e.key);
-  EXPECT_EQ(keys, (std::vector<std::string>{"p_v", "p_u", "anytime",
-                                            "max_iterations", "max_nodes"}));
+  EXPECT_EQ(keys, (std::vector<std::string>{"p_v", "p_u", "p_tour", "anytime",
+                                            "max_iterations", "max_nodes",
+                                            "tour_budget"}));
   EXPECT_EQ(params.Find("p_v")->scalar, "0.5");
   EXPECT_FALSE(spec->Create()->name().empty());
 }
@@ -196,8 +197,8 @@ TEST(RegistryTest, WrongTypesAndMisspeltParametersAreInputErrors) {
             "10000000], got \"300\"");
   EXPECT_EQ(error("{name: expert, p_uu: 0.5}"),
             "test.yaml:3: policy.p_uu: unknown parameter for policy 'expert' "
-            "(did you mean `p_u`?) (valid: p_v, p_u, anytime, "
-            "max_iterations, max_nodes)");
+            "(did you mean `p_u`?) (valid: p_v, p_u, p_tour, anytime, "
+            "max_iterations, max_nodes, tour_budget)");
   EXPECT_EQ(error("{name: grdy}"),
             "test.yaml:3: policy.name: unknown policy 'grdy' (did you mean "
             "`greedy`?) (valid: random, greedy, expert, decsb)");

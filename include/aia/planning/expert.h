@@ -3,6 +3,11 @@
 // step. It replans when physics leaves a robot off its planned lattice point,
 // when a target moves, when a planned measurement did not happen (the true
 // target was not where the mean said), and when the plan is spent.
+//
+// A missed measurement is remembered: the lattice points from which a static
+// target's aim was in sight but nothing was measured rule that part of the
+// prior out, and the next plan aims where it has not been searched (so the
+// team searches instead of shuttling back to the same points).
 #ifndef AIA_PLANNING_EXPERT_H_
 #define AIA_PLANNING_EXPERT_H_
 
@@ -35,9 +40,12 @@ class ExpertPolicy : public Policy {
   // The plan being executed (for tools and tests).
   const SamplingPlan& plan() const { return plan_; }
   int replans() const { return replans_; }
+  // Per target, the lattice points from which it was missed so far.
+  const std::vector<std::vector<int>>& missed() const { return missed_; }
 
  private:
   bool NeedsReplan(const DecisionContext& ctx) const;
+  void RecordMisses(const DecisionContext& ctx);
 
   SamplingParams params_;
   SamplingTree tree_;
@@ -47,6 +55,8 @@ class ExpertPolicy : public Policy {
   bool team_best_ = false;  // plan_ was made on the team's best local beliefs
   int replans_ = 0;
   std::vector<int> best_rows_;
+  std::vector<std::vector<int>> missed_;
+  std::vector<double> last_det_;  // central det Sigma_k at the last decision
   std::unique_ptr<BeliefSet> best_belief_;  // scratch for team-best roots
 };
 

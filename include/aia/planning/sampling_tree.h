@@ -62,6 +62,10 @@ struct SamplingParams {
     a->Visit(AIA_FIELD(p_u).In(kUnit).Doc(
         "f_U: probability that a robot steps along the BFS field toward its "
         "assigned target rather than at random"));
+    a->Visit(AIA_FIELD(p_tour).In(kUnit).Doc(
+        "f_U: probability that the robots follow the best tours (each toward "
+        "the next target of its tour not yet localized) rather than a "
+        "nearest-first assignment"));
     a->Visit(AIA_FIELD(anytime)
                  .In(Between(0, 1e9))
                  .Doc("sampling iterations after the first goal (`aia plan "
@@ -69,17 +73,13 @@ struct SamplingParams {
     a->Visit(AIA_FIELD(max_iterations)
                  .In(Between(1, 1e10))
                  .Doc("iterations allowed before a first goal"));
-    a->Visit(AIA_FIELD(p_tour).In(kUnit).Doc(
-        "f_U: probability that the robots follow the best tours (each toward "
-        "the next target of its tour not yet localized) rather than a "
-        "nearest-first assignment"));
+    a->Visit(AIA_FIELD(max_nodes)
+                 .In(Between(2, 1e9))
+                 .Doc("tree size cap (memory guard)"));
     a->Visit(AIA_FIELD(tour_budget)
                  .In(Between(0, 1e8))
                  .Doc("route evaluations for the tours' local search "
                       "(relocate, swap, 2-opt)"));
-    a->Visit(AIA_FIELD(max_nodes)
-                 .In(Between(2, 1e9))
-                 .Doc("tree size cap (memory guard)"));
   }
 };
 

@@ -108,6 +108,7 @@ class MissionRunner {
   std::unique_ptr<TraceObserver> trace_;
   std::unique_ptr<EstimateObserver> estimate_;
   std::unique_ptr<ProgressObserver> progress_;
+  std::unique_ptr<MoveObserver> moves_;
 };
 
 struct RunOptions {
