@@ -26,7 +26,7 @@ namespace aia {
 namespace {
 
 constexpr const char* kHeader =
-    "size,seed,policy,success,flowtime,fstar,wall_s";
+    "size,seed,policy,success,flowtime,fstar,bound,wall_s";
 
 bool ParseRow(const std::string& line, EvalRow* r) {
   std::vector<std::string> f;
@@ -34,7 +34,7 @@ bool ParseRow(const std::string& line, EvalRow* r) {
   std::string cell;
   while (std::getline(ss, cell, ',')) f.push_back(cell);
   if (line.size() && line.back() == ',') f.push_back("");
-  if (f.size() != 7) return false;
+  if (f.size() != 8) return false;
   try {
     r->size = f[0];
     r->seed = std::stoull(f[1]);
@@ -43,7 +43,8 @@ bool ParseRow(const std::string& line, EvalRow* r) {
     r->success = f[3] == "1";
     r->flowtime = f[4].empty() ? -1 : std::stoi(f[4]);
     r->fstar = std::stoi(f[5]);
-    r->wall_s = std::stod(f[6]);
+    r->bound = std::stoi(f[6]);
+    r->wall_s = std::stod(f[7]);
   } catch (const std::exception&) {
     return false;
   }
@@ -239,6 +240,7 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
     row.seed = inst.seed;
     row.policy = spec->name();
     row.fstar = fstar;
+    row.bound = plan.bound;
     if (fstar >= 0) {
       const auto t0 = std::chrono::steady_clock::now();
       MissionConfig mission = instance->scenario.mission;
@@ -256,11 +258,11 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
 
 std::string FormatRow(const EvalRow& r) {
   char buf[256];
-  std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%.4f\n", r.size.c_str(),
-                static_cast<unsigned long long>(r.seed), r.policy.c_str(),
-                r.success ? 1 : 0,
+  std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%d,%.4f\n",
+                r.size.c_str(), static_cast<unsigned long long>(r.seed),
+                r.policy.c_str(), r.success ? 1 : 0,
                 r.flowtime >= 0 ? std::to_string(r.flowtime).c_str() : "",
-                r.fstar, r.wall_s);
+                r.fstar, r.bound, r.wall_s);
   return buf;
 }
 
@@ -281,11 +283,11 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& policies) {
   std::string out =
       "size,policy,instances,success_rate,flowtime_increase,mean_flowtime,mean_"
-      "fstar,no_expert_plan\n";
+      "fstar,mean_fstar_over_bound,no_expert_plan\n";
   for (const auto& size : sizes) {
     for (const auto& policy : policies) {
       int n = 0, ok = 0, no_plan = 0;
-      double inc = 0.0, flow = 0.0, fstar = 0.0;
+      double inc = 0.0, flow = 0.0, fstar = 0.0, gap = 0.0;
       for (const EvalRow& r : rows) {
         if (r.size != size || r.policy != policy) continue;
         if (r.fstar < 0) {
@@ -299,16 +301,17 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
         inc += static_cast<double>(f - r.fstar) / denom;
         flow += f;
         fstar += r.fstar;
+        gap += static_cast<double>(r.fstar) / std::max(r.bound, 1);
       }
       char buf[256];
       if (n == 0) {
-        std::snprintf(buf, sizeof(buf), "%s,%s,0,,,,,%d\n", size.c_str(),
+        std::snprintf(buf, sizeof(buf), "%s,%s,0,,,,,,%d\n", size.c_str(),
                       policy.c_str(), no_plan);
       } else {
-        std::snprintf(buf, sizeof(buf), "%s,%s,%d,%.4f,%.4f,%.3f,%.3f,%d\n",
-                      size.c_str(), policy.c_str(), n,
-                      static_cast<double>(ok) / n, inc / n, flow / n, fstar / n,
-                      no_plan);
+        std::snprintf(buf, sizeof(buf),
+                      "%s,%s,%d,%.4f,%.4f,%.3f,%.3f,%.4f,%d\n", size.c_str(),
+                      policy.c_str(), n, static_cast<double>(ok) / n, inc / n,
+                      flow / n, fstar / n, gap / n, no_plan);
       }
       out += buf;
     }

@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "aia/runtime/mission.h"
+#include "aia/scenario/loader.h"
 #include "aia/runtime/observers.h"
 #include "support/test_support.h"
 
@@ -94,6 +95,55 @@ TEST(EpisodeTest, TrackingMissionRunsItsWholeHorizon) {
   EXPECT_EQ(e->step(), 12);
   EXPECT_GT((e->target_positions()[0] - start).x(), 0.1);  // drifted right
   EXPECT_GT(e->localized_steps(), 0);
+}
+
+TEST(EpisodeTest, ExpertSearchesInsteadOfShuttling) {
+  // scenarios/default.yaml at seed 31: a prior mean is far from its target,
+  // so the first planned measurement misses. The expert used to replan from
+  // the same belief and shuttle one robot between two points for 15 steps;
+  // remembering the miss, it searches elsewhere and no robot reverses its
+  // move more than twice in a row.
+  Scenario s = LoadScenario(testing::SourcePath("scenarios/default.yaml"),
+                            {{"--seed", "seed", "31"},
+                             {"--policy", "policy.name", "expert"}});
+  auto e = MakeEpisode(s, AllPolicies());
+  MoveObserver moves;
+  e->AddObserver(&moves);
+  e->Run();
+  EXPECT_TRUE(e->success());
+  EXPECT_LE(moves.longest_reversal_run(), 2);
+  EXPECT_LT(moves.reversals(), moves.moves() / 10);
+}
+
+TEST(MoveObserverTest, CountsReversalsByHand) {
+  // One robot in the open, driven by a scripted policy: right, left, right,
+  // up, down: three reversals, the first two back to back.
+  Scenario s = ScenarioFromYaml(
+      "robots: {count: 1, start: [[5.25, 5.25]]}\n"
+      "targets: {list: [{position: [15.0, 15.0]}]}\n"
+      "mission: {max_steps: 5}\n");
+  class Script : public Policy {
+   public:
+    std::string_view name() const override { return "script"; }
+    void Reset(const Map&, int, int, std::uint64_t) override { step_ = 0; }
+    PolicyStatus Decide(const DecisionContext&,
+                        std::vector<Move>* moves) override {
+      static const Move kScript[] = {Move::kRight, Move::kLeft, Move::kRight,
+                                     Move::kUp, Move::kDown};
+      (*moves)[0] = kScript[step_++ % 5];
+      return PolicyStatus::kOk;
+    }
+
+   private:
+    int step_ = 0;
+  };
+  Episode e(BuildInstance(s), std::make_unique<Script>());
+  MoveObserver moves;
+  e.AddObserver(&moves);
+  e.Run();
+  EXPECT_EQ(moves.moves(), 5);
+  EXPECT_EQ(moves.reversals(), 3);
+  EXPECT_EQ(moves.longest_reversal_run(), 2);
 }
 
 // Records what each callback saw.

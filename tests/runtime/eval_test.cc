@@ -22,14 +22,15 @@ std::string WithoutWall(const std::string& csv) {
 }
 
 TEST(EvalTest, SummaryCountsFailuresAsThreeFStar) {
-  // Two instances with F* = 4: one success in 6 steps, one failure.
-  std::vector<EvalRow> rows = {{"2x2", 0, "greedy", true, 6, 4, 0.1},
-                               {"2x2", 1, "greedy", false, -1, 4, 0.1},
-                               {"2x2", 2, "greedy", false, -1, -1, 0.0}};
+  // Two instances with F* = 4 (lower bounds 4 and 2): one success in 6
+  // steps, one failure.
+  std::vector<EvalRow> rows = {{"2x2", 0, "greedy", true, 6, 4, 4, 0.1},
+                               {"2x2", 1, "greedy", false, -1, 4, 2, 0.1},
+                               {"2x2", 2, "greedy", false, -1, -1, 0, 0.0}};
   const std::string csv = SummaryCsv(rows, {"2x2"}, {"greedy"});
-  // success 1/2; increase mean((6-4)/4, (12-4)/4) = 1.25; one instance without
-  // a plan.
-  EXPECT_NE(csv.find("2x2,greedy,2,0.5000,1.2500,9.000,4.000,1"),
+  // success 1/2; increase mean((6-4)/4, (12-4)/4) = 1.25; F* / bound
+  // mean(1, 2) = 1.5; one instance without a plan.
+  EXPECT_NE(csv.find("2x2,greedy,2,0.5000,1.2500,9.000,4.000,1.5000,1"),
             std::string::npos)
       << csv;
 }

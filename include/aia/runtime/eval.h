@@ -68,6 +68,7 @@ struct EvalRow {
   bool success = false;
   int flowtime = -1;  // steps to success, -1 when not reached within 3 F*
   int fstar = -1;     // the expert's F*, -1 when the expert found no plan
+  int bound = 0;      // the expert's lower bound on the horizon
   double wall_s = 0.0;
 };
 
