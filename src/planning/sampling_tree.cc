@@ -110,7 +110,8 @@ void SamplingTree::RegionOf(const Vec2& x,
          ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
       const int q = lattice.Index(ix, iy);
       if (!lattice.Free(q) || reach_[q] < 0) continue;
-      const double r = PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), x);
+      const double r =
+          PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), x);
       if (r > 0.0) region->push_back({q, r});
     }
   }
@@ -139,7 +140,7 @@ bool SamplingTree::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
                                 ? Eigen::Matrix2d(llt.matrixL())
                                 : Eigen::Matrix2d::Identity();
   const double sigma = std::sqrt(std::max(cov(0, 0), cov(1, 1)));
-  constexpr int kRings = 16;        // to 4 sigma
+  constexpr int kRings = 16;  // to 4 sigma
   constexpr double kRingStep = 0.25;
   for (int ring = 0; ring <= kRings; ++ring) {
     const double rho = ring * kRingStep;
@@ -151,7 +152,8 @@ bool SamplingTree::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
     int best = std::numeric_limits<int>::max();
     for (int a = 0; a < count; ++a) {
       const double theta = 2.0 * M_PI * a / count;
-      const Vec2 x = mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta));
+      const Vec2 x =
+          mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta));
       if (!p.map->PointFree(x) || searched(x)) continue;
       RegionOf(x, &trial_region_);
       int near = std::numeric_limits<int>::max();
@@ -173,8 +175,9 @@ SamplingTree::AimSlot& SamplingTree::Slot(int depth, int k) {
   if (slot.ready) return slot;
   const SamplingProblem& p = *problem_;
   const int b = Bucket(depth, k);
-  const Vec2 mean =
-      targets_[k].is_static ? means_[0][k] : MeanAt(b * kBucket + kBucket / 2, k);
+  const Vec2 mean = targets_[k].is_static
+                        ? means_[0][k]
+                        : MeanAt(b * kBucket + kBucket / 2, k);
   const Eigen::MatrixXd sigma =
       p.belief->Covariance(p.belief_row, k).topLeftCorner(2, 2);
   const std::vector<int>* missed =
@@ -491,7 +494,8 @@ void SamplingTree::PlanTours() {
   TourSettings settings;
   settings.budget = tour_budget_;
   settings.objective = TourObjective::kLatency;
-  const Tours latency = tour_planner_.Plan(starts, targets, weight, settings, legs);
+  const Tours latency =
+      tour_planner_.Plan(starts, targets, weight, settings, legs);
   tours_ = latency.order;
   tour_makespan_ = latency.makespan;
   settings.objective = TourObjective::kMakespan;
@@ -595,8 +599,7 @@ void SamplingTree::Select() {
 void SamplingTree::Register(int child, const SamplingParams& params) {
   last_ = child;
   if (unloc_[child] < unloc_[effort_] ||
-      (unloc_[child] == unloc_[effort_] &&
-       det_sum_[child] < det_sum_[effort_]))
+      (unloc_[child] == unloc_[effort_] && det_sum_[child] < det_sum_[effort_]))
     effort_ = child;
   if (unloc_[child] == 0) {
     if (best_ < 0) first_goal_iteration_ = iteration_;
@@ -614,9 +617,9 @@ void SamplingTree::Register(int child, const SamplingParams& params) {
 
 int SamplingTree::Rollout(RolloutKind kind, const SamplingParams& params) {
   const Lattice& lattice = problem_->map->lattice();
-  const int cap = params.max_depth > 0 ? params.max_depth
-                                       : 2 * (lattice.nx() + lattice.ny()) *
-                                             std::max(1, m_);
+  const int cap = params.max_depth > 0
+                      ? params.max_depth
+                      : 2 * (lattice.nx() + lattice.ny()) * std::max(1, m_);
   int v = 0;
   while (unloc_[v] > 0 && depth_[v] < cap &&
          static_cast<long>(parent_.size()) < params.max_nodes) {
@@ -682,8 +685,7 @@ int SamplingTree::RewriteIdle(int end) {
     }
     v = AddNode(v, child_pos_.data());
   }
-  if (unloc_[v] != 0 || cost_[v] > cost_[end] + tol_ ||
-      depth_[v] > depth_[end])
+  if (unloc_[v] != 0 || cost_[v] > cost_[end] + tol_ || depth_[v] > depth_[end])
     return end;  // cannot happen (see above); kept as a guard
   return v;
 }
@@ -715,7 +717,8 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
     int nearest = -1;
     if (targets_[k].is_static) {
       for (int i = 0; i < n_; ++i) {
-        const int f = problem.active[i] ? slots_[k][0].field[problem.start[i]] : -1;
+        const int f =
+            problem.active[i] ? slots_[k][0].field[problem.start[i]] : -1;
         if (f >= 0 && (nearest < 0 || f < nearest)) nearest = f;
       }
     }
@@ -769,8 +772,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
     }
     if (node < 0) continue;
     // f_U: the tours, or a nearest-first assignment.
-    const bool follow_tours =
-        !tours_.empty() && rng.Uniform() < params.p_tour;
+    const bool follow_tours = !tours_.empty() && rng.Uniform() < params.p_tour;
     if (follow_tours) {
       MarkOpen(node);
       for (int i = 0; i < n_; ++i) {

@@ -12,8 +12,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
 Leg TourPlanner::CachedLeg(int from, int t, int k) {
-  const std::uint64_t when =
-      legs_->TimeVarying(k) ? static_cast<std::uint64_t>(t) + 1 : 0;
+  // Legs toward a static target depend on the departure step only through
+  // the start (a robot already in the region at step 0 still has to move).
+  const std::uint64_t when = legs_->TimeVarying(k)
+                                 ? static_cast<std::uint64_t>(t) + 1
+                                 : (t == 0 ? 1 : 0);
   const std::uint64_t key = (static_cast<std::uint64_t>(from) << 40) ^
                             (when << 20) ^ static_cast<std::uint64_t>(k);
   auto it = cache_.find(key);
@@ -184,6 +187,21 @@ Tours TourPlanner::Plan(const std::vector<int>& starts,
   const double tol = 1e-12;
   auto spent = [&] { return evaluations_ >= settings.budget; };
   std::vector<int> ra, rb;
+  // Takes route a (and b, unless b < 0) when that lowers the objective.
+  auto take = [&](int a, const std::vector<int>& route_a, const RouteValue& va,
+                  int b, const std::vector<int>& route_b,
+                  const RouteValue& vb) {
+    const double obj = ObjectiveWith(values, a, va, b, vb);
+    if (!(obj < current - tol)) return false;
+    tours.order[a] = route_a;
+    values[a] = va;
+    if (b >= 0) {
+      tours.order[b] = route_b;
+      values[b] = vb;
+    }
+    current = Objective(values);
+    return true;
+  };
   bool improved = true;
   while (improved && !spent()) {
     improved = false;
@@ -202,21 +220,8 @@ Tours TourPlanner::Plan(const std::vector<int>& starts,
             rb = base;
             rb.insert(rb.begin() + q, k);
             const RouteValue vb = Evaluate(j, rb);
-            const double obj = (j == i) ? ObjectiveWith(values, i, vb, -1, {})
-                                        : ObjectiveWith(values, i, va, j, vb);
-            if (obj < current - tol) {
-              if (j == i) {
-                tours.order[i] = rb;
-                values[i] = vb;
-              } else {
-                tours.order[i] = ra;
-                values[i] = va;
-                tours.order[j] = rb;
-                values[j] = vb;
-              }
-              current = Objective(values);
-              improved = true;
-            }
+            improved = (j == i) ? take(i, rb, vb, -1, rb, vb)
+                                : take(i, ra, va, j, rb, vb);
           }
           if (improved) break;
         }
@@ -236,26 +241,12 @@ Tours TourPlanner::Plan(const std::vector<int>& starts,
             if (i == j) {
               std::swap(ra[p], ra[q]);
               const RouteValue va = Evaluate(i, ra);
-              const double obj = ObjectiveWith(values, i, va, -1, {});
-              if (obj < current - tol) {
-                tours.order[i] = ra;
-                values[i] = va;
-                current = Objective(values);
-                improved = true;
-              }
+              improved = take(i, ra, va, -1, ra, va);
             } else {
               rb = tours.order[j];
               std::swap(ra[p], rb[q]);
               const RouteValue va = Evaluate(i, ra), vb = Evaluate(j, rb);
-              const double obj = ObjectiveWith(values, i, va, j, vb);
-              if (obj < current - tol) {
-                tours.order[i] = ra;
-                values[i] = va;
-                tours.order[j] = rb;
-                values[j] = vb;
-                current = Objective(values);
-                improved = true;
-              }
+              improved = take(i, ra, va, j, rb, vb);
             }
           }
         }
@@ -270,13 +261,7 @@ Tours TourPlanner::Plan(const std::vector<int>& starts,
           ra = tours.order[i];
           std::reverse(ra.begin() + p, ra.begin() + q);
           const RouteValue va = Evaluate(i, ra);
-          const double obj = ObjectiveWith(values, i, va, -1, {});
-          if (obj < current - tol) {
-            tours.order[i] = ra;
-            values[i] = va;
-            current = Objective(values);
-            improved = true;
-          }
+          improved = take(i, ra, va, -1, ra, va);
         }
       }
       if (improved) break;

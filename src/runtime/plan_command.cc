@@ -84,8 +84,8 @@ int RunPlanCommand(const PlanOptions& o) {
     j["best_cost"] = plan.best_cost;
     nlohmann::ordered_json rollouts = nlohmann::ordered_json::object();
     for (const RolloutResult& r : plan.rollouts)
-      rollouts[r.name] = {{"found", r.found}, {"steps", r.depth},
-                          {"cost", r.cost}};
+      rollouts[r.name] = {
+          {"found", r.found}, {"steps", r.depth}, {"cost", r.cost}};
     j["rollouts"] = rollouts;
     j["useful_until"] = plan.useful_until;
     nlohmann::ordered_json aims = nlohmann::ordered_json::array();

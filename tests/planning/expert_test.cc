@@ -143,9 +143,9 @@ TEST(ExpertTest, RingIsTravelledOneWay) {
   EXPECT_EQ(plan.bound, 27);
   // Two robots at (5.25, 0.75) and (5.75, 0.75): one takes the left target
   // (13), the other the right one (11) and then the top one (15): 26.
-  Team two(std::string(
-               "robots: {count: 2, start: [[5.25, 0.75], [5.75, 0.75]]}\n") +
-           kRing);
+  Team two(
+      std::string("robots: {count: 2, start: [[5.25, 0.75], [5.75, 0.75]]}\n") +
+      kRing);
   plan = Solve(two, 5000);
   ASSERT_TRUE(plan.found);
   EXPECT_EQ(plan.depth, 26);
@@ -164,8 +164,7 @@ TEST(ExpertTest, NeverLongerThanItsGreedyRollout) {
       // On the tree's own model: never costlier than a seeded rollout, and
       // never longer than the greedy rule's.
       EXPECT_LE(plan.best_cost, r.cost) << r.name << ", seed " << seed;
-      if (r.name == "greedy")
-        EXPECT_LE(plan.depth, r.depth) << "seed " << seed;
+      if (r.name == "greedy") EXPECT_LE(plan.depth, r.depth) << "seed " << seed;
     }
     EXPECT_GE(plan.depth, plan.bound) << "seed " << seed;
   }
@@ -191,9 +190,10 @@ TEST(ExpertTest, UnseeablePriorMeanStillGetsAPlan) {
 TEST(ExpertTest, MissedPointsAreNotSearchedAgain) {
   // A robot that stood where the prior mean was in sight and measured
   // nothing rules that out: the plan aims where none of those points sees.
-  Team team("robots: {count: 1, start: [[5.25, 5.25]]}\n"
-            "targets: {list: [{position: [9.75, 5.25], prior_mean: [9.75, "
-            "5.25]}]}\n");
+  Team team(
+      "robots: {count: 1, start: [[5.25, 5.25]]}\n"
+      "targets: {list: [{position: [9.75, 5.25], prior_mean: [9.75, "
+      "5.25]}]}\n");
   SamplingProblem problem = ExpertProblem(team.Context());
   const Lattice& lat = team.world.map.lattice();
   const int tried = lat.NearestPoint(Vec2(8.25, 5.25));

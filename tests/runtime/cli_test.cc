@@ -129,7 +129,9 @@ TEST(CliTest, HelpOnEveryCommand) {
 
 std::vector<std::string> ScenarioFiles() {
   std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(SourcePath("scenarios")))
+  // scenarios/long/ (the expert's long-horizon worlds) included.
+  for (const auto& entry :
+       fs::recursive_directory_iterator(SourcePath("scenarios")))
     if (entry.path().extension() == ".yaml")
       files.push_back(entry.path().string());
   std::sort(files.begin(), files.end());

@@ -6,8 +6,8 @@
 #include <type_traits>
 
 #include "aia/runtime/mission.h"
-#include "aia/scenario/loader.h"
 #include "aia/runtime/observers.h"
+#include "aia/scenario/loader.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -103,9 +103,9 @@ TEST(EpisodeTest, ExpertSearchesInsteadOfShuttling) {
   // the same belief and shuttle one robot between two points for 15 steps;
   // remembering the miss, it searches elsewhere and no robot reverses its
   // move more than twice in a row.
-  Scenario s = LoadScenario(testing::SourcePath("scenarios/default.yaml"),
-                            {{"--seed", "seed", "31"},
-                             {"--policy", "policy.name", "expert"}});
+  Scenario s = LoadScenario(
+      testing::SourcePath("scenarios/default.yaml"),
+      {{"--seed", "seed", "31"}, {"--policy", "policy.name", "expert"}});
   auto e = MakeEpisode(s, AllPolicies());
   MoveObserver moves;
   e->AddObserver(&moves);

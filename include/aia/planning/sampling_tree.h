@@ -118,9 +118,9 @@ struct RolloutResult {
 };
 
 struct SamplingPlan {
-  bool found = false;  // a goal node was reached
-  int depth = 0;       // F*: number of moves of the returned path
-  double cost = 0.0;   // J of the returned path
+  bool found = false;      // a goal node was reached
+  int depth = 0;           // F*: number of moves of the returned path
+  double cost = 0.0;       // J of the returned path
   double best_cost = 0.0;  // J of the cheapest goal found (cost is within
                            // kGoalTolerance * eps of it)
   // A lower bound on the horizon: the farthest unlocalized static target's

@@ -72,8 +72,7 @@ class TourPlanner {
   void Summarize(const std::vector<RouteValue>& values);
   double Objective(const std::vector<RouteValue>& values);
   double ObjectiveWith(const std::vector<RouteValue>& values, int a,
-                       const RouteValue& va, int b,
-                       const RouteValue& vb) const;
+                       const RouteValue& va, int b, const RouteValue& vb) const;
   Leg CachedLeg(int from, int t, int k);
 
   LegOracle* legs_ = nullptr;
@@ -82,7 +81,7 @@ class TourPlanner {
   TourObjective objective_ = TourObjective::kLatency;
   long evaluations_ = 0;
   double weight_sum_ = 0.0;
-  double latency_ = 0.0;                       // sum over routes
+  double latency_ = 0.0;                      // sum over routes
   std::array<std::pair<int, int>, 3> top_{};  // largest (makespan, robot)
   std::unordered_map<std::uint64_t, Leg> cache_;
 };

@@ -175,7 +175,9 @@ struct TargetsConfig {
             .In(kNonNegative)
             .Doc(
                 "std of a default prior mean around the truth: mu_0 = x + N(0, "
-                "prior_offset^2 I), redrawn until it lies in free space"));
+                "prior_offset^2 I), redrawn until it lies in free space where "
+                "a "
+                "reachable lattice point sees it"));
   }
   // count and list agree; at least one target.
   void Validate(const FieldChecker& check);
