@@ -159,14 +159,17 @@ TEST(WorldTest, RandomStartsAndTargetsAreValid) {
       const Vec2 truth = w.TargetStart(k);
       EXPECT_TRUE(w.map.PointFree(truth));
       EXPECT_TRUE(w.map.PointFree(w.priors[k].mean.head<2>()));
-      // Observable from a reachable lattice point.
-      bool observable = false;
-      for (int idx = 0; idx < lattice.size() && !observable; ++idx) {
-        if (!lattice.Free(idx) || lattice.components()[idx] != 0) continue;
-        const Vec2 p = lattice.Point(idx);
-        observable = (p - truth).norm() <= 2.0 && w.map.LineOfSight(p, truth);
+      // The truth and the prior mean are observable from a reachable
+      // lattice point.
+      for (const Vec2& x : {truth, Vec2(w.priors[k].mean.head<2>())}) {
+        bool observable = false;
+        for (int idx = 0; idx < lattice.size() && !observable; ++idx) {
+          if (!lattice.Free(idx) || lattice.components()[idx] != 0) continue;
+          const Vec2 p = lattice.Point(idx);
+          observable = (p - x).norm() <= 2.0 && w.map.LineOfSight(p, x);
+        }
+        EXPECT_TRUE(observable) << "seed " << seed << ", target " << k;
       }
-      EXPECT_TRUE(observable);
     }
   }
 }
