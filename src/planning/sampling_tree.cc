@@ -51,11 +51,27 @@ Move MoveBetween(const Lattice& lattice, int a, int b) {
   return Move::kStay;
 }
 
-double SamplingTree::BlockDet(const double* packed, int k) const {
-  const TargetInfo& t = targets_[k];
-  const double* p = packed + t.offset;
-  if (t.dim == 2) return 1.0 / (p[0] * p[2] - p[1] * p[1]);
+namespace {
+
+// det Sigma of one packed information block.
+double PackedDet(const double* p, int dim) {
+  if (dim == 2) return 1.0 / (p[0] * p[2] - p[1] * p[1]);
   return 1.0 / Unpack<4>(p).determinant();
+}
+
+}  // namespace
+
+double SamplingTree::BlockDet(const double* packed, int k) const {
+  return PackedDet(packed + targets_[k].offset, targets_[k].dim);
+}
+
+double SamplingTree::BlockDetAfter(const double* packed, int k,
+                                   double r) const {
+  const TargetInfo& t = targets_[k];
+  double block[10];  // the largest packed block, 4 x 4
+  std::copy(packed + t.offset, packed + t.offset + PackedSize(t.dim), block);
+  AddPositionPrecision(block, t.dim, r);
+  return PackedDet(block, t.dim);
 }
 
 // Moving targets' aims and fields are kept per span of this many depths (the
@@ -122,14 +138,12 @@ bool SamplingTree::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
                            std::vector<std::pair<int, double>>* region) {
   const SamplingProblem& p = *problem_;
   const Lattice& lattice = p.map->lattice();
+  // A point some missed lattice point would have measured is ruled out.
   auto searched = [&](const Vec2& x) {
     if (!missed) return false;
-    for (int q : *missed) {
-      const Vec2 at = lattice.Point(q);
-      if (p.sensor->InRange((x - at).norm()) &&
-          (!p.sensor->line_of_sight || p.map->LineOfSight(at, x)))
+    for (int q : *missed)
+      if (PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), x) > 0.0)
         return true;
-    }
     return false;
   };
   // The mean first, then rings of the prior at growing Mahalanobis radius:
@@ -268,7 +282,6 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   child_pos_.assign(n_, 0);
   taken_.assign(m_, 0);
   open_.assign(m_, 0);
-  scratch_info_.assign(stride_, 0.0);
 }
 
 int SamplingTree::AddNode(int parent, const int* positions) {
@@ -543,12 +556,9 @@ void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
                                    MeasurePoint(depth, k2));
           }
           if (r <= 0.0) continue;
-          const double before = BlockDet(info, k2);
-          std::copy(info, info + stride_, scratch_info_.begin());
-          AddPositionPrecision(scratch_info_.data() + targets_[k2].offset,
-                               targets_[k2].dim, r);
-          const double after = BlockDet(scratch_info_.data(), k2);
-          gain += std::log(before) - std::log(std::max(after, p.eps));
+          const double after = BlockDetAfter(info, k2, r);
+          gain +=
+              std::log(BlockDet(info, k2)) - std::log(std::max(after, p.eps));
         }
         if (gain > best_gain) {
           best_gain = gain;

@@ -171,6 +171,8 @@ class SamplingTree {
   void Prepare(const SamplingProblem& problem);
   int AddNode(int parent, const int* positions);
   double BlockDet(const double* packed, int k) const;
+  // det Sigma_k after adding r to its position precision.
+  double BlockDetAfter(const double* packed, int k, double r) const;
   const double* Info(int node) const {
     return info_.data() + static_cast<size_t>(node) * stride_;
   }
@@ -237,11 +239,9 @@ class SamplingTree {
   // Scratch.
   std::vector<int> assigned_, order_, child_pos_, taken_;
   std::vector<char> open_;
-  const std::vector<std::vector<int>>* rollout_tours_ = nullptr;
   std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
   std::vector<double> lower_;  // per node: lower bound of the total cost
-  std::vector<double> scratch_info_;
   std::vector<int> bfs_queue_;
 };
 
