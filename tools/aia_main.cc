@@ -12,12 +12,21 @@
 #include <vector>
 
 #include "aia/core/error.h"
+#include "aia/learning/trainer.h"
 #include "aia/runtime/bench.h"
 #include "aia/runtime/catalog.h"
+#include "aia/runtime/dataset_command.h"
 #include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/plan_command.h"
 #include "aia/runtime/render_mission.h"
+
+// jemalloc (linked into build/aia) keeps freed pages instead of returning
+// them to the kernel on every libtorch call, which halves libtorch's speed
+// on glibc's allocator (../shared/docs/PLATFORM.md).
+extern "C" {
+const char* malloc_conf = "dirty_decay_ms:-1,muzzy_decay_ms:-1";
+}
 
 namespace {
 
@@ -214,6 +223,8 @@ Action AddBenchCommand(CLI::App& app) {
                 "do not run mujoco-testspeed for comparison");
   cmd->add_flag("--expert", bench->expert,
                 "time the expert's solve (C-SB) instead of episodes");
+  cmd->add_flag("--network", bench->network,
+                "time I-GBNet's network alone (inference and training)");
   cmd->add_option("--seeds", bench->seeds, "with --expert: worlds per size")
       ->capture_default_str();
   cmd->add_option("--set", bench->sets,
@@ -222,6 +233,121 @@ Action AddBenchCommand(CLI::App& app) {
       ->take_all()
       ->expected(1);
   return [=]() { return cmd->parsed() ? aia::RunBench(*bench) : -1; };
+}
+
+Action AddDatasetCommand(CLI::App& app) {
+  auto o = std::make_shared<aia::DatasetOptions>();
+  auto shard = std::make_shared<std::string>("0/1");
+  auto quiet = std::make_shared<bool>(false);
+  CLI::App* cmd = app.add_subcommand(
+      "dataset",
+      "imitation data for I-GBNet: the expert's episodes on generated worlds, "
+      "states and expert labels in SQLite (resumable; docs/learning.md)");
+  cmd->add_option("--out", o->out, "dataset folder (one SQLite file per shard)")
+      ->required();
+  cmd->add_option("--episodes", o->episodes, "episodes in all shards")
+      ->capture_default_str();
+  cmd->add_option("--shard", *shard,
+                  "K/N: this process writes episodes e with e % N == K")
+      ->capture_default_str();
+  cmd->add_option("--size", o->size, "robots x targets of the worlds")
+      ->capture_default_str();
+  cmd->add_option("--first-seed", o->first_seed,
+                  "episode e uses seed FIRST+e (aia eval uses 0..)")
+      ->capture_default_str();
+  cmd->add_option("--keep", o->keep, "random decision steps kept per episode")
+      ->capture_default_str();
+  cmd->add_option("--policy", o->policy,
+                  "acting policy (igbnet for DAgger; labels always come "
+                  "from the expert)")
+      ->capture_default_str();
+  cmd->add_option("--model", o->model, "model of a learned acting policy");
+  cmd->add_option("--max-steps", o->max_steps,
+                  "decision steps per episode at most (0: the scenario's)")
+      ->capture_default_str();
+  cmd->add_option("--set", o->sets, kSetHelp)->take_all()->expected(1);
+  cmd->add_flag("--quiet", *quiet, "no progress line");
+  return [=]() {
+    if (!cmd->parsed()) return -1;
+    aia::ParseShard(*shard, &o->shard, &o->shards);
+    o->progress = !*quiet;
+    aia::RunDataset(*o);
+    return 0;
+  };
+}
+
+Action AddTrainCommand(CLI::App& app) {
+  auto o = std::make_shared<aia::TrainOptions>();
+  auto frame = std::make_shared<std::string>("centred");
+  auto quiet = std::make_shared<bool>(false);
+  CLI::App* cmd = app.add_subcommand(
+      "train",
+      "train I-GBNet by imitation of the expert (checkpoint every epoch, "
+      "--resume; docs/learning.md)");
+  cmd->add_option("--data", o->data, "dataset folders or files (repeatable)")
+      ->required()
+      ->take_all();
+  cmd->add_option("--out", o->out,
+                  "model file; OUT.ckpt and OUT(.pt->.train.csv) beside it")
+      ->capture_default_str();
+  cmd->add_option("--init", o->init, "start from this model (DAgger rounds)");
+  cmd->add_option("--epochs", o->epochs, "epochs")->capture_default_str();
+  cmd->add_option("--batch", o->batch, "batch size")->capture_default_str();
+  cmd->add_option("--lr", o->lr, "learning rate at the start (cosine)")
+      ->capture_default_str();
+  cmd->add_option("--lr-min", o->lr_min, "learning rate at the end")
+      ->capture_default_str();
+  cmd->add_option("--weight-decay", o->weight_decay, "Adam's weight decay")
+      ->capture_default_str();
+  cmd->add_option("--weak-weight", o->weak_weight,
+                  "weight of samples whose robot had no useful work left "
+                  "(0 masks them)")
+      ->capture_default_str();
+  cmd->add_option("--val-share", o->val_share,
+                  "share of the worlds held out for validation")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "initialization, split and shuffling")
+      ->capture_default_str();
+  cmd->add_option("--frame", *frame, "input frame: centred or global")
+      ->capture_default_str();
+  cmd->add_option("--cell", o->network.channels.cell, "metres per pixel")
+      ->capture_default_str();
+  cmd->add_option("--window", o->network.channels.window,
+                  "centred frame: pixels per side")
+      ->capture_default_str();
+  cmd->add_option("--blur", o->network.channels.blur,
+                  "the heatmap's s in metres (about half the sensor range)")
+      ->capture_default_str();
+  cmd->add_option("--width", o->network.width, "feature channels")
+      ->capture_default_str();
+  cmd->add_option("--stem-stride", o->network.stem_stride, "stride of the stem")
+      ->capture_default_str();
+  cmd->add_option("--pool", o->network.pool, "adaptive pooling to P x P")
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "libtorch threads (0: all cores)")
+      ->capture_default_str();
+  cmd->add_flag("--resume", o->resume,
+                "continue from OUT.ckpt (same options) if it is there");
+  cmd->add_flag("--quiet", *quiet, "no progress lines");
+  return [=]() {
+    if (!cmd->parsed()) return -1;
+    if (!aia::ParseChannelFrame(*frame, &o->network.channels.frame))
+      throw aia::InputError("command line", 0, "--frame",
+                            "'" + *frame + "' is not centred or global");
+    o->progress = !*quiet;
+    const std::vector<aia::EpochLog> logs = aia::Train(*o);
+    if (!logs.empty()) {
+      const aia::EpochLog& e = logs.back();
+      double seconds = 0.0;
+      for (const aia::EpochLog& l : logs) seconds += l.seconds;
+      std::printf(
+          "[aia train] %s: %d epochs, val acc %.3f (useful %.3f), val loss "
+          "%.4f, %.0f s training; log %s\n",
+          o->out.c_str(), e.epoch, e.val_acc, e.val_acc_useful, e.val_loss,
+          seconds, aia::TrainLogPath(o->out).c_str());
+    }
+    return 0;
+  };
 }
 
 Action AddPoliciesCommand(CLI::App& app) {
@@ -259,8 +385,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "aia 0.1.0");
   const std::vector<Action> commands = {
       AddRunCommand(app),   AddRenderCommand(app), AddPlanCommand(app),
-      AddEvalCommand(app),  AddBenchCommand(app),  AddPoliciesCommand(app),
-      AddSchemaCommand(app)};
+      AddEvalCommand(app),  AddBenchCommand(app),  AddDatasetCommand(app),
+      AddTrainCommand(app), AddPoliciesCommand(app), AddSchemaCommand(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

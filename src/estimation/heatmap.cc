@@ -67,6 +67,36 @@ void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
   }
 }
 
+void HeatSources(const BeliefSet& beliefs, int row,
+                 std::vector<HeatSource>* out) {
+  const int m = beliefs.layout().num_targets();
+  AIA_CHECK(row >= 0 && row < beliefs.rows());
+  out->resize(m);
+  for (int k = 0; k < m; ++k) {
+    HeatSource& s = (*out)[k];
+    s.mean = beliefs.PositionMean(row, k);
+    s.cov = beliefs.PositionCovariance(row, k);
+    s.log_det = beliefs.LogDetCovariance(row, k);
+  }
+}
+
+void ProjectHeatmap(const std::vector<HeatSource>& sources,
+                    const std::vector<double>& log_det_prior,
+                    const HeatmapParams& params, Grid<float>* out) {
+  AIA_CHECK(log_det_prior.size() == sources.size());
+  AIA_CHECK_MSG(out->nx() > 0 && out->ny() > 0,
+                "size the heatmap grid first (MakeHeatmapGrid)");
+  AIA_CHECK(params.eps > 0.0 && params.blur >= 0.0 && params.cutoff > 0.0);
+  std::fill(out->data().begin(), out->data().end(), 0.0f);
+  for (std::size_t k = 0; k < sources.size(); ++k) {
+    const double w =
+        HeatWeight(sources[k].log_det, log_det_prior[k], params.eps);
+    if (w <= 0.0) continue;
+    AddGaussianHeat(sources[k].mean, sources[k].cov, w, params.blur,
+                    params.cutoff, out);
+  }
+}
+
 void ProjectHeatmap(const BeliefSet& beliefs, int row,
                     const std::vector<double>& log_det_prior,
                     const HeatmapParams& params, Grid<float>* out) {

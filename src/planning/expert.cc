@@ -113,11 +113,16 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
   }
   PolicyStatus status = plan_.status;
   const bool has_next = index_ + 1 < static_cast<int>(plan_.configs.size());
+  last_useful_.assign(moves->size(), 0);
   for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
     Move m = Move::kStay;
-    if (has_next)
+    if (has_next) {
       m = MoveBetween(lattice, plan_.configs[index_][i],
                       plan_.configs[index_ + 1][i]);
+      last_useful_[i] =
+          i < static_cast<int>(plan_.useful_until.size()) &&
+          index_ + 1 <= plan_.useful_until[i];
+    }
     if (m == Move::kStay && ctx.comm->Active(i)) {
       // Nothing planned for this robot (depth-0 plan or no valid move): any
       // valid move, as the world rule would pick.

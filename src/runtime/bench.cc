@@ -12,6 +12,7 @@
 #include <string>
 
 #include "aia/core/error.h"
+#include "aia/learning/trainer.h"
 #include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/plan_command.h"
@@ -89,7 +90,32 @@ int RunExpertBench(const BenchOptions& o) {
 
 }  // namespace
 
+int RunNetworkBench(const BenchOptions& o) {
+  std::printf(
+      "aia bench --network: I-GBNet's network alone, samples (robot images) "
+      "per second, medians of %d runs, %d threads\n",
+      o.repeats, InferenceThreads());
+  std::printf("%-8s %-7s %6s %12s %12s %12s\n", "input", "stride", "width",
+              "infer b=10", "infer b=80", "train b=16");
+  for (int stride : {1, 2}) {
+    NetworkConfig c;
+    c.stem_stride = stride;
+    const int side = c.channels.window;
+    const double i10 =
+        MeasureNetworkSpeed(c, side, side, 10, false, 20, o.repeats);
+    const double i80 =
+        MeasureNetworkSpeed(c, side, side, 80, false, 4, o.repeats);
+    const double t16 =
+        MeasureNetworkSpeed(c, side, side, 16, true, 8, o.repeats);
+    std::printf("%-8s %-7d %6d %12.0f %12.0f %12.0f\n",
+                (std::to_string(side) + "x" + std::to_string(side)).c_str(),
+                stride, c.width, i10, i80, t16);
+  }
+  return 0;
+}
+
 int RunBench(const BenchOptions& o) {
+  if (o.network) return RunNetworkBench(o);
   if (o.expert) return RunExpertBench(o);
   if (o.steps < 1)
     throw InputError("command line", 0, "--steps", "must be at least 1");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <Eigen/LU>
 #include <cmath>
 #include <limits>
 
@@ -50,6 +51,8 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   for (int k = 0; k < num_targets_; ++k) {
     means.push_back(world.priors[k].mean);
     covs.push_back(world.priors[k].cov);
+    log_det_prior_.push_back(
+        std::log(world.priors[k].cov.determinant()));
     target_state_.push_back(world.truth.targets[k]);
     target_pos_.push_back(world.TargetStart(k));
   }
@@ -132,6 +135,7 @@ DecisionContext Episode::Context() const {
   ctx.comm = &comm_;
   ctx.beliefs = &fused_;
   ctx.central = &central_;
+  ctx.log_det_prior = &log_det_prior_;
   return ctx;
 }
 

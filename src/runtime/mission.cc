@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "aia/learning/igbnet_policy.h"
 #include "aia/core/error.h"
 #include "aia/core/io.h"
 #include "aia/scenario/loader.h"
@@ -24,7 +25,11 @@ constexpr char kEffectiveHeader[] =
 
 }  // namespace
 
-PolicyRegistry AllPolicies() { return BuiltinPolicies(); }
+PolicyRegistry AllPolicies() {
+  PolicyRegistry registry = BuiltinPolicies();
+  AddLearnedPolicies(&registry);
+  return registry;
+}
 
 std::vector<Override> CommandOverrides::ToOverrides(
     const PolicyRegistry& registry) const {

@@ -241,9 +241,9 @@ TEST(RegistryTest, SharedResourceIsLoadedOncePerResolve) {
   int loads = 0;
   r.Add<ToyParams, ToyModel>(
       "toy", "a policy with a model", false,
-      [&loads](const ToyParams& p, const PolicyConfig& config) {
+      [&loads](const ToyParams& p, const Scenario& scenario) {
         ++loads;
-        EXPECT_EQ(config.name, "toy");
+        EXPECT_EQ(scenario.policy.name, "toy");
         return std::make_shared<const ToyModel>(ToyModel{p.scale * 10});
       },
       [](const ToyParams&, std::shared_ptr<const ToyModel> model) {

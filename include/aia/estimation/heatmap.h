@@ -42,6 +42,26 @@ Grid<float> MakeHeatmapGrid(const Vec2& size, double cell);
 void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
                      double blur, double cutoff, Grid<float>* out);
 
+// What the heatmap needs of one target in one belief: the position mean and
+// covariance, and log det Sigma of the whole block (what eps judges). Also
+// what the learning dataset stores per sample and target.
+struct HeatSource {
+  Vec2 mean{0.0, 0.0};
+  Mat2 cov = Mat2::Identity();
+  double log_det = 0.0;
+};
+
+// The heat sources of row `row` of `beliefs`, one per target, into `out`
+// (resized).
+void HeatSources(const BeliefSet& beliefs, int row,
+                 std::vector<HeatSource>* out);
+
+// H of these sources into `out` (zeroed first, sized by the caller).
+// log_det_prior[k] is log det Sigma_0^k of target k's whole prior block.
+void ProjectHeatmap(const std::vector<HeatSource>& sources,
+                    const std::vector<double>& log_det_prior,
+                    const HeatmapParams& params, Grid<float>* out);
+
 // H for row `row` of `beliefs` into `out`, which must already be sized (its
 // cells are those of the projection; see MakeHeatmapGrid). log_det_prior[k]
 // is log det Sigma_0^k of target k's whole prior block. The weight uses the

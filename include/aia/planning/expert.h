@@ -40,6 +40,13 @@ class ExpertPolicy : public Policy {
   // The plan being executed (for tools and tests).
   const SamplingPlan& plan() const { return plan_; }
   int replans() const { return replans_; }
+  // Whether robot i's last decided move was useful work in the plan (it
+  // leads to a measurement that counts); false for idle-rule and filler
+  // moves (the dataset's weak labels).
+  bool LastMoveUseful(int robot) const {
+    return robot >= 0 && robot < static_cast<int>(last_useful_.size()) &&
+           last_useful_[robot] != 0;
+  }
   // Per target, the lattice points from which it was missed so far.
   const std::vector<std::vector<int>>& missed() const { return missed_; }
 
@@ -55,6 +62,7 @@ class ExpertPolicy : public Policy {
   bool team_best_ = false;  // plan_ was made on the team's best local beliefs
   int replans_ = 0;
   std::vector<int> best_rows_;
+  std::vector<char> last_useful_;
   std::vector<std::vector<int>> missed_;
   std::vector<double> last_det_;  // central det Sigma_k at the last decision
   std::unique_ptr<BeliefSet> best_belief_;  // scratch for team-best roots

@@ -42,6 +42,9 @@ struct DecisionContext {
   const BeliefSet* beliefs = nullptr;  // robot i's fused belief in row i
   const BeliefSet* central = nullptr;  // the centralized filter; null unless
                                        // the policy is centralized
+  // log det Sigma_0^k of each target's prior, what every robot was told
+  // (the heatmap's weights); may be null for hand-made contexts.
+  const std::vector<double>* log_det_prior = nullptr;
 };
 
 class Policy {

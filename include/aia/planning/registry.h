@@ -64,7 +64,7 @@ class PolicyRegistry {
   using Factory = std::function<std::unique_ptr<Policy>(const Params&)>;
   template <typename Params, typename Resource>
   using Loader = std::function<std::shared_ptr<const Resource>(
-      const Params&, const PolicyConfig&)>;
+      const Params&, const Scenario&)>;
   template <typename Params, typename Resource>
   using ResourceFactory = std::function<std::unique_ptr<Policy>(
       const Params&, std::shared_ptr<const Resource>)>;
@@ -178,7 +178,7 @@ void PolicyRegistry::Add(const std::string& name,
   e.resolve = [name, centralized, load,
                make](const Scenario& s) -> std::shared_ptr<const PolicySpec> {
     const Params params = ReadParams<Params>(name, s);
-    std::shared_ptr<const Resource> resource = load(params, s.policy);
+    std::shared_ptr<const Resource> resource = load(params, s);
     return std::make_shared<internal::TypedPolicySpec<Params>>(
         name, centralized, params,
         [make, resource](const Params& p) { return make(p, resource); });

@@ -139,6 +139,8 @@ class Episode {
   int BestRobot(int target) const { return best_[target]; }
   // min over active robots of det Sigma_i^k.
   double MinDet(int target) const { return min_det_[target]; }
+  // log det Sigma_0^k per target (what the robots were told).
+  const std::vector<double>& log_det_prior() const { return log_det_prior_; }
   const PhaseTimes& times() const { return times_; }
   const EpisodeStats& stats() const { return stats_; }
   // The whole team's view of the current step (the centralized belief
@@ -166,6 +168,7 @@ class Episode {
   std::vector<Move> moves_, applied_;
   std::vector<std::vector<Measurement>> z_;
   std::vector<double> det_, min_det_;
+  std::vector<double> log_det_prior_;  // per target, of Sigma_0
   std::vector<int> best_;
   std::vector<StepObserver*> observers_;
   int num_targets_ = 0;

@@ -1,0 +1,90 @@
+// The imitation dataset (docs/learning.md, Dataset): states, not images. One
+// SQLite file per shard, readable from Python's standard library
+// (tools/igbnet_data.py). Each episode (its world and its kept samples) is
+// written in one transaction, so a killed writer loses at most the episode
+// in flight and a resumed one skips what is done. No torch here.
+#ifndef AIA_LEARNING_DATASET_H_
+#define AIA_LEARNING_DATASET_H_
+
+#include <cstdint>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "aia/core/geometry.h"
+#include "aia/core/types.h"
+#include "aia/estimation/heatmap.h"
+
+namespace aia {
+
+inline constexpr int kDatasetFormatVersion = 1;
+
+// One episode's world: what the map is rebuilt from, and its outcome.
+struct DatasetWorld {
+  std::int64_t episode = 0;  // unique within a dataset folder
+  std::int64_t seed = 0;     // the scenario's seed for this episode
+  Vec2 size{20.0, 20.0};     // workspace, metres
+  double map_cell = 0.1;     // occupancy cell
+  double lattice_step = 0.5;
+  double robot_radius = 0.15;
+  double eps = 0.1;
+  int robots = 0;
+  int targets = 0;
+  int steps = 0;      // decision steps the episode ran
+  int flowtime = -1;  // -1: no success
+  std::vector<Box> obstacles;
+  std::vector<double> log_det_prior;  // per target
+};
+
+// One robot at one decision step.
+struct DatasetSample {
+  std::int64_t episode = 0;
+  int step = 0;
+  int robot = 0;
+  Vec2 position{0.0, 0.0};
+  std::vector<Vec2> neighbours;     // this step's neighbours' positions
+  std::vector<HeatSource> targets;  // the robot's own fused belief
+  Move label = Move::kStay;         // the expert's move from this state
+  bool useful = true;  // the robot still had useful work in the expert's plan
+  Move acted = Move::kStay;  // what the acting policy did
+  int world = -1;            // index into Dataset::worlds (set when read)
+};
+
+struct Dataset {
+  std::vector<DatasetWorld> worlds;    // by (file, episode)
+  std::vector<DatasetSample> samples;  // by (world, step, robot)
+};
+
+class DatasetWriter {
+ public:
+  // Opens or creates the SQLite file `path`. `recipe` describes how the
+  // episodes are made; a file written with another recipe is refused
+  // (InputError naming `key`).
+  DatasetWriter(const std::string& path, const std::string& recipe,
+                const std::string& key);
+  ~DatasetWriter();
+  DatasetWriter(const DatasetWriter&) = delete;
+  DatasetWriter& operator=(const DatasetWriter&) = delete;
+
+  // Episodes already written.
+  const std::set<std::int64_t>& done() const { return done_; }
+  // The world and its samples, in one transaction.
+  void WriteEpisode(const DatasetWorld& world,
+                    const std::vector<DatasetSample>& samples);
+
+ private:
+  struct Db;
+  std::unique_ptr<Db> db_;
+  std::set<std::int64_t> done_;
+};
+
+// Reads every `*.sqlite` file of each folder (or each file given), sorted by
+// name. A missing folder, an empty one, or a file that is not a dataset of
+// this format is an InputError naming `key`.
+Dataset ReadDataset(const std::vector<std::string>& paths,
+                    const std::string& key);
+
+}  // namespace aia
+
+#endif  // AIA_LEARNING_DATASET_H_

@@ -1,0 +1,64 @@
+// The `igbnet` policy (docs/learning.md): robot i's move from its own fused
+// belief, its neighbours' positions in this step's graph and the map only.
+// Each step renders every active robot's channels (learning/channels.h),
+// runs one batched forward for the team and takes each robot's most
+// probable valid move. The model is loaded once per process (shared by
+// every episode and thread that uses the same file).
+#ifndef AIA_LEARNING_IGBNET_POLICY_H_
+#define AIA_LEARNING_IGBNET_POLICY_H_
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "aia/learning/channels.h"
+#include "aia/learning/network.h"
+#include "aia/planning/policy.h"
+#include "aia/planning/registry.h"
+
+namespace aia {
+
+// Where `policy.model` points when a scenario does not say: models/igbnet.pt
+// under the working folder if it is there, else under the source tree.
+std::string DefaultModelPath();
+
+// The model at `path`, loaded once per process; errors as IgbNet::Load.
+std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
+                                            const std::string& error_file,
+                                            int error_line,
+                                            const std::string& key);
+
+class IgbNetPolicy : public Policy {
+ public:
+  explicit IgbNetPolicy(std::shared_ptr<const IgbNet> net);
+  std::string_view name() const override { return "igbnet"; }
+  void Reset(const Map& map, int num_robots, int num_targets,
+             std::uint64_t seed) override;
+  PolicyStatus Decide(const DecisionContext& ctx,
+                      std::vector<Move>* moves) override;
+  // The last step's logits, robot-major (4 per robot; zero for inactive
+  // robots), for tools and tests.
+  const std::vector<float>& logits() const { return logits_; }
+
+ private:
+  std::shared_ptr<const IgbNet> net_;
+  std::optional<ChannelRenderer> renderer_;
+  std::vector<float> images_, batch_logits_, logits_;
+  std::vector<int> rows_;
+  std::vector<Vec2> neighbours_;
+  std::vector<HeatSource> sources_;
+  std::vector<double> no_prior_;
+};
+
+// The robot's images for a context: the same rendering the policy does,
+// for the dataset tools (`images` sized to rows.size() * ImageSize()).
+void RenderRobots(const DecisionContext& ctx, const std::vector<int>& rows,
+                  ChannelRenderer* renderer, std::vector<float>* images);
+
+// Adds `igbnet` to a registry.
+void AddLearnedPolicies(PolicyRegistry* registry);
+
+}  // namespace aia
+
+#endif  // AIA_LEARNING_IGBNET_POLICY_H_

@@ -1,0 +1,78 @@
+// `aia train` (docs/learning.md, Training): imitation of the expert by
+// cross-entropy on the dataset's labels, channels rendered as batches are
+// drawn. A checkpoint (model, optimizer, epoch) every epoch, so that a killed
+// run resumes where it stopped (--resume) and gives the same numbers; a CSV
+// log of loss and accuracy per epoch. torch stays in src/learning.
+#ifndef AIA_LEARNING_TRAINER_H_
+#define AIA_LEARNING_TRAINER_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "aia/learning/network.h"
+
+namespace aia {
+
+struct TrainOptions {
+  std::vector<std::string> data;  // dataset folders or files
+  std::string out = "models/igbnet.pt";
+  std::string init;  // start from this model (DAgger rounds); empty: fresh
+  NetworkConfig network;
+  int epochs = 20;
+  int batch = 16;
+  double lr = 1e-4;      // cosine from lr to lr_min over all epochs
+  double lr_min = 1e-6;
+  double weight_decay = 1e-5;
+  // Weight of the samples whose robot had no useful work left in the
+  // expert's plan (weak labels): 1 keeps them as they are, 0 masks them.
+  double weak_weight = 1.0;
+  double val_share = 0.1;  // of the worlds, held out for validation
+  std::uint64_t seed = 1;
+  int threads = 0;  // libtorch intra-op threads; 0: all cores
+  bool resume = false;
+  bool progress = true;
+  // For tests of --resume: return after this many epochs of this run, as a
+  // killed run would (0: run them all).
+  int stop_after_epochs = 0;
+};
+
+struct EpochLog {
+  int epoch = 0;  // 1-based
+  double lr = 0.0;  // at the epoch's end
+  double train_loss = 0.0, train_acc = 0.0;
+  double val_loss = 0.0, val_acc = 0.0;
+  double val_acc_useful = 0.0;  // on the validation samples with useful work
+  long samples = 0;             // training samples seen in the epoch
+  double seconds = 0.0;         // wall time of the epoch
+};
+
+// Where the checkpoint and the log go: OUT.ckpt and OUT minus ".pt" plus
+// ".train.csv".
+std::string CheckpointPath(const std::string& out);
+std::string TrainLogPath(const std::string& out);
+
+// Trains and writes the model after every epoch. Bad options or data are an
+// InputError naming the flag.
+std::vector<EpochLog> Train(const TrainOptions& options);
+
+// The validation accuracy of a saved model on a dataset's held-out worlds
+// (the same split as Train with `val_share` and `seed`), for comparisons.
+struct ValidationResult {
+  double loss = 0.0, acc = 0.0, acc_useful = 0.0;
+  long samples = 0;
+};
+ValidationResult Validate(const std::string& model,
+                          const std::vector<std::string>& data,
+                          double val_share, std::uint64_t seed);
+
+// Samples per second of the network on random images of height x width:
+// inference (evaluation mode, no gradients) at `batch`, or training steps
+// (forward, backward, Adam) at `batch`; the median of `repeats` timings of
+// `iterations` calls each, after a warm-up.
+double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,
+                           int batch, bool train, int iterations, int repeats);
+
+}  // namespace aia
+
+#endif  // AIA_LEARNING_TRAINER_H_

@@ -1,0 +1,45 @@
+// `aia dataset` (docs/learning.md, Dataset): the paper's recipe for
+// imitation data. Episode e runs on the generated world of seed
+// first_seed + e (runtime/eval.h, GeneratedScenario) with the acting policy
+// (the expert; the learned policy for DAgger rounds), its beliefs fused by
+// the DKF as in any mission; a shadow expert labels every robot's state
+// with the expert's move from it (for the expert itself, its own moves);
+// `keep` random decision steps of each episode are kept. Episodes are split
+// over shards (e % shards == shard), each shard one SQLite file in the
+// folder, one transaction per episode: a killed run resumes where it
+// stopped and loses at most the episode in flight.
+#ifndef AIA_RUNTIME_DATASET_COMMAND_H_
+#define AIA_RUNTIME_DATASET_COMMAND_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace aia {
+
+struct DatasetOptions {
+  std::string out;  // folder
+  int episodes = 1500;
+  int shard = 0, shards = 1;
+  std::string size = "10x10";             // robots x targets
+  std::uint64_t first_seed = 1000000;     // far from aia eval's seeds
+  int keep = 10;                          // decision steps kept per episode
+  std::string policy = "expert";          // the acting policy
+  std::string model;                      // its model (igbnet)
+  int max_steps = 0;                      // 0: the scenario's
+  std::vector<std::string> sets;          // --set key=value
+  bool progress = true;
+  // For tests: stop (throw) after this many decisions of the episode in
+  // flight once `stop_after_episodes` episodes were written (-1: never).
+  int stop_after_episodes = -1;
+};
+
+// Returns the number of episodes written by this run.
+int RunDataset(const DatasetOptions& options);
+
+// "K/N" -> (K, N); InputError naming --shard otherwise.
+void ParseShard(const std::string& text, int* shard, int* shards);
+
+}  // namespace aia
+
+#endif  // AIA_RUNTIME_DATASET_COMMAND_H_

@@ -1,0 +1,136 @@
+#include "aia/learning/igbnet_policy.h"
+
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <mutex>
+
+#include "aia/core/check.h"
+#include "aia/core/error.h"
+
+#ifndef AIA_SOURCE_DIR
+#define AIA_SOURCE_DIR "."
+#endif
+
+namespace aia {
+
+std::string DefaultModelPath() {
+  std::error_code ec;
+  const std::filesystem::path here = "models/igbnet.pt";
+  if (std::filesystem::is_regular_file(here, ec)) return here.string();
+  return (std::filesystem::path(AIA_SOURCE_DIR) / here).string();
+}
+
+std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
+                                            const std::string& error_file,
+                                            int error_line,
+                                            const std::string& key) {
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const IgbNet>> cache;
+  std::error_code ec;
+  std::string id = std::filesystem::weakly_canonical(path, ec).string();
+  if (ec) id = path;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto it = cache.find(id);
+  if (it != cache.end()) return it->second;
+  std::shared_ptr<const IgbNet> net =
+      IgbNet::Load(path, error_file, error_line, key);
+  cache.emplace(id, net);
+  return net;
+}
+
+void RenderRobots(const DecisionContext& ctx, const std::vector<int>& rows,
+                  ChannelRenderer* renderer, std::vector<float>* images) {
+  const Lattice& lattice = ctx.map->lattice();
+  const std::size_t size = renderer->ImageSize();
+  images->resize(rows.size() * size);
+  std::vector<Vec2> neighbours;
+  std::vector<HeatSource> sources;
+  std::vector<double> zeros;
+  const std::vector<double>* prior = ctx.log_det_prior;
+  if (!prior) {
+    zeros.assign(ctx.beliefs->layout().num_targets(), 0.0);
+    prior = &zeros;
+  }
+  for (std::size_t b = 0; b < rows.size(); ++b) {
+    const int i = rows[b];
+    neighbours.clear();
+    for (int j : ctx.comm->Neighbors(i))
+      if (j != i) neighbours.push_back(lattice.Point((*ctx.positions)[j]));
+    HeatSources(*ctx.beliefs, i, &sources);
+    renderer->Render(lattice.Point((*ctx.positions)[i]), neighbours, sources,
+                     *prior, ctx.eps, images->data() + b * size);
+  }
+}
+
+IgbNetPolicy::IgbNetPolicy(std::shared_ptr<const IgbNet> net)
+    : net_(std::move(net)) {
+  AIA_CHECK(net_ != nullptr);
+}
+
+void IgbNetPolicy::Reset(const Map& map, int num_robots, int /*num_targets*/,
+                         std::uint64_t /*seed*/) {
+  renderer_.emplace(map.occupancy(), map.size(), net_->config().channels);
+  logits_.assign(static_cast<std::size_t>(num_robots) * kNumMoves, 0.0f);
+}
+
+PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
+                                  std::vector<Move>* moves) {
+  AIA_CHECK_MSG(renderer_.has_value(), "Reset() before Decide()");
+  const Lattice& lattice = ctx.map->lattice();
+  const int n = static_cast<int>(moves->size());
+  rows_.clear();
+  for (int i = 0; i < n; ++i)
+    if (ctx.comm->Active(i)) rows_.push_back(i);
+  RenderRobots(ctx, rows_, &*renderer_, &images_);
+  batch_logits_.resize(rows_.size() * kNumMoves);
+  net_->Forward(images_.data(), static_cast<int>(rows_.size()),
+                renderer_->height(), renderer_->width(), batch_logits_.data());
+  logits_.assign(static_cast<std::size_t>(n) * kNumMoves, 0.0f);
+  PolicyStatus status = PolicyStatus::kOk;
+  for (int i = 0; i < n; ++i) (*moves)[i] = Move::kStay;
+  for (std::size_t b = 0; b < rows_.size(); ++b) {
+    const int i = rows_[b];
+    const float* l = batch_logits_.data() + b * kNumMoves;
+    std::copy(l, l + kNumMoves, logits_.data() + i * kNumMoves);
+    // The most probable valid move (ties to the lower move index).
+    int best = -1;
+    float best_logit = -std::numeric_limits<float>::infinity();
+    for (int a = 0; a < kNumMoves; ++a) {
+      if (!lattice.Valid((*ctx.positions)[i], static_cast<Move>(a))) continue;
+      if (best < 0 || l[a] > best_logit) {
+        best = a;
+        best_logit = l[a];
+      }
+    }
+    if (best < 0) {
+      status = PolicyStatus::kNoValidMove;
+      continue;
+    }
+    (*moves)[i] = static_cast<Move>(best);
+  }
+  return status;
+}
+
+void AddLearnedPolicies(PolicyRegistry* registry) {
+  registry->Add<NoParams, IgbNet>(
+      "igbnet",
+      "I-GBNet, the paper's graph network trained by imitation of the expert "
+      "(docs/learning.md); each robot decides from its own belief, its "
+      "neighbours' positions and the map; the model is policy.model (default "
+      "models/igbnet.pt)",
+      false,
+      [](const NoParams&, const Scenario& s) {
+        const bool given = !s.policy.model.empty();
+        const std::string path =
+            given ? s.policy.model : DefaultModelPath();
+        return LoadModelOnce(path, s.ErrorFile(),
+                             given ? s.LineOf("policy.model") : 0,
+                             given ? "policy.model" : "policy.model (default)");
+      },
+      [](const NoParams&, std::shared_ptr<const IgbNet> net) {
+        return std::make_unique<IgbNetPolicy>(std::move(net));
+      });
+}
+
+}  // namespace aia

@@ -1,0 +1,222 @@
+#include "aia/learning/network.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <vector>
+
+#include "aia/core/check.h"
+#include "aia/core/error.h"
+#include "network_impl.h"
+
+namespace aia {
+namespace {
+
+constexpr const char* kFormat = "aia-igbnet";
+constexpr int kVersion = 1;
+constexpr const char* kMetaKey = "aia_meta";
+
+}  // namespace
+
+std::string NetworkConfig::ToJson() const {
+  nlohmann::json j;
+  j["format"] = kFormat;
+  j["version"] = kVersion;
+  j["frame"] = std::string(ChannelFrameName(channels.frame));
+  j["cell"] = channels.cell;
+  j["window"] = channels.window;
+  j["blur"] = channels.blur;
+  j["cutoff"] = channels.cutoff;
+  j["width"] = width;
+  j["stem_stride"] = stem_stride;
+  j["pool"] = pool;
+  j["hidden"] = hidden;
+  return j.dump();
+}
+
+NetworkConfig NetworkConfig::FromJson(const std::string& text) {
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    throw std::runtime_error("its metadata is not JSON");
+  if (j.value("format", "") != kFormat)
+    throw std::runtime_error("not an aia I-GBNet model");
+  if (j.value("version", -1) != kVersion)
+    throw std::runtime_error("model format version " +
+                             std::to_string(j.value("version", -1)) +
+                             ", this build reads " + std::to_string(kVersion));
+  NetworkConfig c;
+  try {
+    if (!ParseChannelFrame(j.at("frame").get<std::string>(), &c.channels.frame))
+      throw std::runtime_error("unknown frame");
+    c.channels.cell = j.at("cell").get<double>();
+    c.channels.window = j.at("window").get<int>();
+    c.channels.blur = j.at("blur").get<double>();
+    c.channels.cutoff = j.at("cutoff").get<double>();
+    c.width = j.at("width").get<int>();
+    c.stem_stride = j.at("stem_stride").get<int>();
+    c.pool = j.at("pool").get<int>();
+    c.hidden = j.at("hidden").get<int>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(std::string("metadata: ") + e.what());
+  }
+  const bool ok = std::isfinite(c.channels.cell) && c.channels.cell > 0.0 &&
+                  c.channels.window >= 1 && c.channels.window <= 4096 &&
+                  std::isfinite(c.channels.blur) && c.channels.blur >= 0.0 &&
+                  std::isfinite(c.channels.cutoff) &&
+                  c.channels.cutoff > 0.0 && c.width >= 1 &&
+                  c.width <= 1024 && c.stem_stride >= 1 &&
+                  c.stem_stride <= 8 && c.pool >= 1 && c.pool <= 64 &&
+                  c.hidden >= 1 && c.hidden <= 65536;
+  if (!ok) throw std::runtime_error("metadata out of range");
+  return c;
+}
+
+ResidualBlockImpl::ResidualBlockImpl(int width) {
+  namespace nn = torch::nn;
+  const auto conv = [width] {
+    return nn::Conv2d(
+        nn::Conv2dOptions(width, width, 3).padding(1).bias(false));
+  };
+  conv1 = register_module("conv1", conv());
+  bn1 = register_module("bn1", nn::BatchNorm2d(width));
+  conv2 = register_module("conv2", conv());
+  bn2 = register_module("bn2", nn::BatchNorm2d(width));
+}
+
+torch::Tensor ResidualBlockImpl::forward(const torch::Tensor& x) {
+  torch::Tensor y = torch::relu(bn1(conv1(x)));
+  y = bn2(conv2(y));
+  return torch::relu(y + x);
+}
+
+IgbNetModuleImpl::IgbNetModuleImpl(const NetworkConfig& c) {
+  namespace nn = torch::nn;
+  stem = register_module(
+      "stem", nn::Conv2d(nn::Conv2dOptions(kNumChannels, c.width, 3)
+                             .stride(c.stem_stride)
+                             .padding(1)
+                             .bias(false)));
+  stem_bn = register_module("stem_bn", nn::BatchNorm2d(c.width));
+  blocks = register_module("blocks", nn::ModuleList());
+  for (int i = 0; i < 3; ++i) blocks->push_back(ResidualBlock(c.width));
+  pool = register_module(
+      "pool", nn::AdaptiveAvgPool2d(nn::AdaptiveAvgPool2dOptions(c.pool)));
+  fc1 = register_module("fc1", nn::Linear(c.width * c.pool * c.pool, c.hidden));
+  fc2 = register_module("fc2", nn::Linear(c.hidden, kNumMoves));
+}
+
+torch::Tensor IgbNetModuleImpl::forward(const torch::Tensor& input) {
+  torch::Tensor x = torch::relu(stem_bn(stem(input)));
+  for (const auto& block : *blocks) x = block->as<ResidualBlock>()->forward(x);
+  x = pool(x).flatten(1);
+  return fc2(torch::relu(fc1(x)));
+}
+
+IgbNet::IgbNet() : impl_(std::make_unique<Impl>()) {}
+
+IgbNet::IgbNet(const NetworkConfig& config, std::uint64_t seed) : IgbNet() {
+  torch::manual_seed(seed);
+  impl_->config = config;
+  impl_->module = IgbNetModule(config);
+  impl_->module->eval();
+}
+
+IgbNet::~IgbNet() = default;
+
+const NetworkConfig& IgbNet::config() const { return impl_->config; }
+
+std::int64_t IgbNet::NumParameters() const {
+  std::int64_t n = 0;
+  for (const auto& p : impl_->module->parameters()) n += p.numel();
+  return n;
+}
+
+std::unique_ptr<IgbNet> IgbNet::Load(const std::string& path,
+                                     const std::string& error_file,
+                                     int error_line, const std::string& key) {
+  const auto fail = [&](const std::string& what) {
+    return InputError(error_file, error_line, key, "'" + path + "': " + what);
+  };
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw fail("no such model file (train one with `aia train`)");
+  std::unique_ptr<IgbNet> net(new IgbNet());
+  try {
+    torch::serialize::InputArchive archive;
+    archive.load_from(path);
+    torch::Tensor meta;
+    if (!archive.try_read(kMetaKey, meta, /*is_buffer=*/true))
+      throw std::runtime_error("not an aia I-GBNet model (no metadata)");
+    meta = meta.to(torch::kUInt8).contiguous();
+    const std::string json(reinterpret_cast<const char*>(meta.data_ptr()),
+                           meta.numel());
+    net->impl_->config = NetworkConfig::FromJson(json);
+    net->impl_->module = IgbNetModule(net->impl_->config);
+    // Loading replaces tensors whatever their shape: check them after.
+    std::vector<std::pair<std::string, std::vector<int64_t>>> shapes;
+    for (const auto& p : net->impl_->module->named_parameters())
+      shapes.emplace_back(p.key(), p.value().sizes().vec());
+    for (const auto& b : net->impl_->module->named_buffers())
+      shapes.emplace_back(b.key(), b.value().sizes().vec());
+    net->impl_->module->load(archive);
+    auto params = net->impl_->module->named_parameters();
+    auto buffers = net->impl_->module->named_buffers();
+    for (const auto& [name, shape] : shapes) {
+      const torch::Tensor* t = params.find(name);
+      if (!t) t = buffers.find(name);
+      if (!t || t->sizes().vec() != shape)
+        throw std::runtime_error("tensor '" + name +
+                                 "' does not match the model's metadata");
+      if (t->is_floating_point() && !torch::isfinite(*t).all().item<bool>())
+        throw std::runtime_error("tensor '" + name + "' is not finite");
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const c10::Error& e) {
+    std::string what = e.what_without_backtrace();
+    const auto nl = what.find('\n');
+    if (nl != std::string::npos) what.resize(nl);
+    throw fail("not a readable model (" + what + ")");
+  } catch (const std::exception& e) {
+    throw fail(e.what());
+  }
+  net->impl_->module->eval();
+  return net;
+}
+
+void IgbNet::Save(const std::string& path) const {
+  torch::serialize::OutputArchive archive;
+  impl_->module->save(archive);
+  const std::string json = impl_->config.ToJson();
+  torch::Tensor meta = torch::empty({static_cast<int64_t>(json.size())},
+                                    torch::kUInt8);
+  std::memcpy(meta.data_ptr(), json.data(), json.size());
+  archive.write(kMetaKey, meta, /*is_buffer=*/true);
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  archive.save_to(tmp);
+  std::filesystem::rename(tmp, path);
+}
+
+void IgbNet::Forward(const float* images, int batch, int height, int width,
+                     float* logits) const {
+  AIA_CHECK(batch >= 0 && height > 0 && width > 0);
+  if (batch == 0) return;
+  torch::NoGradGuard no_grad;
+  const torch::Tensor x = torch::from_blob(
+      const_cast<float*>(images), {batch, kNumChannels, height, width},
+      torch::kFloat32);
+  const torch::Tensor y = impl_->module->forward(x).contiguous();
+  std::memcpy(logits, y.data_ptr<float>(),
+              sizeof(float) * static_cast<std::size_t>(batch) * kNumMoves);
+}
+
+void SetInferenceThreads(int threads) {
+  if (threads > 0) torch::set_num_threads(threads);
+}
+
+int InferenceThreads() { return torch::get_num_threads(); }
+
+}  // namespace aia

@@ -1,0 +1,444 @@
+#include "aia/learning/trainer.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <numeric>
+#include <sstream>
+
+#include "aia/core/error.h"
+#include "aia/core/io.h"
+#include "aia/core/rng.h"
+#include "aia/learning/dataset.h"
+#include "aia/world/map.h"
+#include "network_impl.h"
+
+namespace aia {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The dataset with one channel renderer per world.
+struct Corpus {
+  Dataset data;
+  std::vector<ChannelRenderer> renderers;
+  std::vector<char> val_world;
+  std::vector<int> train, val;  // sample indices
+};
+
+Corpus LoadCorpus(const std::vector<std::string>& paths,
+                  const ChannelParams& channels, double val_share,
+                  std::uint64_t seed, double weak_weight) {
+  Corpus c;
+  c.data = ReadDataset(paths, "--data");
+  if (c.data.samples.empty())
+    throw InputError("command line", 0, "--data", "holds no samples");
+  c.renderers.reserve(c.data.worlds.size());
+  for (const DatasetWorld& w : c.data.worlds) {
+    const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
+                  w.robot_radius);
+    c.renderers.emplace_back(map.occupancy(), w.size, channels);
+    // The split is by world: a world's samples all go one way.
+    Rng rng(seed, "train/split", static_cast<std::uint64_t>(w.seed));
+    c.val_world.push_back(rng.Uniform() < val_share ? 1 : 0);
+  }
+  for (int i = 0; i < static_cast<int>(c.data.samples.size()); ++i) {
+    const DatasetSample& s = c.data.samples[i];
+    if (c.val_world[s.world]) {
+      c.val.push_back(i);
+    } else if (s.useful || weak_weight > 0.0) {
+      c.train.push_back(i);
+    }
+  }
+  return c;
+}
+
+// Renders samples idx[first, first + n) into `images`, labels and weights.
+void MakeBatch(Corpus* c, const std::vector<int>& idx, std::size_t first,
+               int n, double weak_weight, int* height, int* width,
+               std::vector<float>* images, std::vector<int64_t>* labels,
+               std::vector<float>* weights, std::vector<char>* useful) {
+  const ChannelRenderer& r0 =
+      c->renderers[c->data.samples[idx[first]].world];
+  *height = r0.height();
+  *width = r0.width();
+  const std::size_t size = r0.ImageSize();
+  images->resize(size * n);
+  labels->resize(n);
+  weights->resize(n);
+  useful->resize(n);
+  for (int b = 0; b < n; ++b) {
+    const DatasetSample& s = c->data.samples[idx[first + b]];
+    ChannelRenderer& r = c->renderers[s.world];
+    if (r.height() != *height || r.width() != *width)
+      throw InputError("command line", 0, "--data",
+                       "worlds of different sizes in the global frame; use "
+                       "--frame centred or one workspace size");
+    const DatasetWorld& w = c->data.worlds[s.world];
+    r.Render(s.position, s.neighbours, s.targets, w.log_det_prior, w.eps,
+             images->data() + b * size);
+    (*labels)[b] = static_cast<int64_t>(s.label);
+    (*weights)[b] = s.useful ? 1.0f : static_cast<float>(weak_weight);
+    (*useful)[b] = s.useful;
+  }
+}
+
+ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
+  ValidationResult r;
+  if (c->val.empty()) return r;
+  module->eval();
+  torch::NoGradGuard no_grad;
+  std::vector<float> images, weights;
+  std::vector<int64_t> labels;
+  std::vector<char> useful;
+  long useful_n = 0, useful_right = 0, right = 0;
+  double loss = 0.0;
+  constexpr int kBatch = 128;
+  for (std::size_t first = 0; first < c->val.size(); first += kBatch) {
+    const int n = static_cast<int>(
+        std::min<std::size_t>(kBatch, c->val.size() - first));
+    int h = 0, w = 0;
+    MakeBatch(c, c->val, first, n, 1.0, &h, &w, &images, &labels, &weights,
+              &useful);
+    const torch::Tensor x =
+        torch::from_blob(images.data(), {n, kNumChannels, h, w});
+    const torch::Tensor y = torch::from_blob(labels.data(), {n}, torch::kInt64);
+    const torch::Tensor logits = module->forward(x);
+    loss += torch::nn::functional::cross_entropy(
+                logits, y,
+                torch::nn::functional::CrossEntropyFuncOptions().reduction(
+                    torch::kSum))
+                .item<double>();
+    const torch::Tensor pred = logits.argmax(1);
+    const auto* p = pred.data_ptr<int64_t>();
+    for (int b = 0; b < n; ++b) {
+      const bool ok = p[b] == labels[b];
+      right += ok;
+      if (useful[b]) {
+        ++useful_n;
+        useful_right += ok;
+      }
+    }
+  }
+  r.samples = static_cast<long>(c->val.size());
+  r.loss = loss / r.samples;
+  r.acc = static_cast<double>(right) / r.samples;
+  r.acc_useful = useful_n ? static_cast<double>(useful_right) / useful_n : 0.0;
+  return r;
+}
+
+std::string OptionsKey(const TrainOptions& o) {
+  std::ostringstream s;
+  s.precision(17);
+  s << o.network.ToJson() << " epochs=" << o.epochs << " batch=" << o.batch
+    << " lr=" << o.lr << " lr_min=" << o.lr_min
+    << " weight_decay=" << o.weight_decay << " weak_weight=" << o.weak_weight
+    << " val_share=" << o.val_share << " seed=" << o.seed
+    << " init=" << o.init;
+  for (const std::string& d : o.data) s << " data=" << d;
+  return s.str();
+}
+
+torch::Tensor StringTensor(const std::string& text) {
+  torch::Tensor t =
+      torch::empty({static_cast<int64_t>(text.size())}, torch::kUInt8);
+  std::memcpy(t.data_ptr(), text.data(), text.size());
+  return t;
+}
+
+std::string TensorString(torch::Tensor t) {
+  t = t.to(torch::kUInt8).contiguous();
+  return std::string(reinterpret_cast<const char*>(t.data_ptr()), t.numel());
+}
+
+constexpr const char* kLogHeader =
+    "epoch,lr,train_loss,train_acc,val_loss,val_acc,val_acc_useful,samples,"
+    "seconds\n";
+
+std::string LogLine(const EpochLog& e) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%d,%.6g,%.6f,%.6f,%.6f,%.6f,%.6f,%ld,%.2f\n",
+                e.epoch, e.lr, e.train_loss, e.train_acc, e.val_loss, e.val_acc,
+                e.val_acc_useful, e.samples, e.seconds);
+  return buf;
+}
+
+void CheckOptions(const TrainOptions& o) {
+  const auto bad = [](const std::string& flag, const std::string& what) {
+    return InputError("command line", 0, flag, what);
+  };
+  if (o.out.empty()) throw bad("--out", "is required");
+  if (o.epochs < 1 || o.epochs > 100000) throw bad("--epochs", "must be 1..100000");
+  if (o.batch < 1 || o.batch > 65536) throw bad("--batch", "must be 1..65536");
+  if (!(o.lr > 0.0 && o.lr < 1.0)) throw bad("--lr", "must be in (0, 1)");
+  if (!(o.lr_min >= 0.0 && o.lr_min <= o.lr))
+    throw bad("--lr-min", "must be in [0, --lr]");
+  if (!(o.weight_decay >= 0.0 && o.weight_decay < 1.0))
+    throw bad("--weight-decay", "must be in [0, 1)");
+  if (!(o.weak_weight >= 0.0 && o.weak_weight <= 1.0))
+    throw bad("--weak-weight", "must be in [0, 1]");
+  if (!(o.val_share >= 0.0 && o.val_share < 1.0))
+    throw bad("--val-share", "must be in [0, 1)");
+  if (o.threads < 0 || o.threads > 1024) throw bad("--threads", "must be 0..1024");
+  const ChannelParams& c = o.network.channels;
+  if (!(c.cell >= 0.05 && c.cell <= 10.0)) throw bad("--cell", "must be 0.05..10 m");
+  if (c.window < 4 || c.window > 512) throw bad("--window", "must be 4..512");
+  if (o.network.width < 1 || o.network.width > 512)
+    throw bad("--width", "must be 1..512");
+  if (o.network.stem_stride < 1 || o.network.stem_stride > 4)
+    throw bad("--stem-stride", "must be 1..4");
+  if (o.network.pool < 1 || o.network.pool > 32) throw bad("--pool", "must be 1..32");
+}
+
+}  // namespace
+
+std::string CheckpointPath(const std::string& out) { return out + ".ckpt"; }
+
+std::string TrainLogPath(const std::string& out) {
+  std::string base = out;
+  if (base.size() > 3 && base.compare(base.size() - 3, 3, ".pt") == 0)
+    base.resize(base.size() - 3);
+  return base + ".train.csv";
+}
+
+std::vector<EpochLog> Train(const TrainOptions& options) {
+  TrainOptions o = options;
+  CheckOptions(o);
+  if (o.threads > 0) torch::set_num_threads(o.threads);
+
+  // The network: from --init (its architecture and channels), or fresh.
+  std::unique_ptr<IgbNet> net;
+  if (!o.init.empty()) {
+    net = IgbNet::Load(o.init, "command line", 0, "--init");
+    o.network = net->config();
+  } else {
+    net = std::make_unique<IgbNet>(o.network, o.seed);
+  }
+  IgbNetModule& module = net->impl().module;
+  torch::optim::Adam optimizer(
+      module->parameters(),
+      torch::optim::AdamOptions(o.lr).weight_decay(o.weight_decay));
+
+  const std::string ckpt = CheckpointPath(o.out);
+  const std::string key = OptionsKey(o);
+  int start = 0;
+  std::vector<EpochLog> logs;
+  std::error_code ec;
+  if (o.resume && std::filesystem::is_regular_file(ckpt, ec)) {
+    try {
+      torch::serialize::InputArchive archive, model_archive, optim_archive;
+      archive.load_from(ckpt);
+      torch::Tensor t;
+      archive.read("options", t, true);
+      if (TensorString(t) != key)
+        throw InputError(ckpt, 0, "--resume",
+                         "was written with other options; run without "
+                         "--resume or with the same options");
+      archive.read("epoch", t, true);
+      start = static_cast<int>(t.item<int64_t>());
+      archive.read("model", model_archive);
+      archive.read("optimizer", optim_archive);
+      module->load(model_archive);
+      optimizer.load(optim_archive);
+      archive.read("log", t, true);
+      std::istringstream in(TensorString(t));
+      EpochLog e;
+      while (in >> e.epoch >> e.lr >> e.train_loss >> e.train_acc >>
+             e.val_loss >> e.val_acc >> e.val_acc_useful >> e.samples >>
+             e.seconds)
+        logs.push_back(e);
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InputError(ckpt, 0, "--resume",
+                       std::string("cannot read the checkpoint: ") + e.what());
+    }
+  }
+  if (start >= o.epochs) return logs;
+
+  Corpus corpus = LoadCorpus(o.data, o.network.channels, o.val_share, o.seed,
+                             o.weak_weight);
+  if (corpus.train.empty())
+    throw InputError("command line", 0, "--data",
+                     "leaves no training samples after the split");
+  if (o.progress)
+    std::fprintf(stderr,
+                 "[train] %zu worlds, %zu samples: %zu for training, %zu held "
+                 "out (%zu worlds); %lld parameters\n",
+                 corpus.data.worlds.size(), corpus.data.samples.size(),
+                 corpus.train.size(), corpus.val.size(),
+                 static_cast<std::size_t>(std::count(
+                     corpus.val_world.begin(), corpus.val_world.end(), 1)),
+                 static_cast<long long>(net->NumParameters()));
+
+  const long steps_per_epoch =
+      (static_cast<long>(corpus.train.size()) + o.batch - 1) / o.batch;
+  const long total_steps = steps_per_epoch * o.epochs;
+  const auto lr_at = [&](long step) {
+    return o.lr_min + 0.5 * (o.lr - o.lr_min) *
+                          (1.0 + std::cos(M_PI * static_cast<double>(step) /
+                                          static_cast<double>(total_steps)));
+  };
+
+  std::vector<float> images, weights;
+  std::vector<int64_t> labels;
+  std::vector<char> useful;
+  for (int epoch = start; epoch < o.epochs; ++epoch) {
+    if (o.stop_after_epochs > 0 && epoch - start >= o.stop_after_epochs) break;
+    const auto t0 = Clock::now();
+    std::vector<int> order = corpus.train;
+    Rng rng(o.seed, "train/shuffle", static_cast<std::uint64_t>(epoch));
+    for (std::size_t i = order.size(); i > 1; --i)
+      std::swap(order[i - 1], order[rng.UniformInt(i)]);
+    module->train();
+    double loss_sum = 0.0, weight_sum = 0.0;
+    long right = 0, seen = 0;
+    double lr = o.lr;
+    for (long s = 0; s < steps_per_epoch; ++s) {
+      const std::size_t first = static_cast<std::size_t>(s) * o.batch;
+      const int n = static_cast<int>(
+          std::min<std::size_t>(o.batch, order.size() - first));
+      if (n < 2) break;  // batch norm needs two samples
+      int h = 0, w = 0;
+      MakeBatch(&corpus, order, first, n, o.weak_weight, &h, &w, &images,
+                &labels, &weights, &useful);
+      lr = lr_at(epoch * steps_per_epoch + s);
+      for (auto& group : optimizer.param_groups())
+        static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+      const torch::Tensor x =
+          torch::from_blob(images.data(), {n, kNumChannels, h, w});
+      const torch::Tensor y =
+          torch::from_blob(labels.data(), {n}, torch::kInt64);
+      const torch::Tensor wt = torch::from_blob(weights.data(), {n});
+      const torch::Tensor logits = module->forward(x);
+      const torch::Tensor per = torch::nn::functional::cross_entropy(
+          logits, y,
+          torch::nn::functional::CrossEntropyFuncOptions().reduction(
+              torch::kNone));
+      const double wsum = wt.sum().item<double>();
+      if (wsum <= 0.0) continue;
+      const torch::Tensor loss = (per * wt).sum() / wsum;
+      optimizer.zero_grad();
+      loss.backward();
+      optimizer.step();
+      loss_sum += loss.item<double>() * wsum;
+      weight_sum += wsum;
+      const torch::Tensor pred = logits.argmax(1);
+      right += (pred == y).sum().item<int64_t>();
+      seen += n;
+      if (o.progress && isatty(2) && (s % 50 == 0 || s + 1 == steps_per_epoch))
+        std::fprintf(stderr,
+                     "\r[train] epoch %d/%d  batch %ld/%ld  loss %.4f  acc "
+                     "%.3f  %.0f samples/s   ",
+                     epoch + 1, o.epochs, s + 1, steps_per_epoch,
+                     loss_sum / std::max(weight_sum, 1e-12),
+                     static_cast<double>(right) / std::max(seen, 1L),
+                     seen / std::max(Seconds(t0), 1e-9));
+    }
+    EpochLog e;
+    e.epoch = epoch + 1;
+    e.lr = lr;
+    e.train_loss = loss_sum / std::max(weight_sum, 1e-12);
+    e.train_acc = static_cast<double>(right) / std::max(seen, 1L);
+    e.samples = seen;
+    const ValidationResult v = Evaluate(module, &corpus);
+    e.val_loss = v.loss;
+    e.val_acc = v.acc;
+    e.val_acc_useful = v.acc_useful;
+    e.seconds = Seconds(t0);
+    logs.push_back(e);
+    module->eval();
+
+    // Model, checkpoint and log, each written atomically.
+    std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
+    if (!parent.empty()) MakeDirs(parent.string());
+    net->Save(o.out);
+    {
+      torch::serialize::OutputArchive archive, model_archive, optim_archive;
+      module->save(model_archive);
+      optimizer.save(optim_archive);
+      archive.write("model", model_archive);
+      archive.write("optimizer", optim_archive);
+      archive.write("epoch", torch::tensor(static_cast<int64_t>(epoch + 1)),
+                    true);
+      archive.write("options", StringTensor(key), true);
+      std::ostringstream log;
+      log.precision(17);
+      for (const EpochLog& l : logs)
+        log << l.epoch << ' ' << l.lr << ' ' << l.train_loss << ' '
+            << l.train_acc << ' ' << l.val_loss << ' ' << l.val_acc << ' '
+            << l.val_acc_useful << ' ' << l.samples << ' ' << l.seconds
+            << '\n';
+      archive.write("log", StringTensor(log.str()), true);
+      const std::string tmp = ckpt + ".tmp." + std::to_string(::getpid());
+      archive.save_to(tmp);
+      std::filesystem::rename(tmp, ckpt);
+    }
+    std::string csv = kLogHeader;
+    for (const EpochLog& l : logs) csv += LogLine(l);
+    WriteFileAtomic(TrainLogPath(o.out), csv);
+    if (o.progress)
+      std::fprintf(stderr,
+                   "%s[train] epoch %d/%d: loss %.4f acc %.3f | val loss %.4f "
+                   "acc %.3f (useful %.3f) | %.0f s, %.0f samples/s\n",
+                   isatty(2) ? "\r" : "", e.epoch, o.epochs, e.train_loss,
+                   e.train_acc, e.val_loss, e.val_acc, e.val_acc_useful,
+                   e.seconds, e.samples / std::max(e.seconds, 1e-9));
+  }
+  return logs;
+}
+
+ValidationResult Validate(const std::string& model,
+                          const std::vector<std::string>& data,
+                          double val_share, std::uint64_t seed) {
+  std::unique_ptr<IgbNet> net = IgbNet::Load(model, "command line", 0, "--model");
+  Corpus corpus =
+      LoadCorpus(data, net->config().channels, val_share, seed, 1.0);
+  return Evaluate(net->impl().module, &corpus);
+}
+
+double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,
+                           int batch, bool train, int iterations,
+                           int repeats) {
+  IgbNet net(config, 1);
+  IgbNetModule& module = net.impl().module;
+  const torch::Tensor x = torch::rand({batch, kNumChannels, height, width});
+  const torch::Tensor y = torch::randint(0, kNumMoves, {batch}, torch::kInt64);
+  torch::optim::Adam optimizer(module->parameters(),
+                               torch::optim::AdamOptions(1e-4));
+  std::vector<float> images(x.numel()), logits(batch * kNumMoves);
+  std::memcpy(images.data(), x.data_ptr<float>(), images.size() * 4);
+  const auto once = [&] {
+    if (train) {
+      module->train();
+      const torch::Tensor loss =
+          torch::nn::functional::cross_entropy(module->forward(x), y);
+      optimizer.zero_grad();
+      loss.backward();
+      optimizer.step();
+    } else {
+      net.Forward(images.data(), batch, height, width, logits.data());
+    }
+  };
+  for (int i = 0; i < 3; ++i) once();
+  std::vector<double> rates;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = Clock::now();
+    for (int i = 0; i < iterations; ++i) once();
+    rates.push_back(batch * iterations / Seconds(t0));
+  }
+  std::sort(rates.begin(), rates.end());
+  return rates[rates.size() / 2];
+}
+
+}  // namespace aia

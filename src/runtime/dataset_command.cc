@@ -1,0 +1,228 @@
+#include "aia/runtime/dataset_command.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <regex>
+#include <stdexcept>
+
+#include "aia/core/error.h"
+#include "aia/core/rng.h"
+#include "aia/estimation/heatmap.h"
+#include "aia/learning/dataset.h"
+#include "aia/planning/expert.h"
+#include "aia/runtime/eval.h"
+#include "aia/runtime/mission.h"
+
+namespace aia {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Records every decision step's samples; labels them with the expert.
+class DatasetObserver : public StepObserver {
+ public:
+  DatasetObserver(ExpertPolicy* shadow, std::int64_t episode, int stop_after)
+      : shadow_(shadow), episode_(episode), stop_after_(stop_after) {}
+
+  void OnStart(const Episode& e) override {
+    if (shadow_)
+      shadow_->Reset(e.world().map, e.world().NumRobots(),
+                     e.world().NumTargets(), e.scenario().seed);
+  }
+
+  void OnDecision(const Episode& e, const DecisionContext& ctx,
+                  const Decision& d) override {
+    if (stop_after_ >= 0 && ctx.step >= stop_after_)
+      throw std::runtime_error("stopped for a test");
+    const int n = e.world().NumRobots();
+    const Lattice& lattice = ctx.map->lattice();
+    const ExpertPolicy* expert = shadow_;
+    const std::vector<Move>* labels = &d.wanted;
+    if (shadow_) {
+      labels_.assign(n, Move::kStay);
+      shadow_->Decide(ctx, &labels_);
+      labels = &labels_;
+    } else {
+      expert = dynamic_cast<const ExpertPolicy*>(&e.policy());
+    }
+    std::vector<DatasetSample> step;
+    for (int i = 0; i < n; ++i) {
+      if (!ctx.comm->Active(i) || (*labels)[i] == Move::kStay) continue;
+      DatasetSample s;
+      s.episode = episode_;
+      s.step = ctx.step;
+      s.robot = i;
+      s.position = lattice.Point((*ctx.positions)[i]);
+      for (int j : ctx.comm->Neighbors(i))
+        if (j != i) s.neighbours.push_back(lattice.Point((*ctx.positions)[j]));
+      HeatSources(*ctx.beliefs, i, &s.targets);
+      s.label = (*labels)[i];
+      s.useful = expert && expert->LastMoveUseful(i);
+      s.acted = d.wanted[i];
+      step.push_back(std::move(s));
+    }
+    steps_.push_back(std::move(step));
+  }
+
+  std::vector<std::vector<DatasetSample>>& steps() { return steps_; }
+
+ private:
+  ExpertPolicy* shadow_;
+  std::int64_t episode_;
+  int stop_after_;
+  std::vector<Move> labels_;
+  std::vector<std::vector<DatasetSample>> steps_;
+};
+
+std::string Recipe(const DatasetOptions& o) {
+  std::string r = "size=" + o.size + " first_seed=" +
+                  std::to_string(o.first_seed) + " keep=" +
+                  std::to_string(o.keep) + " policy=" + o.policy +
+                  " model=" + o.model + " max_steps=" +
+                  std::to_string(o.max_steps) + " shards=" +
+                  std::to_string(o.shards);
+  for (const std::string& s : o.sets) r += " set=" + s;
+  return r;
+}
+
+}  // namespace
+
+void ParseShard(const std::string& text, int* shard, int* shards) {
+  static const std::regex re("^([0-9]{1,4})/([0-9]{1,4})$");
+  std::smatch m;
+  if (!std::regex_match(text, m, re))
+    throw InputError("command line", 0, "--shard",
+                     "'" + text + "' is not K/N such as 0/4");
+  *shard = std::stoi(m[1]);
+  *shards = std::stoi(m[2]);
+  if (*shards < 1 || *shard >= *shards)
+    throw InputError("command line", 0, "--shard",
+                     "'" + text + "': need 0 <= K < N");
+}
+
+int RunDataset(const DatasetOptions& o) {
+  if (o.out.empty())
+    throw InputError("command line", 0, "--out", "is required");
+  if (o.episodes < 1 || o.episodes > 10000000)
+    throw InputError("command line", 0, "--episodes", "must be 1..10000000");
+  if (o.keep < 1 || o.keep > 100000)
+    throw InputError("command line", 0, "--keep", "must be 1..100000");
+  if (o.max_steps < 0 || o.max_steps > 1000000)
+    throw InputError("command line", 0, "--max-steps", "must be 0..1000000");
+  if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards)
+    throw InputError("command line", 0, "--shard", "need 0 <= K < N");
+  const auto [robots, targets] = ParseSize(o.size, "--size");
+
+  const PolicyRegistry registry = AllPolicies();
+  if (!registry.Has(o.policy))
+    throw InputError("command line", 0, "--policy",
+                     registry.UnknownPolicy(o.policy));
+  std::vector<Override> overrides;
+  for (const std::string& s : o.sets) {
+    Override ov = ParseSetFlag(s);
+    if (ov.path == "seed" || ov.path == "robots.count" ||
+        ov.path == "targets.count" || ov.path == "policy.name")
+      throw InputError("command line", 0, "--set",
+                       ov.path + " is given by --first-seed, --size, --policy");
+    overrides.push_back(ov);
+  }
+  if (!o.model.empty())
+    overrides.push_back({"--model", "policy.model", o.model});
+  if (o.max_steps > 0)
+    overrides.push_back(
+        {"--max-steps", "mission.max_steps", std::to_string(o.max_steps)});
+  Scenario base = GeneratedScenario(robots, targets, o.first_seed);
+  base.policy.name = o.policy;
+  base = WithOverrides(base, overrides);
+  const std::shared_ptr<const PolicySpec> acting = registry.Resolve(base);
+  Scenario expert_scenario = base;
+  expert_scenario.policy.name = "expert";
+  expert_scenario.policy.params = ConfigNode();
+  const std::shared_ptr<const PolicySpec> expert_spec =
+      registry.Resolve(expert_scenario);
+
+  MakeOutputDir(o.out, "--out");
+  const std::string file = o.out + "/shard-" + std::to_string(o.shard) +
+                           "-of-" + std::to_string(o.shards) + ".sqlite";
+  DatasetWriter writer(file, Recipe(o), "--out");
+
+  std::vector<int> todo;
+  for (int e = o.shard; e < o.episodes; e += o.shards)
+    if (!writer.done().count(e)) todo.push_back(e);
+  const int mine = (o.episodes - o.shard + o.shards - 1) / o.shards;
+  ProgressLine line(o.progress);
+  const auto t0 = Clock::now();
+  int written = 0;
+  long samples = 0;
+  for (int e : todo) {
+    Scenario s = base;
+    s.seed = o.first_seed + static_cast<std::uint64_t>(e);
+    std::unique_ptr<Policy> shadow_owner;
+    ExpertPolicy* shadow = nullptr;
+    if (o.policy != "expert") {
+      shadow_owner = expert_spec->Create();
+      shadow = dynamic_cast<ExpertPolicy*>(shadow_owner.get());
+    }
+    Episode episode(BuildInstance(s), acting->Create());
+    DatasetObserver observer(
+        shadow, e,
+        o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3
+                                                                       : -1);
+    episode.AddObserver(&observer);
+    episode.Run();
+
+    // Keep `keep` random decision steps (all when fewer).
+    auto& steps = observer.steps();
+    std::vector<int> order(steps.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    Rng rng(s.seed, "dataset/keep");
+    const int keep = std::min<int>(o.keep, static_cast<int>(order.size()));
+    for (int i = 0; i < keep; ++i)
+      std::swap(order[i], order[i + rng.UniformInt(order.size() - i)]);
+    order.resize(keep);
+    std::sort(order.begin(), order.end());
+    std::vector<DatasetSample> kept;
+    for (int i : order)
+      for (DatasetSample& d : steps[i]) kept.push_back(std::move(d));
+
+    const World& w = episode.world();
+    DatasetWorld world;
+    world.episode = e;
+    world.seed = static_cast<std::int64_t>(s.seed);
+    world.size = w.map.size();
+    world.map_cell = w.map.occupancy().cell();
+    world.lattice_step = w.map.lattice().step();
+    world.robot_radius = w.map.robot_radius();
+    world.eps = episode.mission().eps;
+    world.robots = w.NumRobots();
+    world.targets = w.NumTargets();
+    world.steps = episode.step();
+    world.flowtime = episode.flowtime();
+    world.obstacles = w.map.obstacles();
+    world.log_det_prior = episode.log_det_prior();
+    writer.WriteEpisode(world, kept);
+    ++written;
+    samples += static_cast<long>(kept.size());
+    const double secs =
+        std::chrono::duration<double>(Clock::now() - t0).count();
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "[aia dataset] shard %d/%d  episode %zu/%d  %ld samples  "
+                  "%.2f episodes/s",
+                  o.shard, o.shards, writer.done().size(), mine, samples,
+                  written / std::max(secs, 1e-9));
+    line.Update(buf);
+  }
+  line.Finish();
+  const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::printf(
+      "[aia dataset] %s: %d episodes written now (%zu of %d done), %ld "
+      "samples, %.1f s, %.2f episodes/s\n",
+      file.c_str(), written, writer.done().size(), mine, samples, secs,
+      written / std::max(secs, 1e-9));
+  return written;
+}
+
+}  // namespace aia

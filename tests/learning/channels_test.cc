@@ -1,0 +1,140 @@
+// The channels of a tiny hand-built world, worked out by hand in both frames
+// (docs/learning.md, Channels).
+#include "aia/learning/channels.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace aia {
+namespace {
+
+// A 2 x 2 m workspace, occupancy cells of 0.5 m (4 x 4), pixels of 1 m
+// (2 x 2): pixel (0, 0) holds fine cells (0..1, 0..1), two of them
+// occupied; pixel (1, 1) one of four.
+struct TinyWorld {
+  Grid<std::uint8_t> occupancy{4, 4, 0.5, 0};
+  Vec2 size{2.0, 2.0};
+  Vec2 self{0.25, 1.75};                          // pixel (0, 1)
+  std::vector<Vec2> neighbours{{1.5, 0.5}, {1.6, 0.6}};  // both pixel (1, 0)
+  std::vector<HeatSource> targets;
+  std::vector<double> log_det_prior{std::log(100.0)};
+  double eps = 0.01;
+  TinyWorld() {
+    occupancy(0, 0) = occupancy(1, 0) = 1;
+    occupancy(3, 3) = 1;
+    // det Sigma = 1: w = log(1 / 0.01) / log(100 / 0.01) = 0.5.
+    HeatSource t;
+    t.mean = {1.5, 1.5};
+    t.cov = Mat2::Identity();
+    t.log_det = 0.0;
+    targets.push_back(t);
+  }
+};
+
+// With s = 1, S = Sigma + s^2 I = 2 I: H = 0.5 exp(-|d|^2 / 4).
+const float kH0 = 0.5f;                          // at the mean
+const float kH1 = static_cast<float>(0.5 * std::exp(-0.25));  // 1 m away
+const float kH2 = static_cast<float>(0.5 * std::exp(-0.5));   // diagonal
+
+ChannelParams Params(ChannelFrame frame, int window = 3) {
+  ChannelParams p;
+  p.frame = frame;
+  p.cell = 1.0;
+  p.window = window;
+  p.blur = 1.0;
+  p.cutoff = 4.0;
+  return p;
+}
+
+// Channel c at (x, y) of an image `w` pixels wide and `h` high.
+float At(const std::vector<float>& img, int h, int w, int c, int x, int y) {
+  return img[(static_cast<std::size_t>(c) * h + y) * w + x];
+}
+
+TEST(ChannelsTest, GlobalFrameMatchesHandComputedValues) {
+  TinyWorld t;
+  ChannelRenderer r(t.occupancy, t.size, Params(ChannelFrame::kGlobal));
+  ASSERT_EQ(r.height(), 2);
+  ASSERT_EQ(r.width(), 2);
+  std::vector<float> img(r.ImageSize(), -1.0f);
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
+           img.data());
+  const auto at = [&](int c, int x, int y) { return At(img, 2, 2, c, x, y); };
+  // Occupancy shares.
+  EXPECT_FLOAT_EQ(at(0, 0, 0), 0.5f);
+  EXPECT_FLOAT_EQ(at(0, 1, 0), 0.0f);
+  EXPECT_FLOAT_EQ(at(0, 0, 1), 0.0f);
+  EXPECT_FLOAT_EQ(at(0, 1, 1), 0.25f);
+  // Own position and neighbours (self excluded, counted per pixel).
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 2; ++x) {
+      EXPECT_FLOAT_EQ(at(1, x, y), x == 0 && y == 1 ? 1.0f : 0.0f);
+      EXPECT_FLOAT_EQ(at(2, x, y), x == 1 && y == 0 ? 2.0f : 0.0f);
+    }
+  // Heat at the pixel centres.
+  EXPECT_NEAR(at(3, 1, 1), kH0, 1e-6);
+  EXPECT_NEAR(at(3, 0, 1), kH1, 1e-6);
+  EXPECT_NEAR(at(3, 1, 0), kH1, 1e-6);
+  EXPECT_NEAR(at(3, 0, 0), kH2, 1e-6);
+}
+
+TEST(ChannelsTest, CentredFrameMatchesHandComputedValues) {
+  TinyWorld t;
+  // Window 3: the robot's pixel (0, 1) at (1, 1); window (u, v) is global
+  // (u - 1, v).
+  ChannelRenderer r(t.occupancy, t.size, Params(ChannelFrame::kCentred));
+  ASSERT_EQ(r.height(), 3);
+  ASSERT_EQ(r.width(), 3);
+  std::vector<float> img(r.ImageSize(), -1.0f);
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
+           img.data());
+  const auto at = [&](int c, int x, int y) { return At(img, 3, 3, c, x, y); };
+  const float occ[3][3] = {{1.0f, 0.5f, 0.0f},    // v = 0
+                           {1.0f, 0.0f, 0.25f},   // v = 1
+                           {1.0f, 1.0f, 1.0f}};   // v = 2: outside
+  const float heat[3][3] = {{0.0f, kH2, kH1}, {0.0f, kH1, kH0}, {0, 0, 0}};
+  for (int v = 0; v < 3; ++v)
+    for (int u = 0; u < 3; ++u) {
+      EXPECT_FLOAT_EQ(at(0, u, v), occ[v][u]) << u << "," << v;
+      EXPECT_FLOAT_EQ(at(1, u, v), u == 1 && v == 1 ? 1.0f : 0.0f);
+      EXPECT_FLOAT_EQ(at(2, u, v), u == 2 && v == 0 ? 2.0f : 0.0f);
+      EXPECT_NEAR(at(3, u, v), heat[v][u], 1e-6) << u << "," << v;
+    }
+}
+
+TEST(ChannelsTest, CentredFrameFoldsWhatLiesBeyondTheWindowOntoItsBorder) {
+  TinyWorld t;
+  // A one-pixel window: every neighbour and all heat fold onto it; the
+  // heat folds by the largest value, the neighbours by count.
+  ChannelRenderer r(t.occupancy, t.size, Params(ChannelFrame::kCentred, 1));
+  std::vector<float> img(r.ImageSize());
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
+           img.data());
+  EXPECT_FLOAT_EQ(img[0], 0.0f);  // the robot's own pixel is free
+  EXPECT_FLOAT_EQ(img[1], 1.0f);
+  EXPECT_FLOAT_EQ(img[2], 2.0f);
+  EXPECT_NEAR(img[3], kH0, 1e-6);
+}
+
+TEST(ChannelsTest, LocalizedTargetsLeaveNoHeat) {
+  TinyWorld t;
+  t.targets[0].log_det = std::log(t.eps);  // det Sigma = eps
+  ChannelRenderer r(t.occupancy, t.size, Params(ChannelFrame::kGlobal));
+  std::vector<float> img(r.ImageSize());
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
+           img.data());
+  for (int i = 12; i < 16; ++i) EXPECT_EQ(img[i], 0.0f);
+}
+
+TEST(ChannelsTest, FrameNamesParse) {
+  ChannelFrame f = ChannelFrame::kGlobal;
+  EXPECT_TRUE(ParseChannelFrame("centred", &f));
+  EXPECT_EQ(f, ChannelFrame::kCentred);
+  EXPECT_TRUE(ParseChannelFrame("global", &f));
+  EXPECT_EQ(f, ChannelFrame::kGlobal);
+  EXPECT_FALSE(ParseChannelFrame("local", &f));
+}
+
+}  // namespace
+}  // namespace aia

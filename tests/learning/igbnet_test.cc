@@ -1,0 +1,205 @@
+// The network behind its torch-free header and the igbnet policy: save and
+// load give identical outputs; bad model files are bad input; relabelling
+// the robots permutes the actions exactly; the step does not matter.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+
+#include "aia/core/error.h"
+#include "aia/core/rng.h"
+#include "aia/learning/igbnet_policy.h"
+#include "aia/learning/network.h"
+#include "support/team_fixture.h"
+#include "support/test_support.h"
+
+namespace aia {
+namespace {
+
+namespace fs = std::filesystem;
+
+NetworkConfig SmallConfig() {
+  NetworkConfig c;
+  c.width = 8;
+  c.hidden = 16;
+  c.channels.window = 16;
+  return c;
+}
+
+std::vector<float> RandomImages(int batch, int h, int w, std::uint64_t seed) {
+  Rng rng(seed);
+  std::vector<float> x(static_cast<std::size_t>(batch) * kNumChannels * h * w);
+  for (float& v : x) v = static_cast<float>(rng.Uniform());
+  return x;
+}
+
+TEST(IgbNetTest, SaveAndLoadGiveIdenticalOutputs) {
+  const std::string dir = testing::MakeTempDir("aia_net_");
+  for (ChannelFrame frame : {ChannelFrame::kCentred, ChannelFrame::kGlobal}) {
+    NetworkConfig c = SmallConfig();
+    c.channels.frame = frame;
+    IgbNet net(c, 7);
+    const std::vector<float> x = RandomImages(5, 20, 24, 3);
+    std::vector<float> a(5 * kNumMoves), b(5 * kNumMoves);
+    net.Forward(x.data(), 5, 20, 24, a.data());
+    net.Save(dir + "/m.pt");
+    const auto loaded = IgbNet::Load(dir + "/m.pt", "f", 0, "k");
+    EXPECT_EQ(loaded->config().ToJson(), c.ToJson());
+    loaded->Forward(x.data(), 5, 20, 24, b.data());
+    EXPECT_EQ(a, b);
+    // Batched and one at a time agree.
+    std::vector<float> one(kNumMoves);
+    const std::size_t image = static_cast<std::size_t>(kNumChannels) * 20 * 24;
+    for (int i = 0; i < 5; ++i) {
+      loaded->Forward(x.data() + i * image, 1, 20, 24, one.data());
+      for (int m = 0; m < kNumMoves; ++m)
+        EXPECT_NEAR(one[m], a[i * kNumMoves + m], 1e-5);
+    }
+  }
+  fs::remove_all(dir);
+}
+
+TEST(IgbNetTest, MissingOrCorruptModelIsBadInput) {
+  const std::string dir = testing::MakeTempDir("aia_net_");
+  try {
+    IgbNet::Load(dir + "/none.pt", "s.yaml", 4, "policy.model");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format().rfind("s.yaml:4: policy.model: '", 0), 0u)
+        << e.Format();
+    EXPECT_NE(e.Format().find("no such model file"), std::string::npos);
+  }
+  std::ofstream(dir + "/text.pt") << "not a model\n";
+  try {
+    IgbNet::Load(dir + "/text.pt", "s.yaml", 4, "policy.model");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.Format().find("not a readable model"), std::string::npos)
+        << e.Format();
+    EXPECT_EQ(e.Format().find('\n'), std::string::npos) << e.Format();
+  }
+  // A valid model cut short.
+  IgbNet(SmallConfig(), 1).Save(dir + "/m.pt");
+  fs::resize_file(dir + "/m.pt", fs::file_size(dir + "/m.pt") / 2);
+  EXPECT_THROW(IgbNet::Load(dir + "/m.pt", "s.yaml", 4, "policy.model"),
+               InputError);
+  fs::remove_all(dir);
+}
+
+TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
+  NetworkConfig c = SmallConfig();
+  c.channels.frame = ChannelFrame::kGlobal;
+  c.channels.cell = 0.25;
+  const NetworkConfig back = NetworkConfig::FromJson(c.ToJson());
+  EXPECT_EQ(back.ToJson(), c.ToJson());
+  EXPECT_THROW(NetworkConfig::FromJson("{"), std::runtime_error);
+  EXPECT_THROW(NetworkConfig::FromJson(R"({"format": "other"})"),
+               std::runtime_error);
+  std::string j = c.ToJson();
+  j.replace(j.find("\"width\":8"), 9, "\"width\":-3");
+  EXPECT_THROW(NetworkConfig::FromJson(j), std::runtime_error);
+}
+
+// Four robots, three targets; each robot's belief made its own so that the
+// robots see different things.
+const char* kTeam = R"(
+workspace: {size: [8, 8], obstacles: {boxes: [{center: [4, 4], size: [1, 1]}]}}
+robots: {count: 4, step: 0.5, start: [[1.25, 1.25], [6.25, 1.75], [2.75, 6.25], [6.75, 6.75]]}
+targets: {count: 3}
+sensor: {range: 2.0}
+communication: {mode: range, range: 6.0}
+)";
+
+void Personalize(testing::TeamFixture* f) {
+  for (int i = 0; i < f->beliefs.rows(); ++i)
+    for (int k = 0; k < f->layout.num_targets(); ++k) {
+      f->beliefs.Omega(i, k) *= 1.0 + 3.0 * ((i * 7 + k * 3) % 5);
+      f->beliefs.Xi(i, k) *= 1.0 + 3.0 * ((i * 7 + k * 3) % 5);
+    }
+}
+
+std::vector<Move> Decide(IgbNetPolicy* policy, const testing::TeamFixture& f,
+                         int step, const std::vector<double>& prior) {
+  DecisionContext ctx = f.Context();
+  ctx.central = nullptr;
+  ctx.step = step;
+  ctx.log_det_prior = &prior;
+  std::vector<Move> moves(f.world.NumRobots());
+  policy->Reset(f.world.map, f.world.NumRobots(), f.world.NumTargets(), 1);
+  policy->Decide(ctx, &moves);
+  return moves;
+}
+
+std::shared_ptr<const IgbNet> TestNet(ChannelFrame frame) {
+  NetworkConfig c = SmallConfig();
+  c.channels.frame = frame;
+  c.channels.cell = 0.5;
+  return std::make_shared<const IgbNet>(c, 11);
+}
+
+TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
+  for (ChannelFrame frame : {ChannelFrame::kCentred, ChannelFrame::kGlobal}) {
+    testing::TeamFixture f(kTeam);
+    Personalize(&f);
+    const std::vector<double> prior(3, std::log(1.0));
+    IgbNetPolicy policy(TestNet(frame));
+    const std::vector<Move> moves = Decide(&policy, f, 0, prior);
+    const std::vector<float> logits = policy.logits();
+
+    // Robot k of the relabelled team is robot perm[k] of the original.
+    const std::vector<int> perm = {2, 0, 3, 1};
+    testing::TeamFixture g(kTeam);
+    Personalize(&g);
+    BeliefSet permuted = g.beliefs;
+    for (int k = 0; k < 4; ++k) {
+      g.positions[k] = f.positions[perm[k]];
+      permuted.CopyRow(k, f.beliefs, perm[k]);
+    }
+    g.beliefs = permuted;
+    std::vector<Vec2> p;
+    for (int idx : g.positions) p.push_back(g.world.map.lattice().Point(idx));
+    g.comm.Update(1, p);
+    IgbNetPolicy policy2(TestNet(frame));
+    const std::vector<Move> moved = Decide(&policy2, g, 0, prior);
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(moved[k], moves[perm[k]]) << "robot " << k;
+      for (int m = 0; m < kNumMoves; ++m)
+        EXPECT_EQ(policy2.logits()[k * kNumMoves + m],
+                  logits[perm[k] * kNumMoves + m]);
+    }
+    // Not a degenerate network: the robots do not all agree.
+    EXPECT_NE(std::vector<float>(logits.begin(), logits.begin() + 4),
+              std::vector<float>(logits.begin() + 4, logits.begin() + 8));
+  }
+}
+
+TEST(IgbNetPolicyTest, TheSameGraphAtAnotherStepGivesTheSameActions) {
+  testing::TeamFixture f(kTeam);
+  Personalize(&f);
+  const std::vector<double> prior(3, std::log(1.0));
+  IgbNetPolicy policy(TestNet(ChannelFrame::kCentred));
+  const std::vector<Move> a = Decide(&policy, f, 0, prior);
+  const std::vector<float> la = policy.logits();
+  const std::vector<Move> b = Decide(&policy, f, 317, prior);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(la, policy.logits());
+}
+
+TEST(IgbNetPolicyTest, TakesOnlyValidMoves) {
+  testing::TeamFixture f(kTeam);
+  const std::vector<double> prior(3, 0.0);
+  IgbNetPolicy policy(TestNet(ChannelFrame::kCentred));
+  // A robot in the corner: left and down are not valid.
+  f.positions[0] = f.world.map.lattice().NearestPoint({0.25, 0.25});
+  for (int seed = 0; seed < 5; ++seed) {
+    IgbNetPolicy p(std::make_shared<const IgbNet>(SmallConfig(), seed));
+    const std::vector<Move> moves = Decide(&p, f, 0, prior);
+    for (int i = 0; i < 4; ++i)
+      EXPECT_TRUE(f.world.map.lattice().Valid(f.positions[i], moves[i]));
+  }
+}
+
+}  // namespace
+}  // namespace aia
