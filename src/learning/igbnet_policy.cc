@@ -124,9 +124,15 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
         const bool given = !s.policy.model.empty();
         const std::string path =
             given ? s.policy.model : DefaultModelPath();
-        return LoadModelOnce(path, s.ErrorFile(),
-                             given ? s.LineOf("policy.model") : 0,
-                             given ? "policy.model" : "policy.model (default)");
+        try {
+          return LoadModelOnce(path, s.ErrorFile(), 0,
+                               given ? "policy.model"
+                                     : "policy.model (default)");
+        } catch (const InputError& e) {
+          // At the key's line, or naming the flag that set it.
+          if (given) throw s.ErrorAt("policy.model", e.message());
+          throw;
+        }
       },
       [](const NoParams&, std::shared_ptr<const IgbNet> net) {
         return std::make_unique<IgbNetPolicy>(std::move(net));

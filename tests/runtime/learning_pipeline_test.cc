@@ -4,6 +4,8 @@
 // the loss; a training run stopped and resumed ends with the same model.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
@@ -182,6 +184,54 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
   // Resuming with other options is refused.
   b.lr = 1e-2;
   EXPECT_THROW(Train(b), InputError);
+
+  // Python (Debian's python3-torch) loads the model and reproduces the C++
+  // logits on the same input.
+  if (testing::RunCommand("/usr/bin/python3 -c 'import torch'").exit_code != 0) {
+    fs::remove_all(dir);
+    GTEST_SKIP() << "python3-torch is not installed";
+  }
+  const auto write = [](const std::string& path, const std::vector<float>& v) {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(v.data(), sizeof(float), v.size(), f);
+    std::fclose(f);
+  };
+  write(dir + "/x.f32", x);
+  write(dir + "/logits.f32", la);
+  const auto py = testing::RunCommand(
+      "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " check " +
+      dir + "/a.pt " + dir + "/x.f32 3 16 16 " + dir + "/logits.f32");
+  EXPECT_EQ(py.exit_code, 0) << py.out << py.err;
+
+  // Files whose metadata does not match their tensors, or from another
+  // format version, are bad input: one line, exit 2.
+  const std::string craft =
+      "/usr/bin/python3 -c \"import torch, json, sys\n"
+      "m = torch.jit.load(sys.argv[1])\n"
+      "meta = json.loads(bytes(m.aia_meta.tolist()).decode())\n"
+      "meta[sys.argv[2]] = int(sys.argv[3])\n"
+      "m.aia_meta = torch.tensor(list(json.dumps(meta).encode()), "
+      "dtype=torch.uint8)\n"
+      "m.save(sys.argv[4])\" ";
+  const std::pair<std::string, std::string> cases[] = {
+      {"width 16", "does not match the model's metadata"},
+      {"version 99", "model format version 99"}};
+  for (const auto& [change, message] : cases) {
+    const std::string bad = dir + "/bad.pt";
+    ASSERT_EQ(testing::RunCommand(craft + dir + "/a.pt " + change + " " + bad)
+                  .exit_code,
+              0);
+    const auto r = testing::RunAia(
+        {"run", testing::SourcePath("scenarios/default.yaml"), "--policy",
+         "igbnet", "--set", "policy.model=" + bad, "--out", dir + "/run",
+         "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+
   fs::remove_all(dir);
 }
 
