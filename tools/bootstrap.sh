@@ -10,7 +10,8 @@ PACKAGES=(
   libmujoco-dev libmujoco-samples libqhull-dev
   libosmesa6-dev libopencv-dev ffmpeg
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3-matplotlib python3-numpy
+  libtorch-dev libjemalloc-dev libsqlite3-dev
+  python3-matplotlib python3-numpy python3-torch
 )
 
 missing=()
