@@ -237,3 +237,35 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
 
 }  // namespace
 }  // namespace aia
+
+namespace aia {
+namespace {
+
+TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
+  const std::string dir = testing::MakeTempDir("aia_cli_");
+  const std::pair<std::vector<std::string>, std::string> cases[] = {
+      {{"dataset", "--out", dir, "--shard", "3/2"}, "--shard: '3/2'"},
+      {{"dataset", "--out", dir, "--size", "ten"}, "--size: 'ten'"},
+      {{"dataset", "--out", dir, "--policy", "nope"}, "--policy: unknown"},
+      {{"dataset", "--out", dir, "--set", "seed=3"}, "--set: seed"},
+      {{"train", "--data", dir + "/none", "--out", dir + "/m.pt"},
+       "no such file or folder"},
+      {{"train", "--data", dir, "--out", dir + "/m.pt"},
+       "holds no dataset"},
+      {{"train", "--data", dir, "--frame", "polar"}, "--frame: 'polar'"},
+      {{"train", "--data", dir, "--lr", "2"}, "--lr: must be"},
+      {{"train", "--data", dir, "--init", dir + "/none.pt"},
+       "--init: '" + dir + "/none.pt': no such model file"},
+  };
+  for (const auto& [args, message] : cases) {
+    const auto r = testing::RunAia(args);
+    EXPECT_EQ(r.exit_code, 2) << args[0] << " " << r.err;
+    EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace aia
