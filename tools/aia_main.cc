@@ -328,6 +328,10 @@ Action AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--resume", o->resume,
                 "continue from OUT.ckpt (same options) if it is there");
+  auto validate = std::make_shared<std::string>();
+  cmd->add_option("--validate", *validate,
+                  "train nothing: the loss and accuracy of this model on the "
+                  "held-out worlds of --data (same --val-share and --seed)");
   cmd->add_flag("--quiet", *quiet, "no progress lines");
   return [=]() {
     if (!cmd->parsed()) return -1;
@@ -335,6 +339,15 @@ Action AddTrainCommand(CLI::App& app) {
       throw aia::InputError("command line", 0, "--frame",
                             "'" + *frame + "' is not centred or global");
     o->progress = !*quiet;
+    if (!validate->empty()) {
+      const aia::ValidationResult v =
+          aia::Validate(*validate, o->data, o->val_share, o->seed);
+      std::printf(
+          "%s: %ld held-out samples: loss %.4f, accuracy %.4f, accuracy on "
+          "samples with useful work %.4f\n",
+          validate->c_str(), v.samples, v.loss, v.acc, v.acc_useful);
+      return 0;
+    }
     const std::vector<aia::EpochLog> logs = aia::Train(*o);
     if (!logs.empty()) {
       const aia::EpochLog& e = logs.back();

@@ -401,7 +401,8 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
 ValidationResult Validate(const std::string& model,
                           const std::vector<std::string>& data,
                           double val_share, std::uint64_t seed) {
-  std::unique_ptr<IgbNet> net = IgbNet::Load(model, "command line", 0, "--model");
+  std::unique_ptr<IgbNet> net =
+      IgbNet::Load(model, "command line", 0, "--validate");
   Corpus corpus =
       LoadCorpus(data, net->config().channels, val_share, seed, 1.0);
   return Evaluate(net->impl().module, &corpus);
