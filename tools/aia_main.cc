@@ -397,8 +397,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "aia 0.1.0");
   const std::vector<Action> commands = {
-      AddRunCommand(app),   AddRenderCommand(app), AddPlanCommand(app),
-      AddEvalCommand(app),  AddBenchCommand(app),  AddDatasetCommand(app),
+      AddRunCommand(app),   AddRenderCommand(app),   AddPlanCommand(app),
+      AddEvalCommand(app),  AddBenchCommand(app),    AddDatasetCommand(app),
       AddTrainCommand(app), AddPoliciesCommand(app), AddSchemaCommand(app)};
   try {
     app.parse(argc, argv);

@@ -97,8 +97,8 @@ void Exec(sqlite3* db, const char* sql) {
 
 sqlite3* Open(const std::string& path, bool write) {
   sqlite3* db = nullptr;
-  const int flags = write ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE
-                          : SQLITE_OPEN_READONLY;
+  const int flags =
+      write ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
   if (sqlite3_open_v2(path.c_str(), &db, flags, nullptr) != SQLITE_OK) {
     std::string what = db ? sqlite3_errmsg(db) : "cannot open";
     sqlite3_close(db);
@@ -222,8 +222,7 @@ struct DatasetWriter::Db {
   ~Db() { sqlite3_close(db); }
 };
 
-DatasetWriter::DatasetWriter(const std::string& path,
-                             const std::string& recipe,
+DatasetWriter::DatasetWriter(const std::string& path, const std::string& recipe,
                              const std::string& key)
     : db_(std::make_unique<Db>()) {
   try {

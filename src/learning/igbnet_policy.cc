@@ -122,12 +122,11 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
       false,
       [](const NoParams&, const Scenario& s) {
         const bool given = !s.policy.model.empty();
-        const std::string path =
-            given ? s.policy.model : DefaultModelPath();
+        const std::string path = given ? s.policy.model : DefaultModelPath();
         try {
-          return LoadModelOnce(path, s.ErrorFile(), 0,
-                               given ? "policy.model"
-                                     : "policy.model (default)");
+          return LoadModelOnce(
+              path, s.ErrorFile(), 0,
+              given ? "policy.model" : "policy.model (default)");
         } catch (const InputError& e) {
           // At the key's line, or naming the flag that set it.
           if (given) throw s.ErrorAt("policy.model", e.message());

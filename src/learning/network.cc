@@ -65,9 +65,8 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
   const bool ok = std::isfinite(c.channels.cell) && c.channels.cell > 0.0 &&
                   c.channels.window >= 1 && c.channels.window <= 4096 &&
                   std::isfinite(c.channels.blur) && c.channels.blur >= 0.0 &&
-                  std::isfinite(c.channels.cutoff) &&
-                  c.channels.cutoff > 0.0 && c.width >= 1 &&
-                  c.width <= 1024 && c.stem_stride >= 1 &&
+                  std::isfinite(c.channels.cutoff) && c.channels.cutoff > 0.0 &&
+                  c.width >= 1 && c.width <= 1024 && c.stem_stride >= 1 &&
                   c.stem_stride <= 8 && c.pool >= 1 && c.pool <= 64 &&
                   c.hidden >= 1 && c.hidden <= 65536;
   if (!ok) throw std::runtime_error("metadata out of range");
@@ -94,11 +93,11 @@ torch::Tensor ResidualBlockImpl::forward(const torch::Tensor& x) {
 
 IgbNetModuleImpl::IgbNetModuleImpl(const NetworkConfig& c) {
   namespace nn = torch::nn;
-  stem = register_module(
-      "stem", nn::Conv2d(nn::Conv2dOptions(kNumChannels, c.width, 3)
-                             .stride(c.stem_stride)
-                             .padding(1)
-                             .bias(false)));
+  stem = register_module("stem",
+                         nn::Conv2d(nn::Conv2dOptions(kNumChannels, c.width, 3)
+                                        .stride(c.stem_stride)
+                                        .padding(1)
+                                        .bias(false)));
   stem_bn = register_module("stem_bn", nn::BatchNorm2d(c.width));
   blocks = register_module("blocks", nn::ModuleList());
   for (int i = 0; i < 3; ++i) blocks->push_back(ResidualBlock(c.width));
@@ -191,8 +190,8 @@ void IgbNet::Save(const std::string& path) const {
   torch::serialize::OutputArchive archive;
   impl_->module->save(archive);
   const std::string json = impl_->config.ToJson();
-  torch::Tensor meta = torch::empty({static_cast<int64_t>(json.size())},
-                                    torch::kUInt8);
+  torch::Tensor meta =
+      torch::empty({static_cast<int64_t>(json.size())}, torch::kUInt8);
   std::memcpy(meta.data_ptr(), json.data(), json.size());
   archive.write(kMetaKey, meta, /*is_buffer=*/true);
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
@@ -205,9 +204,9 @@ void IgbNet::Forward(const float* images, int batch, int height, int width,
   AIA_CHECK(batch >= 0 && height > 0 && width > 0);
   if (batch == 0) return;
   torch::NoGradGuard no_grad;
-  const torch::Tensor x = torch::from_blob(
-      const_cast<float*>(images), {batch, kNumChannels, height, width},
-      torch::kFloat32);
+  const torch::Tensor x =
+      torch::from_blob(const_cast<float*>(images),
+                       {batch, kNumChannels, height, width}, torch::kFloat32);
   const torch::Tensor y = impl_->module->forward(x).contiguous();
   std::memcpy(logits, y.data_ptr<float>(),
               sizeof(float) * static_cast<std::size_t>(batch) * kNumMoves);

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -64,12 +64,11 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
 }
 
 // Renders samples idx[first, first + n) into `images`, labels and weights.
-void MakeBatch(Corpus* c, const std::vector<int>& idx, std::size_t first,
-               int n, double weak_weight, int* height, int* width,
+void MakeBatch(Corpus* c, const std::vector<int>& idx, std::size_t first, int n,
+               double weak_weight, int* height, int* width,
                std::vector<float>* images, std::vector<int64_t>* labels,
                std::vector<float>* weights, std::vector<char>* useful) {
-  const ChannelRenderer& r0 =
-      c->renderers[c->data.samples[idx[first]].world];
+  const ChannelRenderer& r0 = c->renderers[c->data.samples[idx[first]].world];
   *height = r0.height();
   *width = r0.width();
   const std::size_t size = r0.ImageSize();
@@ -105,8 +104,8 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
   double loss = 0.0;
   constexpr int kBatch = 128;
   for (std::size_t first = 0; first < c->val.size(); first += kBatch) {
-    const int n = static_cast<int>(
-        std::min<std::size_t>(kBatch, c->val.size() - first));
+    const int n =
+        static_cast<int>(std::min<std::size_t>(kBatch, c->val.size() - first));
     int h = 0, w = 0;
     MakeBatch(c, c->val, first, n, 1.0, &h, &w, &images, &labels, &weights,
               &useful);
@@ -143,8 +142,7 @@ std::string OptionsKey(const TrainOptions& o) {
   s << o.network.ToJson() << " epochs=" << o.epochs << " batch=" << o.batch
     << " lr=" << o.lr << " lr_min=" << o.lr_min
     << " weight_decay=" << o.weight_decay << " weak_weight=" << o.weak_weight
-    << " val_share=" << o.val_share << " seed=" << o.seed
-    << " init=" << o.init;
+    << " val_share=" << o.val_share << " seed=" << o.seed << " init=" << o.init;
   for (const std::string& d : o.data) s << " data=" << d;
   return s.str();
 }
@@ -178,7 +176,8 @@ void CheckOptions(const TrainOptions& o) {
     return InputError("command line", 0, flag, what);
   };
   if (o.out.empty()) throw bad("--out", "is required");
-  if (o.epochs < 1 || o.epochs > 100000) throw bad("--epochs", "must be 1..100000");
+  if (o.epochs < 1 || o.epochs > 100000)
+    throw bad("--epochs", "must be 1..100000");
   if (o.batch < 1 || o.batch > 65536) throw bad("--batch", "must be 1..65536");
   if (!(o.lr > 0.0 && o.lr < 1.0)) throw bad("--lr", "must be in (0, 1)");
   if (!(o.lr_min >= 0.0 && o.lr_min <= o.lr))
@@ -189,15 +188,18 @@ void CheckOptions(const TrainOptions& o) {
     throw bad("--weak-weight", "must be in [0, 1]");
   if (!(o.val_share >= 0.0 && o.val_share < 1.0))
     throw bad("--val-share", "must be in [0, 1)");
-  if (o.threads < 0 || o.threads > 1024) throw bad("--threads", "must be 0..1024");
+  if (o.threads < 0 || o.threads > 1024)
+    throw bad("--threads", "must be 0..1024");
   const ChannelParams& c = o.network.channels;
-  if (!(c.cell >= 0.05 && c.cell <= 10.0)) throw bad("--cell", "must be 0.05..10 m");
+  if (!(c.cell >= 0.05 && c.cell <= 10.0))
+    throw bad("--cell", "must be 0.05..10 m");
   if (c.window < 4 || c.window > 512) throw bad("--window", "must be 4..512");
   if (o.network.width < 1 || o.network.width > 512)
     throw bad("--width", "must be 1..512");
   if (o.network.stem_stride < 1 || o.network.stem_stride > 4)
     throw bad("--stem-stride", "must be 1..4");
-  if (o.network.pool < 1 || o.network.pool > 32) throw bad("--pool", "must be 1..32");
+  if (o.network.pool < 1 || o.network.pool > 32)
+    throw bad("--pool", "must be 1..32");
 }
 
 }  // namespace
@@ -377,8 +379,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
       for (const EpochLog& l : logs)
         log << l.epoch << ' ' << l.lr << ' ' << l.train_loss << ' '
             << l.train_acc << ' ' << l.val_loss << ' ' << l.val_acc << ' '
-            << l.val_acc_useful << ' ' << l.samples << ' ' << l.seconds
-            << '\n';
+            << l.val_acc_useful << ' ' << l.samples << ' ' << l.seconds << '\n';
       archive.write("log", StringTensor(log.str()), true);
       const std::string tmp = ckpt + ".tmp." + std::to_string(::getpid());
       archive.save_to(tmp);
@@ -409,8 +410,7 @@ ValidationResult Validate(const std::string& model,
 }
 
 double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,
-                           int batch, bool train, int iterations,
-                           int repeats) {
+                           int batch, bool train, int iterations, int repeats) {
   IgbNet net(config, 1);
   IgbNetModule& module = net.impl().module;
   const torch::Tensor x = torch::rand({batch, kNumChannels, height, width});

@@ -119,9 +119,8 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
     if (has_next) {
       m = MoveBetween(lattice, plan_.configs[index_][i],
                       plan_.configs[index_ + 1][i]);
-      last_useful_[i] =
-          i < static_cast<int>(plan_.useful_until.size()) &&
-          index_ + 1 <= plan_.useful_until[i];
+      last_useful_[i] = i < static_cast<int>(plan_.useful_until.size()) &&
+                        index_ + 1 <= plan_.useful_until[i];
     }
     if (m == Move::kStay && ctx.comm->Active(i)) {
       // Nothing planned for this robot (depth-0 plan or no valid move): any

@@ -77,12 +77,11 @@ class DatasetObserver : public StepObserver {
 };
 
 std::string Recipe(const DatasetOptions& o) {
-  std::string r = "size=" + o.size + " first_seed=" +
-                  std::to_string(o.first_seed) + " keep=" +
-                  std::to_string(o.keep) + " policy=" + o.policy +
-                  " model=" + o.model + " max_steps=" +
-                  std::to_string(o.max_steps) + " shards=" +
-                  std::to_string(o.shards);
+  std::string r =
+      "size=" + o.size + " first_seed=" + std::to_string(o.first_seed) +
+      " keep=" + std::to_string(o.keep) + " policy=" + o.policy +
+      " model=" + o.model + " max_steps=" + std::to_string(o.max_steps) +
+      " shards=" + std::to_string(o.shards);
   for (const std::string& s : o.sets) r += " set=" + s;
   return r;
 }
@@ -176,7 +175,8 @@ int RunDataset(const DatasetOptions& o) {
     // Keep `keep` random decision steps (all when fewer).
     auto& steps = observer.steps();
     std::vector<int> order(steps.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    for (std::size_t i = 0; i < order.size(); ++i)
+      order[i] = static_cast<int>(i);
     Rng rng(s.seed, "dataset/keep");
     const int keep = std::min<int>(o.keep, static_cast<int>(order.size()));
     for (int i = 0; i < keep; ++i)

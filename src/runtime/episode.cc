@@ -1,8 +1,8 @@
 #include "aia/runtime/episode.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <chrono>
-#include <Eigen/LU>
 #include <cmath>
 #include <limits>
 
@@ -51,8 +51,7 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   for (int k = 0; k < num_targets_; ++k) {
     means.push_back(world.priors[k].mean);
     covs.push_back(world.priors[k].cov);
-    log_det_prior_.push_back(
-        std::log(world.priors[k].cov.determinant()));
+    log_det_prior_.push_back(std::log(world.priors[k].cov.determinant()));
     target_state_.push_back(world.truth.targets[k]);
     target_pos_.push_back(world.TargetStart(k));
   }

@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "aia/learning/igbnet_policy.h"
 #include "aia/core/error.h"
 #include "aia/core/io.h"
+#include "aia/learning/igbnet_policy.h"
 #include "aia/scenario/loader.h"
 
 namespace aia {

@@ -15,7 +15,7 @@ namespace {
 struct TinyWorld {
   Grid<std::uint8_t> occupancy{4, 4, 0.5, 0};
   Vec2 size{2.0, 2.0};
-  Vec2 self{0.25, 1.75};                          // pixel (0, 1)
+  Vec2 self{0.25, 1.75};                                 // pixel (0, 1)
   std::vector<Vec2> neighbours{{1.5, 0.5}, {1.6, 0.6}};  // both pixel (1, 0)
   std::vector<HeatSource> targets;
   std::vector<double> log_det_prior{std::log(100.0)};
@@ -33,7 +33,7 @@ struct TinyWorld {
 };
 
 // With s = 1, S = Sigma + s^2 I = 2 I: H = 0.5 exp(-|d|^2 / 4).
-const float kH0 = 0.5f;                          // at the mean
+const float kH0 = 0.5f;                                       // at the mean
 const float kH1 = static_cast<float>(0.5 * std::exp(-0.25));  // 1 m away
 const float kH2 = static_cast<float>(0.5 * std::exp(-0.5));   // diagonal
 
@@ -58,8 +58,7 @@ TEST(ChannelsTest, GlobalFrameMatchesHandComputedValues) {
   ASSERT_EQ(r.height(), 2);
   ASSERT_EQ(r.width(), 2);
   std::vector<float> img(r.ImageSize(), -1.0f);
-  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
-           img.data());
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps, img.data());
   const auto at = [&](int c, int x, int y) { return At(img, 2, 2, c, x, y); };
   // Occupancy shares.
   EXPECT_FLOAT_EQ(at(0, 0, 0), 0.5f);
@@ -87,12 +86,11 @@ TEST(ChannelsTest, CentredFrameMatchesHandComputedValues) {
   ASSERT_EQ(r.height(), 3);
   ASSERT_EQ(r.width(), 3);
   std::vector<float> img(r.ImageSize(), -1.0f);
-  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
-           img.data());
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps, img.data());
   const auto at = [&](int c, int x, int y) { return At(img, 3, 3, c, x, y); };
-  const float occ[3][3] = {{1.0f, 0.5f, 0.0f},    // v = 0
-                           {1.0f, 0.0f, 0.25f},   // v = 1
-                           {1.0f, 1.0f, 1.0f}};   // v = 2: outside
+  const float occ[3][3] = {{1.0f, 0.5f, 0.0f},   // v = 0
+                           {1.0f, 0.0f, 0.25f},  // v = 1
+                           {1.0f, 1.0f, 1.0f}};  // v = 2: outside
   const float heat[3][3] = {{0.0f, kH2, kH1}, {0.0f, kH1, kH0}, {0, 0, 0}};
   for (int v = 0; v < 3; ++v)
     for (int u = 0; u < 3; ++u) {
@@ -109,8 +107,7 @@ TEST(ChannelsTest, CentredFrameFoldsWhatLiesBeyondTheWindowOntoItsBorder) {
   // heat folds by the largest value, the neighbours by count.
   ChannelRenderer r(t.occupancy, t.size, Params(ChannelFrame::kCentred, 1));
   std::vector<float> img(r.ImageSize());
-  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
-           img.data());
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps, img.data());
   EXPECT_FLOAT_EQ(img[0], 0.0f);  // the robot's own pixel is free
   EXPECT_FLOAT_EQ(img[1], 1.0f);
   EXPECT_FLOAT_EQ(img[2], 2.0f);
@@ -122,8 +119,7 @@ TEST(ChannelsTest, LocalizedTargetsLeaveNoHeat) {
   t.targets[0].log_det = std::log(t.eps);  // det Sigma = eps
   ChannelRenderer r(t.occupancy, t.size, Params(ChannelFrame::kGlobal));
   std::vector<float> img(r.ImageSize());
-  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
-           img.data());
+  r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps, img.data());
   for (int i = 12; i < 16; ++i) EXPECT_EQ(img[i], 0.0f);
 }
 

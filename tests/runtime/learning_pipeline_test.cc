@@ -96,8 +96,8 @@ TEST(DatasetTest, KilledMidEpisodeAndResumedReadsBackIdentical) {
 TEST(DatasetTest, SigkilledCommandResumesToTheSameData) {
   const std::string dir = testing::MakeTempDir("aia_ds_");
   const std::vector<std::string> args = {
-      "dataset", "--episodes", "12", "--size", "4x4", "--keep", "2",
-      "--first-seed", "900", "--quiet"};
+      "dataset", "--episodes", "12",           "--size", "4x4",
+      "--keep",  "2",          "--first-seed", "900",    "--quiet"};
   std::vector<std::string> whole = args, killed = args;
   whole.insert(whole.end(), {"--out", dir + "/whole"});
   killed.insert(killed.end(), {"--out", dir + "/killed"});
@@ -187,7 +187,8 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
 
   // Python (Debian's python3-torch) loads the model and reproduces the C++
   // logits on the same input.
-  if (testing::RunCommand("/usr/bin/python3 -c 'import torch'").exit_code != 0) {
+  if (testing::RunCommand("/usr/bin/python3 -c 'import torch'").exit_code !=
+      0) {
     fs::remove_all(dir);
     GTEST_SKIP() << "python3-torch is not installed";
   }
@@ -222,10 +223,10 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
     ASSERT_EQ(testing::RunCommand(craft + dir + "/a.pt " + change + " " + bad)
                   .exit_code,
               0);
-    const auto r = testing::RunAia(
-        {"run", testing::SourcePath("scenarios/default.yaml"), "--policy",
-         "igbnet", "--set", "policy.model=" + bad, "--out", dir + "/run",
-         "--quiet"});
+    const auto r =
+        testing::RunAia({"run", testing::SourcePath("scenarios/default.yaml"),
+                         "--policy", "igbnet", "--set", "policy.model=" + bad,
+                         "--out", dir + "/run", "--quiet"});
     EXPECT_EQ(r.exit_code, 2) << r.err;
     EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << r.err;
     EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
@@ -250,8 +251,7 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
       {{"dataset", "--out", dir, "--set", "seed=3"}, "--set: seed"},
       {{"train", "--data", dir + "/none", "--out", dir + "/m.pt"},
        "no such file or folder"},
-      {{"train", "--data", dir, "--out", dir + "/m.pt"},
-       "holds no dataset"},
+      {{"train", "--data", dir, "--out", dir + "/m.pt"}, "holds no dataset"},
       {{"train", "--data", dir, "--frame", "polar"}, "--frame: 'polar'"},
       {{"train", "--data", dir, "--lr", "2"}, "--lr: must be"},
       {{"train", "--data", dir, "--init", dir + "/none.pt"},

@@ -39,10 +39,10 @@ bool ParseChannelFrame(std::string_view text, ChannelFrame* frame);
 
 struct ChannelParams {
   ChannelFrame frame = ChannelFrame::kCentred;
-  double cell = 0.5;   // metres per pixel
-  int window = 40;     // centred frame: pixels per side
-  double blur = 1.0;   // the heatmap's s, metres
-  double cutoff = 4.0; // the heatmap's cut-off, standard deviations
+  double cell = 0.5;    // metres per pixel
+  int window = 40;      // centred frame: pixels per side
+  double blur = 1.0;    // the heatmap's s, metres
+  double cutoff = 4.0;  // the heatmap's cut-off, standard deviations
 };
 
 // Renders the channels of the robots of one map. Owns scratch memory: one
@@ -71,8 +71,7 @@ class ChannelRenderer {
   // nothing once warm.
   void Render(const Vec2& self, const std::vector<Vec2>& neighbours,
               const std::vector<HeatSource>& targets,
-              const std::vector<double>& log_det_prior, double eps,
-              float* out);
+              const std::vector<double>& log_det_prior, double eps, float* out);
 
  private:
   ChannelParams params_;

@@ -17,10 +17,10 @@ namespace aia {
 
 struct NetworkConfig {
   ChannelParams channels;
-  int width = 32;        // feature channels of the stem and the blocks
-  int stem_stride = 2;   // the stem's stride (docs/learning.md, Speed)
-  int pool = 5;          // P: adaptive pooling to P x P
-  int hidden = 128;      // the MLP's hidden units
+  int width = 32;       // feature channels of the stem and the blocks
+  int stem_stride = 2;  // the stem's stride (docs/learning.md, Speed)
+  int pool = 5;         // P: adaptive pooling to P x P
+  int hidden = 128;     // the MLP's hidden units
 
   // The model file's metadata (JSON), and back; FromJson throws
   // std::runtime_error on anything missing or out of range.

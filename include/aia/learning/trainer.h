@@ -21,7 +21,7 @@ struct TrainOptions {
   NetworkConfig network;
   int epochs = 20;
   int batch = 16;
-  double lr = 1e-4;      // cosine from lr to lr_min over all epochs
+  double lr = 1e-4;  // cosine from lr to lr_min over all epochs
   double lr_min = 1e-6;
   double weight_decay = 1e-5;
   // Weight of the samples whose robot had no useful work left in the
@@ -38,7 +38,7 @@ struct TrainOptions {
 };
 
 struct EpochLog {
-  int epoch = 0;  // 1-based
+  int epoch = 0;    // 1-based
   double lr = 0.0;  // at the epoch's end
   double train_loss = 0.0, train_acc = 0.0;
   double val_loss = 0.0, val_acc = 0.0;

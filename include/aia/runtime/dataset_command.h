@@ -21,13 +21,13 @@ struct DatasetOptions {
   std::string out;  // folder
   int episodes = 1500;
   int shard = 0, shards = 1;
-  std::string size = "10x10";             // robots x targets
-  std::uint64_t first_seed = 1000000;     // far from aia eval's seeds
-  int keep = 10;                          // decision steps kept per episode
-  std::string policy = "expert";          // the acting policy
-  std::string model;                      // its model (igbnet)
-  int max_steps = 0;                      // 0: the scenario's
-  std::vector<std::string> sets;          // --set key=value
+  std::string size = "10x10";          // robots x targets
+  std::uint64_t first_seed = 1000000;  // far from aia eval's seeds
+  int keep = 10;                       // decision steps kept per episode
+  std::string policy = "expert";       // the acting policy
+  std::string model;                   // its model (igbnet)
+  int max_steps = 0;                   // 0: the scenario's
+  std::vector<std::string> sets;       // --set key=value
   bool progress = true;
   // For tests: stop (throw) after this many decisions of the episode in
   // flight once `stop_after_episodes` episodes were written (-1: never).
