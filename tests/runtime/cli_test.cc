@@ -304,7 +304,7 @@ TEST(CliTest, BadSetIsBadInputOnEveryCommand) {
        "error: command line: --set: 'mission.eps' is not key.path=value"},
       {{"run", scenario, "--set", "policy.p_v=0.5", "--out", out},
        "error: command line: --set policy.p_v: unknown parameter for policy "
-       "'greedy'"},
+       "'igbnet'"},
       {{"render", scenario, "--out", out + "/v.mp4", "--set", "render.fps=0"},
        "error: command line: --set render.fps: must be an integer >= 1"},
       {{"plan", scenario, "--set", "policy.p_vv=1"},
