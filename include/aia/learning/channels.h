@@ -1,6 +1,6 @@
 // I-GBNet's input (docs/learning.md, Channels): per robot, four images over
 // the workspace, one definition shared by the dataset reader, the trainer,
-// the igbnet policy and tools/igbnet_data.py. No torch here.
+// the igbnet policy (Python reads the states: tools/igbnet.py). No torch here.
 //   0 occupancy: the share of the pixel covered by obstacles (1 outside the
 //     workspace);
 //   1 own position: 1 at the robot's pixel;

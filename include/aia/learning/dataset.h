@@ -1,6 +1,6 @@
 // The imitation dataset (docs/learning.md, Dataset): states, not images. One
 // SQLite file per shard, readable from Python's standard library
-// (tools/igbnet_data.py). Each episode (its world and its kept samples) is
+// (tools/igbnet.py). Each episode (its world and its kept samples) is
 // written in one transaction, so a killed writer loses at most the episode
 // in flight and a resumed one skips what is done. No torch here.
 #ifndef AIA_LEARNING_DATASET_H_
