@@ -39,30 +39,6 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
   return net;
 }
 
-void RenderRobots(const DecisionContext& ctx, const std::vector<int>& rows,
-                  ChannelRenderer* renderer, std::vector<float>* images) {
-  const Lattice& lattice = ctx.map->lattice();
-  const std::size_t size = renderer->ImageSize();
-  images->resize(rows.size() * size);
-  std::vector<Vec2> neighbours;
-  std::vector<HeatSource> sources;
-  std::vector<double> zeros;
-  const std::vector<double>* prior = ctx.log_det_prior;
-  if (!prior) {
-    zeros.assign(ctx.beliefs->layout().num_targets(), 0.0);
-    prior = &zeros;
-  }
-  for (std::size_t b = 0; b < rows.size(); ++b) {
-    const int i = rows[b];
-    neighbours.clear();
-    for (int j : ctx.comm->Neighbors(i))
-      if (j != i) neighbours.push_back(lattice.Point((*ctx.positions)[j]));
-    HeatSources(*ctx.beliefs, i, &sources);
-    renderer->Render(lattice.Point((*ctx.positions)[i]), neighbours, sources,
-                     *prior, ctx.eps, images->data() + b * size);
-  }
-}
-
 IgbNetPolicy::IgbNetPolicy(std::shared_ptr<const IgbNet> net)
     : net_(std::move(net)) {
   AIA_CHECK(net_ != nullptr);
@@ -74,6 +50,26 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int /*num_targets*/,
   logits_.assign(static_cast<std::size_t>(num_robots) * kNumMoves, 0.0f);
 }
 
+void IgbNetPolicy::RenderRobots(const DecisionContext& ctx) {
+  const Lattice& lattice = ctx.map->lattice();
+  const std::size_t size = renderer_->ImageSize();
+  images_.resize(rows_.size() * size);
+  const std::vector<double>* prior = ctx.log_det_prior;
+  if (!prior) {  // a hand-made context: every prior counts as det 1
+    no_prior_.assign(ctx.beliefs->layout().num_targets(), 0.0);
+    prior = &no_prior_;
+  }
+  for (std::size_t b = 0; b < rows_.size(); ++b) {
+    const int i = rows_[b];
+    neighbours_.clear();
+    for (int j : ctx.comm->Neighbors(i))
+      if (j != i) neighbours_.push_back(lattice.Point((*ctx.positions)[j]));
+    HeatSources(*ctx.beliefs, i, &sources_);
+    renderer_->Render(lattice.Point((*ctx.positions)[i]), neighbours_, sources_,
+                      *prior, ctx.eps, images_.data() + b * size);
+  }
+}
+
 PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
                                   std::vector<Move>* moves) {
   AIA_CHECK_MSG(renderer_.has_value(), "Reset() before Decide()");
@@ -82,7 +78,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   rows_.clear();
   for (int i = 0; i < n; ++i)
     if (ctx.comm->Active(i)) rows_.push_back(i);
-  RenderRobots(ctx, rows_, &*renderer_, &images_);
+  RenderRobots(ctx);
   batch_logits_.resize(rows_.size() * kNumMoves);
   net_->Forward(images_.data(), static_cast<int>(rows_.size()),
                 renderer_->height(), renderer_->width(), batch_logits_.data());

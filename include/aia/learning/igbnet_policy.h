@@ -42,6 +42,10 @@ class IgbNetPolicy : public Policy {
   const std::vector<float>& logits() const { return logits_; }
 
  private:
+  // Renders the images of robots `rows_` into images_ (scratch reused:
+  // nothing is allocated once warm but by libtorch's forward).
+  void RenderRobots(const DecisionContext& ctx);
+
   std::shared_ptr<const IgbNet> net_;
   std::optional<ChannelRenderer> renderer_;
   std::vector<float> images_, batch_logits_, logits_;
@@ -50,11 +54,6 @@ class IgbNetPolicy : public Policy {
   std::vector<HeatSource> sources_;
   std::vector<double> no_prior_;
 };
-
-// The robot's images for a context: the same rendering the policy does,
-// for the dataset tools (`images` sized to rows.size() * ImageSize()).
-void RenderRobots(const DecisionContext& ctx, const std::vector<int>& rows,
-                  ChannelRenderer* renderer, std::vector<float>* images);
 
 // Adds `igbnet` to a registry.
 void AddLearnedPolicies(PolicyRegistry* registry);
