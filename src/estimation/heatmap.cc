@@ -67,6 +67,18 @@ void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
   }
 }
 
+namespace {
+
+// Adds target k's heat (nothing when it is localized).
+void AddTargetHeat(const Vec2& mean, const Mat2& cov, double log_det,
+                   double log_det_prior, const HeatmapParams& params,
+                   Grid<float>* out) {
+  const double w = HeatWeight(log_det, log_det_prior, params.eps);
+  if (w > 0.0) AddGaussianHeat(mean, cov, w, params.blur, params.cutoff, out);
+}
+
+}  // namespace
+
 void HeatSources(const BeliefSet& beliefs, int row,
                  std::vector<HeatSource>* out) {
   const int m = beliefs.layout().num_targets();
@@ -88,13 +100,9 @@ void ProjectHeatmap(const std::vector<HeatSource>& sources,
                 "size the heatmap grid first (MakeHeatmapGrid)");
   AIA_CHECK(params.eps > 0.0 && params.blur >= 0.0 && params.cutoff > 0.0);
   std::fill(out->data().begin(), out->data().end(), 0.0f);
-  for (std::size_t k = 0; k < sources.size(); ++k) {
-    const double w =
-        HeatWeight(sources[k].log_det, log_det_prior[k], params.eps);
-    if (w <= 0.0) continue;
-    AddGaussianHeat(sources[k].mean, sources[k].cov, w, params.blur,
-                    params.cutoff, out);
-  }
+  for (std::size_t k = 0; k < sources.size(); ++k)
+    AddTargetHeat(sources[k].mean, sources[k].cov, sources[k].log_det,
+                  log_det_prior[k], params, out);
 }
 
 void ProjectHeatmap(const BeliefSet& beliefs, int row,
@@ -107,14 +115,10 @@ void ProjectHeatmap(const BeliefSet& beliefs, int row,
                 "size the heatmap grid first (MakeHeatmapGrid)");
   AIA_CHECK(params.eps > 0.0 && params.blur >= 0.0 && params.cutoff > 0.0);
   std::fill(out->data().begin(), out->data().end(), 0.0f);
-  for (int k = 0; k < m; ++k) {
-    const double w = HeatWeight(beliefs.LogDetCovariance(row, k),
-                                log_det_prior[k], params.eps);
-    if (w <= 0.0) continue;
-    AddGaussianHeat(beliefs.PositionMean(row, k),
-                    beliefs.PositionCovariance(row, k), w, params.blur,
-                    params.cutoff, out);
-  }
+  for (int k = 0; k < m; ++k)
+    AddTargetHeat(
+        beliefs.PositionMean(row, k), beliefs.PositionCovariance(row, k),
+        beliefs.LogDetCovariance(row, k), log_det_prior[k], params, out);
 }
 
 }  // namespace aia

@@ -194,6 +194,11 @@ void IgbNet::Save(const std::string& path) const {
       torch::empty({static_cast<int64_t>(json.size())}, torch::kUInt8);
   std::memcpy(meta.data_ptr(), json.data(), json.size());
   archive.write(kMetaKey, meta, /*is_buffer=*/true);
+  SaveArchiveAtomic(archive, path);
+}
+
+void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
+                       const std::string& path) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   archive.save_to(tmp);
   std::filesystem::rename(tmp, path);

@@ -28,6 +28,10 @@ struct IgbNetModuleImpl : torch::nn::Module {
 };
 TORCH_MODULE(IgbNetModule);
 
+// Writes the archive to a temporary file beside `path`, then renames it.
+void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
+                       const std::string& path);
+
 struct IgbNet::Impl {
   NetworkConfig config;
   IgbNetModule module{nullptr};

@@ -381,9 +381,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
             << l.train_acc << ' ' << l.val_loss << ' ' << l.val_acc << ' '
             << l.val_acc_useful << ' ' << l.samples << ' ' << l.seconds << '\n';
       archive.write("log", StringTensor(log.str()), true);
-      const std::string tmp = ckpt + ".tmp." + std::to_string(::getpid());
-      archive.save_to(tmp);
-      std::filesystem::rename(tmp, ckpt);
+      SaveArchiveAtomic(archive, ckpt);
     }
     std::string csv = kLogHeader;
     for (const EpochLog& l : logs) csv += LogLine(l);

@@ -27,9 +27,13 @@ class DatasetObserver : public StepObserver {
       : shadow_(shadow), episode_(episode), stop_after_(stop_after) {}
 
   void OnStart(const Episode& e) override {
-    if (shadow_)
+    if (shadow_) {
       shadow_->Reset(e.world().map, e.world().NumRobots(),
                      e.world().NumTargets(), e.scenario().seed);
+      expert_ = shadow_;
+    } else {
+      expert_ = dynamic_cast<const ExpertPolicy*>(&e.policy());
+    }
   }
 
   void OnDecision(const Episode& e, const DecisionContext& ctx,
@@ -38,14 +42,11 @@ class DatasetObserver : public StepObserver {
       throw std::runtime_error("stopped for a test");
     const int n = e.world().NumRobots();
     const Lattice& lattice = ctx.map->lattice();
-    const ExpertPolicy* expert = shadow_;
     const std::vector<Move>* labels = &d.wanted;
     if (shadow_) {
       labels_.assign(n, Move::kStay);
       shadow_->Decide(ctx, &labels_);
       labels = &labels_;
-    } else {
-      expert = dynamic_cast<const ExpertPolicy*>(&e.policy());
     }
     std::vector<DatasetSample> step;
     for (int i = 0; i < n; ++i) {
@@ -59,7 +60,7 @@ class DatasetObserver : public StepObserver {
         if (j != i) s.neighbours.push_back(lattice.Point((*ctx.positions)[j]));
       HeatSources(*ctx.beliefs, i, &s.targets);
       s.label = (*labels)[i];
-      s.useful = expert && expert->LastMoveUseful(i);
+      s.useful = expert_ && expert_->LastMoveUseful(i);
       s.acted = d.wanted[i];
       step.push_back(std::move(s));
     }
@@ -70,6 +71,7 @@ class DatasetObserver : public StepObserver {
 
  private:
   ExpertPolicy* shadow_;
+  const ExpertPolicy* expert_ = nullptr;  // whose plan says what is useful
   std::int64_t episode_;
   int stop_after_;
   std::vector<Move> labels_;

@@ -86,8 +86,6 @@ class VideoObserver : public StepObserver {
     frame_dt_ = 1.0 / fps_;
     next_frame_ = frame_dt_;
     heat_robot_ = s.render.follow_robot;
-    for (const TargetPrior& p : e.world().priors)
-      log_det_prior_.push_back(std::log(p.cov.determinant()));
     heat_params_.eps = e.mission().eps;
     heat_params_.blur = 0.5 * s.sensor.range;
     if (heat_robot_ >= 0)
@@ -145,13 +143,13 @@ class VideoObserver : public StepObserver {
       t.cov = e.beliefs().PositionCovariance(best, k);
       t.det = e.Det(best, k);
       t.weight = HeatWeight(e.beliefs().LogDetCovariance(best, k),
-                            log_det_prior_[k], eps);
+                            e.log_det_prior()[k], eps);
     }
     overlay_.step = e.step();
     overlay_.localized = e.NumLocalized();
     renderer_->AddTrailPoints(e.robot_positions());
     if (heat_robot_ >= 0) {
-      ProjectHeatmap(e.beliefs(), heat_robot_, log_det_prior_, heat_params_,
+      ProjectHeatmap(e.beliefs(), heat_robot_, e.log_det_prior(), heat_params_,
                      &heat_);
       renderer_->SetHeatmap(&heat_);
     }
@@ -189,7 +187,6 @@ class VideoObserver : public StepObserver {
   double frame_dt_ = 1.0 / 30, next_frame_ = 1.0 / 30;
   double sim_time_ = 0.0, step_start_ = 0.0;
   int heat_robot_ = -1;
-  std::vector<double> log_det_prior_;
   Grid<float> heat_;
   HeatmapParams heat_params_;
   FrameOverlay overlay_;
