@@ -20,6 +20,7 @@
 #include "aia/runtime/mission.h"
 #include "aia/runtime/plan_command.h"
 #include "aia/runtime/render_mission.h"
+#include "aia/runtime/world_command.h"
 
 // jemalloc (linked into build/aia) keeps freed pages instead of returning
 // them to the kernel on every libtorch call, which halves libtorch's speed
@@ -162,6 +163,25 @@ Action AddPlanCommand(CLI::App& app) {
     plan->overrides = flags->Get();
     if (cmd->count("--budget")) plan->budget = *budget;
     return aia::RunPlanCommand(*plan);
+  };
+}
+
+Action AddWorldCommand(CLI::App& app) {
+  auto world = std::make_shared<aia::WorldOptions>();
+  auto flags = std::make_shared<MissionFlags>();
+  CLI::App* cmd = app.add_subcommand(
+      "world",
+      "write a scenario's generated world as MJCF (robots at their starts, "
+      "targets at their positions) for mujoco-simulate or Python's mujoco");
+  cmd->add_option("scenario", world->scenario_path, "scenario YAML file")
+      ->required();
+  flags->Add(cmd, /*with_policy=*/false, /*with_max_steps=*/false);
+  cmd->add_option("--out", world->out, "the MJCF file to write, e.g. world.xml")
+      ->required();
+  return [=]() {
+    if (!cmd->parsed()) return -1;
+    world->overrides = flags->Get();
+    return aia::RunWorldCommand(*world);
   };
 }
 
@@ -398,6 +418,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "aia 0.1.0");
   const std::vector<Action> commands = {
       AddRunCommand(app),   AddRenderCommand(app),   AddPlanCommand(app),
+      AddWorldCommand(app),
       AddEvalCommand(app),  AddBenchCommand(app),    AddDatasetCommand(app),
       AddTrainCommand(app), AddPoliciesCommand(app), AddSchemaCommand(app)};
   try {

@@ -24,17 +24,42 @@ std::string Fmt(const Vec2& v) {
   throw s.ErrorAt(key, what);
 }
 
+// Random boxes keep clear of the robot starts and targets the scenario places
+// by hand: a box that comes within `keep_out` of one is drawn again (the draws
+// of a scenario that places nothing, or whose boxes stay clear, are unchanged).
 std::vector<Box> RandomBoxes(const Scenario& s, Rng& rng) {
   const RandomObstaclesConfig& r = *s.workspace.obstacles.random;
   const Vec2& ws = s.workspace.size;
+  std::vector<Vec2> placed(s.robots.start.begin(), s.robots.start.end());
+  for (const TargetConfig& t : s.targets.list) placed.push_back(t.position);
+  // The robot disc plus one lattice step: the start snaps to a free lattice
+  // point, and a target keeps a free point beside it to be seen from.
+  const double keep_out = s.robots.radius + s.robots.step;
+  auto clear = [&](const Box& b) {
+    for (const Vec2& p : placed)
+      if (PointBoxDistanceSq(p, b) < keep_out * keep_out) return false;
+    return true;
+  };
+  constexpr int kAttempts = 1000;
   std::vector<Box> boxes;
   boxes.reserve(r.count);
   for (int i = 0; i < r.count; ++i) {
-    const Vec2 size(rng.Uniform(r.min_size.x(), r.max_size.x()),
-                    rng.Uniform(r.min_size.y(), r.max_size.y()));
-    const Vec2 lo(rng.Uniform(0.0, std::max(0.0, ws.x() - size.x())),
-                  rng.Uniform(0.0, std::max(0.0, ws.y() - size.y())));
-    boxes.push_back({lo, lo + size});
+    for (int attempt = 0;; ++attempt) {
+      if (attempt == kAttempts)
+        Fail(s, "workspace.obstacles.random",
+             "cannot place random box " + std::to_string(i) + " clear of the "
+             "placed robot starts and targets (" +
+                 std::to_string(kAttempts) +
+                 " tries): fewer or smaller boxes, or a larger workspace");
+      const Vec2 size(rng.Uniform(r.min_size.x(), r.max_size.x()),
+                      rng.Uniform(r.min_size.y(), r.max_size.y()));
+      const Vec2 lo(rng.Uniform(0.0, std::max(0.0, ws.x() - size.x())),
+                    rng.Uniform(0.0, std::max(0.0, ws.y() - size.y())));
+      const Box box{lo, lo + size};
+      if (!clear(box)) continue;
+      boxes.push_back(box);
+      break;
+    }
   }
   return boxes;
 }

@@ -117,7 +117,8 @@ TEST(CliTest, UncreatableOutputFolderIsBadInput) {
 
 TEST(CliTest, HelpOnEveryCommand) {
   for (const std::string cmd :
-       {"", "run", "render", "plan", "eval", "bench", "policies", "schema"}) {
+       {"", "run", "render", "plan", "world", "eval", "bench", "dataset",
+        "train", "policies", "schema"}) {
     std::vector<std::string> args;
     if (!cmd.empty()) args.push_back(cmd);
     args.push_back("--help");
@@ -239,6 +240,48 @@ TEST(CliTest, RunWritesItsResultFiles) {
                           "\"timeouts\"", "\"rmse_m\"", "\"mean_nees\""})
     EXPECT_NE(diagnostics.find(key), std::string::npos) << key;
   fs::remove_all(out);
+}
+
+TEST(CliTest, WorldWritesAnMjcfThatMujocoLoads) {
+  const std::string dir = testing::MakeTempDir("aia_world_");
+  const std::string scenario = dir + "/placed.yaml";
+  // Hand-placed robots and a target among random clutter.
+  std::ofstream(scenario)
+      << "name: placed\nseed: 7\nrobots:\n  count: 2\n  start: [[1, 1], [2.5, 1]]\n"
+         "targets:\n  list:\n    - {position: [10, 10]}\n"
+         "workspace: {obstacles: {random: {count: 40}}}\n";
+  const auto r = RunAia({"world", scenario, "--seed", "3", "--out",
+                         dir + "/world.xml"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 robots, 1 targets, 40 obstacle boxes"),
+            std::string::npos)
+      << r.out;
+  const std::string xml = ReadFile(dir + "/world.xml");
+  for (const char* body : {"name=\"robot0\"", "name=\"robot1\"",
+                           "name=\"target0\"", "name=\"obstacle39\""})
+    EXPECT_NE(xml.find(body), std::string::npos) << body;
+  EXPECT_EQ(xml.find("name=\"robot2\""), std::string::npos);
+  // MuJoCo's own tool loads it, saves it and compiles both to one model.
+  const auto t =
+      testing::RunCommand("cd " + dir + " && mujoco-testxml world.xml");
+  EXPECT_EQ(t.exit_code, 0) << t.out << t.err;
+  EXPECT_NE(t.out.find("Max difference : 0"), std::string::npos) << t.out;
+  // --set applies; a missing folder and a bad scenario are bad input.
+  const auto s = RunAia({"world", SourcePath("scenarios/default.yaml"), "--set",
+                         "robots.count=3", "--out", dir + "/three.xml"});
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  EXPECT_NE(s.out.find("3 robots"), std::string::npos) << s.out;
+  const auto m = RunAia({"world", SourcePath("scenarios/default.yaml"),
+                         "--out", dir + "/no/such/world.xml"});
+  EXPECT_EQ(m.exit_code, 2);
+  EXPECT_EQ(m.err.rfind("error: command line: --out: ", 0), 0u) << m.err;
+  const auto b =
+      RunAia({"world", scenario, "--set", "robots.radius=-1", "--out",
+              dir + "/bad.xml"});
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_EQ(b.err.rfind("error: ", 0), 0u) << b.err;
+  EXPECT_FALSE(fs::exists(dir + "/bad.xml"));
+  fs::remove_all(dir);
 }
 
 std::string WithoutFileAndWallTime(const std::string& json) {

@@ -221,6 +221,61 @@ TEST(WorldTest, TargetInsideAnObstacleIsAnError) {
   }
 }
 
+TEST(WorldTest, RandomObstaclesKeepClearOfPlacedStartsAndTargets) {
+  // Dense clutter with hand-placed robots and targets: every seed builds
+  // (before, some stopped with "inside an obstacle"), and every random box
+  // keeps the robot radius plus one step away from each placed point.
+  const std::vector<Vec2> placed = {{1, 1}, {10, 10}, {18.5, 3}, {4, 16},
+                                    {12, 12}, {16, 17}};
+  for (std::uint64_t seed = 0; seed < 30; ++seed) {
+    Scenario s = ScenarioFromYaml(
+        "robots:\n  count: 3\n  start: [[1, 1], [10, 10], [18.5, 3]]\n"
+        "targets:\n  list:\n    - {position: [4, 16]}\n"
+        "    - {position: [12, 12]}\n    - {position: [16, 17]}\n"
+        "workspace: {obstacles: {random: {count: 60}}}\n");
+    s.seed = seed;
+    const World w = World::Build(s);
+    ASSERT_EQ(w.map.obstacles().size(), 60u);
+    const double keep_out = s.robots.radius + s.robots.step;
+    for (const Box& b : w.map.obstacles())
+      for (const Vec2& p : placed)
+        EXPECT_GE(PointBoxDistanceSq(p, b), keep_out * keep_out)
+            << "seed " << seed;
+  }
+  // Without placed points the draws are those of before: the same boxes as
+  // a scenario whose placed points no box comes near.
+  Scenario plain = ScenarioFromYaml(
+      "robots: {count: 2}\ntargets: {count: 1}\n"
+      "workspace: {obstacles: {random: {count: 3, max_size: [0.5, 0.5]}}}\n");
+  const World a = World::Build(plain);
+  Scenario far = plain;
+  far.robots.start = {a.map.lattice().Point(a.robot_starts[0]),
+                      a.map.lattice().Point(a.robot_starts[1])};
+  bool near = false;
+  for (const Box& b : a.map.obstacles())
+    for (const Vec2& p : far.robots.start)
+      near = near || PointBoxDistanceSq(p, b) < 1.0;
+  ASSERT_FALSE(near) << "pick a seed whose boxes stay away from the starts";
+  const World c = World::Build(far);
+  for (size_t i = 0; i < a.map.obstacles().size(); ++i)
+    EXPECT_EQ(a.map.obstacles()[i].lo, c.map.obstacles()[i].lo);
+}
+
+TEST(WorldTest, RandomObstaclesThatCannotKeepClearAreAnError) {
+  Scenario s = ScenarioFromYaml(
+      "robots:\n  count: 1\n  start: [[5, 5]]\ntargets: {count: 1}\n"
+      "workspace:\n  size: [10, 10]\n  obstacles:\n"
+      "    random: {count: 1, min_size: [9.5, 9.5], max_size: [9.9, 9.9]}\n");
+  try {
+    World::Build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "workspace.obstacles.random");
+    EXPECT_NE(e.message().find("clear of the placed"), std::string::npos)
+        << e.message();
+  }
+}
+
 TEST(WorldTest, MapImageBecomesObstacles) {
   const Scenario s = ScenarioFromYaml(
       "robots: {count: 3}\ntargets: {count: 3}\n"

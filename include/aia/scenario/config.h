@@ -68,7 +68,9 @@ struct ObstaclesConfig {
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(random).Doc(
         "axis-aligned boxes of uniform random size placed uniformly in the "
-        "workspace (an empty `random:` takes the defaults)"));
+        "workspace, kept at least robots.radius + robots.step away from "
+        "placed robot starts and targets (an empty `random:` takes the "
+        "defaults)"));
     a->Visit(AIA_FIELD(boxes).Doc("explicit boxes"));
     a->Visit(AIA_FIELD(map).Path().Doc(
         "PGM or PNG image scaled to the workspace, row 0 at the top; dark "

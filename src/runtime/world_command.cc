@@ -1,0 +1,43 @@
+#include "aia/runtime/world_command.h"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "aia/core/error.h"
+#include "aia/core/io.h"
+#include "aia/runtime/instance.h"
+#include "aia/scenario/loader.h"
+#include "aia/world/mjcf.h"
+
+namespace aia {
+
+int RunWorldCommand(const WorldOptions& o) {
+  if (o.out.empty())
+    throw InputError("command line", 0, "--out", "an output file is needed");
+  const std::filesystem::path out(o.out);
+  const std::filesystem::path parent =
+      out.has_parent_path() ? out.parent_path() : ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(parent, ec))
+    throw InputError("command line", 0, "--out",
+                     "folder '" + parent.string() + "' does not exist");
+  const PolicyRegistry registry = AllPolicies();
+  const Scenario scenario =
+      LoadScenario(o.scenario_path, o.overrides.ToOverrides(registry));
+  const std::shared_ptr<const Instance> instance = BuildInstance(scenario);
+  const World& world = instance->world;
+  try {
+    WriteFileAtomic(o.out, MakeMjcf(world, scenario));
+  } catch (const std::exception& e) {
+    throw InputError("command line", 0, "--out", e.what());
+  }
+  std::printf(
+      "wrote %s: %d robots, %d targets, %zu obstacle boxes (seed %llu); "
+      "open it with: mujoco-simulate %s\n",
+      o.out.c_str(), world.NumRobots(), world.NumTargets(),
+      world.map.obstacles().size(),
+      static_cast<unsigned long long>(scenario.seed), o.out.c_str());
+  return 0;
+}
+
+}  // namespace aia
