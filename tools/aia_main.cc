@@ -18,6 +18,7 @@
 #include "aia/runtime/dataset_command.h"
 #include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
+#include "aia/runtime/ranks.h"
 #include "aia/runtime/plan_command.h"
 #include "aia/runtime/render_mission.h"
 #include "aia/runtime/world_command.h"
@@ -213,7 +214,9 @@ Action AddEvalCommand(CLI::App& app) {
   cmd->add_option("--out", eval->out_dir,
                   "output folder (runs.csv, summary.csv, effective.yaml)")
       ->required();
-  cmd->add_option("--threads", eval->threads, "worker threads (0: all cores)")
+  cmd->add_option("--threads", eval->threads,
+                  "worker threads per process (0: all cores, shared among "
+                  "the MPI ranks on a machine)")
       ->capture_default_str();
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
@@ -268,7 +271,8 @@ Action AddDatasetCommand(CLI::App& app) {
   cmd->add_option("--episodes", o->episodes, "episodes in all shards")
       ->capture_default_str();
   cmd->add_option("--shard", *shard,
-                  "K/N: this process writes episodes e with e % N == K")
+                  "K/N: this process writes episodes e with e % N == K "
+                  "(under mpirun: the rank and the number of ranks)")
       ->capture_default_str();
   cmd->add_option("--size", o->size, "robots x targets of the worlds")
       ->capture_default_str();
@@ -290,7 +294,15 @@ Action AddDatasetCommand(CLI::App& app) {
   return [=]() {
     if (!cmd->parsed()) return -1;
     aia::ParseShard(*shard, &o->shard, &o->shards);
-    o->progress = !*quiet;
+    const aia::Ranks& ranks = aia::Ranks::Get();
+    if (ranks.distributed()) {  // under mpirun: one shard per rank
+      if (cmd->count("--shard"))
+        throw aia::InputError("command line", 0, "--shard",
+                              "is given by the MPI ranks under mpirun");
+      o->shard = ranks.rank();
+      o->shards = ranks.size();
+    }
+    o->progress = !*quiet && ranks.rank() == 0;
     aia::RunDataset(*o);
     return 0;
   };

@@ -11,6 +11,7 @@ PACKAGES=(
   libosmesa6-dev libopencv-dev ffmpeg
   libgtest-dev libgmock-dev libbenchmark-dev
   libtorch-dev libjemalloc-dev libsqlite3-dev
+  libopenmpi-dev openmpi-bin
   python3-matplotlib python3-numpy python3-torch
 )
 

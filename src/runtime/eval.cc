@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -21,6 +22,7 @@
 #include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/plan_command.h"
+#include "aia/runtime/ranks.h"
 
 namespace aia {
 namespace {
@@ -337,31 +339,45 @@ int RunEval(const EvalOptions& o) {
       EnumerateInstances(o.sizes, o.seeds, o.seed_base);
   const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry);
 
-  MakeOutputDir(o.out_dir, "--out");
-  // Finished rows are kept only for the same configuration.
+  // Under mpirun, rank 0 alone checks and rewrites the folder; then every
+  // rank reads the rows already done and takes its share of the rest.
+  Ranks& ranks = Ranks::Get();
+  const bool root = ranks.rank() == 0;
   const std::string effective_path = o.out_dir + "/effective.yaml";
   const std::string effective = EffectiveText(setup);
-  if (std::ifstream old(effective_path); old) {
-    std::stringstream text;
-    text << old.rdbuf();
-    const std::string why = Mismatch(text.str(), effective);
-    if (!why.empty())
-      throw InputError("command line", 0, "--out",
-                       o.out_dir + " holds results of another configuration (" +
-                           why + "; see its effective.yaml): use a new folder");
-  }
   const std::string runs_path = o.out_dir + "/runs.csv";
-  // Resume: keep the rows already there, rewritten cleanly (a row cut short
-  // by an interruption is dropped and run again).
-  std::vector<EvalRow> rows = ReadRuns(runs_path);
+  std::vector<EvalRow> rows;
+  if (root) {
+    try {
+      MakeOutputDir(o.out_dir, "--out");
+      // Finished rows are kept only for the same configuration.
+      if (std::ifstream old(effective_path); old) {
+        std::stringstream text;
+        text << old.rdbuf();
+        const std::string why = Mismatch(text.str(), effective);
+        if (!why.empty())
+          throw InputError("command line", 0, "--out",
+                           o.out_dir + " holds results of another "
+                                       "configuration (" +
+                               why + "; see its effective.yaml): use a new "
+                                     "folder");
+      }
+      // Resume: keep the rows already there, rewritten cleanly (a row cut
+      // short by an interruption is dropped and run again).
+      rows = ReadRuns(runs_path);
+      std::string text = std::string(kHeader) + "\n";
+      for (const auto& r : rows) text += FormatRow(r);
+      WriteFileAtomic(runs_path, text);
+      WriteFileAtomic(effective_path, effective);
+    } catch (...) {
+      ranks.AgreeFromRoot(false);  // the other ranks stop quietly
+      throw;
+    }
+  }
+  if (!ranks.AgreeFromRoot(true)) return 2;
+  if (!root) rows = ReadRuns(runs_path);
   std::set<std::tuple<std::string, std::uint64_t, std::string>> done;
   for (const auto& r : rows) done.insert({r.size, r.seed, r.policy});
-  {
-    std::string text = std::string(kHeader) + "\n";
-    for (const auto& r : rows) text += FormatRow(r);
-    WriteFileAtomic(runs_path, text);
-  }
-  WriteFileAtomic(effective_path, effective);
 
   struct Work {
     const EvalInstance* instance;
@@ -374,21 +390,59 @@ int RunEval(const EvalOptions& o) {
     for (const auto& p : policies)
       if (!done.count({inst.size, inst.seed, p})) w.todo.push_back(p);
     total_runs += static_cast<int>(w.todo.size());
-    if (!w.todo.empty()) work.push_back(std::move(w));
+    if (w.todo.empty()) continue;
+    work.push_back(std::move(w));
   }
-  std::printf(
-      "aia eval: %zu sizes x %d seeds x %zu policies; %zu rows already done, "
-      "%d to run\n",
-      o.sizes.size(), o.seeds, policies.size(), rows.size(), total_runs);
-  std::fflush(stdout);
+  {  // Round-robin over the ranks: the same split on every rank.
+    std::vector<Work> mine;
+    for (size_t i = 0; i < work.size(); ++i)
+      if (static_cast<int>(i % ranks.size()) == ranks.rank())
+        mine.push_back(std::move(work[i]));
+    work = std::move(mine);
+  }
+  if (root) {
+    std::printf(
+        "aia eval: %zu sizes x %d seeds x %zu policies; %zu rows already "
+        "done, %d to run%s\n",
+        o.sizes.size(), o.seeds, policies.size(), rows.size(), total_runs,
+        ranks.distributed()
+            ? (" on " + std::to_string(ranks.size()) + " MPI ranks").c_str()
+            : "");
+    std::fflush(stdout);
+  }
 
-  const int fd = ::open(runs_path.c_str(), O_WRONLY | O_APPEND);
-  if (fd < 0) throw std::runtime_error("cannot append to " + runs_path);
+  // Rank 0 appends every row to runs.csv as it finishes (its own, and those
+  // the other ranks send), so that an interrupted eval loses only runs in
+  // flight.
+  int fd = -1;
+  if (root) {
+    fd = ::open(runs_path.c_str(), O_WRONLY | O_APPEND);
+    if (fd < 0) throw std::runtime_error("cannot append to " + runs_path);
+  }
   std::mutex mu;
   std::atomic<size_t> next{0};
   int finished = 0;
-  ProgressLine progress(o.progress);
+  ProgressLine progress(o.progress && root);
   std::string first_error;
+  // Under mu.
+  const auto record = [&](const EvalRow& row, const std::string& size,
+                          std::uint64_t seed) {
+    const std::string line = FormatRow(row);
+    if (!root) {
+      ranks.SendLine(line);
+      return;
+    }
+    if (::write(fd, line.data(), line.size()) !=
+        static_cast<ssize_t>(line.size()))
+      throw std::runtime_error("cannot append to " + runs_path);
+    rows.push_back(row);
+    ++finished;
+    char buf[200];
+    std::snprintf(buf, sizeof(buf), "[aia eval] %d/%d runs  (last: %s seed %llu)",
+                  finished, total_runs, size.c_str(),
+                  static_cast<unsigned long long>(seed));
+    progress.Update(buf);
+  };
   auto worker = [&]() {
     while (true) {
       const size_t w = next.fetch_add(1);
@@ -397,20 +451,8 @@ int RunEval(const EvalOptions& o) {
         const std::vector<EvalRow> result =
             RunInstance(*work[w].instance, setup, work[w].todo);
         std::lock_guard<std::mutex> lock(mu);
-        for (const EvalRow& row : result) {
-          const std::string line = FormatRow(row);
-          if (::write(fd, line.data(), line.size()) !=
-              static_cast<ssize_t>(line.size()))
-            throw std::runtime_error("cannot append to " + runs_path);
-          rows.push_back(row);
-          ++finished;
-        }
-        char buf[200];
-        std::snprintf(buf, sizeof(buf),
-                      "[aia eval] %d/%d runs  (last: %s seed %llu)", finished,
-                      total_runs, work[w].instance->size.c_str(),
-                      static_cast<unsigned long long>(work[w].instance->seed));
-        progress.Update(buf);
+        for (const EvalRow& row : result)
+          record(row, work[w].instance->size, work[w].instance->seed);
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mu);
         if (first_error.empty()) first_error = e.what();
@@ -418,18 +460,49 @@ int RunEval(const EvalOptions& o) {
       }
     }
   };
-  int threads = o.threads > 0
-                    ? o.threads
-                    : static_cast<int>(std::thread::hardware_concurrency());
+  std::thread receiver;
+  std::string remote_error;
+  if (root && ranks.distributed()) {
+    receiver = std::thread([&]() {
+      remote_error = ranks.ReceiveAll([&](const std::string& line) {
+        EvalRow row;
+        std::string text = line;
+        if (!text.empty() && text.back() == '\n') text.pop_back();
+        std::lock_guard<std::mutex> lock(mu);
+        if (!ParseRow(text, &row)) {
+          if (first_error.empty()) first_error = "a rank sent a bad row";
+          return;
+        }
+        try {
+          record(row, row.size, row.seed);
+        } catch (const std::exception& e) {
+          if (first_error.empty()) first_error = e.what();
+        }
+      });
+    });
+  }
+  int threads = o.threads;
+  if (threads == 0) {
+    // All cores, shared among the ranks on this machine.
+    threads = static_cast<int>(std::thread::hardware_concurrency());
+    if (const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE"))
+      threads /= std::max(1, std::atoi(local));
+  }
   threads = std::max(
       1, std::min<int>(threads,
                        static_cast<int>(std::max<size_t>(work.size(), 1))));
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
+  if (!root) {
+    ranks.SendDone(first_error);
+    return 0;  // rank 0 reports
+  }
+  if (receiver.joinable()) receiver.join();
   progress.Finish();
   ::fsync(fd);
   ::close(fd);
+  if (first_error.empty()) first_error = remote_error;
   if (!first_error.empty()) throw std::runtime_error(first_error);
 
   // Canonical order, so the files do not depend on the thread count.

@@ -9,6 +9,7 @@
 
 #include "aia/planning/decsb.h"
 #include "aia/runtime/mission.h"
+#include "aia/runtime/ranks.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -71,6 +72,74 @@ TEST(EvalTest, RunsResumeAndDoNotDependOnThreads) {
     EXPECT_EQ(plot.exit_code, 0) << plot.err;
     EXPECT_TRUE(std::filesystem::exists(a + "/eval.png"));
   }
+  std::filesystem::remove_all(a);
+  std::filesystem::remove_all(b);
+}
+
+// `mpirun -n 2 aia eval` (ranks take instances round-robin, rank 0 writes
+// the rows) gives the files of one process; so does `aia dataset`'s one
+// shard per rank. Skipped when aia was built without MPI or mpirun is absent.
+TEST(EvalTest, TwoMpiRanksGiveTheFilesOfOneProcess) {
+  if (!Ranks::Built() ||
+      testing::RunCommand("command -v mpirun").exit_code != 0)
+    GTEST_SKIP() << "built without MPI, or no mpirun";
+  const std::string a = testing::MakeTempDir("aia_mpi_"),
+                    b = testing::MakeTempDir("aia_mpi_");
+  // Root may run mpirun only when it says so (CI containers run as root).
+  const std::string mpirun =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+      "OMPI_MCA_rmaps_base_oversubscribe=1 mpirun -n 2 '" +
+      std::string(AIA_BINARY) + "' ";
+  const std::string flags =
+      "eval --sizes 2x2,3x2,4x3 --seeds 3 --seed-base 11 --policies "
+      "greedy,random,decsb --threads 1 --quiet --out ";
+  const auto one = RunAia({"eval", "--sizes", "2x2,3x2,4x3", "--seeds", "3",
+                           "--seed-base", "11", "--policies",
+                           "greedy,random,decsb", "--threads", "1", "--quiet",
+                           "--out", a});
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  // Half done first, then resumed under MPI.
+  ASSERT_EQ(RunAia({"eval", "--sizes", "2x2", "--seeds", "3", "--seed-base",
+                    "11", "--policies", "greedy,random,decsb", "--threads",
+                    "1", "--quiet", "--out", b})
+                .exit_code,
+            0);
+  const auto two = testing::RunCommand(mpirun + flags + b);
+  ASSERT_EQ(two.exit_code, 0) << two.out << two.err;
+  EXPECT_NE(two.out.find("9 rows already done, 18 to run on 2 MPI ranks"),
+            std::string::npos)
+      << two.out;
+  EXPECT_EQ(ReadFile(a + "/summary.csv"), ReadFile(b + "/summary.csv"));
+  EXPECT_EQ(WithoutWall(ReadFile(a + "/runs.csv")),
+            WithoutWall(ReadFile(b + "/runs.csv")));
+  EXPECT_EQ(ReadFile(a + "/effective.yaml"), ReadFile(b + "/effective.yaml"));
+  // A folder of another configuration is refused by rank 0; no rank hangs.
+  const auto refused =
+      testing::RunCommand(mpirun + flags + b + " --set sensor.range=3");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("holds results of another configuration"),
+            std::string::npos)
+      << refused.err;
+  // The dataset: one shard per rank, as --shard K/2 would write them.
+  const auto ds = testing::RunCommand(
+      mpirun + "dataset --episodes 3 --size 3x2 --keep 2 --quiet --out " + a +
+      "/data");
+  ASSERT_EQ(ds.exit_code, 0) << ds.err;
+  for (const char* k : {"0", "1"}) {
+    ASSERT_EQ(RunAia({"dataset", "--episodes", "3", "--size", "3x2", "--keep",
+                      "2", "--quiet", "--shard", std::string(k) + "/2",
+                      "--out", b + "/data"})
+                  .exit_code,
+              0);
+  }
+  const std::string info = "/usr/bin/python3 " +
+                           testing::SourcePath("tools/igbnet.py") + " info ";
+  const auto ia = testing::RunCommand(info + a + "/data");
+  const auto ib = testing::RunCommand(info + b + "/data");
+  ASSERT_EQ(ia.exit_code, 0) << ia.err;
+  EXPECT_NE(ia.out.find("3 episodes"), std::string::npos) << ia.out;
+  EXPECT_EQ(ia.out, ib.out);
+  EXPECT_TRUE(std::filesystem::exists(a + "/data/shard-1-of-2.sqlite"));
   std::filesystem::remove_all(a);
   std::filesystem::remove_all(b);
 }
