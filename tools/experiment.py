@@ -1,0 +1,455 @@
+#!/usr/bin/python3
+"""The paper's experiments (section V; ../shared/docs/SPEC.md section 9), one
+command each, built on `build/aia`:
+
+  scalability  success rate and flowtime increase against N x M (the paper's
+               figure 2), error bars from the seeds: `aia eval` on 7 sizes x
+               100 seeds (resumable; `--mpi K` runs it under mpirun).
+  tracking     the localization mission (5 robots, 3 static targets, dense
+               clutter, eps 1.8e-2) and the tracking mission (2 robots, one
+               static and one moving target): det Sigma per robot and per
+               target over time with the threshold, the estimate's RMSE and
+               NEES over time, and a video of each.
+  robustness   5 robots, 5 targets, r_com = 4 m, Poisson(1) packet loss, a
+               random robot failing at step 10, on 50 worlds, against the
+               same worlds with a static full graph and no failure: the mean
+               mission time's increase (the paper: +71.51 %), and a video.
+
+Each writes, under --out: CSV, summary.json and PNG plots (and MP4 videos);
+--quick shrinks it to about a minute. Every piece already written is kept:
+run the command again after an interruption and it goes on.
+
+Usage:
+  tools/experiment.py scalability --out results/scalability [--quick] [--mpi 2]
+  tools/experiment.py tracking --out results/tracking [--quick]
+  tools/experiment.py robustness --out results/robustness [--quick]
+"""
+
+import argparse
+import concurrent.futures
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+import matplotlib
+
+matplotlib.use("Agg")  # headless
+import matplotlib.pyplot as plt  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+import plot_trace  # noqa: E402
+
+SIZES = ["10x10", "20x20", "30x30", "40x40", "50x50", "60x60", "80x80"]
+POLICIES = ["igbnet", "decsb", "greedy", "random"]
+POLICY_COLOR = {"igbnet": "C0", "decsb": "C1", "greedy": "C2", "random": "C3", "expert": "C4"}
+
+
+class Failure(Exception):
+    pass
+
+
+def write_atomic(path, text):
+    tmp = f"{path}.tmp.{os.getpid()}"
+    with open(tmp, "w") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def write_json(path, data):
+    write_atomic(path, json.dumps(data, indent=2, sort_keys=False) + "\n")
+
+
+def write_csv(path, header, rows):
+    lines = [",".join(header)]
+    for r in rows:
+        lines.append(",".join("" if v is None else (f"{v:.6g}" if isinstance(v, float) else str(v))
+                              for v in r))
+    write_atomic(path, "\n".join(lines) + "\n")
+
+
+def run(cmd, quiet=False):
+    """Runs a command; a failure stops the experiment with its stderr."""
+    if not quiet:
+        print("+ " + " ".join(cmd), flush=True)
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    if p.returncode != 0:
+        raise Failure(f"{' '.join(cmd)} exited with {p.returncode}:\n{p.stderr.strip()}")
+    return p.stdout
+
+
+def save(fig, path):
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    print(f"wrote {path}", flush=True)
+
+
+# ---------------------------------------------------------------- scalability
+
+
+def load_runs(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def scalability_table(runs, sizes, policies):
+    """Per size and policy: n, success rate and flowtime increase, each with
+    its standard error over the seeds (a failure counts F = 3 F*, as in
+    aia eval's summary)."""
+    table = []
+    for size in sizes:
+        for policy in policies:
+            rs = [r for r in runs if r["size"] == size and r["policy"] == policy
+                  and int(r["fstar"]) >= 0]
+            n = len(rs)
+            if n == 0:
+                continue
+            succ = [1.0 if r["success"] == "1" else 0.0 for r in rs]
+            inc = []
+            for r in rs:
+                fstar = int(r["fstar"])
+                denom = max(fstar, 1)
+                f = int(r["flowtime"]) if r["success"] == "1" else 3 * denom
+                inc.append((f - fstar) / denom)
+            p = sum(succ) / n
+            mean_inc = sum(inc) / n
+            sd_inc = math.sqrt(sum((x - mean_inc) ** 2 for x in inc) / (n - 1)) if n > 1 else 0.0
+            wall = sum(float(r["wall_s"]) for r in rs)
+            table.append({
+                "size": size, "policy": policy, "instances": n,
+                "success_rate": p, "success_se": math.sqrt(p * (1 - p) / n),
+                "flowtime_increase": mean_inc, "flowtime_increase_se": sd_inc / math.sqrt(n),
+                "policy_wall_s": wall,
+            })
+    return table
+
+
+def plot_scalability(table, sizes, path, title):
+    fig, (ax_s, ax_f) = plt.subplots(1, 2, figsize=(11, 4))
+    for policy in dict.fromkeys(r["policy"] for r in table):
+        rs = [r for r in table if r["policy"] == policy]
+        x = [sizes.index(r["size"]) for r in rs]
+        kw = dict(label=policy, color=POLICY_COLOR.get(policy), marker="o", capsize=3)
+        ax_s.errorbar(x, [100 * r["success_rate"] for r in rs],
+                      yerr=[100 * r["success_se"] for r in rs], **kw)
+        ax_f.errorbar(x, [100 * r["flowtime_increase"] for r in rs],
+                      yerr=[100 * r["flowtime_increase_se"] for r in rs], **kw)
+    for ax, label in ((ax_s, "success rate (%)"), (ax_f, "flowtime increase (%)")):
+        ax.set_xticks(range(len(sizes)))
+        ax.set_xticklabels(sizes)
+        ax.set_xlabel("robots x targets")
+        ax.set_title(label)
+        ax.grid(alpha=0.3)
+    ax_s.set_ylim(-5, 105)
+    ax_s.legend()
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    save(fig, path)
+
+
+def scalability(args):
+    sizes = args.sizes or (["10x10", "20x20"] if args.quick else SIZES)
+    seeds = args.seeds or (3 if args.quick else 100)
+    policies = args.policies or POLICIES
+    eval_dir = os.path.join(args.out, "eval")
+    cmd = [args.aia, "eval", "--sizes", ",".join(sizes), "--seeds", str(seeds),
+           "--seed-base", str(args.seed_base), "--policies", ",".join(policies),
+           "--out", eval_dir, "--threads", str(args.threads)]
+    for s in args.set:
+        cmd += ["--set", s]
+    if args.mpi > 1:
+        cmd = ["mpirun", "-n", str(args.mpi)] + cmd
+    t0 = time.time()
+    print("+ " + " ".join(cmd), flush=True)
+    if subprocess.run(cmd).returncode != 0:  # its progress line shows
+        raise Failure("aia eval failed (see above)")
+    wall = time.time() - t0
+    runs = load_runs(os.path.join(eval_dir, "runs.csv"))
+    runs = [r for r in runs if args.seed_base <= int(r["seed"]) < args.seed_base + seeds]
+    table = scalability_table(runs, sizes, policies)
+    header = ["size", "policy", "instances", "success_rate", "success_se",
+              "flowtime_increase", "flowtime_increase_se", "policy_wall_s"]
+    write_csv(os.path.join(args.out, "scalability.csv"), header,
+              [[r[h] for h in header] for r in table])
+    no_plan = {s: sum(1 for r in runs if r["size"] == s and int(r["fstar"]) < 0) // max(1, len(policies))
+               for s in sizes}
+    write_json(os.path.join(args.out, "summary.json"), {
+        "experiment": "scalability", "sizes": sizes, "seeds": seeds,
+        "seed_base": args.seed_base, "policies": policies, "sets": args.set,
+        "mpi_ranks": args.mpi, "wall_s_this_call": wall,
+        "instances_without_expert_plan": no_plan, "rows": table})
+    plot_scalability(table, sizes, os.path.join(args.out, "scalability.png"),
+                     f"scalability: {seeds} worlds per size, 20 x 20 m, error bars: 1 s.e.")
+
+
+# ------------------------------------------------------------------- tracking
+
+
+def load_estimate(path):
+    """estimate.csv -> {target: (steps, error_m, nees)}."""
+    out = {}
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            k = int(r["target"])
+            s, e, n = out.setdefault(k, ([], [], []))
+            s.append(int(r["step"]))
+            e.append(float(r["error_m"]))
+            n.append(float(r["nees"]))
+    return out
+
+
+def chi2_even_ppf(p, dof):
+    """Quantile of chi-square with an even number of degrees of freedom
+    (closed-form CDF, bisection)."""
+    def cdf(x):
+        h = x / 2.0
+        term, total = 1.0, 1.0
+        for j in range(1, dof // 2):
+            term *= h / j
+            total += term
+        return 1.0 - math.exp(-h) * total
+    lo, hi = 0.0, 1000.0
+    for _ in range(200):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if cdf(mid) < p else (lo, mid)
+    return (lo + hi) / 2
+
+
+def plot_estimate(est, dof, path, title):
+    fig, (ax_e, ax_n) = plt.subplots(1, 2, figsize=(11, 4))
+    for k, (s, e, n) in sorted(est.items()):
+        ax_e.plot(s, e, label=f"target {k}", color=f"C{k % 10}")
+        ax_n.plot(s, n, label=f"target {k}", color=f"C{k % 10}")
+    lo, hi = chi2_even_ppf(0.025, dof), chi2_even_ppf(0.975, dof)
+    ax_n.axhspan(lo, hi, color="0.85", zorder=0, label=f"chi2({dof}) 95 %")
+    ax_n.axhline(dof, color="0.5", linestyle="--", linewidth=1, label=f"E = {dof}")
+    ax_e.set_title("position error of the team's best estimate (m)")
+    ax_n.set_title("NEES of the team's best estimate")
+    for ax in (ax_e, ax_n):
+        ax.set_yscale("log")
+        ax.set_xlabel("decision step t")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    save(fig, path)
+
+
+def mission(args, name, scenario, extra):
+    """One mission: aia run, its plots, and its video."""
+    folder = os.path.join(args.out, name)
+    base = [scenario, "--policy", args.policy] + extra
+    for s in args.set:
+        base += ["--set", s]
+    if not os.path.isfile(os.path.join(folder, "summary.json")):
+        run([args.aia, "run"] + base + ["--out", folder, "--quiet"])
+    summary = json.load(open(os.path.join(folder, "summary.json")))
+    trace = plot_trace.load_trace(os.path.join(folder, "trace.csv"))
+    ns = argparse.Namespace(eps=None, title=None)
+    fig = plot_trace.figure_uncertainty(trace, summary, ns)
+    save(fig, os.path.join(folder, "uncertainty.png"))
+    est = load_estimate(os.path.join(folder, "estimate.csv"))
+    # The shipped missions' targets are positions (2-D states); NEES of a
+    # consistent filter is then chi-square with 2 degrees of freedom.
+    dof = 2
+    plot_estimate(est, dof, os.path.join(folder, "estimate.png"),
+                  f"{name}: {args.policy}, seed {summary['seed']}")
+    video = os.path.join(folder, f"{name}.mp4")
+    if not args.no_video and not os.path.isfile(video):
+        size = ["--width", "320", "--height", "240"] if args.quick else []
+        run([args.aia, "render"] + base + size + ["--heatmap", "0", "--out", video, "--quiet"])
+    per_target = {}
+    for k, (s, e, n) in sorted(est.items()):
+        per_target[str(k)] = {
+            "rmse_m": math.sqrt(sum(x * x for x in e) / len(e)),
+            "final_error_m": e[-1],
+            "mean_nees": sum(n) / len(n),
+            "nees_in_95_band": sum(1 for x in n if chi2_even_ppf(0.025, dof) <= x
+                                   <= chi2_even_ppf(0.975, dof)) / len(n),
+        }
+    keys = ("scenario", "policy", "seed", "robots", "targets", "success", "flowtime",
+            "steps", "eps", "localized_share")
+    return {**{k: summary.get(k) for k in keys}, "targets_estimate": per_target,
+            "video": None if args.no_video else os.path.basename(video)}
+
+
+def tracking(args):
+    steps = ["--max-steps", "40"] if args.quick else []
+    results = {
+        "localization": mission(args, "localization",
+                                os.path.join(ROOT, "scenarios/localization.yaml"), steps),
+        "tracking": mission(args, "tracking", os.path.join(ROOT, "scenarios/tracking.yaml"),
+                            steps),
+    }
+    rows = []
+    for name, r in results.items():
+        for k, t in r["targets_estimate"].items():
+            rows.append([name, r["policy"], r["seed"], int(r["success"]), r["flowtime"],
+                         r["steps"], r["localized_share"], k, t["rmse_m"], t["final_error_m"],
+                         t["mean_nees"], t["nees_in_95_band"]])
+    write_csv(os.path.join(args.out, "tracking.csv"),
+              ["mission", "policy", "seed", "success", "flowtime", "steps", "localized_share",
+               "target", "rmse_m", "final_error_m", "mean_nees", "nees_in_95_band"], rows)
+    write_json(os.path.join(args.out, "summary.json"),
+               {"experiment": "tracking", "quick": args.quick, "missions": results})
+
+
+# ----------------------------------------------------------------- robustness
+
+NOMINAL = ["--set", "communication.mode=full", "--set", "communication.packet_loss_lambda=0",
+           "--set", "communication.failures=[]"]
+
+
+def robustness_run(args, variant, seed):
+    folder = os.path.join(args.out, "runs", f"{variant}-{seed}")
+    path = os.path.join(folder, "summary.json")
+    if not os.path.isfile(path):
+        cmd = [args.aia, "run", args.scenario, "--policy", args.policy, "--seed", str(seed),
+               "--out", folder, "--quiet"]
+        if variant == "nominal":
+            cmd += NOMINAL
+        for s in args.set:
+            cmd += ["--set", s]
+        run(cmd, quiet=True)
+    s = json.load(open(path))
+    return {"variant": variant, "seed": seed, "success": bool(s["success"]),
+            "flowtime": s["flowtime"], "steps": s["steps"], "max_steps": s["max_steps"],
+            "failed_robots": s.get("failed_robots", [])}
+
+
+def robustness(args):
+    runs_n = args.seeds or (5 if args.quick else 50)
+    seeds = list(range(args.seed_base, args.seed_base + runs_n))
+    jobs = [(v, s) for s in seeds for v in ("nominal", "faults")]
+    results = []
+    t0 = time.time()
+    with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        futures = [pool.submit(robustness_run, args, v, s) for v, s in jobs]
+        for i, f in enumerate(concurrent.futures.as_completed(futures), 1):
+            results.append(f.result())
+            print(f"\r[robustness] {i}/{len(jobs)} runs", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    wall = time.time() - t0
+    results.sort(key=lambda r: (r["seed"], r["variant"]))
+
+    def mission_time(r):  # a run that never succeeds counts its whole horizon
+        return r["flowtime"] if r["success"] else r["max_steps"]
+
+    by = {v: [r for r in results if r["variant"] == v] for v in ("nominal", "faults")}
+    stats = {}
+    for v, rs in by.items():
+        times = [mission_time(r) for r in rs]
+        stats[v] = {"runs": len(rs), "success_rate": sum(r["success"] for r in rs) / len(rs),
+                    "mean_mission_time": sum(times) / len(times)}
+    both = [(mission_time(a), mission_time(b)) for a, b in zip(by["nominal"], by["faults"])
+            if a["success"] and b["success"]]
+    penalty = stats["faults"]["mean_mission_time"] / stats["nominal"]["mean_mission_time"] - 1
+    penalty_both = (sum(b for _, b in both) / sum(a for a, _ in both) - 1) if both else None
+    write_csv(os.path.join(args.out, "robustness.csv"),
+              ["seed", "variant", "success", "flowtime", "steps", "mission_time", "failed_robots"],
+              [[r["seed"], r["variant"], int(r["success"]), r["flowtime"], r["steps"],
+                mission_time(r), " ".join(map(str, r["failed_robots"]))] for r in results])
+    write_json(os.path.join(args.out, "summary.json"), {
+        "experiment": "robustness", "scenario": os.path.relpath(args.scenario, ROOT),
+        "policy": args.policy, "seeds": seeds, "variants": {
+            "faults": "the scenario as written: range graph, Poisson packet loss, a failure",
+            "nominal": "the same worlds with a static full graph, no loss, no failure"},
+        "stats": stats, "mission_time_increase": penalty,
+        "mission_time_increase_both_succeeded": penalty_both,
+        "paper_mission_time_increase": 0.7151, "wall_s_this_call": wall})
+    print(f"mission time: nominal {stats['nominal']['mean_mission_time']:.1f}, with faults "
+          f"{stats['faults']['mean_mission_time']:.1f} steps: {100 * penalty:+.1f} % "
+          f"(paper: +71.51 %)")
+
+    fig, (ax_b, ax_s) = plt.subplots(1, 2, figsize=(11, 4))
+    ax_b.bar(["static full graph", "range, loss, failure"],
+             [stats["nominal"]["mean_mission_time"], stats["faults"]["mean_mission_time"]],
+             color=["C2", "C3"])
+    ax_b.set_ylabel("mean mission time (steps)")
+    ax_b.set_title(f"{args.policy}, {runs_n} worlds: {100 * penalty:+.1f} % (paper +71.51 %)")
+    x = [mission_time(r) for r in by["nominal"]]
+    y = [mission_time(r) for r in by["faults"]]
+    ax_s.scatter(x, y, s=14)
+    top = max(x + y + [1])
+    ax_s.plot([0, top], [0, top], color="0.6", linestyle="--", linewidth=1)
+    ax_s.set_xlabel("static full graph (steps)")
+    ax_s.set_ylabel("range, loss, failure (steps)")
+    ax_s.set_title("per world")
+    for ax in (ax_b, ax_s):
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    save(fig, os.path.join(args.out, "robustness.png"))
+    video = os.path.join(args.out, "robustness.mp4")
+    if not args.no_video and not os.path.isfile(video):
+        size = ["--width", "320", "--height", "240", "--max-steps", "40"] if args.quick else []
+        cmd = [args.aia, "render", args.scenario, "--policy", args.policy, "--seed",
+               str(seeds[0]), "--out", video, "--quiet"] + size
+        for s in args.set:
+            cmd += ["--set", s]
+        run(cmd)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        description="The paper's experiments (section V), one command each.",
+        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    sub = parser.add_subparsers(dest="experiment", required=True)
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--out", required=True, help="output folder")
+    common.add_argument("--quick", action="store_true", help="a small version (about a minute)")
+    common.add_argument("--aia", default=os.path.join(ROOT, "build/aia"), help="the aia binary")
+    common.add_argument("--set", action="append", default=[],
+                        help="override a scenario key (passed to aia as --set)")
+    s = sub.add_parser("scalability", parents=[common], help="success and flowtime vs N x M")
+    s.add_argument("--sizes", type=lambda t: t.split(","), help="default: the paper's 7")
+    s.add_argument("--seeds", type=int, help="worlds per size (default 100; quick 3)")
+    s.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
+    s.add_argument("--policies", type=lambda t: t.split(","),
+                   help="default: " + ",".join(POLICIES))
+    s.add_argument("--threads", type=int, default=0, help="aia eval --threads (0: all cores)")
+    s.add_argument("--mpi", type=int, default=0, help="run aia eval under mpirun -n K")
+    t = sub.add_parser("tracking", parents=[common], help="localization and tracking missions")
+    t.add_argument("--policy", default="igbnet", help="decision maker (default igbnet)")
+    t.add_argument("--no-video", action="store_true", help="skip the videos")
+    r = sub.add_parser("robustness", parents=[common], help="failures and packet loss")
+    r.add_argument("--policy", default="igbnet", help="decision maker (default igbnet)")
+    r.add_argument("--scenario", default=os.path.join(ROOT, "scenarios/robustness.yaml"),
+                   help="default: scenarios/robustness.yaml")
+    r.add_argument("--seeds", type=int, help="worlds (default 50; quick 5)")
+    r.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
+    r.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="runs at once")
+    r.add_argument("--no-video", action="store_true", help="skip the video")
+    args = parser.parse_args(argv)
+    if not os.access(args.aia, os.X_OK):
+        print(f"error: {args.aia}: not built (run tools/bootstrap.sh)", file=sys.stderr)
+        return 2
+    for name in ("seeds",):
+        v = getattr(args, name, None)
+        if v is not None and v < 1:
+            print(f"error: --{name}: must be at least 1", file=sys.stderr)
+            return 2
+    if getattr(args, "jobs", 1) < 1:
+        print("error: --jobs: must be at least 1", file=sys.stderr)
+        return 2
+    os.makedirs(args.out, exist_ok=True)
+    try:
+        {"scalability": scalability, "tracking": tracking, "robustness": robustness}[
+            args.experiment](args)
+    except Failure as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2 if " exited with 2" in str(e) else 1
+    except KeyboardInterrupt:
+        print("\ninterrupted: run the same command again to go on", file=sys.stderr)
+        return 130
+    print(f"results in {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
