@@ -331,9 +331,15 @@ def robustness(args):
     t0 = time.time()
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         futures = [pool.submit(robustness_run, args, v, s) for v, s in jobs]
-        for i, f in enumerate(concurrent.futures.as_completed(futures), 1):
-            results.append(f.result())
-            print(f"\r[robustness] {i}/{len(jobs)} runs", end="", file=sys.stderr, flush=True)
+        try:
+            for i, f in enumerate(concurrent.futures.as_completed(futures), 1):
+                results.append(f.result())
+                print(f"\r[robustness] {i}/{len(jobs)} runs", end="", file=sys.stderr,
+                      flush=True)
+        except BaseException:
+            for f in futures:  # finished runs stay on disk for the next call
+                f.cancel()
+            raise
     print(file=sys.stderr)
     wall = time.time() - t0
     results.sort(key=lambda r: (r["seed"], r["variant"]))
