@@ -8,14 +8,11 @@ Usage:
 
 import argparse
 import csv
+import os
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")  # headless
-import matplotlib.pyplot as plt  # noqa: E402
-
-POLICY_STYLE = {"igbnet": "C0", "decsb": "C1", "greedy": "C2", "random": "C3"}
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import experiment  # noqa: E402  (the one plot of success and flowtime)
 
 
 def load(path):
@@ -45,25 +42,13 @@ def main(argv=None):
     if not rows:
         print(f"error: {args.summary}: no scored rows", file=sys.stderr)
         return 2
-    fig, (ax_s, ax_f) = plt.subplots(1, 2, figsize=(11, 4))
-    for policy, rs in rows.items():
-        x = [sizes.index(r["size"]) for r in rs]
-        color = POLICY_STYLE.get(policy)
-        ax_s.plot(x, [100 * float(r["success_rate"]) for r in rs], "o-", label=policy, color=color)
-        ax_f.plot(x, [100 * float(r["flowtime_increase"]) for r in rs], "o-", label=policy,
-                  color=color)
-    for ax, title in ((ax_s, "success rate (%)"), (ax_f, "flowtime increase (%)")):
-        ax.set_xticks(range(len(sizes)))
-        ax.set_xticklabels(sizes)
-        ax.set_xlabel("robots x targets")
-        ax.set_title(title)
-        ax.grid(alpha=0.3)
-        ax.legend()
+    table = [{"size": r["size"], "policy": policy,
+              "success_rate": float(r["success_rate"]), "success_se": 0.0,
+              "flowtime_increase": float(r["flowtime_increase"]), "flowtime_increase_se": 0.0}
+             for policy, rs in rows.items() for r in rs]
     n = max(int(r["instances"]) for rs in rows.values() for r in rs)
-    fig.suptitle(f"aia eval: {n} worlds per size; a failure counts F = 3 F*")
-    fig.tight_layout()
-    fig.savefig(args.out, dpi=110)
-    print(args.out)
+    experiment.plot_scalability(table, sizes, args.out,
+                                f"aia eval: {n} worlds per size; a failure counts F = 3 F*")
     return 0
 
 
