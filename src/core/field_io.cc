@@ -230,10 +230,11 @@ void FieldReader::Record(const std::string& key, int key_line,
   nodes_[key] = &value;
 }
 
-std::string FieldReader::ResolvePath(const std::string& text) const {
+std::string FieldReader::ResolvePath(const ConfigNode& node) const {
   namespace fs = std::filesystem;
-  fs::path path(text);
-  if (path.is_relative()) path = fs::path(options_.base_dir) / path;
+  fs::path path(node.scalar);
+  if (path.is_relative() && node.origin.empty())
+    path = fs::path(options_.base_dir) / path;
   std::error_code ec;
   const fs::path absolute = fs::absolute(path, ec);
   return (ec ? path : absolute).lexically_normal().string();

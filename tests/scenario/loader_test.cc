@@ -229,6 +229,14 @@ TEST(LoaderTest, RelativePathsResolveAgainstBaseDir) {
   EXPECT_EQ(s.workspace.obstacles.map, base + "/maps/m.pgm");
   EXPECT_EQ(s.policy.model, dir + "/models/net.pt");  // need not exist yet
 
+  // A path given on the command line is the user's, relative to the
+  // working folder, not to the scenario's.
+  const Scenario flagged =
+      ParseScenario(yaml, "inline.yaml", base,
+                    {ParseSetFlag("policy.model=models/other.pt")});
+  EXPECT_EQ(flagged.policy.model,
+            (fs::current_path() / "models/other.pt").string());
+
   // Absolute paths stay as they are.
   const std::string absolute = std::string(kMinimal) +
                                "workspace: {obstacles: {map: " + base +

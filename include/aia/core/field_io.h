@@ -194,7 +194,9 @@ class FieldReader {
                                    const std::vector<std::string>& names) const;
   // Records a key read from `entry` (or a list item), for later errors.
   void Record(const std::string& key, int key_line, const ConfigNode& value);
-  std::string ResolvePath(const std::string& text) const;
+  // A relative path from the file is resolved against base_dir; one given
+  // by a command-line flag (the node's origin), against the working folder.
+  std::string ResolvePath(const ConfigNode& node) const;
 
   template <typename T>
   void ReadValue(const ConfigNode& node, const std::string& key,
@@ -363,7 +365,7 @@ void FieldReader::ReadValue(const ConfigNode& node, const std::string& key,
                    : f.path          ? std::string("a file path")
                                      : std::string("a non-empty string"));
     }
-    *out = f.path ? ResolvePath(node.scalar) : node.scalar;
+    *out = f.path ? ResolvePath(node) : node.scalar;
   } else if constexpr (std::is_enum_v<T>) {
     if (node.IsPlainScalar()) {
       for (const auto& n : EnumNames(T{})) {
