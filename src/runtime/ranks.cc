@@ -1,7 +1,9 @@
 #include "aia/runtime/ranks.h"
 
+#include <chrono>
 #include <cstdlib>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #ifdef AIA_WITH_MPI
@@ -104,9 +106,17 @@ std::string Ranks::ReceiveAll(
   int open = size_ - 1;
   std::vector<char> buf;
   while (open > 0) {
+    // Polled with a pause rather than a blocking probe, which spins a core
+    // (OpenMPI busy-waits) that rank 0's own workers need.
     MPI_Status status;
-    Check(MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &status),
-          "MPI_Probe");
+    int pending = 0;
+    Check(MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &pending,
+                     &status),
+          "MPI_Iprobe");
+    if (!pending) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      continue;
+    }
     int count = 0;
     MPI_Get_count(&status, MPI_CHAR, &count);
     buf.resize(static_cast<std::size_t>(count) + 1);
