@@ -45,7 +45,7 @@ sys.path.insert(0, os.path.join(ROOT, "tools"))
 import plot_trace  # noqa: E402
 
 SIZES = ["10x10", "20x20", "30x30", "40x40", "50x50", "60x60", "80x80"]
-POLICIES = ["igbnet", "decsb", "greedy", "random"]
+POLICIES = ["expert", "igbnet", "decsb", "greedy", "random"]  # expert: C-SB in the loop
 POLICY_COLOR = {"igbnet": "C0", "decsb": "C1", "greedy": "C2", "random": "C3", "expert": "C4"}
 
 
