@@ -18,8 +18,8 @@
 #include "aia/runtime/dataset_command.h"
 #include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
-#include "aia/runtime/ranks.h"
 #include "aia/runtime/plan_command.h"
+#include "aia/runtime/ranks.h"
 #include "aia/runtime/render_mission.h"
 #include "aia/runtime/world_command.h"
 
@@ -429,10 +429,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "aia 0.1.0");
   const std::vector<Action> commands = {
-      AddRunCommand(app),   AddRenderCommand(app),   AddPlanCommand(app),
-      AddWorldCommand(app),
-      AddEvalCommand(app),  AddBenchCommand(app),    AddDatasetCommand(app),
-      AddTrainCommand(app), AddPoliciesCommand(app), AddSchemaCommand(app)};
+      AddRunCommand(app),     AddRenderCommand(app), AddPlanCommand(app),
+      AddWorldCommand(app),   AddEvalCommand(app),   AddBenchCommand(app),
+      AddDatasetCommand(app), AddTrainCommand(app),  AddPoliciesCommand(app),
+      AddSchemaCommand(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

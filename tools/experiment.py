@@ -264,14 +264,14 @@ def mission(args, name, scenario, extra):
     if not args.no_video and not os.path.isfile(video):
         size = ["--width", "320", "--height", "240"] if args.quick else []
         run([args.aia, "render"] + base + size + ["--heatmap", "0", "--out", video, "--quiet"])
+    band = chi2_even_ppf(0.025, dof), chi2_even_ppf(0.975, dof)
     per_target = {}
     for k, (s, e, n) in sorted(est.items()):
         per_target[str(k)] = {
             "rmse_m": math.sqrt(sum(x * x for x in e) / len(e)),
             "final_error_m": e[-1],
             "mean_nees": sum(n) / len(n),
-            "nees_in_95_band": sum(1 for x in n if chi2_even_ppf(0.025, dof) <= x
-                                   <= chi2_even_ppf(0.975, dof)) / len(n),
+            "nees_in_95_band": sum(1 for x in n if band[0] <= x <= band[1]) / len(n),
         }
     keys = ("scenario", "policy", "seed", "robots", "targets", "success", "flowtime",
             "steps", "eps", "localized_share")

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -357,10 +357,12 @@ int RunEval(const EvalOptions& o) {
         const std::string why = Mismatch(text.str(), effective);
         if (!why.empty())
           throw InputError("command line", 0, "--out",
-                           o.out_dir + " holds results of another "
-                                       "configuration (" +
-                               why + "; see its effective.yaml): use a new "
-                                     "folder");
+                           o.out_dir +
+                               " holds results of another "
+                               "configuration (" +
+                               why +
+                               "; see its effective.yaml): use a new "
+                               "folder");
       }
       // Resume: keep the rows already there, rewritten cleanly (a row cut
       // short by an interruption is dropped and run again).
@@ -438,8 +440,9 @@ int RunEval(const EvalOptions& o) {
     rows.push_back(row);
     ++finished;
     char buf[200];
-    std::snprintf(buf, sizeof(buf), "[aia eval] %d/%d runs  (last: %s seed %llu)",
-                  finished, total_runs, size.c_str(),
+    std::snprintf(buf, sizeof(buf),
+                  "[aia eval] %d/%d runs  (last: %s seed %llu)", finished,
+                  total_runs, size.c_str(),
                   static_cast<unsigned long long>(seed));
     progress.Update(buf);
   };

@@ -47,8 +47,9 @@ std::vector<Box> RandomBoxes(const Scenario& s, Rng& rng) {
     for (int attempt = 0;; ++attempt) {
       if (attempt == kAttempts)
         Fail(s, "workspace.obstacles.random",
-             "cannot place random box " + std::to_string(i) + " clear of the "
-             "placed robot starts and targets (" +
+             "cannot place random box " + std::to_string(i) +
+                 " clear of the "
+                 "placed robot starts and targets (" +
                  std::to_string(kAttempts) +
                  " tries): fewer or smaller boxes, or a larger workspace");
       const Vec2 size(rng.Uniform(r.min_size.x(), r.max_size.x()),

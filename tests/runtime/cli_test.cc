@@ -246,12 +246,12 @@ TEST(CliTest, WorldWritesAnMjcfThatMujocoLoads) {
   const std::string dir = testing::MakeTempDir("aia_world_");
   const std::string scenario = dir + "/placed.yaml";
   // Hand-placed robots and a target among random clutter.
-  std::ofstream(scenario)
-      << "name: placed\nseed: 7\nrobots:\n  count: 2\n  start: [[1, 1], [2.5, 1]]\n"
-         "targets:\n  list:\n    - {position: [10, 10]}\n"
-         "workspace: {obstacles: {random: {count: 40}}}\n";
-  const auto r = RunAia({"world", scenario, "--seed", "3", "--out",
-                         dir + "/world.xml"});
+  std::ofstream(scenario) << "name: placed\nseed: 7\nrobots:\n  count: 2\n  "
+                             "start: [[1, 1], [2.5, 1]]\n"
+                             "targets:\n  list:\n    - {position: [10, 10]}\n"
+                             "workspace: {obstacles: {random: {count: 40}}}\n";
+  const auto r =
+      RunAia({"world", scenario, "--seed", "3", "--out", dir + "/world.xml"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("2 robots, 1 targets, 40 obstacle boxes"),
             std::string::npos)
@@ -271,13 +271,12 @@ TEST(CliTest, WorldWritesAnMjcfThatMujocoLoads) {
                          "robots.count=3", "--out", dir + "/three.xml"});
   ASSERT_EQ(s.exit_code, 0) << s.err;
   EXPECT_NE(s.out.find("3 robots"), std::string::npos) << s.out;
-  const auto m = RunAia({"world", SourcePath("scenarios/default.yaml"),
-                         "--out", dir + "/no/such/world.xml"});
+  const auto m = RunAia({"world", SourcePath("scenarios/default.yaml"), "--out",
+                         dir + "/no/such/world.xml"});
   EXPECT_EQ(m.exit_code, 2);
   EXPECT_EQ(m.err.rfind("error: command line: --out: ", 0), 0u) << m.err;
-  const auto b =
-      RunAia({"world", scenario, "--set", "robots.radius=-1", "--out",
-              dir + "/bad.xml"});
+  const auto b = RunAia({"world", scenario, "--set", "robots.radius=-1",
+                         "--out", dir + "/bad.xml"});
   EXPECT_EQ(b.exit_code, 2);
   EXPECT_EQ(b.err.rfind("error: ", 0), 0u) << b.err;
   EXPECT_FALSE(fs::exists(dir + "/bad.xml"));

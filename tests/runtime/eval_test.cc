@@ -93,15 +93,15 @@ TEST(EvalTest, TwoMpiRanksGiveTheFilesOfOneProcess) {
   const std::string flags =
       "eval --sizes 2x2,3x2,4x3 --seeds 3 --seed-base 11 --policies "
       "greedy,random,decsb --threads 1 --quiet --out ";
-  const auto one = RunAia({"eval", "--sizes", "2x2,3x2,4x3", "--seeds", "3",
-                           "--seed-base", "11", "--policies",
-                           "greedy,random,decsb", "--threads", "1", "--quiet",
-                           "--out", a});
+  const auto one =
+      RunAia({"eval", "--sizes", "2x2,3x2,4x3", "--seeds", "3", "--seed-base",
+              "11", "--policies", "greedy,random,decsb", "--threads", "1",
+              "--quiet", "--out", a});
   ASSERT_EQ(one.exit_code, 0) << one.err;
   // Half done first, then resumed under MPI.
   ASSERT_EQ(RunAia({"eval", "--sizes", "2x2", "--seeds", "3", "--seed-base",
-                    "11", "--policies", "greedy,random,decsb", "--threads",
-                    "1", "--quiet", "--out", b})
+                    "11", "--policies", "greedy,random,decsb", "--threads", "1",
+                    "--quiet", "--out", b})
                 .exit_code,
             0);
   const auto two = testing::RunCommand(mpirun + flags + b);
@@ -127,13 +127,13 @@ TEST(EvalTest, TwoMpiRanksGiveTheFilesOfOneProcess) {
   ASSERT_EQ(ds.exit_code, 0) << ds.err;
   for (const char* k : {"0", "1"}) {
     ASSERT_EQ(RunAia({"dataset", "--episodes", "3", "--size", "3x2", "--keep",
-                      "2", "--quiet", "--shard", std::string(k) + "/2",
-                      "--out", b + "/data"})
+                      "2", "--quiet", "--shard", std::string(k) + "/2", "--out",
+                      b + "/data"})
                   .exit_code,
               0);
   }
-  const std::string info = "/usr/bin/python3 " +
-                           testing::SourcePath("tools/igbnet.py") + " info ";
+  const std::string info =
+      "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " info ";
   const auto ia = testing::RunCommand(info + a + "/data");
   const auto ib = testing::RunCommand(info + b + "/data");
   ASSERT_EQ(ia.exit_code, 0) << ia.err;

@@ -59,8 +59,8 @@ TEST(ExperimentTest, QuickExperimentsWriteResultsPlotsAndVideos) {
   const auto r = RunCommand(Experiment(
       "robustness --quick --policy greedy --jobs 2 --out " + dir + "/r"));
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-  for (const char* f : {"robustness.csv", "summary.json", "robustness.png",
-                        "robustness.mp4"})
+  for (const char* f :
+       {"robustness.csv", "summary.json", "robustness.png", "robustness.mp4"})
     EXPECT_TRUE(fs::exists(dir + "/r/" + f)) << f;
   const std::string rows = ReadFile(dir + "/r/robustness.csv");
   EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 1 + 2 * 5);
@@ -72,9 +72,8 @@ TEST(ExperimentTest, QuickExperimentsWriteResultsPlotsAndVideos) {
 TEST(ExperimentTest, BadArgumentsExitWith2) {
   if (!HaveMatplotlib()) GTEST_SKIP() << "no python3-matplotlib";
   const std::string dir = testing::MakeTempDir("aia_experiment_");
-  EXPECT_EQ(RunCommand(Experiment("robustness --seeds 0 --out " + dir))
-                .exit_code,
-            2);
+  EXPECT_EQ(
+      RunCommand(Experiment("robustness --seeds 0 --out " + dir)).exit_code, 2);
   EXPECT_EQ(RunCommand(Experiment("bogus --out " + dir)).exit_code, 2);
   const auto bad = RunCommand(Experiment(
       "robustness --quick --no-video --set robots.count=-1 --out " + dir));

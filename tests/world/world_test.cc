@@ -225,8 +225,8 @@ TEST(WorldTest, RandomObstaclesKeepClearOfPlacedStartsAndTargets) {
   // Dense clutter with hand-placed robots and targets: every seed builds
   // (before, some stopped with "inside an obstacle"), and every random box
   // keeps the robot radius plus one step away from each placed point.
-  const std::vector<Vec2> placed = {{1, 1}, {10, 10}, {18.5, 3}, {4, 16},
-                                    {12, 12}, {16, 17}};
+  const std::vector<Vec2> placed = {{1, 1},  {10, 10}, {18.5, 3},
+                                    {4, 16}, {12, 12}, {16, 17}};
   for (std::uint64_t seed = 0; seed < 30; ++seed) {
     Scenario s = ScenarioFromYaml(
         "robots:\n  count: 3\n  start: [[1, 1], [10, 10], [18.5, 3]]\n"

@@ -34,7 +34,8 @@ class Ranks {
   // Rank 0: receives lines from every other rank until each has sent its
   // end, calling on_line for each (in arrival order); returns the first
   // error a rank reported, or "".
-  std::string ReceiveAll(const std::function<void(const std::string&)>& on_line);
+  std::string ReceiveAll(
+      const std::function<void(const std::string&)>& on_line);
 
   Ranks(const Ranks&) = delete;
   Ranks& operator=(const Ranks&) = delete;
