@@ -7,11 +7,13 @@
 #include <exception>
 #include <functional>
 #include <memory>
+#include <new>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "aia/core/error.h"
+#include "aia/core/interrupt.h"
 #include "aia/learning/trainer.h"
 #include "aia/runtime/bench.h"
 #include "aia/runtime/catalog.h"
@@ -91,7 +93,12 @@ Action AddRunCommand(CLI::App& app) {
     if (!cmd->parsed()) return -1;
     run->overrides = flags->Get();
     run->progress = !*quiet;
+    aia::InstallInterruptHandler();  // Ctrl-C: write what is done, exit 130
     aia::RunMission(*run);
+    if (aia::Interrupted()) {
+      std::fprintf(stderr, "aia run: interrupted; wrote the steps done\n");
+      return aia::kInterruptedExitCode;
+    }
     return 0;
   };
 }
@@ -447,8 +454,16 @@ int main(int argc, char** argv) {
   } catch (const aia::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.Format().c_str());
     return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "error: out of memory (a smaller scenario, fewer threads, "
+                 "or a machine with more memory)\n");
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  } catch (...) {
+    std::fprintf(stderr, "error: an unknown failure ended aia\n");
     return 1;
   }
   return 0;

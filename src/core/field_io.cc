@@ -22,6 +22,37 @@ std::string FormatPair(double x, double y) {
   return "[" + FormatNumber(x) + ", " + FormatNumber(y) + "]";
 }
 
+bool field_text::IsUtf8(std::string_view text) {
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const auto* end = p + text.size();
+  while (p < end) {
+    const unsigned c = *p;
+    int extra = 0;
+    unsigned code = 0, min = 0;
+    if (c < 0x80) {
+      ++p;
+      continue;
+    } else if ((c & 0xE0) == 0xC0) {
+      extra = 1, code = c & 0x1F, min = 0x80;
+    } else if ((c & 0xF0) == 0xE0) {
+      extra = 2, code = c & 0x0F, min = 0x800;
+    } else if ((c & 0xF8) == 0xF0) {
+      extra = 3, code = c & 0x07, min = 0x10000;
+    } else {
+      return false;
+    }
+    if (end - p <= extra) return false;
+    for (int k = 1; k <= extra; ++k) {
+      if ((p[k] & 0xC0) != 0x80) return false;
+      code = (code << 6) | (p[k] & 0x3F);
+    }
+    if (code < min || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF))
+      return false;
+    p += extra + 1;
+  }
+  return true;
+}
+
 std::string NumberRange::Describe(bool plural) const {
   const std::string noun = plural ? "numbers" : "number";
   if (lo == -kInfinity && hi == kInfinity) return noun;
@@ -296,7 +327,8 @@ Eigen::VectorXd FieldReader::ReadNumbers(const ConfigNode& node,
 }
 
 Eigen::MatrixXd FieldReader::ReadMatrix(const ConfigNode& node,
-                                        const std::string& key) const {
+                                        const std::string& key,
+                                        const NumberRange& range) const {
   const std::string expected =
       "a matrix given as a list of rows of numbers, e.g. [[1, 0], [0, 1]]";
   if (!node.IsList() || node.items.empty()) FailExpected(node, key, expected);
@@ -304,7 +336,8 @@ Eigen::MatrixXd FieldReader::ReadMatrix(const ConfigNode& node,
   const std::size_t cols =
       node.items[0].IsList() ? node.items[0].items.size() : 0;
   if (cols == 0) FailExpected(node, key, expected);
-  Eigen::MatrixXd m(rows, cols);
+  // Every row's shape before the matrix is allocated: rows * cols is only
+  // bounded once the rows agree.
   for (std::size_t i = 0; i < rows; ++i) {
     const ConfigNode& row = node.items[i];
     if (!row.IsList()) FailExpected(node, key, expected);
@@ -315,12 +348,21 @@ Eigen::MatrixXd FieldReader::ReadMatrix(const ConfigNode& node,
                " entries but row 0 has " + std::to_string(cols) + ", got " +
                ShowNode(node));
     }
+  }
+  Eigen::MatrixXd m(rows, cols);
+  for (std::size_t i = 0; i < rows; ++i) {
+    const ConfigNode& row = node.items[i];
     for (std::size_t j = 0; j < cols; ++j) {
       const std::optional<double> x = field_text::ParseReal(row.items[j]);
       if (!x || !std::isfinite(*x)) {
         Fail(node, key,
              "entries must be finite numbers, got " + ShowNode(row.items[j]) +
                  " in row " + std::to_string(i));
+      }
+      if (!range.Contains(*x)) {
+        Fail(node, key,
+             "entries must be " + range.Describe(true) + ", got " +
+                 ShowNode(row.items[j]) + " in row " + std::to_string(i));
       }
       m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = *x;
     }

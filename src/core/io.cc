@@ -1,13 +1,102 @@
 #include "aia/core/io.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 
 namespace aia {
+
+std::string ReadFile(const std::string& path, std::uintmax_t max_bytes) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0)
+    throw std::runtime_error(std::string("cannot read file: ") +
+                             std::strerror(errno));
+  if (!S_ISREG(st.st_mode))
+    throw std::runtime_error(
+        "cannot read file: not a regular file (a directory, device or pipe)");
+  if (static_cast<std::uintmax_t>(st.st_size) > max_bytes)
+    throw std::runtime_error("file of " + std::to_string(st.st_size) +
+                             " bytes; at most " + std::to_string(max_bytes) +
+                             " bytes are read");
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(
+      std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f)
+    throw std::runtime_error(std::string("cannot read file: ") +
+                             std::strerror(errno));
+  std::string text;
+  char buffer[1 << 16];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f.get())) > 0) {
+    text.append(buffer, n);
+    if (text.size() > max_bytes)  // it grew while being read
+      throw std::runtime_error("file larger than " + std::to_string(max_bytes) +
+                               " bytes");
+  }
+  if (std::ferror(f.get()))
+    throw std::runtime_error(std::string("cannot read file: ") +
+                             std::strerror(errno));
+  return text;
+}
+
+FileLock::FileLock(const std::string& path) {
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0)
+    throw std::runtime_error("cannot create the lock file '" + path +
+                             "': " + std::strerror(errno));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    char buf[32] = {0};
+    const ssize_t n = ::pread(fd_, buf, sizeof(buf) - 1, 0);
+    ::close(fd_);
+    fd_ = -1;
+    if (err != EWOULDBLOCK)
+      throw std::runtime_error("cannot lock '" + path +
+                               "': " + std::strerror(err));
+    std::string holder = n > 0 ? std::string(buf, static_cast<size_t>(n)) : "";
+    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' '))
+      holder.pop_back();
+    throw std::runtime_error(
+        "is in use by another aia job" +
+        (holder.empty() ? std::string() : " (pid " + holder + ")") +
+        " holding " + path + "; wait for it to end or use another folder");
+  }
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(fd_, 0) == 0) (void)!::pwrite(fd_, pid.data(), pid.size(), 0);
+}
+
+FileLock::~FileLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the lock
+}
+
+int RemoveStaleTemporaries(const std::string& dir, const std::string& prefix) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  int removed = 0;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const std::size_t at = name.rfind(".tmp.");
+    if (at == std::string::npos || name.compare(0, prefix.size(), prefix) != 0)
+      continue;
+    const std::string pid = name.substr(at + 5);
+    if (pid.empty() || pid.size() > 9 ||
+        pid.find_first_not_of("0123456789") != std::string::npos)
+      continue;
+    const pid_t p = static_cast<pid_t>(std::stol(pid));
+    if (p == ::getpid() || ::kill(p, 0) == 0 || errno != ESRCH) continue;
+    std::error_code rm;
+    if (fs::remove(it->path(), rm)) ++removed;
+  }
+  return removed;
+}
 
 void MakeDirs(const std::string& path) {
   if (path.empty()) return;

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "aia/core/check.h"
+#include "spd.h"
 
 namespace aia {
 namespace {
@@ -20,11 +21,7 @@ using VecD = Eigen::Matrix<double, D, 1>;
 
 template <int D>
 MatD<D> CovarianceOf(const double* block) {
-  const Eigen::Map<const MatD<D>> omega(block);
-  const Eigen::LLT<MatD<D>> llt(omega);
-  AIA_CHECK_MSG(llt.info() == Eigen::Success,
-                "information matrix is not positive definite");
-  return llt.solve(MatD<D>::Identity());
+  return internal::InverseSpd<D>(Eigen::Map<const MatD<D>>(block));
 }
 
 template <int D>
@@ -32,9 +29,8 @@ VecD<D> MeanOf(const double* block) {
   const Eigen::Map<const MatD<D>> omega(block);
   const Eigen::Map<const VecD<D>> xi(block + D * D);
   const Eigen::LLT<MatD<D>> llt(omega);
-  AIA_CHECK_MSG(llt.info() == Eigen::Success,
-                "information matrix is not positive definite");
-  return llt.solve(xi);
+  if (llt.info() == Eigen::Success) return llt.solve(xi);
+  return internal::InverseSpd<D>(omega) * xi;
 }
 
 // log det Sigma = -log det Omega = -2 sum log L_ii for Omega = L L'. Going

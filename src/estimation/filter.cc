@@ -1,9 +1,13 @@
 #include "aia/estimation/filter.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <string>
 
 #include "aia/core/check.h"
+#include "aia/core/fields.h"
+#include "spd.h"
 
 namespace aia {
 namespace {
@@ -15,36 +19,31 @@ using VecD = Eigen::Matrix<double, D, 1>;
 using RowMap = Eigen::Map<Eigen::ArrayXd>;
 using ConstRowMap = Eigen::Map<const Eigen::ArrayXd>;
 
-// Sigma^-1 of an SPD block. For D = 2 the closed form is exact enough and
-// several times cheaper than a factorization; for D = 4 the Cholesky solve
-// avoids the cofactor formula's cancellation when Omega is badly scaled
-// (position precision ~1e4 / sigma0^2 next to a loosely known velocity).
-template <int D>
-MatD<D> InverseSpd(const MatD<D>& m) {
-  if constexpr (D == 2) {
-    const double det = m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0);
-    AIA_CHECK_MSG(det > 0.0 && m(0, 0) > 0.0, "block is not positive definite");
-    MatD<2> inv;
-    inv << m(1, 1), -m(0, 1), -m(1, 0), m(0, 0);
-    return inv / det;
-  } else {
-    const Eigen::LLT<MatD<D>> llt(m);
-    AIA_CHECK_MSG(llt.info() == Eigen::Success,
-                  "block is not positive definite");
-    return llt.solve(MatD<D>::Identity());
-  }
-}
-
 // Omega_{t+1|t} = (A Sigma A' + q I)^-1 from Sigma = Omega_{t|t}^-1, through
 // the moment form: the information form has no cheaper exact time update
-// when A is not the identity.
+// when A is not the identity. A predicted variance above kMaxVariance is a
+// divergence: `strict` (the filter) throws EstimateDiverged, otherwise (a
+// planner looking ahead) the covariance is scaled down to that bound.
 template <int D>
 void PredictOmega(const TargetModel& model, const MatD<D>& sigma,
-                  Eigen::Map<MatD<D>> omega) {
+                  Eigen::Map<MatD<D>> omega, bool strict) {
   const Eigen::Map<const MatD<D>> a(model.A.data());
-  const MatD<D> sigma_pred =
+  MatD<D> sigma_pred =
       a * sigma * a.transpose() + model.q * MatD<D>::Identity();
-  const MatD<D> omega_pred = InverseSpd<D>(sigma_pred);
+  const double top = sigma_pred.diagonal().maxCoeff();
+  if (!(top <= kMaxVariance)) {
+    if (strict || !std::isfinite(top)) {
+      throw EstimateDiverged(-1, "its predicted variance reaches " +
+                                     FormatNumber(top) + " m^2, beyond " +
+                                     FormatNumber(kMaxVariance));
+    }
+    sigma_pred *= kMaxVariance / top;
+  }
+  // A variance that contracting noiseless dynamics drive toward zero stays
+  // a normal double (a no-op for any variance above ~1e-14).
+  if (sigma_pred.diagonal().minCoeff() < kMinVariance)
+    sigma_pred.diagonal().array() += kMinVariance;
+  const MatD<D> omega_pred = internal::InverseSpd<D>(sigma_pred);
   // The DKF sums these blocks across robots every step; any asymmetry left
   // here would be carried (and compounded by prediction) forever.
   omega = 0.5 * (omega_pred + omega_pred.transpose());
@@ -52,15 +51,17 @@ void PredictOmega(const TargetModel& model, const MatD<D>& sigma,
 
 // x_{t+1|t} for one target block: Omega as above, xi = Omega (A mu + b).
 template <int D>
-void PredictBlock(const TargetModel& model, double* block) {
+void PredictBlock(const TargetModel& model, double* block, bool strict) {
   Eigen::Map<MatD<D>> omega(block);
   Eigen::Map<VecD<D>> xi(block + D * D);
   const Eigen::Map<const MatD<D>> a(model.A.data());
   const Eigen::Map<const VecD<D>> b(model.b.data());
-  const MatD<D> sigma = InverseSpd<D>(omega);
+  const MatD<D> sigma = internal::InverseSpd<D>(omega);
   const VecD<D> mu = sigma * xi;
-  PredictOmega<D>(model, sigma, omega);
+  PredictOmega<D>(model, sigma, omega, strict);
   const VecD<D> mu_pred = a * mu + b;
+  if (strict && !mu_pred.allFinite())
+    throw EstimateDiverged(-1, "its predicted mean is not finite");
   xi = omega * mu_pred;
 }
 
@@ -202,26 +203,35 @@ void Predict(BeliefSet* beliefs) {
     double* row = data.data() + r * data.cols();
     for (int k = 0; k < layout.num_targets(); ++k) {
       if (layout.is_static(k)) continue;
-      PredictInformationBlock(layout.model(k), row + layout.omega_offset(k));
+      double* block = row + layout.omega_offset(k);
+      try {
+        if (layout.dim(k) == 2) {
+          PredictBlock<2>(layout.model(k), block, true);
+        } else {
+          PredictBlock<4>(layout.model(k), block, true);
+        }
+      } catch (const EstimateDiverged& e) {
+        throw EstimateDiverged(k, e.what());
+      }
     }
   }
 }
 
 void PredictInformationBlock(const TargetModel& model, double* block) {
   if (model.dim() == 2) {
-    PredictBlock<2>(model, block);
+    PredictBlock<2>(model, block, false);
   } else {
-    PredictBlock<4>(model, block);
+    PredictBlock<4>(model, block, false);
   }
 }
 
 void PredictInformationMatrix(const TargetModel& model, double* omega) {
   if (model.dim() == 2) {
     Eigen::Map<MatD<2>> m(omega);
-    PredictOmega<2>(model, InverseSpd<2>(m), m);
+    PredictOmega<2>(model, internal::InverseSpd<2>(m), m, false);
   } else {
     Eigen::Map<MatD<4>> m(omega);
-    PredictOmega<4>(model, InverseSpd<4>(m), m);
+    PredictOmega<4>(model, internal::InverseSpd<4>(m), m, false);
   }
 }
 

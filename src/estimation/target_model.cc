@@ -1,5 +1,7 @@
 #include "aia/estimation/target_model.h"
 
+#include <Eigen/SVD>
+#include <algorithm>
 #include <string>
 
 #include "aia/core/field_io.h"
@@ -44,6 +46,20 @@ void TargetModel::Validate(const FieldChecker& check) {
   } else if (b.size() != dim()) {
     check.Fail(b, "must be " + field_text::CountWord(dim()) +
                       " numbers (one per row of A), got " + check.Shown(b));
+  }
+  // Without process noise the predicted covariance A Sigma A' is as singular
+  // as A: the filter would have no finite information to carry.
+  if (q == 0.0) {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A);
+    const Eigen::VectorXd& s = svd.singularValues();
+    if (s.minCoeff() <= 1e-9 * std::max(1.0, s.maxCoeff())) {
+      check.Fail(q,
+                 "must be positive when dynamics.A is singular (its smallest "
+                 "singular value is " +
+                     FormatNumber(s.minCoeff()) +
+                     "): the predicted covariance A Sigma A' would have no "
+                     "inverse");
+    }
   }
 }
 

@@ -34,7 +34,7 @@ std::string NetworkConfig::ToJson() const {
   j["stem_stride"] = stem_stride;
   j["pool"] = pool;
   j["hidden"] = hidden;
-  return j.dump();
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 NetworkConfig NetworkConfig::FromJson(const std::string& text) {

@@ -632,7 +632,7 @@ int SamplingTree::Rollout(RolloutKind kind, const SamplingParams& params) {
                       : 2 * (lattice.nx() + lattice.ny()) * std::max(1, m_);
   int v = 0;
   while (unloc_[v] > 0 && depth_[v] < cap &&
-         static_cast<long>(parent_.size()) < params.max_nodes) {
+         static_cast<long>(parent_.size()) < node_cap_) {
     RolloutMoves(v, kind);
     const int child = AddNode(v, child_pos_.data());
     Register(child, params);
@@ -707,6 +707,11 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   AIA_CHECK(problem.active.size() == problem.start.size());
   tour_budget_ = params.tour_budget;
   Prepare(problem);
+  // Memory guard: a node keeps n positions, `stride_` numbers and six
+  // scalars, in vectors that may hold up to twice what they use.
+  const double node_bytes = 2.0 * (4.0 * n_ + 8.0 * stride_ + 40.0);
+  node_cap_ = std::min<long>(params.max_nodes,
+                             static_cast<long>(kMaxTreeBytes / node_bytes));
   const Lattice& lattice = problem.map->lattice();
   SamplingPlan plan;
 
@@ -756,7 +761,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   while (best_ != root) {
     if (best_ >= 0 && since_goal >= params.anytime) break;
     if (best_ < 0 && it >= params.max_iterations) break;
-    if (static_cast<long>(parent_.size()) >= params.max_nodes) break;
+    if (static_cast<long>(parent_.size()) >= node_cap_) break;
     ++it;
     if (best_ >= 0) ++since_goal;
     // f_V: with probability p_V the deepest node of the branch being grown

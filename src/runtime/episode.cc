@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "aia/core/check.h"
+#include "aia/core/interrupt.h"
 #include "aia/estimation/filter.h"
 
 namespace aia {
@@ -89,7 +90,9 @@ void Episode::AddObserver(StepObserver* observer) {
 
 void Episode::Run() {
   for (StepObserver* o : observers_) o->OnStart(*this);
-  while (!done()) Step();
+  // Ctrl-C (when the command installed the handler) ends the mission after
+  // the step in progress; what was done is written as usual.
+  while (!done() && !Interrupted()) Step();
   for (StepObserver* o : observers_) o->OnEnd(*this);
 }
 
@@ -209,8 +212,21 @@ void Episode::Observe() {
   // this step's graph, fuse with the robot's own measurements.
   predicted_.data() = fused_.data();
   if (step_ > 0) {
-    Predict(&predicted_);
-    Predict(&central_);
+    try {
+      Predict(&predicted_);
+      Predict(&central_);
+    } catch (const EstimateDiverged& e) {
+      // Unstable dynamics that no robot measures: the model, not the robots,
+      // makes the mission impossible; stop with the key to blame.
+      const int k = e.target();
+      throw instance_->scenario.ErrorAt(
+          k >= 0 ? "targets.list[" + std::to_string(k) + "].dynamics"
+                 : "targets",
+          "the estimate of target " + std::to_string(k) + " diverges at step " +
+              std::to_string(step_) + ": " + e.what() +
+              " (the dynamics are unstable and no robot measures the target; "
+              "a stable A, or robots that reach it sooner)");
+    }
   }
   FusionWeights(comm_.AllNeighbors(),
                 instance_->scenario.communication.kappa_self, &weights_);

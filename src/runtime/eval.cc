@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include <thread>
 
 #include "aia/core/error.h"
+#include "aia/core/interrupt.h"
 #include "aia/core/io.h"
 #include "aia/runtime/episode.h"
 #include "aia/runtime/instance.h"
@@ -37,16 +39,31 @@ bool ParseRow(const std::string& line, EvalRow* r) {
   while (std::getline(ss, cell, ',')) f.push_back(cell);
   if (line.size() && line.back() == ',') f.push_back("");
   if (f.size() != 8) return false;
+  // Whole cells only: "12abc" is garbled, not 12.
+  const auto whole = [](const std::string& cell, auto parse) {
+    std::size_t used = 0;
+    const auto v = parse(cell, &used);
+    if (used != cell.size()) throw std::invalid_argument(cell);
+    return v;
+  };
+  const auto to_int = [](const std::string& c, std::size_t* n) {
+    return std::stoi(c, n);
+  };
   try {
     r->size = f[0];
-    r->seed = std::stoull(f[1]);
+    if (f[1].empty() || f[1][0] == '-') return false;
+    r->seed = whole(f[1], [](const std::string& c, std::size_t* n) {
+      return std::stoull(c, n);
+    });
     r->policy = f[2];
     if (f[3] != "0" && f[3] != "1") return false;
     r->success = f[3] == "1";
-    r->flowtime = f[4].empty() ? -1 : std::stoi(f[4]);
-    r->fstar = std::stoi(f[5]);
-    r->bound = std::stoi(f[6]);
-    r->wall_s = std::stod(f[7]);
+    r->flowtime = f[4].empty() ? -1 : whole(f[4], to_int);
+    r->fstar = whole(f[5], to_int);
+    r->bound = whole(f[6], to_int);
+    r->wall_s = whole(f[7], [](const std::string& c, std::size_t* n) {
+      return std::stod(c, n);
+    });
   } catch (const std::exception&) {
     return false;
   }
@@ -268,16 +285,63 @@ std::string FormatRow(const EvalRow& r) {
   return buf;
 }
 
-std::vector<EvalRow> ReadRuns(const std::string& path) {
+// Why a parsed row cannot be a run's result, or "".
+std::string Impossible(const EvalRow& r) {
+  static const std::regex kSize("^[0-9]{1,5}x[0-9]{1,5}$");
+  static const std::regex kPolicy("^[A-Za-z0-9_.-]{1,64}$");
+  if (!std::regex_match(r.size, kSize)) return "size '" + r.size + "'";
+  if (!std::regex_match(r.policy, kPolicy)) return "policy '" + r.policy + "'";
+  if (r.fstar < -1) return "fstar " + std::to_string(r.fstar);
+  if (r.bound < -1) return "bound " + std::to_string(r.bound);
+  if (!std::isfinite(r.wall_s) || r.wall_s < 0) return "wall_s";
+  if (r.flowtime < -1) return "flowtime " + std::to_string(r.flowtime);
+  if (r.success && r.flowtime < 0) return "a success without a flowtime";
+  if (r.success && r.fstar >= 0 && r.flowtime > Horizon(r.fstar))
+    return "flowtime " + std::to_string(r.flowtime) + " beyond the horizon " +
+           std::to_string(Horizon(r.fstar));
+  return "";
+}
+
+std::vector<EvalRow> ReadRuns(const std::string& path,
+                              std::vector<std::string>* problems) {
   std::vector<EvalRow> rows;
+  std::vector<int> lines;
   std::ifstream in(path);
   std::string line;
+  int number = 0;
+  const auto report = [&](int at, const std::string& why) {
+    if (problems)
+      problems->push_back("line " + std::to_string(at) + ": " + why);
+  };
   while (std::getline(in, line)) {
+    ++number;
     EvalRow r;
     if (line == kHeader || line.empty()) continue;
-    if (ParseRow(line, &r)) rows.push_back(r);
+    if (!ParseRow(line, &r)) {
+      report(number, "not a row");
+      continue;
+    }
+    if (const std::string why = Impossible(r); !why.empty()) {
+      report(number, "impossible " + why);
+      continue;
+    }
+    rows.push_back(r);
+    lines.push_back(number);
   }
-  return rows;
+  // A run found twice: which copy is right is unknown, so neither is kept.
+  std::map<std::tuple<std::string, std::uint64_t, std::string>, int> count;
+  for (const EvalRow& r : rows) ++count[{r.size, r.seed, r.policy}];
+  std::vector<EvalRow> kept;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const EvalRow& r = rows[i];
+    if (count[{r.size, r.seed, r.policy}] > 1) {
+      report(lines[i], "duplicate run " + r.size + " seed " +
+                           std::to_string(r.seed) + " " + r.policy);
+    } else {
+      kept.push_back(r);
+    }
+  }
+  return kept;
 }
 
 std::string SummaryCsv(const std::vector<EvalRow>& rows,
@@ -330,6 +394,9 @@ int RunEval(const EvalOptions& o) {
     throw InputError("command line", 0, "--out",
                      "an output folder is required");
   const PolicyRegistry registry = AllPolicies();
+  // One process: Ctrl-C writes the rows done (below). Under mpirun the
+  // launcher owns the signals.
+  if (!Ranks::Get().distributed()) InstallInterruptHandler();
   std::vector<std::string> policies = o.policies;
   if (policies.empty()) {
     for (const auto& name : registry.Names())
@@ -349,7 +416,7 @@ int RunEval(const EvalOptions& o) {
   std::vector<EvalRow> rows;
   if (root) {
     try {
-      MakeOutputDir(o.out_dir, "--out");
+      MakeOutputDir(o.out_dir, "--out", /*lock=*/true);
       // Finished rows are kept only for the same configuration.
       if (std::ifstream old(effective_path); old) {
         std::stringstream text;
@@ -364,9 +431,22 @@ int RunEval(const EvalOptions& o) {
                                "; see its effective.yaml): use a new "
                                "folder");
       }
-      // Resume: keep the rows already there, rewritten cleanly (a row cut
-      // short by an interruption is dropped and run again).
-      rows = ReadRuns(runs_path);
+      // Resume: keep the rows already there, rewritten cleanly; a row cut
+      // short by an interruption, garbled, impossible or duplicated is
+      // reported, dropped and run again.
+      std::vector<std::string> problems;
+      rows = ReadRuns(runs_path, &problems);
+      if (!problems.empty()) {
+        std::string shown;
+        for (size_t i = 0; i < problems.size() && i < 5; ++i)
+          shown += (i ? "; " : "") + problems[i];
+        if (problems.size() > 5)
+          shown += "; ... (" + std::to_string(problems.size() - 5) + " more)";
+        std::fprintf(stderr,
+                     "aia eval: %s: dropped %zu rows that will run again: "
+                     "%s\n",
+                     runs_path.c_str(), problems.size(), shown.c_str());
+      }
       std::string text = std::string(kHeader) + "\n";
       for (const auto& r : rows) text += FormatRow(r);
       WriteFileAtomic(runs_path, text);
@@ -447,7 +527,7 @@ int RunEval(const EvalOptions& o) {
     progress.Update(buf);
   };
   auto worker = [&]() {
-    while (true) {
+    while (!Interrupted()) {
       const size_t w = next.fetch_add(1);
       if (w >= work.size()) return;
       try {
@@ -495,7 +575,58 @@ int RunEval(const EvalOptions& o) {
       1, std::min<int>(threads,
                        static_cast<int>(std::max<size_t>(work.size(), 1))));
   std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  std::atomic<int> running{threads};
+  for (int t = 0; t < threads; ++t)
+    pool.emplace_back([&]() {
+      worker();
+      --running;
+    });
+  // Canonical order, so the files do not depend on the thread count.
+  std::map<std::string, size_t> size_rank, policy_rank;
+  for (size_t i = 0; i < o.sizes.size(); ++i) size_rank.emplace(o.sizes[i], i);
+  for (size_t i = 0; i < policies.size(); ++i)
+    policy_rank.emplace(policies[i], i);
+  const auto write_results = [&]() {
+    auto rank = [](const std::map<std::string, size_t>& m,
+                   const std::string& k) {
+      const auto it = m.find(k);
+      return it == m.end() ? m.size() : it->second;
+    };
+    std::stable_sort(
+        rows.begin(), rows.end(), [&](const EvalRow& a, const EvalRow& b) {
+          return std::make_tuple(rank(size_rank, a.size), a.size, a.seed,
+                                 rank(policy_rank, a.policy), a.policy) <
+                 std::make_tuple(rank(size_rank, b.size), b.size, b.seed,
+                                 rank(policy_rank, b.policy), b.policy);
+        });
+    std::string text = std::string(kHeader) + "\n";
+    for (const auto& r : rows) text += FormatRow(r);
+    WriteFileAtomic(runs_path, text);
+    std::vector<EvalRow> in_range;
+    for (const auto& r : rows)
+      if (r.seed >= o.seed_base &&
+          r.seed < o.seed_base + static_cast<std::uint64_t>(o.seeds))
+        in_range.push_back(r);
+    const std::string summary = SummaryCsv(in_range, o.sizes, policies);
+    WriteFileAtomic(o.out_dir + "/summary.csv", summary);
+    return summary;
+  };
+  // Ctrl-C (one process): the rows finished so far are written, with the
+  // summary of what is done, and the runs in flight are abandoned.
+  while (running > 0 && !(root && !ranks.distributed() && Interrupted()))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  if (running > 0) {
+    std::lock_guard<std::mutex> lock(mu);  // no row is being appended
+    progress.Finish();
+    ::fsync(fd);
+    write_results();
+    std::fprintf(stderr,
+                 "aia eval: interrupted; %zu rows written to %s (summary.csv "
+                 "covers them); run the same command to go on\n",
+                 rows.size(), runs_path.c_str());
+    std::fflush(stderr);
+    std::_Exit(kInterruptedExitCode);
+  }
   for (auto& t : pool) t.join();
   if (!root) {
     ranks.SendDone(first_error);
@@ -508,32 +639,14 @@ int RunEval(const EvalOptions& o) {
   if (first_error.empty()) first_error = remote_error;
   if (!first_error.empty()) throw std::runtime_error(first_error);
 
-  // Canonical order, so the files do not depend on the thread count.
-  std::map<std::string, size_t> size_rank, policy_rank;
-  for (size_t i = 0; i < o.sizes.size(); ++i) size_rank.emplace(o.sizes[i], i);
-  for (size_t i = 0; i < policies.size(); ++i)
-    policy_rank.emplace(policies[i], i);
-  auto rank = [](const std::map<std::string, size_t>& m, const std::string& k) {
-    const auto it = m.find(k);
-    return it == m.end() ? m.size() : it->second;
-  };
-  std::stable_sort(
-      rows.begin(), rows.end(), [&](const EvalRow& a, const EvalRow& b) {
-        return std::make_tuple(rank(size_rank, a.size), a.size, a.seed,
-                               rank(policy_rank, a.policy), a.policy) <
-               std::make_tuple(rank(size_rank, b.size), b.size, b.seed,
-                               rank(policy_rank, b.policy), b.policy);
-      });
-  std::string text = std::string(kHeader) + "\n";
-  for (const auto& r : rows) text += FormatRow(r);
-  WriteFileAtomic(runs_path, text);
-  std::vector<EvalRow> in_range;
-  for (const auto& r : rows)
-    if (r.seed >= o.seed_base &&
-        r.seed < o.seed_base + static_cast<std::uint64_t>(o.seeds))
-      in_range.push_back(r);
-  const std::string summary = SummaryCsv(in_range, o.sizes, policies);
-  WriteFileAtomic(o.out_dir + "/summary.csv", summary);
+  const std::string summary = write_results();
+  if (Interrupted()) {
+    std::fprintf(stderr,
+                 "aia eval: interrupted; %zu rows written to %s; run the same "
+                 "command to go on\n",
+                 rows.size(), runs_path.c_str());
+    return kInterruptedExitCode;
+  }
   std::printf("%s", summary.c_str());
   std::printf("wrote %s, %s/summary.csv and %s\n", runs_path.c_str(),
               o.out_dir.c_str(), effective_path.c_str());

@@ -1,11 +1,19 @@
 #include "aia/runtime/mission.h"
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "aia/core/error.h"
+#include "aia/core/interrupt.h"
 #include "aia/core/io.h"
 #include "aia/learning/igbnet_policy.h"
 #include "aia/scenario/loader.h"
@@ -54,13 +62,33 @@ std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
                                    registry.Resolve(scenario)->Create());
 }
 
-void MakeOutputDir(const std::string& dir, const std::string& flag) {
+void LockOutput(const std::string& path, const std::string& flag) {
+  // Held until the process ends (the kernel releases it on any exit).
+  static std::mutex mu;
+  static std::vector<std::unique_ptr<FileLock>> held;
+  try {
+    auto lock = std::make_unique<FileLock>(path);
+    const std::lock_guard<std::mutex> guard(mu);
+    held.push_back(std::move(lock));
+  } catch (const std::runtime_error& e) {
+    throw InputError("command line", 0, flag, e.what());
+  }
+}
+
+void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
   if (dir.empty()) return;
   try {
     MakeDirs(dir);
   } catch (const std::exception& e) {
     throw InputError("command line", 0, flag, e.what());
   }
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw InputError(
+        "command line", 0, flag,
+        "cannot write into '" + dir + "': " + std::strerror(errno));
+  if (!lock) return;
+  LockOutput(dir + "/.aia.lock", flag);
+  RemoveStaleTemporaries(dir);
 }
 
 PreparedMission PrepareMission(Scenario scenario,
@@ -121,7 +149,9 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
     if (!e.comm().Active(i)) failed.push_back(i);
   j["failed_robots"] = failed;
   j["wall_s"] = s.wall_s;
-  return j.dump(2) + "\n";
+  // Only for a mission stopped by Ctrl-C, whose steps end early.
+  if (Interrupted()) j["interrupted"] = true;
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 MissionRunner::MissionRunner(const PreparedMission& mission, std::string prefix,
@@ -178,7 +208,9 @@ MissionSummary MissionRunner::Run() {
   d["wall_seconds"] = {{"physics", t.physics}, {"sensing", t.sensing},
                        {"fusion", t.fusion},   {"policy", t.policy},
                        {"steps", t.total},     {"total", summary.wall_s}};
-  WriteFileAtomic(prefix_ + "diagnostics.json", d.dump(2) + "\n");
+  WriteFileAtomic(
+      prefix_ + "diagnostics.json",
+      d.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   return summary;
 }
 
@@ -192,7 +224,7 @@ MissionSummary RunMission(const RunOptions& options) {
   if (out.empty())
     out = "renders/" +
           std::filesystem::path(options.scenario_path).stem().string();
-  MakeOutputDir(out, "--out");
+  MakeOutputDir(out, "--out", /*lock=*/true);
 
   MissionRunner runner(mission, out + "/", "aia run", options.progress);
   const MissionSummary summary = runner.Run();

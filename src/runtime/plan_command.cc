@@ -107,7 +107,9 @@ int RunPlanCommand(const PlanOptions& o) {
     j["plan"] = steps;
     const std::filesystem::path out(o.out);
     MakeOutputDir(out.parent_path().string(), "--out");
-    WriteFileAtomic(o.out, j.dump(1) + "\n");
+    WriteFileAtomic(
+        o.out,
+        j.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     Scenario effective = EffectiveScenario(mission);
     if (o.budget) {
       effective.policy.params.Set(

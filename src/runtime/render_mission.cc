@@ -277,7 +277,9 @@ RenderResult RenderMission(const RenderOptions& options) {
   t["total"] = wall;
   v["seconds"] = t;
   j["video"] = v;
-  WriteFileAtomic(prefix + "summary.json", j.dump(2) + "\n");
+  WriteFileAtomic(
+      prefix + "summary.json",
+      j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 
   const MissionSummary& s = r.mission;
   std::printf(

@@ -1,5 +1,6 @@
 #include "aia/scenario/config.h"
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -98,10 +99,79 @@ void TargetsConfig::Validate(const FieldChecker& check) {
   if (has_list) count = static_cast<int>(list.size());
 }
 
+void PhysicsConfig::Validate(const FieldChecker& check) {
+  // The waypoint actuator is a critically damped spring: explicit
+  // integration is stable while timestep * omega stays well below 1.
+  const double omega_dt = timestep * std::sqrt(kp / robot_mass);
+  if (omega_dt > 0.5) {
+    check.Fail(kp, "is too stiff for physics.timestep " +
+                       FormatNumber(timestep) + " and robot_mass " +
+                       FormatNumber(robot_mass) +
+                       ": timestep * sqrt(kp / robot_mass) is " +
+                       FormatNumber(omega_dt) +
+                       ", at most 0.5 keeps the simulation stable (lower kp "
+                       "or the timestep)");
+  }
+  const double steps = step_timeout / timestep;
+  if (steps > limits::kMaxPhysicsStepsPerDecision) {
+    check.Fail(timestep, "makes " + FormatNumber(steps) +
+                             " physics steps in one decision step "
+                             "(step_timeout / timestep); at most " +
+                             FormatNumber(limits::kMaxPhysicsStepsPerDecision));
+  }
+}
+
 void Scenario::Validate(const FieldChecker& check) {
   const Vec2& size = workspace.size;
   const std::string bounds = "[0, " + FormatNumber(size.x()) + "] x [0, " +
                              FormatNumber(size.y()) + "]";
+  // Derived sizes, before anything is allocated (the ranges keep these
+  // products finite and far from integer overflow).
+  const double cells = std::ceil(size.x() / workspace.cell) *
+                       std::ceil(size.y() / workspace.cell);
+  if (cells > limits::kMaxGridCells) {
+    check.Fail(workspace.cell,
+               "makes " + FormatNumber(cells) +
+                   " occupancy-grid cells in the workspace " +
+                   FormatPair(size.x(), size.y()) + "; at most " +
+                   FormatNumber(limits::kMaxGridCells) + " (a larger cell)");
+  }
+  const double points = std::floor(size.x() / robots.step + 1e-9) *
+                        std::floor(size.y() / robots.step + 1e-9);
+  if (points > limits::kMaxLatticePoints) {
+    check.Fail(robots.step, "makes " + FormatNumber(points) +
+                                " lattice points in the workspace " +
+                                FormatPair(size.x(), size.y()) + "; at most " +
+                                FormatNumber(limits::kMaxLatticePoints) +
+                                " (a larger step or a smaller workspace)");
+  }
+  const int random_boxes =
+      workspace.obstacles.random ? workspace.obstacles.random->count : 0;
+  const long bodies = static_cast<long>(robots.count) + NumTargets() +
+                      random_boxes +
+                      static_cast<long>(workspace.obstacles.boxes.size());
+  if (bodies > limits::kMaxBodies) {
+    const std::string what =
+        std::to_string(robots.count) + " robots, " +
+        std::to_string(NumTargets()) + " targets and " +
+        std::to_string(bodies - robots.count - NumTargets()) +
+        " obstacle boxes make " + std::to_string(bodies) +
+        " bodies; aia simulates at most " + std::to_string(limits::kMaxBodies);
+    if (random_boxes >= robots.count && random_boxes >= NumTargets())
+      check.Fail(workspace.obstacles.random->count, what);
+    if (robots.count >= NumTargets()) check.Fail(robots.count, what);
+    if (targets.list.empty()) check.Fail(targets.count, what);
+    check.Fail(targets.list, what);
+  }
+  for (const BoxConfig& b : workspace.obstacles.boxes) {
+    const Vec2 lo = b.center - 0.5 * b.size, hi = b.center + 0.5 * b.size;
+    if (!(lo.x() < size.x() && lo.y() < size.y() && hi.x() > 0.0 &&
+          hi.y() > 0.0)) {
+      check.Fail(b.center, "box " + check.Shown(b.center) + " of size " +
+                               check.Shown(b.size) +
+                               " lies outside the workspace " + bounds);
+    }
+  }
   if (const auto& random = workspace.obstacles.random;
       random && (random->max_size.array() > size.array()).any()) {
     check.Fail(random->max_size,

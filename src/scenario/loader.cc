@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "aia/core/error.h"
+#include "aia/core/io.h"
 #include "aia/scenario/yaml.h"
 
 namespace aia {
@@ -18,23 +19,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The whole file, or an InputError carrying the system's reason.
+// Scenario files larger than this are not scenarios.
+constexpr std::uintmax_t kMaxScenarioBytes = 16u << 20;
+
+// The whole file, or an InputError carrying the reason.
 std::string ReadText(const std::string& path) {
-  const auto fail = [&path](int err) {
-    return InputError(path, 0, "(file)",
-                      std::string("cannot read file: ") + std::strerror(err));
-  };
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(
-      std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) throw fail(errno);
-  std::string text;
-  char buffer[1 << 16];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f.get())) > 0)
-    text.append(buffer, n);
-  // A directory opens but fails to read (EISDIR).
-  if (std::ferror(f.get())) throw fail(errno);
-  return text;
+  try {
+    return ReadFile(path, kMaxScenarioBytes);
+  } catch (const std::runtime_error& e) {
+    throw InputError(path, 0, "(file)", e.what());
+  }
 }
 
 // One step of a key path: a mapping key or a list index.

@@ -7,6 +7,12 @@
 namespace aia {
 namespace {
 
+// Index of the cell holding coordinate v, clamped to [0, n - 1] before any
+// conversion to int (a box far outside the workspace would overflow it).
+int ClampedCell(double v, int n) {
+  return static_cast<int>(std::clamp(v, 0.0, static_cast<double>(n - 1)));
+}
+
 Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
                              const std::vector<Box>& boxes) {
   const int nx =
@@ -16,12 +22,13 @@ Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
   Grid<std::uint8_t> grid(nx, ny, cell, 0);
   for (const Box& b : boxes) {
     // Cells whose interior overlaps the box.
-    const int x0 = std::max(0, static_cast<int>(std::floor(b.lo.x() / cell)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(b.lo.y() / cell)));
-    const int x1 =
-        std::min(nx - 1, static_cast<int>(std::ceil(b.hi.x() / cell)) - 1);
-    const int y1 =
-        std::min(ny - 1, static_cast<int>(std::ceil(b.hi.y() / cell)) - 1);
+    if (b.hi.x() <= 0.0 || b.hi.y() <= 0.0 || b.lo.x() >= nx * cell ||
+        b.lo.y() >= ny * cell)
+      continue;
+    const int x0 = ClampedCell(std::floor(b.lo.x() / cell), nx);
+    const int y0 = ClampedCell(std::floor(b.lo.y() / cell), ny);
+    const int x1 = ClampedCell(std::ceil(b.hi.x() / cell) - 1, nx);
+    const int y1 = ClampedCell(std::ceil(b.hi.y() / cell) - 1, ny);
     for (int iy = y0; iy <= y1; ++iy)
       for (int ix = x0; ix <= x1; ++ix) grid(ix, iy) = 1;
   }
@@ -37,7 +44,9 @@ Map::Map(const Vec2& size, std::vector<Box> obstacles, double cell, double step,
       occupancy_(Rasterize(size, cell, obstacles_)),
       lattice_(size, step, robot_radius, obstacles_),
       robot_radius_(robot_radius) {
-  bucket_ = 1.0;
+  // 1 m buckets, larger in workspaces over 1 km^2 so that there are at most
+  // about 1e6 of them.
+  bucket_ = std::max(1.0, std::sqrt(size_.x() * size_.y() / 1e6));
   bx_ = std::max(1, static_cast<int>(std::ceil(size_.x() / bucket_)));
   by_ = std::max(1, static_cast<int>(std::ceil(size_.y() / bucket_)));
   buckets_.assign(static_cast<size_t>(bx_) * by_, {});
@@ -54,7 +63,8 @@ Map::Map(const Vec2& size, std::vector<Box> obstacles, double cell, double step,
 void Map::BucketRange(const Vec2& lo, const Vec2& hi, int* x0, int* x1, int* y0,
                       int* y1) const {
   const auto bucket = [this](double v, int n) {
-    return std::clamp(static_cast<int>(std::floor(v / bucket_)), 0, n - 1);
+    return static_cast<int>(
+        std::clamp(std::floor(v / bucket_), 0.0, static_cast<double>(n - 1)));
   };
   *x0 = bucket(lo.x(), bx_);
   *x1 = bucket(hi.x(), bx_);

@@ -1,12 +1,20 @@
 #include "aia/world/world.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <stdexcept>
 
 #include "aia/core/check.h"
 #include "aia/core/error.h"
+#include "aia/core/io.h"
 #include "aia/core/rng.h"
 #include "aia/world/map.h"
 
@@ -68,36 +76,163 @@ std::vector<Box> RandomBoxes(const Scenario& s, Rng& rng) {
 std::vector<Box> MapBoxes(const Scenario& s) {
   const std::string key = "workspace.obstacles.map";
   const std::string& map = s.workspace.obstacles.map;
-  cv::Mat img = cv::imread(map, cv::IMREAD_GRAYSCALE);
-  if (img.empty())
-    Fail(s, key, "cannot decode image '" + map + "' (PGM or PNG expected)");
-  if (img.depth() != CV_8U) img.convertTo(img, CV_8U, 1.0 / 256.0);
-  std::vector<std::uint8_t> gray(img.begin<std::uint8_t>(),
-                                 img.end<std::uint8_t>());
-  return BoxesFromImage(gray, img.cols, img.rows, s.workspace.size,
-                        s.workspace.obstacles.map_threshold);
+  // A PNG of kMaxMapPixels pixels is far smaller than this.
+  constexpr std::uintmax_t kMaxFileBytes = 256u << 20;
+  std::string bytes;
+  try {
+    bytes = ReadFile(map, kMaxFileBytes);
+  } catch (const std::exception& e) {
+    Fail(s, key, e.what());
+  }
+  GrayImage img;
+  try {
+    img = DecodeMapImage(bytes);
+  } catch (const std::invalid_argument& e) {
+    Fail(s, key, "cannot decode image '" + map + "': " + e.what());
+  }
+  std::vector<Box> boxes =
+      BoxesFromImage(img.pixels, img.cols, img.rows, s.workspace.size,
+                     s.workspace.obstacles.map_threshold, kMaxBodies);
+  if (boxes.size() > static_cast<std::size_t>(kMaxBodies))
+    Fail(s, key,
+         "the map's dark pixels make more than " + std::to_string(kMaxBodies) +
+             " boxes; aia simulates at most " + std::to_string(kMaxBodies) +
+             " bodies (a simpler or smaller image)");
+  return boxes;
+}
+
+// Silences file descriptor 2 while it lives (decoders that print).
+class QuietStderr {
+ public:
+  QuietStderr() : lock_(Mutex()) {
+    std::fflush(stderr);
+    saved_ = ::dup(2);
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (saved_ >= 0 && null >= 0) ::dup2(null, 2);
+    if (null >= 0) ::close(null);
+  }
+  ~QuietStderr() {
+    if (saved_ < 0) return;
+    ::dup2(saved_, 2);
+    ::close(saved_);
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  static std::mutex& Mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  int saved_ = -1;
+};
+
+// Width and height as the image's header declares them; false when the
+// bytes are neither PNG nor PGM.
+bool HeaderSize(const std::string& b, long long* cols, long long* rows) {
+  static const char kPng[] = "\x89PNG\r\n\x1a\n";
+  if (b.size() >= 24 && b.compare(0, 8, kPng, 8) == 0 &&
+      b.compare(12, 4, "IHDR") == 0) {
+    auto be32 = [&](std::size_t at) {
+      long long v = 0;
+      for (std::size_t i = 0; i < 4; ++i)
+        v = (v << 8) | static_cast<unsigned char>(b[at + i]);
+      return v;
+    };
+    *cols = be32(16);
+    *rows = be32(20);
+    return true;
+  }
+  if (b.size() >= 2 && b[0] == 'P' && (b[1] == '2' || b[1] == '5')) {
+    std::size_t at = 2;
+    long long v[2] = {-1, -1};
+    for (long long& x : v) {
+      while (at < b.size()) {  // whitespace and comments
+        if (std::isspace(static_cast<unsigned char>(b[at]))) {
+          ++at;
+        } else if (b[at] == '#') {
+          while (at < b.size() && b[at] != '\n') ++at;
+        } else {
+          break;
+        }
+      }
+      std::size_t digits = 0;
+      x = 0;
+      while (at < b.size() && std::isdigit(static_cast<unsigned char>(b[at])) &&
+             digits < 12) {
+        x = 10 * x + (b[at++] - '0');
+        ++digits;
+      }
+      if (digits == 0 || digits == 12) return false;
+    }
+    *cols = v[0];
+    *rows = v[1];
+    return true;
+  }
+  return false;
 }
 
 }  // namespace
 
+GrayImage DecodeMapImage(const std::string& bytes) {
+  long long cols = 0, rows = 0;
+  if (!HeaderSize(bytes, &cols, &rows))
+    throw std::invalid_argument("not a PGM or PNG image");
+  if (cols <= 0 || rows <= 0)
+    throw std::invalid_argument("the header declares an empty image (" +
+                                std::to_string(cols) + " x " +
+                                std::to_string(rows) + " pixels)");
+  if (cols * rows > kMaxMapPixels)
+    throw std::invalid_argument(
+        "the header declares " + std::to_string(cols) + " x " +
+        std::to_string(rows) + " pixels; at most " +
+        std::to_string(kMaxMapPixels) + " pixels (e.g. 4096 x 4096)");
+  cv::Mat img;
+  try {
+    const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8U,
+                      const_cast<char*>(bytes.data()));
+    // libpng prints its own complaint about a corrupt file to stderr; the
+    // reason reaches the user as one error line instead.
+    const QuietStderr quiet;
+    img = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception&) {
+    img.release();
+  }
+  if (img.empty() || img.cols != cols || img.rows != rows)
+    throw std::invalid_argument("the image data is corrupt or truncated");
+  if (img.depth() != CV_8U) img.convertTo(img, CV_8U, 1.0 / 256.0);
+  GrayImage out;
+  out.cols = img.cols;
+  out.rows = img.rows;
+  out.pixels.assign(img.begin<std::uint8_t>(), img.end<std::uint8_t>());
+  return out;
+}
+
 std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
-                                int rows, const Vec2& size, double threshold) {
-  AIA_CHECK(static_cast<int>(gray.size()) == cols * rows);
+                                int rows, const Vec2& size, double threshold,
+                                std::size_t max_boxes) {
+  AIA_CHECK(cols >= 0 && rows >= 0 &&
+            gray.size() == static_cast<std::size_t>(cols) * rows);
   const double px = size.x() / cols, py = size.y() / rows;
   const double cut = threshold * 255.0;
   // Runs of dark pixels per row, merged downwards while the next row has the
-  // exact same run: few boxes for typical maps, exact coverage always.
+  // exact same run: few boxes for typical maps, exact coverage always. Runs
+  // of a row are disjoint and ordered by x0, and so are the open boxes: one
+  // merge pass per row.
   struct Run {
     int x0, x1, y0, y1;  // pixel columns [x0, x1), rows [y0, y1)
   };
   std::vector<Run> open, next, done;
+  std::vector<std::pair<int, int>> runs;
   for (int r = 0; r <= rows; ++r) {
-    std::vector<std::pair<int, int>> runs;
+    runs.clear();
     if (r < rows) {
+      const std::uint8_t* row = gray.data() + static_cast<size_t>(r) * cols;
       for (int c = 0; c < cols;) {
-        if (gray[static_cast<size_t>(r) * cols + c] < cut) {
+        if (row[c] < cut) {
           int e = c;
-          while (e < cols && gray[static_cast<size_t>(r) * cols + e] < cut) ++e;
+          while (e < cols && row[e] < cut) ++e;
           runs.push_back({c, e});
           c = e;
         } else {
@@ -106,22 +241,24 @@ std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
       }
     }
     next.clear();
-    std::vector<bool> used(runs.size(), false);
+    std::size_t i = 0;
     for (const Run& o : open) {
-      bool extended = false;
-      for (size_t i = 0; i < runs.size(); ++i) {
-        if (!used[i] && runs[i].first == o.x0 && runs[i].second == o.x1) {
-          used[i] = true;
-          next.push_back({o.x0, o.x1, o.y0, r + 1});
-          extended = true;
-          break;
-        }
+      while (i < runs.size() && runs[i].first < o.x0)
+        next.push_back({runs[i].first, runs[i].second, r, r + 1}), ++i;
+      if (i < runs.size() && runs[i].first == o.x0 && runs[i].second == o.x1) {
+        next.push_back({o.x0, o.x1, o.y0, r + 1});
+        ++i;
+      } else {
+        done.push_back(o);
       }
-      if (!extended) done.push_back(o);
     }
-    for (size_t i = 0; i < runs.size(); ++i)
-      if (!used[i]) next.push_back({runs[i].first, runs[i].second, r, r + 1});
+    for (; i < runs.size(); ++i)
+      next.push_back({runs[i].first, runs[i].second, r, r + 1});
     open.swap(next);
+    if (done.size() + open.size() > max_boxes) {  // known to be too many
+      done.insert(done.end(), open.begin(), open.end());
+      break;
+    }
   }
   std::vector<Box> boxes;
   boxes.reserve(done.size());

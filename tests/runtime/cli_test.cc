@@ -348,7 +348,8 @@ TEST(CliTest, BadSetIsBadInputOnEveryCommand) {
        "error: command line: --set policy.p_v: unknown parameter for policy "
        "'igbnet'"},
       {{"render", scenario, "--out", out + "/v.mp4", "--set", "render.fps=0"},
-       "error: command line: --set render.fps: must be an integer >= 1"},
+       "error: command line: --set render.fps: must be an integer in [1, "
+       "1000]"},
       {{"plan", scenario, "--set", "policy.p_vv=1"},
        "error: command line: --set policy.p_vv: unknown parameter for policy "
        "'expert' (did you mean `p_v`?)"},

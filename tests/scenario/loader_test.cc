@@ -304,7 +304,8 @@ TEST(LoaderTest, ErrorNamesFileLineAndKey) {
       "robots: {count: 2}\ntargets: {count: 1}\n"
       "workspace:\n  size: [0, 20]\n");
   EXPECT_EQ(e.Format(),
-            "test.yaml:4: workspace.size: must be two positive numbers [width, "
+            "test.yaml:4: workspace.size: must be two numbers in [0.1, 10000] "
+            "[width, "
             "height], "
             "got [0, 20]");
 }
@@ -464,7 +465,7 @@ TEST(LoaderTest, TargetCountAndListMustAgree) {
 
 TEST(LoaderTest, IntegersAreNotFloats) {
   EXPECT_EQ(ErrorOf("robots: {count: 2.0}\ntargets: {count: 1}\n").message(),
-            "must be an integer >= 1, got 2.0");
+            "must be an integer in [1, 5000], got 2.0");
   EXPECT_EQ(ErrorOf("robots: {count: 1e1}\ntargets: {count: 1}\n").key(),
             "robots.count");
   EXPECT_EQ(ErrorOf("robots: {count: 0x10}\ntargets: {count: 1}\n").key(),
@@ -603,10 +604,11 @@ TEST(OverrideTest, BadOverridesNameTheirFlag) {
             "command line: --set robots.cuont: unknown key (did you mean "
             "`count`?); valid keys under robots: count, radius, step, start");
   EXPECT_EQ(OverrideError({ParseSetFlag("mission.eps=-1")}).Format(),
-            "command line: --set mission.eps: must be a positive number, got "
-            "-1");
+            "command line: --set mission.eps: must be a number in [1e-30, "
+            "1e+30], got -1");
   EXPECT_EQ(OverrideError({{"--max-steps", "mission.max_steps", "0"}}).Format(),
-            "command line: --max-steps: must be an integer >= 1, got 0");
+            "command line: --max-steps: must be an integer in [1, 1000000], "
+            "got 0");
   EXPECT_EQ(
       OverrideError({ParseSetFlag("targets.list[2].position=[1, 1]")}).Format(),
       "command line: --set targets.list[2].position: targets.list is "
@@ -615,7 +617,7 @@ TEST(OverrideTest, BadOverridesNameTheirFlag) {
             "robots.count is not a mapping, so it has no key `x`");
   // A key path that the file does not give yet is made, then checked.
   EXPECT_EQ(OverrideError({ParseSetFlag("mission.eps.x=1")}).message(),
-            "must be a positive number, got {x: 1}");
+            "must be a number in [1e-30, 1e+30], got {x: 1}");
   // A start outside the workspace set on the command line.
   EXPECT_EQ(
       OverrideError({ParseSetFlag("robots.start=[[1, 1], [50, 1]]")}).Format(),

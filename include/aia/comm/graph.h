@@ -35,7 +35,7 @@ struct RobotFailure {
                  .Keyword("random", kRandomRobot)
                  .Doc("the robot's index, or random (drawn from the seed)"));
     a->Visit(AIA_FIELD(step)
-                 .In(AtLeast(0))
+                 .In(Between(0, 1e6))
                  .Doc("decision step from which it is isolated"));
   }
 };
@@ -53,13 +53,15 @@ struct CommParams {
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(mode).Doc(
         "full: every pair of active robots talks; range: pairs within range"));
-    a->Visit(AIA_FIELD(range).In(kPositive).Doc("r_com of range mode, metres"));
+    a->Visit(AIA_FIELD(range)
+                 .In(Between(1e-3, 1e6))
+                 .Doc("r_com of range mode, metres"));
     a->Visit(AIA_FIELD(kappa_self)
                  .In(kHalfOpenUnit)
                  .Doc("DKF self weight; the neighbours share 1 - kappa_self "
                       "equally"));
     a->Visit(AIA_FIELD(packet_loss_lambda)
-                 .In(kNonNegative)
+                 .In(Between(0, 1e3))
                  .Doc("Poisson mean of directed edges lost per step"));
     a->Visit(AIA_FIELD(failures).Doc(
         "robots that fail: isolated for good from their step on"));

@@ -63,6 +63,8 @@ std::string ClosestName(const std::string& name,
                         const std::vector<std::string>& names);
 // " >= 1", " in (0, 1]", "" for any number: the range after a noun.
 std::string RangeSuffix(const NumberRange& range, bool integer);
+// Whether `text` is well-formed UTF-8 (no overlong forms or surrogates).
+bool IsUtf8(std::string_view text);
 }  // namespace field_text
 
 namespace internal {
@@ -205,8 +207,8 @@ class FieldReader {
   Eigen::VectorXd ReadNumbers(const ConfigNode& node, const std::string& key,
                               std::size_t size, const NumberRange& range,
                               std::string_view shape) const;
-  Eigen::MatrixXd ReadMatrix(const ConfigNode& node,
-                             const std::string& key) const;
+  Eigen::MatrixXd ReadMatrix(const ConfigNode& node, const std::string& key,
+                             const NumberRange& range) const;
   double ReadReal(const ConfigNode& node, const std::string& key,
                   const NumberRange& range, std::string_view expect) const;
   long long ReadInteger(const ConfigNode& node, const std::string& key,
@@ -365,6 +367,8 @@ void FieldReader::ReadValue(const ConfigNode& node, const std::string& key,
                    : f.path          ? std::string("a file path")
                                      : std::string("a non-empty string"));
     }
+    if (!field_text::IsUtf8(node.scalar))
+      FailExpected(node, key, "text in UTF-8");
     *out = f.path ? ResolvePath(node) : node.scalar;
   } else if constexpr (std::is_enum_v<T>) {
     if (node.IsPlainScalar()) {
@@ -382,7 +386,7 @@ void FieldReader::ReadValue(const ConfigNode& node, const std::string& key,
   } else if constexpr (std::is_same_v<T, Eigen::VectorXd>) {
     *out = ReadNumbers(node, key, 0, f.range, f.shape);
   } else if constexpr (std::is_same_v<T, Eigen::MatrixXd>) {
-    *out = ReadMatrix(node, key);
+    *out = ReadMatrix(node, key, f.range);
   } else if constexpr (internal::IsOptional<T>::value) {
     using U = typename T::value_type;
     out->emplace();

@@ -4,6 +4,7 @@
 #ifndef AIA_CORE_IO_H_
 #define AIA_CORE_IO_H_
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -12,8 +13,34 @@ namespace aia {
 // Writes `content` to `path` atomically; throws std::runtime_error on failure.
 void WriteFileAtomic(const std::string& path, const std::string& content);
 
+// The whole content of a regular file of at most `max_bytes` bytes. Throws
+// std::runtime_error with a one-line reason otherwise ("not a regular file"
+// for a FIFO, a device or a directory: nothing blocks or reads forever).
+std::string ReadFile(const std::string& path, std::uintmax_t max_bytes);
+
 // Creates a directory and its parents; throws std::runtime_error on failure.
 void MakeDirs(const std::string& path);
+
+// An exclusive advisory lock (flock) on the file `path` (created if
+// needed), held until destroyed or until the process ends: a killed job
+// leaves no stale lock. Throws std::runtime_error, naming the holder's pid,
+// when another process holds it.
+class FileLock {
+ public:
+  explicit FileLock(const std::string& path);
+  ~FileLock();
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+// Removes the leftovers of AtomicFile writers that were killed: files
+// `NAME.tmp.PID` in `dir`, NAME starting with `prefix`, whose process PID
+// is gone. Returns how many were removed.
+int RemoveStaleTemporaries(const std::string& dir,
+                           const std::string& prefix = "");
 
 // A file written through a temporary name and renamed into place by Commit().
 // Destroyed without Commit(), it removes the temporary file.

@@ -10,6 +10,8 @@
 #define AIA_ESTIMATION_FILTER_H_
 
 #include <Eigen/Core>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "aia/core/types.h"
@@ -18,12 +20,35 @@
 
 namespace aia {
 
-// One time update of every row (identity for static targets).
+// Largest variance (m^2) a filter's prediction may reach: a standard
+// deviation of 1e12 m is far beyond any workspace, and det Sigma of a 4-D
+// state stays a finite double below it.
+inline constexpr double kMaxVariance = 1e24;
+// Smallest predicted variance: added to the diagonal of a prediction that
+// falls below it, so that Omega stays finite.
+inline constexpr double kMinVariance = 1e-30;
+
+// The filter cannot go on: a target's predicted covariance grows past
+// kMaxVariance (unstable dynamics and no measurements) or is not finite.
+// `target` is the target's index (-1 when not known).
+class EstimateDiverged : public std::runtime_error {
+ public:
+  EstimateDiverged(int target, const std::string& what)
+      : std::runtime_error(what), target_(target) {}
+  int target() const { return target_; }
+
+ private:
+  int target_;
+};
+
+// One time update of every row (identity for static targets). Throws
+// EstimateDiverged for a target whose estimate diverges.
 void Predict(BeliefSet* beliefs);
 
 // The time update of one target block stored as Omega (dim x dim,
 // column-major) followed by xi (dim), in place. Callers skip static targets
-// (BeliefLayout::is_static), whose update is the identity.
+// (BeliefLayout::is_static), whose update is the identity. For planners
+// looking ahead: a variance past kMaxVariance is scaled back to it.
 void PredictInformationBlock(const TargetModel& model, double* block);
 
 // The same for Omega alone (dim x dim, column-major), for planners that

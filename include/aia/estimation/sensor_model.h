@@ -18,14 +18,17 @@ struct SensorModel {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(range).In(kPositive).Doc(
-        "sensing range, metres: a target farther away is not measured"));
+    a->Visit(AIA_FIELD(range)
+                 .In(Between(1e-3, 1e4))
+                 .Doc("sensing range, metres: a target farther away is not "
+                      "measured"));
     a->Visit(
         AIA_FIELD(eta)
-            .In(kNonNegative)
+            .In(Between(0, 1e3))
             .Doc("noise std grows by eta per metre: R = (sigma0 + eta d)^2 I"));
-    a->Visit(AIA_FIELD(sigma0).In(kPositive).Doc(
-        "noise std at zero distance, metres"));
+    a->Visit(AIA_FIELD(sigma0)
+                 .In(Between(1e-6, 1e4))
+                 .Doc("noise std at zero distance, metres"));
     a->Visit(AIA_FIELD(line_of_sight)
                  .Doc("obstacles block sensing (a ray against the obstacles, "
                       "mj_ray)"));

@@ -28,13 +28,20 @@ struct TargetModel {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(A).Doc(
-        "state transition: 2x2 for a state [px, py], 4x4 for [px, py, vx, "
-        "vy]; the identity with b = 0 and q = 0 is a static target"));
     a->Visit(
-        AIA_FIELD(b).Doc("constant drift, one entry per row of A (zero "
-                         "when not given)"));
-    a->Visit(AIA_FIELD(q).In(kNonNegative).Doc("process noise: w ~ N(0, q I)"));
+        AIA_FIELD(A)
+            .In(Between(-1e3, 1e3))
+            .Doc("state transition: 2x2 for a state [px, py], 4x4 for [px, py, "
+                 "vx, "
+                 "vy]; the identity with b = 0 and q = 0 is a static target"));
+    a->Visit(AIA_FIELD(b)
+                 .In(Between(-1e4, 1e4))
+                 .Doc("constant drift, one entry per row of A (zero "
+                      "when not given)"));
+    a->Visit(
+        AIA_FIELD(q)
+            .In(Between(0, 1e6))
+            .Doc("process noise: w ~ N(0, q I); positive when A is singular"));
   }
   // A square, 2x2 or 4x4; b sized to A (zero when not given).
   void Validate(const FieldChecker& check);

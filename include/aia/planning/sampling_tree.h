@@ -74,14 +74,19 @@ struct SamplingParams {
                  .In(Between(1, 1e10))
                  .Doc("iterations allowed before a first goal"));
     a->Visit(AIA_FIELD(max_nodes)
-                 .In(Between(2, 1e9))
-                 .Doc("tree size cap (memory guard)"));
+                 .In(Between(2, 1e8))
+                 .Doc("tree size cap (memory guard; the tree also stops "
+                      "growing at 2 GiB)"));
     a->Visit(AIA_FIELD(tour_budget)
                  .In(Between(0, 1e8))
                  .Doc("route evaluations for the tours' local search "
                       "(relocate, swap, 2-opt)"));
   }
 };
+
+// A tree stops growing before its nodes would take more memory than this,
+// whatever SamplingParams::max_nodes says.
+inline constexpr double kMaxTreeBytes = 2.0 * (1L << 30);
 
 // Goal paths whose J is within this fraction of eps of the cheapest one
 // count as equally good, and the shortest of them is returned. One step of
@@ -208,6 +213,7 @@ class SamplingTree {
   // Problem data.
   const SamplingProblem* problem_ = nullptr;
   int n_ = 0, m_ = 0, stride_ = 0;
+  long node_cap_ = 0;  // max_nodes, or fewer to stay within kMaxTreeBytes
   std::vector<TargetInfo> targets_;
   std::vector<const TargetModel*> models_;
   std::vector<std::vector<Vec2>> means_;  // [depth][k] position means

@@ -84,9 +84,12 @@ std::vector<EvalRow> RunInstance(const EvalInstance& instance,
 
 // runs.csv rows and their text.
 std::string FormatRow(const EvalRow& row);
-// Parses runs.csv (rows that do not parse are dropped, e.g. a line cut short
-// by an interruption).
-std::vector<EvalRow> ReadRuns(const std::string& path);
+// Parses runs.csv. Rows that do not parse (e.g. a line cut short by an
+// interruption), hold impossible values (a negative flowtime, a success
+// beyond the horizon) or repeat a run (every copy) are dropped, each with a
+// "line N: why" in `problems` when given.
+std::vector<EvalRow> ReadRuns(const std::string& path,
+                              std::vector<std::string>* problems = nullptr);
 
 // summary.csv text from rows, sizes and policies in the given order.
 std::string SummaryCsv(const std::vector<EvalRow>& rows,

@@ -25,6 +25,35 @@
 
 namespace aia {
 
+// Hard limits of a scenario (docs/scenarios.md, "Limits"). The declared
+// ranges and Scenario::Validate keep every length, count and derived size
+// inside them, so that integer arithmetic stays in range and every
+// allocation is bounded before anything is built.
+namespace limits {
+inline constexpr double kMinLength = 1e-3;  // smallest length, metres
+inline constexpr double kMaxLength = 1e4;   // largest length, metres
+// Occupancy-grid cells (workspace area / cell^2), one byte each.
+inline constexpr double kMaxGridCells = 5e7;
+// Motion-lattice points (workspace area / step^2).
+inline constexpr double kMaxLatticePoints = 1e6;
+// Robots, targets and obstacle boxes together (MuJoCo's memory for its broad
+// phase grows with the square of this).
+inline constexpr int kMaxBodies = 5000;
+// Decision steps of a mission.
+inline constexpr double kMaxSteps = 1e6;
+// Physics steps in one decision step (step_timeout / timestep).
+inline constexpr double kMaxPhysicsStepsPerDecision = 1e6;
+}  // namespace limits
+
+// The range of lengths: [kMinLength, kMaxLength] metres.
+inline constexpr NumberRange kLength{limits::kMinLength, limits::kMaxLength};
+// Coordinates: [-kMaxLength, kMaxLength] metres.
+inline constexpr NumberRange kCoordinate{-limits::kMaxLength,
+                                         limits::kMaxLength};
+// Prior standard deviations: [1e-6, 1e6] (det Sigma stays a normal double
+// in every dimension aia uses).
+inline constexpr NumberRange kPriorSigma{1e-6, 1e6};
+
 struct RandomObstaclesConfig {
   int count = 30;
   Vec2 min_size{0.4, 0.4};
@@ -32,13 +61,15 @@ struct RandomObstaclesConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(count).In(AtLeast(0)).Doc("number of boxes"));
+    a->Visit(AIA_FIELD(count)
+                 .In(Between(0, limits::kMaxBodies))
+                 .Doc("number of boxes"));
     a->Visit(AIA_FIELD(min_size)
-                 .In(kPositive)
+                 .In(kLength)
                  .Shape("[width, height]")
                  .Doc("smallest box, metres"));
     a->Visit(AIA_FIELD(max_size)
-                 .In(kPositive)
+                 .In(kLength)
                  .Shape("[width, height]")
                  .Doc("largest box, metres; sizes are uniform in between"));
   }
@@ -51,9 +82,11 @@ struct BoxConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(center).Doc("metres"));
+    a->Visit(AIA_FIELD(center)
+                 .In(kCoordinate)
+                 .Doc("metres; the box must overlap the workspace"));
     a->Visit(
-        AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc("metres"));
+        AIA_FIELD(size).In(kLength).Shape("[width, height]").Doc("metres"));
   }
 };
 
@@ -91,9 +124,12 @@ struct WorkspaceConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(
-        AIA_FIELD(size).In(kPositive).Shape("[width, height]").Doc("metres"));
-    a->Visit(AIA_FIELD(cell).In(kPositive).Doc("occupancy-grid cell, metres"));
+    a->Visit(AIA_FIELD(size)
+                 .In(Between(0.1, limits::kMaxLength))
+                 .Shape("[width, height]")
+                 .Doc("metres"));
+    a->Visit(AIA_FIELD(cell).In(kLength).Doc(
+        "occupancy-grid cell, metres; at most 5e7 cells"));
     a->Visit(AIA_FIELD(obstacles));
   }
   void Validate(const FieldChecker& check);
@@ -108,14 +144,14 @@ struct RobotsConfig {
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(count)
-                 .In(AtLeast(1))
+                 .In(Between(1, limits::kMaxBodies))
                  .Required("the number of robots, an integer >= 1")
                  .Doc("number of robots"));
-    a->Visit(AIA_FIELD(radius).In(kPositive).Doc(
+    a->Visit(AIA_FIELD(radius).In(kLength).Doc(
         "robot disc, metres; below step / 2"));
-    a->Visit(AIA_FIELD(step).In(kPositive).Doc(
+    a->Visit(AIA_FIELD(step).In(kLength).Doc(
         "lattice spacing and move length, metres; lattice points sit at "
-        "(i + 0.5) step"));
+        "(i + 0.5) step; at most 1e6 points"));
     a->Visit(AIA_FIELD(start).Doc(
         "one [x, y] per robot, each snapped to its nearest lattice point "
         "(free, not shared); none: distinct random free points of the "
@@ -137,12 +173,14 @@ struct TargetConfig {
                  .Required("the target's true position [x, y]")
                  .Doc("true initial position"));
     a->Visit(AIA_FIELD(velocity)
+                 .In(kCoordinate)
                  .Shape("[vx, vy]")
                  .Doc("true initial velocity; only with 4x4 dynamics"));
     a->Visit(AIA_FIELD(prior_mean)
+                 .In(kCoordinate)
                  .Doc("mu_0; none: the truth plus N(0, prior_offset^2 I)"));
     a->Visit(AIA_FIELD(prior_sigma)
-                 .In(kPositive)
+                 .In(kPriorSigma)
                  .Doc("prior std; none: targets.prior_sigma"));
     a->Visit(AIA_FIELD(dynamics).Doc("static when not given"));
   }
@@ -162,7 +200,7 @@ struct TargetsConfig {
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(count)
-                 .In(AtLeast(0))
+                 .In(Between(0, limits::kMaxBodies))
                  .Doc("random static targets, each in free space and "
                       "observable (within 0.9 "
                       "of the range, in sight) from a point the robots can "
@@ -170,11 +208,11 @@ struct TargetsConfig {
                       "`list` it must equal the list's length"));
     a->Visit(AIA_FIELD(list).Doc("explicit targets"));
     a->Visit(AIA_FIELD(prior_sigma)
-                 .In(kPositive)
+                 .In(kPriorSigma)
                  .Doc("prior std per coordinate: Sigma_0 = prior_sigma^2 I"));
     a->Visit(
         AIA_FIELD(prior_offset)
-            .In(kNonNegative)
+            .In(Between(0, limits::kMaxLength))
             .Doc(
                 "std of a default prior mean around the truth: mu_0 = x + N(0, "
                 "prior_offset^2 I), redrawn until it lies in free space where "
@@ -192,10 +230,12 @@ struct MissionConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(eps).In(kPositive).Doc(
-        "success: every target has some active robot with det Sigma <= eps"));
+    a->Visit(AIA_FIELD(eps)
+                 .In(Between(1e-30, 1e30))
+                 .Doc("success: every target has some active robot with det "
+                      "Sigma <= eps"));
     a->Visit(AIA_FIELD(max_steps)
-                 .In(AtLeast(1))
+                 .In(Between(1, limits::kMaxSteps))
                  .Doc("decision steps at most (--max-steps)"));
     a->Visit(
         AIA_FIELD(stop_at_success)
@@ -232,16 +272,26 @@ struct PhysicsConfig {
 
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(timestep).In(kPositive).Doc("MuJoCo timestep, seconds"));
-    a->Visit(AIA_FIELD(kp).In(kPositive).Doc(
-        "waypoint actuator stiffness, N/m (critically damped)"));
-    a->Visit(AIA_FIELD(robot_mass).In(kPositive).Doc("kg"));
-    a->Visit(AIA_FIELD(tolerance).In(kPositive).Doc(
-        "a robot has arrived within this distance of its waypoint, metres"));
+    a->Visit(AIA_FIELD(timestep)
+                 .In(Between(1e-5, 0.1))
+                 .Doc("MuJoCo timestep, seconds"));
+    a->Visit(AIA_FIELD(kp)
+                 .In(Between(1e-3, 1e6))
+                 .Doc("waypoint actuator stiffness, N/m (critically damped); "
+                      "timestep * sqrt(kp / robot_mass) at most 0.5"));
+    a->Visit(AIA_FIELD(robot_mass).In(Between(1e-3, 1e3)).Doc("kg"));
+    a->Visit(AIA_FIELD(tolerance)
+                 .In(Between(1e-6, 1.0))
+                 .Doc("a robot has arrived within this distance of its "
+                      "waypoint, metres"));
     a->Visit(AIA_FIELD(step_timeout)
-                 .In(kPositive)
-                 .Doc("simulated seconds a decision step may last"));
+                 .In(Between(1e-3, 1e3))
+                 .Doc("simulated seconds a decision step may last; at most "
+                      "1e6 timesteps"));
   }
+  // The actuator is stable at this timestep; a decision step is at most
+  // 1e6 timesteps.
+  void Validate(const FieldChecker& check);
 };
 
 struct RenderConfig {
@@ -259,7 +309,7 @@ struct RenderConfig {
                  .In(AtLeast(1))
                  .Doc("video height, pixels (even, 16 to 8192)"));
     a->Visit(AIA_FIELD(fps)
-                 .In(AtLeast(1))
+                 .In(Between(1, 1000))
                  .Doc("frames per second of simulated time, at most 1 / "
                       "physics.timestep"));
     a->Visit(

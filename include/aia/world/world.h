@@ -9,6 +9,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "aia/comm/graph.h"
@@ -35,9 +37,8 @@ struct GroundTruth {
   std::vector<RobotFailure> failures;
 };
 
-// Robots, targets and obstacle boxes together, at most (MuJoCo's memory for
-// its broad phase grows with the square of this).
-inline constexpr int kMaxBodies = 5000;
+// Robots, targets and obstacle boxes together, at most.
+inline constexpr int kMaxBodies = limits::kMaxBodies;
 
 struct World {
   // Builds and validates the instance; throws InputError (with the
@@ -56,11 +57,30 @@ struct World {
   Vec2 TargetStart(int k) const { return truth.targets[k].head<2>(); }
 };
 
+// A decoded grayscale map image, row-major, row 0 at the top.
+struct GrayImage {
+  int cols = 0, rows = 0;
+  std::vector<std::uint8_t> pixels;
+};
+
+// Map images larger than this many pixels (4096 x 4096) are refused before
+// they are decoded.
+inline constexpr long kMaxMapPixels = 1L << 24;
+
+// Decodes PGM (P2, P5) or PNG bytes. Checks the header's size first (at most
+// kMaxMapPixels, as the header declares it) and throws std::invalid_argument
+// with a one-line reason for anything else; decoder messages never leak.
+GrayImage DecodeMapImage(const std::string& bytes);
+
 // Merges the dark pixels of a grayscale image into axis-aligned boxes scaled
 // to the workspace (row 0 of the image is the top, y = size.y()). Pixels
-// darker than threshold * 255 are occupied.
-std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
-                                int rows, const Vec2& size, double threshold);
+// darker than threshold * 255 are occupied. Linear in the pixels. Stops
+// early, returning more than `max_boxes` boxes, once the image is known to
+// make more than that many.
+std::vector<Box> BoxesFromImage(
+    const std::vector<std::uint8_t>& gray, int cols, int rows, const Vec2& size,
+    double threshold,
+    std::size_t max_boxes = std::numeric_limits<std::size_t>::max());
 
 }  // namespace aia
 

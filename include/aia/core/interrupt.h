@@ -1,0 +1,22 @@
+// Ctrl-C for long jobs: a command that can stop cleanly installs the handler,
+// then polls Interrupted() and writes what is done (exit code 130). Commands
+// that do not install it keep the default: SIGINT ends the process, and
+// their results are committed piece by piece anyway.
+#ifndef AIA_CORE_INTERRUPT_H_
+#define AIA_CORE_INTERRUPT_H_
+
+namespace aia {
+
+// The exit code of a job stopped by SIGINT or SIGTERM (128 + SIGINT).
+inline constexpr int kInterruptedExitCode = 130;
+
+// From now on SIGINT and SIGTERM set a flag instead of ending the process;
+// a second one ends it at once.
+void InstallInterruptHandler();
+
+// Whether SIGINT or SIGTERM arrived since InstallInterruptHandler().
+bool Interrupted();
+
+}  // namespace aia
+
+#endif  // AIA_CORE_INTERRUPT_H_
