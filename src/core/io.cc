@@ -47,29 +47,26 @@ std::string ReadFile(const std::string& path, std::uintmax_t max_bytes) {
 }
 
 FileLock::FileLock(const std::string& path) {
-  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  // A folder is locked through its own descriptor: no file is added to it.
+  struct stat st;
+  const bool dir = ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+  fd_ = dir ? ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC)
+            : ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0)
-    throw std::runtime_error("cannot create the lock file '" + path +
-                             "': " + std::strerror(errno));
+    throw std::runtime_error("cannot open '" + path +
+                             "' to lock it: " + std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
-    char buf[32] = {0};
-    const ssize_t n = ::pread(fd_, buf, sizeof(buf) - 1, 0);
     ::close(fd_);
     fd_ = -1;
     if (err != EWOULDBLOCK)
       throw std::runtime_error("cannot lock '" + path +
                                "': " + std::strerror(err));
-    std::string holder = n > 0 ? std::string(buf, static_cast<size_t>(n)) : "";
-    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' '))
-      holder.pop_back();
     throw std::runtime_error(
-        "is in use by another aia job" +
-        (holder.empty() ? std::string() : " (pid " + holder + ")") +
-        " holding " + path + "; wait for it to end or use another folder");
+        "'" + path +
+        "' is in use by another aia job (it holds the lock); wait for it to "
+        "end or use another folder");
   }
-  const std::string pid = std::to_string(::getpid()) + "\n";
-  if (::ftruncate(fd_, 0) == 0) (void)!::pwrite(fd_, pid.data(), pid.size(), 0);
 }
 
 FileLock::~FileLock() {

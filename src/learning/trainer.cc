@@ -232,23 +232,24 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
       torch::optim::AdamOptions(o.lr).weight_decay(o.weight_decay));
 
   const std::string ckpt = CheckpointPath(o.out);
-  // One training run per model path: OUT.lock, held until the process ends;
-  // then the temporary files of killed runs are removed.
+  // One training run at a time in OUT's folder (an flock on the folder,
+  // released when the run ends or dies); then the temporary files that
+  // killed runs left there are removed.
   std::unique_ptr<FileLock> lock;
   {
-    const std::filesystem::path parent =
-        std::filesystem::path(o.out).parent_path();
+    std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
+    if (parent.empty()) parent = ".";
     try {
-      if (!parent.empty()) MakeDirs(parent.string());
-      lock = std::make_unique<FileLock>(o.out + ".lock");
+      MakeDirs(parent.string());
+      lock = std::make_unique<FileLock>(parent.string());
     } catch (const std::runtime_error& e) {
-      throw InputError("command line", 0, "--out", o.out + ": " + e.what());
+      throw InputError("command line", 0, "--out", e.what());
     }
     // OUT, OUT.ckpt and the log share OUT's name without ".pt".
     std::string prefix = std::filesystem::path(o.out).filename().string();
     if (prefix.size() > 3 && prefix.compare(prefix.size() - 3, 3, ".pt") == 0)
       prefix.resize(prefix.size() - 3);
-    RemoveStaleTemporaries(parent.empty() ? "." : parent.string(), prefix);
+    RemoveStaleTemporaries(parent.string(), prefix);
   }
   const std::string key = OptionsKey(o);
   int start = 0;

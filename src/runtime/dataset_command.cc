@@ -147,10 +147,10 @@ int RunDataset(const DatasetOptions& o) {
   MakeOutputDir(o.out, "--out");
   const std::string file = o.out + "/shard-" + std::to_string(o.shard) +
                            "-of-" + std::to_string(o.shards) + ".sqlite";
-  // One writer per shard (the ranks of an mpirun share the folder).
-  LockOutput(o.out + "/.shard-" + std::to_string(o.shard) + "-of-" +
-                 std::to_string(o.shards) + ".lock",
-             "--out");
+  // One writer per shard (the ranks of an mpirun share the folder): an
+  // flock on the shard file itself, which SQLite's own (fcntl) locks leave
+  // alone; an empty new file is an empty database to SQLite.
+  LockOutput(file, "--out");
   DatasetWriter writer(file, Recipe(o), "--out");
 
   std::vector<int> todo;

@@ -21,10 +21,11 @@ std::string ReadFile(const std::string& path, std::uintmax_t max_bytes);
 // Creates a directory and its parents; throws std::runtime_error on failure.
 void MakeDirs(const std::string& path);
 
-// An exclusive advisory lock (flock) on the file `path` (created if
-// needed), held until destroyed or until the process ends: a killed job
-// leaves no stale lock. Throws std::runtime_error, naming the holder's pid,
-// when another process holds it.
+// An exclusive advisory lock (flock) on `path`: a folder, or a file
+// (created if needed, never written), held until destroyed or until the
+// process ends: a killed job leaves no stale lock. Throws
+// std::runtime_error when another process (or another FileLock of this one)
+// holds it.
 class FileLock {
  public:
   explicit FileLock(const std::string& path);

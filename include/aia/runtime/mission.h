@@ -49,14 +49,15 @@ std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
 
 // Creates an output folder named by a flag; InputError (exit code 2) naming
 // the flag when it cannot be created or written. With `lock`, the folder is
-// this process's until it ends (DIR/.aia.lock: a second job writing into it
-// is refused with an InputError), and temporary files that killed jobs left
-// there are removed.
+// this process's until it ends (an flock on the folder: a second job
+// writing into it is refused with an InputError), and temporary files that
+// killed jobs left there are removed.
 void MakeOutputDir(const std::string& dir, const std::string& flag,
                    bool lock = false);
 
-// Takes the lock file `path` until the process ends; InputError naming the
-// flag when another process holds it or it cannot be created.
+// Locks `path` (a folder, or a file that is created if needed) until the
+// process ends; InputError naming the flag when another process holds it.
+// Taking a path this process holds already does nothing.
 void LockOutput(const std::string& path, const std::string& flag);
 
 // A mission ready to run: the scenario as overridden, its policy resolved
