@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(
-  build-essential cmake ninja-build pkg-config
+  build-essential cmake ninja-build pkg-config clang
   libeigen3-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libmujoco-dev libmujoco-samples libqhull-dev
   libosmesa6-dev libopencv-dev ffmpeg

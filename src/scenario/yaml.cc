@@ -16,6 +16,44 @@ namespace {
 // to billions of nodes.
 constexpr long kMaxNodes = 1000000;
 
+// Nesting deeper than this is not a scenario, and a recursive alias
+// (`&a [*a]`) would otherwise recurse until the stack overflows.
+constexpr int kMaxDepth = 64;
+
+// yaml-cpp 0.7 allocates without end (gigabytes a second) on a ',' that
+// opens the document, or that opens a line after a top-level block
+// sequence. Neither is ever a scenario or a value; the line of such a ','
+// (1-based), or 0.
+int RunawayCommaLine(const std::string& text) {
+  bool seen = false, top_sequence = false;
+  int number = 0;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    std::size_t end = text.find('\n', begin);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(begin, end - begin);
+    ++number;
+    begin = end + 1;
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#' ||
+        line[first] == '%' || line.rfind("---", 0) == 0 ||
+        line.rfind("...", 0) == 0) {
+      if (end == text.size()) break;
+      continue;
+    }
+    if (!seen) {
+      seen = true;
+      if (line[first] == ',') return number;
+      top_sequence = line[0] == '-' && (line.size() == 1 || line[1] == ' ' ||
+                                        line[1] == '\t' || line[1] == '\r');
+    } else if (top_sequence && line[0] == ',') {
+      return number;
+    }
+    if (end == text.size()) break;
+  }
+  return 0;
+}
+
 // yaml-cpp marks an empty value (`key:`) at the next token, often on a later
 // line, so an empty value is blamed on the line of its key instead.
 int LineOf(const YAML::Node& node, int fallback) {
@@ -30,6 +68,18 @@ class Converter {
 
   ConfigNode Convert(const YAML::Node& node, const std::string& key,
                      int fallback_line) {
+    struct Depth {
+      explicit Depth(int* d) : d_(d) { ++*d_; }
+      ~Depth() { --*d_; }
+      int* d_;
+    } depth(&depth_);
+    if (depth_ > kMaxDepth) {
+      // The key down to the first list level (not 64 of them).
+      const std::string top = key.substr(0, key.find('['));
+      Fail(LineOf(node, fallback_line), top.empty() ? "(yaml)" : top,
+           "nests deeper than " + std::to_string(kMaxDepth) +
+               " levels (a recursive alias such as &a [*a]?)");
+    }
     if (++count_ > kMaxNodes) {
       Fail(0, "(yaml)",
            "the document holds more than " + std::to_string(kMaxNodes) +
@@ -99,6 +149,7 @@ class Converter {
 
   std::string file_, origin_;
   long count_ = 0;
+  int depth_ = 0;
 };
 
 InputError YamlError(const YAML::Exception& e, const std::string& file) {
@@ -264,6 +315,10 @@ void Block(const ConfigNode& n, std::size_t indent, std::string* out) {
 
 ConfigNode ParseYaml(const std::string& text, const std::string& file) {
   std::vector<YAML::Node> docs;
+  if (const int line = RunawayCommaLine(text)) {
+    throw InputError(file, line, "(yaml)",
+                     "invalid YAML: a ',' outside brackets");
+  }
   try {
     docs = YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
@@ -281,6 +336,10 @@ ConfigNode ParseYaml(const std::string& text, const std::string& file) {
 
 ConfigNode ParseYamlValue(const std::string& text, const std::string& flag) {
   YAML::Node node;
+  if (RunawayCommaLine(text)) {
+    throw InputError("command line", 0, flag,
+                     "invalid YAML value '" + text + "': a ',' outside brackets");
+  }
   try {
     node = YAML::Load(text);
   } catch (const YAML::Exception& e) {

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# The sanitizer tree (docs/hardening.md): clang with AddressSanitizer and
+# UndefinedBehaviorSanitizer on every target, plus the libFuzzer harnesses;
+# builds it and runs its tests (tools/test.sh does this when CI=true or
+# AIA_SANITIZE=1).
+#   tools/sanitize.sh [--configure-only] [BUILD_DIR]     (default build-asan)
+# AIA_SANITIZE_LABELS picks the ctest labels (default below); system
+# libraries' own leaks are suppressed by tools/sanitizers/*.supp.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+configure_only=0
+if [ "${1:-}" = "-h" ] || [ "${1:-}" = "--help" ]; then
+  sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'
+  exit 0
+fi
+[ "${1:-}" = "--configure-only" ] && { configure_only=1; shift; }
+dir=${1:-build-asan}
+if [ ! -f "$dir/build.ninja" ]; then
+  CC=clang CXX=clang++ cmake -S . -B "$dir" -G Ninja \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
+    -DAIA_SANITIZE=ON -DAIA_FUZZ=ON -DAIA_BUILD_BENCHMARKS=OFF
+fi
+[ "$configure_only" = 1 ] && exit 0
+jobs=${AIA_JOBS:-$(nproc)}
+cmake --build "$dir" -j "$jobs"
+supp=$PWD/tools/sanitizers
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:suppressions=$supp/asan.supp
+export LSAN_OPTIONS=suppressions=$supp/lsan.supp:print_suppressions=0
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$supp/ubsan.supp
+labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|fuzz|runtime}
+cd "$dir"
+exec ctest --output-on-failure -j "$jobs" --timeout 900 -L "$labels"
