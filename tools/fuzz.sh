@@ -27,5 +27,11 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}:suppressions=$PWD/tools/sani
 export LSAN_OPTIONS=suppressions=$PWD/tools/sanitizers/lsan.supp
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$PWD/tools/sanitizers/ubsan.supp
 echo "[fuzz] $name for $seconds s; crashes go to $out/crashes/"
-exec "$build/fuzz/${name}_fuzzer" -max_total_time="$seconds" -rss_limit_mb=2048 \
-  -timeout=30 -artifact_prefix="$out/crashes/" -print_final_stats=1 "$out/corpus"
+# Fork mode keeps fuzzing after a crash, so that SECONDS are spent in full;
+# every crash is saved and counted.
+"$build/fuzz/${name}_fuzzer" -max_total_time="$seconds" -rss_limit_mb=2048 \
+  -timeout=30 -artifact_prefix="$out/crashes/" -print_final_stats=1 \
+  -fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1 "$out/corpus"
+found=$(find "$out/crashes" -type f | wc -l)
+echo "[fuzz] $name: $found crash/oom/timeout inputs in $out/crashes/"
+[ "$found" -eq 0 ]

@@ -27,6 +27,11 @@ supp=$PWD/tools/sanitizers
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:suppressions=$supp/asan.supp
 export LSAN_OPTIONS=suppressions=$supp/lsan.supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$supp/ubsan.supp
-labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|fuzz|runtime}
+labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|learning|render|fuzz|runtime}
+# Left out here: the golden traces (recorded with the main build's gcc; clang's
+# floating point differs in the last bits and missions diverge from there)
+# and the two-rank MPI test (OpenMPI's plugins leak and are unloaded before
+# LeakSanitizer reports, so their leaks cannot be told from ours).
+exclude='^golden\.|TwoMpiRanksGiveTheFilesOfOneProcess'
 cd "$dir"
-exec ctest --output-on-failure -j "$jobs" --timeout 900 -L "$labels"
+exec ctest --output-on-failure -j "$jobs" --timeout 900 -L "$labels" -E "$exclude"

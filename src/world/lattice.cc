@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "aia/core/check.h"
+#include "aia/core/grid.h"
 
 namespace aia {
 namespace {
@@ -122,10 +123,8 @@ int Lattice::NumValidMoves(int idx) const {
 }
 
 int Lattice::NearestPoint(const Vec2& p) const {
-  const int ix =
-      std::clamp(static_cast<int>(std::floor(p.x() / step_)), 0, nx_ - 1);
-  const int iy =
-      std::clamp(static_cast<int>(std::floor(p.y() / step_)), 0, ny_ - 1);
+  const int ix = FloorIndex(p.x() / step_, nx_);
+  const int iy = FloorIndex(p.y() / step_, ny_);
   return Index(ix, iy);
 }
 

@@ -7,12 +7,6 @@
 namespace aia {
 namespace {
 
-// Index of the cell holding coordinate v, clamped to [0, n - 1] before any
-// conversion to int (a box far outside the workspace would overflow it).
-int ClampedCell(double v, int n) {
-  return static_cast<int>(std::clamp(v, 0.0, static_cast<double>(n - 1)));
-}
-
 Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
                              const std::vector<Box>& boxes) {
   const int nx =
@@ -25,10 +19,10 @@ Grid<std::uint8_t> Rasterize(const Vec2& size, double cell,
     if (b.hi.x() <= 0.0 || b.hi.y() <= 0.0 || b.lo.x() >= nx * cell ||
         b.lo.y() >= ny * cell)
       continue;
-    const int x0 = ClampedCell(std::floor(b.lo.x() / cell), nx);
-    const int y0 = ClampedCell(std::floor(b.lo.y() / cell), ny);
-    const int x1 = ClampedCell(std::ceil(b.hi.x() / cell) - 1, nx);
-    const int y1 = ClampedCell(std::ceil(b.hi.y() / cell) - 1, ny);
+    const int x0 = FloorIndex(b.lo.x() / cell, nx);
+    const int y0 = FloorIndex(b.lo.y() / cell, ny);
+    const int x1 = FloorIndex(std::ceil(b.hi.x() / cell) - 1, nx);
+    const int y1 = FloorIndex(std::ceil(b.hi.y() / cell) - 1, ny);
     for (int iy = y0; iy <= y1; ++iy)
       for (int ix = x0; ix <= x1; ++ix) grid(ix, iy) = 1;
   }

@@ -183,7 +183,8 @@ GrayImage DecodeMapImage(const std::string& bytes) {
     throw std::invalid_argument("the header declares an empty image (" +
                                 std::to_string(cols) + " x " +
                                 std::to_string(rows) + " pixels)");
-  if (cols * rows > kMaxMapPixels)
+  if (cols > kMaxMapPixels || rows > kMaxMapPixels ||
+      cols * rows > kMaxMapPixels)
     throw std::invalid_argument(
         "the header declares " + std::to_string(cols) + " x " +
         std::to_string(rows) + " pixels; at most " +

@@ -13,6 +13,14 @@
 
 namespace aia {
 
+// floor(v) clamped to [0, n - 1], clamped before the conversion to int (a
+// far-away estimate would overflow it); NaN gives 0.
+inline int FloorIndex(double v, int n) {
+  if (!(v >= 0.0)) return 0;
+  const double f = std::floor(v);
+  return f >= n - 1 ? n - 1 : static_cast<int>(f);
+}
+
 template <typename T>
 class Grid {
  public:
@@ -45,8 +53,8 @@ class Grid {
   }
   // Cell holding a point, clamped into the grid.
   void CellOf(const Vec2& p, int* ix, int* iy) const {
-    *ix = std::clamp(static_cast<int>(std::floor(p.x() / cell_)), 0, nx_ - 1);
-    *iy = std::clamp(static_cast<int>(std::floor(p.y() / cell_)), 0, ny_ - 1);
+    *ix = FloorIndex(p.x() / cell_, nx_);
+    *iy = FloorIndex(p.y() / cell_, ny_);
   }
 
   std::vector<T>& data() { return data_; }
