@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <regex>
 #include <string>
 #include <vector>
@@ -20,36 +21,75 @@ constexpr long kMaxNodes = 200000;
 // (`&a [*a]`) would otherwise recurse until the stack overflows.
 constexpr int kMaxDepth = 64;
 
-// yaml-cpp 0.7 allocates without end (gigabytes a second) on a ',' that
-// opens the document, or that opens a line after a top-level block
-// sequence. Neither is ever a scenario or a value; the line of such a ','
-// (1-based), or 0.
+// yaml-cpp 0.7 allocates without end (gigabytes a second) on a ',' outside
+// brackets where a new token starts: at the start of a line, or right after
+// a bracket that closes a flow collection (found by fuzzing: ",", "[],",
+// "c\n#\n,", "- a\n,"). Such a ',' is never part of a scenario (a plain
+// scalar cannot begin with one). A light scan (quotes, comments and flow
+// brackets that open a node) finds it before yaml-cpp sees the text; the
+// line of the first (1-based), or 0.
 int RunawayCommaLine(const std::string& text) {
-  bool seen = false, top_sequence = false;
-  int number = 0;
-  std::size_t begin = 0;
-  while (begin <= text.size()) {
-    std::size_t end = text.find('\n', begin);
-    if (end == std::string::npos) end = text.size();
-    const std::string line = text.substr(begin, end - begin);
-    ++number;
-    begin = end + 1;
-    const std::size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#' ||
-        line[first] == '%' || line.rfind("---", 0) == 0 ||
-        line.rfind("...", 0) == 0) {
-      if (end == text.size()) break;
+  int line = 1, depth = 0;
+  bool line_start = true;    // only blanks so far on this line
+  bool node_start = true;    // a flow bracket here opens a collection
+  bool after_close = false;  // just after a bracket that closed to depth 0
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      line_start = node_start = true;
+      after_close = false;
       continue;
     }
-    if (!seen) {
-      seen = true;
-      if (line[first] == ',') return number;
-      top_sequence = line[0] == '-' && (line.size() == 1 || line[1] == ' ' ||
-                                        line[1] == '\t' || line[1] == '\r');
-    } else if (top_sequence && line[0] == ',') {
-      return number;
+    if (c == ' ' || c == '\t' || c == '\r') continue;
+    if (c == '#' &&
+        (i == 0 || std::isspace(static_cast<unsigned char>(text[i - 1])))) {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+      continue;
     }
-    if (end == text.size()) break;
+    if (c == ',' && depth == 0 && (line_start || after_close || node_start))
+      return line;
+    if ((c == '!' || c == '&' || c == '*') && node_start) {
+      // A tag, anchor or alias runs to the next blank; a ',' in it at depth 0
+      // ("!,") sends yaml-cpp off too.
+      for (; i + 1 < text.size() &&
+             !std::isspace(static_cast<unsigned char>(text[i + 1]));
+           ++i)
+        if (text[i + 1] == ',' && depth == 0) return line;
+      line_start = after_close = false;
+      node_start = c != '*';
+      continue;
+    }
+    if ((c == '\'' || c == '"') && node_start) {  // a quoted scalar
+      for (++i; i < text.size(); ++i) {
+        if (text[i] == '\n') ++line;
+        if (c == '"' && text[i] == '\\') {
+          ++i;
+        } else if (text[i] == c) {
+          if (c == '\'' && i + 1 < text.size() && text[i + 1] == '\'') {
+            ++i;
+          } else {
+            break;
+          }
+        }
+      }
+      line_start = node_start = after_close = false;
+      continue;
+    }
+    after_close = false;
+    if ((c == '[' || c == '{') && node_start) {
+      ++depth;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      after_close = --depth == 0;
+    }
+    line_start = false;
+    // Block indicators open a node only before a blank (in "a:b" or "-1"
+    // they are part of a plain scalar).
+    const bool blank_next =
+        i + 1 == text.size() ||
+        std::isspace(static_cast<unsigned char>(text[i + 1]));
+    node_start = c == ',' || c == '[' || c == '{' ||
+                 ((c == ':' || c == '-' || c == '?') && blank_next);
   }
   return 0;
 }
@@ -337,8 +377,9 @@ ConfigNode ParseYaml(const std::string& text, const std::string& file) {
 ConfigNode ParseYamlValue(const std::string& text, const std::string& flag) {
   YAML::Node node;
   if (RunawayCommaLine(text)) {
-    throw InputError("command line", 0, flag,
-                     "invalid YAML value '" + text + "': a ',' outside brackets");
+    throw InputError(
+        "command line", 0, flag,
+        "invalid YAML value '" + text + "': a ',' outside brackets");
   }
   try {
     node = YAML::Load(text);

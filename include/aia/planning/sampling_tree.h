@@ -76,7 +76,7 @@ struct SamplingParams {
     a->Visit(AIA_FIELD(max_nodes)
                  .In(Between(2, 1e8))
                  .Doc("tree size cap (memory guard; the tree also stops "
-                      "growing at 2 GiB)"));
+                      "growing at 1 GiB)"));
     a->Visit(AIA_FIELD(tour_budget)
                  .In(Between(0, 1e8))
                  .Doc("route evaluations for the tours' local search "
@@ -86,7 +86,7 @@ struct SamplingParams {
 
 // A tree stops growing before its nodes would take more memory than this,
 // whatever SamplingParams::max_nodes says.
-inline constexpr double kMaxTreeBytes = 2.0 * (1L << 30);
+inline constexpr double kMaxTreeBytes = 1.0 * (1L << 30);
 
 // Goal paths whose J is within this fraction of eps of the cheapest one
 // count as equally good, and the shortest of them is returned. One step of
