@@ -10,7 +10,7 @@ PACKAGES=(
   libmujoco-dev libmujoco-samples libqhull-dev
   libosmesa6-dev libopencv-dev ffmpeg
   libgtest-dev libgmock-dev libbenchmark-dev
-  libtorch-dev libjemalloc-dev libsqlite3-dev
+  libtorch-dev libjemalloc-dev libsqlite3-dev zlib1g-dev
   libopenmpi-dev openmpi-bin
   python3-matplotlib python3-numpy python3-torch
 )

@@ -1,6 +1,7 @@
 #include "aia/learning/network.h"
 
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <filesystem>
@@ -10,6 +11,7 @@
 
 #include "aia/core/check.h"
 #include "aia/core/error.h"
+#include "aia/core/io.h"
 #include "network_impl.h"
 
 namespace aia {
@@ -133,6 +135,64 @@ std::int64_t IgbNet::NumParameters() const {
   return n;
 }
 
+namespace {
+
+// Why the model file's zip container is not intact, or "". TorchScript's
+// reader does not check the entries' CRC-32s, and its parser crashes on some
+// corrupted code entries (found by fuzzing); a damaged file is refused
+// here instead. Entries are stored uncompressed, as torch writes them.
+std::string ZipDamage(const std::string& path) {
+  std::string b;
+  try {
+    b = ReadFile(path, std::uintmax_t{1} << 31);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  const auto u16 = [&](std::size_t at) -> std::uint32_t {
+    return static_cast<unsigned char>(b[at]) |
+           static_cast<unsigned char>(b[at + 1]) << 8;
+  };
+  const auto u32 = [&](std::size_t at) -> std::uint32_t {
+    return u16(at) | u16(at + 2) << 16;
+  };
+  // End of central directory: the last "PK\5\6" within 64 KiB of the end.
+  if (b.size() < 22) return "not a zip container";
+  std::size_t eocd = std::string::npos;
+  for (std::size_t i = b.size() - 22 + 1; i-- > 0 && b.size() - i <= 65557;)
+    if (u32(i) == 0x06054b50) {
+      eocd = i;
+      break;
+    }
+  if (eocd == std::string::npos) return "not a zip container (no directory)";
+  const std::uint32_t entries = u16(eocd + 10);
+  std::size_t at = u32(eocd + 16);
+  if (entries == 0xffff || at == 0xffffffffu) return "";  // zip64: not checked
+  for (std::uint32_t e = 0; e < entries; ++e) {
+    if (at + 46 > b.size() || u32(at) != 0x02014b50)
+      return "damaged zip directory";
+    const std::uint32_t method = u16(at + 10), crc = u32(at + 16),
+                        size = u32(at + 20), name = u16(at + 28),
+                        extra = u16(at + 30), comment = u16(at + 32),
+                        local = u32(at + 42);
+    if (local + 30 > b.size() || u32(local) != 0x04034b50)
+      return "damaged zip entry " + std::to_string(e);
+    const std::size_t data = local + 30 + u16(local + 26) + u16(local + 28);
+    if (method == 0) {
+      if (data + size > b.size())
+        return "zip entry " + std::to_string(e) + " is cut short";
+      const auto got = static_cast<std::uint32_t>(
+          crc32(0L, reinterpret_cast<const Bytef*>(b.data() + data), size));
+      if (got != crc)
+        return "zip entry " + std::to_string(e) +
+               " fails its CRC-32 check (the file is damaged)";
+    }
+    at += 46 + name + extra + comment;
+  }
+  return "";
+}
+
+}  // namespace
+
 std::unique_ptr<IgbNet> IgbNet::Load(const std::string& path,
                                      const std::string& error_file,
                                      int error_line, const std::string& key) {
@@ -142,6 +202,8 @@ std::unique_ptr<IgbNet> IgbNet::Load(const std::string& path,
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw fail("no such model file (train one with `aia train`)");
+  if (const std::string damage = ZipDamage(path); !damage.empty())
+    throw fail("not a readable model: " + damage);
   std::unique_ptr<IgbNet> net(new IgbNet());
   try {
     torch::serialize::InputArchive archive;
