@@ -1,9 +1,11 @@
 #include "aia/scenario/yaml.h"
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -21,77 +23,55 @@ constexpr long kMaxNodes = 200000;
 // (`&a [*a]`) would otherwise recurse until the stack overflows.
 constexpr int kMaxDepth = 64;
 
-// yaml-cpp 0.7 allocates without end (gigabytes a second) on a ',' outside
-// brackets where a new token starts: at the start of a line, or right after
-// a bracket that closes a flow collection (found by fuzzing: ",", "[],",
-// "c\n#\n,", "- a\n,"). Such a ',' is never part of a scenario (a plain
-// scalar cannot begin with one). A light scan (quotes, comments and flow
-// brackets that open a node) finds it before yaml-cpp sees the text; the
-// line of the first (1-based), or 0.
-int RunawayCommaLine(const std::string& text) {
-  int line = 1, depth = 0;
-  bool line_start = true;    // only blanks so far on this line
-  bool node_start = true;    // a flow bracket here opens a collection
-  bool after_close = false;  // just after a bracket that closed to depth 0
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (c == '\n') {
-      ++line;
-      line_start = node_start = true;
-      after_close = false;
-      continue;
+// yaml-cpp 0.7's parser stops consuming its input on some stray tokens (a
+// ',' outside brackets: ",", "[],", "!,", "- a\n,", and more that fuzzing
+// keeps finding) and then hands out the same empty document again and again;
+// YAML::LoadAll collects them until memory runs out (upstream yaml-cpp
+// #1040, fixed after 0.7). So documents are walked here with a parser of our
+// own that stops at the first one that starts where the last one did: that
+// place is reported.
+class DocumentStarts : public YAML::EventHandler {
+ public:
+  YAML::Mark start;
+  void OnDocumentStart(const YAML::Mark& mark) override { start = mark; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
+struct Documents {
+  int count = 0;
+  int second_line = 0;  // 1-based line where the second one starts
+};
+
+// Throws YAML::ParserException where the parser stops making progress.
+Documents CountDocuments(const std::string& text) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DocumentStarts handler;
+  Documents docs;
+  int last = -1;
+  while (parser.HandleNextDocument(handler)) {
+    const YAML::Mark& at = handler.start;
+    if (at.pos <= last) {
+      const std::size_t pos = static_cast<std::size_t>(at.pos);
+      throw YAML::ParserException(at,
+                                  pos < text.size() && text[pos] == ','
+                                      ? "unexpected ','"
+                                      : "the parser cannot go on from here");
     }
-    if (c == ' ' || c == '\t' || c == '\r') continue;
-    if (c == '#' &&
-        (i == 0 || std::isspace(static_cast<unsigned char>(text[i - 1])))) {
-      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
-      continue;
-    }
-    if (c == ',' && depth == 0 && (line_start || after_close || node_start))
-      return line;
-    if ((c == '!' || c == '&' || c == '*') && node_start) {
-      // A tag, anchor or alias runs to the next blank; a ',' in it at depth 0
-      // ("!,") sends yaml-cpp off too.
-      for (; i + 1 < text.size() &&
-             !std::isspace(static_cast<unsigned char>(text[i + 1]));
-           ++i)
-        if (text[i + 1] == ',' && depth == 0) return line;
-      line_start = after_close = false;
-      node_start = c != '*';
-      continue;
-    }
-    if ((c == '\'' || c == '"') && node_start) {  // a quoted scalar
-      for (++i; i < text.size(); ++i) {
-        if (text[i] == '\n') ++line;
-        if (c == '"' && text[i] == '\\') {
-          ++i;
-        } else if (text[i] == c) {
-          if (c == '\'' && i + 1 < text.size() && text[i + 1] == '\'') {
-            ++i;
-          } else {
-            break;
-          }
-        }
-      }
-      line_start = node_start = after_close = false;
-      continue;
-    }
-    after_close = false;
-    if ((c == '[' || c == '{') && node_start) {
-      ++depth;
-    } else if ((c == ']' || c == '}') && depth > 0) {
-      after_close = --depth == 0;
-    }
-    line_start = false;
-    // Block indicators open a node only before a blank (in "a:b" or "-1"
-    // they are part of a plain scalar).
-    const bool blank_next =
-        i + 1 == text.size() ||
-        std::isspace(static_cast<unsigned char>(text[i + 1]));
-    node_start = c == ',' || c == '[' || c == '{' ||
-                 ((c == ':' || c == '-' || c == '?') && blank_next);
+    last = at.pos;
+    if (++docs.count == 2) docs.second_line = at.line + 1;
   }
-  return 0;
+  return docs;
 }
 
 // yaml-cpp marks an empty value (`key:`) at the next token, often on a later
@@ -192,11 +172,21 @@ class Converter {
   int depth_ = 0;
 };
 
-InputError YamlError(const YAML::Exception& e, const std::string& file) {
+// yaml-cpp's message where it stops at a stray ',' ("end of map not found")
+// is replaced by what is there.
+std::string YamlMessage(const YAML::Exception& e, const std::string& text) {
+  const auto pos = static_cast<std::size_t>(e.mark.pos);
+  if (e.mark.pos >= 0 && pos < text.size() && text[pos] == ',')
+    return "unexpected ','";
+  return e.msg;
+}
+
+InputError YamlError(const YAML::Exception& e, const std::string& file,
+                     const std::string& text) {
   const bool has_mark = e.mark.line >= 0;
   return InputError(
       file, has_mark ? e.mark.line + 1 : 0, "(yaml)",
-      "invalid YAML: " + e.msg +
+      "invalid YAML: " + YamlMessage(e, text) +
           (has_mark ? " (column " + std::to_string(e.mark.column + 1) + ")"
                     : ""));
 }
@@ -354,38 +344,32 @@ void Block(const ConfigNode& n, std::size_t indent, std::string* out) {
 }  // namespace
 
 ConfigNode ParseYaml(const std::string& text, const std::string& file) {
-  std::vector<YAML::Node> docs;
-  if (const int line = RunawayCommaLine(text)) {
-    throw InputError(file, line, "(yaml)",
-                     "invalid YAML: a ',' outside brackets");
-  }
+  YAML::Node doc;
   try {
-    docs = YAML::LoadAll(text);
+    // YAML::Load alone would silently drop every document after the first.
+    if (const Documents docs = CountDocuments(text); docs.count > 1) {
+      throw InputError(file, docs.second_line, "(yaml)",
+                       "a scenario file holds one YAML document, found " +
+                           std::to_string(docs.count) + " (separated by ---)");
+    } else if (docs.count == 0) {
+      return ConfigNode{};
+    }
+    doc = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw YamlError(e, file);
+    throw YamlError(e, file, text);
   }
-  // YAML::Load would silently drop every document after the first.
-  if (docs.size() > 1) {
-    throw InputError(file, LineOf(docs[1], 0), "(yaml)",
-                     "a scenario file holds one YAML document, found " +
-                         std::to_string(docs.size()) + " (separated by ---)");
-  }
-  if (docs.empty()) return ConfigNode{};
-  return Converter(file, "").Convert(docs[0], "", 0);
+  return Converter(file, "").Convert(doc, "", 0);
 }
 
 ConfigNode ParseYamlValue(const std::string& text, const std::string& flag) {
   YAML::Node node;
-  if (RunawayCommaLine(text)) {
-    throw InputError(
-        "command line", 0, flag,
-        "invalid YAML value '" + text + "': a ',' outside brackets");
-  }
   try {
+    CountDocuments(text);
     node = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError("command line", 0, flag,
-                     "invalid YAML value '" + text + "': " + e.msg);
+    throw InputError(
+        "command line", 0, flag,
+        "invalid YAML value '" + text + "': " + YamlMessage(e, text));
   }
   ConfigNode out = Converter("command line", flag).Convert(node, "", 0);
   out.SetOrigin(flag);
