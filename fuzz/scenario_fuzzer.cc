@@ -11,7 +11,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
                                       std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    const aia::Scenario s = aia::ParseScenario(text, "fuzz.yaml", AIA_FUZZ_BASE_DIR);
+    const aia::Scenario s =
+        aia::ParseScenario(text, "fuzz.yaml", AIA_FUZZ_BASE_DIR);
     // The effective scenario reads back (what effective.yaml promises).
     const std::string yaml = aia::EffectiveYaml(s, "");
     aia::ParseScenario(yaml, "effective.yaml", AIA_FUZZ_BASE_DIR);

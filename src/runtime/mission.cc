@@ -94,8 +94,9 @@ void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
       dir + "/.aia-probe.tmp." + std::to_string(::getpid());
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
   if (fd < 0)
-    throw InputError("command line", 0, flag,
-                     "cannot write into '" + dir + "': " + std::strerror(errno));
+    throw InputError(
+        "command line", 0, flag,
+        "cannot write into '" + dir + "': " + std::strerror(errno));
   ::close(fd);
   ::unlink(probe.c_str());
   if (!lock) return;

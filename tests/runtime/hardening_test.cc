@@ -239,9 +239,9 @@ TEST(HardeningTest, FullDiskGivesOneClearError) {
     fs::remove_all(dir);
     GTEST_SKIP() << "cannot mount a tmpfs here";
   }
-  const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"),
-                         "--policy", "greedy", "--out", dir + "/out",
-                         "--quiet"});
+  const auto r =
+      RunAia({"run", SourcePath("scenarios/default.yaml"), "--policy", "greedy",
+              "--out", dir + "/out", "--quiet"});
   RunCommand("umount '" + dir + "'");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_EQ(r.err.rfind("error: cannot write '" + dir + "/out/", 0), 0u)
