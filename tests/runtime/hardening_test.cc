@@ -207,6 +207,7 @@ TEST(HardeningTest, SigkilledTrainingResumesToTheSameModel) {
   };
   EXPECT_EQ(losses(ReadFile(dir + "/a.train.csv")),
             losses(ReadFile(dir + "/b.train.csv")));
+  EXPECT_TRUE(ReadFile(dir + "/a.pt") == ReadFile(dir + "/b.pt"));
   EXPECT_TRUE(Temporaries(dir).empty());
   fs::remove_all(dir);
 }
