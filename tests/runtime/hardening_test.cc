@@ -194,20 +194,23 @@ TEST(HardeningTest, SigkilledTrainingResumesToTheSameModel) {
         "--epochs", "30",        "--width",     "8",        "--window",
         "16",       "--threads", "1",           "--resume", "--quiet"};
   };
-  const auto whole = RunAia(args(dir + "/a.pt"));
+  // The same file name in two folders: a model's archive is named after it.
+  fs::create_directories(dir + "/a");
+  fs::create_directories(dir + "/b");
+  const auto whole = RunAia(args(dir + "/a/model.pt"));
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   for (const char* after : {"1.5", "2.2", "2.9", "3.6"})
     RunCommand(std::string("timeout -s KILL ") + after + " " +
-               Quoted(args(dir + "/b.pt")));
-  const auto r = RunAia(args(dir + "/b.pt"));
+               Quoted(args(dir + "/b/model.pt")));
+  const auto r = RunAia(args(dir + "/b/model.pt"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The same epochs with the same losses (seconds aside), the same weights.
   const auto losses = [](const std::string& csv) {
     return std::regex_replace(csv, std::regex(",[0-9.e+-]+\n"), ",X\n");
   };
-  EXPECT_EQ(losses(ReadFile(dir + "/a.train.csv")),
-            losses(ReadFile(dir + "/b.train.csv")));
-  EXPECT_TRUE(ReadFile(dir + "/a.pt") == ReadFile(dir + "/b.pt"));
+  EXPECT_EQ(losses(ReadFile(dir + "/a/model.train.csv")),
+            losses(ReadFile(dir + "/b/model.train.csv")));
+  EXPECT_TRUE(ReadFile(dir + "/a/model.pt") == ReadFile(dir + "/b/model.pt"));
   EXPECT_TRUE(Temporaries(dir).empty());
   fs::remove_all(dir);
 }
