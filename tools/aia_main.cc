@@ -40,6 +40,16 @@ constexpr char kSetHelp[] =
     "override a scenario key, e.g. --set mission.eps=0.05 or --set "
     "policy.p_v=0.8 (repeatable; see aia schema and aia policies)";
 
+// Seeds and other unsigned flags: digits only. CLI11 2.1 reads them with
+// strtoull, which turns -1 into 18446744073709551615.
+const CLI::Validator kUnsigned(
+    [](std::string& v) -> std::string {
+      if (v.empty() || v.find_first_not_of("0123456789") != std::string::npos)
+        return "must be a non-negative whole number, got '" + v + "'";
+      return "";
+    },
+    "", "UNSIGNED");
+
 // The scenario flags of the mission commands; their values are read after
 // parsing (only the flags given override the scenario).
 struct MissionFlags {
@@ -54,8 +64,8 @@ struct MissionFlags {
     if (with_policy)
       c->add_option("--policy", policy,
                     "policy name (overrides the scenario's policy.name)");
-    c->add_option("--seed", seed,
-                  "random seed (overrides the scenario's seed)");
+    c->add_option("--seed", seed, "random seed (overrides the scenario's seed)")
+        ->check(kUnsigned);
     if (with_max_steps)
       c->add_option("--max-steps", max_steps,
                     "decision steps at most (overrides mission.max_steps)");
@@ -207,6 +217,7 @@ Action AddEvalCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed-base", eval->seed_base,
                   "first seed (seeds B .. B+n-1)")
+      ->check(kUnsigned)
       ->capture_default_str();
   cmd->add_option(
          "--policies", eval->policies,
@@ -246,6 +257,7 @@ Action AddBenchCommand(CLI::App& app) {
                   "runs per size (median reported)")
       ->capture_default_str();
   cmd->add_option("--seed", bench->seed, "seed of the generated worlds")
+      ->check(kUnsigned)
       ->capture_default_str();
   cmd->add_option("--policy", bench->policy, "policy to time")
       ->capture_default_str();
@@ -285,6 +297,7 @@ Action AddDatasetCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--first-seed", o->first_seed,
                   "episode e uses seed FIRST+e (aia eval uses 0..)")
+      ->check(kUnsigned)
       ->capture_default_str();
   cmd->add_option("--keep", o->keep, "random decision steps kept per episode")
       ->capture_default_str();
@@ -346,6 +359,7 @@ Action AddTrainCommand(CLI::App& app) {
                   "share of the worlds held out for validation")
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "initialization, split and shuffling")
+      ->check(kUnsigned)
       ->capture_default_str();
   cmd->add_option("--frame", *frame, "input frame: centred or global")
       ->capture_default_str();
@@ -443,8 +457,17 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // One `error:` line like any bad input, with where to look.
+    std::string what = e.what();
+    for (char& c : what)
+      if (c == '\n' || c == '\r') c = ' ';
+    std::string help = "aia --help";
+    for (const CLI::App* sub : app.get_subcommands())
+      help = "aia " + sub->get_name() + " --help";
+    std::fprintf(stderr, "error: command line: %s (%s lists the options)\n",
+                 what.c_str(), help.c_str());
+    return 2;
   }
   try {
     for (const Action& run : commands) {

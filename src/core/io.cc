@@ -104,8 +104,17 @@ void MakeDirs(const std::string& path) {
                              "': " + ec.message());
 }
 
+void CheckReplaceableFile(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+    throw std::runtime_error("cannot write '" + path +
+                             "': it exists and is not a regular file (a "
+                             "folder, device or pipe); give a file's path");
+}
+
 AtomicFile::AtomicFile(const std::string& path)
     : path_(path), tmp_(path + ".tmp." + std::to_string(::getpid())) {
+  CheckReplaceableFile(path);
   file_ = std::fopen(tmp_.c_str(), "wb");
   if (file_ == nullptr)
     throw std::runtime_error("cannot write '" + path +

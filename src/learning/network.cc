@@ -327,6 +327,7 @@ void IgbNet::Save(const std::string& path) const {
 
 void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
                        const std::string& path) {
+  CheckReplaceableFile(path);
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   archive.save_to(tmp);
   std::filesystem::rename(tmp, path);

@@ -242,6 +242,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
     try {
       MakeDirs(parent.string());
       lock = std::make_unique<FileLock>(parent.string());
+      CheckReplaceableFile(o.out);
     } catch (const std::runtime_error& e) {
       throw InputError("command line", 0, "--out", e.what());
     }

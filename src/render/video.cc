@@ -6,12 +6,14 @@
 #include <stdexcept>
 
 #include "aia/core/check.h"
+#include "aia/core/io.h"
 
 namespace aia {
 
 Mp4Writer::Mp4Writer(const std::string& path, int width, int height, double fps)
     : path_(path), width_(width), height_(height) {
   AIA_CHECK(width > 0 && height > 0 && fps > 0.0);
+  CheckReplaceableFile(path);
   const std::filesystem::path p(path);
   // OpenCV picks the container from the extension: keep .mp4 last.
   tmp_ =

@@ -81,6 +81,14 @@ void LockOutput(const std::string& path, const std::string& flag) {
   }
 }
 
+void CheckOutputFile(const std::string& path, const std::string& flag) {
+  try {
+    CheckReplaceableFile(path);
+  } catch (const std::runtime_error& e) {
+    throw InputError("command line", 0, flag, e.what());
+  }
+}
+
 void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
   if (dir.empty()) return;
   try {

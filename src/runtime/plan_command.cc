@@ -38,6 +38,7 @@ SamplingPlan PlanFromStart(std::shared_ptr<const Instance> instance,
 int RunPlanCommand(const PlanOptions& o) {
   if (o.budget && *o.budget < 0)
     throw InputError("command line", 0, "--budget", "must be >= 0");
+  if (!o.out.empty()) CheckOutputFile(o.out, "--out");
   const PolicyRegistry registry = AllPolicies();
   CommandOverrides overrides = o.overrides;
   overrides.policy = "expert";

@@ -207,6 +207,7 @@ RenderResult RenderMission(const RenderOptions& options) {
       out.stem().empty())
     throw InputError("command line", 0, "--out",
                      "must name an .mp4 file, got '" + options.out_file + "'");
+  CheckOutputFile(options.out_file, "--out");
   const std::string prefix =
       (out.parent_path() / (out.stem().string() + ".")).string();
 

@@ -21,6 +21,7 @@ int RunWorldCommand(const WorldOptions& o) {
   if (!std::filesystem::is_directory(parent, ec))
     throw InputError("command line", 0, "--out",
                      "folder '" + parent.string() + "' does not exist");
+  CheckOutputFile(o.out, "--out");
   const PolicyRegistry registry = AllPolicies();
   const Scenario scenario =
       LoadScenario(o.scenario_path, o.overrides.ToOverrides(registry));

@@ -1,6 +1,7 @@
 // The command line: bad input gives `error: FILE:LINE: key: ...` and exit 2,
 // every scenario runs, the same seed gives byte-identical results.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -104,6 +105,56 @@ TEST(CliTest, UnknownFlagAndMissingArgumentExitWith2) {
   EXPECT_EQ(RunAia({"run"}).exit_code, 2);
   EXPECT_EQ(RunAia({}).exit_code, 2);
   EXPECT_EQ(RunAia({"bench", "--sizes", "10by10"}).exit_code, 2);
+}
+
+// Flags the parser refuses read like any bad input: one `error:` line.
+TEST(CliTest, ParserErrorsAreOneErrorLine) {
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", scenario, "--bogus"},
+       "error: command line: The following argument was not expected: "
+       "--bogus (aia run --help lists the options)\n"},
+      {{"eval", "--seeds", "1000000000000"},
+       "error: command line: Could not convert: --seeds = 1000000000000 (aia "
+       "eval --help lists the options)\n"},
+      // strtoull alone would read -1 as 18446744073709551615.
+      {{"run", scenario, "--seed", "-1"},
+       "error: command line: --seed: must be a non-negative whole number, got "
+       "'-1' (aia run --help lists the options)\n"},
+      {{"dataset", "--episodes", "1", "--out", "x", "--first-seed", "0x10"},
+       "error: command line: --first-seed: must be a non-negative whole "
+       "number, got '0x10' (aia dataset --help lists the options)\n"},
+      {{},
+       "error: command line: A subcommand is required (aia --help lists "
+       "the options)\n"},
+  };
+  for (const auto& [args, err] : cases) {
+    const auto r = RunAia(args);
+    EXPECT_EQ(r.exit_code, 2) << err;
+    EXPECT_EQ(r.err, err);
+  }
+}
+
+// An output file's path that is a pipe (or a device, or a folder) is refused
+// before any work; renaming the finished file onto it would replace it.
+TEST(CliTest, OutputFileThatIsNotARegularFileIsRefused) {
+  const std::string dir = testing::MakeTempDir("aia_fifo_");
+  const std::string fifo = dir + "/pipe.xml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"world", scenario, "--out", fifo},
+        std::vector<std::string>{"plan", scenario, "--out", fifo}}) {
+    const auto r = RunAia(args);
+    EXPECT_EQ(r.exit_code, 2) << args[0];
+    EXPECT_EQ(r.err, "error: command line: --out: cannot write '" + fifo +
+                         "': it exists and is not a regular file (a folder, "
+                         "device or pipe); give a file's path\n");
+    struct stat st;
+    ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode)) << args[0] << " replaced the pipe";
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST(CliTest, UncreatableOutputFolderIsBadInput) {

@@ -43,7 +43,13 @@ class FileLock {
 int RemoveStaleTemporaries(const std::string& dir,
                            const std::string& prefix = "");
 
+// Throws std::runtime_error("cannot write 'PATH': ...") when `path` exists
+// and is not a regular file (after links): renaming a finished file onto it
+// would replace a folder, a device such as /dev/null, or a pipe.
+void CheckReplaceableFile(const std::string& path);
+
 // A file written through a temporary name and renamed into place by Commit().
+// The path must be new or a regular file (CheckReplaceableFile).
 // Destroyed without Commit(), it removes the temporary file.
 class AtomicFile {
  public:

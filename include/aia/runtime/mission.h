@@ -47,6 +47,10 @@ struct CommandOverrides {
 std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
                                      const PolicyRegistry& registry);
 
+// Checks an output file named by a flag before any work: InputError (exit
+// code 2) naming the flag when the path exists and is not a regular file.
+void CheckOutputFile(const std::string& path, const std::string& flag);
+
 // Creates an output folder named by a flag; InputError (exit code 2) naming
 // the flag when it cannot be created or written. With `lock`, the folder is
 // this process's until it ends (an flock on the folder: a second job
