@@ -16,6 +16,7 @@
 #include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/plan_command.h"
+#include "aia/scenario/config.h"
 
 namespace aia {
 
@@ -47,8 +48,6 @@ double TestSpeed(const std::string& xml_path, int nstep) {
 namespace {
 
 int RunExpertBench(const BenchOptions& o) {
-  if (o.seeds < 1)
-    throw InputError("command line", 0, "--seeds", "must be at least 1");
   std::printf(
       "aia bench --expert: C-SB solve from the initial state, %d generated "
       "worlds per size "
@@ -115,12 +114,22 @@ int RunNetworkBench(const BenchOptions& o) {
 }
 
 int RunBench(const BenchOptions& o) {
+  // Every mode reports medians of a few runs; --steps has mission.max_steps'
+  // range.
+  constexpr int kMaxRepeats = 1000, kMaxSeeds = 100000;
+  if (o.repeats < 1 || o.repeats > kMaxRepeats)
+    throw InputError("command line", 0, "--repeats",
+                     "must be in [1, " + std::to_string(kMaxRepeats) + "]");
+  if (o.seeds < 1 || o.seeds > kMaxSeeds)
+    throw InputError("command line", 0, "--seeds",
+                     "must be in [1, " + std::to_string(kMaxSeeds) + "]");
+  if (o.steps < 1 || o.steps > limits::kMaxSteps)
+    throw InputError("command line", 0, "--steps",
+                     "must be in [1, " +
+                         std::to_string(static_cast<int>(limits::kMaxSteps)) +
+                         "] (mission.max_steps' range)");
   if (o.network) return RunNetworkBench(o);
   if (o.expert) return RunExpertBench(o);
-  if (o.steps < 1)
-    throw InputError("command line", 0, "--steps", "must be at least 1");
-  if (o.repeats < 1)
-    throw InputError("command line", 0, "--repeats", "must be at least 1");
   const PolicyRegistry registry = AllPolicies();
   if (!registry.Has(o.policy))
     throw InputError("command line", 0, "--policy",

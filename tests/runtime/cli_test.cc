@@ -135,6 +135,24 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
   }
 }
 
+// Benchmark sizes have ranges in every mode (--network --repeats 0 used to
+// take the median of nothing and crash).
+TEST(CliTest, BenchCountsOutOfRangeExitWith2) {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"bench", "--network", "--repeats", "0"},
+       "--repeats: must be in [1, 1000]"},
+      {{"bench", "--repeats", "100000"}, "--repeats: must be in [1, 1000]"},
+      {{"bench", "--expert", "--seeds", "0"},
+       "--seeds: must be in [1, 100000]"},
+      {{"bench", "--steps", "1000001"}, "--steps: must be in [1, 1000000]"},
+  };
+  for (const auto& [args, message] : cases) {
+    const auto r = RunAia(args);
+    EXPECT_EQ(r.exit_code, 2) << message;
+    EXPECT_EQ(r.err.rfind("error: command line: " + message, 0), 0u) << r.err;
+  }
+}
+
 // An output file's path that is a pipe (or a device, or a folder) is refused
 // before any work; renaming the finished file onto it would replace it.
 TEST(CliTest, OutputFileThatIsNotARegularFileIsRefused) {
