@@ -459,9 +459,11 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     // One `error:` line like any bad input, with where to look.
-    std::string what = e.what();
+    std::string what = e.what();  // CLI11 breaks some messages in lines
     for (char& c : what)
       if (c == '\n' || c == '\r') c = ' ';
+    while (!what.empty() && what.back() == ' ') what.pop_back();
+    what = aia::OneLine(what);
     std::string help = "aia --help";
     for (const CLI::App* sub : app.get_subcommands())
       help = "aia " + sub->get_name() + " --help";
@@ -483,7 +485,7 @@ int main(int argc, char** argv) {
                  "or a machine with more memory)\n");
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
+    std::fprintf(stderr, "error: %s\n", aia::OneLine(e.what()).c_str());
     return 1;
   } catch (...) {
     std::fprintf(stderr, "error: an unknown failure ended aia\n");

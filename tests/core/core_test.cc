@@ -95,5 +95,15 @@ TEST(InputErrorTest, FormatsFileLineKey) {
             "command line: --policy: unknown");
 }
 
+// A message quoting odd bytes (yaml-cpp's "unknown escape character: " and
+// the raw byte) still prints as one line.
+TEST(InputErrorTest, FormatIsOneLine) {
+  EXPECT_EQ(InputError("a\nb.yaml", 2, "(yaml)",
+                       std::string("bad \x01 escape: \n\t\r\x7f\0 end", 23))
+                .Format(),
+            "a\\nb.yaml:2: (yaml): bad \\x01 escape: \\n\\t\\r\\x7f\\x00 end");
+  EXPECT_EQ(OneLine("caf\xc3\xa9 ok"), "caf\xc3\xa9 ok");  // UTF-8 stays
+}
+
 }  // namespace
 }  // namespace aia

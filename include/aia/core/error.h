@@ -20,7 +20,8 @@ class InputError : public std::runtime_error {
   const std::string& key() const { return key_; }
   const std::string& message() const { return message_; }
 
-  // "FILE:LINE: key: what" (or "FILE: key: what" when line is 0).
+  // "FILE:LINE: key: what" (or "FILE: key: what" when line is 0), on one
+  // line (OneLine).
   std::string Format() const;
 
  private:
@@ -29,6 +30,11 @@ class InputError : public std::runtime_error {
   std::string key_;
   std::string message_;
 };
+
+// `text` with its control characters written as escapes (\n, \t, \x00):
+// an error is one line however odd the input it quotes (a file name, a
+// parser's message quoting a byte).
+std::string OneLine(const std::string& text);
 
 }  // namespace aia
 
