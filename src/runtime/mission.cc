@@ -215,6 +215,22 @@ MissionSummary MissionRunner::Run() {
                   {"stalled_steps", st.stalled_steps},
                   {"substeps", st.substeps},
                   {"sim_seconds", st.sim_seconds}};
+  // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
+  // handled contact overflow means the physics went wrong somewhere.
+  const PhysicsMemoryStats mem = e.sim().memory();
+  d["physics"]["memory"] = {{"nconmax", mem.nconmax},
+                            {"njmax", mem.njmax},
+                            {"grows", mem.grows},
+                            {"max_contacts", mem.max_contacts},
+                            {"max_constraints", mem.max_constraints},
+                            {"max_stack", mem.max_stack},
+                            {"nstack", mem.nstack},
+                            {"data_mib", mem.data_bytes / (1 << 20)}};
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::object();
+  for (int w = 0; w < mjNWARNING; ++w)
+    if (e.sim().warnings()[w] > 0)
+      warnings[MujocoWarningName(w)] = e.sim().warnings()[w];
+  d["physics"]["mujoco_warnings"] = warnings;
   d["moves"] = {{"total", moves_->moves()},
                 {"reversals", moves_->reversals()},
                 {"longest_reversal_run", moves_->longest_reversal_run()}};

@@ -1,16 +1,58 @@
 #include "aia/sim/simulation.h"
 
+#include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <stdexcept>
 
 #include "aia/core/check.h"
 #include "aia/world/mjcf.h"
 
 namespace aia {
+namespace {
+
+thread_local std::string last_warning;
+
+// Called by MuJoCo in place of its own handler, which would print, write
+// MUJOCO_LOG.TXT, wait for Enter and exit. MuJoCo does not expect it to
+// return: the exception unwinds through its C frames (libmujoco is built with
+// unwind tables, as every x86-64 object is by default).
+void OnMujocoError(const char* message) {
+  throw PhysicsError(std::string("MuJoCo: ") + message);
+}
+
+void OnMujocoWarning(const char* message) { last_warning = message; }
+
+template <typename T>
+void CopyArray(const T* from, int count, T* to) {
+  if (count > 0) std::memcpy(to, from, sizeof(T) * count);
+}
+
+}  // namespace
+
+void InstallMujocoHandlers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    mju_user_error = OnMujocoError;
+    mju_user_warning = OnMujocoWarning;
+  });
+}
+
+const std::string& LastMujocoWarning() { return last_warning; }
+
+const char* MujocoWarningName(int warning) {
+  static const char* const kNames[mjNWARNING] = {
+      "inertia",  "contact_full", "constraint_full", "visual_geom_full",
+      "bad_qpos", "bad_qvel",     "bad_qacc",        "bad_ctrl"};
+  return warning >= 0 && warning < mjNWARNING ? kNames[warning] : "unknown";
+}
 
 MjModelPtr CompileMjcf(const std::string& xml) {
+  InstallMujocoHandlers();
   auto vfs = std::make_unique<mjVFS>();
   mj_defaultVFS(vfs.get());
   const char* name = "aia_model.xml";
@@ -27,22 +69,23 @@ MjModelPtr CompileMjcf(const std::string& xml) {
   return MjModelPtr(m);
 }
 
-PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario)
-    : mjcf_(MakeMjcf(world, scenario)), physics_(scenario.physics) {
+PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario,
+                           long contacts)
+    : mjcf_(MakeMjcf(world, scenario, contacts)), physics_(scenario.physics) {
   model_ = CompileMjcf(mjcf_);
   const int n = world.NumRobots();
   for (int i = 0; i < n; ++i) {
     const std::string robot = "robot" + std::to_string(i);
     const int jx =
         mj_name2id(model_.get(), mjOBJ_JOINT, (robot + "_x").c_str());
-    const int ax =
-        mj_name2id(model_.get(), mjOBJ_ACTUATOR, (robot + "_x").c_str());
-    AIA_CHECK(jx >= 0 && ax >= 0);
+    AIA_CHECK(jx >= 0);
     starts_.push_back(world.map.lattice().Point(world.robot_starts[i]));
     qpos_adr_.push_back(model_->jnt_qposadr[jx]);
     qvel_adr_.push_back(model_->jnt_dofadr[jx]);
-    ctrl_adr_.push_back(ax);
   }
+  const int kp = mj_name2id(model_.get(), mjOBJ_NUMERIC, kKpNumeric);
+  AIA_CHECK(kp >= 0 && model_->numeric_size[kp] == 1);
+  kp_ = model_->numeric_data[model_->numeric_adr[kp]];
   for (int k = 0; k < world.NumTargets(); ++k) {
     const int body = mj_name2id(model_.get(), mjOBJ_BODY,
                                 ("target" + std::to_string(k)).c_str());
@@ -54,9 +97,122 @@ PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario)
 Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
     : model_(std::move(model)) {
   AIA_CHECK(model_ != nullptr);
-  data_ = MjDataPtr(mj_makeData(model_->model()));
+  InstallMujocoHandlers();
+  m_ = model_->model();
+  data_ = MjDataPtr(mj_makeData(m_));
+  if (data_ == nullptr)
+    throw PhysicsError("MuJoCo cannot allocate the simulation's data");
   waypoints_ = model_->starts_;
-  mj_forward(model_->model(), data_.get());
+  targets_.assign(waypoints_.size(), Vec2::Zero());
+  mj_forward(m_, data_.get());
+}
+
+void Simulation::StepPhysics() {
+  mjData* d = data_.get();
+  // The waypoint controller: a spring toward each robot's waypoint, evaluated
+  // as MuJoCo evaluates a position actuator (gain * target + bias * q, with
+  // bias = -kp), so that it gives the same numbers; the joints' damping,
+  // integrated implicitly by MuJoCo, makes it critical.
+  const int n = num_robots();
+  const mjtNum kp = model_->kp_;
+  for (int i = 0; i < n; ++i) {
+    const int q = model_->qpos_adr_[i], v = model_->qvel_adr_[i];
+    for (int c = 0; c < 2; ++c) {
+      // MuJoCo's affine bias [0, -kp, 0] . [1, length, velocity].
+      mjtNum bias = 0.0 + (-kp) * d->qpos[q + c];
+      bias += 0.0 * d->qvel[v + c];
+      d->qfrc_applied[v + c] = kp * targets_[i][c] + bias;
+    }
+  }
+  const int nq = m_->nq, nv = m_->nv, na = m_->na;
+  saved_.resize(1 + nq + 2 * nv + na);
+  mjtNum* s = saved_.data();
+  s[0] = d->time;
+  CopyArray(d->qpos, nq, s + 1);
+  CopyArray(d->qvel, nv, s + 1 + nq);
+  CopyArray(d->qacc_warmstart, nv, s + 1 + nq + nv);
+  CopyArray(d->act, na, s + 1 + nq + 2 * nv);
+  while (true) {
+    const auto t0 = std::chrono::steady_clock::now();
+    mj_step(m_, d);
+    physics_seconds_ +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+            .count();
+    if (d->warning[mjWARN_CONTACTFULL].number == 0 &&
+        d->warning[mjWARN_CNSTRFULL].number == 0)
+      break;
+    // Contacts were dropped: undo the step and take it again with room.
+    d->time = s[0];
+    CopyArray(s + 1, nq, d->qpos);
+    CopyArray(s + 1 + nq, nv, d->qvel);
+    CopyArray(s + 1 + nq + nv, nv, d->qacc_warmstart);
+    CopyArray(s + 1 + nq + 2 * nv, na, d->act);
+    Grow();
+    d = data_.get();
+  }
+  ++mj_steps_;
+  max_contacts_ = std::max(max_contacts_, d->ncon);
+  max_constraints_ = std::max(max_constraints_, d->nefc);
+  max_stack_ = std::max<long>(max_stack_, d->maxuse_stack);
+  for (int w = 0; w < mjNWARNING; ++w) {
+    if (d->warning[w].number == 0) continue;
+    warnings_[w] += d->warning[w].number;
+    d->warning[w].number = 0;
+  }
+}
+
+void Simulation::Grow() {
+  const MujocoSizes sizes = MujocoSizesFor(m_->nbody, m_->nv, 2L * m_->nconmax);
+  const double bytes = MujocoDataBytes(sizes, m_->nv, m_->nu);
+  if (bytes > kMaxPhysicsBytes) {
+    char what[400];
+    std::snprintf(what, sizeof(what),
+                  "the robots' contacts need more than %d in one physics "
+                  "step, and MuJoCo 2.2 would need %.1f GiB for them (its "
+                  "constraint arrays grow with the square of the contacts; "
+                  "the limit is %.0f GiB): fewer robots, or more room",
+                  m_->nconmax, bytes / (1L << 30),
+                  kMaxPhysicsBytes / (1L << 30));
+    throw std::runtime_error(what);
+  }
+  MjModelPtr grown(mj_copyModel(nullptr, m_));
+  grown->nconmax = sizes.nconmax;
+  grown->njmax = sizes.njmax;
+  grown->nstack = static_cast<int>(std::min<long>(sizes.nstack, INT_MAX));
+  MjDataPtr data(mj_makeData(grown.get()));
+  if (data == nullptr)
+    throw PhysicsError("MuJoCo cannot allocate the simulation's data");
+  const mjModel* m = grown.get();
+  const mjData* from = data_.get();
+  mjData* to = data.get();
+  to->time = from->time;
+  CopyArray(from->qpos, m->nq, to->qpos);
+  CopyArray(from->qvel, m->nv, to->qvel);
+  CopyArray(from->act, m->na, to->act);
+  CopyArray(from->qacc_warmstart, m->nv, to->qacc_warmstart);
+  CopyArray(from->ctrl, m->nu, to->ctrl);
+  CopyArray(from->qfrc_applied, m->nv, to->qfrc_applied);
+  CopyArray(from->xfrc_applied, 6 * m->nbody, to->xfrc_applied);
+  CopyArray(from->mocap_pos, 3 * m->nmocap, to->mocap_pos);
+  CopyArray(from->mocap_quat, 4 * m->nmocap, to->mocap_quat);
+  max_stack_ = std::max<long>(max_stack_, from->maxuse_stack);
+  data_ = std::move(data);
+  own_model_ = std::move(grown);
+  m_ = own_model_.get();
+  ++grows_;
+}
+
+PhysicsMemoryStats Simulation::memory() const {
+  PhysicsMemoryStats s;
+  s.nconmax = m_->nconmax;
+  s.njmax = m_->njmax;
+  s.grows = grows_;
+  s.max_contacts = max_contacts_;
+  s.max_constraints = max_constraints_;
+  s.max_stack = std::max<long>(max_stack_, data_->maxuse_stack);
+  s.nstack = m_->nstack;
+  s.data_bytes = static_cast<double>(data_->nbuffer);
+  return s;
 }
 
 Simulation::Simulation(const World& world, const Scenario& scenario)
@@ -75,8 +231,7 @@ Vec2 Simulation::RobotVelocity(int i) const {
 void Simulation::SetWaypoint(int i, const Vec2& p) {
   waypoints_[i] = p;
   const Vec2& start = model_->starts_[i];
-  data_->ctrl[model_->ctrl_adr_[i]] = p.x() - start.x();
-  data_->ctrl[model_->ctrl_adr_[i] + 1] = p.y() - start.y();
+  targets_[i] = p - start;
 }
 
 Vec2 Simulation::TargetPosition(int k) const {
@@ -93,9 +248,8 @@ void Simulation::SetTargetPosition(int k, const Vec2& p) {
 PhysicsStepStats Simulation::AdvanceToWaypoints(
     const std::function<void(double)>& on_substep) {
   PhysicsStepStats stats;
-  const mjModel* m = model_->model();
   const PhysicsConfig& physics = model_->physics();
-  const double dt = m->opt.timestep;
+  const double dt = m_->opt.timestep;
   const int max_steps =
       std::max(1, static_cast<int>(std::ceil(physics.step_timeout / dt)));
   const double tol2 = physics.tolerance * physics.tolerance;
@@ -103,23 +257,36 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
       0.01;  // m/s: a robot this slow and not there is blocked
   const double settle_time =
       0.05;  // s: a robot is never called stalled before this
+  // A robot in a sliding contact can creep on for seconds faster than
+  // stall_speed: it is stuck too when its distance to the waypoint has not
+  // shrunk by the tolerance over the last progress window.
+  const double progress_window = 0.1;  // s
+  const int check_every =
+      std::max(1, static_cast<int>(std::lround(progress_window / dt)));
   const int n = num_robots();
+  progress_.resize(n);
+  stuck_.assign(n, 0);
+  for (int i = 0; i < n; ++i)
+    progress_[i] = (RobotPosition(i) - waypoints_[i]).norm();
   for (int s = 0; s < max_steps; ++s) {
-    const auto t0 = std::chrono::steady_clock::now();
-    mj_step(m, data_.get());
-    physics_seconds_ +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-            .count();
-    ++mj_steps_;
+    StepPhysics();
     ++stats.substeps;
     const double elapsed = (s + 1) * dt;
     if (on_substep) on_substep(elapsed);
+    if ((s + 1) % check_every == 0) {
+      for (int i = 0; i < n; ++i) {
+        const double d = (RobotPosition(i) - waypoints_[i]).norm();
+        stuck_[i] = progress_[i] - d < physics.tolerance ? 1 : 0;
+        progress_[i] = d;
+      }
+    }
     bool all_arrived = true, all_settled = true;
     for (int i = 0; i < n; ++i) {
       if ((RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2) continue;
       all_arrived = false;
       if (elapsed < settle_time ||
-          RobotVelocity(i).squaredNorm() > stall_speed * stall_speed) {
+          (!stuck_[i] &&
+           RobotVelocity(i).squaredNorm() > stall_speed * stall_speed)) {
         all_settled = false;
         break;
       }
@@ -142,8 +309,7 @@ bool Simulation::RayClear(const Vec2& from, const Vec2& to) const {
   int geom = -1;
   // Static geoms included (obstacles are static bodies); the ray length is
   // |vec|, so a hit before 1 lies between the two points.
-  const mjtNum x =
-      mj_ray(model_->model(), data_.get(), pnt, vec, groups, 1, -1, &geom);
+  const mjtNum x = mj_ray(m_, data_.get(), pnt, vec, groups, 1, -1, &geom);
   return x < 0.0 || x >= 1.0;
 }
 

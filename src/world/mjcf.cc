@@ -1,5 +1,6 @@
 #include "aia/world/mjcf.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -14,6 +15,27 @@ std::string Num(double v) {
 }
 
 }  // namespace
+
+MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts) {
+  MujocoSizes s;
+  s.nconmax = static_cast<int>(std::max(1L, contacts));
+  s.njmax = static_cast<int>(kRowsPerContact * s.nconmax);
+  const long broad_phase = nbody * (nbody - 1) / 2 + 12 * nbody;
+  const long newton = 3 * nv * nv + 40 * nv;
+  const long constraints = 24L * s.njmax;
+  s.nstack = broad_phase + newton + constraints + 20 * (nbody + nv) + 100000;
+  return s;
+}
+
+long InitialContacts(int num_robots) { return 100 + num_robots / 4; }
+
+double MujocoDataBytes(const MujocoSizes& s, long nv, long nu) {
+  const double j = s.njmax, v = static_cast<double>(nv);
+  // efc_J, efc_JT, efc_AR as mjtNum and their column indices as int, the
+  // actuator moments (nu x nv; none in the generated models) and contacts.
+  return 12.0 * (j * j + 2.0 * j * v) + 8.0 * nu * v +
+         static_cast<double>(sizeof(double)) * 80 * s.nconmax;
+}
 
 std::array<float, 3> RobotColor(int robot) {
   // Golden-ratio hue walk: neighbouring ids get well-separated colours.
@@ -54,7 +76,7 @@ std::array<float, 3> RobotColor(int robot) {
           static_cast<float>(b + m)};
 }
 
-std::string MakeMjcf(const World& world, const Scenario& s) {
+std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   const int n = world.NumRobots();
   const double W = world.map.size().x(), H = world.map.size().y();
   const double mass = s.physics.robot_mass;
@@ -65,15 +87,13 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
   x << "  <compiler angle=\"radian\"/>\n";
   x << "  <option timestep=\"" << Num(s.physics.timestep)
     << "\" gravity=\"0 0 0\"/>\n";
-  // MuJoCo 2.2 allocates njmax x njmax: size it from the robot count.
-  // The stack MuJoCo sizes by default is too small for thousands of bodies.
-  const int bodies =
-      n + world.NumTargets() + static_cast<int>(world.map.obstacles().size());
-  x << "  <size njmax=\"" << 8 * n + 500 << "\" nconmax=\"" << 2 * n + 100
-    << "\"";
-  if (bodies > 200)
-    x << " nstack=\"" << 200000 + static_cast<long>(bodies) * bodies << "\"";
-  x << "/>\n";
+  // The world body, four walls, the obstacles, robots and targets.
+  const long bodies = 5L + n + world.NumTargets() +
+                      static_cast<long>(world.map.obstacles().size());
+  const MujocoSizes sizes = MujocoSizesFor(
+      bodies, 2L * n, contacts > 0 ? contacts : InitialContacts(n));
+  x << "  <size njmax=\"" << sizes.njmax << "\" nconmax=\"" << sizes.nconmax
+    << "\" nstack=\"" << sizes.nstack << "\"/>\n";
   x << "  <visual>\n    <global offwidth=\"" << s.render.width
     << "\" offheight=\"" << s.render.height << "\" fovy=\"45\"/>\n";
   x << "    <quality shadowsize=\"2048\"/>\n    <map znear=\"0.01\"/>\n  "
@@ -126,8 +146,9 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
   for (int i = 0; i < n; ++i) {
     const Vec2 p = world.map.lattice().Point(world.robot_starts[i]);
     const auto c = RobotColor(i);
-    // qpos (and ctrl) are displacements from the start, so that the file at
-    // rest (ctrl = 0) holds every robot at its start in MuJoCo's own tools.
+    // qpos (and the controller's target) are displacements from the start,
+    // so that the file at rest holds every robot at its start in MuJoCo's
+    // own tools.
     x << "    <body name=\"robot" << i << "\" pos=\"" << Num(p.x()) << " "
       << Num(p.y()) << " " << Num(kRobotHalfHeight + 0.001) << "\">\n"
       << "      <joint name=\"robot" << i
@@ -151,17 +172,12 @@ std::string MakeMjcf(const World& world, const Scenario& s) {
       << "\"/></body>\n";
   }
   x << "  </worldbody>\n";
-  if (n > 0) {
-    x << "  <actuator>\n";
-    for (int i = 0; i < n; ++i) {
-      for (const char* axis : {"x", "y"}) {
-        x << "    <position name=\"robot" << i << "_" << axis
-          << "\" joint=\"robot" << i << "_" << axis << "\" kp=\""
-          << Num(s.physics.kp) << "\"/>\n";
-      }
-    }
-    x << "  </actuator>\n";
-  }
+  // The waypoint controller's stiffness, read by the simulation, which applies
+  // kp (waypoint - q) as a force on each slide joint before every mj_step.
+  // Position actuators would do the same but cost MuJoCo 2.2 O(N^2) per step
+  // (its actuator moments are a dense nu x nv matrix).
+  x << "  <custom>\n    <numeric name=\"" << kKpNumeric << "\" data=\""
+    << Num(s.physics.kp) << "\"/>\n  </custom>\n";
   x << "</mujoco>\n";
   return x.str();
 }

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "aia/sim/simulation.h"
 #include "aia/world/mjcf.h"
 #include "support/test_support.h"
@@ -28,9 +30,13 @@ TEST(SimulationTest, ModelIsSizedFromTheRobotCount) {
       ScenarioFromYaml("robots: {count: 7}\ntargets: {count: 2}\n");
   const World w = World::Build(s);
   Simulation sim(w, s);
-  EXPECT_EQ(sim.model()->njmax, 8 * 7 + 500);
-  EXPECT_EQ(sim.model()->nconmax, 2 * 7 + 100);
-  EXPECT_EQ(sim.model()->nu, 14);
+  EXPECT_EQ(sim.model()->nconmax, InitialContacts(7));
+  EXPECT_EQ(sim.model()->njmax, kRowsPerContact * InitialContacts(7));
+  // The broad phase's pairs and the Newton solver's Hessians fit the stack.
+  const long nbody = sim.model()->nbody, nv = sim.model()->nv;
+  EXPECT_EQ(nv, 14);
+  EXPECT_GE(sim.model()->nstack, nbody * (nbody - 1) / 2 + 3 * nv * nv);
+  EXPECT_EQ(sim.model()->nu, 0);  // the waypoint spring is applied by aia
   EXPECT_EQ(sim.model()->nmocap, 2);
   for (int i = 0; i < 7; ++i)
     EXPECT_LT((sim.RobotPosition(i) - w.map.lattice().Point(w.robot_starts[i]))
@@ -120,6 +126,108 @@ TEST(SensingTest, RayClearMatchesWorldLineOfSight) {
     EXPECT_EQ(sim.RayClear(a, b), w.map.LineOfSight(a, b))
         << a.transpose() << " -> " << b.transpose();
   }
+}
+
+TEST(MujocoHandlersTest, ErrorsAreExceptionsAndWarningsAreKept) {
+  InstallMujocoHandlers();
+  const bool had_log = std::filesystem::exists("MUJOCO_LOG.TXT");
+  ::testing::internal::CaptureStdout();
+  EXPECT_THROW(mju_error("a test error"), PhysicsError);
+  try {
+    mju_error("a test error");
+  } catch (const PhysicsError& e) {
+    EXPECT_STREQ(e.what(), "MuJoCo: a test error");
+  }
+  mju_warning("a test warning");
+  EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");  // MuJoCo prints
+  EXPECT_EQ(LastMujocoWarning(), "a test warning");
+  // MuJoCo's own handlers append to MUJOCO_LOG.TXT in the working folder.
+  EXPECT_EQ(std::filesystem::exists("MUJOCO_LOG.TXT"), had_log);
+}
+
+TEST(MujocoHandlersTest, AStackOverflowInsideMjStepIsAPhysicsError) {
+  // 40 bodies whose broad phase needs 780 pairs of stack: 100 is too few
+  // (set after compiling: the compiler steps the model once itself).
+  std::string xml = "<mujoco><worldbody>";
+  for (int i = 0; i < 40; ++i)
+    xml += "<body pos=\"" + std::to_string(i) +
+           " 0 0\"><freejoint/><geom size=\"0.1\"/></body>";
+  xml += "</worldbody></mujoco>";
+  MjModelPtr model = CompileMjcf(xml);
+  model->nstack = 100;
+  MjDataPtr data(mj_makeData(model.get()));
+  EXPECT_THROW(mj_step(model.get(), data.get()), PhysicsError);
+}
+
+// A crowd: discs of radius 0.24 on a 0.5 m lattice, every point but a few
+// taken, so that moving robots push into their neighbours.
+Scenario CrowdScenario(int robots, double side) {
+  return ScenarioFromYaml("workspace: {size: [" + std::to_string(side) + ", " +
+                          std::to_string(side) +
+                          "], obstacles: {random: {count: 0}}}\n"
+                          "robots: {count: " +
+                          std::to_string(robots) +
+                          ", radius: 0.24}\ntargets: {count: 1}\n");
+}
+
+// Drives every robot one lattice step in a seeded random direction.
+void PushCrowd(const World& w, Simulation* sim, Rng* rng) {
+  const Lattice& lattice = w.map.lattice();
+  for (int i = 0; i < sim->num_robots(); ++i) {
+    const int at = lattice.NearestFree(sim->RobotPosition(i));
+    const Move m = static_cast<Move>(rng->UniformInt(kNumMoves));
+    const int next = lattice.Valid(at, m) ? lattice.Next(at, m) : at;
+    sim->SetWaypoint(i, lattice.Point(next));
+  }
+}
+
+TEST(SimulationTest, ContactBudgetGrowsWithoutChangingResults) {
+  const Scenario s = CrowdScenario(60, 4.0);
+  const World w = World::Build(s);
+  // One model starts with room for a single contact, the other with room
+  // for every contact the crowd can make.
+  Simulation small(std::make_shared<const PhysicsModel>(w, s, 1));
+  Simulation large(std::make_shared<const PhysicsModel>(w, s, 2000));
+  EXPECT_EQ(small.model()->nconmax, 1);
+  Rng a(5), b(5);
+  for (int step = 0; step < 4; ++step) {
+    PushCrowd(w, &small, &a);
+    PushCrowd(w, &large, &b);
+    const PhysicsStepStats x = small.AdvanceToWaypoints();
+    const PhysicsStepStats y = large.AdvanceToWaypoints();
+    ASSERT_EQ(x.substeps, y.substeps);
+    for (int i = 0; i < s.robots.count; ++i) {
+      ASSERT_EQ(small.RobotPosition(i).x(), large.RobotPosition(i).x());
+      ASSERT_EQ(small.RobotPosition(i).y(), large.RobotPosition(i).y());
+    }
+  }
+  EXPECT_GT(small.memory().grows, 0);
+  EXPECT_GT(small.model()->nconmax, 1);
+  EXPECT_EQ(large.memory().grows, 0);
+  EXPECT_GT(large.memory().max_contacts, 10);
+  for (long count : small.warnings()) EXPECT_EQ(count, 0);
+  // The stack held what the broad phase and the solver took.
+  EXPECT_LT(small.memory().max_stack, small.memory().nstack);
+}
+
+TEST(SimulationTest, ACrowdOf250StaysApart) {
+  const Scenario s = CrowdScenario(250, 8.0);
+  const World w = World::Build(s);
+  Simulation sim(w, s);
+  Rng rng(11);
+  for (int step = 0; step < 3; ++step) {
+    PushCrowd(w, &sim, &rng);
+    sim.AdvanceToWaypoints();
+  }
+  EXPECT_GT(sim.memory().max_contacts, InitialContacts(250));
+  for (long count : sim.warnings()) EXPECT_EQ(count, 0);
+  // Contacts are soft: a robot may sink into another by a few millimetres.
+  double closest = 1e9;
+  for (int i = 0; i < 250; ++i)
+    for (int j = i + 1; j < 250; ++j)
+      closest = std::min(closest,
+                         (sim.RobotPosition(i) - sim.RobotPosition(j)).norm());
+  EXPECT_GT(closest, 2 * 0.24 - 0.02);
 }
 
 }  // namespace

@@ -1,15 +1,17 @@
 // The physics of a mission (docs/design.md, Physics): a MuJoCo model generated
-// from the world, robots that track lattice waypoints with position actuators
-// and real contacts, targets as mocap bodies, and ray sensing against
-// obstacles. No process-wide MuJoCo callbacks: the caller sets waypoints and
-// this class calls mj_step explicitly.
+// from the world, robots that track lattice waypoints (a spring applied before
+// every mj_step, damped by the joints) and real contacts, targets as mocap
+// bodies, and ray sensing against obstacles. No process-wide MuJoCo callbacks:
+// the caller sets waypoints and this class calls mj_step explicitly.
 #ifndef AIA_SIM_SIMULATION_H_
 #define AIA_SIM_SIMULATION_H_
 
 #include <mujoco/mujoco.h>
 
+#include <array>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -30,6 +32,26 @@ struct MjDataDeleter {
 using MjModelPtr = std::unique_ptr<mjModel, MjModelDeleter>;
 using MjDataPtr = std::unique_ptr<mjData, MjDataDeleter>;
 
+// An error MuJoCo raised (mju_error): one line, thrown through MuJoCo's C
+// frames (libmujoco has unwind tables). The mjData it came from is left in an
+// unknown state and must not be stepped again.
+class PhysicsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Replaces MuJoCo's process-wide error and warning handlers, once: its own
+// print to stdout, append to MUJOCO_LOG.TXT in the working folder and, for an
+// error, wait for Enter on stdin and exit. Errors become PhysicsError;
+// warnings are counted per mjData (mjData::warning), which the simulation
+// reports, so the handler keeps only this thread's last message.
+// Called by everything here that runs MuJoCo; safe to call again.
+void InstallMujocoHandlers();
+// The name of a MuJoCo warning type (mjtWarning), e.g. "bad_qacc".
+const char* MujocoWarningName(int warning);
+// This thread's last MuJoCo warning message ("" if none).
+const std::string& LastMujocoWarning();
+
 // Compiles MJCF text (through MuJoCo's virtual file system); throws
 // std::runtime_error with MuJoCo's message if it does not compile.
 MjModelPtr CompileMjcf(const std::string& xml);
@@ -40,6 +62,18 @@ struct PhysicsStepStats {
   bool timed_out = false;  // the step timeout passed first
 };
 
+// How a simulation's MuJoCo memory went (diagnostics.json).
+struct PhysicsMemoryStats {
+  int nconmax = 0;          // contact budget now
+  int njmax = 0;            // constraint rows now
+  int grows = 0;            // times the budget was doubled
+  int max_contacts = 0;     // most contacts in one mj_step
+  int max_constraints = 0;  // most constraint rows in one mj_step
+  long max_stack = 0;       // most stack used (mjtNums) of nstack
+  long nstack = 0;
+  double data_bytes = 0.0;  // the mjData's arrays
+};
+
 // The compiled MuJoCo model of a world: generated once per instance and
 // shared, read-only, by every simulation of it (mj_step takes the model as
 // const), so that the runs of several policies on one world compile it once.
@@ -47,7 +81,9 @@ class PhysicsModel {
  public:
   // Generates the world's MJCF and compiles it; throws std::runtime_error
   // with MuJoCo's message if it does not compile.
-  PhysicsModel(const World& world, const Scenario& scenario);
+  // `contacts`: the first contact budget (0: InitialContacts); results do
+  // not depend on it.
+  PhysicsModel(const World& world, const Scenario& scenario, long contacts = 0);
 
   const mjModel* model() const { return model_.get(); }
   const std::string& mjcf() const { return mjcf_; }
@@ -63,7 +99,7 @@ class PhysicsModel {
   std::vector<Vec2> starts_;
   std::vector<int> qpos_adr_;  // per robot: qpos index of its x joint (y next)
   std::vector<int> qvel_adr_;
-  std::vector<int> ctrl_adr_;
+  double kp_ = 0.0;  // the waypoint spring, as the MJCF states it
   std::vector<int> mocap_id_;
 };
 
@@ -76,7 +112,9 @@ class Simulation {
 
   int num_robots() const { return model_->num_robots(); }
   int num_targets() const { return model_->num_targets(); }
-  const mjModel* model() const { return model_->model(); }
+  // The model being stepped: the shared one, or this simulation's copy once
+  // its contact budget has grown (the same bodies, larger buffers).
+  const mjModel* model() const { return m_; }
   mjData* data() { return data_.get(); }
   const mjData* data() const { return data_.get(); }
   const std::string& mjcf() const { return model_->mjcf(); }
@@ -89,8 +127,10 @@ class Simulation {
 
   // Runs mj_step until every robot is within the tolerance of its waypoint and
   // nearly still, or every robot that has not arrived has stalled (blocked by
-  // a contact), or the step timeout passes. `on_substep(elapsed_seconds)` runs
-  // after each mj_step (targets' mocap interpolation, video frames).
+  // a contact: slower than 1 cm/s, or closer to its waypoint by less than the
+  // tolerance than 0.1 s before), or the step timeout passes.
+  // `on_substep(elapsed_seconds)` runs after each mj_step (targets' mocap
+  // interpolation, video frames).
   PhysicsStepStats AdvanceToWaypoints(
       const std::function<void(double)>& on_substep = {});
 
@@ -98,17 +138,44 @@ class Simulation {
   // (mj_ray against the obstacle geom group only).
   bool RayClear(const Vec2& from, const Vec2& to) const;
 
+  // One mj_step. When the contacts of the step overflow MuJoCo's budget
+  // (it would drop them: robots would pass through each other), the step is
+  // undone, the budget doubled and the step taken again, so that results
+  // never depend on the budget. Throws PhysicsError for MuJoCo's errors and
+  // std::runtime_error when the contacts need more memory than
+  // kMaxPhysicsBytes.
+  void StepPhysics();
+
   // Seconds of wall time spent inside mj_step, and its call count.
   double physics_seconds() const { return physics_seconds_; }
   long mj_steps() const { return mj_steps_; }
+  // MuJoCo's warnings (mjtWarning) raised so far, by type, the overflows
+  // that StepPhysics() handled by growing not counted.
+  const std::array<long, mjNWARNING>& warnings() const { return warnings_; }
+  PhysicsMemoryStats memory() const;
 
  private:
+  void Grow();
+
   std::shared_ptr<const PhysicsModel> model_;
+  MjModelPtr own_model_;  // set once the contact budget has grown
+  const mjModel* m_ = nullptr;
   MjDataPtr data_;
   std::vector<Vec2> waypoints_;
+  std::vector<Vec2> targets_;  // waypoints as displacements from the starts
+  std::vector<mjtNum> saved_;
+  std::vector<double> progress_;  // distance to the waypoint at a checkpoint
+  std::vector<std::uint8_t>
+      stuck_;  // qpos, qvel, act, qacc_warmstart before a step
+  std::array<long, mjNWARNING> warnings_{};
+  int grows_ = 0, max_contacts_ = 0, max_constraints_ = 0;
+  long max_stack_ = 0;
   double physics_seconds_ = 0.0;
   long mj_steps_ = 0;
 };
+
+// The most memory a simulation's MuJoCo arrays may take as contacts grow.
+inline constexpr double kMaxPhysicsBytes = 3.0 * (1L << 30);
 
 // One round of sensing (docs/design.md, Sensing): robot i (if active) measures
 // target k when it is within range and, with line of sight on, a ray between
