@@ -2,7 +2,9 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 
 #include "aia/core/check.h"
 
@@ -25,20 +27,30 @@ Grid<float> MakeHeatmapGrid(const Vec2& size, double cell) {
   return Grid<float>(nx, ny, cell, 0.0f);
 }
 
-void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
-                     double blur, double cutoff, Grid<float>* out) {
-  if (!(weight > 0.0)) return;
+namespace {
+
+// The cut-off window of one Gaussian and its exponent's coefficients.
+struct GaussianWindow {
+  int x0 = 0, x1 = -1, y0 = 0, y1 = -1;  // cells, inclusive
+  double pxx = 0.0, pyy = 0.0, pxy = 0.0, limit = 0.0;
+};
+
+GaussianWindow WindowOf(const Vec2& mu, const Mat2& sigma, double blur,
+                        double cutoff, const Grid<float>& grid) {
+  GaussianWindow g;
   const Mat2 s =
       0.5 * (sigma + sigma.transpose()) + blur * blur * Mat2::Identity();
   const double det = s.determinant();
   AIA_CHECK_MSG(det > 0.0, "heatmap covariance is not positive definite");
   // P = S^-1; the window is the ellipse's bounding box, |dx| <= cutoff
   // sqrt(S_xx).
-  const double pxx = s(1, 1) / det, pyy = s(0, 0) / det, pxy = -s(0, 1) / det;
-  const double cell = out->cell();
+  g.pxx = s(1, 1) / det;
+  g.pyy = s(0, 0) / det;
+  g.pxy = -s(0, 1) / det;
+  const double cell = grid.cell();
   const double rx = cutoff * std::sqrt(s(0, 0)),
                ry = cutoff * std::sqrt(s(1, 1));
-  const double limit = 0.5 * cutoff * cutoff;
+  g.limit = 0.5 * cutoff * cutoff;
   // Cells whose centres (i + 0.5) * cell lie in [mu - r, mu + r], clamped in
   // floating point first (a vague belief's window may exceed int's range).
   const auto first = [cell](double lo, int n) {
@@ -49,20 +61,73 @@ void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
     return static_cast<int>(
         std::clamp(std::floor(hi / cell - 0.5), -1.0, n - 1.0));
   };
-  const int x0 = first(mu.x() - rx, out->nx()),
-            x1 = last(mu.x() + rx, out->nx());
-  const int y0 = first(mu.y() - ry, out->ny()),
-            y1 = last(mu.y() + ry, out->ny());
-  float* data = out->data().data();
-  for (int iy = y0; iy <= y1; ++iy) {
+  g.x0 = first(mu.x() - rx, grid.nx());
+  g.x1 = last(mu.x() + rx, grid.nx());
+  g.y0 = first(mu.y() - ry, grid.ny());
+  g.y1 = last(mu.y() + ry, grid.ny());
+  return g;
+}
+
+// Calls f(row iy, ix, value) for each cell of the window inside the cut-off.
+template <typename F>
+void ForEachHeatCell(const Vec2& mu, const GaussianWindow& g, double weight,
+                     double cell, F f) {
+  for (int iy = g.y0; iy <= g.y1; ++iy) {
     const double dy = (iy + 0.5) * cell - mu.y();
-    float* row = data + out->Index(0, iy);
-    for (int ix = x0; ix <= x1; ++ix) {
+    for (int ix = g.x0; ix <= g.x1; ++ix) {
       const double dx = (ix + 0.5) * cell - mu.x();
       const double q =
-          0.5 * (pxx * dx * dx + 2.0 * pxy * dx * dy + pyy * dy * dy);
-      if (q > limit) continue;
-      row[ix] += static_cast<float>(weight * std::exp(-q));
+          0.5 * (g.pxx * dx * dx + 2.0 * g.pxy * dx * dy + g.pyy * dy * dy);
+      if (q > g.limit) continue;
+      f(iy, ix, static_cast<float>(weight * std::exp(-q)));
+    }
+  }
+}
+
+}  // namespace
+
+void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
+                     double blur, double cutoff, Grid<float>* out) {
+  if (!(weight > 0.0)) return;
+  const GaussianWindow g = WindowOf(mu, sigma, blur, cutoff, *out);
+  float* data = out->data().data();
+  const int nx = out->nx();
+  ForEachHeatCell(mu, g, weight, out->cell(), [&](int iy, int ix, float v) {
+    data[static_cast<size_t>(iy) * nx + ix] += v;
+  });
+}
+
+void MakeHeatStamp(const Vec2& mu, const Mat2& sigma, double weight,
+                   double blur, double cutoff, const Grid<float>& grid,
+                   HeatStamp* out) {
+  out->nx = out->ny = 0;
+  out->values.clear();
+  if (!(weight > 0.0)) return;
+  const GaussianWindow g = WindowOf(mu, sigma, blur, cutoff, grid);
+  if (g.x1 < g.x0 || g.y1 < g.y0) return;
+  out->x0 = g.x0;
+  out->y0 = g.y0;
+  out->nx = g.x1 - g.x0 + 1;
+  out->ny = g.y1 - g.y0 + 1;
+  out->values.assign(static_cast<size_t>(out->nx) * out->ny, 0.0f);
+  float* values = out->values.data();
+  const int w = out->nx;
+  ForEachHeatCell(mu, g, weight, grid.cell(), [&](int iy, int ix, float v) {
+    values[static_cast<size_t>(iy - g.y0) * w + (ix - g.x0)] = v;
+  });
+}
+
+void AddHeatStamp(const HeatStamp& stamp, bool subtract, Grid<float>* out) {
+  float* data = out->data().data();
+  const int nx = out->nx();
+  const float* v = stamp.values.data();
+  for (int y = 0; y < stamp.ny; ++y) {
+    float* row = data + static_cast<size_t>(stamp.y0 + y) * nx + stamp.x0;
+    const float* in = v + static_cast<size_t>(y) * stamp.nx;
+    if (subtract) {
+      for (int x = 0; x < stamp.nx; ++x) row[x] -= in[x];
+    } else {
+      for (int x = 0; x < stamp.nx; ++x) row[x] += in[x];
     }
   }
 }
@@ -119,6 +184,150 @@ void ProjectHeatmap(const BeliefSet& beliefs, int row,
     AddTargetHeat(
         beliefs.PositionMean(row, k), beliefs.PositionCovariance(row, k),
         beliefs.LogDetCovariance(row, k), log_det_prior[k], params, out);
+}
+
+namespace {
+
+HeatSource SourceOf(const BeliefSet& beliefs, int row, int k) {
+  HeatSource s;
+  s.mean = beliefs.PositionMean(row, k);
+  s.cov = beliefs.PositionCovariance(row, k);
+  s.log_det = beliefs.LogDetCovariance(row, k);
+  return s;
+}
+
+// A block rounded to 2^-40 of its scale (a power of two above max |Omega_ii|
+// for Omega's entries, above max |xi_i| + that for xi's), as integers, the
+// two scales' exponents last: blocks that agree this closely have the same key,
+// and the key gives back one block for all of them (Dequantize).
+constexpr int kKeyBits = 40;
+
+// The exponent of a scale, with its steps at sqrt(2) times the powers of
+// two: priors sit on powers of two (prior_sigma 1 gives Omega = I), and a
+// step there would split one belief's rounded copies into two keys.
+int ScaleExponent(double scale) {
+  constexpr double kOffset = 0.70710678118654752;
+  return scale > 0.0 && std::isfinite(scale) ? std::ilogb(scale * kOffset) + 2
+                                             : -1022;
+}
+
+void Quantize(const double* block, int d, std::int64_t* key) {
+  double omega_scale = 0.0, xi_scale = 0.0;
+  for (int i = 0; i < d; ++i)
+    omega_scale = std::max(omega_scale, std::fabs(block[i * d + i]));
+  for (int i = 0; i < d; ++i)
+    xi_scale = std::max(xi_scale, std::fabs(block[d * d + i]));
+  const int eo = ScaleExponent(omega_scale);
+  const int ex = ScaleExponent(xi_scale + omega_scale);
+  for (int i = 0; i < d * d + d; ++i) {
+    const double q = std::ldexp(block[i], (i < d * d ? -eo : -ex) + kKeyBits);
+    key[i] = std::isfinite(q) ? std::llround(q) : INT64_MIN;
+  }
+  key[d * d + d] = eo;
+  key[d * d + d + 1] = ex;
+}
+
+void Dequantize(const std::int64_t* key, int d, double* block) {
+  const int eo = static_cast<int>(key[d * d + d]);
+  const int ex = static_cast<int>(key[d * d + d + 1]);
+  for (int i = 0; i < d * d + d; ++i)
+    block[i] = std::ldexp(static_cast<double>(key[i]),
+                          (i < d * d ? eo : ex) - kKeyBits);
+}
+
+}  // namespace
+
+void TeamHeatmap::Prepare(const BeliefSet& beliefs,
+                          const std::vector<int>& rows,
+                          const std::vector<double>& log_det_prior,
+                          const HeatmapParams& params,
+                          const Grid<float>& grid) {
+  const int m = beliefs.layout().num_targets();
+  AIA_CHECK(static_cast<int>(log_det_prior.size()) == m);
+  AIA_CHECK(params.eps > 0.0 && params.blur >= 0.0 && params.cutoff > 0.0);
+  common_.resize(m);
+  if (base_.nx() != grid.nx() || base_.ny() != grid.ny() ||
+      base_.cell() != grid.cell()) {
+    base_ = Grid<float>(grid.nx(), grid.ny(), grid.cell(), 0.0f);
+  } else {
+    std::fill(base_.data().begin(), base_.data().end(), 0.0f);
+  }
+  // The belief more than half the rows hold about each target, if any, to
+  // 2^-40 of its scale (Boyer-Moore's majority vote over the keys, then a
+  // count), and its heat into the base. The majority's block is the one its
+  // key gives back, so no robot's heatmap depends on the order of the rows:
+  // relabelling the robots permutes them.
+  const BeliefLayout& layout = beliefs.layout();
+  const int n = static_cast<int>(rows.size());
+  if (representative_.rows() != 1 || &representative_.layout() != &layout)
+    representative_ = BeliefSet(&layout, 1);
+  member_.assign(static_cast<std::size_t>(n) * m, 0);
+  for (int k = 0; k < m; ++k) {
+    const int d = layout.dim(k);
+    const int len = d * d + d + 2;
+    keys_.resize(static_cast<std::size_t>(n) * len);
+    for (int b = 0; b < n; ++b)
+      Quantize(beliefs.Omega(rows[b], k).data(), d, &keys_[b * len]);
+    const auto same = [&](int a, int b) {
+      return std::equal(&keys_[a * len], &keys_[a * len] + len,
+                        &keys_[b * len]);
+    };
+    int candidate = -1, count = 0;
+    for (int b = 0; b < n; ++b) {
+      if (count == 0) {
+        candidate = b;
+        count = 1;
+      } else {
+        count += same(b, candidate) ? 1 : -1;
+      }
+    }
+    HeatStamp& stamp = common_[k];
+    stamp.nx = stamp.ny = 0;
+    if (candidate < 0) continue;
+    count = 0;
+    for (int b = 0; b < n; ++b) count += same(b, candidate);
+    if (2 * count <= n) continue;
+    for (int b = 0; b < n; ++b)
+      member_[static_cast<std::size_t>(b) * m + k] = same(b, candidate);
+    Dequantize(&keys_[candidate * len], d, representative_.Omega(0, k).data());
+    const HeatSource s = SourceOf(representative_, 0, k);
+    MakeHeatStamp(s.mean, s.cov,
+                  HeatWeight(s.log_det, log_det_prior[k], params.eps),
+                  params.blur, params.cutoff, grid, &stamp);
+    AddHeatStamp(stamp, false, &base_);
+  }
+  // Each row's own stamps where it holds another belief. The pool of stamps
+  // keeps its memory from step to step.
+  robot_own_.resize(rows.size());
+  std::size_t used = 0;
+  for (int b = 0; b < n; ++b) {
+    robot_own_[b].clear();
+    for (int k = 0; k < m; ++k) {
+      if (member_[static_cast<std::size_t>(b) * m + k]) continue;
+      const HeatSource s = SourceOf(beliefs, rows[b], k);
+      const double w = HeatWeight(s.log_det, log_det_prior[k], params.eps);
+      if (!(w > 0.0) && common_[k].nx == 0) continue;  // no heat either way
+      if (used == own_.size()) own_.emplace_back();
+      Own& own = own_[used];
+      own.target = k;
+      MakeHeatStamp(s.mean, s.cov, w, params.blur, params.cutoff, grid,
+                    &own.stamp);
+      robot_own_[b].push_back(static_cast<int>(used));
+      ++used;
+    }
+  }
+  own_used_ = used;
+}
+
+void TeamHeatmap::Robot(int b, Grid<float>* out) const {
+  AIA_CHECK(b >= 0 && b < static_cast<int>(robot_own_.size()));
+  AIA_CHECK(out->nx() == base_.nx() && out->ny() == base_.ny());
+  std::copy(base_.data().begin(), base_.data().end(), out->data().begin());
+  for (const int o : robot_own_[b]) {
+    const Own& own = own_[o];
+    AddHeatStamp(common_[own.target], true, out);
+    AddHeatStamp(own.stamp, false, out);
+  }
 }
 
 }  // namespace aia

@@ -60,17 +60,28 @@ ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
   }
 }
 
+HeatmapParams ChannelRenderer::Heatmap(double eps) const {
+  HeatmapParams hp;
+  hp.eps = eps;
+  hp.blur = params_.blur;
+  hp.cutoff = params_.cutoff;
+  return hp;
+}
+
 void ChannelRenderer::Render(const Vec2& self,
                              const std::vector<Vec2>& neighbours,
                              const std::vector<HeatSource>& targets,
                              const std::vector<double>& log_det_prior,
                              double eps, float* out) {
-  HeatmapParams hp;
-  hp.eps = eps;
-  hp.blur = params_.blur;
-  hp.cutoff = params_.cutoff;
-  ProjectHeatmap(targets, log_det_prior, hp, &heat_);
+  ProjectHeatmap(targets, log_det_prior, Heatmap(eps), &heat_);
+  RenderWithHeat(self, neighbours, heat_, out);
+}
 
+void ChannelRenderer::RenderWithHeat(const Vec2& self,
+                                     const std::vector<Vec2>& neighbours,
+                                     const Grid<float>& field,
+                                     float* out) const {
+  AIA_CHECK(field.nx() == occupancy_.nx() && field.ny() == occupancy_.ny());
   const std::size_t plane = static_cast<std::size_t>(height_) * width_;
   float* occ = out;
   float* own = out + plane;
@@ -81,7 +92,7 @@ void ChannelRenderer::Render(const Vec2& self,
 
   if (params_.frame == ChannelFrame::kGlobal) {
     std::copy(occupancy_.data().begin(), occupancy_.data().end(), occ);
-    std::copy(heat_.data().begin(), heat_.data().end(), heat);
+    std::copy(field.data().begin(), field.data().end(), heat);
     int ix = 0, iy = 0;
     occupancy_.CellOf(self, &ix, &iy);
     own[occupancy_.Index(ix, iy)] = 1.0f;
@@ -112,14 +123,19 @@ void ChannelRenderer::Render(const Vec2& self,
     occupancy_.CellOf(p, &ix, &iy);
     nbr[fold(iy, y0) * w + fold(ix, x0)] += 1.0f;
   }
+  // Row by row: the cells left of the window fold onto its first column,
+  // those right of it onto its last, the rest onto their own column.
+  const int mid0 = std::clamp(x0, 0, nx), mid1 = std::clamp(x0 + w, 0, nx);
   for (int gy = 0; gy < ny; ++gy) {
-    const int v = fold(gy, y0);
-    const float* row = heat_.data().data() + heat_.Index(0, gy);
-    for (int gx = 0; gx < nx; ++gx) {
-      if (row[gx] <= 0.0f) continue;
-      float& h = heat[v * w + fold(gx, x0)];
-      h = std::max(h, row[gx]);
-    }
+    float* h = heat + fold(gy, y0) * w;
+    const float* row = field.data().data() + field.Index(0, gy);
+    float left = 0.0f, right = 0.0f;
+    for (int gx = 0; gx < mid0; ++gx) left = std::max(left, row[gx]);
+    for (int gx = mid1; gx < nx; ++gx) right = std::max(right, row[gx]);
+    h[0] = std::max(h[0], left);
+    h[w - 1] = std::max(h[w - 1], right);
+    for (int gx = mid0; gx < mid1; ++gx)
+      h[gx - x0] = std::max(h[gx - x0], row[gx]);
   }
 }
 

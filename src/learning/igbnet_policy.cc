@@ -50,7 +50,7 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int /*num_targets*/,
   logits_.assign(static_cast<std::size_t>(num_robots) * kNumMoves, 0.0f);
 }
 
-void IgbNetPolicy::RenderRobots(const DecisionContext& ctx) {
+void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
   const Lattice& lattice = ctx.map->lattice();
   const std::size_t size = renderer_->ImageSize();
   images_.resize(rows_.size() * size);
@@ -59,15 +59,39 @@ void IgbNetPolicy::RenderRobots(const DecisionContext& ctx) {
     no_prior_.assign(ctx.beliefs->layout().num_targets(), 0.0);
     prior = &no_prior_;
   }
-  for (std::size_t b = 0; b < rows_.size(); ++b) {
-    const int i = rows_[b];
-    neighbours_.clear();
-    for (int j : ctx.comm->Neighbors(i))
-      if (j != i) neighbours_.push_back(lattice.Point((*ctx.positions)[j]));
-    HeatSources(*ctx.beliefs, i, &sources_);
-    renderer_->Render(lattice.Point((*ctx.positions)[i]), neighbours_, sources_,
-                      *prior, ctx.eps, images_.data() + b * size);
+  heat_.Prepare(*ctx.beliefs, rows_, *prior, renderer_->Heatmap(ctx.eps),
+                renderer_->occupancy());
+  const int workers = std::max(1, PolicyThreads());
+  if (static_cast<int>(worker_heat_.size()) < workers) {
+    worker_heat_.resize(workers, renderer_->occupancy());
+    worker_neighbours_.resize(workers);
   }
+  // Chunks of kForwardBatch robots: each rendered and run through the
+  // network by one thread (libtorch runs single-threaded inside), so that a
+  // robot's logits depend on its chunk, never on the number of threads.
+  const int count = static_cast<int>(rows_.size());
+  const int chunks = (count + kForwardBatch - 1) / kForwardBatch;
+  batch_logits_.resize(rows_.size() * kNumMoves);
+  ParallelFor(chunks, 1, [&](int c0, int c1, int worker) {
+    Grid<float>& heat = worker_heat_[worker];
+    std::vector<Vec2>& neighbours = worker_neighbours_[worker];
+    for (int c = c0; c < c1; ++c) {
+      const int begin = c * kForwardBatch;
+      const int end = std::min(count, begin + kForwardBatch);
+      for (int b = begin; b < end; ++b) {
+        const int i = rows_[b];
+        neighbours.clear();
+        for (int j : ctx.comm->Neighbors(i))
+          if (j != i) neighbours.push_back(lattice.Point((*ctx.positions)[j]));
+        heat_.Robot(b, &heat);
+        renderer_->RenderWithHeat(lattice.Point((*ctx.positions)[i]),
+                                  neighbours, heat, images_.data() + b * size);
+      }
+      net_->Forward(images_.data() + begin * size, end - begin,
+                    renderer_->height(), renderer_->width(),
+                    batch_logits_.data() + begin * kNumMoves);
+    }
+  });
 }
 
 PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
@@ -78,10 +102,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   rows_.clear();
   for (int i = 0; i < n; ++i)
     if (ctx.comm->Active(i)) rows_.push_back(i);
-  RenderRobots(ctx);
-  batch_logits_.resize(rows_.size() * kNumMoves);
-  net_->Forward(images_.data(), static_cast<int>(rows_.size()),
-                renderer_->height(), renderer_->width(), batch_logits_.data());
+  RenderAndForward(ctx);
   logits_.assign(static_cast<std::size_t>(n) * kNumMoves, 0.0f);
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < n; ++i) (*moves)[i] = Move::kStay;

@@ -12,12 +12,14 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <thread>
 #include <vector>
 
 #include "aia/core/error.h"
 #include "aia/core/interrupt.h"
 #include "aia/core/io.h"
 #include "aia/learning/igbnet_policy.h"
+#include "aia/learning/network.h"
 #include "aia/scenario/loader.h"
 
 namespace aia {
@@ -116,6 +118,10 @@ PreparedMission PrepareMission(Scenario scenario,
                                const PolicyRegistry& registry) {
   PreparedMission m;
   m.started = std::chrono::steady_clock::now();
+  // One mission in the process: a learned policy renders and infers on every
+  // core (its results do not depend on the thread count; eval's workers
+  // keep one thread each).
+  SetPolicyThreads(static_cast<int>(std::thread::hardware_concurrency()));
   m.policy = registry.Resolve(scenario);
   m.instance = BuildInstance(scenario);
   m.scenario = std::move(scenario);

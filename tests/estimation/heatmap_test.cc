@@ -171,5 +171,75 @@ TEST(HeatmapTest, ReusesTheGridWithoutAllocating) {
   EXPECT_EQ(grid.size(), 200u * 200u);
 }
 
+// Eight robots, six static targets: every robot holds the prior of targets 0
+// to 3 but for robot 2 (target 1) and robots 5 and 6 (target 3, one
+// measurement each); targets 4 and 5 have no majority belief (every robot's
+// differs), and target 0's copies differ by float rounding only.
+struct Team {
+  BeliefLayout layout{std::vector<TargetModel>(6)};
+  BeliefSet beliefs{&layout, 8};
+  std::vector<double> prior;
+  Team() {
+    std::vector<Eigen::VectorXd> means;
+    std::vector<Eigen::MatrixXd> covs;
+    for (int k = 0; k < 6; ++k) {
+      means.push_back(Vec2(2.0 + 3.0 * k, 4.0 + 2.0 * k));
+      covs.push_back(Eigen::MatrixXd::Identity(2, 2));
+      prior.push_back(0.0);
+    }
+    beliefs.SetPrior(means, covs);
+    beliefs.Omega(0, 0)(0, 0) = std::nextafter(1.0, 0.0);  // a rounded copy
+    Measure(2, 1, 40.0);
+    Measure(5, 3, 10.0);
+    Measure(6, 3, 20.0);
+    for (int i = 0; i < 8; ++i) {
+      Measure(i, 4, 1.0 + i);
+      Measure(i, 5, 0.5 * (i + 1));
+    }
+  }
+  void Measure(int robot, int k, double precision) {
+    beliefs.Omega(robot, k) += precision * Mat2::Identity();
+    beliefs.Xi(robot, k) +=
+        precision * (beliefs.PositionMean(robot, k) + Vec2(0.3, -0.2));
+  }
+};
+
+TEST(TeamHeatmapTest, EachRobotsHeatmapIsItsOwnToFloatRounding) {
+  Team t;
+  HeatmapParams params;
+  params.eps = 0.01;
+  const Grid<float> shape(60, 60, 0.5);
+  TeamHeatmap team;
+  const std::vector<int> rows = {0, 1, 2, 3, 4, 5, 6, 7};
+  team.Prepare(t.beliefs, rows, t.prior, params, shape);
+  // Own stamps: robot 2's target 1, robots 5 and 6's target 3, and all
+  // eight robots' targets 4 and 5; target 0's rounded copy is the majority's.
+  EXPECT_EQ(team.own_stamps(), 1 + 2 + 16);
+  for (int b = 0; b < 8; ++b) {
+    Grid<float> got = shape, want = shape;
+    team.Robot(b, &got);
+    ProjectHeatmap(t.beliefs, b, t.prior, params, &want);
+    for (std::size_t c = 0; c < got.size(); ++c)
+      ASSERT_NEAR(got.data()[c], want.data()[c], 1e-6) << "robot " << b;
+  }
+}
+
+TEST(TeamHeatmapTest, RelabellingTheRobotsPermutesTheHeatmaps) {
+  Team t;
+  HeatmapParams params;
+  params.eps = 0.01;
+  const Grid<float> shape(60, 60, 0.5);
+  TeamHeatmap a, b;
+  a.Prepare(t.beliefs, {0, 1, 2, 3, 4, 5, 6, 7}, t.prior, params, shape);
+  const std::vector<int> perm = {5, 2, 7, 0, 6, 1, 3, 4};
+  b.Prepare(t.beliefs, perm, t.prior, params, shape);
+  for (int k = 0; k < 8; ++k) {
+    Grid<float> x = shape, y = shape;
+    a.Robot(perm[k], &x);
+    b.Robot(k, &y);
+    ASSERT_EQ(x.data(), y.data()) << "robot " << perm[k];
+  }
+}
+
 }  // namespace
 }  // namespace aia

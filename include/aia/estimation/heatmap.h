@@ -11,6 +11,7 @@
 #ifndef AIA_ESTIMATION_HEATMAP_H_
 #define AIA_ESTIMATION_HEATMAP_H_
 
+#include <cstdint>
 #include <vector>
 
 #include "aia/core/grid.h"
@@ -42,6 +43,21 @@ Grid<float> MakeHeatmapGrid(const Vec2& size, double cell);
 void AddGaussianHeat(const Vec2& mu, const Mat2& sigma, double weight,
                      double blur, double cutoff, Grid<float>* out);
 
+// One target's heat on a grid, kept to be added (or taken away) many times:
+// the cells of its cut-off window, row-major, 0 beyond the cut-off ellipse.
+struct HeatStamp {
+  int x0 = 0, y0 = 0;  // first cell
+  int nx = 0, ny = 0;  // window size in cells (0: no heat)
+  std::vector<float> values;
+};
+// The stamp of AddGaussianHeat on grids shaped like `grid` (its values are
+// the ones AddGaussianHeat adds, to the bit).
+void MakeHeatStamp(const Vec2& mu, const Mat2& sigma, double weight,
+                   double blur, double cutoff, const Grid<float>& grid,
+                   HeatStamp* out);
+// out += stamp (or -= with subtract).
+void AddHeatStamp(const HeatStamp& stamp, bool subtract, Grid<float>* out);
+
 // What the heatmap needs of one target in one belief: the position mean and
 // covariance, and log det Sigma of the whole block (what eps judges). Also
 // what the learning dataset stores per sample and target.
@@ -70,6 +86,48 @@ void ProjectHeatmap(const std::vector<HeatSource>& sources,
 void ProjectHeatmap(const BeliefSet& beliefs, int row,
                     const std::vector<double>& log_det_prior,
                     const HeatmapParams& params, Grid<float>* out);
+
+// The heatmaps of many robots of one team at one step (I-GBNet renders one
+// per robot). Most robots hold the same belief about most targets (the
+// prior, or what a full graph shares), so each target's heat is computed
+// once for the block more than half the robots hold (to 2^-40 of its scale:
+// float rounding drifts the DKF's copies of one belief apart), into a base
+// heatmap, and a robot's heatmap is the base with its own stamp in place of
+// that one for each target where its block differs (all robots' own stamps
+// for a target without such a majority). A robot's heatmap is a function of
+// its own belief and the majority's, so relabelling the robots permutes
+// them; it differs from its own ProjectHeatmap only in float rounding. Cost:
+// M stamps plus, per robot, the grid and its differing targets, instead of
+// N * M stamps.
+class TeamHeatmap {
+ public:
+  // For rows `rows` of `beliefs`, on grids shaped like `grid`.
+  void Prepare(const BeliefSet& beliefs, const std::vector<int>& rows,
+               const std::vector<double>& log_det_prior,
+               const HeatmapParams& params, const Grid<float>& grid);
+  // The heatmap of rows[b] into `out` (shaped like the grid). Thread-safe
+  // for distinct `out`s once prepared.
+  void Robot(int b, Grid<float>* out) const;
+  // Robot-target pairs whose heat was not the common one (a measure of the
+  // work saved).
+  long own_stamps() const { return static_cast<long>(own_used_); }
+
+ private:
+  struct Own {
+    int target;
+    HeatStamp stamp;
+  };
+  std::vector<HeatStamp> common_;  // per target
+  Grid<float> base_;
+  std::vector<std::vector<int>> robot_own_;  // per row: indices into own_
+  std::vector<Own> own_;  // a pool: the first own_used_ are this step's
+  std::size_t own_used_ = 0;
+  // Scratch: one target's keys per row, whether row b holds the majority's
+  // belief of target k (b * M + k), the majority's blocks.
+  std::vector<std::int64_t> keys_;
+  std::vector<std::uint8_t> member_;
+  BeliefSet representative_;
+};
 
 }  // namespace aia
 

@@ -72,6 +72,13 @@ class ChannelRenderer {
   void Render(const Vec2& self, const std::vector<Vec2>& neighbours,
               const std::vector<HeatSource>& targets,
               const std::vector<double>& log_det_prior, double eps, float* out);
+  // The same with the robot's heatmap given, on a grid shaped like
+  // occupancy() (a team's heatmaps: estimation/heatmap.h, TeamHeatmap).
+  // Thread-safe.
+  void RenderWithHeat(const Vec2& self, const std::vector<Vec2>& neighbours,
+                      const Grid<float>& heat, float* out) const;
+  // The heatmap parameters of these channels at a mission's eps.
+  HeatmapParams Heatmap(double eps) const;
 
  private:
   ChannelParams params_;

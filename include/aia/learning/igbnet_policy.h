@@ -42,16 +42,21 @@ class IgbNetPolicy : public Policy {
   const std::vector<float>& logits() const { return logits_; }
 
  private:
-  // Renders the images of robots `rows_` into images_ (scratch reused:
-  // nothing is allocated once warm but by libtorch's forward).
-  void RenderRobots(const DecisionContext& ctx);
+  // Robots in one forward of the network.
+  static constexpr int kForwardBatch = 32;
+  // Renders the images of robots `rows_` into images_ and their logits into
+  // batch_logits_, on libtorch's threads (scratch reused: nothing is
+  // allocated once warm but by libtorch's forward).
+  void RenderAndForward(const DecisionContext& ctx);
 
   std::shared_ptr<const IgbNet> net_;
   std::optional<ChannelRenderer> renderer_;
   std::vector<float> images_, batch_logits_, logits_;
   std::vector<int> rows_;
-  std::vector<Vec2> neighbours_;
-  std::vector<HeatSource> sources_;
+  TeamHeatmap heat_;
+  // Per worker thread (ParallelFor): a heatmap and the neighbours' points.
+  std::vector<Grid<float>> worker_heat_;
+  std::vector<std::vector<Vec2>> worker_neighbours_;
   std::vector<double> no_prior_;
 };
 

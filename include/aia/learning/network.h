@@ -8,6 +8,7 @@
 #define AIA_LEARNING_NETWORK_H_
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -68,6 +69,18 @@ class IgbNet {
 // Sets libtorch's intra-op threads (0: leave its default).
 void SetInferenceThreads(int threads);
 int InferenceThreads();
+
+// Threads of the learned policy's rendering and inference (workers of
+// ParallelFor; 1 until set; 0 leaves it). Each runs libtorch single-threaded.
+void SetPolicyThreads(int threads);
+int PolicyThreads();
+
+// Runs f(begin, end, worker) over [0, n) in chunks of `grain` on
+// PolicyThreads() threads, worker in [0, PolicyThreads()); libtorch runs
+// single-threaded in each (nested OpenMP teams spin against each other on
+// two cores). Each index is visited once; what f writes per index must not
+// depend on the split.
+void ParallelFor(int n, int grain, const std::function<void(int, int, int)>& f);
 
 }  // namespace aia
 
