@@ -140,7 +140,7 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
       const std::size_t colon = line.find(':', 4);
       if (line.rfind("#   ", 0) == 0 && colon != std::string::npos &&
           colon > 4 && colon + 1 < line.size() && line[colon + 1] == ' ' &&
-          line.find('\r') == std::string::npos) {
+          line.find('\r', colon) == std::string::npos) {
         policies[line.substr(4, colon - 4)] = line.substr(colon + 2);
       } else if (line.rfind("#", 0) != 0) {
         body += line + "\n";
