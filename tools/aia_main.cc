@@ -1,9 +1,15 @@
 // build/aia: one binary, one subcommand per job. Each Add*Command declares its
 // flags and returns what runs it; main() parses, runs the chosen one, and
 // turns bad input into `error: FILE:LINE: key: what` and exit code 2.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <array>
+#include <cerrno>
+#include <charconv>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <functional>
 #include <memory>
@@ -40,15 +46,39 @@ constexpr char kSetHelp[] =
     "override a scenario key, e.g. --set mission.eps=0.05 or --set "
     "policy.p_v=0.8 (repeatable; see aia schema and aia policies)";
 
-// Seeds and other unsigned flags: digits only. CLI11 2.1 reads them with
-// strtoull, which turns -1 into 18446744073709551615.
+// At most `n` characters of a flag's value, for messages.
+std::string Shown(const std::string& v, std::size_t n = 40) {
+  return v.size() <= n ? v
+                       : v.substr(0, n) + "... (" + std::to_string(v.size()) +
+                             " characters)";
+}
+
+// Seeds and other unsigned flags: decimal digits that fit in 64 bits. CLI11
+// 2.1 reads them with strtoull, which turns -1 into 18446744073709551615,
+// saturates 18446744073709551616 (and anything longer) to the same, and
+// reads 010 as octal 8; so the value is checked here and handed on without
+// leading zeros.
 const CLI::Validator kUnsigned(
     [](std::string& v) -> std::string {
       if (v.empty() || v.find_first_not_of("0123456789") != std::string::npos)
-        return "must be a non-negative whole number, got '" + v + "'";
+        return "must be a non-negative whole number, got '" + Shown(v) + "'";
+      std::uint64_t x = 0;
+      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+      if (ec != std::errc() || end != v.data() + v.size())
+        return "'" + Shown(v) +
+               "' does not fit in 64 bits (at most 18446744073709551615)";
+      v = std::to_string(x);
       return "";
     },
     "", "UNSIGNED");
+
+// Paths given to a flag: an empty one is a mistake (an unset variable in a
+// script), not the flag's default.
+const CLI::Validator kPath(
+    [](std::string& v) -> std::string {
+      return v.empty() ? "an empty path; give a file or folder" : "";
+    },
+    "", "PATH");
 
 // The scenario flags of the mission commands; their values are read after
 // parsing (only the flags given override the scenario).
@@ -65,7 +95,7 @@ struct MissionFlags {
       c->add_option("--policy", policy,
                     "policy name (overrides the scenario's policy.name)");
     c->add_option("--seed", seed, "random seed (overrides the scenario's seed)")
-        ->check(kUnsigned);
+        ->transform(kUnsigned);
     if (with_max_steps)
       c->add_option("--max-steps", max_steps,
                     "decision steps at most (overrides mission.max_steps)");
@@ -97,7 +127,8 @@ Action AddRunCommand(CLI::App& app) {
       ->required();
   flags->Add(cmd);
   cmd->add_option("--out", run->out_dir,
-                  "output directory (default: renders/<scenario name>)");
+                  "output directory (default: renders/<scenario name>)")
+      ->check(kPath);
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;
@@ -126,7 +157,8 @@ Action AddRenderCommand(CLI::App& app) {
   cmd->add_option("--out", render->out_file,
                   "the video, FILE.mp4 (FILE.summary.json, FILE.trace.csv, "
                   "... are written next to it)")
-      ->required();
+      ->required()
+      ->check(kPath);
   flags->Add(cmd);
   cmd->add_option("--width", (*ints)[0],
                   "image width in pixels, even (default render.width)");
@@ -139,7 +171,8 @@ Action AddRenderCommand(CLI::App& app) {
                   "robot whose uncertainty heatmap is drawn, -1 for none "
                   "(default render.follow_robot)");
   cmd->add_option("--frames", render->frames_dir,
-                  "also write frames as PNG into this folder");
+                  "also write frames as PNG into this folder")
+      ->check(kPath);
   cmd->add_option("--frames-every", render->frames_every,
                   "with --frames: write every k-th frame")
       ->capture_default_str();
@@ -175,7 +208,8 @@ Action AddPlanCommand(CLI::App& app) {
                   "(default: the expert's policy.anytime)");
   cmd->add_option("--out", plan->out,
                   "write the plan as JSON to this file (and the scenario "
-                  "next to it as FILE.effective.yaml)");
+                  "next to it as FILE.effective.yaml)")
+      ->check(kPath);
   return [=]() {
     if (!cmd->parsed()) return -1;
     plan->overrides = flags->Get();
@@ -195,7 +229,8 @@ Action AddWorldCommand(CLI::App& app) {
       ->required();
   flags->Add(cmd, /*with_policy=*/false, /*with_max_steps=*/false);
   cmd->add_option("--out", world->out, "the MJCF file to write, e.g. world.xml")
-      ->required();
+      ->required()
+      ->check(kPath);
   return [=]() {
     if (!cmd->parsed()) return -1;
     world->overrides = flags->Get();
@@ -217,7 +252,7 @@ Action AddEvalCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed-base", eval->seed_base,
                   "first seed (seeds B .. B+n-1)")
-      ->check(kUnsigned)
+      ->transform(kUnsigned)
       ->capture_default_str();
   cmd->add_option(
          "--policies", eval->policies,
@@ -231,7 +266,8 @@ Action AddEvalCommand(CLI::App& app) {
       ->expected(1);
   cmd->add_option("--out", eval->out_dir,
                   "output folder (runs.csv, summary.csv, effective.yaml)")
-      ->required();
+      ->required()
+      ->check(kPath);
   cmd->add_option("--threads", eval->threads,
                   "worker threads per process (0: all cores, shared among "
                   "the MPI ranks on a machine)")
@@ -257,7 +293,7 @@ Action AddBenchCommand(CLI::App& app) {
                   "runs per size (median reported)")
       ->capture_default_str();
   cmd->add_option("--seed", bench->seed, "seed of the generated worlds")
-      ->check(kUnsigned)
+      ->transform(kUnsigned)
       ->capture_default_str();
   cmd->add_option("--policy", bench->policy, "policy to time")
       ->capture_default_str();
@@ -286,7 +322,8 @@ Action AddDatasetCommand(CLI::App& app) {
       "imitation data for I-GBNet: the expert's episodes on generated worlds, "
       "states and expert labels in SQLite (resumable; docs/learning.md)");
   cmd->add_option("--out", o->out, "dataset folder (one SQLite file per shard)")
-      ->required();
+      ->required()
+      ->check(kPath);
   cmd->add_option("--episodes", o->episodes, "episodes in all shards")
       ->capture_default_str();
   cmd->add_option("--shard", *shard,
@@ -297,7 +334,7 @@ Action AddDatasetCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--first-seed", o->first_seed,
                   "episode e uses seed FIRST+e (aia eval uses 0..)")
-      ->check(kUnsigned)
+      ->transform(kUnsigned)
       ->capture_default_str();
   cmd->add_option("--keep", o->keep, "random decision steps kept per episode")
       ->capture_default_str();
@@ -305,7 +342,8 @@ Action AddDatasetCommand(CLI::App& app) {
                   "acting policy (igbnet for DAgger; labels always come "
                   "from the expert)")
       ->capture_default_str();
-  cmd->add_option("--model", o->model, "model of a learned acting policy");
+  cmd->add_option("--model", o->model, "model of a learned acting policy")
+      ->check(kPath);
   cmd->add_option("--max-steps", o->max_steps,
                   "decision steps per episode at most (0: the scenario's)")
       ->capture_default_str();
@@ -338,11 +376,14 @@ Action AddTrainCommand(CLI::App& app) {
       "--resume; docs/learning.md)");
   cmd->add_option("--data", o->data, "dataset folders or files (repeatable)")
       ->required()
-      ->take_all();
+      ->take_all()
+      ->check(kPath);
   cmd->add_option("--out", o->out,
                   "model file; OUT.ckpt and OUT(.pt->.train.csv) beside it")
-      ->capture_default_str();
-  cmd->add_option("--init", o->init, "start from this model (DAgger rounds)");
+      ->capture_default_str()
+      ->check(kPath);
+  cmd->add_option("--init", o->init, "start from this model (DAgger rounds)")
+      ->check(kPath);
   cmd->add_option("--epochs", o->epochs, "epochs")->capture_default_str();
   cmd->add_option("--batch", o->batch, "batch size")->capture_default_str();
   cmd->add_option("--lr", o->lr, "learning rate at the start (cosine)")
@@ -359,7 +400,7 @@ Action AddTrainCommand(CLI::App& app) {
                   "share of the worlds held out for validation")
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "initialization, split and shuffling")
-      ->check(kUnsigned)
+      ->transform(kUnsigned)
       ->capture_default_str();
   cmd->add_option("--frame", *frame, "input frame: centred or global")
       ->capture_default_str();
@@ -384,7 +425,8 @@ Action AddTrainCommand(CLI::App& app) {
   auto validate = std::make_shared<std::string>();
   cmd->add_option("--validate", *validate,
                   "train nothing: the loss and accuracy of this model on the "
-                  "held-out worlds of --data (same --val-share and --seed)");
+                  "held-out worlds of --data (same --val-share and --seed)")
+      ->check(kPath);
   cmd->add_flag("--quiet", *quiet, "no progress lines");
   return [=]() {
     if (!cmd->parsed()) return -1;
@@ -443,6 +485,25 @@ Action AddSchemaCommand(CLI::App& app) {
   };
 }
 
+// Output that did not reach standard output (a full disk, /dev/full, a
+// closed descriptor) fails the command: `code` when it failed already,
+// else 1, after one `error:` line.
+int CheckStandardOutput(int code) {
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  if (flushed && !std::ferror(stdout)) return code;
+  int err = flushed ? 0 : errno;
+  if (err == 0) {
+    // An earlier write failed and stdio kept no errno: ask again with an
+    // empty write.
+    errno = 0;
+    if (::write(STDOUT_FILENO, "", 0) < 0) err = errno;
+  }
+  std::fprintf(stderr, "error: cannot write to standard output: %s\n",
+               err != 0 ? std::strerror(err) : "a write failed");
+  return code == 0 ? 1 : code;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -457,7 +518,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // --help, --version
+    if (e.get_exit_code() == 0) return CheckStandardOutput(app.exit(e));
     // One `error:` line like any bad input, with where to look.
     std::string what = e.what();  // CLI11 breaks some messages in lines
     for (char& c : what)
@@ -474,7 +536,7 @@ int main(int argc, char** argv) {
   try {
     for (const Action& run : commands) {
       const int code = run();
-      if (code >= 0) return code;
+      if (code >= 0) return CheckStandardOutput(code);
     }
   } catch (const aia::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.Format().c_str());

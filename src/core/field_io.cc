@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <iomanip>
 #include <locale>
-#include <regex>
 #include <sstream>
 #include <system_error>
 
@@ -98,30 +97,153 @@ InputError KeyError(const std::string& file, const KeySources& sources,
 }
 
 namespace field_text {
+namespace {
 
-std::optional<double> ParseReal(const ConfigNode& node) {
+// Hand-written scanners rather than std::regex: libstdc++'s regex matcher
+// recurses once per character and overflows the stack on a literal of some
+// 30 000 characters (a crash, not an error).
+
+bool IsDigit(char c) { return c >= '0' && c <= '9'; }
+
+// Moves *i past the digits at s[*i]; how many there were.
+std::size_t SkipDigits(std::string_view s, std::size_t* i) {
+  const std::size_t begin = *i;
+  while (*i < s.size() && IsDigit(s[*i])) ++*i;
+  return *i - begin;
+}
+
+bool EqualsIgnoringCase(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const char c = a[i] >= 'A' && a[i] <= 'Z' ? a[i] - 'A' + 'a' : a[i];
+    if (c != b[i]) return false;
+  }
+  return true;
+}
+
+// The decimal order of magnitude of a decimal literal (IsDecimalLiteral):
+// k with 10^(k-1) <= |x| < 10^k, saturated far beyond double's range, or
+// nullopt when x is zero. Only its sign is used, to tell an overflow from an
+// underflow.
+std::optional<long long> DecimalOrder(std::string_view s) {
+  constexpr long long kCap = 1LL << 40;
+  std::size_t i = (s[0] == '+' || s[0] == '-') ? 1 : 0;
+  long long order = 0;
+  bool nonzero = false;
+  for (; i < s.size() && IsDigit(s[i]); ++i) {
+    nonzero = nonzero || s[i] != '0';
+    if (nonzero) order = std::min(order + 1, kCap);
+  }
+  if (i < s.size() && s[i] == '.') {
+    for (++i; i < s.size() && IsDigit(s[i]); ++i) {
+      if (nonzero) continue;
+      if (s[i] == '0') {
+        order = std::max(order - 1, -kCap);
+      } else {
+        nonzero = true;
+      }
+    }
+  }
+  if (!nonzero) return std::nullopt;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    const bool negative = s[i] == '-';
+    if (s[i] == '+' || s[i] == '-') ++i;
+    long long e = 0;
+    for (; i < s.size(); ++i) e = std::min(e * 10 + (s[i] - '0'), kCap);
+    order += negative ? -e : e;
+  }
+  return order;
+}
+
+}  // namespace
+
+bool IsDecimalLiteral(std::string_view s) {
+  std::size_t i = 0;
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    if (SkipDigits(s, &i) == 0) return false;
+  } else {
+    if (SkipDigits(s, &i) == 0) return false;
+    if (i < s.size() && s[i] == '.') {
+      ++i;
+      SkipDigits(s, &i);
+    }
+  }
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    if (SkipDigits(s, &i) == 0) return false;
+  }
+  return i == s.size();
+}
+
+bool IsNonFiniteLiteral(std::string_view s) {
+  std::size_t i = 0;
+  const bool sign = !s.empty() && (s[0] == '+' || s[0] == '-');
+  if (sign) ++i;
+  if (i < s.size() && s[i] == '.') ++i;
+  const std::string_view word = s.substr(i);
+  return EqualsIgnoringCase(word, "inf") ||
+         EqualsIgnoringCase(word, "infinity") ||
+         (!sign && EqualsIgnoringCase(word, "nan"));
+}
+
+bool IsIntegerLiteral(std::string_view s) {
+  std::size_t i = 0;
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+  return SkipDigits(s, &i) > 0 && i == s.size();
+}
+
+bool IsYamlWord(std::string_view s) {
+  for (const char* word :
+       {"true", "false", "null", "yes", "no", "on", "off", "y", "n", "~"})
+    if (EqualsIgnoringCase(s, word)) return true;
+  return false;
+}
+
+bool ParseCountPair(std::string_view text, char separator,
+                    std::size_t max_digits, int* first, int* second) {
+  std::size_t i = 0;
+  const auto count = [&](int* out) {
+    const std::size_t begin = i;
+    *out = 0;
+    for (; i < text.size() && IsDigit(text[i]) && i - begin < max_digits; ++i)
+      *out = *out * 10 + (text[i] - '0');
+    return i > begin;
+  };
+  if (!count(first) || i >= text.size() || text[i] != separator) return false;
+  ++i;
+  return count(second) && i == text.size();
+}
+
+std::optional<double> ParseReal(const ConfigNode& node,
+                                OutOfRange* out_of_range) {
+  if (out_of_range) *out_of_range = OutOfRange::kNo;
   if (!node.IsPlainScalar()) return std::nullopt;
-  static const std::regex kReal(
-      R"([-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?)");
-  static const std::regex kNonFinite(R"([-+]?\.?(inf|infinity)|\.?nan)",
-                                     std::regex::icase);
   const std::string& s = node.scalar;
   const bool negative = !s.empty() && s[0] == '-';
-  if (std::regex_match(s, kNonFinite)) {
+  if (IsNonFiniteLiteral(s)) {
     if (s.find_first_of("nN") != std::string::npos &&
         s.find_first_of("aA") != std::string::npos) {
       return std::numeric_limits<double>::quiet_NaN();
     }
     return negative ? -kInfinity : kInfinity;
   }
-  if (!std::regex_match(s, kReal)) return std::nullopt;
+  if (!IsDecimalLiteral(s)) return std::nullopt;
   const char* begin = s.data() + (s[0] == '+' ? 1 : 0);
   double x = 0.0;
   const auto [end, ec] = std::from_chars(begin, s.data() + s.size(), x);
   if (ec == std::errc::result_out_of_range) {
-    // Too large (1e999) is not finite; too small (1e-999) is zero.
-    const std::string::size_type e = s.find_first_of("eE");
-    if (e != std::string::npos && s[e + 1] == '-') return 0.0;
+    // Too large (1e999) is not finite; too small (1e-999, 0.000...01) is
+    // zero. The readers refuse both, saying which.
+    const std::optional<long long> order = DecimalOrder(s);
+    if (!order) return 0.0;
+    const bool small = *order <= 0;
+    if (out_of_range)
+      *out_of_range = small ? OutOfRange::kTooSmall : OutOfRange::kTooLarge;
+    if (small) return 0.0;
     return negative ? -kInfinity : kInfinity;
   }
   if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
@@ -132,8 +254,7 @@ namespace {
 
 template <typename T>
 std::optional<T> ParseWhole(const ConfigNode& node) {
-  static const std::regex kInteger("[-+]?[0-9]+");
-  if (!node.IsPlainScalar() || !std::regex_match(node.scalar, kInteger))
+  if (!node.IsPlainScalar() || !IsIntegerLiteral(node.scalar))
     return std::nullopt;
   const std::string& s = node.scalar;
   const char* begin = s.data() + (s[0] == '+' ? 1 : 0);
@@ -217,6 +338,19 @@ std::string RangeSuffix(const NumberRange& r, bool integer) {
 
 }  // namespace field_text
 
+namespace {
+
+// What is wrong with a literal beyond a double's range ("1e-400 is too
+// small: ..."), which would otherwise read as 0 (silently) or as infinite.
+std::string BeyondDouble(field_text::OutOfRange r) {
+  return r == field_text::OutOfRange::kTooSmall
+             ? "is too small: it underflows to 0 (non-zero magnitudes start "
+               "at 4.9e-324)"
+             : "is too large: it overflows (magnitudes end at 1.8e308)";
+}
+
+}  // namespace
+
 void FieldReader::Fail(const ConfigNode& node, const std::string& key,
                        const std::string& what) const {
   if (!node.origin.empty()) {
@@ -274,13 +408,17 @@ std::string FieldReader::ResolvePath(const ConfigNode& node) const {
 double FieldReader::ReadReal(const ConfigNode& node, const std::string& key,
                              const NumberRange& range,
                              std::string_view expect) const {
-  const std::optional<double> x = field_text::ParseReal(node);
-  if (x && !std::isfinite(*x)) FailExpected(node, key, "a finite number");
-  if (!x || !range.Contains(*x)) {
-    FailExpected(
-        node, key,
-        expect.empty() ? "a " + range.Describe(false) : std::string(expect));
+  field_text::OutOfRange beyond = field_text::OutOfRange::kNo;
+  const std::optional<double> x = field_text::ParseReal(node, &beyond);
+  const std::string expected =
+      expect.empty() ? "a " + range.Describe(false) : std::string(expect);
+  if (beyond != field_text::OutOfRange::kNo) {
+    Fail(node, key,
+         "must be " + expected + ", got " + ShowNode(node) + ", which " +
+             BeyondDouble(beyond));
   }
+  if (x && !std::isfinite(*x)) FailExpected(node, key, "a finite number");
+  if (!x || !range.Contains(*x)) FailExpected(node, key, expected);
   return *x;
 }
 
@@ -314,7 +452,14 @@ Eigen::VectorXd FieldReader::ReadNumbers(const ConfigNode& node,
     FailExpected(node, key, expected);
   Eigen::VectorXd out(static_cast<Eigen::Index>(node.items.size()));
   for (std::size_t i = 0; i < node.items.size(); ++i) {
-    const std::optional<double> x = field_text::ParseReal(node.items[i]);
+    field_text::OutOfRange beyond = field_text::OutOfRange::kNo;
+    const std::optional<double> x =
+        field_text::ParseReal(node.items[i], &beyond);
+    if (beyond != field_text::OutOfRange::kNo) {
+      Fail(node, key,
+           "must be " + expected + ", got " + ShowNode(node) + "; " +
+               ShowNode(node.items[i]) + " " + BeyondDouble(beyond));
+    }
     if (x && !std::isfinite(*x)) {
       FailExpected(node, key,
                    size > 0 ? "finite numbers" + suffix
@@ -353,7 +498,15 @@ Eigen::MatrixXd FieldReader::ReadMatrix(const ConfigNode& node,
   for (std::size_t i = 0; i < rows; ++i) {
     const ConfigNode& row = node.items[i];
     for (std::size_t j = 0; j < cols; ++j) {
-      const std::optional<double> x = field_text::ParseReal(row.items[j]);
+      field_text::OutOfRange beyond = field_text::OutOfRange::kNo;
+      const std::optional<double> x =
+          field_text::ParseReal(row.items[j], &beyond);
+      if (beyond != field_text::OutOfRange::kNo) {
+        Fail(node, key,
+             "entries must be " + range.Describe(true) + ", got " +
+                 ShowNode(row.items[j]) + " in row " + std::to_string(i) +
+                 ", which " + BeyondDouble(beyond));
+      }
       if (!x || !std::isfinite(*x)) {
         Fail(node, key,
              "entries must be finite numbers, got " + ShowNode(row.items[j]) +

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <regex>
 #include <string>
@@ -47,6 +48,16 @@ double TestSpeed(const std::string& xml_path, int nstep) {
 
 namespace {
 
+// One instance per size at the first seed: what the setup checks.
+std::vector<EvalInstance> Instances(const BenchOptions& o) {
+  std::vector<EvalInstance> out;
+  for (const std::string& size : o.sizes) {
+    const auto [n, m] = ParseSize(size, "--sizes");
+    out.push_back({size, n, m, o.seed});
+  }
+  return out;
+}
+
 int RunExpertBench(const BenchOptions& o) {
   std::printf(
       "aia bench --expert: C-SB solve from the initial state, %d generated "
@@ -57,16 +68,22 @@ int RunExpertBench(const BenchOptions& o) {
   std::printf("%-8s %10s %10s %8s %8s %10s %12s %12s %10s\n", "size",
               "median_s", "worst_s", "F*_med", "found", "nodes_med",
               "arena_MiB", "arena_worst", "RSS_MiB");
-  const EvalSetup setup = MakeEvalSetup({}, o.sets, AllPolicies());
+  const EvalSetup setup =
+      MakeEvalSetup({}, o.sets, AllPolicies(), Instances(o));
   const ExpertParams& expert = *ParamsOf<ExpertParams>(*setup.expert);
   for (const std::string& size_text : o.sizes) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
     std::vector<double> secs, fstar, nodes, arena;
     int found = 0;
     for (int k = 0; k < o.seeds; ++k) {
-      const SamplingPlan plan = PlanFromStart(
-          BuildInstance(InstanceScenario({size_text, n, m, o.seed + k}, setup)),
-          expert);
+      const EvalInstance instance{size_text, n, m, o.seed + k};
+      std::shared_ptr<const Instance> built;
+      try {
+        built = BuildInstance(InstanceScenario(instance, setup));
+      } catch (const InputError& e) {
+        NameTheFlag(e, InstanceSpec(instance, setup));
+      }
+      const SamplingPlan plan = PlanFromStart(built, expert);
       secs.push_back(plan.seconds);
       fstar.push_back(plan.depth);
       nodes.push_back(static_cast<double>(plan.nodes));
@@ -128,13 +145,23 @@ int RunBench(const BenchOptions& o) {
                      "must be in [1, " +
                          std::to_string(static_cast<int>(limits::kMaxSteps)) +
                          "] (mission.max_steps' range)");
+  if (o.expert && static_cast<std::uint64_t>(o.seeds - 1) >
+                      std::numeric_limits<std::uint64_t>::max() - o.seed) {
+    throw InputError("command line", 0, "--seed",
+                     "seeds " + std::to_string(o.seed) + " .. " +
+                         std::to_string(o.seed) + " + " +
+                         std::to_string(o.seeds - 1) +
+                         " do not fit in 64 bits (the largest seed is "
+                         "18446744073709551615); give a smaller --seed");
+  }
   if (o.network) return RunNetworkBench(o);
   if (o.expert) return RunExpertBench(o);
   const PolicyRegistry registry = AllPolicies();
   if (!registry.Has(o.policy))
     throw InputError("command line", 0, "--policy",
                      registry.UnknownPolicy(o.policy));
-  const EvalSetup setup = MakeEvalSetup({o.policy}, o.sets, registry);
+  const EvalSetup setup =
+      MakeEvalSetup({o.policy}, o.sets, registry, Instances(o));
   std::printf(
       "aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
       o.policy.c_str(), o.steps, o.repeats);
@@ -143,11 +170,17 @@ int RunBench(const BenchOptions& o) {
               "rest", "mj_step%", "mj_step/s", "testspeed/s");
   for (const std::string& size_text : o.sizes) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
-    Scenario s = InstanceScenario({size_text, n, m, o.seed}, setup);
+    const EvalInstance generated{size_text, n, m, o.seed};
+    Scenario s = InstanceScenario(generated, setup);
     s.mission.max_steps = o.steps;
     s.mission.stop_at_success = false;
     const std::shared_ptr<const PolicySpec>& policy = setup.policies[0];
-    const std::shared_ptr<const Instance> instance = BuildInstance(s);
+    std::shared_ptr<const Instance> instance;
+    try {
+      instance = BuildInstance(s);
+    } catch (const InputError& e) {
+      NameTheFlag(e, InstanceSpec(generated, setup));
+    }
     std::vector<double> rate, ms, phys, sens, fus, pol, rest, share, mjrate;
     std::string mjcf;
     for (int r = 0; r < o.repeats; ++r) {

@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <memory>
-#include <regex>
 #include <stdexcept>
 
 #include "aia/core/error.h"
+#include "aia/core/field_io.h"
 #include "aia/core/rng.h"
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/dataset.h"
@@ -91,13 +92,9 @@ std::string Recipe(const DatasetOptions& o) {
 }  // namespace
 
 void ParseShard(const std::string& text, int* shard, int* shards) {
-  static const std::regex re("^([0-9]{1,4})/([0-9]{1,4})$");
-  std::smatch m;
-  if (!std::regex_match(text, m, re))
+  if (!field_text::ParseCountPair(text, '/', 4, shard, shards))
     throw InputError("command line", 0, "--shard",
                      "'" + text + "' is not K/N such as 0/4");
-  *shard = std::stoi(m[1]);
-  *shards = std::stoi(m[2]);
   if (*shards < 1 || *shard >= *shards)
     throw InputError("command line", 0, "--shard",
                      "'" + text + "': need 0 <= K < N");
@@ -134,15 +131,43 @@ int RunDataset(const DatasetOptions& o) {
   if (o.max_steps > 0)
     overrides.push_back(
         {"--max-steps", "mission.max_steps", std::to_string(o.max_steps)});
-  Scenario base = GeneratedScenario(robots, targets, o.first_seed);
-  base.policy.name = o.policy;
-  base = WithOverrides(base, overrides);
+  if (static_cast<std::uint64_t>(o.episodes - 1) >
+      std::numeric_limits<std::uint64_t>::max() - o.first_seed) {
+    throw InputError(
+        "command line", 0, "--first-seed",
+        "seeds " + std::to_string(o.first_seed) + " .. " +
+            std::to_string(o.first_seed) + " + " +
+            std::to_string(o.episodes - 1) +
+            " do not fit in 64 bits (the largest seed is "
+            "18446744073709551615); with --episodes " +
+            std::to_string(o.episodes) + ", --first-seed must be at most " +
+            std::to_string(std::numeric_limits<std::uint64_t>::max() -
+                           static_cast<std::uint64_t>(o.episodes - 1)));
+  }
+  GeneratedSpec spec;
+  spec.size = o.size;
+  spec.size_flag = "--size";
+  spec.robots = robots;
+  spec.targets = targets;
+  spec.seed = o.first_seed;
+  spec.overrides = {{"--policy", "policy.name", o.policy}};
+  spec.overrides.insert(spec.overrides.end(), overrides.begin(),
+                        overrides.end());
+  const Scenario base = ReadGenerated(spec);
   const std::shared_ptr<const PolicySpec> acting = registry.Resolve(base);
   Scenario expert_scenario = base;
   expert_scenario.policy.name = "expert";
   expert_scenario.policy.params = ConfigNode();
   const std::shared_ptr<const PolicySpec> expert_spec =
       registry.Resolve(expert_scenario);
+
+  // The world of the first seed, built now: a size the world cannot hold is
+  // bad input before any work (the episodes' other seeds are named below).
+  try {
+    BuildInstance(base);
+  } catch (const InputError& e) {
+    NameTheFlag(e, spec);
+  }
 
   MakeOutputDir(o.out, "--out");
   const std::string file = o.out + "/shard-" + std::to_string(o.shard) +
@@ -170,7 +195,14 @@ int RunDataset(const DatasetOptions& o) {
       shadow_owner = expert_spec->Create();
       shadow = dynamic_cast<ExpertPolicy*>(shadow_owner.get());
     }
-    Episode episode(BuildInstance(s), acting->Create());
+    std::shared_ptr<const Instance> instance;
+    try {
+      instance = BuildInstance(s);
+    } catch (const InputError& e) {
+      spec.seed = s.seed;
+      NameTheFlag(e, spec);
+    }
+    Episode episode(instance, acting->Create());
     DatasetObserver observer(
         shadow, e,
         o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3

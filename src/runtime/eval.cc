@@ -9,10 +9,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <mutex>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -91,7 +92,7 @@ std::set<std::string> DeclaredParams(const PolicyRegistry& registry,
 
 // DIR/effective.yaml: the instances' scenario and each policy's parameters.
 // Policy lines read "#   NAME: {...}".
-std::string EffectiveText(const EvalSetup& setup) {
+std::string EffectiveText(const EvalSetup& setup, const EvalInstance& first) {
   std::string text =
       "# aia eval: the scenario of every instance, overrides applied. Per\n"
       "# instance, robots.count and targets.count are its size and seed its\n"
@@ -100,10 +101,31 @@ std::string EffectiveText(const EvalSetup& setup) {
   text += "#   expert (F*): " + ShowNode(setup.expert->Params(), 100000) + "\n";
   for (const auto& p : setup.policies)
     text += "#   " + p->name() + ": " + ShowNode(p->Params(), 100000) + "\n";
-  Scenario s = WithOverrides(GeneratedScenario(1, 1, 0), setup.overrides);
+  // The scenario of a 1x1 world at seed 0, as ever (an older folder's text
+  // is compared with it), or of the first instance where overrides fit only
+  // the sizes given (a robots.start of two robots).
+  Scenario s;
+  try {
+    s = WithOverrides(GeneratedScenario(1, 1, 0), setup.overrides);
+  } catch (const InputError&) {
+    s = InstanceScenario(first, setup);
+  }
   s.policy.name = "expert";
   s.policy.params = setup.expert->Params();
   return text + EffectiveYaml(s, "");
+}
+
+// The text an exception prints with.
+std::string Message(std::exception_ptr failure) {
+  try {
+    std::rethrow_exception(failure);
+  } catch (const InputError& e) {
+    return e.Format();
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "an unknown failure";
+  }
 }
 
 // Why an existing DIR/effective.yaml does not fit this run, or "".
@@ -113,11 +135,13 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
     std::string body;
     std::istringstream in(text);
     std::string line;
-    static const std::regex kPolicy(R"(#   ([^:]+): (.*))");
     while (std::getline(in, line)) {
-      std::smatch m;
-      if (std::regex_match(line, m, kPolicy)) {
-        policies[m[1]] = m[2];
+      // "#   NAME: PARAMS", NAME without ':'.
+      const std::size_t colon = line.find(':', 4);
+      if (line.rfind("#   ", 0) == 0 && colon != std::string::npos &&
+          colon > 4 && colon + 1 < line.size() && line[colon + 1] == ' ' &&
+          line.find('\r', colon) == std::string::npos) {
+        policies[line.substr(4, colon - 4)] = line.substr(colon + 2);
       } else if (line.rfind("#", 0) != 0) {
         body += line + "\n";
       }
@@ -150,21 +174,88 @@ Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed) {
 
 std::pair<int, int> ParseSize(const std::string& text,
                               const std::string& flag) {
-  static const std::regex re("^([0-9]{1,5})x([0-9]{1,5})$");
-  std::smatch m;
-  if (!std::regex_match(text, m, re))
+  int n = 0, k = 0;
+  if (!field_text::ParseCountPair(text, 'x', 5, &n, &k))
     throw InputError(
         "command line", 0, flag,
         "'" + text + "' is not a size ROBOTSxTARGETS such as 10x10");
-  const int n = std::stoi(m[1]), k = std::stoi(m[2]);
   if (n < 1 || k < 1)
     throw InputError("command line", 0, flag,
                      "'" + text + "': robots and targets must be >= 1");
   return {n, k};
 }
 
+namespace {
+
+std::string FlagKey(const Override& o) {
+  return o.flag == "--set" ? "--set " + o.path : o.flag;
+}
+
+// The spec's scenario with its first `n` overrides, unchanged when there
+// are none.
+Scenario WithFirstOverrides(const GeneratedSpec& spec, std::size_t n) {
+  return WithOverrides(GeneratedScenario(spec.robots, spec.targets, spec.seed),
+                       std::vector<Override>(spec.overrides.begin(),
+                                             spec.overrides.begin() + n));
+}
+
+}  // namespace
+
+Scenario ReadGenerated(const GeneratedSpec& spec) {
+  try {
+    // WithOverrides reads back and checks even when there are none.
+    return WithFirstOverrides(spec, spec.overrides.size());
+  } catch (const InputError& e) {
+    NameTheFlag(e, spec);
+  }
+}
+
+void NameTheFlag(const InputError& error, const GeneratedSpec& spec) {
+  if (error.file() == "command line") throw error;
+  const std::string size = spec.size_flag + " " + spec.size;
+  const std::string world = " (in the generated world of " + size + ", seed " +
+                            std::to_string(spec.seed) + ")";
+  // Read (then build the world) with more and more of the overrides: the
+  // first that fails is the one at fault; when the size alone fails, the
+  // size is.
+  for (const bool build : {false, true}) {
+    for (std::size_t n = 0; n <= spec.overrides.size(); ++n) {
+      try {
+        const Scenario s = WithFirstOverrides(spec, n);
+        if (build) BuildInstance(s);
+      } catch (const InputError& e) {
+        if (e.file() == "command line") throw;
+        const std::string why = e.key() + ": " + e.message();
+        if (n == 0) {
+          throw InputError("command line", 0, spec.size_flag,
+                           build ? why + world : "'" + spec.size + "': " + why);
+        }
+        throw InputError(
+            "command line", 0, FlagKey(spec.overrides[n - 1]),
+            why + (build ? world
+                         : " (in the generated scenario of " + size + ")"));
+      }
+    }
+  }
+  // Not found again: the size and seed it was found with.
+  throw InputError("command line", 0, spec.size_flag,
+                   error.key() + ": " + error.message() + world);
+}
+
 std::vector<EvalInstance> EnumerateInstances(
     const std::vector<std::string>& sizes, int seeds, std::uint64_t seed_base) {
+  if (seeds > 0 && static_cast<std::uint64_t>(seeds - 1) >
+                       std::numeric_limits<std::uint64_t>::max() - seed_base) {
+    throw InputError(
+        "command line", 0, "--seed-base",
+        "seeds " + std::to_string(seed_base) + " .. " +
+            std::to_string(seed_base) + " + " + std::to_string(seeds - 1) +
+            " do not fit in 64 bits (the largest seed is "
+            "18446744073709551615); with --seeds " +
+            std::to_string(seeds) + ", --seed-base must be at most " +
+            std::to_string(std::numeric_limits<std::uint64_t>::max() -
+                           static_cast<std::uint64_t>(seeds - 1)));
+  }
   std::vector<EvalInstance> out;
   for (const std::string& size : sizes) {
     const auto [n, m] = ParseSize(size, "--sizes");
@@ -176,7 +267,8 @@ std::vector<EvalInstance> EnumerateInstances(
 
 EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
                         const std::vector<std::string>& sets,
-                        const PolicyRegistry& registry) {
+                        const PolicyRegistry& registry,
+                        const std::vector<EvalInstance>& instances) {
   EvalSetup setup;
   std::vector<Override> policy_sets;
   for (const std::string& text : sets) {
@@ -197,9 +289,26 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
       setup.overrides.push_back(o);
     }
   }
-  // Checked now, once, rather than on every instance.
-  const Scenario base =
-      WithOverrides(GeneratedScenario(1, 1, 0), setup.overrides);
+  // Checked now, once per size, rather than on every instance: the scenario
+  // and the world of its first seed (the other seeds only draw another
+  // world, which can still fail: RunInstance names the flag too).
+  std::vector<EvalInstance> checked;
+  for (const EvalInstance& inst : instances) {
+    bool seen = false;
+    for (const EvalInstance& c : checked) seen = seen || c.size == inst.size;
+    if (!seen) checked.push_back(inst);
+  }
+  Scenario base;
+  for (const EvalInstance& inst : checked) {
+    const Scenario s = InstanceScenario(inst, setup);
+    try {
+      BuildInstance(s);
+    } catch (const InputError& e) {
+      NameTheFlag(e, InstanceSpec(inst, setup));
+    }
+    if (&inst == &checked.front()) base = s;
+  }
+  if (checked.empty()) base = InstanceScenario({"1x1", 1, 1, 0}, setup);
   std::set<std::string> used;
   const auto resolve = [&](const std::string& name) {
     const std::set<std::string> declared = DeclaredParams(registry, name);
@@ -234,18 +343,31 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
   return setup;
 }
 
+GeneratedSpec InstanceSpec(const EvalInstance& instance,
+                           const EvalSetup& setup) {
+  GeneratedSpec spec;
+  spec.size = instance.size;
+  spec.robots = instance.robots;
+  spec.targets = instance.targets;
+  spec.seed = instance.seed;
+  spec.overrides = setup.overrides;
+  return spec;
+}
+
 Scenario InstanceScenario(const EvalInstance& instance,
                           const EvalSetup& setup) {
-  return WithOverrides(
-      GeneratedScenario(instance.robots, instance.targets, instance.seed),
-      setup.overrides);
+  return ReadGenerated(InstanceSpec(instance, setup));
 }
 
 std::vector<EvalRow> RunInstance(const EvalInstance& inst,
                                  const EvalSetup& setup,
                                  const std::vector<std::string>& policies) {
-  const std::shared_ptr<const Instance> instance =
-      BuildInstance(InstanceScenario(inst, setup));
+  std::shared_ptr<const Instance> instance;
+  try {
+    instance = BuildInstance(InstanceScenario(inst, setup));
+  } catch (const InputError& e) {
+    NameTheFlag(e, InstanceSpec(inst, setup));
+  }
   const SamplingPlan plan =
       PlanFromStart(instance, *ParamsOf<ExpertParams>(*setup.expert));
   const int fstar = plan.found ? plan.depth : -1;
@@ -287,10 +409,16 @@ std::string FormatRow(const EvalRow& r) {
 
 // Why a parsed row cannot be a run's result, or "".
 std::string Impossible(const EvalRow& r) {
-  static const std::regex kSize("^[0-9]{1,5}x[0-9]{1,5}$");
-  static const std::regex kPolicy("^[A-Za-z0-9_.-]{1,64}$");
-  if (!std::regex_match(r.size, kSize)) return "size '" + r.size + "'";
-  if (!std::regex_match(r.policy, kPolicy)) return "policy '" + r.policy + "'";
+  int robots = 0, targets = 0;
+  if (!field_text::ParseCountPair(r.size, 'x', 5, &robots, &targets))
+    return "size '" + r.size + "'";
+  const bool name_ok =
+      !r.policy.empty() && r.policy.size() <= 64 &&
+      std::all_of(r.policy.begin(), r.policy.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+               (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
+      });
+  if (!name_ok) return "policy '" + r.policy + "'";
   if (r.fstar < -1) return "fstar " + std::to_string(r.fstar);
   if (r.bound < -1) return "bound " + std::to_string(r.bound);
   if (!std::isfinite(r.wall_s) || r.wall_s < 0) return "wall_s";
@@ -404,14 +532,16 @@ int RunEval(const EvalOptions& o) {
   }
   const std::vector<EvalInstance> instances =
       EnumerateInstances(o.sizes, o.seeds, o.seed_base);
-  const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry);
+  if (instances.empty())
+    throw InputError("command line", 0, "--sizes", "give at least one size");
+  const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry, instances);
 
   // Under mpirun, rank 0 alone checks and rewrites the folder; then every
   // rank reads the rows already done and takes its share of the rest.
   Ranks& ranks = Ranks::Get();
   const bool root = ranks.rank() == 0;
   const std::string effective_path = o.out_dir + "/effective.yaml";
-  const std::string effective = EffectiveText(setup);
+  const std::string effective = EffectiveText(setup, instances.front());
   const std::string runs_path = o.out_dir + "/runs.csv";
   std::vector<EvalRow> rows;
   if (root) {
@@ -506,6 +636,7 @@ int RunEval(const EvalOptions& o) {
   int finished = 0;
   ProgressLine progress(o.progress && root);
   std::string first_error;
+  std::exception_ptr first_failure;  // of a run
   // Under mu.
   const auto record = [&](const EvalRow& row, const std::string& size,
                           std::uint64_t seed) {
@@ -536,9 +667,11 @@ int RunEval(const EvalOptions& o) {
         std::lock_guard<std::mutex> lock(mu);
         for (const EvalRow& row : result)
           record(row, work[w].instance->size, work[w].instance->seed);
-      } catch (const std::exception& e) {
+      } catch (...) {
+        // Kept as it is: bad input found in a run (a generated world that
+        // cannot be built) is still bad input.
         std::lock_guard<std::mutex> lock(mu);
-        if (first_error.empty()) first_error = e.what();
+        if (!first_failure) first_failure = std::current_exception();
         next = work.size();  // stop handing out work
       }
     }
@@ -629,13 +762,14 @@ int RunEval(const EvalOptions& o) {
   }
   for (auto& t : pool) t.join();
   if (!root) {
-    ranks.SendDone(first_error);
+    ranks.SendDone(first_failure ? Message(first_failure) : first_error);
     return 0;  // rank 0 reports
   }
   if (receiver.joinable()) receiver.join();
   progress.Finish();
   ::fsync(fd);
   ::close(fd);
+  if (first_failure) std::rethrow_exception(first_failure);
   if (first_error.empty()) first_error = remote_error;
   if (!first_error.empty()) throw std::runtime_error(first_error);
 

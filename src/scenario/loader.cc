@@ -5,7 +5,6 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
-#include <regex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,31 +40,39 @@ std::string FlagKey(const Override& o, const std::string& key) {
   return o.flag == "--set" ? "--set " + key : o.flag;
 }
 
+// A key path: segments NAME[I][J]... joined by dots, NAME
+// [A-Za-z_][A-Za-z0-9_]* and each index 1 to 9 digits. Scanned by hand: a
+// std::regex overflows the stack on a path of some 30 000 characters.
 std::vector<Step> ParsePath(const Override& o) {
-  static const std::regex kSegment(
-      R"(([A-Za-z_][A-Za-z0-9_]*)((\[[0-9]{1,9}\])*))");
+  const auto refuse = [&o]() {
+    return InputError("command line", 0, o.flag,
+                      "'" + o.path +
+                          "' is not a key path such as mission.eps or "
+                          "targets.list[0].position");
+  };
+  const auto letter = [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_';
+  };
+  const auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  const std::string& p = o.path;
   std::vector<Step> steps;
-  std::size_t begin = 0;
+  std::size_t i = 0;
   while (true) {
-    const std::size_t dot = o.path.find('.', begin);
-    const std::string part = o.path.substr(
-        begin, dot == std::string::npos ? std::string::npos : dot - begin);
-    std::smatch m;
-    if (!std::regex_match(part, m, kSegment)) {
-      throw InputError("command line", 0, o.flag,
-                       "'" + o.path +
-                           "' is not a key path such as mission.eps or "
-                           "targets.list[0].position");
+    if (i >= p.size() || !letter(p[i])) throw refuse();
+    const std::size_t begin = i;
+    while (i < p.size() && (letter(p[i]) || digit(p[i]))) ++i;
+    steps.push_back({p.substr(begin, i - begin), 0});
+    while (i < p.size() && p[i] == '[') {
+      const std::size_t first = ++i;
+      while (i < p.size() && digit(p[i])) ++i;
+      if (i == first || i - first > 9 || i >= p.size() || p[i] != ']')
+        throw refuse();
+      steps.push_back({"", std::stoul(p.substr(first, i - first))});
+      ++i;
     }
-    steps.push_back({m[1].str(), 0});
-    const std::string indices = m[2].str();
-    for (std::size_t i = 0; i < indices.size();) {
-      const std::size_t close = indices.find(']', i);
-      steps.push_back({"", std::stoul(indices.substr(i + 1, close - i - 1))});
-      i = close + 1;
-    }
-    if (dot == std::string::npos) break;
-    begin = dot + 1;
+    if (i == p.size()) break;
+    if (p[i] != '.') throw refuse();
+    ++i;
   }
   return steps;
 }
@@ -80,7 +87,7 @@ std::string PolicyName(const ConfigNode& root) {
 
 void Apply(const Override& o, ConfigNode* root) {
   const std::vector<Step> steps = ParsePath(o);
-  ConfigNode value = ParseYamlValue(o.value, o.flag);
+  ConfigNode value = ParseYamlValue(o.value, o.flag, FlagKey(o, o.path));
   // A new policy drops the parameters the file gave the old one.
   if (o.path == "policy.name" && value.IsScalar() &&
       value.scalar != PolicyName(*root)) {
@@ -184,7 +191,6 @@ Scenario ParseScenario(const std::string& yaml, const std::string& file,
 
 Scenario WithOverrides(const Scenario& scenario,
                        const std::vector<Override>& overrides) {
-  if (overrides.empty()) return scenario;
   ConfigNode root = ScenarioNode(scenario);
   for (const Override& o : overrides) Apply(o, &root);
   return Read(root, scenario.file, "");

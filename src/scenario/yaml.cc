@@ -4,7 +4,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -174,10 +173,23 @@ class Converter {
 
 // yaml-cpp's message where it stops at a stray ',' ("end of map not found")
 // is replaced by what is there.
+// Its "illegal map value" after a key of more than 1024 characters (YAML's
+// limit for an implicit key) says why.
 std::string YamlMessage(const YAML::Exception& e, const std::string& text) {
   const auto pos = static_cast<std::size_t>(e.mark.pos);
   if (e.mark.pos >= 0 && pos < text.size() && text[pos] == ',')
     return "unexpected ','";
+  if (e.msg == YAML::ErrorMsg::MAP_VALUE && e.mark.pos >= 0 &&
+      pos < text.size() && text[pos] == ':') {
+    const std::size_t newline = text.rfind('\n', pos);
+    const std::size_t line_start =
+        newline == std::string::npos ? 0 : newline + 1;
+    if (pos - line_start > 1024) {
+      return e.msg +
+             " (a key of more than 1024 characters? YAML allows no longer "
+             "key unless it is written as `? KEY`)";
+    }
+  }
   return e.msg;
 }
 
@@ -197,10 +209,8 @@ constexpr std::size_t kLineWidth = 80;
 
 // Numbers as the readers parse them (core/field_io.h), and YAML's words.
 bool LooksLikeNumberOrWord(const std::string& s) {
-  static const std::regex kWord("true|false|null|yes|no|on|off|y|n|~",
-                                std::regex::icase);
   return field_text::ParseReal(ConfigNode::Scalar(s)).has_value() ||
-         std::regex_match(s, kWord);
+         field_text::IsYamlWord(s);
 }
 
 // Whether a string can be written without quotes and read back as itself.
@@ -361,14 +371,26 @@ ConfigNode ParseYaml(const std::string& text, const std::string& file) {
   return Converter(file, "").Convert(doc, "", 0);
 }
 
-ConfigNode ParseYamlValue(const std::string& text, const std::string& flag) {
+ConfigNode ParseYamlValue(const std::string& text, const std::string& flag,
+                          const std::string& key) {
+  const std::string& named = key.empty() ? flag : key;
+  // yaml-cpp reads bytes that are not UTF-8 as nothing at all (and quoting
+  // them would put them in the error).
+  if (!field_text::IsUtf8(text))
+    throw InputError("command line", 0, named, "the value is not UTF-8 text");
   YAML::Node node;
   try {
-    CountDocuments(text);
+    // YAML::Load would silently drop every document after the first.
+    if (const Documents docs = CountDocuments(text); docs.count > 1) {
+      throw InputError("command line", 0, named,
+                       "the value holds " + std::to_string(docs.count) +
+                           " YAML documents (separated by ---), not one: '" +
+                           text + "'");
+    }
     node = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw InputError(
-        "command line", 0, flag,
+        "command line", 0, named,
         "invalid YAML value '" + text + "': " + YamlMessage(e, text));
   }
   ConfigNode out = Converter("command line", flag).Convert(node, "", 0);

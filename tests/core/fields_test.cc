@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <regex>
+#include <string>
+#include <vector>
 
 #include "aia/core/field_io.h"
 
@@ -234,6 +237,194 @@ TEST(KeyErrorTest, BlamesTheNearestGivenKey) {
   EXPECT_EQ(KeyError("f", sources, "q", "x").line(), 0);
   EXPECT_EQ(KeyError("f", sources, "c.d", "x").Format(),
             "command line: --seed: x");
+}
+
+// Literals beyond a double's range are refused as such, not read as 0 or as
+// "not finite".
+TEST(FieldReaderTest, LiteralsBeyondADoubleAreOutOfRange) {
+  EXPECT_EQ(
+      ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"rate", Scalar("1e-400", 0)}}))
+          .Format(),
+      "f.yaml:2: rate: must be a number in (0, 1], got 1e-400, which is too "
+      "small: it underflows to 0 (non-zero magnitudes start at 4.9e-324)");
+  const std::string tiny = "0." + std::string(400, '0') + "1";
+  EXPECT_NE(
+      ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"rate", Scalar(tiny, 0)}}))
+          .message()
+          .find("which is too small: it underflows to 0"),
+      std::string::npos);
+  EXPECT_EQ(
+      ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"rate", Scalar("-1e999", 0)}}))
+          .message(),
+      "must be a number in (0, 1], got -1e999, which is too large: it "
+      "overflows (magnitudes end at 1.8e308)");
+  ConfigNode at = ConfigNode::List();
+  at.items = {Scalar("1e-400", 0), Scalar("2", 0)};
+  EXPECT_EQ(
+      ErrorOf(Doc({{"needed", Scalar("1", 0)}, {"inner", Doc({{"at", at}})}}))
+          .message(),
+      "must be two numbers [x, y], got [1e-400, 2]; 1e-400 is too "
+      "small: it underflows to 0 (non-zero magnitudes start at "
+      "4.9e-324)");
+  // The smallest subnormal still reads, and zero is zero however written.
+  EXPECT_EQ(field_text::ParseReal(Scalar("4.9e-324", 0)).value_or(-1),
+            4.9e-324);
+  field_text::OutOfRange beyond = field_text::OutOfRange::kTooLarge;
+  EXPECT_EQ(
+      field_text::ParseReal(Scalar("0.000e-99999", 0), &beyond).value_or(-1),
+      0.0);
+  EXPECT_EQ(beyond, field_text::OutOfRange::kNo);
+}
+
+// The scanners accept exactly the languages of the regular expressions they
+// replaced (std::regex overflowed the stack on literals of some 30 000
+// characters): a table of the edge cases, then every short string over the
+// characters that matter, compared with the expressions themselves.
+TEST(FieldTextTest, ScannersAcceptWhatTheFormerRegexesAccepted) {
+  const std::regex decimal(
+      R"([-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?)");
+  const std::regex non_finite(R"([-+]?\.?(inf|infinity)|\.?nan)",
+                              std::regex::icase);
+  const std::regex integer("[-+]?[0-9]+");
+  const std::regex word("true|false|null|yes|no|on|off|y|n|~",
+                        std::regex::icase);
+  struct Row {
+    const char* text;
+    bool decimal, non_finite, integer, word;
+  };
+  const Row table[] = {
+      {"0", true, false, true, false},
+      {"5", true, false, true, false},
+      {"-17", true, false, true, false},
+      {"+3", true, false, true, false},
+      {"007", true, false, true, false},
+      {".5", true, false, false, false},
+      {"5.", true, false, false, false},
+      {"-.5", true, false, false, false},
+      {"+1e-3", true, false, false, false},
+      {"2.5E+10", true, false, false, false},
+      {"1e5", true, false, false, false},
+      {".5e1", true, false, false, false},
+      {"5.e1", true, false, false, false},
+      {"1e", false, false, false, false},
+      {"1e+", false, false, false, false},
+      {"e5", false, false, false, false},
+      {".e5", false, false, false, false},
+      {".", false, false, false, false},
+      {"-", false, false, false, false},
+      {"+", false, false, false, false},
+      {"", false, false, false, false},
+      {"--1", false, false, false, false},
+      {"+-1", false, false, false, false},
+      {"1.2.3", false, false, false, false},
+      {"1e5.5", false, false, false, false},
+      {"0x10", false, false, false, false},
+      {"1_000", false, false, false, false},
+      {" 1", false, false, false, false},
+      {"1 ", false, false, false, false},
+      {"inf", false, true, false, false},
+      {"INF", false, true, false, false},
+      {".inf", false, true, false, false},
+      {"-.Inf", false, true, false, false},
+      {"+.inf", false, true, false, false},
+      {"-Infinity", false, true, false, false},
+      {"infinity", false, true, false, false},
+      {".infinity", false, true, false, false},
+      {"nan", false, true, false, false},
+      {".NaN", false, true, false, false},
+      {"NAN", false, true, false, false},
+      {"-nan", false, false, false, false},
+      {"+.nan", false, false, false, false},
+      {"..inf", false, false, false, false},
+      {"+-inf", false, false, false, false},
+      {"infinit", false, false, false, false},
+      {"infinityy", false, false, false, false},
+      {"in", false, false, false, false},
+      {"nan.", false, false, false, false},
+      {"yes", false, false, false, true},
+      {"No", false, false, false, true},
+      {"TRUE", false, false, false, true},
+      {"Off", false, false, false, true},
+      {"y", false, false, false, true},
+      {"N", false, false, false, true},
+      {"~", false, false, false, true},
+      {"null", false, false, false, true},
+      {"nul", false, false, false, false},
+      {"yess", false, false, false, false},
+      {"~~", false, false, false, false},
+  };
+  for (const Row& r : table) {
+    SCOPED_TRACE(std::string("'") + r.text + "'");
+    EXPECT_EQ(field_text::IsDecimalLiteral(r.text), r.decimal);
+    EXPECT_EQ(field_text::IsNonFiniteLiteral(r.text), r.non_finite);
+    EXPECT_EQ(field_text::IsIntegerLiteral(r.text), r.integer);
+    EXPECT_EQ(field_text::IsYamlWord(r.text), r.word);
+    EXPECT_EQ(std::regex_match(r.text, decimal), r.decimal);
+    EXPECT_EQ(std::regex_match(r.text, non_finite), r.non_finite);
+    EXPECT_EQ(std::regex_match(r.text, integer), r.integer);
+    EXPECT_EQ(std::regex_match(r.text, word), r.word);
+  }
+  // Every string of up to 5 characters over "05.eE+-": 19 608 of them.
+  const std::string alphabet = "05.eE+-";
+  std::vector<std::string> texts = {""};
+  for (std::size_t begin = 0, length = 0; length < 5; ++length) {
+    const std::size_t end = texts.size();
+    for (std::size_t i = begin; i < end; ++i)
+      for (const char c : alphabet) texts.push_back(texts[i] + c);
+    begin = end;
+  }
+  for (const std::string& t : texts) {
+    EXPECT_EQ(field_text::IsDecimalLiteral(t), std::regex_match(t, decimal))
+        << "'" << t << "'";
+    EXPECT_EQ(field_text::IsIntegerLiteral(t), std::regex_match(t, integer))
+        << "'" << t << "'";
+  }
+  // And over the letters of the words, with signs and points.
+  const std::string letters = "infatyINF.+-";
+  texts = {""};
+  for (std::size_t begin = 0, length = 0; length < 4; ++length) {
+    const std::size_t end = texts.size();
+    for (std::size_t i = begin; i < end; ++i)
+      for (const char c : letters) texts.push_back(texts[i] + c);
+    begin = end;
+  }
+  for (const std::string& t : texts) {
+    EXPECT_EQ(field_text::IsNonFiniteLiteral(t),
+              std::regex_match(t, non_finite))
+        << "'" << t << "'";
+  }
+}
+
+// Literals far longer than the stack would allow a recursive matcher: read
+// (or refused) in linear time.
+TEST(FieldTextTest, LongLiteralsAreScannedWithoutRecursion) {
+  const std::string digits(100000, '7');
+  field_text::OutOfRange beyond = field_text::OutOfRange::kNo;
+  EXPECT_EQ(field_text::ParseReal(Scalar(digits, 0), &beyond).value_or(-1),
+            kInfinity);
+  EXPECT_EQ(beyond, field_text::OutOfRange::kTooLarge);
+  EXPECT_EQ(field_text::ParseReal(Scalar("0." + digits, 0)).value_or(-1),
+            0.7777777777777778);
+  EXPECT_FALSE(field_text::ParseInteger(Scalar(digits, 0)).has_value());
+  EXPECT_TRUE(field_text::IsIntegerLiteral(digits));
+  EXPECT_FALSE(field_text::IsDecimalLiteral(digits + "x"));
+  EXPECT_FALSE(field_text::IsNonFiniteLiteral(digits));
+}
+
+TEST(FieldTextTest, ParseCountPairTakesTwoBoundedCounts) {
+  int a = -1, b = -1;
+  EXPECT_TRUE(field_text::ParseCountPair("10x20", 'x', 5, &a, &b));
+  EXPECT_EQ(a, 10);
+  EXPECT_EQ(b, 20);
+  EXPECT_TRUE(field_text::ParseCountPair("0/4", '/', 4, &a, &b));
+  EXPECT_EQ(a, 0);
+  EXPECT_EQ(b, 4);
+  EXPECT_TRUE(field_text::ParseCountPair("99999x00001", 'x', 5, &a, &b));
+  for (const char* bad : {"", "x", "1x", "x1", "123456x1", "1x123456", "1x1x1",
+                          "-1x1", "+1x1", "1 x1", "1x1 ", "1X1", "a x b"})
+    EXPECT_FALSE(field_text::ParseCountPair(bad, 'x', 5, &a, &b)) << bad;
+  EXPECT_FALSE(field_text::ParseCountPair(std::string(100000, '1') + "x1", 'x',
+                                          5, &a, &b));
 }
 
 TEST(FieldTextTest, ShortestRealReadsBackExactly) {

@@ -428,6 +428,18 @@ TEST(CliTest, BadSetIsBadInputOnEveryCommand) {
         "--out", out},
        "error: command line: --set sensor.rang: unknown key (did you mean "
        "`range`?)"},
+      // yaml-cpp dropped a second document and read bytes that are not
+      // UTF-8 as nothing.
+      {{"run", scenario, "--set", "seed=1\n---\n2", "--out", out},
+       "error: command line: --set seed: the value holds 2 YAML documents "
+       "(separated by ---), not one: '1\\n---\\n2'"},
+      {{"run", scenario, "--set", "name=\xff", "--out", out},
+       "error: command line: --set name: the value is not UTF-8 text"},
+      {{"run", scenario, "--set", "mission.eps=\xff\xfe", "--out", out},
+       "error: command line: --set mission.eps: the value is not UTF-8 text"},
+      {{"run", scenario, "--set", "sensor.sigma0=1e-400", "--out", out},
+       "error: command line: --set sensor.sigma0: must be a number in [1e-06, "
+       "10000], got 1e-400, which is too small: it underflows to 0"},
   };
   for (const auto& [args, prefix] : cases) {
     std::vector<std::string> a = args;
@@ -440,6 +452,144 @@ TEST(CliTest, BadSetIsBadInputOnEveryCommand) {
   }
   EXPECT_FALSE(fs::exists(out + "/summary.json"));
   fs::remove_all(out);
+}
+
+// A key path of 40 000 characters overflowed the stack of a std::regex
+// (SIGSEGV, nothing printed); it is an unknown key like any other.
+TEST(CliTest, LongSetKeyIsOneErrorLine) {
+  const std::string key(40000, 'a');
+  const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--set",
+                         key + "=1", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(
+      r.err.rfind("error: command line: --set " + key + ": unknown key", 0), 0u)
+      << r.err.substr(0, 300);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1);
+  const auto bad = RunAia({"run", SourcePath("scenarios/default.yaml"), "--set",
+                           key + "-=1", "--quiet"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.err.rfind("error: command line: --set: '" + key +
+                              "-' is not "
+                              "a key path",
+                          0),
+            0u)
+      << bad.err.substr(0, 300);
+}
+
+// Seeds are whole numbers that fit in 64 bits, read as decimal: CLI11's
+// strtoull saturated 2^64 and beyond to 2^64 - 1 and read 010 as octal 8,
+// so distinct flags gave one seed.
+TEST(CliTest, SeedsThatDoNotFitIn64BitsAreRefused) {
+  const std::string dir = testing::MakeTempDir("aia_seed_");
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  const std::string big = "18446744073709551616";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", scenario, "--seed", big, "--out", dir + "/r"},
+       "error: command line: --seed: '" + big +
+           "' does not fit in 64 bits (at most 18446744073709551615) (aia run "
+           "--help lists the options)\n"},
+      {{"world", scenario, "--seed", std::string(60, '9'), "--out",
+        dir + "/w.xml"},
+       "error: command line: --seed: '" + std::string(40, '9') +
+           "... (60 characters)' does not fit in 64 bits (at most "
+           "18446744073709551615) (aia world --help lists the options)\n"},
+      {{"bench", "--seed", big},
+       "error: command line: --seed: '" + big +
+           "' does not fit in 64 bits (at most 18446744073709551615) (aia "
+           "bench --help lists the options)\n"},
+      {{"train", "--data", dir, "--seed", big},
+       "error: command line: --seed: '" + big +
+           "' does not fit in 64 bits (at most 18446744073709551615) (aia "
+           "train --help lists the options)\n"},
+      {{"eval", "--seed-base", big, "--out", dir + "/e"},
+       "error: command line: --seed-base: '" + big +
+           "' does not fit in 64 bits (at most 18446744073709551615) (aia "
+           "eval --help lists the options)\n"},
+      // The last seed of a range must fit too: it used to wrap to 0.
+      {{"eval", "--sizes", "2x1", "--seeds", "2", "--seed-base",
+        "18446744073709551615", "--out", dir + "/e"},
+       "error: command line: --seed-base: seeds 18446744073709551615 .. "
+       "18446744073709551615 + 1 do not fit in 64 bits (the largest seed is "
+       "18446744073709551615); with --seeds 2, --seed-base must be at most "
+       "18446744073709551614\n"},
+      {{"dataset", "--episodes", "3", "--first-seed", "18446744073709551614",
+        "--out", dir + "/d"},
+       "error: command line: --first-seed: seeds 18446744073709551614 .. "
+       "18446744073709551614 + 2 do not fit in 64 bits (the largest seed is "
+       "18446744073709551615); with --episodes 3, --first-seed must be at "
+       "most 18446744073709551613\n"},
+      {{"bench", "--expert", "--seeds", "2", "--seed", "18446744073709551615"},
+       "error: command line: --seed: seeds 18446744073709551615 .. "
+       "18446744073709551615 + 1 do not fit in 64 bits (the largest seed is "
+       "18446744073709551615); give a smaller --seed\n"},
+  };
+  for (const auto& [args, err] : cases) {
+    const auto r = RunAia(args);
+    EXPECT_EQ(r.exit_code, 2) << err;
+    EXPECT_EQ(r.err, err);
+  }
+  for (const char* out : {"/r", "/w.xml", "/e", "/d"})
+    EXPECT_FALSE(fs::exists(dir + out)) << out;
+  // The largest seed is a seed; leading zeros do not make octal.
+  for (const char* seed : {"18446744073709551615", "010"}) {
+    const auto r =
+        RunAia({"world", scenario, "--seed", seed, "--out", dir + "/w.xml"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find(std::string("(seed ") +
+                         (seed[0] == '0' ? "10" : seed) + ")"),
+              std::string::npos)
+        << r.out;
+  }
+  fs::remove_all(dir);
+}
+
+// An empty path given to a flag is a mistake (an unset shell variable), not
+// the flag's default: --out "" used to write renders/<name>/ or nothing.
+TEST(CliTest, EmptyPathFlagsAreRefused) {
+  const std::string dir = testing::MakeTempDir("aia_empty_");
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  const std::vector<std::vector<std::string>> cases = {
+      {"run", scenario, "--out", ""},
+      {"render", scenario, "--out", ""},
+      {"render", scenario, "--out", dir + "/v.mp4", "--frames", ""},
+      {"plan", scenario, "--out", ""},
+      {"world", scenario, "--out", ""},
+      {"eval", "--sizes", "2x1", "--seeds", "1", "--out", ""},
+      {"train", "--data", dir, "--out", ""},
+      {"train", "--data", ""},
+      {"dataset", "--episodes", "1", "--out", ""},
+      {"dataset", "--episodes", "1", "--out", dir + "/d", "--model", ""},
+  };
+  for (const std::vector<std::string>& args : cases) {
+    const auto r = testing::RunCommand(
+        "cd " + dir + " && '" + std::string(AIA_BINARY) + "' " + [&args]() {
+          std::string line;
+          for (const std::string& a : args) line += "'" + a + "' ";
+          return line;
+        }());
+    const std::string flag = args[args.size() - 2];
+    EXPECT_EQ(r.exit_code, 2) << args[0] << " " << flag;
+    EXPECT_EQ(r.err, "error: command line: " + flag +
+                         ": an empty path; give a file or folder (aia " +
+                         args[0] + " --help lists the options)\n");
+  }
+  EXPECT_TRUE(fs::is_empty(dir)) << "something was written";
+  fs::remove_all(dir);
+}
+
+// Output that cannot be written to standard output fails the command
+// (it exited 0 with nothing written).
+TEST(CliTest, FailedWriteToStandardOutputIsAnError) {
+  for (const std::string args :
+       {"schema", "policies", "schema --markdown", "--help", "eval --help"}) {
+    const auto r = testing::RunCommand("{ '" + std::string(AIA_BINARY) + "' " +
+                                       args + " >/dev/full; }");
+    EXPECT_EQ(r.exit_code, 1) << args;
+    EXPECT_EQ(r.err,
+              "error: cannot write to standard output: No space left on "
+              "device\n")
+        << args;
+  }
 }
 
 }  // namespace

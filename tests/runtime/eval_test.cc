@@ -214,6 +214,161 @@ TEST(EvalPiecesTest, SetReachesTheInstancesAndThePoliciesThatDeclareIt) {
       0u);
 }
 
+// Bad input in the generated scenarios of eval, bench and dataset names the
+// flag behind it, before any work (it read `error: :0:` or `error:
+// (generated scenario):0:`, exit 1, once the folder was made).
+TEST(EvalTest, GeneratedScenarioErrorsNameTheirFlag) {
+  const std::string dir = testing::MakeTempDir("aia_gen_");
+  const std::string out = dir + "/out";
+  const std::string bodies =
+      "'5000x1': robots.count: 5000 robots, 1 targets and 30 obstacle boxes "
+      "make 5031 bodies; aia simulates at most 5000\n";
+  const std::string list =
+      "targets.count: is 2 but targets.list has 1 targets; give count "
+      "(random targets) or list, or make them agree (in the generated "
+      "scenario of ";
+  const std::vector<std::string> eval = {"eval",   "--seeds", "1", "--policies",
+                                         "random", "--out",   out, "--quiet"};
+  const auto with = [](std::vector<std::string> args,
+                       const std::vector<std::string>& more) {
+    args.insert(args.end(), more.begin(), more.end());
+    return args;
+  };
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {with(eval, {"--sizes", "5000x1"}),
+       "error: command line: --sizes: " + bodies},
+      {with(eval, {"--sizes", "2x2", "--set",
+                   "targets.list=[{position: [1, "
+                   "1]}]"}),
+       "error: command line: --set targets.list: " + list + "--sizes 2x2)\n"},
+      {with(eval, {"--sizes", "2x1", "--set", "sensor.range=3", "--set",
+                   "workspace.size=[1, 1]"}),
+       "error: command line: --set workspace.size: "
+       "workspace.obstacles.random.max_size: must not be larger than the "
+       "workspace [1, 1], got [2, 2] (in the generated scenario of --sizes "
+       "2x1)\n"},
+      {{"bench", "--sizes", "5000x1", "--steps", "1", "--repeats", "1",
+        "--no-testspeed"},
+       "error: command line: --sizes: " + bodies},
+      {{"bench", "--expert", "--sizes", "2x2", "--seeds", "1", "--set",
+        "targets.list=[{position: [1, 1]}]"},
+       "error: command line: --set targets.list: " + list + "--sizes 2x2)\n"},
+      {{"dataset", "--size", "5000x1", "--episodes", "1", "--out", out,
+        "--quiet"},
+       "error: command line: --size: " + bodies},
+      {{"dataset", "--size", "2x2", "--episodes", "1", "--set",
+        "targets.list=[{position: [1, 1]}]", "--out", out, "--quiet"},
+       "error: command line: --set targets.list: " + list + "--size 2x2)\n"},
+  };
+  for (const auto& [args, err] : cases) {
+    const auto r = RunAia(args);
+    EXPECT_EQ(r.exit_code, 2) << err;
+    EXPECT_EQ(r.err, err);
+    EXPECT_FALSE(std::filesystem::exists(out)) << err;
+  }
+  // What the world of a size refuses (more robots than free lattice
+  // points), found by building the first seed's world before any work.
+  for (const std::vector<std::string>& args :
+       {with(eval, {"--sizes", "2000x1"}),
+        std::vector<std::string>{"dataset", "--size", "2000x1", "--episodes",
+                                 "1", "--first-seed", "0", "--out", out}}) {
+    const auto r = RunAia(args);
+    EXPECT_EQ(r.exit_code, 2) << args[0];
+    EXPECT_EQ(r.err.rfind("error: command line: --size" +
+                              std::string(args[0] == "eval" ? "s" : "") +
+                              ": robots.count: 2000 robots but only ",
+                          0),
+              0u)
+        << r.err;
+    EXPECT_NE(r.err.find("(in the generated world of --size"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("2000x1, seed 0)\n"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << r.err;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(EvalPiecesTest, ErrorsOfGeneratedScenariosNameTheFlagBehindThem) {
+  GeneratedSpec spec;
+  spec.size = "2x2";
+  spec.robots = 2;
+  spec.targets = 2;
+  spec.seed = 5;
+  const auto named = [&spec](const InputError& e) {
+    try {
+      NameTheFlag(e, spec);
+    } catch (const InputError& named) {
+      return named.Format();
+    }
+    return std::string("no error");
+  };
+  // The generated world of a size it does not fit in, with a --set that
+  // has nothing to do with it: the size is named.
+  spec.size = "2000x1";
+  spec.robots = 2000;
+  spec.targets = 1;
+  spec.overrides = {ParseSetFlag("sensor.range=3")};
+  EXPECT_EQ(named(InputError("(generated scenario)", 0, "robots.count", "x"))
+                .rfind("command line: --sizes: robots.count: 2000 robots but "
+                       "only ",
+                       0),
+            0u);
+  // A --set that makes the world fail is named.
+  spec.size = "40x1";
+  spec.robots = 40;
+  spec.overrides.push_back(ParseSetFlag("workspace.size=[3, 3]"));
+  spec.overrides.push_back(
+      ParseSetFlag("workspace.obstacles.random.max_size=[1, 1]"));
+  const std::string world =
+      named(InputError("(generated scenario)", 0, "robots.count", "x"));
+  EXPECT_EQ(world.rfind("command line: --set workspace.size: ", 0), 0u)
+      << world;
+  EXPECT_NE(world.find("(in the generated world of --sizes 40x1, seed 5)"),
+            std::string::npos)
+      << world;
+  spec.size = "2x2";
+  spec.robots = 2;
+  spec.targets = 2;
+  spec.overrides = {ParseSetFlag("sensor.range=3")};
+  // Not found again (the error came from elsewhere): the size is named.
+  EXPECT_EQ(named(InputError("(generated scenario)", 0, "robots.count", "x")),
+            "command line: --sizes: robots.count: x (in the generated world "
+            "of --sizes 2x2, seed 5)");
+  // Already about a flag: as it is.
+  EXPECT_EQ(named(InputError("command line", 0, "--set sensor.range", "y")),
+            "command line: --set sensor.range: y");
+  // The first override that breaks the scenario is the one named (here
+  // with the reader's own error, which names it already).
+  spec.overrides.push_back(ParseSetFlag("robots.start=[[1, 1]]"));
+  spec.overrides.push_back(ParseSetFlag("mission.eps=0.5"));
+  EXPECT_EQ(named(InputError("", 0, "robots.count", "z")),
+            "command line: --set robots.start: has 1 positions but "
+            "robots.count is 2; give one [x, y] per robot, or omit start for "
+            "random ones");
+  // A size refused by itself names the size.
+  spec.robots = 6000;
+  spec.size = "6000x2";
+  EXPECT_EQ(named(InputError("", 0, "robots.count", "z")),
+            "command line: --sizes: '6000x2': robots.count: must be an "
+            "integer in [1, 5000], got 6000");
+  // Sizes whose scenario fits: checked on them rather than on a 1x1 world
+  // (which refused a robot index of 2).
+  const PolicyRegistry registry = AllPolicies();
+  const EvalSetup setup =
+      MakeEvalSetup({"greedy"}, {"render.follow_robot=2"}, registry,
+                    EnumerateInstances({"3x1"}, 1, 0));
+  EXPECT_EQ(InstanceScenario({"3x1", 3, 1, 0}, setup).render.follow_robot, 2);
+  // The seeds of an eval fit in 64 bits.
+  EXPECT_EQ(EnumerateInstances({"1x1"}, 1, 18446744073709551615u).size(), 1u);
+  try {
+    EnumerateInstances({"1x1"}, 2, 18446744073709551615u);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "--seed-base");
+  }
+}
+
 TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
   const std::string dir = testing::MakeTempDir("aia_eval_");
   const auto eval = [&](const std::vector<std::string>& extra) {

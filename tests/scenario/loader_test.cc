@@ -4,10 +4,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <string>
+#include <vector>
 
 #include "aia/core/error.h"
 #include "aia/scenario/config.h"
+#include "aia/scenario/yaml.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -631,6 +634,110 @@ TEST(OverrideTest, BadOverridesNameTheirFlag) {
       EXPECT_EQ(e.Format().rfind("command line: --set: ", 0), 0u) << e.Format();
     }
   }
+}
+
+// Key paths are scanned by hand (a std::regex overflowed the stack on a
+// path of some 30 000 characters) and accept what the expression did:
+// dot-separated ([A-Za-z_][A-Za-z0-9_]*)((\[[0-9]{1,9}\])*).
+TEST(OverrideTest, KeyPathsAreWhatTheFormerRegexAccepted) {
+  const auto accepted = [](const std::string& path) {
+    try {
+      ParseSetFlag(path + "=1");
+      return true;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.Format().rfind("command line: --set: ", 0), 0u) << e.Format();
+      return false;
+    }
+  };
+  const std::regex segment(R"(([A-Za-z_][A-Za-z0-9_]*)((\[[0-9]{1,9}\])*))");
+  const auto by_regex = [&segment](const std::string& path) {
+    std::size_t begin = 0;
+    while (true) {
+      const std::size_t dot = path.find('.', begin);
+      if (!std::regex_match(
+              path.substr(begin, dot == std::string::npos ? std::string::npos
+                                                          : dot - begin),
+              segment))
+        return false;
+      if (dot == std::string::npos) return true;
+      begin = dot + 1;
+    }
+  };
+  for (const char* good :
+       {"a", "_", "_a9", "mission.eps", "targets.list[0].position", "a[1][22]",
+        "a[123456789]", "A.b_C.d9", "a[0].b[1].c"}) {
+    EXPECT_TRUE(accepted(good)) << good;
+    EXPECT_TRUE(by_regex(good)) << good;
+  }
+  for (const char* bad :
+       {".a", "a.", "a..b", "9a", "a[]", "a[1234567890]", "a[-1]", "a[1]b",
+        "a b", "a-b", "[0]", "a.[0]", "a[0", "a]", "a[x]", "\xc3\xa9"}) {
+    EXPECT_FALSE(accepted(bad)) << bad;
+    EXPECT_FALSE(by_regex(bad)) << bad;
+  }
+  // Every path of up to 5 characters over "a9_.[]".
+  const std::string alphabet = "a9_.[]";
+  std::vector<std::string> paths = {""};
+  for (std::size_t begin = 0, length = 0; length < 5; ++length) {
+    const std::size_t end = paths.size();
+    for (std::size_t i = begin; i < end; ++i)
+      for (const char c : alphabet) paths.push_back(paths[i] + c);
+    begin = end;
+  }
+  for (std::size_t i = 1; i < paths.size(); ++i)
+    EXPECT_EQ(accepted(paths[i]), by_regex(paths[i])) << "'" << paths[i] << "'";
+  // A path of 100 000 characters is scanned, not recursed into.
+  EXPECT_TRUE(accepted(std::string(100000, 'a')));
+  EXPECT_FALSE(accepted(std::string(100000, 'a') + "-"));
+}
+
+// A --set value is one YAML document in UTF-8 (yaml-cpp read a second
+// document as nothing and bytes that are not UTF-8 as nothing).
+TEST(OverrideTest, SetValueIsOneDocumentInUtf8) {
+  EXPECT_EQ(OverrideError({ParseSetFlag("seed=1\n---\n2")}).Format(),
+            "command line: --set seed: the value holds 2 YAML documents "
+            "(separated by ---), not one: '1\\n---\\n2'");
+  EXPECT_EQ(OverrideError({ParseSetFlag("name=\xff")}).Format(),
+            "command line: --set name: the value is not UTF-8 text");
+  EXPECT_EQ(OverrideError({ParseSetFlag("mission.eps=\xff\xfe")}).Format(),
+            "command line: --set mission.eps: the value is not UTF-8 text");
+  EXPECT_EQ(ParseYamlValue("[1, 2]", "--set").items.size(), 2u);
+  EXPECT_TRUE(ParseYamlValue("", "--set").IsNull());
+}
+
+// Seeds take the whole unsigned 64-bit range and nothing beyond it.
+TEST(OverrideTest, SeedsBeyond64BitsAreRefusedAtTheirLine) {
+  const std::string yaml =
+      std::string(kMinimal) + "seed: 18446744073709551615\n";
+  EXPECT_EQ(ParseScenario(yaml, "m.yaml", ".").seed, 18446744073709551615u);
+  try {
+    ParseScenario(
+        std::string(kMinimal) + "seed: " + std::string(30, '9') + "\n",
+        "m.yaml", ".");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "m.yaml:3: seed: must be an integer >= 0 that fits in 64 bits "
+              "(at most 18446744073709551615), got " +
+                  std::string(30, '9'));
+  }
+  EXPECT_EQ(OverrideError({ParseSetFlag("seed=18446744073709551616")}).Format(),
+            "command line: --set seed: must be an integer >= 0 that fits in "
+            "64 bits (at most 18446744073709551615), got "
+            "18446744073709551616");
+}
+
+// Names that look like numbers, however long, are written quoted and read
+// back as themselves (the writer asked a std::regex, which overflowed the
+// stack on 30 000 digits).
+TEST(OverrideTest, LongNumericNamesAreQuotedInTheEffectiveScenario) {
+  const std::string digits(100000, '1');
+  const Scenario s = ParseScenario(
+      std::string(kMinimal) + "name: \"" + digits + "\"\n", "m.yaml", ".");
+  EXPECT_EQ(s.name, digits);
+  const std::string yaml = EffectiveYaml(s, "");
+  EXPECT_NE(yaml.find("name: \"" + digits + "\"\n"), std::string::npos);
+  EXPECT_EQ(ParseScenario(yaml, "e.yaml", ".").name, digits);
 }
 
 TEST(OverrideTest, ANewPolicyDropsTheFilesParametersButKeepsSetOnes) {

@@ -16,6 +16,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <typeinfo>
 #include <utility>
@@ -46,9 +47,18 @@ InputError KeyError(const std::string& file, const KeySources& sources,
 
 // Text helpers shared by the archives.
 namespace field_text {
+// Whether a decimal literal lies beyond what a double holds.
+enum class OutOfRange {
+  kNo,
+  kTooSmall,  // non-zero, below 4.9e-324 (1e-400): it reads as 0
+  kTooLarge,  // beyond 1.8e308 (1e999): it reads as infinite
+};
 // The value of a plain numeric scalar (YAML 1.2 core schema spellings,
-// possibly infinite or NaN); nullopt for anything else.
-std::optional<double> ParseReal(const ConfigNode& node);
+// possibly infinite or NaN); nullopt for anything else. A decimal literal
+// too large for a double reads as infinite, one too small as 0, each said in
+// *out_of_range.
+std::optional<double> ParseReal(const ConfigNode& node,
+                                OutOfRange* out_of_range = nullptr);
 std::optional<long long> ParseInteger(const ConfigNode& node);
 std::optional<std::uint64_t> ParseUnsigned(const ConfigNode& node);
 // Shortest text that reads back as exactly `x` ("0.1", "20", "1e-06").
@@ -65,6 +75,20 @@ std::string ClosestName(const std::string& name,
 std::string RangeSuffix(const NumberRange& range, bool integer);
 // Whether `text` is well-formed UTF-8 (no overlong forms or surrogates).
 bool IsUtf8(std::string_view text);
+// The spellings the parsers above accept, scanned in linear time and
+// constant stack (std::regex overflows the stack on long input):
+//   IsDecimalLiteral   [-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?
+//   IsNonFiniteLiteral [-+]?\.?(inf|infinity)|\.?nan, any case
+//   IsIntegerLiteral   [-+]?[0-9]+
+//   IsYamlWord         true|false|null|yes|no|on|off|y|n|~, any case
+bool IsDecimalLiteral(std::string_view text);
+bool IsNonFiniteLiteral(std::string_view text);
+bool IsIntegerLiteral(std::string_view text);
+bool IsYamlWord(std::string_view text);
+// "10x10" (separator 'x'), "0/4" ('/'): two counts of 1 to `max_digits`
+// digits each around `separator`, and nothing else.
+bool ParseCountPair(std::string_view text, char separator,
+                    std::size_t max_digits, int* first, int* second);
 }  // namespace field_text
 
 namespace internal {
@@ -346,9 +370,17 @@ void FieldReader::ReadValue(const ConfigNode& node, const std::string& key,
     // The full unsigned range (seeds).
     const std::optional<std::uint64_t> u = field_text::ParseUnsigned(node);
     if (!u) {
-      FailExpected(
-          node, key,
-          f.expect.empty() ? "an integer >= 0" : std::string(f.expect));
+      const std::string expected =
+          f.expect.empty() ? "an integer >= 0" : std::string(f.expect);
+      if (node.IsPlainScalar() && field_text::IsIntegerLiteral(node.scalar) &&
+          node.scalar[0] != '-') {
+        Fail(node, key,
+             "must be " + expected +
+                 " that fits in 64 bits (at most "
+                 "18446744073709551615), got " +
+                 ShowNode(node));
+      }
+      FailExpected(node, key, expected);
     }
     *out = *u;
   } else if constexpr (internal::kIsInteger<T>) {

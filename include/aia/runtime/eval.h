@@ -32,6 +32,29 @@ Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed);
 // "10x10" -> (10, 10); throws InputError naming `flag` on anything else.
 std::pair<int, int> ParseSize(const std::string& text, const std::string& flag);
 
+// A generated scenario as a command makes it from its flags: a size (given
+// to `size_flag` as `size`), a seed and the overrides (--set).
+struct GeneratedSpec {
+  std::string size;  // as given, e.g. "10x10"
+  std::string size_flag = "--sizes";
+  int robots = 0;
+  int targets = 0;
+  std::uint64_t seed = 0;
+  std::vector<Override> overrides;
+};
+
+// The spec's scenario, read back and checked as a file's would be.
+// InputErrors name the flag behind them (NameTheFlag).
+Scenario ReadGenerated(const GeneratedSpec& spec);
+
+// An InputError about a generated scenario, which has no file, as one about
+// the command-line flag behind it: the size's flag when the size alone is
+// refused, else the first override that makes the scenario invalid, or
+// (when every read passes) its world fail to build. One that names a flag
+// already is thrown as it is.
+[[noreturn]] void NameTheFlag(const InputError& error,
+                              const GeneratedSpec& spec);
+
 // One world of the experiment.
 struct EvalInstance {
   std::string size;  // as given, e.g. "10x10"
@@ -40,7 +63,8 @@ struct EvalInstance {
   std::uint64_t seed = 0;
 };
 
-// Sizes in the given order, seeds seed_base .. seed_base + seeds - 1.
+// Sizes in the given order, seeds seed_base .. seed_base + seeds - 1;
+// InputError naming --seed-base when the last seed would pass 2^64 - 1.
 std::vector<EvalInstance> EnumerateInstances(
     const std::vector<std::string>& sizes, int seeds, std::uint64_t seed_base);
 
@@ -55,10 +79,14 @@ struct EvalSetup {
 
 // `sets` are --set flags: policy.<param> goes to every policy (the expert of
 // F* included) that declares the parameter, and is bad input if none does;
-// seed, robots.count and targets.count belong to the instances.
+// seed, robots.count and targets.count belong to the instances. The
+// overrides are checked, before any work, on the first instance of each
+// size of `instances` (on a 1x1 world at seed 0 when there are none); an
+// error names the flag at fault (NameTheFlag).
 EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
                         const std::vector<std::string>& sets,
-                        const PolicyRegistry& registry);
+                        const PolicyRegistry& registry,
+                        const std::vector<EvalInstance>& instances = {});
 
 // One row of runs.csv.
 struct EvalRow {
@@ -72,7 +100,11 @@ struct EvalRow {
   double wall_s = 0.0;
 };
 
-// The scenario of an instance: the generated one with the setup's overrides.
+// How an instance's scenario is generated (with "--sizes" as its flag).
+GeneratedSpec InstanceSpec(const EvalInstance& instance,
+                           const EvalSetup& setup);
+// The scenario of an instance: the generated one with the setup's overrides
+// (ReadGenerated).
 Scenario InstanceScenario(const EvalInstance& instance, const EvalSetup& setup);
 
 // Runs `policies` (a subset of setup.policies, by name; empty: all) on one

@@ -42,8 +42,8 @@ Scenario ParseScenario(const std::string& yaml, const std::string& file,
                        const std::vector<Override>& overrides = {});
 
 // A scenario (built in code, or loaded) with overrides applied: it is
-// written as a document, changed and read back, so that the overrides are
-// checked as in a file.
+// written as a document, changed and read back, so that it and the
+// overrides are checked as in a file (also when there are none).
 Scenario WithOverrides(const Scenario& scenario,
                        const std::vector<Override>& overrides);
 

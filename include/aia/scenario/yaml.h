@@ -14,9 +14,11 @@ namespace aia {
 // a document that expands (through aliases) to more than a million nodes.
 ConfigNode ParseYaml(const std::string& text, const std::string& file);
 
-// Parses the value of a command-line flag (`--set key=[1, 2]`): any YAML
-// value on one line; every node gets `flag` as its origin.
-ConfigNode ParseYamlValue(const std::string& text, const std::string& flag);
+// Parses the value of a command-line flag (`--set key=[1, 2]`): one YAML
+// value in UTF-8; every node gets `flag` as its origin. Errors name `key`
+// ("--set mission.eps"), or `flag` when it is empty.
+ConfigNode ParseYamlValue(const std::string& text, const std::string& flag,
+                          const std::string& key = "");
 
 // YAML text for a tree: block mappings, short lists and mappings of scalars
 // in flow style, strings quoted where YAML would read them otherwise.
