@@ -7,6 +7,7 @@
 #include <array>
 #include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -189,7 +190,16 @@ Action AddRenderCommand(CLI::App& app) {
     for (int i = 0; i < 4; ++i)
       if (cmd->count(names[i])) *targets[i] = (*ints)[i];
     render->progress = !*quiet;
+    // Ctrl-C: the mission ends after the current step; the video so far and
+    // the result files are written; exit 130.
+    aia::InstallInterruptHandler();
     aia::RenderMission(*render);
+    if (aia::Interrupted()) {
+      std::fprintf(stderr,
+                   "aia render: interrupted; wrote the video and files of the "
+                   "steps done\n");
+      return aia::kInterruptedExitCode;
+    }
     return 0;
   };
 }
@@ -437,10 +447,13 @@ Action AddTrainCommand(CLI::App& app) {
     if (!validate->empty()) {
       const aia::ValidationResult v =
           aia::Validate(*validate, o->data, o->val_share, o->seed);
-      std::printf(
-          "%s: %ld held-out samples: loss %.4f, accuracy %.4f, accuracy on "
-          "samples with useful work %.4f\n",
-          validate->c_str(), v.samples, v.loss, v.acc, v.acc_useful);
+      char useful[64] = "none of them with useful work";
+      if (!std::isnan(v.acc_useful))
+        std::snprintf(useful, sizeof useful,
+                      "accuracy on samples with useful work %.4f",
+                      v.acc_useful);
+      std::printf("%s: %ld held-out samples: loss %.4f, accuracy %.4f, %s\n",
+                  validate->c_str(), v.samples, v.loss, v.acc, useful);
       return 0;
     }
     const std::vector<aia::EpochLog> logs = aia::Train(*o);
@@ -448,11 +461,9 @@ Action AddTrainCommand(CLI::App& app) {
       const aia::EpochLog& e = logs.back();
       double seconds = 0.0;
       for (const aia::EpochLog& l : logs) seconds += l.seconds;
-      std::printf(
-          "[aia train] %s: %d epochs, val acc %.3f (useful %.3f), val loss "
-          "%.4f, %.0f s training; log %s\n",
-          o->out.c_str(), e.epoch, e.val_acc, e.val_acc_useful, e.val_loss,
-          seconds, aia::TrainLogPath(o->out).c_str());
+      std::printf("[aia train] %s: %d epochs, %s, %.0f s training; log %s\n",
+                  o->out.c_str(), e.epoch, aia::ValidationText(e).c_str(),
+                  seconds, aia::TrainLogPath(o->out).c_str());
     }
     return 0;
   };

@@ -22,7 +22,9 @@ def load(path):
         rows = list(csv.DictReader(f))
     if not rows:
         sys.exit("error: %s: no epochs logged" % path)
-    return {k: [float(r[k]) for r in rows] for k in rows[0]}
+    # Validation fields are empty when no world was held out (--val-share 0).
+    return {k: [float(r[k]) if r[k] != "" else float("nan") for r in rows]
+            for k in rows[0]}
 
 
 def main():

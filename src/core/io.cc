@@ -12,6 +12,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "aia/core/error.h"
+
 namespace aia {
 
 std::string ReadFile(const std::string& path, std::uintmax_t max_bytes) {
@@ -83,7 +85,17 @@ int RemoveStaleTemporaries(const std::string& dir, const std::string& prefix) {
     const std::size_t at = name.rfind(".tmp.");
     if (at == std::string::npos || name.compare(0, prefix.size(), prefix) != 0)
       continue;
-    const std::string pid = name.substr(at + 5);
+    std::string pid = name.substr(at + 5);
+    // NAME.tmp.PID.EXT (TemporaryPath with keep_extension): a short
+    // alphanumeric extension after the PID.
+    if (const std::size_t dot = pid.find('.'); dot != std::string::npos) {
+      const std::string ext = pid.substr(dot + 1);
+      if (ext.empty() || ext.size() > 8 ||
+          ext.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789") !=
+              std::string::npos)
+        continue;
+      pid.resize(dot);
+    }
     if (pid.empty() || pid.size() > 9 ||
         pid.find_first_not_of("0123456789") != std::string::npos)
       continue;
@@ -112,8 +124,34 @@ void CheckReplaceableFile(const std::string& path) {
                              "folder, device or pipe); give a file's path");
 }
 
+bool SameFile(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  return !a.empty() && !b.empty() && std::filesystem::equivalent(a, b, ec) &&
+         !ec;
+}
+
+void CheckNotAnInput(const std::string& output, const std::string& flag,
+                     const std::vector<InputFile>& inputs,
+                     const std::string& written) {
+  for (const InputFile& in : inputs)
+    if (SameFile(output, in.path))
+      throw InputError("command line", 0, flag,
+                       "'" + output + "'" +
+                           (written.empty() ? "" : " (" + written + ")") +
+                           " is " + in.what + "; choose another path");
+}
+
+std::string TemporaryPath(const std::string& path, bool keep_extension) {
+  const std::string pid = std::to_string(::getpid());
+  if (!keep_extension) return path + ".tmp." + pid;
+  const std::filesystem::path p(path);
+  return (p.parent_path() /
+          ("." + p.stem().string() + ".tmp." + pid + p.extension().string()))
+      .string();
+}
+
 AtomicFile::AtomicFile(const std::string& path)
-    : path_(path), tmp_(path + ".tmp." + std::to_string(::getpid())) {
+    : path_(path), tmp_(TemporaryPath(path)) {
   CheckReplaceableFile(path);
   file_ = std::fopen(tmp_.c_str(), "wb");
   if (file_ == nullptr)
@@ -129,13 +167,24 @@ AtomicFile::~AtomicFile() {
 }
 
 void AtomicFile::Commit() {
-  const bool ok = std::fflush(file_) == 0 && ::fsync(fileno(file_)) == 0;
-  std::fclose(file_);
+  // errno is taken where the first step fails (a full disk shows at the
+  // flush, the sync or the close of buffered data).
+  // A write that failed earlier (unchecked fwrite calls of the streaming
+  // writers) leaves the stream's error flag.
+  int err = 0;
+  errno = 0;
+  if (std::fflush(file_) != 0 || ::fsync(fileno(file_)) != 0) {
+    err = errno;
+  } else if (std::ferror(file_)) {
+    err = errno != 0 ? errno : EIO;
+  }
+  if (std::fclose(file_) != 0 && err == 0) err = errno;
   file_ = nullptr;
-  if (!ok || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+  if (err == 0 && std::rename(tmp_.c_str(), path_.c_str()) != 0) err = errno;
+  if (err != 0) {
     std::remove(tmp_.c_str());
     throw std::runtime_error("cannot write '" + path_ +
-                             "': " + std::strerror(errno));
+                             "': " + std::strerror(err));
   }
 }
 

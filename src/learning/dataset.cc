@@ -3,11 +3,14 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 
 #include "aia/core/error.h"
+#include "aia/core/io.h"
 
 namespace aia {
 namespace {
@@ -48,11 +51,46 @@ std::vector<double> Doubles(sqlite3_stmt* st, int col) {
   return v;
 }
 
+// A failed SQLite call, with its result code and the errno of the system
+// call that failed under it (0 when none did).
+class SqliteError : public std::runtime_error {
+ public:
+  SqliteError(sqlite3* db, int code)
+      : std::runtime_error(db ? sqlite3_errmsg(db) : sqlite3_errstr(code)),
+        code_(code),
+        errno_(db ? sqlite3_system_errno(db) : 0) {}
+  int code() const { return code_ & 0xff; }  // the primary result code
+  int system_errno() const { return errno_; }
+
+ private:
+  int code_, errno_;
+};
+
+// A write to `path` that the file system refused (a full disk, an I/O
+// error) as aia's I/O error, "cannot write 'PATH': <errno text>"; other
+// SQLite errors are passed on as they are.
+[[noreturn]] void ThrowWriteError(const SqliteError& e,
+                                  const std::string& path) {
+  const int code = e.code();
+  if (code != SQLITE_FULL && code != SQLITE_IOERR && code != SQLITE_CANTOPEN &&
+      code != SQLITE_READONLY)
+    throw e;
+  std::string why;
+  if (code == SQLITE_FULL) {
+    why = std::strerror(ENOSPC);  // SQLite's own "database or disk is full"
+  } else if (e.system_errno() != 0) {
+    why = std::strerror(e.system_errno());
+  } else {
+    why = sqlite3_errstr(code);
+  }
+  throw std::runtime_error("cannot write '" + path + "': " + why);
+}
+
 class Statement {
  public:
   Statement(sqlite3* db, const char* sql) : db_(db) {
-    if (sqlite3_prepare_v2(db, sql, -1, &st_, nullptr) != SQLITE_OK)
-      throw std::runtime_error(sqlite3_errmsg(db));
+    const int rc = sqlite3_prepare_v2(db, sql, -1, &st_, nullptr);
+    if (rc != SQLITE_OK) throw SqliteError(db, rc);
   }
   ~Statement() { sqlite3_finalize(st_); }
   Statement(const Statement&) = delete;
@@ -73,7 +111,7 @@ class Statement {
     const int rc = sqlite3_step(st_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    throw std::runtime_error(sqlite3_errmsg(db_));
+    throw SqliteError(db_, rc);
   }
   void Run() {
     Step();
@@ -87,22 +125,19 @@ class Statement {
 };
 
 void Exec(sqlite3* db, const char* sql) {
-  char* err = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
-    std::string what = err ? err : "unknown sqlite error";
-    sqlite3_free(err);
-    throw std::runtime_error(what);
-  }
+  const int rc = sqlite3_exec(db, sql, nullptr, nullptr, nullptr);
+  if (rc != SQLITE_OK) throw SqliteError(db, rc);
 }
 
 sqlite3* Open(const std::string& path, bool write) {
   sqlite3* db = nullptr;
   const int flags =
       write ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
-  if (sqlite3_open_v2(path.c_str(), &db, flags, nullptr) != SQLITE_OK) {
-    std::string what = db ? sqlite3_errmsg(db) : "cannot open";
+  if (const int rc = sqlite3_open_v2(path.c_str(), &db, flags, nullptr);
+      rc != SQLITE_OK) {
+    const SqliteError e(db, rc);
     sqlite3_close(db);
-    throw std::runtime_error(what);
+    throw e;
   }
   sqlite3_busy_timeout(db, 5000);
   return db;
@@ -116,7 +151,8 @@ std::string MetaValue(sqlite3* db, const std::string& key) {
   return t ? reinterpret_cast<const char*>(t) : "";
 }
 
-void ReadFile(const std::string& file, Dataset* out) {
+// Appends the file's worlds and samples; returns its recipe.
+std::string ReadFile(const std::string& file, Dataset* out) {
   sqlite3* db = Open(file, false);
   struct Closer {
     sqlite3* db;
@@ -213,6 +249,7 @@ void ReadFile(const std::string& file, Dataset* out) {
     }
     out->samples.push_back(std::move(d));
   }
+  return MetaValue(db, "recipe");
 }
 
 }  // namespace
@@ -224,7 +261,7 @@ struct DatasetWriter::Db {
 
 DatasetWriter::DatasetWriter(const std::string& path, const std::string& recipe,
                              const std::string& key)
-    : db_(std::make_unique<Db>()) {
+    : db_(std::make_unique<Db>()), path_(path) {
   try {
     db_->db = Open(path, true);
     Exec(db_->db, "PRAGMA synchronous = FULL");
@@ -256,8 +293,15 @@ DatasetWriter::DatasetWriter(const std::string& path, const std::string& recipe,
     }
     Statement st(db_->db, "SELECT episode FROM worlds");
     while (st.Step()) done_.insert(sqlite3_column_int64(st.get(), 0));
+  } catch (const SqliteError& e) {
+    // A full disk or an I/O error is exit 1 with the path; a file that is
+    // not a database is bad input.
+    if (e.code() == SQLITE_FULL || e.code() == SQLITE_IOERR)
+      ThrowWriteError(e, path);
+    throw InputError(path, 0, key, std::string("cannot open: ") + e.what());
+  } catch (const InputError&) {
+    throw;
   } catch (const std::runtime_error& e) {
-    if (dynamic_cast<const InputError*>(&e)) throw;
     throw InputError(path, 0, key, std::string("cannot open: ") + e.what());
   }
 }
@@ -267,7 +311,11 @@ DatasetWriter::~DatasetWriter() = default;
 void DatasetWriter::WriteEpisode(const DatasetWorld& w,
                                  const std::vector<DatasetSample>& samples) {
   sqlite3* db = db_->db;
-  Exec(db, "BEGIN IMMEDIATE");
+  try {
+    Exec(db, "BEGIN IMMEDIATE");
+  } catch (const SqliteError& e) {
+    ThrowWriteError(e, path_);
+  }
   try {
     {
       Statement st(db,
@@ -315,6 +363,9 @@ void DatasetWriter::WriteEpisode(const DatasetWorld& w,
       st.Run();
     }
     Exec(db, "COMMIT");
+  } catch (const SqliteError& e) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    ThrowWriteError(e, path_);
   } catch (...) {
     sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
@@ -322,10 +373,40 @@ void DatasetWriter::WriteEpisode(const DatasetWorld& w,
   done_.insert(w.episode);
 }
 
-Dataset ReadDataset(const std::vector<std::string>& paths,
-                    const std::string& key) {
-  Dataset out;
+int ShardCount(const std::string& path) {
+  const fs::path file(path);
+  const std::string name = file.filename().string();
+  const std::size_t of = name.find("-of-");
+  if (name.rfind("shard-", 0) != 0 || of == std::string::npos ||
+      name.size() < of + 4 + 7 ||
+      name.compare(name.size() - 7, 7, ".sqlite") != 0)
+    return 0;
+  const std::string n = name.substr(of + 4, name.size() - of - 4 - 7);
+  if (n.empty() || n.size() > 6 ||
+      n.find_first_not_of("0123456789") != std::string::npos)
+    return 0;
+  return std::stoi(n);
+}
+
+namespace {
+
+// The recipe without its shard count: shards of one recipe with different
+// counts hold the same episodes.
+std::string RecipeWithoutShards(std::string recipe) {
+  const std::size_t at = recipe.find(" shards=");
+  if (at == std::string::npos) return recipe;
+  std::size_t end = at + 8;
+  while (end < recipe.size() && recipe[end] != ' ') ++end;
+  return recipe.erase(at, end - at);
+}
+
+}  // namespace
+
+std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
+                                      const std::string& key) {
   if (paths.empty()) throw InputError("command line", 0, key, "is required");
+  std::vector<std::string> out;
+  std::vector<std::string> given;  // the path that named each file
   for (const std::string& p : paths) {
     std::vector<std::string> files;
     std::error_code ec;
@@ -336,19 +417,72 @@ Dataset ReadDataset(const std::vector<std::string>& paths,
       std::sort(files.begin(), files.end());
       if (files.empty())
         throw InputError(p, 0, key, "holds no dataset (*.sqlite) files");
+      // One shard set per folder: sets written with other --shard counts
+      // split the same episodes differently, and would be read together.
+      std::string first;
+      int first_n = 0;
+      for (const std::string& f : files) {
+        const int n = ShardCount(f);
+        if (n == 0) continue;
+        if (first_n == 0) {
+          first = f;
+          first_n = n;
+        } else if (n != first_n) {
+          throw InputError(
+              p, 0, key,
+              "mixes shard sets: '" + first + "' is one of " +
+                  std::to_string(first_n) + " shards, '" + f + "' one of " +
+                  std::to_string(n) +
+                  " (written with another --shard K/N); keep one set per "
+                  "folder");
+        }
+      }
     } else if (fs::is_regular_file(p, ec)) {
       files.push_back(p);
     } else {
       throw InputError(p, 0, key, "no such file or folder");
     }
+    // A file named twice (the same path, a link, or a file and its folder)
+    // would count every sample twice.
     for (const std::string& f : files) {
-      try {
-        ReadFile(f, &out);
-      } catch (const InputError&) {
-        throw;
-      } catch (const std::exception& e) {
-        throw InputError(f, 0, key, e.what());
-      }
+      for (std::size_t i = 0; i < out.size(); ++i)
+        if (SameFile(f, out[i]))
+          throw InputError(
+              "command line", 0, key,
+              "'" + f + "' is read twice (as '" + given[i] + "' and as '" + p +
+                  "'): its samples would count twice; give each dataset once");
+      out.push_back(f);
+      given.push_back(p);
+    }
+  }
+  return out;
+}
+
+Dataset ReadDataset(const std::vector<std::string>& paths,
+                    const std::string& key) {
+  Dataset out;
+  // (recipe without shard count, episode) -> file: the same episode from two
+  // files (a copied shard, shard sets of two counts) is refused.
+  std::map<std::pair<std::string, std::int64_t>, std::string> seen;
+  for (const std::string& f : DatasetFiles(paths, key)) {
+    const std::size_t first_world = out.worlds.size();
+    std::string recipe;
+    try {
+      recipe = RecipeWithoutShards(ReadFile(f, &out));
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InputError(f, 0, key, e.what());
+    }
+    for (std::size_t w = first_world; w < out.worlds.size(); ++w) {
+      const auto [it, fresh] =
+          seen.emplace(std::make_pair(recipe, out.worlds[w].episode), f);
+      if (!fresh)
+        throw InputError(f, 0, key,
+                         "episode " + std::to_string(out.worlds[w].episode) +
+                             " is also in '" + it->second +
+                             "' (the same recipe): its samples would count "
+                             "twice; read one copy");
     }
   }
   return out;

@@ -140,15 +140,29 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
       [](const NoParams&, const Scenario& s) {
         const bool given = !s.policy.model.empty();
         const std::string path = given ? s.policy.model : DefaultModelPath();
+        std::shared_ptr<const IgbNet> net;
         try {
-          return LoadModelOnce(
-              path, s.ErrorFile(), 0,
-              given ? "policy.model" : "policy.model (default)");
+          net =
+              LoadModelOnce(path, s.ErrorFile(), 0,
+                            given ? "policy.model" : "policy.model (default)");
         } catch (const InputError& e) {
           // At the key's line, or naming the flag that set it.
           if (given) throw s.ErrorAt("policy.model", e.message());
           throw;
         }
+        // A result's effective.yaml records the model's hash: repeating it
+        // with a retrained or replaced model would not repeat it.
+        if (s.policy.model_sha256 &&
+            *s.policy.model_sha256 != net->file().sha256)
+          throw s.ErrorAt(
+              "policy.model_sha256",
+              "the model file '" + net->file().path + "' has SHA-256 " +
+                  net->file().sha256.substr(0, 16) + "..., not the recorded " +
+                  s.policy.model_sha256->substr(0, 16) +
+                  "...: it was retrained or replaced since; restore that "
+                  "model, or delete the policy.model_sha256 line to run with "
+                  "this one");
+        return net;
       },
       [](const NoParams&, std::shared_ptr<const IgbNet> net) {
         return std::make_unique<IgbNetPolicy>(std::move(net));

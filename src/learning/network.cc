@@ -134,6 +134,8 @@ IgbNet::~IgbNet() = default;
 
 const NetworkConfig& IgbNet::config() const { return impl_->config; }
 
+const FileIdentity& IgbNet::file() const { return impl_->file; }
+
 std::int64_t IgbNet::NumParameters() const {
   std::int64_t n = 0;
   for (const auto& p : impl_->module->parameters()) n += p.numel();
@@ -151,13 +153,7 @@ constexpr std::uint32_t kMaxDeflatedEntry = 64u << 20;
 // corrupted code entries (found by fuzzing); a damaged file is refused
 // here instead. Torch stores tensors and pickles and deflates code: both are
 // unpacked and checked.
-std::string ZipDamage(const std::string& path) {
-  std::string b;
-  try {
-    b = ReadFile(path, std::uintmax_t{1} << 31);
-  } catch (const std::exception& e) {
-    return e.what();
-  }
+std::string ZipDamage(const std::string& b) {
   const auto u16 = [&](std::size_t at) -> std::uint32_t {
     return static_cast<unsigned char>(b[at]) |
            static_cast<unsigned char>(b[at + 1]) << 8;
@@ -272,12 +268,23 @@ std::unique_ptr<IgbNet> IgbNet::Load(const std::string& path,
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw fail("no such model file (train one with `aia train`)");
-  if (const std::string damage = ZipDamage(path); !damage.empty())
+  // Read once: the bytes checked, hashed and loaded are the same.
+  std::string bytes;
+  try {
+    bytes = ReadFile(path, std::uintmax_t{1} << 31);
+  } catch (const std::exception& e) {
+    throw fail(std::string("not a readable model: ") + e.what());
+  }
+  if (const std::string damage = ZipDamage(bytes); !damage.empty())
     throw fail("not a readable model: " + damage);
   std::unique_ptr<IgbNet> net(new IgbNet());
+  const std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+  net->impl_->file.path =
+      (ec ? std::filesystem::path(path) : absolute).lexically_normal().string();
+  net->impl_->file.sha256 = Sha256Hex(bytes);
   try {
     torch::serialize::InputArchive archive;
-    archive.load_from(path);
+    archive.load_from(bytes.data(), bytes.size());
     torch::Tensor meta;
     if (!archive.try_read(kMetaKey, meta, /*is_buffer=*/true))
       throw std::runtime_error("not an aia I-GBNet model (no metadata)");
@@ -331,10 +338,16 @@ void IgbNet::Save(const std::string& path) const {
 
 void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
                        const std::string& path) {
-  CheckReplaceableFile(path);
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  archive.save_to(tmp);
-  std::filesystem::rename(tmp, path);
+  // Serialized into memory, then written by aia's own atomic writer: a
+  // failed write (a full disk) is one "cannot write 'PATH': <errno text>"
+  // error and leaves no temporary file, where libtorch's own file writer
+  // aborts the process with a backtrace.
+  std::string bytes;
+  archive.save_to([&bytes](const void* data, std::size_t size) {
+    bytes.append(static_cast<const char*>(data), size);
+    return size;
+  });
+  WriteFileAtomic(path, bytes);
 }
 
 void IgbNet::Forward(const float* images, int batch, int height, int width,

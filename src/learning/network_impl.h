@@ -34,6 +34,7 @@ void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
 
 struct IgbNet::Impl {
   NetworkConfig config;
+  FileIdentity file;
   IgbNetModule module{nullptr};
 };
 

@@ -6,9 +6,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <sstream>
@@ -93,7 +95,7 @@ void MakeBatch(Corpus* c, const std::vector<int>& idx, std::size_t first, int n,
 }
 
 ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
-  ValidationResult r;
+  ValidationResult r;  // NaN: no held-out samples
   if (c->val.empty()) return r;
   module->eval();
   torch::NoGradGuard no_grad;
@@ -132,7 +134,8 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
   r.samples = static_cast<long>(c->val.size());
   r.loss = loss / r.samples;
   r.acc = static_cast<double>(right) / r.samples;
-  r.acc_useful = useful_n ? static_cast<double>(useful_right) / useful_n : 0.0;
+  r.acc_useful = useful_n ? static_cast<double>(useful_right) / useful_n
+                          : std::numeric_limits<double>::quiet_NaN();
   return r;
 }
 
@@ -163,12 +166,52 @@ constexpr const char* kLogHeader =
     "epoch,lr,train_loss,train_acc,val_loss,val_acc,val_acc_useful,samples,"
     "seconds\n";
 
+// A validation figure, or an empty field when there was none (NaN).
+std::string Field(double v) {
+  if (std::isnan(v)) return "";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6f", v);
+  return buf;
+}
+
 std::string LogLine(const EpochLog& e) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "%d,%.6g,%.6f,%.6f,%.6f,%.6f,%.6f,%ld,%.2f\n",
-                e.epoch, e.lr, e.train_loss, e.train_acc, e.val_loss, e.val_acc,
-                e.val_acc_useful, e.samples, e.seconds);
+  std::snprintf(buf, sizeof buf, "%d,%.6g,%.6f,%.6f,%s,%s,%s,%ld,%.2f\n",
+                e.epoch, e.lr, e.train_loss, e.train_acc,
+                Field(e.val_loss).c_str(), Field(e.val_acc).c_str(),
+                Field(e.val_acc_useful).c_str(), e.samples, e.seconds);
   return buf;
+}
+
+// The checkpoint's log, one epoch per line (NaN written as "nan", which
+// strtod reads back and operator>> does not).
+std::vector<EpochLog> ParseLog(const std::string& text) {
+  std::vector<EpochLog> logs;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    const char* p = line.c_str();
+    char* end = nullptr;
+    double v[9];
+    int n = 0;
+    for (; n < 9; ++n, p = end) {
+      v[n] = std::strtod(p, &end);
+      if (end == p) break;
+    }
+    if (n != 9) break;
+    EpochLog e;
+    e.epoch = static_cast<int>(v[0]);
+    e.lr = v[1];
+    e.train_loss = v[2];
+    e.train_acc = v[3];
+    e.val_loss = v[4];
+    e.val_acc = v[5];
+    e.val_acc_useful = v[6];
+    e.samples = static_cast<long>(v[7]);
+    e.seconds = v[8];
+    logs.push_back(e);
+  }
+  return logs;
 }
 
 void CheckOptions(const TrainOptions& o) {
@@ -204,6 +247,19 @@ void CheckOptions(const TrainOptions& o) {
 
 }  // namespace
 
+std::string ValidationText(const EpochLog& e) {
+  if (std::isnan(e.val_loss)) return "val: none";
+  char buf[96];
+  if (std::isnan(e.val_acc_useful)) {
+    std::snprintf(buf, sizeof buf, "val loss %.4f acc %.3f (useful: none)",
+                  e.val_loss, e.val_acc);
+  } else {
+    std::snprintf(buf, sizeof buf, "val loss %.4f acc %.3f (useful %.3f)",
+                  e.val_loss, e.val_acc, e.val_acc_useful);
+  }
+  return buf;
+}
+
 std::string CheckpointPath(const std::string& out) { return out + ".ckpt"; }
 
 std::string TrainLogPath(const std::string& out) {
@@ -212,6 +268,45 @@ std::string TrainLogPath(const std::string& out) {
     base.resize(base.size() - 3);
   return base + ".train.csv";
 }
+
+namespace {
+
+// No file written (the model, its checkpoint, its log) may be a file read:
+// a dataset file of --data, or the --init model. --init M --out M is
+// refused too: the first epoch would replace the starting point, so a run
+// started again (or one killed before its first checkpoint) would start
+// from a half-trained model.
+void CheckOutputsAreNotInputs(const TrainOptions& o) {
+  std::vector<InputFile> inputs;
+  for (const std::string& f : DatasetFiles(o.data, "--data"))
+    inputs.push_back({f, "a dataset file of --data"});
+  if (!o.init.empty())
+    inputs.push_back({o.init, "the model to start from (--init)"});
+  const std::pair<std::string, std::string> outputs[] = {
+      {o.out, ""},
+      {CheckpointPath(o.out), "the checkpoint written next to the model"},
+      {TrainLogPath(o.out), "the log written next to the model"}};
+  for (const auto& [path, written] : outputs) {
+    CheckNotAnInput(path, "--out", inputs, written);
+    // A new *.sqlite file in a --data folder would be read as data next
+    // time.
+    const std::filesystem::path p(path);
+    if (p.extension() != ".sqlite") continue;
+    for (const std::string& d : o.data) {
+      std::filesystem::path parent = p.parent_path();
+      if (parent.empty()) parent = ".";
+      std::error_code ec;
+      if (std::filesystem::is_directory(d, ec) && SameFile(parent.string(), d))
+        throw InputError("command line", 0, "--out",
+                         "'" + path + "'" +
+                             (written.empty() ? "" : " (" + written + ")") +
+                             " would be read as a dataset file of --data '" +
+                             d + "'; choose another path");
+    }
+  }
+}
+
+}  // namespace
 
 std::vector<EpochLog> Train(const TrainOptions& options) {
   TrainOptions o = options;
@@ -226,6 +321,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
   } else {
     net = std::make_unique<IgbNet>(o.network, o.seed);
   }
+  CheckOutputsAreNotInputs(o);
   IgbNetModule& module = net->impl().module;
   torch::optim::Adam optimizer(
       module->parameters(),
@@ -273,12 +369,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
       module->load(model_archive);
       optimizer.load(optim_archive);
       archive.read("log", t, true);
-      std::istringstream in(TensorString(t));
-      EpochLog e;
-      while (in >> e.epoch >> e.lr >> e.train_loss >> e.train_acc >>
-             e.val_loss >> e.val_acc >> e.val_acc_useful >> e.samples >>
-             e.seconds)
-        logs.push_back(e);
+      logs = ParseLog(TensorString(t));
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
@@ -408,11 +499,11 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
     WriteFileAtomic(TrainLogPath(o.out), csv);
     if (o.progress)
       std::fprintf(stderr,
-                   "%s[train] epoch %d/%d: loss %.4f acc %.3f | val loss %.4f "
-                   "acc %.3f (useful %.3f) | %.0f s, %.0f samples/s\n",
+                   "%s[train] epoch %d/%d: loss %.4f acc %.3f | %s | %.0f s, "
+                   "%.0f samples/s\n",
                    isatty(2) ? "\r" : "", e.epoch, o.epochs, e.train_loss,
-                   e.train_acc, e.val_loss, e.val_acc, e.val_acc_useful,
-                   e.seconds, e.samples / std::max(e.seconds, 1e-9));
+                   e.train_acc, ValidationText(e).c_str(), e.seconds,
+                   e.samples / std::max(e.seconds, 1e-9));
   }
   return logs;
 }
@@ -424,6 +515,12 @@ ValidationResult Validate(const std::string& model,
       IgbNet::Load(model, "command line", 0, "--validate");
   Corpus corpus =
       LoadCorpus(data, net->config().channels, val_share, seed, 1.0);
+  if (corpus.val.empty())
+    throw InputError("command line", 0, "--val-share",
+                     "holds out none of the " +
+                         std::to_string(corpus.data.worlds.size()) +
+                         " worlds of --data: nothing to validate on (a larger "
+                         "--val-share, or more worlds)");
   return Evaluate(net->impl().module, &corpus);
 }
 

@@ -1,11 +1,17 @@
 #include "aia/planning/sampling_tree.h"
 
+#include <sys/mman.h>
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <limits>
+#include <mutex>
+#include <new>
+#include <type_traits>
 
 #include "aia/core/check.h"
 #include "aia/estimation/filter.h"
@@ -77,6 +83,67 @@ double SamplingTree::BlockDetAfter(const double* packed, int k,
 // Moving targets' aims and fields are kept per span of this many depths (the
 // predicted mean at the span's middle), for at most kMaxBuckets spans.
 constexpr int kBucket = 4;
+// What a node keeps resident: its rows of the arena (reserved, so not
+// grown by copies) and its entries in levels_ and goals_ (std::vectors,
+// counted twice for their growth).
+double ResidentNodeBytes(int n, int stride) {
+  return 4.0 * n + 8.0 * stride + 36.0 + 16.0;
+}
+
+// Solves whose arena stays below this take no part of the budget (the
+// ordinary ones: Dec-SB's 300 iterations, the expert's default budget on
+// small teams); their memory is kept for the next solve.
+constexpr double kSmallTreeBytes = 32.0 * (1 << 20);
+
+// The process's budget of tree memory, kMaxTreeBytes for all the large
+// solves running at once. A solve takes all it may need before it starts
+// and holds nothing else meanwhile, and one solve never needs more than the
+// whole budget, so waiting cannot deadlock.
+class TreeMemory {
+ public:
+  static TreeMemory& Get() {
+    static TreeMemory memory;
+    return memory;
+  }
+  void Take(double bytes) {
+    std::unique_lock<std::mutex> lock(mu_);
+    ready_.wait(lock, [&] { return free_ >= bytes; });
+    free_ -= bytes;
+  }
+  void Give(double bytes) {
+    {
+      const std::lock_guard<std::mutex> lock(mu_);
+      free_ += bytes;
+    }
+    ready_.notify_all();
+  }
+
+ private:
+  std::mutex mu_;
+  std::condition_variable ready_;
+  double free_ = kMaxTreeBytes;
+};
+
+class TreeMemoryLease {
+ public:
+  explicit TreeMemoryLease(double bytes)
+      : bytes_(bytes > kSmallTreeBytes ? std::min(bytes, kMaxTreeBytes) : 0.0) {
+    if (bytes_ > 0.0) TreeMemory::Get().Take(bytes_);
+  }
+  ~TreeMemoryLease() {
+    if (bytes_ > 0.0) TreeMemory::Get().Give(bytes_);
+  }
+  TreeMemoryLease(const TreeMemoryLease&) = delete;
+  TreeMemoryLease& operator=(const TreeMemoryLease&) = delete;
+  bool large() const { return bytes_ > 0.0; }
+
+ private:
+  double bytes_;
+};
+
+// Blocks from this size on are mapped (ArenaAllocator).
+constexpr std::size_t kMappedBytes = std::size_t{1} << 20;
+
 constexpr int kMaxBuckets = 64;
 
 // The tours' legs are the tree's own fields, walked.
@@ -756,6 +823,34 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
     last_ = root;
   }
 
+  // The most nodes this solve can make from here: one per iteration (before
+  // a first goal and after it, all within node_cap_) and the idle rewrite's
+  // path. A solve that may need a large arena takes that much of the
+  // process's budget of tree memory first (waiting for other trees to
+  // finish if need be), reserves its arena at once (no copies as it grows)
+  // and gives both back at the end. Taken after the seeded rollouts, which
+  // mostly find a goal and so bound what is left by the anytime budget.
+  const double rewrite_cap =
+      !params.routing ? 0.0
+      : params.max_depth > 0
+          ? params.max_depth
+          : 2.0 * (lattice.nx() + lattice.ny()) * std::max(1, m_);
+  const double most_nodes =
+      std::min(
+          static_cast<double>(node_cap_),
+          static_cast<double>(parent_.size()) +
+              static_cast<double>(params.anytime) +
+              (best_ >= 0 ? 0.0 : static_cast<double>(params.max_iterations))) +
+      rewrite_cap;
+  const TreeMemoryLease lease(most_nodes * ResidentNodeBytes(n_, stride_));
+  if (lease.large()) {
+    const auto nodes = static_cast<std::size_t>(most_nodes);
+    pos_.reserve(nodes * n_);
+    info_.reserve(nodes * stride_);
+    for (auto* v : {&parent_, &depth_, &unloc_}) v->reserve(nodes);
+    for (auto* v : {&cost_, &det_sum_, &lower_}) v->reserve(nodes);
+  }
+
   long since_goal = 0;
   long& it = iteration_;
   while (best_ != root) {
@@ -845,10 +940,46 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
           sizeof(int) +
       (cost_.capacity() + det_sum_.capacity() + lower_.capacity()) *
           sizeof(double);
+  if (lease.large()) {  // the memory goes back to the kernel
+    const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+    release(pos_);
+    release(info_);
+    release(parent_);
+    release(depth_);
+    release(unloc_);
+    release(cost_);
+    release(det_sum_);
+    release(lower_);
+    release(levels_);
+    release(goals_);
+  }
   plan.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
           .count();
   return plan;
 }
+
+template <typename T>
+T* ArenaAllocator<T>::allocate(std::size_t n) {
+  const std::size_t bytes = n * sizeof(T);
+  if (bytes < kMappedBytes) return static_cast<T*>(::operator new(bytes));
+  void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE,
+                   MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+  if (p == MAP_FAILED) throw std::bad_alloc();
+  return static_cast<T*>(p);
+}
+
+template <typename T>
+void ArenaAllocator<T>::deallocate(T* p, std::size_t n) {
+  const std::size_t bytes = n * sizeof(T);
+  if (bytes < kMappedBytes) {
+    ::operator delete(p);
+  } else {
+    ::munmap(p, bytes);
+  }
+}
+
+template struct ArenaAllocator<int>;
+template struct ArenaAllocator<double>;
 
 }  // namespace aia

@@ -1,6 +1,11 @@
 #include "aia/render/video.h"
 
+#include <sys/statvfs.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <opencv2/videoio.hpp>
 #include <stdexcept>
@@ -10,14 +15,41 @@
 
 namespace aia {
 
+namespace {
+
+// Why the finished video at `file` is not whole (FFmpeg's writer reports no
+// errors: a full disk leaves a cut file without its index), or "".
+std::string VideoDamage(const std::string& file, int frames) {
+  cv::VideoCapture probe(file, cv::CAP_FFMPEG);
+  if (!probe.isOpened()) return "the encoder left an unreadable file";
+  const double n = probe.get(cv::CAP_PROP_FRAME_COUNT);
+  if (static_cast<int>(n) != frames)
+    return "the encoder wrote " + std::to_string(static_cast<long>(n)) +
+           " of " + std::to_string(frames) + " frames";
+  return "";
+}
+
+// Whether the file system of `dir` is (nearly) full: what cut the video
+// short, when the encoder does not say.
+bool NoSpaceLeft(const std::string& dir) {
+  struct statvfs st;
+  if (::statvfs(dir.empty() ? "." : dir.c_str(), &st) != 0) return false;
+  return static_cast<double>(st.f_bavail) * st.f_frsize < 1024.0 * 1024.0;
+}
+
+}  // namespace
+
 Mp4Writer::Mp4Writer(const std::string& path, int width, int height, double fps)
     : path_(path), width_(width), height_(height) {
   AIA_CHECK(width > 0 && height > 0 && fps > 0.0);
   CheckReplaceableFile(path);
-  const std::filesystem::path p(path);
-  // OpenCV picks the container from the extension: keep .mp4 last.
-  tmp_ =
-      (p.parent_path() / ("." + p.stem().string() + ".partial.mp4")).string();
+  // FFmpeg's own log lines (OpenCV passes them to stderr) are not aia's
+  // errors: aia checks the finished file and reports on one line. Set before
+  // OpenCV's FFmpeg backend starts; a user's own setting is kept.
+  ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", /*overwrite=*/0);
+  // OpenCV picks the container from the extension: keep .mp4 last
+  // (.STEM.tmp.PID.mp4, which a later job removes once PID is gone).
+  tmp_ = TemporaryPath(path, /*keep_extension=*/true);
   const cv::Size size(width, height);
   for (const char* fourcc : {"avc1", "mp4v"}) {
     writer_ = std::make_unique<cv::VideoWriter>();
@@ -52,12 +84,17 @@ void Mp4Writer::Commit() {
   AIA_CHECK(writer_ != nullptr);
   writer_->release();
   writer_.reset();
+  if (std::string damage = VideoDamage(tmp_, frames_); !damage.empty()) {
+    const std::string dir = std::filesystem::path(tmp_).parent_path().string();
+    if (NoSpaceLeft(dir)) damage = std::strerror(ENOSPC);
+    std::remove(tmp_.c_str());
+    throw std::runtime_error("cannot write '" + path_ + "': " + damage);
+  }
   std::error_code ec;
   std::filesystem::rename(tmp_, path_, ec);
   if (ec) {
     std::remove(tmp_.c_str());
-    throw std::runtime_error("cannot move the video to " + path_ + ": " +
-                             ec.message());
+    throw std::runtime_error("cannot write '" + path_ + "': " + ec.message());
   }
 }
 

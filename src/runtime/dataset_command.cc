@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -172,6 +173,22 @@ int RunDataset(const DatasetOptions& o) {
   MakeOutputDir(o.out, "--out");
   const std::string file = o.out + "/shard-" + std::to_string(o.shard) +
                            "-of-" + std::to_string(o.shards) + ".sqlite";
+  CheckNotAnInput(file, "--out", MissionInputs(base, acting.get()),
+                  "the shard written");
+  // One shard set per folder: `aia train --data` reads them all, and sets of
+  // two counts hold the same episodes.
+  {
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator(o.out, ec)) {
+      const int n = ShardCount(entry.path().string());
+      if (n != 0 && n != o.shards)
+        throw InputError("command line", 0, "--shard",
+                         o.out + " holds shards of a set of " +
+                             std::to_string(n) + " ('" + entry.path().string() +
+                             "'), not of " + std::to_string(o.shards) +
+                             ": use the same N, or another folder");
+    }
+  }
   // One writer per shard (the ranks of an mpirun share the folder): an
   // flock on the shard file itself, which SQLite's own (fcntl) locks leave
   // alone; an empty new file is an empty database to SQLite.

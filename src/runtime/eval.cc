@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <fstream>
 #include <limits>
@@ -90,8 +92,12 @@ std::set<std::string> DeclaredParams(const PolicyRegistry& registry,
   return out;
 }
 
+// Where a policy line names a learned policy's model file.
+constexpr const char* kModelMark = "; model ";
+
 // DIR/effective.yaml: the instances' scenario and each policy's parameters.
-// Policy lines read "#   NAME: {...}".
+// Policy lines read "#   NAME: {...}", and for a learned policy
+// "#   NAME: {...}; model PATH sha256 HEX".
 std::string EffectiveText(const EvalSetup& setup, const EvalInstance& first) {
   std::string text =
       "# aia eval: the scenario of every instance, overrides applied. Per\n"
@@ -99,8 +105,14 @@ std::string EffectiveText(const EvalSetup& setup, const EvalInstance& first) {
       "# seed (--sizes, --seeds, --seed-base); the expert gives F*, and each\n"
       "# policy runs with these parameters:\n";
   text += "#   expert (F*): " + ShowNode(setup.expert->Params(), 100000) + "\n";
-  for (const auto& p : setup.policies)
-    text += "#   " + p->name() + ": " + ShowNode(p->Params(), 100000) + "\n";
+  for (const auto& p : setup.policies) {
+    text += "#   " + p->name() + ": " + ShowNode(p->Params(), 100000);
+    // A learned policy's model by path and content: rows made with a
+    // retrained model are not resumed into.
+    if (const FileIdentity* model = p->model_file())
+      text += kModelMark + model->path + " sha256 " + model->sha256;
+    text += "\n";
+  }
   // The scenario of a 1x1 world at seed 0, as ever (an older folder's text
   // is compared with it), or of the first instance where overrides fit only
   // the sizes given (a robots.start of two robots).
@@ -153,8 +165,20 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
   if (old_body != new_body) return "the scenario differs (--set)";
   for (const auto& [name, params] : new_policies) {
     const auto it = old_policies.find(name);
-    if (it != old_policies.end() && it->second != params)
-      return name + "'s parameters differ";
+    if (it == old_policies.end() || it->second == params) continue;
+    const auto cut = [](const std::string& line) {
+      const std::size_t at = line.find(kModelMark);
+      return std::make_pair(line.substr(0, at),
+                            at == std::string::npos ? "" : line.substr(at));
+    };
+    const auto [old_params, old_model] = cut(it->second);
+    const auto [new_params, new_model] = cut(params);
+    if (old_params != new_params) return name + "'s parameters differ";
+    return name + "'s model file differs: " +
+           (old_model.empty()
+                ? std::string("the folder does not record which was used")
+                : "another file, or the same one retrained (its SHA-256 "
+                  "changed)");
   }
   return "";
 }
@@ -283,7 +307,8 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
     if (o.path == "policy.name")
       throw InputError("command line", 0, key,
                        "the evaluated policies are given by --policies");
-    if (o.path.rfind("policy.", 0) == 0 && o.path != "policy.model") {
+    if (o.path.rfind("policy.", 0) == 0 && o.path != "policy.model" &&
+        o.path != "policy.model_sha256") {
       policy_sets.push_back(o);
     } else {
       setup.overrides.push_back(o);
@@ -522,6 +547,23 @@ int RunEval(const EvalOptions& o) {
     throw InputError("command line", 0, "--out",
                      "an output folder is required");
   const PolicyRegistry registry = AllPolicies();
+  // A size or a policy listed twice would write every row twice, and each
+  // resume would drop both copies and run them again: refused.
+  for (std::size_t i = 0; i < o.sizes.size(); ++i) {
+    const auto size = ParseSize(o.sizes[i], "--sizes");
+    for (std::size_t j = 0; j < i; ++j)
+      if (ParseSize(o.sizes[j], "--sizes") == size)
+        throw InputError("command line", 0, "--sizes",
+                         o.sizes[i] == o.sizes[j]
+                             ? "'" + o.sizes[i] + "' is listed twice"
+                             : "'" + o.sizes[j] + "' and '" + o.sizes[i] +
+                                   "' are the same size");
+  }
+  for (std::size_t i = 0; i < o.policies.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (o.policies[i] == o.policies[j])
+        throw InputError("command line", 0, "--policies",
+                         "'" + o.policies[i] + "' is listed twice");
   // One process: Ctrl-C writes the rows done (below). Under mpirun the
   // launcher owns the signals.
   if (!Ranks::Get().distributed()) InstallInterruptHandler();
@@ -535,6 +577,16 @@ int RunEval(const EvalOptions& o) {
   if (instances.empty())
     throw InputError("command line", 0, "--sizes", "give at least one size");
   const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry, instances);
+  {  // No file written may be an input (a model, a map image).
+    std::vector<InputFile> inputs =
+        MissionInputs(InstanceScenario(instances.front(), setup), nullptr);
+    for (const auto& p : setup.policies)
+      for (const InputFile& f : MissionInputs(Scenario{}, p.get()))
+        inputs.push_back(f);
+    for (const char* name : {"runs.csv", "summary.csv", "effective.yaml"})
+      CheckNotAnInput(o.out_dir + "/" + name, "--out", inputs,
+                      "written into the output folder");
+  }
 
   // Under mpirun, rank 0 alone checks and rewrites the folder; then every
   // rank reads the rows already done and takes its share of the rest.
@@ -629,7 +681,9 @@ int RunEval(const EvalOptions& o) {
   int fd = -1;
   if (root) {
     fd = ::open(runs_path.c_str(), O_WRONLY | O_APPEND);
-    if (fd < 0) throw std::runtime_error("cannot append to " + runs_path);
+    if (fd < 0)
+      throw std::runtime_error("cannot write '" + runs_path +
+                               "': " + std::strerror(errno));
   }
   std::mutex mu;
   std::atomic<size_t> next{0};
@@ -647,7 +701,8 @@ int RunEval(const EvalOptions& o) {
     }
     if (::write(fd, line.data(), line.size()) !=
         static_cast<ssize_t>(line.size()))
-      throw std::runtime_error("cannot append to " + runs_path);
+      throw std::runtime_error("cannot write '" + runs_path + "': " +
+                               std::strerror(errno != 0 ? errno : ENOSPC));
     rows.push_back(row);
     ++finished;
     char buf[200];

@@ -131,7 +131,32 @@ PreparedMission PrepareMission(Scenario scenario,
 Scenario EffectiveScenario(const PreparedMission& mission) {
   Scenario s = mission.scenario;
   s.policy.params = mission.policy->Params();
+  // The model as loaded: where it was (the default resolved) and its
+  // content, so that a repeat refuses a retrained file.
+  if (const FileIdentity* model = mission.policy->model_file()) {
+    s.policy.model = model->path;
+    s.policy.model_sha256 = model->sha256;
+  }
   return s;
+}
+
+std::vector<InputFile> MissionInputs(const Scenario& scenario,
+                                     const PolicySpec* policy) {
+  std::vector<InputFile> in;
+  if (!scenario.file.empty())
+    in.push_back({scenario.file, "the input scenario"});
+  if (!scenario.workspace.obstacles.map.empty())
+    in.push_back({scenario.workspace.obstacles.map,
+                  "the scenario's map image (workspace.obstacles.map)"});
+  if (policy && policy->model_file())
+    in.push_back(
+        {policy->model_file()->path, "the policy's model file (policy.model)"});
+  return in;
+}
+
+std::vector<std::string> MissionFileNames() {
+  return {"summary.json", "trace.csv", "estimate.csv", "effective.yaml",
+          "diagnostics.json"};
 }
 
 MissionSummary Summarize(const Episode& e, double wall_s) {
@@ -267,6 +292,13 @@ MissionSummary RunMission(const RunOptions& options) {
   if (out.empty())
     out = "renders/" +
           std::filesystem::path(options.scenario_path).stem().string();
+  // The folder may hold the scenario itself (DIR/effective.yaml of an
+  // earlier run): none of the files written may be an input.
+  const std::vector<InputFile> inputs =
+      MissionInputs(mission.scenario, mission.policy.get());
+  for (const std::string& name : MissionFileNames())
+    CheckNotAnInput(out + "/" + name, "--out", inputs,
+                    "written into the output folder");
   MakeOutputDir(out, "--out", /*lock=*/true);
 
   MissionRunner runner(mission, out + "/", "aia run", options.progress);

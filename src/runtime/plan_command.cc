@@ -44,6 +44,20 @@ int RunPlanCommand(const PlanOptions& o) {
   overrides.policy = "expert";
   const PreparedMission mission = PrepareMission(
       LoadScenario(o.scenario_path, overrides.ToOverrides(registry)), registry);
+  // Neither the plan nor the scenario written next to it may replace an
+  // input; checked before the solve.
+  const std::filesystem::path out(o.out);
+  const std::string side =
+      o.out.empty()
+          ? ""
+          : (out.parent_path() / (out.stem().string() + ".effective.yaml"))
+                .string();
+  if (!o.out.empty()) {
+    const std::vector<InputFile> inputs =
+        MissionInputs(mission.scenario, mission.policy.get());
+    CheckNotAnInput(o.out, "--out", inputs);
+    CheckNotAnInput(side, "--out", inputs, "written next to the plan");
+  }
   // The expert's parameters as resolved (and range-checked) by the registry.
   const ExpertParams* params = ParamsOf<ExpertParams>(*mission.policy);
   AIA_CHECK(params != nullptr);
@@ -106,7 +120,6 @@ int RunPlanCommand(const PlanOptions& o) {
       steps.push_back({{"step", d}, {"robots", robots}, {"det", plan.det[d]}});
     }
     j["plan"] = steps;
-    const std::filesystem::path out(o.out);
     MakeOutputDir(out.parent_path().string(), "--out");
     WriteFileAtomic(
         o.out,
@@ -116,9 +129,6 @@ int RunPlanCommand(const PlanOptions& o) {
       effective.policy.params.Set(
           "anytime", ConfigNode::Scalar(std::to_string(*o.budget)));
     }
-    const std::string side =
-        (out.parent_path() / (out.stem().string() + ".effective.yaml"))
-            .string();
     WriteFileAtomic(side, EffectiveYaml(effective,
                                         "# The effective scenario of this plan "
                                         "(aia plan; the expert's parameters\n"

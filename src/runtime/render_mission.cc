@@ -9,6 +9,8 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <vector>
 
 #include "aia/core/error.h"
 #include "aia/core/io.h"
@@ -171,8 +173,14 @@ class VideoObserver : public StepObserver {
       char name[32];
       std::snprintf(name, sizeof(name), "frame_%06d.png", video_->frames());
       const std::string path = (fs::path(options_.frames_dir) / name).string();
-      if (!cv::imwrite(path, image))
-        throw InputError("command line", 0, "--frames", "cannot write " + path);
+      // Encoded in memory and written by aia's atomic writer: a failed write
+      // (a full disk) is "cannot write 'PATH': <errno text>", where
+      // cv::imwrite prints libpng's own message and returns false.
+      std::vector<unsigned char> png;
+      if (!cv::imencode(".png", image, png))
+        throw std::runtime_error("cannot write '" + path +
+                                 "': the PNG encoder failed");
+      WriteFileAtomic(path, std::string(png.begin(), png.end()));
       ++png_frames_;
     }
     video_->Write(image);
@@ -212,8 +220,22 @@ RenderResult RenderMission(const RenderOptions& options) {
       (out.parent_path() / (out.stem().string() + ".")).string();
 
   const PreparedMission mission = PrepareMission(scenario, registry);
+  // Neither the video nor the files next to it may replace an input (the
+  // scenario may be FILE.effective.yaml of an earlier render).
+  const std::vector<InputFile> inputs =
+      MissionInputs(mission.scenario, mission.policy.get());
+  CheckNotAnInput(options.out_file, "--out", inputs);
+  for (const std::string& name : MissionFileNames())
+    CheckNotAnInput(prefix + name, "--out", inputs,
+                    "written next to the video");
   MakeOutputDir(out.parent_path().string(), "--out");
   MakeOutputDir(options.frames_dir, "--frames");
+  // The folder is not locked (renders of other scenarios may share it), but
+  // what killed renders left there (a partial video, temporaries of their
+  // result files) is removed: only files whose process is gone.
+  RemoveStaleTemporaries(
+      out.parent_path().empty() ? "." : out.parent_path().string());
+  if (!options.frames_dir.empty()) RemoveStaleTemporaries(options.frames_dir);
   const int fps = scenario.render.fps;
   const int width = scenario.render.width, height = scenario.render.height;
 

@@ -6,6 +6,7 @@
 #include "aia/core/error.h"
 #include "aia/core/io.h"
 #include "aia/runtime/instance.h"
+#include "aia/runtime/mission.h"
 #include "aia/scenario/loader.h"
 #include "aia/world/mjcf.h"
 
@@ -25,13 +26,13 @@ int RunWorldCommand(const WorldOptions& o) {
   const PolicyRegistry registry = AllPolicies();
   const Scenario scenario =
       LoadScenario(o.scenario_path, o.overrides.ToOverrides(registry));
+  CheckNotAnInput(o.out, "--out", MissionInputs(scenario, nullptr));
   const std::shared_ptr<const Instance> instance = BuildInstance(scenario);
   const World& world = instance->world;
-  try {
-    WriteFileAtomic(o.out, MakeMjcf(world, scenario));
-  } catch (const std::exception& e) {
-    throw InputError("command line", 0, "--out", e.what());
-  }
+  // An unwritable folder is bad input (exit 2); a write that fails then (a
+  // full disk) is an I/O error (exit 1), as for every command.
+  MakeOutputDir(parent.string(), "--out");
+  WriteFileAtomic(o.out, MakeMjcf(world, scenario));
   std::printf(
       "wrote %s: %d robots, %d targets, %zu obstacle boxes (seed %llu); "
       "open it with: mujoco-simulate %s\n",

@@ -5,6 +5,8 @@
 #include <string>
 #include <system_error>
 
+#include "aia/core/hash.h"
+
 namespace aia {
 namespace {
 
@@ -41,6 +43,14 @@ void ObstaclesConfig::Validate(const FieldChecker& check) {
   }
   if (!fs::is_regular_file(map, ec))
     check.Fail(map, "map is not a file: " + map);
+}
+
+void PolicyConfig::Validate(const FieldChecker& check) {
+  if (model_sha256 && !IsSha256Hex(*model_sha256))
+    check.Fail(model_sha256,
+               "must be 64 lower-case hexadecimal digits (a SHA-256 as "
+               "sha256sum prints it), got '" +
+                   *model_sha256 + "'");
 }
 
 void WorkspaceConfig::Validate(const FieldChecker& check) {

@@ -1,8 +1,10 @@
 #include "aia/planning/expert.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <limits>
+#include <thread>
 
 #include "aia/core/error.h"
 #include "aia/estimation/filter.h"
@@ -329,6 +331,51 @@ TEST(DecSbTest, WithoutEdgesEachRobotPlansAlone) {
     alone.Decide(solo.Context(), &one);
     EXPECT_EQ(one[i], moves[i]) << "robot " << i;
   }
+}
+
+// Issue 19: Dec-SB at the largest horizon and budget its ranges allow,
+// three trees at once (as aia eval's threads run them), reached 3.6 GB
+// although a tree stops growing at 1 GiB. Large solves now share one
+// budget of kMaxTreeBytes for the process (they wait for each other; the
+// plans do not change), and give their memory back when done.
+TEST(DecSbTest, LargeTreesSolvedAtOnceShareTheProcesssBudget) {
+  const Team team(
+      "seed: 7\nrobots: {count: 10}\ntargets: {count: 10}\n"
+      "workspace: {obstacles: {random: {count: 30}}}\n");
+  DecSbParams huge;
+  huge.horizon = 1000;
+  huge.iterations = 10000000;
+  const SamplingParams params = huge.Sampling();
+  // The trees outlive their solves, as a policy's tree does.
+  std::vector<SamplingTree> trees(4);
+  const auto solve = [&](int robot, SamplingTree* tree) {
+    SamplingProblem problem;
+    problem.map = &team.world.map;
+    problem.sensor = &team.sensor;
+    problem.eps = team.scenario.mission.eps;
+    problem.start = {team.positions[robot]};
+    problem.active = {1};
+    problem.belief = &team.beliefs;
+    problem.belief_row = robot;
+    problem.extra_at_depth1.assign(team.world.NumTargets(), 0.0);
+    Rng rng(1, "policy.decsb", robot);
+    return tree->Solve(problem, params, rng);
+  };
+  std::vector<SamplingPlan> plans(3);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 3; ++t)
+    threads.emplace_back([&, t] { plans[t] = solve(t, &trees[t]); });
+  for (std::thread& t : threads) t.join();
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const double peak_mib = usage.ru_maxrss / 1024.0;  // Linux: KiB
+  for (const SamplingPlan& plan : plans)
+    EXPECT_GT(plan.nodes, 1000000);  // each tree did grow large
+  EXPECT_LT(peak_mib, 1024.0 + 128.0);
+  // Solved alone, the same plan.
+  const SamplingPlan alone = solve(1, &trees[3]);
+  EXPECT_EQ(alone.configs, plans[1].configs);
+  EXPECT_EQ(alone.nodes, plans[1].nodes);
 }
 
 }  // namespace

@@ -289,6 +289,76 @@ TEST_F(RenderCliTest, BadInputExitsWith2) {
       << r.err;
 }
 
+// Issue 19: a full disk printed libpng's own message for PNG frames, and a
+// cut video was renamed into place as if whole.
+TEST_F(RenderCliTest, FullDiskGivesOneClearError) {
+  const testing::SmallDisk disk("32k");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here";
+  const auto expect_no_space = [](const testing::CommandResult& r,
+                                  const std::string& file) {
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_EQ(r.err,
+              "error: cannot write '" + file + "': No space left on device\n");
+  };
+  auto r = RunAia({"render", scenario_, "--out", dir_ + "/v.mp4", "--frames",
+                   disk.dir() + "/f", "--quiet"});
+  expect_no_space(r, disk.dir() + "/f/frame_000001.png");
+  fs::remove_all(disk.dir() + "/f");
+  r = RunAia({"render", scenario_, "--out", disk.dir() + "/v.mp4", "--width",
+              "320", "--height", "240", "--hold", "10", "--quiet"});
+  expect_no_space(r, disk.dir() + "/v.mp4");
+  EXPECT_FALSE(fs::exists(disk.dir() + "/v.mp4"));
+  EXPECT_TRUE(testing::Temporaries(disk.dir()).empty());
+}
+
+// Issue 19: Ctrl-C ended a render without its summary and left the partial
+// video. Now it ends like `aia run`: after the current step, the video so
+// far finished, the summary marked, exit 130; what killed renders leave is
+// removed by the next render into the folder.
+TEST_F(RenderCliTest, CtrlCFinishesTheVideoSoFarAndStaleFilesAreRemoved) {
+  const std::string out = dir_ + "/int";
+  fs::create_directories(out);
+  const std::string render =
+      "'" + std::string(AIA_BINARY) + "' render '" +
+      testing::SourcePath("scenarios/default.yaml") +
+      "' --policy random --max-steps 1000000 --set "
+      "mission.stop_at_success=false --width 64 --height 48 --out '" +
+      out + "/v.mp4' --quiet";
+  // Once the mission runs (its trace is open), a signal; then the exit code.
+  const auto send = [&](const std::string& name) {
+    const std::string script =
+        render + " & pid=$!\nfor i in $(seq 600); do ls -a '" + out +
+        "' | grep -q 'trace.csv.tmp' && break; sleep 0.05; done\nsleep 1\n"
+        "kill -" +
+        name + " $pid; wait $pid; echo rc=$?\n";
+    return testing::RunCommand(
+        "bash -c '" + std::regex_replace(script, std::regex("'"), "'\\''") +
+        "'");
+  };
+  auto r = send("INT");
+  EXPECT_NE(r.out.find("rc=130"), std::string::npos) << r.out << r.err;
+  const auto summary = nlohmann::json::parse(ReadFile(out + "/v.summary.json"));
+  EXPECT_EQ(summary["interrupted"], true);
+  const int frames = summary["video"]["frames"];
+  EXPECT_GT(frames, 1);
+  EXPECT_EQ(FfProbe(out + "/v.mp4").frames, frames);
+  EXPECT_TRUE(testing::Temporaries(out).empty());
+
+  // SIGKILL leaves the partial video and the result files' temporaries;
+  // the next render into the folder removes them (their process is gone).
+  r = send("KILL");
+  EXPECT_NE(r.out.find("rc=137"), std::string::npos) << r.out << r.err;
+  EXPECT_FALSE(testing::Temporaries(out).empty());
+  bool partial_video = false;
+  for (const std::string& t : testing::Temporaries(out))
+    partial_video |=
+        std::regex_search(t, std::regex("/\\.v\\.tmp\\.[0-9]+\\.mp4$"));
+  EXPECT_TRUE(partial_video);
+  r = RunAia({"render", scenario_, "--out", out + "/other.mp4", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(testing::Temporaries(out).empty());
+}
+
 TEST(RenderCliHelpTest, HelpNamesTheFlags) {
   const auto r = RunAia({"render", "--help"});
   EXPECT_EQ(r.exit_code, 0);

@@ -380,6 +380,50 @@ TEST(CliTest, EffectiveYamlRepeatsTheMission) {
   fs::remove_all(b);
 }
 
+// Issue 19: "repeat exactly" must tell a retrained model from the one used:
+// effective.yaml records the model's absolute path and SHA-256, and a run
+// of it refuses a file whose content has changed since.
+TEST(CliTest, EffectiveYamlRecordsTheModelAndRefusesAnotherOne) {
+  const std::string dir = testing::MakeTempDir("aia_model_");
+  const std::string model = dir + "/model.pt";
+  fs::copy_file(SourcePath("models/igbnet_10x10.pt"), model);
+  auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--policy",
+                   "igbnet", "--set", "policy.model=" + model, "--max-steps",
+                   "3", "--out", dir + "/a", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto sha = testing::RunCommand("sha256sum '" + model + "'");
+  ASSERT_EQ(sha.exit_code, 0);
+  const std::string effective = ReadFile(dir + "/a/effective.yaml");
+  EXPECT_NE(effective.find("  model: " + model +
+                           "\n  model_sha256: " + sha.out.substr(0, 64) + "\n"),
+            std::string::npos)
+      << effective;
+  r = RunAia(
+      {"run", dir + "/a/effective.yaml", "--out", dir + "/b", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir + "/a/trace.csv"), ReadFile(dir + "/b/trace.csv"));
+  // The same path, retrained (here: another model copied over it).
+  fs::copy_file(SourcePath("models/igbnet.pt"), model,
+                fs::copy_options::overwrite_existing);
+  r = RunAia(
+      {"run", dir + "/a/effective.yaml", "--out", dir + "/c", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("effective.yaml:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(": policy.model_sha256: the model file '" + model +
+                       "' has SHA-256 "),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "/c/summary.json"));
+  // The default model is recorded by its resolved path.
+  r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--max-steps", "1",
+              "--out", dir + "/d", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(ReadFile(dir + "/d/effective.yaml").find("/models/igbnet.pt\n"),
+            std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(CliTest, SetWorksOnRunRenderAndPlan) {
   const std::string out = testing::MakeTempDir("aia_set_");
   auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--set",

@@ -402,5 +402,37 @@ TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
   std::filesystem::remove_all(dir);
 }
 
+// Issue 19: rows made with a model that was retrained since must not be
+// resumed into: effective.yaml records the model by path and SHA-256.
+TEST(EvalTest, ResumeRefusesARetrainedModel) {
+  const std::string dir = testing::MakeTempDir("aia_eval_");
+  const std::string model = dir + "/model.pt";
+  std::filesystem::copy_file(testing::SourcePath("models/igbnet_10x10.pt"),
+                             model);
+  const auto eval = [&]() {
+    return RunAia({"eval", "--sizes", "2x1", "--seeds", "1", "--policies",
+                   "igbnet", "--set", "policy.model=" + model, "--out",
+                   dir + "/e", "--quiet"});
+  };
+  ASSERT_EQ(eval().exit_code, 0);
+  const std::string effective = ReadFile(dir + "/e/effective.yaml");
+  const auto sha = testing::RunCommand("sha256sum '" + model + "'");
+  ASSERT_EQ(sha.exit_code, 0);
+  EXPECT_NE(effective.find("#   igbnet: {}; model " + model + " sha256 " +
+                           sha.out.substr(0, 64) + "\n"),
+            std::string::npos)
+      << effective;
+  EXPECT_EQ(eval().exit_code, 0);  // the same model resumes
+  std::filesystem::copy_file(testing::SourcePath("models/igbnet.pt"), model,
+                             std::filesystem::copy_options::overwrite_existing);
+  const auto r = eval();
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("igbnet's model file differs: another file, or the "
+                       "same one retrained"),
+            std::string::npos)
+      << r.err;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace aia

@@ -18,7 +18,9 @@ namespace fs = std::filesystem;
 using testing::ReadFile;
 using testing::RunAia;
 using testing::RunCommand;
+using testing::SmallDisk;
 using testing::SourcePath;
+using testing::Temporaries;
 
 std::string Quoted(const std::vector<std::string>& args) {
   std::string line = std::string("'") + AIA_BINARY + "'";
@@ -28,15 +30,6 @@ std::string Quoted(const std::vector<std::string>& args) {
 
 std::string WithoutWall(const std::string& csv) {
   return std::regex_replace(csv, std::regex(",[0-9.]+\n"), ",X\n");
-}
-
-// Files that AtomicFile writers leave when killed: NAME.tmp.PID.
-std::vector<std::string> Temporaries(const std::string& dir) {
-  std::vector<std::string> out;
-  for (const auto& e : fs::recursive_directory_iterator(dir))
-    if (e.path().filename().string().find(".tmp.") != std::string::npos)
-      out.push_back(e.path().string());
-  return out;
 }
 
 void ExpectOneErrorLine(const testing::CommandResult& r,
@@ -194,7 +187,8 @@ TEST(HardeningTest, SigkilledTrainingResumesToTheSameModel) {
         "--epochs", "30",        "--width",     "8",        "--window",
         "16",       "--threads", "1",           "--resume", "--quiet"};
   };
-  // The same file name in two folders: a model's archive is named after it.
+  // The same file name in two folders, so that the bytes compare whatever
+  // the archive's folder is named after.
   fs::create_directories(dir + "/a");
   fs::create_directories(dir + "/b");
   const auto whole = RunAia(args(dir + "/a/model.pt"));
@@ -234,24 +228,228 @@ TEST(HardeningTest, CtrlCEndsAMissionWithItsFilesWritten) {
   fs::remove_all(dir);
 }
 
+// The one line of an I/O failure: exit 1, the file under `dir` named.
+void ExpectNoSpaceError(const testing::CommandResult& r,
+                        const std::string& dir) {
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.err.rfind("error: cannot write '" + dir + "/", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("': No space left on device"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
 // A full disk: one clear line naming the file, no crash. Needs a small
 // tmpfs (root in a container that allows mounts); skipped elsewhere.
 TEST(HardeningTest, FullDiskGivesOneClearError) {
-  const std::string dir = testing::MakeTempDir("aia_full_");
-  if (RunCommand("mount -t tmpfs -o size=64k tmpfs '" + dir + "'").exit_code !=
-      0) {
-    fs::remove_all(dir);
-    GTEST_SKIP() << "cannot mount a tmpfs here";
-  }
+  const SmallDisk disk;
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here";
   const auto r =
       RunAia({"run", SourcePath("scenarios/default.yaml"), "--policy", "greedy",
-              "--out", dir + "/out", "--quiet"});
-  RunCommand("umount '" + dir + "'");
-  EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_EQ(r.err.rfind("error: cannot write '" + dir + "/out/", 0), 0u)
-      << r.err;
-  EXPECT_NE(r.err.find("No space left on device"), std::string::npos) << r.err;
-  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+              "--out", disk.dir() + "/out", "--quiet"});
+  ExpectNoSpaceError(r, disk.dir() + "/out");
+  EXPECT_TRUE(Temporaries(disk.dir()).empty());
+}
+
+// Issue 19: `aia train` aborted with libtorch's backtrace when the model
+// did not fit; `aia dataset` printed SQLite's "database or disk is full".
+TEST(HardeningTest, FullDiskOnTrainAndDatasetGivesOneClearError) {
+  const SmallDisk disk("8k");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here";
+  const std::string dir = testing::MakeTempDir("aia_fulltrain_");
+  ASSERT_EQ(
+      RunAia({"dataset", "--episodes", "6", "--size", "3x3", "--keep", "3",
+              "--first-seed", "500", "--out", dir + "/data", "--quiet"})
+          .exit_code,
+      0);
+  const auto train =
+      RunAia({"train", "--data", dir + "/data", "--out",
+              disk.dir() + "/m/model.pt", "--epochs", "1", "--width", "8",
+              "--window", "16", "--threads", "1", "--quiet"});
+  ExpectNoSpaceError(train, disk.dir() + "/m");
+  EXPECT_TRUE(Temporaries(disk.dir()).empty());
+  EXPECT_FALSE(fs::exists(disk.dir() + "/m/model.pt"));
+
+  // The disk fills as the database is made (8k), or in an episode's
+  // transaction (40k).
+  const SmallDisk larger("40k");
+  for (const std::string& d : {disk.dir() + "/d", larger.dir() + "/d"}) {
+    const auto data = RunAia({"dataset", "--episodes", "40", "--size", "6x6",
+                              "--keep", "10", "--out", d, "--quiet"});
+    ExpectNoSpaceError(data, d);
+    EXPECT_NE(data.err.find("/d/shard-0-of-1.sqlite'"), std::string::npos)
+        << data.err;
+    for (const auto& e : fs::directory_iterator(d))  // no journal left
+      EXPECT_EQ(e.path().filename(), "shard-0-of-1.sqlite");
+  }
+  fs::remove_all(dir);
+}
+
+// Issue 19: an output that is an input would silently replace it. Refused
+// before any work, through links and other spellings too; the input is
+// left as it was.
+TEST(HardeningTest, OutputThatIsAnInputIsRefused) {
+  const std::string dir = testing::MakeTempDir("aia_inout_");
+  const std::string yaml = dir + "/x.yaml";
+  fs::copy_file(SourcePath("scenarios/default.yaml"), yaml);
+  const std::string text = ReadFile(yaml);
+  fs::create_symlink(yaml, dir + "/link.yaml");
+  const auto refused = [&](const std::vector<std::string>& args,
+                           const std::string& message) {
+    const auto r = RunAia(args);
+    ExpectOneErrorLine(r, message);
+    EXPECT_EQ(r.err.rfind("error: command line: --out: '", 0), 0u) << r.err;
+    EXPECT_EQ(ReadFile(yaml), text) << args[0];
+  };
+  const std::string input = "' is the input scenario; choose another path";
+  refused({"plan", yaml, "--out", yaml}, input);
+  refused({"plan", yaml, "--out", dir + "/link.yaml"}, input);
+  refused({"world", yaml, "--out", dir + "/./x.yaml"}, input);
+  refused({"world", dir + "/link.yaml", "--out", yaml}, input);
+  // Files written next to the output: plan's FILE.effective.yaml, render's
+  // FILE.effective.yaml and the files of `aia run` in its folder.
+  fs::copy_file(yaml, dir + "/p.effective.yaml");
+  refused({"plan", dir + "/p.effective.yaml", "--out", dir + "/p.json"},
+          "p.effective.yaml' (written next to the plan) is the input scenario");
+  refused(
+      {"render", dir + "/p.effective.yaml", "--out", dir + "/p.mp4", "--quiet"},
+      "p.effective.yaml' (written next to the video) is the input "
+      "scenario");
+  fs::create_directories(dir + "/run");
+  fs::copy_file(yaml, dir + "/run/effective.yaml");
+  refused(
+      {"run", dir + "/run/effective.yaml", "--out", dir + "/run", "--quiet"},
+      "effective.yaml' (written into the output folder) is the input "
+      "scenario");
+  EXPECT_FALSE(fs::exists(dir + "/run/summary.json"));
+  EXPECT_FALSE(fs::exists(dir + "/p.json"));
+
+  // Training: a dataset file, a new *.sqlite in a data folder, --init.
+  ASSERT_EQ(
+      RunAia({"dataset", "--episodes", "6", "--size", "3x3", "--keep", "3",
+              "--first-seed", "500", "--out", dir + "/data", "--quiet"})
+          .exit_code,
+      0);
+  const std::string shard = dir + "/data/shard-0-of-1.sqlite";
+  const std::string data = ReadFile(shard);
+  const std::vector<std::string> tiny = {"--epochs",  "1",        "--width",
+                                         "8",         "--window", "16",
+                                         "--threads", "1",        "--quiet"};
+  const auto train = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), "train");
+    args.insert(args.end(), tiny.begin(), tiny.end());
+    return RunAia(args);
+  };
+  auto r = train({"--data", dir + "/data", "--out", shard});
+  ExpectOneErrorLine(r, "' is a dataset file of --data; choose another path");
+  r = train(
+      {"--data", shard, "--out", dir + "/data/../data/shard-0-of-1.sqlite"});
+  ExpectOneErrorLine(r, "is a dataset file of --data");
+  r = train({"--data", dir + "/data", "--out", dir + "/data/model.sqlite"});
+  ExpectOneErrorLine(r, "would be read as a dataset file of --data");
+  EXPECT_TRUE(ReadFile(shard) == data);
+  ASSERT_EQ(train({"--data", dir + "/data", "--out", dir + "/m.pt"}).exit_code,
+            0);
+  const std::string model = ReadFile(dir + "/m.pt");
+  r = train({"--data", dir + "/data", "--init", dir + "/m.pt", "--out",
+             dir + "/m.pt"});
+  ExpectOneErrorLine(r, "'" + dir +
+                            "/m.pt' is the model to start from (--init); "
+                            "choose another path");
+  EXPECT_TRUE(ReadFile(dir + "/m.pt") == model);
+  fs::remove_all(dir);
+}
+
+// Issue 19: datasets read twice or mixed shard sets counted samples twice.
+TEST(HardeningTest, DatasetsReadTwiceOrMixedShardSetsAreRefused) {
+  const std::string dir = testing::MakeTempDir("aia_dup_");
+  const auto dataset = [&](const std::string& out, const std::string& shard) {
+    return RunAia({"dataset", "--episodes", "6", "--size", "3x3", "--keep", "3",
+                   "--first-seed", "500", "--shard", shard, "--out", out,
+                   "--quiet"});
+  };
+  ASSERT_EQ(dataset(dir + "/d", "0/1").exit_code, 0);
+  const std::string shard = dir + "/d/shard-0-of-1.sqlite";
+  const auto train = [&](const std::vector<std::string>& data) {
+    std::vector<std::string> args = {"train"};
+    for (const std::string& d : data) args.insert(args.end(), {"--data", d});
+    args.insert(args.end(), {"--out", dir + "/m.pt", "--epochs", "1", "--width",
+                             "8", "--window", "16", "--quiet"});
+    return RunAia(args);
+  };
+  ExpectOneErrorLine(train({dir + "/d", dir + "/d"}),
+                     "is read twice (as '" + dir + "/d' and as '" + dir +
+                         "/d'): its samples would count twice");
+  ExpectOneErrorLine(train({dir + "/d", shard}), "is read twice");
+  ExpectOneErrorLine(train({shard, dir + "/d/../d/shard-0-of-1.sqlite"}),
+                     "is read twice");
+  // A copy of the same shard elsewhere holds the same episodes.
+  fs::create_directories(dir + "/copy");
+  fs::copy_file(shard, dir + "/copy/shard-0-of-1.sqlite");
+  ExpectOneErrorLine(train({dir + "/d", dir + "/copy"}),
+                     "is also in '" + shard + "' (the same recipe)");
+  // `aia dataset` refuses a second shard count in a folder...
+  ExpectOneErrorLine(dataset(dir + "/d", "0/2"),
+                     "--shard: " + dir + "/d holds shards of a set of 1");
+  // ... and `aia train` a folder that got one anyway.
+  ASSERT_EQ(dataset(dir + "/two", "1/2").exit_code, 0);
+  fs::copy_file(dir + "/two/shard-1-of-2.sqlite",
+                dir + "/d/shard-1-of-2.sqlite");
+  ExpectOneErrorLine(train({dir + "/d"}),
+                     "mixes shard sets: '" + shard + "' is one of 1 shards, '" +
+                         dir + "/d/shard-1-of-2.sqlite' one of 2");
+  fs::remove_all(dir);
+}
+
+// Issue 19: a policy or size listed twice wrote duplicate rows, which every
+// resume dropped and ran again.
+TEST(HardeningTest, EvalRefusesAPolicyOrASizeListedTwice) {
+  const std::string dir = testing::MakeTempDir("aia_evaldup_");
+  const auto eval = [&](const std::string& sizes, const std::string& policies) {
+    return RunAia({"eval", "--sizes", sizes, "--seeds", "1", "--policies",
+                   policies, "--out", dir + "/e", "--quiet"});
+  };
+  ExpectOneErrorLine(eval("2x2", "random,greedy,random"),
+                     "error: command line: --policies: 'random' is listed "
+                     "twice");
+  ExpectOneErrorLine(eval("2x2,3x3,2x2", "random"),
+                     "error: command line: --sizes: '2x2' is listed twice");
+  ExpectOneErrorLine(eval("2x2,02x2", "random"),
+                     "--sizes: '2x2' and '02x2' are the same size");
+  EXPECT_FALSE(fs::exists(dir + "/e/runs.csv"));
+  fs::remove_all(dir);
+}
+
+// Issue 19: training without held-out worlds printed "val acc 0.000".
+TEST(HardeningTest, TrainingWithoutValidationSaysSo) {
+  const std::string dir = testing::MakeTempDir("aia_noval_");
+  ASSERT_EQ(
+      RunAia({"dataset", "--episodes", "6", "--size", "3x3", "--keep", "3",
+              "--first-seed", "500", "--out", dir + "/data", "--quiet"})
+          .exit_code,
+      0);
+  const auto train = [&]() {
+    return RunAia({"train", "--data", dir + "/data", "--out", dir + "/m.pt",
+                   "--val-share", "0", "--epochs", "2", "--width", "8",
+                   "--window", "16", "--threads", "1", "--resume"});
+  };
+  auto r = train();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("| val: none |"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("2 epochs, val: none,"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("val acc"), std::string::npos) << r.out;
+  // A resume of the finished run reads the log back from the checkpoint.
+  r = train();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 epochs, val: none,"), std::string::npos) << r.out;
+  // The log's validation fields are empty.
+  const std::string log = ReadFile(dir + "/m.train.csv");
+  EXPECT_TRUE(std::regex_search(
+      log, std::regex("\n1,[^,]+,[^,]+,[^,]+,,,,[0-9]+,[0-9.]+\n2,[^,]+,"
+                      "[^,]+,[^,]+,,,,[0-9]+,[0-9.]+\n$")))
+      << log;
+  r = RunAia({"train", "--data", dir + "/data", "--validate", dir + "/m.pt",
+              "--val-share", "0"});
+  ExpectOneErrorLine(r, "--val-share: holds out none of the 6 worlds");
   fs::remove_all(dir);
 }
 

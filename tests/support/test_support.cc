@@ -63,6 +63,28 @@ CommandResult RunCommand(const std::string& command_line) {
   return r;
 }
 
+SmallDisk::SmallDisk(const std::string& size) : dir_(MakeTempDir("aia_full_")) {
+  mounted_ =
+      RunCommand("mount -t tmpfs -o size=" + size + " tmpfs " + Quote(dir_))
+          .exit_code == 0;
+}
+
+SmallDisk::~SmallDisk() {
+  if (mounted_) RunCommand("umount " + Quote(dir_));
+  std::error_code ec;
+  std::filesystem::remove_all(dir_, ec);
+}
+
+std::vector<std::string> Temporaries(const std::string& dir) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (std::filesystem::recursive_directory_iterator it(dir, ec), end;
+       !ec && it != end; it.increment(ec))
+    if (it->path().filename().string().find(".tmp.") != std::string::npos)
+      out.push_back(it->path().string());
+  return out;
+}
+
 CommandResult RunAia(const std::vector<std::string>& args) {
   std::string cmd = Quote(AIA_BINARY);
   for (const auto& a : args) cmd += " " + Quote(a);

@@ -32,6 +32,27 @@ CommandResult RunCommand(const std::string& command_line);
 
 std::string ReadFile(const std::string& path);
 
+// A small tmpfs on a fresh folder, for full-disk tests: mounted when the
+// tests run as root in a container that allows mounts (mounted() tells;
+// skip the test otherwise); unmounted and removed when destroyed.
+class SmallDisk {
+ public:
+  explicit SmallDisk(const std::string& size = "64k");
+  ~SmallDisk();
+  SmallDisk(const SmallDisk&) = delete;
+  SmallDisk& operator=(const SmallDisk&) = delete;
+  bool mounted() const { return mounted_; }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+  bool mounted_ = false;
+};
+
+// Files that aia's writers leave when killed or failed: NAME.tmp.PID and
+// .NAME.tmp.PID.EXT, anywhere under `dir`.
+std::vector<std::string> Temporaries(const std::string& dir);
+
 }  // namespace aia::testing
 
 #endif  // AIA_TESTS_SUPPORT_TEST_SUPPORT_H_

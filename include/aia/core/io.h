@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace aia {
 
@@ -37,9 +38,14 @@ class FileLock {
   int fd_ = -1;
 };
 
-// Removes the leftovers of AtomicFile writers that were killed: files
-// `NAME.tmp.PID` in `dir`, NAME starting with `prefix`, whose process PID
-// is gone. Returns how many were removed.
+// Where this process writes `path` before renaming it into place:
+// `PATH.tmp.PID`, or, with `keep_extension`, `DIR/.STEM.tmp.PID.EXT` for
+// writers that choose the format by the extension (a video's container).
+std::string TemporaryPath(const std::string& path, bool keep_extension = false);
+
+// Removes the leftovers of writers that were killed: files `NAME.tmp.PID`
+// and `NAME.tmp.PID.EXT` (TemporaryPath) in `dir`, NAME starting with
+// `prefix`, whose process PID is gone. Returns how many were removed.
 int RemoveStaleTemporaries(const std::string& dir,
                            const std::string& prefix = "");
 
@@ -47,6 +53,25 @@ int RemoveStaleTemporaries(const std::string& dir,
 // and is not a regular file (after links): renaming a finished file onto it
 // would replace a folder, a device such as /dev/null, or a pipe.
 void CheckReplaceableFile(const std::string& path);
+
+// Whether `a` and `b` name one existing file (std::filesystem::equivalent:
+// through symbolic and hard links, `./` and `..`).
+bool SameFile(const std::string& a, const std::string& b);
+
+// A file a command reads, for the check that no output replaces it.
+struct InputFile {
+  std::string path;
+  std::string what;  // "the input scenario", "the model (--init)", ...
+};
+
+// Throws InputError("command line", 0, flag, "'OUT' is WHAT; choose another
+// path") when `output` is one of `inputs` (SameFile): writing it would
+// replace an input. `written`, when not empty, says how the output comes
+// from the flag ("written next to the video"). Outputs that do not exist
+// yet are no input.
+void CheckNotAnInput(const std::string& output, const std::string& flag,
+                     const std::vector<InputFile>& inputs,
+                     const std::string& written = "");
 
 // A file written through a temporary name and renamed into place by Commit().
 // The path must be new or a regular file (CheckReplaceableFile).

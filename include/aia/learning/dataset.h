@@ -69,19 +69,34 @@ class DatasetWriter {
 
   // Episodes already written.
   const std::set<std::int64_t>& done() const { return done_; }
-  // The world and its samples, in one transaction.
+  // The world and its samples, in one transaction. A write the file system
+  // refuses (a full disk) throws std::runtime_error("cannot write 'PATH':
+  // <errno text>").
   void WriteEpisode(const DatasetWorld& world,
                     const std::vector<DatasetSample>& samples);
 
  private:
   struct Db;
   std::unique_ptr<Db> db_;
+  std::string path_;
   std::set<std::int64_t> done_;
 };
 
-// Reads every `*.sqlite` file of each folder (or each file given), sorted by
-// name. A missing folder, an empty one, or a file that is not a dataset of
-// this format is an InputError naming `key`.
+// N of a shard file named "shard-K-of-N.sqlite" (aia dataset --shard K/N),
+// 0 for any other name.
+int ShardCount(const std::string& path);
+
+// The files `paths` name: each file given, and every `*.sqlite` file of
+// each folder, sorted by name. InputError naming `key` for a missing path, a
+// folder without dataset files, a folder that mixes shard sets of different
+// counts (shard-K-of-N.sqlite with two N), and a file read twice (given
+// twice, through a link, or as a file and within its folder).
+std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
+                                      const std::string& key);
+
+// Reads DatasetFiles(paths, key). A file that is not a dataset of this
+// format, or an episode found in two files with the same recipe (a copy;
+// shard sets of two counts), is an InputError naming `key`.
 Dataset ReadDataset(const std::vector<std::string>& paths,
                     const std::string& key);
 

@@ -12,6 +12,7 @@
 #include <memory>
 #include <string>
 
+#include "aia/core/hash.h"
 #include "aia/learning/channels.h"
 
 namespace aia {
@@ -49,6 +50,9 @@ class IgbNet {
   void Save(const std::string& path) const;
 
   const NetworkConfig& config() const;
+  // The file a loaded model was read from: its absolute path and the
+  // SHA-256 of the bytes read (empty for a network made in memory).
+  const FileIdentity& file() const;
   // Inference (evaluation mode, no gradients; safe from several threads):
   // `images` holds `batch` images of kNumChannels x height x width floats;
   // writes batch x 4 logits.

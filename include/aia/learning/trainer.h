@@ -7,6 +7,7 @@
 #define AIA_LEARNING_TRAINER_H_
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -41,11 +42,17 @@ struct EpochLog {
   int epoch = 0;    // 1-based
   double lr = 0.0;  // at the epoch's end
   double train_loss = 0.0, train_acc = 0.0;
+  // NaN when no world was held out (--val-share 0, or too few worlds): an
+  // empty field in the CSV log, "val: none" in the progress lines.
   double val_loss = 0.0, val_acc = 0.0;
   double val_acc_useful = 0.0;  // on the validation samples with useful work
+                                // (NaN: none of them had useful work)
   long samples = 0;             // training samples seen in the epoch
   double seconds = 0.0;         // wall time of the epoch
 };
+
+// "val loss L acc A (useful U)", or "val: none" without validation samples.
+std::string ValidationText(const EpochLog& e);
 
 // Where the checkpoint and the log go: OUT.ckpt and OUT minus ".pt" plus
 // ".train.csv".
@@ -59,7 +66,10 @@ std::vector<EpochLog> Train(const TrainOptions& options);
 // The validation accuracy of a saved model on a dataset's held-out worlds
 // (the same split as Train with `val_share` and `seed`), for comparisons.
 struct ValidationResult {
-  double loss = 0.0, acc = 0.0, acc_useful = 0.0;
+  // NaN without held-out samples (acc_useful: without useful ones).
+  double loss = std::numeric_limits<double>::quiet_NaN();
+  double acc = std::numeric_limits<double>::quiet_NaN();
+  double acc_useful = std::numeric_limits<double>::quiet_NaN();
   long samples = 0;
 };
 ValidationResult Validate(const std::string& model,

@@ -15,10 +15,12 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "aia/core/field_io.h"
+#include "aia/core/hash.h"
 #include "aia/planning/policy.h"
 #include "aia/scenario/config.h"
 
@@ -46,10 +48,17 @@ class PolicySpec {
   virtual std::unique_ptr<Policy> Create() const = 0;
   // Every parameter with its value, defaults included (for effective.yaml).
   virtual ConfigNode Params() const = 0;
+  // The file a learned policy's model was loaded from (its absolute path and
+  // SHA-256), recorded in effective.yaml; nullptr for other policies.
+  const FileIdentity* model_file() const {
+    return model_file_.path.empty() ? nullptr : &model_file_;
+  }
+  void set_model_file(FileIdentity file) { model_file_ = std::move(file); }
 
  private:
   std::string name_;
   bool centralized_;
+  FileIdentity model_file_;
 };
 
 // A policy without parameters declares this.
@@ -115,6 +124,15 @@ PolicyRegistry BuiltinPolicies();
 
 namespace internal {
 
+// Whether a resource says which file it was loaded from (`file()`).
+template <typename R, typename = void>
+struct HasFileIdentity : std::false_type {};
+template <typename R>
+struct HasFileIdentity<
+    R, std::enable_if_t<std::is_same_v<
+           decltype(std::declval<const R&>().file()), const FileIdentity&>>>
+    : std::true_type {};
+
 template <typename P>
 class TypedPolicySpec : public PolicySpec {
  public:
@@ -179,9 +197,12 @@ void PolicyRegistry::Add(const std::string& name,
                make](const Scenario& s) -> std::shared_ptr<const PolicySpec> {
     const Params params = ReadParams<Params>(name, s);
     std::shared_ptr<const Resource> resource = load(params, s);
-    return std::make_shared<internal::TypedPolicySpec<Params>>(
+    auto spec = std::make_shared<internal::TypedPolicySpec<Params>>(
         name, centralized, params,
         [make, resource](const Params& p) { return make(p, resource); });
+    if constexpr (internal::HasFileIdentity<Resource>::value)
+      spec->set_model_file(resource->file());
+    return spec;
   };
   Put(std::move(e));
 }

@@ -85,8 +85,36 @@ struct SamplingParams {
 };
 
 // A tree stops growing before its nodes would take more memory than this,
-// whatever SamplingParams::max_nodes says.
+// whatever SamplingParams::max_nodes says. It is also the budget of all the
+// trees of a process together (several threads of `aia eval`, Dec-SB's
+// trees beside the expert's): a solve that may need a large arena waits
+// until the trees solving at the same time leave it room (docs/design.md,
+// Policies). Waiting changes when a plan is made, never which plan.
 inline constexpr double kMaxTreeBytes = 1.0 * (1L << 30);
+
+// The tree's arena: large blocks are mapped from the kernel and returned to
+// it when freed, so that a finished large solve gives its memory back
+// whatever the process's malloc keeps (jemalloc in build/aia keeps freed
+// pages), and only the pages a tree fills are resident.
+template <typename T>
+struct ArenaAllocator {
+  using value_type = T;
+  ArenaAllocator() = default;
+  template <typename U>
+  ArenaAllocator(const ArenaAllocator<U>&) {}  // NOLINT: allocator rebind
+  T* allocate(std::size_t n);
+  void deallocate(T* p, std::size_t n);
+  template <typename U>
+  bool operator==(const ArenaAllocator<U>&) const {
+    return true;
+  }
+  template <typename U>
+  bool operator!=(const ArenaAllocator<U>&) const {
+    return false;
+  }
+};
+template <typename T>
+using ArenaVector = std::vector<T, ArenaAllocator<T>>;
 
 // Goal paths whose J is within this fraction of eps of the cheapest one
 // count as equally good, and the shortest of them is returned. One step of
@@ -227,10 +255,10 @@ class SamplingTree {
   bool any_moving_ = false;
 
   // Arena.
-  std::vector<int> pos_;      // nodes x n
-  std::vector<double> info_;  // nodes x stride
-  std::vector<int> parent_, depth_, unloc_;
-  std::vector<double> cost_, det_sum_;
+  ArenaVector<int> pos_;      // nodes x n
+  ArenaVector<double> info_;  // nodes x stride
+  ArenaVector<int> parent_, depth_, unloc_;
+  ArenaVector<double> cost_, det_sum_;
   std::vector<std::vector<int>> levels_;  // expandable nodes per depth
   // Search state.
   std::vector<int> goals_;  // goal nodes within the tolerance of j_min_
@@ -247,7 +275,7 @@ class SamplingTree {
   std::vector<char> open_;
   std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
-  std::vector<double> lower_;  // per node: lower bound of the total cost
+  ArenaVector<double> lower_;  // per node: lower bound of the total cost
   std::vector<int> bfs_queue_;
 };
 

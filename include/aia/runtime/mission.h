@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/io.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
 #include "aia/runtime/instance.h"
@@ -76,8 +77,18 @@ struct PreparedMission {
 PreparedMission PrepareMission(Scenario scenario,
                                const PolicyRegistry& registry);
 
-// The scenario with the resolved policy's parameters written in full.
+// The scenario with the resolved policy's parameters written in full, and a
+// learned policy's model file by absolute path and SHA-256.
 Scenario EffectiveScenario(const PreparedMission& mission);
+
+// The files a mission reads: the scenario file, its map image and a learned
+// policy's model. No output of a command may be one of them
+// (CheckNotAnInput).
+std::vector<InputFile> MissionInputs(const Scenario& scenario,
+                                     const PolicySpec* policy);
+
+// The names of the files MissionRunner writes under its prefix.
+std::vector<std::string> MissionFileNames();
 
 // The outcome of a finished episode.
 struct MissionSummary {

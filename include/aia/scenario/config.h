@@ -247,6 +247,9 @@ struct MissionConfig {
 struct PolicyConfig {
   std::string name = "greedy";
   std::string model;  // absolute path, for learned policies
+  // SHA-256 of the model file's bytes, as effective.yaml records it; when
+  // given, a model file with other content is refused.
+  std::optional<std::string> model_sha256;
   // The named policy's parameters as written; the policy registry reads and
   // checks them against the policy's declared parameters (`aia policies`).
   ConfigNode params;
@@ -258,9 +261,15 @@ struct PolicyConfig {
                  .Expect("a policy name such as greedy")
                  .Doc("the decision maker (`aia policies`); --policy"));
     a->Visit(AIA_FIELD(model).Path().Doc("model file of learned policies"));
+    a->Visit(AIA_FIELD(model_sha256)
+                 .Doc("SHA-256 of the model file (64 hex digits, as sha256sum "
+                      "prints it; effective.yaml records it): a model file "
+                      "with other content is refused"));
     a->Visit(AIA_FIELD(params).Rest().Doc(
         "the named policy's parameters, listed by `aia policies`"));
   }
+  // model_sha256 is 64 lower-case hex digits.
+  void Validate(const FieldChecker& check);
 };
 
 struct PhysicsConfig {
