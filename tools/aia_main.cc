@@ -130,9 +130,18 @@ Action AddRunCommand(CLI::App& app) {
   cmd->add_option("--out", run->out_dir,
                   "output directory (default: renders/<scenario name>)")
       ->check(kPath);
+  auto trace = std::make_shared<std::string>("auto");
+  cmd->add_option("--trace", *trace,
+                  "trace.csv per step and target: full (every robot's det "
+                  "Sigma), min (the team's min_det only) or auto (full up to "
+                  "100 robots)")
+      ->capture_default_str();
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;
+    if (!aia::ParseTraceMode(*trace, &run->trace))
+      throw aia::InputError("command line", 0, "--trace",
+                            "'" + *trace + "' is not auto, full or min");
     run->overrides = flags->Get();
     run->progress = !*quiet;
     aia::InstallInterruptHandler();  // Ctrl-C: write what is done, exit 130

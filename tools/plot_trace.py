@@ -120,6 +120,9 @@ def figure_uncertainty(trace, summary, args):
         elif trace.num_robots <= 12:
             ax_kw["label"] = f"robot {i}"
         left.plot(trace.steps, per_robot[:, i], **ax_kw)
+    if trace.num_robots == 0:  # a trace written with `aia run --trace min`
+        left.text(0.5, 0.5, "per-robot columns not in this trace\n(aia run --trace full)",
+                  ha="center", va="center", transform=left.transAxes, fontsize=9)
     _threshold(left, eps)
     left.set_title(r"per robot $i$: sum over targets $k$ of $\det \Sigma_i^k$", fontsize=10)
 

@@ -27,40 +27,59 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
   AIA_CHECK(static_cast<int>(positions.size()) == n_);
   for (const auto& f : failures_)
     if (step >= f.step) active_[f.robot] = 0;
-  edges_.clear();
-  const double r2 = params_.range * params_.range;
-  for (int i = 0; i < n_; ++i) {
-    if (!active_[i]) continue;
-    for (int j = 0; j < n_; ++j) {
-      if (j == i || !active_[j]) continue;
-      if (params_.mode == CommMode::kRange &&
-          (positions[i] - positions[j]).squaredNorm() > r2)
-        continue;
-      edges_.push_back({i, j});
-    }
-  }
-  // Packet loss: Poisson(lambda) distinct directed edges, uniformly chosen.
-  lost_.clear();
-  drop_.assign(edges_.size(), 0);
-  if (params_.packet_loss_lambda > 0.0) {
-    const int k = std::min<int>(rng_.Poisson(params_.packet_loss_lambda),
-                                static_cast<int>(edges_.size()));
-    for (int c = 0; c < k; ++c) {
-      // Floyd's algorithm would also do; rejection is fine for k << edges.
-      size_t e;
-      do {
-        e = rng_.UniformInt(edges_.size());
-      } while (drop_[e]);
-      drop_[e] = 1;
-    }
-  }
+  // The candidate edges (i <- j), each robot's ascending: every other
+  // active robot, or those in range.
   for (auto& nb : neighbors_) nb.clear();
-  for (size_t e = 0; e < edges_.size(); ++e) {
-    if (drop_[e]) {
-      lost_.push_back(edges_[e]);
-    } else {
-      neighbors_[edges_[e].first].push_back(edges_[e].second);
+  if (params_.mode == CommMode::kRange) {
+    // O(N + edges) through a grid of the active robots.
+    grid_.Build(positions, params_.range, &active_);
+    for (int i = 0; i < n_; ++i) {
+      if (!active_[i]) continue;
+      grid_.Near(positions, positions[i], params_.range, &neighbors_[i]);
+      auto self = std::find(neighbors_[i].begin(), neighbors_[i].end(), i);
+      if (self != neighbors_[i].end()) neighbors_[i].erase(self);
     }
+  } else {
+    for (int i = 0; i < n_; ++i) {
+      if (!active_[i]) continue;
+      for (int j = 0; j < n_; ++j)
+        if (j != i && active_[j]) neighbors_[i].push_back(j);
+    }
+  }
+  // Packet loss: Poisson(lambda) distinct directed edges, uniformly chosen
+  // among the candidates numbered in order (receiver, then sender).
+  lost_.clear();
+  if (params_.packet_loss_lambda <= 0.0) return;
+  std::size_t edges = 0;
+  for (const auto& nb : neighbors_) edges += nb.size();
+  const std::size_t k =
+      std::min<std::size_t>(rng_.Poisson(params_.packet_loss_lambda), edges);
+  drop_.clear();
+  for (std::size_t c = 0; c < k; ++c) {
+    std::uint64_t e;
+    do {
+      e = rng_.UniformInt(edges);
+    } while (std::find(drop_.begin(), drop_.end(), e) != drop_.end());
+    drop_.push_back(e);
+  }
+  std::sort(drop_.begin(), drop_.end());
+  // Remove the dropped edges, walking the numbering once.
+  std::size_t first = 0, next = 0;
+  for (int i = 0; i < n_ && next < drop_.size(); ++i) {
+    std::vector<int>& nb = neighbors_[i];
+    const std::size_t end = first + nb.size();
+    std::size_t kept = 0;
+    for (std::size_t e = first; e < end; ++e) {
+      const int j = nb[e - first];
+      if (next < drop_.size() && drop_[next] == e) {
+        lost_.push_back({i, j});
+        ++next;
+      } else {
+        nb[kept++] = j;
+      }
+    }
+    nb.resize(kept);
+    first = end;
   }
 }
 

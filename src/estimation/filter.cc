@@ -65,33 +65,21 @@ void PredictBlock(const TargetModel& model, double* block, bool strict) {
   xi = omega * mu_pred;
 }
 
-// Off-diagonal structure of row i of W: how many j != i have W(i,j) != 0,
-// and whether they all carry one common weight (as FusionWeights makes them).
-struct RowShape {
-  int off_nonzeros = 0;
+// Row i of the DKF's weights as MixRows takes it: uniform rows (the DKF's,
+// as FusionWeights makes them) are self * B_i + off * sum_{j in nb} B_j with
+// nb ascending and i excluded; other rows (a general W) are a dense row.
+struct RowWeights {
   bool uniform = true;
-  double off_weight = 0.0;
+  double self = 0.0, off = 0.0;
+  const std::vector<int>* nb = nullptr;
+  const double* dense = nullptr;  // !uniform: W(i, 0..n-1), strided
+  Eigen::Index stride = 1;
 };
-
-RowShape ShapeOf(const Eigen::MatrixXd& w, int i) {
-  RowShape s;
-  for (int j = 0; j < w.cols(); ++j) {
-    const double v = w(i, j);
-    if (j == i || v == 0.0) continue;
-    if (s.off_nonzeros == 0) {
-      s.off_weight = v;
-    } else if (v != s.off_weight) {
-      s.uniform = false;
-    }
-    ++s.off_nonzeros;
-  }
-  return s;
-}
 
 // A row worth the sum trick: its neighbours are the majority of the team, so
 // S - (the few non-neighbours) is cheaper than adding the neighbours.
-bool IsDenseUniform(const RowShape& s, int n) {
-  return s.uniform && 2 * s.off_nonzeros > n;
+bool IsDenseUniform(const RowWeights& r, int n) {
+  return r.uniform && 2 * static_cast<int>(r.nb->size()) > n;
 }
 
 // Rows of the N x stride belief matrices, as contiguous arrays (the storage
@@ -104,25 +92,33 @@ struct RowPair {
   RowMap Out(int i) const { return {out.data() + i * out.cols(), out.cols()}; }
 };
 
-// o += scale * sum_j B_j over the rows j != i that `pick(w(i,j))` selects, in
-// index order. Four rows go in one pass over `o`, which saves loads and stores
-// of `o` in a loop that is bound by memory traffic.
-template <typename Pick>
-void AddRows(const Eigen::MatrixXd& w, const RowPair& m, int i, Pick pick,
-             double scale, RowMap o) {
-  int idx[4];
-  int count = 0;
-  for (int j = 0; j < w.cols(); ++j) {
-    if (j == i || !pick(w(i, j))) continue;
-    idx[count++] = j;
-    if (count == 4) {
-      o += scale * (m.In(idx[0]) + m.In(idx[1]) + m.In(idx[2]) + m.In(idx[3]));
-      count = 0;
+// o += scale * sum_j B_j over the rows `rows`, in their (ascending) order.
+// Four rows go in one pass over `o`, which saves loads and stores of `o` in
+// a loop that is bound by memory traffic.
+void AddRows(const std::vector<int>& rows, const RowPair& m, double scale,
+             RowMap o) {
+  const std::size_t full = rows.size() / 4 * 4;
+  for (std::size_t c = 0; c < full; c += 4)
+    o += scale * (m.In(rows[c]) + m.In(rows[c + 1]) + m.In(rows[c + 2]) +
+                  m.In(rows[c + 3]));
+  const std::size_t rest = rows.size() - full;
+  const int* r = rows.data() + full;
+  if (rest == 3) o += scale * (m.In(r[0]) + m.In(r[1]) + m.In(r[2]));
+  if (rest == 2) o += scale * (m.In(r[0]) + m.In(r[1]));
+  if (rest == 1) o += scale * m.In(r[0]);
+}
+
+// The rows of the team not in nb and not i, ascending, into `out`.
+void Excluded(const std::vector<int>& nb, int i, int n, std::vector<int>* out) {
+  out->clear();
+  std::size_t next = 0;
+  for (int j = 0; j < n; ++j) {
+    if (next < nb.size() && nb[next] == j) {
+      ++next;
+      continue;
     }
+    if (j != i) out->push_back(j);
   }
-  if (count == 3) o += scale * (m.In(idx[0]) + m.In(idx[1]) + m.In(idx[2]));
-  if (count == 2) o += scale * (m.In(idx[0]) + m.In(idx[1]));
-  if (count == 1) o += scale * m.In(idx[0]);
 }
 
 // out = W * B. A dense GEMM costs N^2 * stride multiply-adds whatever the
@@ -131,24 +127,23 @@ void AddRows(const Eigen::MatrixXd& w, const RowPair& m, int i, Pick pick,
 //   out_i = kappa_ii B_i + c_i sum_{j in N_i} B_j
 //         = kappa_ii B_i + c_i (S - B_i - sum_{j not in N_i + i} B_j)
 // with the column sum S = sum_j B_j: the first form for few neighbours, the
-// second for many; O(N * stride) in all for the full graph. S lives in the
-// first dense row of `out` (the "holder"), which is finished last and in
-// place, so no scratch memory is needed. Rows with unequal weights take the
-// direct sum. The subtraction costs accuracy only when one robot's
-// information dwarfs the others': the error is about eps * sum_j |B_j| per
-// element. Each element is summed in an order fixed by the row indices, not
-// by cache sizes or threads as in a blocked GEMM, so results are
-// reproducible. (Tiling the columns for L1 reuse gained nothing at N = 80.)
-void MixRows(const Eigen::MatrixXd& w, const BeliefSet::Storage& b,
-             BeliefSet::Storage* out) {
+// second for many; O(N * stride) in all for the full graph, O(edges *
+// stride) for a sparse one. S lives in the first dense row of `out` (the
+// "holder"), which is finished last and in place, so no scratch memory is
+// needed. General rows take the direct sum. The subtraction costs accuracy
+// only when one robot's information dwarfs the others': the error is about
+// eps * sum_j |B_j| per element. Each element is summed in an order fixed by
+// the row indices, not by cache sizes or threads as in a blocked GEMM, so
+// results are reproducible. (Tiling the columns for L1 reuse gained nothing
+// at N = 80.)
+void MixRows(const std::vector<RowWeights>& w, const BeliefSet::Storage& b,
+             BeliefSet::Storage* out, std::vector<int>* scratch) {
   const int n = static_cast<int>(b.rows());
   const RowPair m{b, *out};
-  auto is_neighbor = [](double v) { return v != 0.0; };
-  auto is_excluded = [](double v) { return v == 0.0; };
 
   int holder = -1;
   for (int i = 0; i < n && holder < 0; ++i) {
-    if (IsDenseUniform(ShapeOf(w, i), n)) holder = i;
+    if (IsDenseUniform(w[i], n)) holder = i;
   }
   if (holder >= 0) {
     RowMap sum = m.Out(holder);
@@ -158,28 +153,48 @@ void MixRows(const Eigen::MatrixXd& w, const BeliefSet::Storage& b,
 
   for (int i = 0; i < n; ++i) {
     if (i == holder) continue;
-    const RowShape s = ShapeOf(w, i);
+    const RowWeights& r = w[i];
     RowMap o = m.Out(i);
-    if (!s.uniform) {
+    if (!r.uniform) {
       o.setZero();
       for (int j = 0; j < n; ++j) {
-        if (w(i, j) != 0.0) o += w(i, j) * m.In(j);
+        const double v = r.dense[j * r.stride];
+        if (v != 0.0) o += v * m.In(j);
       }
-    } else if (holder >= 0 && IsDenseUniform(s, n)) {
-      o = s.off_weight * (m.Out(holder) - m.In(i)) + w(i, i) * m.In(i);
-      AddRows(w, m, i, is_excluded, -s.off_weight, o);
+    } else if (holder >= 0 && IsDenseUniform(r, n)) {
+      o = r.off * (m.Out(holder) - m.In(i)) + r.self * m.In(i);
+      Excluded(*r.nb, i, n, scratch);
+      AddRows(*scratch, m, -r.off, o);
     } else {
-      o = w(i, i) * m.In(i);
-      AddRows(w, m, i, is_neighbor, s.off_weight, o);
+      o = r.self * m.In(i);
+      AddRows(*r.nb, m, r.off, o);
     }
   }
   if (holder >= 0) {
     // Element-wise, so S may be overwritten as it is read.
-    const double c = ShapeOf(w, holder).off_weight;
+    const RowWeights& r = w[holder];
     RowMap o = m.Out(holder);
-    o = c * (o - m.In(holder)) + w(holder, holder) * m.In(holder);
-    AddRows(w, m, holder, is_excluded, -c, o);
+    o = r.off * (o - m.In(holder)) + r.self * m.In(holder);
+    Excluded(*r.nb, holder, n, scratch);
+    AddRows(*scratch, m, -r.off, o);
   }
+}
+
+void FuseRows(const BeliefSet& predicted, const std::vector<RowWeights>& w,
+              const std::vector<std::vector<Measurement>>& z,
+              const std::vector<Vec2>& positions, BeliefSet* out,
+              std::vector<int>* scratch) {
+  AIA_CHECK(out != &predicted);
+  const int n = predicted.rows();
+  AIA_CHECK(static_cast<int>(w.size()) == n);
+  AIA_CHECK(static_cast<int>(z.size()) == n &&
+            static_cast<int>(positions.size()) == n);
+  if (out->data().rows() != n ||
+      out->data().cols() != predicted.data().cols()) {
+    *out = BeliefSet(&predicted.layout(), n);
+  }
+  MixRows(w, predicted.data(), &out->data(), scratch);
+  for (int i = 0; i < n; ++i) AddMeasurements(z[i], positions[i], out, i);
 }
 
 template <int D>
@@ -277,20 +292,75 @@ void FusionWeights(const std::vector<std::vector<int>>& neighbors,
   }
 }
 
+void MakeDkfWeights(const std::vector<std::vector<int>>& neighbors,
+                    double kappa_self, DkfWeights* w) {
+  const int n = static_cast<int>(neighbors.size());
+  w->neighbors = &neighbors;
+  w->self.resize(n);
+  w->off.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const std::vector<int>& ni = neighbors[i];
+    if (ni.empty()) {
+      w->self[i] = 1.0;
+      w->off[i] = 0.0;
+      continue;
+    }
+    w->self[i] = kappa_self;
+    w->off[i] = (1.0 - kappa_self) / static_cast<double>(ni.size());
+    for (std::size_t c = 0; c < ni.size(); ++c)
+      AIA_CHECK_MSG(ni[c] >= 0 && ni[c] < n && ni[c] != i &&
+                        (c == 0 || ni[c - 1] < ni[c]),
+                    "neighbours must be distinct, ascending and not self");
+  }
+}
+
+void Fuse(const BeliefSet& predicted, const DkfWeights& w,
+          const std::vector<std::vector<Measurement>>& z,
+          const std::vector<Vec2>& positions, BeliefSet* out) {
+  const int n = predicted.rows();
+  AIA_CHECK(w.neighbors != nullptr &&
+            static_cast<int>(w.neighbors->size()) == n &&
+            static_cast<int>(w.self.size()) == n);
+  thread_local std::vector<RowWeights> rows;
+  thread_local std::vector<int> scratch;
+  rows.resize(n);
+  for (int i = 0; i < n; ++i) {
+    RowWeights& r = rows[i];
+    r.uniform = true;
+    r.self = w.self[i];
+    r.off = w.off[i];
+    r.nb = &(*w.neighbors)[i];
+  }
+  FuseRows(predicted, rows, z, positions, out, &scratch);
+}
+
 void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
           const std::vector<std::vector<Measurement>>& z,
           const std::vector<Vec2>& positions, BeliefSet* out) {
-  AIA_CHECK(out != &predicted);
   const int n = predicted.rows();
   AIA_CHECK(W.rows() == n && W.cols() == n);
-  AIA_CHECK(static_cast<int>(z.size()) == n &&
-            static_cast<int>(positions.size()) == n);
-  if (out->data().rows() != n ||
-      out->data().cols() != predicted.data().cols()) {
-    *out = BeliefSet(&predicted.layout(), n);
+  // Each row as a uniform one where its off-diagonal weights are equal.
+  std::vector<std::vector<int>> nb(n);
+  std::vector<RowWeights> rows(n);
+  for (int i = 0; i < n; ++i) {
+    RowWeights& r = rows[i];
+    r.self = W(i, i);
+    for (int j = 0; j < n; ++j) {
+      const double v = W(i, j);
+      if (j == i || v == 0.0) continue;
+      if (nb[i].empty()) {
+        r.off = v;
+      } else if (v != r.off) {
+        r.uniform = false;
+      }
+      nb[i].push_back(j);
+    }
+    r.nb = &nb[i];
+    r.dense = W.data() + i;  // column-major: W(i, j) at i + j * rows
+    r.stride = W.rows();
   }
-  MixRows(W, predicted.data(), &out->data());
-  for (int i = 0; i < n; ++i) AddMeasurements(z[i], positions[i], out, i);
+  std::vector<int> scratch;
+  FuseRows(predicted, rows, z, positions, out, &scratch);
 }
 
 void CentralUpdate(const std::vector<std::vector<Measurement>>& z,

@@ -204,7 +204,7 @@ void Episode::Observe() {
   auto t0 = Clock::now();
   comm_.Update(step_, robot_pos_);
   Sense(sim_, instance_->scenario.sensor, robot_pos_, target_pos_,
-        comm_.active(), &sensor_rngs_, &z_);
+        comm_.active(), &sensor_rngs_, &z_, &sensing_);
   times_.sensing += Since(t0);
 
   t0 = Clock::now();
@@ -228,8 +228,8 @@ void Episode::Observe() {
               "a stable A, or robots that reach it sooner)");
     }
   }
-  FusionWeights(comm_.AllNeighbors(),
-                instance_->scenario.communication.kappa_self, &weights_);
+  MakeDkfWeights(comm_.AllNeighbors(),
+                 instance_->scenario.communication.kappa_self, &weights_);
   Fuse(predicted_, weights_, z_, robot_pos_, &fused_);
   CentralUpdate(z_, robot_pos_, &central_);
 

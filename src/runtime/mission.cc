@@ -206,14 +206,34 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
+bool ParseTraceMode(const std::string& text, TraceMode* mode) {
+  if (text == "auto") {
+    *mode = TraceMode::kAuto;
+  } else if (text == "full") {
+    *mode = TraceMode::kFull;
+  } else if (text == "min") {
+    *mode = TraceMode::kMin;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+bool TraceHasRobotColumns(TraceMode mode, int num_robots) {
+  return mode == TraceMode::kFull ||
+         (mode == TraceMode::kAuto && num_robots <= kTraceFullRobots);
+}
+
 MissionRunner::MissionRunner(const PreparedMission& mission, std::string prefix,
                              std::string label, bool progress,
-                             std::function<std::string()> progress_extra)
+                             std::function<std::string()> progress_extra,
+                             TraceMode trace)
     : mission_(mission), prefix_(std::move(prefix)) {
   episode_ =
       std::make_unique<Episode>(mission.instance, mission.policy->Create());
-  trace_ = std::make_unique<TraceObserver>(prefix_ + "trace.csv",
-                                           episode_->world().NumRobots());
+  const int n = episode_->world().NumRobots();
+  trace_ = std::make_unique<TraceObserver>(prefix_ + "trace.csv", n,
+                                           TraceHasRobotColumns(trace, n));
   estimate_ = std::make_unique<EstimateObserver>(prefix_ + "estimate.csv");
   progress_ = std::make_unique<ProgressObserver>(std::move(label), progress,
                                                  std::move(progress_extra));
@@ -301,7 +321,8 @@ MissionSummary RunMission(const RunOptions& options) {
                     "written into the output folder");
   MakeOutputDir(out, "--out", /*lock=*/true);
 
-  MissionRunner runner(mission, out + "/", "aia run", options.progress);
+  MissionRunner runner(mission, out + "/", "aia run", options.progress, {},
+                       options.trace);
   const MissionSummary summary = runner.Run();
   WriteFileAtomic(out + "/summary.json",
                   SummaryJson(summary, runner.episode()));

@@ -4,8 +4,10 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "aia/core/io.h"
 
@@ -14,13 +16,31 @@ namespace aia {
 struct TraceObserver::Impl {
   AtomicFile file;
   std::string row;
+  bool robot_columns = true;
   explicit Impl(const std::string& path) : file(path) {}
 };
 
-TraceObserver::TraceObserver(const std::string& path, int num_robots)
+namespace {
+
+// ",%.6e" as printf writes it (std::to_chars: the same digits, five times
+// faster; a trace of 1000 x 1000 writes a million numbers a step).
+void AppendScientific(double v, std::string* row) {
+  char buf[40];
+  buf[0] = ',';
+  const auto r = std::to_chars(buf + 1, buf + sizeof(buf), v,
+                               std::chars_format::scientific, 6);
+  row->append(buf, r.ptr);
+}
+
+}  // namespace
+
+TraceObserver::TraceObserver(const std::string& path, int num_robots,
+                             bool robot_columns)
     : impl_(std::make_unique<Impl>(path)) {
+  impl_->robot_columns = robot_columns;
   std::string header = "step,target,min_det";
-  for (int i = 0; i < num_robots; ++i) header += ",det_r" + std::to_string(i);
+  if (robot_columns)
+    for (int i = 0; i < num_robots; ++i) header += ",det_r" + std::to_string(i);
   header += "\n";
   std::fputs(header.c_str(), impl_->file.get());
 }
@@ -28,17 +48,15 @@ TraceObserver::TraceObserver(const std::string& path, int num_robots)
 TraceObserver::~TraceObserver() = default;
 
 void TraceObserver::Write(const Episode& e) {
-  const int n = e.world().NumRobots();
-  char buf[64];
+  const int n = impl_->robot_columns ? e.world().NumRobots() : 0;
   for (int k = 0; k < e.world().NumTargets(); ++k) {
     std::string& row = impl_->row;
     row.clear();
-    std::snprintf(buf, sizeof(buf), "%d,%d,%.6e", e.step(), k, e.MinDet(k));
-    row += buf;
-    for (int i = 0; i < n; ++i) {
-      std::snprintf(buf, sizeof(buf), ",%.6e", e.Det(i, k));
-      row += buf;
-    }
+    row += std::to_string(e.step());
+    row += ',';
+    row += std::to_string(k);
+    AppendScientific(e.MinDet(k), &row);
+    for (int i = 0; i < n; ++i) AppendScientific(e.Det(i, k), &row);
     row += '\n';
     std::fwrite(row.data(), 1, row.size(), impl_->file.get());
   }

@@ -317,17 +317,30 @@ void Sense(const Simulation& sim, const SensorModel& sensor,
            const std::vector<Vec2>& robots, const std::vector<Vec2>& targets,
            const std::vector<std::uint8_t>& active, std::vector<Rng>* rngs,
            std::vector<std::vector<Measurement>>* out) {
+  SensingScratch scratch;
+  Sense(sim, sensor, robots, targets, active, rngs, out, &scratch);
+}
+
+void Sense(const Simulation& sim, const SensorModel& sensor,
+           const std::vector<Vec2>& robots, const std::vector<Vec2>& targets,
+           const std::vector<std::uint8_t>& active, std::vector<Rng>* rngs,
+           std::vector<std::vector<Measurement>>* out,
+           SensingScratch* scratch) {
   const int n = static_cast<int>(robots.size());
   out->resize(n);
-  const double range2 = sensor.range * sensor.range;
+  // The targets in range of each robot through a grid of the targets, in
+  // ascending order as a loop over all of them would find them.
+  scratch->targets.Build(targets, sensor.range);
   for (int i = 0; i < n; ++i) {
     auto& z = (*out)[i];
     z.clear();
     if (!active[i]) continue;
-    for (int k = 0; k < static_cast<int>(targets.size()); ++k) {
+    std::vector<int>& near = scratch->near;
+    near.clear();
+    scratch->targets.Near(targets, robots[i], sensor.range, &near);
+    for (const int k : near) {
       const Vec2 rel = targets[k] - robots[i];
       const double d2 = rel.squaredNorm();
-      if (d2 > range2) continue;
       if (sensor.line_of_sight && !sim.RayClear(robots[i], targets[k]))
         continue;
       Rng& rng = (*rngs)[i];

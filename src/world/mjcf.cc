@@ -27,7 +27,7 @@ MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts) {
   return s;
 }
 
-long InitialContacts(int num_robots) { return 100 + num_robots / 4; }
+long InitialContacts(int num_robots) { return 64 + num_robots / 8; }
 
 double MujocoDataBytes(const MujocoSizes& s, long nv, long nu) {
   const double j = s.njmax, v = static_cast<double>(nv);

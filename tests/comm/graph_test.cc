@@ -81,5 +81,31 @@ TEST(CommTest, SameSeedSameLosses) {
   }
 }
 
+// The range graph through the grid is the all-pairs rule, for ranges from
+// below the spacing to beyond the spread of the robots.
+TEST(CommTest, RangeGraphIsEveryPairInRange) {
+  Rng rng(4);
+  const int n = 300;
+  std::vector<Vec2> pos;
+  for (int i = 0; i < n; ++i)
+    pos.emplace_back(rng.Uniform(0.0, 60.0), rng.Uniform(0.0, 40.0));
+  pos[7] = pos[8];  // two robots at one point
+  for (const double range : {0.01, 1.0, 4.0, 25.0, 500.0}) {
+    CommParams p;
+    p.mode = CommMode::kRange;
+    p.range = range;
+    CommNetwork net(p, n, {{3, 0}}, 1);  // robot 3 has failed
+    net.Update(0, pos);
+    for (int i = 0; i < n; ++i) {
+      std::vector<int> want;
+      for (int j = 0; j < n; ++j)
+        if (i != 3 && j != 3 && j != i &&
+            (pos[i] - pos[j]).squaredNorm() <= range * range)
+          want.push_back(j);
+      ASSERT_EQ(net.Neighbors(i), want) << "robot " << i << ", range " << range;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace aia

@@ -6,6 +6,7 @@
 #include "aia/core/error.h"
 #include "aia/core/geometry.h"
 #include "aia/core/grid.h"
+#include "aia/core/point_grid.h"
 #include "aia/core/rng.h"
 
 namespace aia {
@@ -103,6 +104,40 @@ TEST(InputErrorTest, FormatIsOneLine) {
                 .Format(),
             "a\\nb.yaml:2: (yaml): bad \\x01 escape: \\n\\t\\r\\x7f\\x00 end");
   EXPECT_EQ(OneLine("caf\xc3\xa9 ok"), "caf\xc3\xa9 ok");  // UTF-8 stays
+}
+
+TEST(PointGridTest, NearIsEveryPointWithinTheRadiusAscending) {
+  Rng rng(12);
+  std::vector<Vec2> points;
+  for (int i = 0; i < 500; ++i)
+    points.emplace_back(rng.Uniform(-5.0, 95.0), rng.Uniform(0.0, 30.0));
+  std::vector<std::uint8_t> keep(points.size(), 1);
+  for (std::size_t i = 0; i < keep.size(); i += 7) keep[i] = 0;
+  for (const double radius : {1e-3, 0.7, 2.0, 9.0, 1e4}) {
+    for (const bool all : {true, false}) {
+      PointGrid grid;
+      grid.Build(points, radius, all ? nullptr : &keep);
+      for (int q = 0; q < 60; ++q) {
+        // Queries inside the box, on points, and far outside it.
+        const Vec2 p =
+            q < 20   ? points[q * 11]
+            : q < 40 ? Vec2(rng.Uniform(-50.0, 150.0), rng.Uniform(-50.0, 80.0))
+                     : Vec2(rng.Uniform(0.0, 90.0), rng.Uniform(0.0, 30.0));
+        std::vector<int> got, want;
+        grid.Near(points, p, radius, &got);
+        for (int j = 0; j < static_cast<int>(points.size()); ++j)
+          if ((all || keep[j]) &&
+              (points[j] - p).squaredNorm() <= radius * radius)
+            want.push_back(j);
+        ASSERT_EQ(got, want) << "radius " << radius << ", query " << q;
+      }
+    }
+  }
+  PointGrid empty;
+  empty.Build({}, 1.0);
+  std::vector<int> none;
+  empty.Near({}, Vec2(0, 0), 1.0, &none);
+  EXPECT_TRUE(none.empty());
 }
 
 }  // namespace

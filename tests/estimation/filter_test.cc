@@ -268,6 +268,29 @@ TEST(FuseTest, TwoRobotsByHand) {
   EXPECT_TRUE(fused.Xi(1, 0).isApprox(Eigen::Vector2d(2.25, 4.5), 1e-15));
 }
 
+// The episode's weights without the N x N matrix give the matrix's numbers
+// to the bit, on sparse and dense graphs (the sum trick) alike.
+TEST(FuseTest, DkfWeightsGiveTheMatrixNumbersToTheBit) {
+  Rng rng(8);
+  const BeliefLayout layout({StaticModel(2), ConstantVelocity(0.1)});
+  const int n = 23;
+  BeliefSet predicted(&layout, n);
+  const std::vector<Vec2> p = RandomPositions(n, &rng);
+  for (const double density : {0.0, 0.05, 0.3, 0.55, 0.9, 1.0}) {
+    Randomize(&predicted, &rng);
+    const Graph g = RandomGraph(n, density, &rng);
+    Eigen::MatrixXd W;
+    FusionWeights(g, 0.75, &W);
+    DkfWeights w;
+    MakeDkfWeights(g, 0.75, &w);
+    const Measurements z = RandomMeasurements(n, layout.num_targets(), &rng);
+    BeliefSet dense, sparse;
+    Fuse(predicted, W, z, p, &dense);
+    Fuse(predicted, w, z, p, &sparse);
+    EXPECT_EQ(dense.data(), sparse.data()) << "density " << density;
+  }
+}
+
 // Fuse exploits the structure of W; it must still be exactly W * B + Z.
 TEST(FuseTest, MatchesDenseProductOnAnyGraph) {
   Rng rng(5);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "aia/core/fields.h"
+#include "aia/core/point_grid.h"
 #include "aia/core/rng.h"
 #include "aia/core/types.h"
 
@@ -77,6 +78,7 @@ class CommNetwork {
 
   // Builds this step's graph from the robots' positions. Call once per step,
   // with increasing steps; packet loss draws from the network's own stream.
+  // O(N^2) for the full graph (its edges), O(N + edges) in range mode.
   void Update(int step, const std::vector<Vec2>& positions);
 
   int size() const { return n_; }
@@ -98,9 +100,10 @@ class CommNetwork {
   Rng rng_;
   std::vector<std::uint8_t> active_;
   std::vector<std::vector<int>> neighbors_;
-  std::vector<std::pair<int, int>> edges_;  // scratch: candidate directed edges
   std::vector<std::pair<int, int>> lost_;
-  std::vector<std::uint8_t> drop_;
+  // Scratch: the lost edges' numbers, the range mode's grid of robots.
+  std::vector<std::uint64_t> drop_;
+  PointGrid grid_;
 };
 
 }  // namespace aia

@@ -67,8 +67,25 @@ void FusionWeights(const std::vector<std::vector<int>>& neighbors,
                    double kappa_self, Eigen::MatrixXd* W);
 
 // out = W * predicted, then each robot's own measurements are added.
-// `out` must not alias `predicted`. No allocation once `out` has its size.
+// `out` must not alias `predicted`. A general W (any weights) for tests and
+// tools; the episode fuses with DkfWeights.
 void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
+          const std::vector<std::vector<Measurement>>& z,
+          const std::vector<Vec2>& positions, BeliefSet* out);
+
+// The DKF's weights without the N x N matrix: W(i,i) = self[i], W(i,j) =
+// off[i] for j in (*neighbors)[i] (ascending, i excluded), as FusionWeights
+// makes them. `neighbors` must outlive its use.
+struct DkfWeights {
+  std::vector<double> self, off;
+  const std::vector<std::vector<int>>* neighbors = nullptr;
+};
+void MakeDkfWeights(const std::vector<std::vector<int>>& neighbors,
+                    double kappa_self, DkfWeights* w);
+// Fuse with these weights: the same numbers, to the bit, as Fuse with the
+// FusionWeights matrix, in O(N * stride) for the full graph and O(edges *
+// stride) for a sparse one. No allocation once `out` has its size.
+void Fuse(const BeliefSet& predicted, const DkfWeights& w,
           const std::vector<std::vector<Measurement>>& z,
           const std::vector<Vec2>& positions, BeliefSet* out);
 

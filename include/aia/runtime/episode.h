@@ -15,6 +15,7 @@
 #include "aia/comm/graph.h"
 #include "aia/core/rng.h"
 #include "aia/estimation/belief.h"
+#include "aia/estimation/filter.h"
 #include "aia/estimation/sensor_model.h"
 #include "aia/planning/policy.h"
 #include "aia/runtime/instance.h"
@@ -159,7 +160,8 @@ class Episode {
   BeliefLayout layout_;
   BeliefSet predicted_, fused_, central_;
   CommNetwork comm_;
-  Eigen::MatrixXd weights_;
+  DkfWeights weights_;
+  SensingScratch sensing_;
   std::vector<Rng> sensor_rngs_, rule_rngs_;
   Rng target_rng_;
   std::vector<Vec2> robot_pos_, target_pos_, target_prev_;

@@ -109,6 +109,16 @@ MissionSummary Summarize(const Episode& episode, double wall_s);
 // summary.json's text.
 std::string SummaryJson(const MissionSummary& summary, const Episode& episode);
 
+// What trace.csv holds per step and target: the team's min_det, and with
+// kFull every robot's det Sigma (N x M numbers a step); kAuto is kFull up to
+// kTraceFullRobots robots, kMin beyond (a 1000 x 1000 mission would write
+// 12 MB a step).
+enum class TraceMode { kAuto, kFull, kMin };
+inline constexpr int kTraceFullRobots = 100;
+// "auto", "full" or "min"; false for anything else.
+bool ParseTraceMode(const std::string& text, TraceMode* mode);
+bool TraceHasRobotColumns(TraceMode mode, int num_robots);
+
 // Runs a prepared mission with the standard observers (trace, estimate,
 // progress) and any added ones, then writes the result files but
 // summary.json (the caller's, which may add to it) under `prefix`.
@@ -116,7 +126,8 @@ class MissionRunner {
  public:
   MissionRunner(const PreparedMission& mission, std::string prefix,
                 std::string label, bool progress,
-                std::function<std::string()> progress_extra = {});
+                std::function<std::string()> progress_extra = {},
+                TraceMode trace = TraceMode::kAuto);
   ~MissionRunner();
 
   Episode& episode() { return *episode_; }
@@ -140,6 +151,7 @@ struct RunOptions {
   CommandOverrides overrides;
   std::string out_dir;  // empty: renders/<scenario file stem>
   bool progress = true;
+  TraceMode trace = TraceMode::kAuto;
 };
 
 // `aia run`: runs the mission, writes the result files under DIR/ and prints

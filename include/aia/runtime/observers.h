@@ -18,7 +18,10 @@ namespace aia {
 // robot's det Sigma.
 class TraceObserver : public StepObserver {
  public:
-  TraceObserver(const std::string& path, int num_robots);
+  // With robot_columns, each row also holds every robot's det Sigma_i^k
+  // (det_r0, det_r1, ...): N x M numbers a step.
+  TraceObserver(const std::string& path, int num_robots,
+                bool robot_columns = true);
   ~TraceObserver() override;
   void OnStart(const Episode& e) override { Write(e); }
   void OnStep(const Episode& e) override { Write(e); }

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/point_grid.h"
 #include "aia/core/rng.h"
 #include "aia/core/types.h"
 #include "aia/estimation/sensor_model.h"
@@ -181,11 +182,22 @@ inline constexpr double kMaxPhysicsBytes = 3.0 * (1L << 30);
 // target k when it is within range and, with line of sight on, a ray between
 // them meets no obstacle. y = pos_k - p_i + v with v ~ N(0, (sigma0 + eta d)^2
 // I) drawn at the true distance d; the recorded precision is computed from |y|,
-// as the filter does not know d.
+// as the filter does not know d. The pairs in range come from a grid of the
+// targets: O(N + M + pairs in range), not O(N M).
 void Sense(const Simulation& sim, const SensorModel& sensor,
            const std::vector<Vec2>& robots, const std::vector<Vec2>& targets,
            const std::vector<std::uint8_t>& active, std::vector<Rng>* rngs,
            std::vector<std::vector<Measurement>>* out);
+// The same with scratch memory kept from step to step (no allocation once
+// warm).
+struct SensingScratch {
+  PointGrid targets;
+  std::vector<int> near;
+};
+void Sense(const Simulation& sim, const SensorModel& sensor,
+           const std::vector<Vec2>& robots, const std::vector<Vec2>& targets,
+           const std::vector<std::uint8_t>& active, std::vector<Rng>* rngs,
+           std::vector<std::vector<Measurement>>* out, SensingScratch* scratch);
 
 }  // namespace aia
 

@@ -1,0 +1,141 @@
+// Hundreds of robots through the command line (issue 19's probe): MuJoCo's
+// memory is sized from the model, its errors are aia's, and no command waits
+// on stdin or writes a log into the working folder.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "support/test_support.h"
+
+namespace aia {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ReadFile;
+using testing::RunCommand;
+
+std::string WriteScenario(const std::string& dir, const std::string& name,
+                          int robots, int targets, double side, int boxes) {
+  const std::string path = dir + "/" + name + ".yaml";
+  std::ofstream(path) << "name: " << name << "\nseed: 2\n"
+                      << "workspace: {size: [" << side << ", " << side
+                      << "], obstacles: {random: {count: " << boxes << "}}}\n"
+                      << "robots: {count: " << robots << "}\n"
+                      << "targets: {count: " << targets << "}\n"
+                      << "mission: {stop_at_success: false}\n"
+                      << "policy: {name: random}\n";
+  return path;
+}
+
+// Every file under `dir` whose name holds ".tmp." (an unfinished write).
+std::vector<std::string> Temporaries(const std::string& dir) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp.") != std::string::npos)
+      found.push_back(e.path().string());
+  return found;
+}
+
+// The probe's worlds that printed MuJoCo's "Stack overflow" and waited for
+// Enter: 200 robots in 60 x 60 m without boxes, 150 robots with 51
+// targets, 190 robots with 200 boxes, 320 robots with 270 boxes. Each runs
+// from a folder of its own, which must hold no MUJOCO_LOG.TXT afterwards.
+TEST(ScaleTest, TheProbesWorldsRunWithoutMujocoErrors) {
+  const std::string dir = testing::MakeTempDir("aia_scale_");
+  struct Case {
+    const char* name;
+    int robots, targets;
+    double side;
+    int boxes;
+  };
+  const Case cases[] = {{"r200", 200, 1, 60.0, 0},
+                        {"r150", 150, 51, 20.0, 30},
+                        {"r190", 190, 2, 45.0, 200},
+                        {"r320", 320, 320, 57.0, 270}};
+  for (const Case& c : cases) {
+    const std::string scenario =
+        WriteScenario(dir, c.name, c.robots, c.targets, c.side, c.boxes);
+    const std::string out = dir + "/" + c.name;
+    const auto r =
+        RunCommand("cd '" + dir + "' && '" AIA_BINARY "' run '" + scenario +
+                   "' --max-steps 3 --quiet --out '" + out + "'");
+    ASSERT_EQ(r.exit_code, 0) << c.name << ": " << r.err << r.out;
+    EXPECT_EQ(r.out.find("ERROR"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("Press Enter"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(dir + "/MUJOCO_LOG.TXT")) << c.name;
+    EXPECT_TRUE(Temporaries(out).empty()) << c.name;
+    const std::string diagnostics = ReadFile(out + "/diagnostics.json");
+    EXPECT_NE(diagnostics.find("\"mujoco_warnings\": {}"), std::string::npos)
+        << c.name << ": " << diagnostics;
+  }
+  fs::remove_all(dir);
+}
+
+// Commands run with a pseudo-terminal as stdin, as in a user's shell: any
+// read of stdin (MuJoCo's default error handler waits for Enter there) would
+// block until the timeout. The harness itself is checked on a command that
+// does read stdin.
+TEST(ScaleTest, NoCommandWaitsOnStdinUnderATerminal) {
+  const std::string dir = testing::MakeTempDir("aia_pty_");
+  // script(1) gives the command a terminal fed from a pipe that stays open
+  // and silent (a sleep), so a read of stdin waits rather than sees EOF.
+  const auto under_pty = [&](const std::string& command, int seconds) {
+    std::ofstream(dir + "/command.sh") << command << "\n";
+    const std::string t = std::to_string(seconds);
+    return RunCommand("cd '" + dir + "' && bash -c \"timeout " + t +
+                      " script -qec 'sh command.sh' /dev/null < <(sleep " +
+                      std::to_string(seconds + 5) + ")\"");
+  };
+  EXPECT_EQ(under_pty("head -c 1", 3).exit_code, 124);  // the harness works
+
+  const std::string big = WriteScenario(dir, "big", 200, 2, 45.0, 100);
+  const std::string aia = std::string("'") + AIA_BINARY + "'";
+  const std::vector<std::string> commands = {
+      aia + " run '" + big + "' --max-steps 2 --out run",
+      aia + " render '" + big + "' --max-steps 1 --out video/big.mp4 --quiet",
+      aia + " world '" + big + "' --out world.xml",
+      aia + " plan '" + testing::SourcePath("scenarios/default.yaml") +
+          "' --budget 100",
+      aia + " run '" + testing::SourcePath("tests/data/bad/bool_as_yes.yaml") +
+          "' --out bad",
+      aia + " eval --sizes 3x3 --seeds 1 --policies greedy --out eval --quiet",
+  };
+  for (const std::string& c : commands) {
+    const auto r = under_pty(c, 240);
+    EXPECT_NE(r.exit_code, 124) << "timed out: " << c;
+    EXPECT_EQ(r.out.find("Press Enter"), std::string::npos) << c;
+  }
+  EXPECT_FALSE(fs::exists(dir + "/MUJOCO_LOG.TXT"));
+  fs::remove_all(dir);
+}
+
+TEST(ScaleTest, TraceOfManyRobotsKeepsTheTeamColumnOnly) {
+  const std::string dir = testing::MakeTempDir("aia_trace_");
+  const std::string scenario = WriteScenario(dir, "t", 120, 3, 30.0, 20);
+  const auto first_line = [](const std::string& path) {
+    const std::string text = ReadFile(path);
+    return text.substr(0, text.find('\n'));
+  };
+  auto r = testing::RunAia(
+      {"run", scenario, "--max-steps", "1", "--quiet", "--out", dir + "/auto"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(first_line(dir + "/auto/trace.csv"), "step,target,min_det");
+  r = testing::RunAia({"run", scenario, "--max-steps", "1", "--quiet",
+                       "--trace", "full", "--out", dir + "/full"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(first_line(dir + "/full/trace.csv")
+                .rfind("step,target,min_det,det_r0,det_r1,", 0),
+            0u);
+  r = testing::RunAia(
+      {"run", scenario, "--trace", "some", "--out", dir + "/bad"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err,
+            "error: command line: --trace: 'some' is not auto, full or min\n");
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace aia
