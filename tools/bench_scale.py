@@ -1,0 +1,170 @@
+#!/usr/bin/python3
+"""How each phase of a decision step grows with the team (issue 19, Scale).
+
+Runs `aia bench` once per team size N (N robots, N targets) in worlds that
+grow with the team: side = 20 sqrt(max(N, 40) / 40) m (the paper's 20 x 20 m
+world up to 40 robots, then 10 m^2 per robot: 100 x 100 m at 1000) with the
+paper's box density, 0.075 per m^2 (30 boxes at 20 m, 750 at 100 m). Each run
+is its own process, timed by /usr/bin/time for its peak memory. Writes
+OUT/scale.csv (one row per size: ms per step and per phase, mj_step/s inside
+episodes and mujoco-testspeed's on the same model, peak RSS), OUT/scale.png
+(ms per phase against N on log axes) and OUT/scale.md (the table, with each
+phase's growth order: the slope of log ms against log N between the two
+largest sizes). Every finished size is kept; a second call goes on.
+
+Usage:
+  tools/bench_scale.py --out DIR [--sizes 10,80,200,500,1000] [--policy igbnet]
+                       [--steps 10] [--repeats 3] [--aia build/aia]
+"""
+
+import argparse
+import csv
+import math
+import os
+import re
+import subprocess
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+PHASES = ["physics", "sensing", "fusion", "policy", "rest"]
+COLUMNS = (["robots", "side_m", "boxes", "steps_per_s", "ms_step"] + PHASES +
+           ["mj_step_per_s", "testspeed_per_s", "peak_rss_mib", "wall_s"])
+
+
+def world(n):
+    side = 20.0 * math.sqrt(max(n, 40) / 40.0)
+    return side, int(round(0.075 * side * side))
+
+
+def run_size(args, n):
+    side, boxes = world(n)
+    cmd = ["/usr/bin/time", "-f", "%M %e", args.aia, "bench", "--sizes", f"{n}x{n}",
+           "--steps", str(args.steps), "--repeats", str(args.repeats),
+           "--policy", args.policy, "--seed", str(args.seed),
+           "--set", f"workspace.size=[{side:g},{side:g}]",
+           "--set", f"workspace.obstacles.random.count={boxes}"]
+    print(f"[bench_scale] {n}x{n} in {side:g} x {side:g} m, {boxes} boxes ...",
+          file=sys.stderr, flush=True)
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed:\n{p.stdout}{p.stderr}")
+    row = None
+    for line in p.stdout.splitlines():
+        f = line.split()
+        if f and f[0] == f"{n}x{n}":
+            row = f
+    if row is None:
+        raise RuntimeError(f"no result row in:\n{p.stdout}")
+    rss_kib, wall = p.stderr.strip().splitlines()[-1].split()
+    values = [float(x.rstrip("%")) for x in row[1:]]
+    rate, ms, phys, sens, fus, pol, rest, _share, mj, ts = values
+    return {"robots": n, "side_m": f"{side:g}", "boxes": boxes,
+            "steps_per_s": rate, "ms_step": ms, "physics": phys, "sensing": sens,
+            "fusion": fus, "policy": pol, "rest": rest, "mj_step_per_s": mj,
+            "testspeed_per_s": ts, "peak_rss_mib": round(int(rss_kib) / 1024.0, 1),
+            "wall_s": float(wall)}
+
+
+def read_rows(path):
+    if not os.path.isfile(path):
+        return {}
+    with open(path, newline="") as f:
+        return {int(r["robots"]): r for r in csv.DictReader(f)}
+
+
+def write_rows(path, rows):
+    tmp = f"{path}.tmp.{os.getpid()}"
+    with open(tmp, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=COLUMNS)
+        w.writeheader()
+        for n in sorted(rows):
+            w.writerow({k: rows[n][k] for k in COLUMNS})
+    os.replace(tmp, path)
+
+
+def slope(rows, key):
+    ns = sorted(rows)
+    if len(ns) < 2:
+        return float("nan")
+    a, b = ns[-2], ns[-1]
+    ya, yb = float(rows[a][key]), float(rows[b][key])
+    if ya <= 0 or yb <= 0:
+        return float("nan")
+    return math.log(yb / ya) / math.log(b / a)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", required=True, help="output folder")
+    parser.add_argument("--sizes", default="10,80,200,500,1000",
+                        help="team sizes N (N robots, N targets), comma-separated")
+    parser.add_argument("--policy", default="igbnet", help="policy to time (default igbnet)")
+    parser.add_argument("--steps", type=int, default=10, help="decision steps per run")
+    parser.add_argument("--repeats", type=int, default=3, help="runs per size (medians)")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the worlds")
+    parser.add_argument("--aia", default="build/aia", help="the aia binary")
+    args = parser.parse_args(argv)
+    try:
+        sizes = sorted({int(s) for s in args.sizes.split(",") if s})
+    except ValueError:
+        print(f"error: --sizes: '{args.sizes}' is not a list of whole numbers",
+              file=sys.stderr)
+        return 2
+    if not sizes or min(sizes) < 1:
+        print("error: --sizes: give team sizes of at least 1", file=sys.stderr)
+        return 2
+    os.makedirs(args.out, exist_ok=True)
+    path = os.path.join(args.out, "scale.csv")
+    rows = read_rows(path)
+    for n in sizes:
+        if n in rows:
+            continue
+        try:
+            rows[n] = run_size(args, n)
+        except RuntimeError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
+        write_rows(path, rows)
+    rows = {n: rows[n] for n in sizes}
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    ns = sorted(rows)
+    for key in ["ms_step"] + PHASES:
+        ys = [float(rows[n][key]) for n in ns]
+        label = "whole step" if key == "ms_step" else key
+        ax.plot(ns, ys, marker="o", linewidth=2.2 if key == "ms_step" else 1.2,
+                label=f"{label} (~N^{slope(rows, key):.2f})")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("robots N (= targets)")
+    ax.set_ylabel("ms per decision step")
+    ax.set_title(f"aia bench, policy {args.policy}, worlds growing with N", fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "scale.png"), dpi=120)
+
+    with open(os.path.join(args.out, "scale.md"), "w") as f:
+        f.write("| N x N | world | ms/step | physics | sensing | fusion | policy | rest "
+                "| mj_step/s (episodes) | testspeed/s | peak RSS (MiB) |\n")
+        f.write("|---|---|---|---|---|---|---|---|---|---|---|\n")
+        for n in ns:
+            r = rows[n]
+            f.write(f"| {n}x{n} | {r['side_m']} m, {r['boxes']} boxes | "
+                    f"{float(r['ms_step']):.1f} | " +
+                    " | ".join(f"{float(r[p]):.1f}" for p in PHASES) +
+                    f" | {float(r['mj_step_per_s']):.0f} | {float(r['testspeed_per_s']):.0f}"
+                    f" | {float(r['peak_rss_mib']):.0f} |\n")
+        f.write("| growth (slope, two largest) | | " +
+                " | ".join(f"N^{slope(rows, k):.2f}" for k in ["ms_step"] + PHASES) +
+                " | | | |\n")
+    print(os.path.join(args.out, "scale.md"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
