@@ -123,6 +123,51 @@ torch::Tensor IgbNetModuleImpl::forward(const torch::Tensor& input) {
 
 IgbNet::IgbNet() : impl_(std::make_unique<Impl>()) {}
 
+IgbNet::Impl& IgbNet::impl() {
+  std::lock_guard<std::mutex> lock(impl_->folded_mutex);
+  impl_->folded.reset();
+  return *impl_;
+}
+
+namespace {
+
+std::pair<torch::Tensor, torch::Tensor> FoldInto(
+    const torch::nn::Conv2d& conv, const torch::nn::BatchNorm2d& bn) {
+  const torch::Tensor g =
+      bn->weight / torch::sqrt(bn->running_var + bn->options.eps());
+  return {(conv->weight * g.view({-1, 1, 1, 1})).contiguous(),
+          (bn->bias - bn->running_mean * g).contiguous()};
+}
+
+}  // namespace
+
+FoldedNet Fold(IgbNetModule& module) {
+  torch::NoGradGuard no_grad;
+  FoldedNet f;
+  std::tie(f.stem_w, f.stem_b) = FoldInto(module->stem, module->stem_bn);
+  for (const auto& b : *module->blocks) {
+    const auto* block = b->as<ResidualBlock>();
+    const auto [w1, b1] = FoldInto(block->conv1, block->bn1);
+    const auto [w2, b2] = FoldInto(block->conv2, block->bn2);
+    f.blocks.push_back({w1, b1, w2, b2});
+  }
+  return f;
+}
+
+torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
+                            const NetworkConfig& config,
+                            const torch::Tensor& input) {
+  torch::Tensor x = torch::relu(
+      torch::conv2d(input, f.stem_w, f.stem_b, config.stem_stride, 1));
+  for (const auto& b : f.blocks) {
+    torch::Tensor y = torch::relu(torch::conv2d(x, b[0], b[1], 1, 1));
+    y = torch::conv2d(y, b[2], b[3], 1, 1);
+    x = torch::relu(y + x);
+  }
+  x = module->pool(x).flatten(1);
+  return module->fc2(torch::relu(module->fc1(x)));
+}
+
 IgbNet::IgbNet(const NetworkConfig& config, std::uint64_t seed) : IgbNet() {
   torch::manual_seed(seed);
   impl_->config = config;
@@ -358,7 +403,15 @@ void IgbNet::Forward(const float* images, int batch, int height, int width,
   const torch::Tensor x =
       torch::from_blob(const_cast<float*>(images),
                        {batch, kNumChannels, height, width}, torch::kFloat32);
-  const torch::Tensor y = impl_->module->forward(x).contiguous();
+  std::shared_ptr<const FoldedNet> folded;
+  {
+    std::lock_guard<std::mutex> lock(impl_->folded_mutex);
+    if (!impl_->folded)
+      impl_->folded = std::make_shared<const FoldedNet>(Fold(impl_->module));
+    folded = impl_->folded;
+  }
+  const torch::Tensor y =
+      FoldedForward(*folded, impl_->module, impl_->config, x).contiguous();
   std::memcpy(logits, y.data_ptr<float>(),
               sizeof(float) * static_cast<std::size_t>(batch) * kNumMoves);
 }

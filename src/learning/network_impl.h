@@ -5,6 +5,11 @@
 
 #include <torch/torch.h>
 
+#include <array>
+#include <memory>
+#include <mutex>
+#include <vector>
+
 #include "aia/learning/network.h"
 
 namespace aia {
@@ -32,10 +37,27 @@ TORCH_MODULE(IgbNetModule);
 void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
                        const std::string& path);
 
+// The module in eval mode with each batch norm folded into the convolution
+// before it (w' = w gamma / sqrt(var + eps), b' = beta - mean gamma /
+// sqrt(var + eps)): the same function in a quarter fewer passes over the
+// activations, for inference.
+struct FoldedNet {
+  torch::Tensor stem_w, stem_b;
+  std::vector<std::array<torch::Tensor, 4>> blocks;  // w1, b1, w2, b2
+};
+FoldedNet Fold(IgbNetModule& module);
+torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
+                            const NetworkConfig& config,
+                            const torch::Tensor& x);
+
 struct IgbNet::Impl {
   NetworkConfig config;
   FileIdentity file;
   IgbNetModule module{nullptr};
+  // Built by the first Forward, dropped by IgbNet::impl() (through which
+  // training changes the module).
+  std::mutex folded_mutex;
+  std::shared_ptr<const FoldedNet> folded;
 };
 
 }  // namespace aia

@@ -62,7 +62,8 @@ class IgbNet {
   std::int64_t NumParameters() const;
 
   struct Impl;  // the libtorch module (src/learning/network_impl.h)
-  Impl& impl() { return *impl_; }
+  // The module to change (training): forgets what Forward folded.
+  Impl& impl();
   const Impl& impl() const { return *impl_; }
 
  private:
