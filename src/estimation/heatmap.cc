@@ -219,9 +219,14 @@ void Quantize(const double* block, int d, std::int64_t* key) {
     xi_scale = std::max(xi_scale, std::fabs(block[d * d + i]));
   const int eo = ScaleExponent(omega_scale);
   const int ex = ScaleExponent(xi_scale + omega_scale);
+  // Multiplying by a power of two is exact (as ldexp, but faster), and the
+  // exponents stay far from the double range's ends.
+  const double so = std::ldexp(1.0, kKeyBits - eo);
+  const double sx = std::ldexp(1.0, kKeyBits - ex);
   for (int i = 0; i < d * d + d; ++i) {
-    const double q = std::ldexp(block[i], (i < d * d ? -eo : -ex) + kKeyBits);
-    key[i] = std::isfinite(q) ? std::llround(q) : INT64_MIN;
+    const double q = block[i] * (i < d * d ? so : sx);
+    key[i] =
+        std::isfinite(q) && std::fabs(q) < 9e18 ? std::llround(q) : INT64_MIN;
   }
   key[d * d + d] = eo;
   key[d * d + d + 1] = ex;
@@ -319,8 +324,10 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
   own_used_ = used;
 }
 
-void TeamHeatmap::Robot(int b, Grid<float>* out) const {
+const Grid<float>& TeamHeatmap::Robot(int b, Grid<float>* scratch) const {
   AIA_CHECK(b >= 0 && b < static_cast<int>(robot_own_.size()));
+  if (robot_own_[b].empty()) return base_;
+  Grid<float>* out = scratch;
   AIA_CHECK(out->nx() == base_.nx() && out->ny() == base_.ny());
   std::copy(base_.data().begin(), base_.data().end(), out->data().begin());
   for (const int o : robot_own_[b]) {
@@ -328,6 +335,7 @@ void TeamHeatmap::Robot(int b, Grid<float>* out) const {
     AddHeatStamp(common_[own.target], true, out);
     AddHeatStamp(own.stamp, false, out);
   }
+  return *out;
 }
 
 }  // namespace aia

@@ -83,9 +83,9 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
         neighbours.clear();
         for (int j : ctx.comm->Neighbors(i))
           if (j != i) neighbours.push_back(lattice.Point((*ctx.positions)[j]));
-        heat_.Robot(b, &heat);
         renderer_->RenderWithHeat(lattice.Point((*ctx.positions)[i]),
-                                  neighbours, heat, images_.data() + b * size);
+                                  neighbours, heat_.Robot(b, &heat),
+                                  images_.data() + b * size);
       }
       net_->Forward(images_.data() + begin * size, end - begin,
                     renderer_->height(), renderer_->width(),

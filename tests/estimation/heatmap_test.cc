@@ -216,8 +216,8 @@ TEST(TeamHeatmapTest, EachRobotsHeatmapIsItsOwnToFloatRounding) {
   // eight robots' targets 4 and 5; target 0's rounded copy is the majority's.
   EXPECT_EQ(team.own_stamps(), 1 + 2 + 16);
   for (int b = 0; b < 8; ++b) {
-    Grid<float> got = shape, want = shape;
-    team.Robot(b, &got);
+    Grid<float> scratch = shape, want = shape;
+    const Grid<float>& got = team.Robot(b, &scratch);
     ProjectHeatmap(t.beliefs, b, t.prior, params, &want);
     for (std::size_t c = 0; c < got.size(); ++c)
       ASSERT_NEAR(got.data()[c], want.data()[c], 1e-6) << "robot " << b;
@@ -234,9 +234,9 @@ TEST(TeamHeatmapTest, RelabellingTheRobotsPermutesTheHeatmaps) {
   const std::vector<int> perm = {5, 2, 7, 0, 6, 1, 3, 4};
   b.Prepare(t.beliefs, perm, t.prior, params, shape);
   for (int k = 0; k < 8; ++k) {
-    Grid<float> x = shape, y = shape;
-    a.Robot(perm[k], &x);
-    b.Robot(k, &y);
+    Grid<float> sx = shape, sy = shape;
+    const Grid<float>& x = a.Robot(perm[k], &sx);
+    const Grid<float>& y = b.Robot(k, &sy);
     ASSERT_EQ(x.data(), y.data()) << "robot " << perm[k];
   }
 }

@@ -105,9 +105,10 @@ class TeamHeatmap {
   void Prepare(const BeliefSet& beliefs, const std::vector<int>& rows,
                const std::vector<double>& log_det_prior,
                const HeatmapParams& params, const Grid<float>& grid);
-  // The heatmap of rows[b] into `out` (shaped like the grid). Thread-safe
-  // for distinct `out`s once prepared.
-  void Robot(int b, Grid<float>* out) const;
+  // The heatmap of rows[b]: the base itself when the robot holds the
+  // majority's belief of every target, else built in `scratch` (shaped like
+  // the grid). Thread-safe for distinct scratches once prepared.
+  const Grid<float>& Robot(int b, Grid<float>* scratch) const;
   // Robot-target pairs whose heat was not the common one (a measure of the
   // work saved).
   long own_stamps() const { return static_cast<long>(own_used_); }
