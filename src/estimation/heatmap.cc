@@ -245,11 +245,15 @@ void Dequantize(const std::int64_t* key, int d, double* block) {
 void TeamHeatmap::Prepare(const BeliefSet& beliefs,
                           const std::vector<int>& rows,
                           const std::vector<double>& log_det_prior,
-                          const HeatmapParams& params,
-                          const Grid<float>& grid) {
+                          const HeatmapParams& params, const Grid<float>& grid,
+                          const HeatRunner& run, int workers) {
   const int m = beliefs.layout().num_targets();
   AIA_CHECK(static_cast<int>(log_det_prior.size()) == m);
   AIA_CHECK(params.eps > 0.0 && params.blur >= 0.0 && params.cutoff > 0.0);
+  AIA_CHECK(workers >= 1);
+  const HeatRunner serial = [](int n, const HeatTask& f) { f(0, n, 0); };
+  const HeatRunner& runner = run ? run : serial;
+  if (!run) workers = 1;
   common_.resize(m);
   if (base_.nx() != grid.nx() || base_.ny() != grid.ny() ||
       base_.cell() != grid.cell()) {
@@ -259,79 +263,87 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
   }
   // The belief more than half the rows hold about each target, if any, to
   // 2^-40 of its scale (Boyer-Moore's majority vote over the keys, then a
-  // count), and its heat into the base. The majority's block is the one its
-  // key gives back, so no robot's heatmap depends on the order of the rows:
-  // relabelling the robots permutes them.
+  // count). The majority's block is the one its key gives back, so no
+  // robot's heatmap depends on the order of the rows: relabelling the robots
+  // permutes them. Targets in parallel; their heat into the base in order.
   const BeliefLayout& layout = beliefs.layout();
   const int n = static_cast<int>(rows.size());
-  if (representative_.rows() != 1 || &representative_.layout() != &layout)
-    representative_ = BeliefSet(&layout, 1);
   member_.assign(static_cast<std::size_t>(n) * m, 0);
-  for (int k = 0; k < m; ++k) {
-    const int d = layout.dim(k);
-    const int len = d * d + d + 2;
-    keys_.resize(static_cast<std::size_t>(n) * len);
-    for (int b = 0; b < n; ++b)
-      Quantize(beliefs.Omega(rows[b], k).data(), d, &keys_[b * len]);
-    const auto same = [&](int a, int b) {
-      return std::equal(&keys_[a * len], &keys_[a * len] + len,
-                        &keys_[b * len]);
-    };
-    int candidate = -1, count = 0;
-    for (int b = 0; b < n; ++b) {
-      if (count == 0) {
-        candidate = b;
-        count = 1;
-      } else {
-        count += same(b, candidate) ? 1 : -1;
+  if (static_cast<int>(scratch_.size()) < workers) scratch_.resize(workers);
+  runner(m, [&](int k0, int k1, int worker) {
+    Scratch& w = scratch_[worker];
+    if (w.representative.rows() != 1 || &w.representative.layout() != &layout)
+      w.representative = BeliefSet(&layout, 1);
+    for (int k = k0; k < k1; ++k) {
+      const int d = layout.dim(k);
+      const int len = d * d + d + 2;
+      w.keys.resize(static_cast<std::size_t>(n) * len);
+      for (int b = 0; b < n; ++b)
+        Quantize(beliefs.Omega(rows[b], k).data(), d, &w.keys[b * len]);
+      const auto same = [&](int a, int b) {
+        return std::equal(&w.keys[a * len], &w.keys[a * len] + len,
+                          &w.keys[b * len]);
+      };
+      int candidate = -1, count = 0;
+      for (int b = 0; b < n; ++b) {
+        if (count == 0) {
+          candidate = b;
+          count = 1;
+        } else {
+          count += same(b, candidate) ? 1 : -1;
+        }
       }
+      HeatStamp& stamp = common_[k];
+      stamp.nx = stamp.ny = 0;
+      if (candidate < 0) continue;
+      count = 0;
+      for (int b = 0; b < n; ++b) count += same(b, candidate);
+      if (2 * count <= n) continue;
+      for (int b = 0; b < n; ++b)
+        member_[static_cast<std::size_t>(b) * m + k] = same(b, candidate);
+      Dequantize(&w.keys[candidate * len], d,
+                 w.representative.Omega(0, k).data());
+      const HeatSource s = SourceOf(w.representative, 0, k);
+      MakeHeatStamp(s.mean, s.cov,
+                    HeatWeight(s.log_det, log_det_prior[k], params.eps),
+                    params.blur, params.cutoff, grid, &stamp);
     }
-    HeatStamp& stamp = common_[k];
-    stamp.nx = stamp.ny = 0;
-    if (candidate < 0) continue;
-    count = 0;
-    for (int b = 0; b < n; ++b) count += same(b, candidate);
-    if (2 * count <= n) continue;
-    for (int b = 0; b < n; ++b)
-      member_[static_cast<std::size_t>(b) * m + k] = same(b, candidate);
-    Dequantize(&keys_[candidate * len], d, representative_.Omega(0, k).data());
-    const HeatSource s = SourceOf(representative_, 0, k);
-    MakeHeatStamp(s.mean, s.cov,
-                  HeatWeight(s.log_det, log_det_prior[k], params.eps),
-                  params.blur, params.cutoff, grid, &stamp);
-    AddHeatStamp(stamp, false, &base_);
-  }
-  // Each row's own stamps where it holds another belief. The pool of stamps
-  // keeps its memory from step to step.
-  robot_own_.resize(rows.size());
-  std::size_t used = 0;
-  for (int b = 0; b < n; ++b) {
-    robot_own_[b].clear();
-    for (int k = 0; k < m; ++k) {
-      if (member_[static_cast<std::size_t>(b) * m + k]) continue;
-      const HeatSource s = SourceOf(beliefs, rows[b], k);
-      const double w = HeatWeight(s.log_det, log_det_prior[k], params.eps);
-      if (!(w > 0.0) && common_[k].nx == 0) continue;  // no heat either way
-      if (used == own_.size()) own_.emplace_back();
-      Own& own = own_[used];
-      own.target = k;
-      MakeHeatStamp(s.mean, s.cov, w, params.blur, params.cutoff, grid,
-                    &own.stamp);
-      robot_own_[b].push_back(static_cast<int>(used));
-      ++used;
+  });
+  for (int k = 0; k < m; ++k) AddHeatStamp(common_[k], false, &base_);
+  // Each row's own stamps where it holds another belief, rows in parallel.
+  // Each row keeps its stamps' memory from step to step.
+  if (robot_own_.size() < rows.size()) robot_own_.resize(rows.size());
+  robot_used_.assign(rows.size(), 0);
+  runner(n, [&](int b0, int b1, int) {
+    for (int b = b0; b < b1; ++b) {
+      std::vector<Own>& own = robot_own_[b];
+      int used = 0;
+      for (int k = 0; k < m; ++k) {
+        if (member_[static_cast<std::size_t>(b) * m + k]) continue;
+        const HeatSource s = SourceOf(beliefs, rows[b], k);
+        const double w = HeatWeight(s.log_det, log_det_prior[k], params.eps);
+        if (!(w > 0.0) && common_[k].nx == 0) continue;  // no heat either way
+        if (used == static_cast<int>(own.size())) own.emplace_back();
+        own[used].target = k;
+        MakeHeatStamp(s.mean, s.cov, w, params.blur, params.cutoff, grid,
+                      &own[used].stamp);
+        ++used;
+      }
+      robot_used_[b] = used;
     }
-  }
-  own_used_ = used;
+  });
+  own_used_ = 0;
+  for (const int u : robot_used_) own_used_ += u;
 }
 
 const Grid<float>& TeamHeatmap::Robot(int b, Grid<float>* scratch) const {
-  AIA_CHECK(b >= 0 && b < static_cast<int>(robot_own_.size()));
-  if (robot_own_[b].empty()) return base_;
+  AIA_CHECK(b >= 0 && b < static_cast<int>(robot_used_.size()));
+  if (robot_used_[b] == 0) return base_;
   Grid<float>* out = scratch;
   AIA_CHECK(out->nx() == base_.nx() && out->ny() == base_.ny());
   std::copy(base_.data().begin(), base_.data().end(), out->data().begin());
-  for (const int o : robot_own_[b]) {
-    const Own& own = own_[o];
+  for (int o = 0; o < robot_used_[b]; ++o) {
+    const Own& own = robot_own_[b][o];
     AddHeatStamp(common_[own.target], true, out);
     AddHeatStamp(own.stamp, false, out);
   }

@@ -59,9 +59,11 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
     no_prior_.assign(ctx.beliefs->layout().num_targets(), 0.0);
     prior = &no_prior_;
   }
-  heat_.Prepare(*ctx.beliefs, rows_, *prior, renderer_->Heatmap(ctx.eps),
-                renderer_->occupancy());
   const int workers = std::max(1, PolicyThreads());
+  heat_.Prepare(
+      *ctx.beliefs, rows_, *prior, renderer_->Heatmap(ctx.eps),
+      renderer_->occupancy(),
+      [](int n, const HeatTask& f) { ParallelFor(n, 16, f); }, workers);
   if (static_cast<int>(worker_heat_.size()) < workers) {
     worker_heat_.resize(workers, renderer_->occupancy());
     worker_neighbours_.resize(workers);

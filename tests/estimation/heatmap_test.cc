@@ -7,6 +7,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <thread>
 
 namespace aia {
 namespace {
@@ -238,6 +239,29 @@ TEST(TeamHeatmapTest, RelabellingTheRobotsPermutesTheHeatmaps) {
     const Grid<float>& x = a.Robot(perm[k], &sx);
     const Grid<float>& y = b.Robot(k, &sy);
     ASSERT_EQ(x.data(), y.data()) << "robot " << perm[k];
+  }
+}
+
+TEST(TeamHeatmapTest, ThreadsDoNotChangeTheHeatmaps) {
+  Team t;
+  HeatmapParams params;
+  params.eps = 0.01;
+  const Grid<float> shape(60, 60, 0.5);
+  const std::vector<int> rows = {0, 1, 2, 3, 4, 5, 6, 7};
+  TeamHeatmap serial, threaded;
+  serial.Prepare(t.beliefs, rows, t.prior, params, shape);
+  // Three workers, the work split unevenly between them.
+  const HeatRunner three = [](int n, const HeatTask& f) {
+    std::vector<std::thread> pool;
+    const int cut[4] = {0, n / 5, n / 2, n};
+    for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);
+    for (std::thread& th : pool) th.join();
+  };
+  threaded.Prepare(t.beliefs, rows, t.prior, params, shape, three, 3);
+  EXPECT_EQ(serial.own_stamps(), threaded.own_stamps());
+  for (int b = 0; b < 8; ++b) {
+    Grid<float> sa = shape, sb = shape;
+    ASSERT_EQ(serial.Robot(b, &sa).data(), threaded.Robot(b, &sb).data());
   }
 }
 

@@ -12,6 +12,7 @@
 #define AIA_ESTIMATION_HEATMAP_H_
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "aia/core/grid.h"
@@ -99,12 +100,20 @@ void ProjectHeatmap(const BeliefSet& beliefs, int row,
 // them; it differs from its own ProjectHeatmap only in float rounding. Cost:
 // M stamps plus, per robot, the grid and its differing targets, instead of
 // N * M stamps.
+// A way to run f(begin, end, worker) over [0, n) on threads, workers
+// numbered from 0 (learning/network.h's ParallelFor is one).
+using HeatTask = std::function<void(int, int, int)>;
+using HeatRunner = std::function<void(int, const HeatTask&)>;
+
 class TeamHeatmap {
  public:
-  // For rows `rows` of `beliefs`, on grids shaped like `grid`.
+  // For rows `rows` of `beliefs`, on grids shaped like `grid`; targets, then
+  // rows, split over `run`'s `workers` threads when given (the result does
+  // not depend on them).
   void Prepare(const BeliefSet& beliefs, const std::vector<int>& rows,
                const std::vector<double>& log_det_prior,
-               const HeatmapParams& params, const Grid<float>& grid);
+               const HeatmapParams& params, const Grid<float>& grid,
+               const HeatRunner& run = {}, int workers = 1);
   // The heatmap of rows[b]: the base itself when the robot holds the
   // majority's belief of every target, else built in `scratch` (shaped like
   // the grid). Thread-safe for distinct scratches once prepared.
@@ -120,14 +129,19 @@ class TeamHeatmap {
   };
   std::vector<HeatStamp> common_;  // per target
   Grid<float> base_;
-  std::vector<std::vector<int>> robot_own_;  // per row: indices into own_
-  std::vector<Own> own_;  // a pool: the first own_used_ are this step's
+  // Per row: its own stamps (the first robot_used_[b] are this step's; the
+  // rest keep their memory).
+  std::vector<std::vector<Own>> robot_own_;
+  std::vector<int> robot_used_;
   std::size_t own_used_ = 0;
-  // Scratch: one target's keys per row, whether row b holds the majority's
-  // belief of target k (b * M + k), the majority's blocks.
-  std::vector<std::int64_t> keys_;
+  // Whether row b holds the majority's belief of target k (b * M + k); per
+  // worker: one target's keys per row, the majority's blocks.
   std::vector<std::uint8_t> member_;
-  BeliefSet representative_;
+  struct Scratch {
+    std::vector<std::int64_t> keys;
+    BeliefSet representative;
+  };
+  std::vector<Scratch> scratch_;
 };
 
 }  // namespace aia
