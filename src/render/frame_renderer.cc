@@ -632,6 +632,8 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
   const double spacing_r = std::sqrt(area_px / std::max(1, n));
   const double dot =
       std::max(1.5, std::min(std::max(robot_px, 2.5 * unit), 0.3 * spacing_r));
+  // A dot's ring stays thin, so that its colour shows.
+  const int dot_ring = std::max(1, static_cast<int>(std::lround(0.6 * unit)));
   for (int i = 0; i < n; ++i) {
     const cv::Point p = Fixed(view_.ToPixel(o.robots[i], 2 * kRobotHalfHeight));
     const int ring =
@@ -640,7 +642,8 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
       if (compact_)
         cv::circle(*image, p, ring, RobotBgr(i), cv::FILLED, cv::LINE_AA,
                    kShift);
-      cv::circle(*image, p, ring, kBlack, thin, cv::LINE_AA, kShift);
+      cv::circle(*image, p, ring, kBlack, compact_ ? dot_ring : thin,
+                 cv::LINE_AA, kShift);
       continue;
     }
     cv::circle(*image, p, ring, kFailed, cv::FILLED, cv::LINE_AA, kShift);
