@@ -189,6 +189,11 @@ Action AddRenderCommand(CLI::App& app) {
   cmd->add_option("--hold", render->hold_seconds,
                   "seconds the final frame is held")
       ->capture_default_str();
+  cmd->add_option("--edges", render->edges,
+                  "communication edges drawn: auto (lost messages, and the "
+                  "delivered ones while they stay readable), all, lost or "
+                  "none")
+      ->capture_default_str();
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;

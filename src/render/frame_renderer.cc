@@ -63,10 +63,110 @@ void DashedLine(cv::Mat* image, const Vec2& a, const Vec2& b,
   }
 }
 
+// A compact target: a square of half-size `half` pixels around `center`
+// (continuous pixel coordinates) in `color`, so that it differs from the
+// robots' round dots; outlined dark unless `outline` is 0 (a localized
+// target, which needs no more attention).
+void DrawTargetMarker(cv::Mat* image, const Vec2& center, double half,
+                      const cv::Scalar& color, int outline) {
+  const cv::Point corners[4] = {
+      Fixed(center + Vec2(-half, -half)), Fixed(center + Vec2(half, -half)),
+      Fixed(center + Vec2(half, half)), Fixed(center + Vec2(-half, half))};
+  cv::fillConvexPoly(*image, corners, 4, color, cv::LINE_AA, kShift);
+  if (outline <= 0) return;
+  const cv::Point* polygon = corners;
+  const int count = 4;
+  cv::polylines(*image, &polygon, &count, 1, true, kBlack, outline, cv::LINE_AA,
+                kShift);
+}
+
+// The legend's column: 140 pixels at 480 rows, growing with the image.
+constexpr double kLegendColumn = 140.0;
+// The column is kept only when it shrinks the workspace by at most this much
+// (never for a square workspace in a 4:3 or wider image).
+constexpr double kLegendMaxLoss = 0.15;
+// MuJoCo's robot discs and target spheres are drawn (as bodies of the scene)
+// only while a robot's disc is at least this many pixels in radius and there
+// are at most kMaxSceneBodies robots and targets; else the overlay draws dots.
+constexpr double kMinBodyPixels = 2.0;
+constexpr int kMaxSceneBodies = 250;
+// Trails: robot-steps in all, and the fewest per robot.
+constexpr int kTrailBudget = 500;
+constexpr int kMinTrail = 5;
+// Border walls' thickness outside the workspace (world/mjcf.cc).
+constexpr double kWallThickness = 0.1;
+
+const cv::Scalar kPaper(236, 236, 236);  // the legend's background
+const cv::Scalar kTint(120, 215, 250);   // sensing discs as one tint
+constexpr double kDiscAlpha = 0.18, kTintAlpha = 0.22;
+
+double Unit(int image_height) { return std::max(1.0, image_height / 480.0); }
+
+struct LegendGeometry {
+  int row = 0, icon = 0, pad = 0;
+};
+LegendGeometry LegendRows(int image_height) {
+  const double unit = Unit(image_height);
+  LegendGeometry g;
+  g.row = std::max(12, static_cast<int>(std::lround(18 * unit)));
+  g.icon = static_cast<int>(std::lround(1.3 * g.row));
+  g.pad = std::max(3, g.row / 4);
+  return g;
+}
+constexpr int kMaxLegendRows = 9;
+
+// The view of a frame: the workspace below the heads-up band and, when the
+// image is wide enough, left of the legend's column.
+TopDownView FrameView(const Vec2& size, const SceneSettings& s, double fovy) {
+  const int band = HudBandPixels(s.height);
+  const TopDownView plain(size, s.width, s.height, fovy, band, kObstacleHeight);
+  const int column =
+      static_cast<int>(std::lround(kLegendColumn * Unit(s.height)));
+  const LegendGeometry g = LegendRows(s.height);
+  if (column >= s.width / 2 ||
+      kMaxLegendRows * g.row + 2 * g.pad > s.height - band - 2 * g.pad)
+    return plain;
+  const TopDownView beside(size, s.width, s.height, fovy, band, kObstacleHeight,
+                           0.25, column);
+  return beside.Scale() >= (1.0 - kLegendMaxLoss) * plain.Scale() ? beside
+                                                                  : plain;
+}
+
 }  // namespace
 
 int HudBandPixels(int image_height) {
   return std::max(12, static_cast<int>(std::lround(0.055 * image_height)));
+}
+
+bool ParseEdgeMode(const std::string& text, EdgeMode* mode) {
+  for (EdgeMode m :
+       {EdgeMode::kAuto, EdgeMode::kAll, EdgeMode::kLost, EdgeMode::kNone}) {
+    if (text == EdgeModeName(m)) {
+      *mode = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* EdgeModeName(EdgeMode mode) {
+  switch (mode) {
+    case EdgeMode::kAll:
+      return "all";
+    case EdgeMode::kLost:
+      return "lost";
+    case EdgeMode::kNone:
+      return "none";
+    case EdgeMode::kAuto:
+      break;
+  }
+  return "auto";
+}
+
+int TrailSteps(int trail_steps, int robots) {
+  if (trail_steps <= 0) return 0;
+  return std::min(trail_steps,
+                  std::max(kMinTrail, kTrailBudget / std::max(1, robots)));
 }
 
 FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
@@ -74,13 +174,16 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
     : sim_(sim),
       settings_(settings),
       scene_(sim.model(), settings.scene),
-      view_(map.size(), settings.scene.width, settings.scene.height,
-            sim.model()->vis.global.fovy, HudBandPixels(settings.scene.height),
-            kObstacleHeight),
+      view_(
+          FrameView(map.size(), settings.scene, sim.model()->vis.global.fovy)),
       robot_radius_(map.robot_radius()),
+      world_area_m2_(map.size().x() * map.size().y()),
+      trail_steps_(TrailSteps(settings.trail_steps, sim.num_robots())),
       trails_(sim.num_robots()) {
   const Vec2& size = map.size();
+  const int width = settings.scene.width, height = settings.scene.height;
   view_.SetCamera(&camera_);
+  const cv::Rect image(0, 0, width, height);
   // The workspace's floor rectangle in whole pixels, for the heatmap layer.
   const Vec2 top_left = view_.ToPixel({0.0, size.y()});
   const Vec2 bottom_right = view_.ToPixel({size.x(), 0.0});
@@ -88,86 +191,144 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
   const int y0 = static_cast<int>(std::lround(top_left.y()));
   const int x1 = static_cast<int>(std::lround(bottom_right.x()));
   const int y1 = static_cast<int>(std::lround(bottom_right.y()));
-  heat_rect_ = cv::Rect(x0, y0, std::max(1, x1 - x0), std::max(1, y1 - y0)) &
-               cv::Rect(0, 0, settings.scene.width, settings.scene.height);
-  // The margin right of the walls' tops.
-  const int right = static_cast<int>(
-      std::ceil(view_.ToPixel({size.x() + 0.3, 0.0}, kObstacleHeight).x()));
-  const int room = settings.scene.width - right;
-  if (room >= 72) {
-    const int pad = std::max(3, room / 16);
-    legend_room_ = cv::Rect(right + pad, view_.band_px() + pad, room - 2 * pad,
-                            settings.scene.height - view_.band_px() - 2 * pad);
+  heat_rect_ =
+      cv::Rect(x0, y0, std::max(1, x1 - x0), std::max(1, y1 - y0)) & image;
+  // The walls' tops, in the pixels that they touch.
+  const double t = kWallThickness;
+  const Vec2 wall_tl = view_.ToPixel({-t, size.y() + t}, kObstacleHeight);
+  const Vec2 wall_br = view_.ToPixel({size.x() + t, -t}, kObstacleHeight);
+  const int wx0 = static_cast<int>(std::floor(wall_tl.x()));
+  const int wy0 = static_cast<int>(std::floor(wall_tl.y()));
+  world_rect_ =
+      cv::Rect(wx0, wy0, static_cast<int>(std::ceil(wall_br.x())) - wx0,
+               static_cast<int>(std::ceil(wall_br.y())) - wy0) &
+      image;
+  // The legend: in the view's column, just right of the walls.
+  if (view_.side_px() > 0) {
+    const int pad = LegendRows(height).pad;
+    const int left =
+        std::min(world_rect_.br().x + 2 * pad, width - view_.side_px() + pad);
+    legend_room_ =
+        cv::Rect(left, view_.band_px() + pad, view_.side_px() - 2 * pad,
+                 height - view_.band_px() - 2 * pad);
   }
-  BuildLegend(false);
+  // Bodies too small or too many to show: MuJoCo draws the static world
+  // (floor, walls, obstacles) once, the overlay the robots and targets.
+  const double robot_px = robot_radius_ * view_.Scale(2 * kRobotHalfHeight);
+  compact_ = robot_px < kMinBodyPixels ||
+             sim.num_robots() + sim.num_targets() > kMaxSceneBodies;
+  if (compact_) scene_.SetGeomGroupVisible(kGroupAgent, false);
+  legend_key_.messages =
+      settings_.edges == EdgeMode::kAll || settings_.edges == EdgeMode::kAuto;
+  legend_key_.lost = settings_.edges != EdgeMode::kNone;
+  BuildLegend(legend_key_);
 }
 
-void FrameRenderer::BuildLegend(bool heat) {
-  legend_heat_ = heat;
+void FrameRenderer::BuildLegend(const LegendKey& key) {
+  legend_key_ = key;
+  legend_built_ = true;
   if (legend_room_.empty()) return;
   legend_rect_ = legend_room_;
-  const double unit = std::max(1.0, view_.height() / 480.0);
+  const double unit = Unit(view_.height());
   const int thin = static_cast<int>(std::lround(unit));
   const int thick = static_cast<int>(std::lround(2 * unit));
-  const int row = std::max(12, static_cast<int>(std::lround(18 * unit)));
-  const int icon = static_cast<int>(std::lround(1.3 * row));
-  const int pad = std::max(3, row / 4);
-  const char* labels[] = {"robot",        "sensing range", "message",
-                          "lost message", "target",        "det > eps",
-                          "det <= eps",   "failed robot",  "heat"};
-  const int rows = heat ? 9 : 8;
+  const LegendGeometry g = LegendRows(view_.height());
+  const int row = g.row, icon = g.icon, pad = g.pad;
+  enum Icon {
+    kRobotIcon,
+    kSensingIcon,
+    kMessageIcon,
+    kLostIcon,
+    kTargetIcon,
+    kUncertainIcon,
+    kLocalizedIcon,
+    kFailedIcon,
+    kHeatIcon
+  };
+  std::vector<std::pair<Icon, const char*>> rows = {
+      {kRobotIcon, "robot"},
+      {kSensingIcon, key.tint ? "sensed area" : "sensing range"},
+      {kMessageIcon, key.messages ? "message" : "message: off"},
+      {kLostIcon, key.lost ? "lost message" : "lost: off"}};
+  // Compact: the target is the marker coloured by det Sigma.
+  if (!compact_) rows.push_back({kTargetIcon, "target"});
+  rows.push_back(
+      {kUncertainIcon, compact_ ? "target, det > eps" : "det > eps"});
+  rows.push_back(
+      {kLocalizedIcon, compact_ ? "target, det <= eps" : "det <= eps"});
+  rows.push_back({kFailedIcon, "failed robot"});
+  if (key.heat) rows.push_back({kHeatIcon, "heat"});
   const int font = cv::FONT_HERSHEY_SIMPLEX;
   const int text_room = legend_rect_.width - icon - 3 * pad;
   double scale = row / 42.0;
   int baseline = 0;
-  for (int i = 0; i < rows; ++i) {
-    const cv::Size size = cv::getTextSize(labels[i], font, scale, 1, &baseline);
+  for (const auto& [what, label] : rows) {
+    const cv::Size size = cv::getTextSize(label, font, scale, 1, &baseline);
     if (size.width > text_room)
       scale *= static_cast<double>(text_room) / size.width;
   }
-  const int height = std::min(legend_room_.height, rows * row + 2 * pad);
+  const int height = std::min(legend_room_.height,
+                              static_cast<int>(rows.size()) * row + 2 * pad);
   legend_rect_.height = height;
   legend_.create(height, legend_rect_.width, CV_8UC3);
-  legend_.setTo(cv::Scalar(236, 236, 236));
+  legend_.setTo(kPaper);
   cv::rectangle(legend_, cv::Rect(0, 0, legend_.cols, legend_.rows),
                 cv::Scalar(150, 150, 150), 1);
-  for (int i = 0; i < rows; ++i) {
+  for (size_t i = 0; i < rows.size(); ++i) {
     const double cy = pad + (i + 0.5) * row;
     const double cx = pad + 0.5 * icon;
     const Vec2 c(cx + 0.5, cy + 0.5);  // continuous coordinates of the centre
     const cv::Point p = Fixed(c);
     const double r = 0.36 * row;
     const Vec2 left(pad + 0.5, cy + 0.5), right(pad + icon + 0.5, cy + 0.5);
-    switch (i) {
-      case 0:
+    switch (rows[i].first) {
+      case kRobotIcon:
         cv::circle(legend_, p, FixedLength(0.22 * row), RobotBgr(0), cv::FILLED,
                    cv::LINE_AA, kShift);
         cv::circle(legend_, p, FixedLength(0.22 * row), kBlack, thin,
                    cv::LINE_AA, kShift);
         break;
-      case 1:
+      case kSensingIcon:
+        if (key.tint) {
+          cv::circle(legend_, p, FixedLength(r),
+                     kTint * kTintAlpha + kPaper * (1.0 - kTintAlpha),
+                     cv::FILLED, cv::LINE_AA, kShift);
+          break;
+        }
         cv::circle(legend_, p, FixedLength(r),
-                   RobotBgr(3) * 0.25 + cv::Scalar(236, 236, 236) * 0.75,
-                   cv::FILLED, cv::LINE_AA, kShift);
+                   RobotBgr(3) * 0.25 + kPaper * 0.75, cv::FILLED, cv::LINE_AA,
+                   kShift);
         cv::circle(legend_, p, FixedLength(r), RobotBgr(3, 0.8), thin,
                    cv::LINE_AA, kShift);
         break;
-      case 2:
-        cv::line(legend_, Fixed(left), Fixed(right), kEdge, thin, cv::LINE_AA,
-                 kShift);
+      case kMessageIcon:
+        cv::line(legend_, Fixed(left), Fixed(right),
+                 key.messages ? kEdge : cv::Scalar(200, 200, 200), thin,
+                 cv::LINE_AA, kShift);
         break;
-      case 3:
-        DashedLine(&legend_, left, right, kLost, thin, 5 * unit, 4 * unit);
+      case kLostIcon:
+        DashedLine(&legend_, left, right,
+                   key.lost ? kLost : cv::Scalar(200, 200, 200), thin, 5 * unit,
+                   4 * unit);
         break;
-      case 4:
+      case kTargetIcon:
         cv::circle(legend_, p, FixedLength(0.12 * row), cv::Scalar(25, 25, 217),
                    cv::FILLED, cv::LINE_AA, kShift);
         cv::circle(legend_, p, FixedLength(0.26 * row), kBlack, thin,
                    cv::LINE_AA, kShift);
         break;
-      case 5:
-      case 6: {
-        const cv::Scalar color = i == 5 ? kUnlocalized : kLocalized;
+      case kUncertainIcon:
+      case kLocalizedIcon: {
+        const cv::Scalar color =
+            rows[i].first == kUncertainIcon ? kUnlocalized : kLocalized;
+        if (compact_) {
+          cv::ellipse(legend_, p,
+                      cv::Size(FixedLength(0.46 * icon), FixedLength(r)), 0.0,
+                      0.0, 360.0, color, thin, cv::LINE_AA, kShift);
+          DrawTargetMarker(&legend_, c, 0.16 * row, color,
+                           rows[i].first == kUncertainIcon ? thin : 0);
+          break;
+        }
         cv::ellipse(legend_, p,
                     cv::Size(FixedLength(0.46 * icon), FixedLength(r)), 0.0,
                     0.0, 360.0, color, thick, cv::LINE_AA, kShift);
@@ -178,7 +339,7 @@ void FrameRenderer::BuildLegend(bool heat) {
                  color, thick, cv::LINE_AA, kShift);
         break;
       }
-      case 7: {
+      case kFailedIcon: {
         cv::circle(legend_, p, FixedLength(0.2 * row), kFailed, cv::FILLED,
                    cv::LINE_AA, kShift);
         const int arm = FixedLength(0.3 * row);
@@ -188,7 +349,7 @@ void FrameRenderer::BuildLegend(bool heat) {
                  kFailed, thick, cv::LINE_AA, kShift);
         break;
       }
-      default: {
+      case kHeatIcon: {
         // The heat scale, H from 0 (left) to 1, as DrawHeatmap blends it.
         const int x0 = pad, w = icon, y0 = static_cast<int>(cy - 0.3 * row);
         const int h = std::max(2, static_cast<int>(0.6 * row));
@@ -202,17 +363,18 @@ void FrameRenderer::BuildLegend(bool heat) {
           const double a =
               settings_.heat_alpha * value.at<unsigned char>(0, x) / 255.0;
           const cv::Vec3b c3 = color.at<cv::Vec3b>(0, x);
-          const cv::Scalar blended(a * c3[0] + (1 - a) * 236,
-                                   a * c3[1] + (1 - a) * 236,
-                                   a * c3[2] + (1 - a) * 236);
+          const cv::Scalar blended(a * c3[0] + (1 - a) * kPaper[0],
+                                   a * c3[1] + (1 - a) * kPaper[1],
+                                   a * c3[2] + (1 - a) * kPaper[2]);
           cv::line(legend_, {x0 + x, y0}, {x0 + x, y0 + h - 1}, blended, 1);
         }
         break;
       }
     }
-    const cv::Size size = cv::getTextSize(labels[i], font, scale, 1, &baseline);
+    const char* label = rows[i].second;
+    const cv::Size size = cv::getTextSize(label, font, scale, 1, &baseline);
     cv::putText(
-        legend_, labels[i],
+        legend_, label,
         cv::Point(pad * 2 + icon, static_cast<int>(cy + 0.5 * size.height)),
         font, scale, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
   }
@@ -225,8 +387,8 @@ void FrameRenderer::AddTrailPoints(const std::vector<Vec2>& robots) {
     if (!trail.empty() && (trail.back() - robots[i]).squaredNorm() < 1e-8)
       continue;
     trail.push_back(robots[i]);
-    if (settings_.trail_steps > 0)
-      while (static_cast<int>(trail.size()) > settings_.trail_steps + 1)
+    if (trail_steps_ > 0)
+      while (static_cast<int>(trail.size()) > trail_steps_ + 1)
         trail.pop_front();
   }
 }
@@ -235,7 +397,6 @@ void FrameRenderer::SetHeatmap(const Grid<float>* heat) {
   if (heat == nullptr || heat_rect_.empty()) {
     heat_bgr_.release();
     heat_alpha_.release();
-    if (legend_heat_) BuildLegend(false);
     return;
   }
   // Grid row 0 is y = 0 (the bottom of the image): flip, clamp, then resample
@@ -252,7 +413,6 @@ void FrameRenderer::SetHeatmap(const Grid<float>* heat) {
   value.convertTo(shade, CV_8U, 0.55, 0.2 * 255.0);
   cv::applyColorMap(shade, heat_bgr_, cv::COLORMAP_INFERNO);
   value.convertTo(heat_alpha_, CV_8U, settings_.heat_alpha);
-  if (!legend_heat_) BuildLegend(true);
 }
 
 void FrameRenderer::DrawHeatmap(cv::Mat* image) const {
@@ -277,7 +437,13 @@ void FrameRenderer::DrawHeatmap(cv::Mat* image) const {
 const cv::Mat& FrameRenderer::Render(const FrameOverlay& overlay) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  scene_.Render(sim_.data(), camera_, &frame_);
+  if (compact_) {
+    // Nothing MuJoCo draws then moves: render it once.
+    if (background_.empty()) scene_.Render(sim_.data(), camera_, &background_);
+    background_.copyTo(frame_);
+  } else {
+    scene_.Render(sim_.data(), camera_, &frame_);
+  }
   const auto t1 = Clock::now();
   DrawHeatmap(&frame_);
   DrawOverlay(overlay, &frame_);
@@ -287,38 +453,85 @@ const cv::Mat& FrameRenderer::Render(const FrameOverlay& overlay) {
   return frame_;
 }
 
+bool FrameRenderer::MessagesShown(const FrameOverlay& o) {
+  if (o.neighbors == nullptr) return false;
+  switch (settings_.edges) {
+    case EdgeMode::kAll:
+      return true;
+    case EdgeMode::kLost:
+    case EdgeMode::kNone:
+      return false;
+    case EdgeMode::kAuto:
+      break;
+  }
+  const auto& nb = *o.neighbors;
+  size_t directed = 0;
+  for (const auto& list : nb) directed += list.size();
+  // Decided once per step's graph, so that it does not flicker as the robots
+  // move during the step.
+  if (o.step == messages_step_ && o.neighbors == messages_graph_ &&
+      directed == messages_directed_)
+    return messages_shown_;
+  messages_step_ = o.step;
+  messages_graph_ = o.neighbors;
+  messages_directed_ = directed;
+  // The ink of one line per pair (length x width) against the workspace's
+  // pixels; counting stops once the budget is spent.
+  const double s = view_.Scale(0.0);
+  const double width = std::max(1.0, 0.75 * Unit(view_.height()));
+  double budget = settings_.edge_ink * world_area_m2_ * s * s / width;
+  messages_shown_ = true;
+  for (int i = 0; i < static_cast<int>(nb.size()) && messages_shown_; ++i) {
+    for (int j : nb[i]) {
+      if (j < i && std::binary_search(nb[j].begin(), nb[j].end(), i)) continue;
+      budget -= s * (o.robots[i] - o.robots[j]).norm();
+      if (budget < 0.0) {
+        messages_shown_ = false;
+        break;
+      }
+    }
+  }
+  return messages_shown_;
+}
+
 void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
   const int n = static_cast<int>(o.robots.size());
+  const int m = static_cast<int>(o.targets.size());
   AIA_CHECK(n == static_cast<int>(trails_.size()) &&
             o.active.size() == o.robots.size());
   // Line widths and marker sizes grow with the image; 1 px at 480 rows.
-  const double unit = std::max(1.0, view_.height() / 480.0);
+  const double unit = Unit(view_.height());
   const int thin = static_cast<int>(std::lround(unit));
   const int thick = static_cast<int>(std::lround(2 * unit));
   const double floor_scale = view_.Scale(0.0);
   const double robot_px = robot_radius_ * view_.Scale(2 * kRobotHalfHeight);
+  const double area_px = world_area_m2_ * floor_scale * floor_scale;
 
   pixels_.resize(n);
   for (int i = 0; i < n; ++i) pixels_[i] = Fixed(view_.ToPixel(o.robots[i]));
 
-  // Translucent layers over the world below the heads-up band: sensing discs,
-  // then delivered messages.
-  const cv::Rect world_rect(0, view_.band_px(), image->cols,
-                            image->rows - view_.band_px());
-  cv::Mat world = (*image)(world_rect);
-  const cv::Point band_offset(0, FixedLength(view_.band_px()));
+  // Translucent layers over the workspace (clipped to its walls, as sensing
+  // and messages are): sensing discs, then delivered messages. Discs that
+  // would cover the workspace more than once over (n pi r^2 > its area) are
+  // one tint: the area sensed now.
+  cv::Mat world = (*image)(world_rect_);
+  const cv::Point offset(FixedLength(world_rect_.x),
+                         FixedLength(world_rect_.y));
   const int range_px = FixedLength(o.sensor_range * floor_scale);
+  const bool tint = n * kPi * o.sensor_range * o.sensor_range > world_area_m2_;
   world.copyTo(layer_);
   for (int i = 0; i < n; ++i)
     if (o.active[i])
-      cv::circle(layer_, pixels_[i] - band_offset, range_px, RobotBgr(i),
-                 cv::FILLED, cv::LINE_AA, kShift);
-  cv::addWeighted(layer_, 0.18, world, 0.82, 0.0, world);
-  if (o.neighbors != nullptr) {
-    world.copyTo(layer_);
+      cv::circle(layer_, pixels_[i] - offset, range_px,
+                 tint ? kTint : RobotBgr(i), cv::FILLED, cv::LINE_AA, kShift);
+  const double disc_alpha = tint ? kTintAlpha : kDiscAlpha;
+  cv::addWeighted(layer_, disc_alpha, world, 1.0 - disc_alpha, 0.0, world);
+  const bool messages = MessagesShown(o);
+  drew_messages_ = false;
+  if (messages) {
     const auto& nb = *o.neighbors;
     // Anti-aliased lines cost about 5x plain ones; past a few hundred edges
-    // (a full graph of 25 robots) the web is a haze and plain lines do.
+    // (a full graph of 25 robots) plain lines do.
     size_t directed = 0;
     for (const auto& list : nb) directed += list.size();
     const int line_type = directed <= 600 ? cv::LINE_AA : cv::LINE_8;
@@ -329,20 +542,23 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
         // An undirected line per pair that exchanged anything; once per pair.
         const bool both = std::binary_search(nb[j].begin(), nb[j].end(), i);
         if (both && j < i) continue;
-        cv::line(layer_, pixels_[i] - band_offset, pixels_[j] - band_offset,
-                 kEdge, edge_width, line_type, kShift);
+        if (!drew_messages_) world.copyTo(layer_);
+        drew_messages_ = true;
+        cv::line(layer_, pixels_[i] - offset, pixels_[j] - offset, kEdge,
+                 edge_width, line_type, kShift);
       }
     }
-    cv::addWeighted(layer_, 0.7, world, 0.3, 0.0, world);
+    if (drew_messages_) cv::addWeighted(layer_, 0.7, world, 0.3, 0.0, world);
   }
-  for (int i = 0; i < n; ++i)
-    if (o.active[i])
-      cv::circle(*image, pixels_[i], range_px, RobotBgr(i, 0.8), thin,
-                 cv::LINE_AA, kShift);
+  if (!tint)
+    for (int i = 0; i < n; ++i)
+      if (o.active[i])
+        cv::circle(world, pixels_[i] - offset, range_px, RobotBgr(i, 0.8), thin,
+                   cv::LINE_AA, kShift);
 
   // Lost messages: red dashes from sender to receiver, shifted to the right
   // of that direction so that the two directions of a pair stay apart.
-  if (o.lost != nullptr) {
+  if (o.lost != nullptr && settings_.edges != EdgeMode::kNone) {
     for (const auto& [receiver, sender] : *o.lost) {
       const Vec2 a = view_.ToPixel(o.robots[sender]),
                  b = view_.ToPixel(o.robots[receiver]);
@@ -355,25 +571,31 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
   }
 
   // Trails: the recorded decision-step positions, closed by the position now.
-  std::vector<cv::Point> polyline;
   for (int i = 0; i < n; ++i) {
-    polyline.clear();
+    polyline_.clear();
     for (const Vec2& p : trails_[i])
-      polyline.push_back(Fixed(view_.ToPixel(p)));
-    polyline.push_back(pixels_[i]);
-    if (polyline.size() >= 2)
-      cv::polylines(*image, polyline, false, RobotBgr(i, 0.7), thin,
+      polyline_.push_back(Fixed(view_.ToPixel(p)));
+    polyline_.push_back(pixels_[i]);
+    if (polyline_.size() >= 2)
+      cv::polylines(*image, polyline_, false, RobotBgr(i, 0.7), thin,
                     cv::LINE_AA, kShift);
   }
 
   // Targets: the best estimate's 2-sigma ellipse, a cross at its mean joined
-  // to the truth, and a ring around the true position.
+  // to the truth, and a ring around the true position. Compact: a square at
+  // the truth in the estimate's colour, the ellipse thin and drawn only
+  // where it reaches beyond the square, no cross.
   const int max_axis = 4 * std::max(image->cols, image->rows);
+  const double spacing_t = std::sqrt(area_px / std::max(1, m));
+  const double half = std::max(1.5, std::min(3.0 * unit, 0.15 * spacing_t));
   for (const TargetOverlay& t : o.targets) {
     const cv::Scalar color = TargetColor(t, o.eps);
-    const cv::Point mean = Fixed(view_.ToPixel(t.mean));
-    const cv::Point truth = Fixed(view_.ToPixel(t.truth, 0.08));
-    cv::line(*image, mean, truth, color, thin, cv::LINE_AA, kShift);
+    const Vec2 mean_px = view_.ToPixel(t.mean);
+    const Vec2 truth_px = view_.ToPixel(t.truth, 0.08);
+    const cv::Point mean = Fixed(mean_px);
+    const cv::Point truth = Fixed(truth_px);
+    if (!compact_ || (mean_px - truth_px).norm() > half)
+      cv::line(*image, mean, truth, color, thin, cv::LINE_AA, kShift);
     const Eigen::SelfAdjointEigenSolver<Mat2> eig(0.5 *
                                                   (t.cov + t.cov.transpose()));
     const Eigen::Vector2d lambda =
@@ -386,6 +608,13 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
     const double b =
         std::min<double>(max_axis, 2.0 * std::sqrt(lambda[0]) * floor_scale);
     const double angle = -std::atan2(major.y(), major.x()) * 180.0 / kPi;
+    if (compact_) {
+      if (a > 1.5 * half)
+        cv::ellipse(*image, mean, cv::Size(FixedLength(a), FixedLength(b)),
+                    angle, 0.0, 360.0, color, thin, cv::LINE_AA, kShift);
+      DrawTargetMarker(image, truth_px, half, color, t.det <= o.eps ? 0 : thin);
+      continue;
+    }
     cv::ellipse(*image, mean, cv::Size(FixedLength(a), FixedLength(b)), angle,
                 0.0, 360.0, color, thick, cv::LINE_AA, kShift);
     const int arm = FixedLength(3.0 * unit);
@@ -398,13 +627,23 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
                thin, cv::LINE_AA, kShift);
   }
 
-  // Robots: a dark ring around MuJoCo's disc; a failed robot greyed and
-  // crossed.
+  // Robots: a dark ring around MuJoCo's disc; compact, a dot in the robot's
+  // colour, ringed; a failed robot greyed and crossed.
+  const double spacing_r = std::sqrt(area_px / std::max(1, n));
+  const double dot =
+      std::max(1.5, std::min(std::max(robot_px, 2.5 * unit), 0.3 * spacing_r));
+  // A dot's ring stays thin, so that its colour shows.
+  const int dot_ring = std::max(1, static_cast<int>(std::lround(0.6 * unit)));
   for (int i = 0; i < n; ++i) {
     const cv::Point p = Fixed(view_.ToPixel(o.robots[i], 2 * kRobotHalfHeight));
-    const int ring = FixedLength(std::max(robot_px + unit, 3.0 * unit));
+    const int ring =
+        FixedLength(compact_ ? dot : std::max(robot_px + unit, 3.0 * unit));
     if (o.active[i]) {
-      cv::circle(*image, p, ring, kBlack, thin, cv::LINE_AA, kShift);
+      if (compact_)
+        cv::circle(*image, p, ring, RobotBgr(i), cv::FILLED, cv::LINE_AA,
+                   kShift);
+      cv::circle(*image, p, ring, kBlack, compact_ ? dot_ring : thin,
+                 cv::LINE_AA, kShift);
       continue;
     }
     cv::circle(*image, p, ring, kFailed, cv::FILLED, cv::LINE_AA, kShift);
@@ -414,6 +653,15 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
     cv::line(*image, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm),
              kFailed, thick, cv::LINE_AA, kShift);
   }
+
+  // The legend follows what was drawn.
+  LegendKey key;
+  key.heat = !heat_bgr_.empty();
+  key.tint = tint;
+  key.messages = messages ||
+                 (settings_.edges == EdgeMode::kAuto && o.neighbors == nullptr);
+  key.lost = settings_.edges != EdgeMode::kNone;
+  if (!legend_built_ || !(key == legend_key_)) BuildLegend(key);
 
   // The heads-up line, in the band kept free above the workspace.
   const int band = view_.band_px();

@@ -3,6 +3,7 @@
 #include <GL/osmesa.h>
 
 #include <algorithm>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 
@@ -106,18 +107,15 @@ void SceneRenderer::Render(const mjData* data, const mjvCamera& camera,
   const mjrRect viewport = {0, 0, w, h};
   mjr_render(viewport, scene_.get(), context_.get());
   mjr_readPixels(rgb_.data(), nullptr, viewport, context_.get());
-  bgr->create(h, w, CV_8UC3);
   // GL rows run bottom to top; OpenCV's top to bottom, in BGR order.
-  const size_t row_bytes = static_cast<size_t>(w) * 3;
-  for (int r = 0; r < h; ++r) {
-    const unsigned char* src = rgb_.data() + (h - 1 - r) * row_bytes;
-    unsigned char* dst = bgr->ptr<unsigned char>(r);
-    for (int c = 0; c < w; ++c) {
-      dst[3 * c + 0] = src[3 * c + 2];
-      dst[3 * c + 1] = src[3 * c + 1];
-      dst[3 * c + 2] = src[3 * c + 0];
-    }
-  }
+  const cv::Mat rgb(h, w, CV_8UC3, rgb_.data());
+  cv::flip(rgb, flipped_, 0);
+  cv::cvtColor(flipped_, *bgr, cv::COLOR_RGB2BGR);
+}
+
+void SceneRenderer::SetGeomGroupVisible(int group, bool visible) {
+  AIA_CHECK(group >= 0 && group < mjNGROUP);
+  option_.geomgroup[group] = visible ? 1 : 0;
 }
 
 }  // namespace aia

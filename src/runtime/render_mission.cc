@@ -74,6 +74,10 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
         "must be at least 1, got " + std::to_string(o.frames_every));
   if (!(o.hold_seconds >= 0.0 && o.hold_seconds <= 60.0))
     throw InputError("command line", 0, "--hold", "must be in [0, 60] seconds");
+  EdgeMode mode;
+  if (!ParseEdgeMode(o.edges, &mode))
+    throw InputError("command line", 0, "--edges",
+                     "must be auto, all, lost or none, got '" + o.edges + "'");
 }
 
 // Films the episode: a frame every 1/fps seconds of simulated time, taken
@@ -251,6 +255,7 @@ RenderResult RenderMission(const RenderOptions& options) {
   FrameSettings settings;
   settings.scene.width = width;
   settings.scene.height = height;
+  ParseEdgeMode(options.edges, &settings.edges);  // checked above
   FrameRenderer renderer(runner.episode().sim(), mission.instance->world.map,
                          settings);
   try {
@@ -291,12 +296,23 @@ RenderResult RenderMission(const RenderOptions& options) {
   v["heatmap_robot"] = scenario.render.follow_robot;
   v["png_frames"] = r.png_frames;
   v["frames_per_second"] = r.frames_per_second;
+  // The video's own cost: frames per second of scene, overlay and encoder
+  // time, without the mission's.
+  const double video_seconds = renderer.scene_seconds() +
+                               renderer.overlay_seconds() +
+                               filming.write_seconds();
+  v["render_frames_per_second"] =
+      video_seconds > 0.0 ? r.frames / video_seconds : 0.0;
+  v["edges"] = EdgeModeName(settings.edges);
+  v["compact"] = renderer.compact();
   // Where the wall time went (the mission's own phases are in
-  // diagnostics.json and `aia bench`).
+  // diagnostics.json and `aia bench`); mission: the rest (start-up, policy,
+  // physics, fusion, result files).
   nlohmann::ordered_json t;
   t["scene"] = renderer.scene_seconds();
   t["overlay"] = renderer.overlay_seconds();
   t["encode"] = filming.write_seconds();
+  t["mission"] = std::max(0.0, wall - video_seconds);
   t["total"] = wall;
   v["seconds"] = t;
   j["video"] = v;

@@ -200,6 +200,14 @@ TEST_F(RenderCliTest, EndsLikeAiaRun) {
                           "final_min_det", "failed_robots"})
     EXPECT_EQ(a[key], b[key]) << key;
   EXPECT_EQ(ReadFile(dir_ + "/run/trace.csv"), ReadFile(dir_ + "/r.trace.csv"));
+  // What the video draws does not change the mission.
+  const auto none = RunAia({"render", scenario_, "--out", dir_ + "/n.mp4",
+                            "--edges", "none", "--quiet"});
+  ASSERT_EQ(none.exit_code, 0) << none.err;
+  EXPECT_EQ(ReadFile(dir_ + "/run/trace.csv"), ReadFile(dir_ + "/n.trace.csv"));
+  const auto c = nlohmann::json::parse(ReadFile(dir_ + "/n.summary.json"));
+  EXPECT_EQ(c["video"]["edges"], "none");
+  EXPECT_EQ(b["video"]["edges"], "auto");
 }
 
 TEST_F(RenderCliTest, PlotScriptDrawsTheTrace) {
@@ -247,6 +255,7 @@ TEST_F(RenderCliTest, BadInputExitsWith2) {
        {"--frames", dir_ + "/f", "--frames-every", "0"},
        "--frames-every"},
       {"negative hold", {"--hold", "-1"}, "--hold"},
+      {"unknown edges", {"--edges", "some"}, "--edges"},
   };
   for (const BadCase& c : cases) {
     std::vector<std::string> args = {"render", scenario_, "--out", out,
@@ -364,7 +373,7 @@ TEST(RenderCliHelpTest, HelpNamesTheFlags) {
   EXPECT_EQ(r.exit_code, 0);
   for (const char* flag :
        {"--out", "--policy", "--seed", "--width", "--height", "--fps",
-        "--frames", "--heatmap", "--max-steps", "--quiet"})
+        "--frames", "--heatmap", "--max-steps", "--edges", "--quiet"})
     EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
 }
 

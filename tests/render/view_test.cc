@@ -53,6 +53,31 @@ TEST(TopDownViewTest, FramesTheWorkspaceBelowTheBand) {
             view.ToPixel({20.0, 10.0}, 0.0).x());
 }
 
+TEST(TopDownViewTest, KeepsTheLegendColumnFreeAndFitsExactly) {
+  const int band = 26, side = 140;
+  const double t = 0.5, margin = 0.25;
+  for (const Vec2& size : {Vec2(20.0, 20.0), Vec2(40.0, 10.0)}) {
+    SCOPED_TRACE(size.x());
+    const TopDownView view(size, 640, 480, 45.0, band, t, margin, side);
+    EXPECT_EQ(view.side_px(), side);
+    // The framed rectangle at the walls' tops lies in [0, 640 - side] x
+    // [band, 480], touching the free pixels on one pair of sides (the
+    // smallest height that fits), and the floor is centred in them.
+    const Vec2 tl = view.ToPixel({-margin, size.y() + margin}, t);
+    const Vec2 br = view.ToPixel({size.x() + margin, -margin}, t);
+    EXPECT_GE(tl.x(), -1e-9);
+    EXPECT_GE(tl.y(), band - 1e-9);
+    EXPECT_LE(br.x(), 640 - side + 1e-9);
+    EXPECT_LE(br.y(), 480 + 1e-9);
+    const double slack =
+        std::min({tl.x(), tl.y() - band, 640 - side - br.x(), 480 - br.y()});
+    EXPECT_NEAR(slack, 0.0, 1e-6);
+    const Vec2 a = view.ToPixel({0.0, 0.0}), b = view.ToPixel(size);
+    EXPECT_NEAR(0.5 * (a.x() + b.x()), 0.5 * (640 - side), 1e-9);
+    EXPECT_NEAR(0.5 * (a.y() + b.y()), 0.5 * (480 + band), 1e-9);
+  }
+}
+
 TEST(TopDownViewTest, ObstacleCornersAndTargetLandWhereTheMapSays) {
   const Scenario scenario = MappingScenario();
   const World world = World::Build(scenario);

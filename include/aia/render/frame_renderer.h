@@ -3,9 +3,13 @@
 // discs, this step's communication edges (lost packets red and dashed),
 // trails, each target's truth and the team's best estimate with its 2-sigma
 // ellipse coloured by det Sigma against eps, failed robots, an optional
-// uncertainty heatmap, and a heads-up line. The overlay is plain data filled
-// by the caller (runtime's `aia render`), so that this module needs no
-// episode; it draws, it decides nothing.
+// uncertainty heatmap, a heads-up line and a legend beside the workspace.
+// What is drawn, and how big, follows the scale (docs/rendering.md, "At
+// scale"): with many robots or few pixels per metre, robots and targets
+// become dots (the target's coloured by det Sigma against eps), sensing discs
+// one tint, trails short, and a graph too dense to read is left out. The
+// overlay is plain data filled by the caller (runtime's `aia render`), so
+// that this module needs no episode; it draws, it decides nothing.
 #ifndef AIA_RENDER_FRAME_RENDERER_H_
 #define AIA_RENDER_FRAME_RENDERER_H_
 
@@ -57,14 +61,35 @@ struct FrameOverlay {
   int heatmap_robot = -1;  // named in the heads-up line (the layer: SetHeatmap)
 };
 
+// Which communication edges a frame draws (`aia render --edges`).
+enum class EdgeMode {
+  kAuto,  // lost messages; delivered ones while they stay readable
+  kAll,   // every pair that exchanged a message, and the lost messages
+  kLost,  // the lost messages only
+  kNone,  // no edges
+};
+// "auto", "all", "lost", "none" -> the mode; false for anything else.
+bool ParseEdgeMode(const std::string& text, EdgeMode* mode);
+const char* EdgeModeName(EdgeMode mode);
+
 struct FrameSettings {
   SceneSettings scene;
   // Decision steps of trail kept per robot; 0 keeps the whole mission. A
   // long mission's full trails bury the map, so the default shows the
-  // recent past.
+  // recent past; with more than 10 robots each keeps
+  // max(5, 500 / robots) steps at most (TrailSteps).
   int trail_steps = 50;
   float heat_alpha = 0.6f;  // opacity of the heatmap where H >= 1
+  EdgeMode edges = EdgeMode::kAuto;
+  // kAuto draws the delivered messages while their lines (one per pair,
+  // length x width) would cover at most this share of the workspace's
+  // pixels; a denser web is a haze that hides the map.
+  double edge_ink = 0.12;
 };
+
+// Decision steps of trail each of `robots` robots keeps with `trail_steps`
+// asked for: at most 500 robot-steps of trail in all, but at least 5 each.
+int TrailSteps(int trail_steps, int robots);
 
 // Height of the band kept free at the top of the image for the heads-up line.
 int HudBandPixels(int image_height);
@@ -88,16 +113,41 @@ class FrameRenderer {
   const cv::Mat& Render(const FrameOverlay& overlay);
 
   const TopDownView& view() const { return view_; }
+  // The workspace with its border walls, at the walls' tops, in whole pixels.
+  const cv::Rect& world_rect() const { return world_rect_; }
+  // Where the legend is drawn, beside the workspace; empty: no room for one.
+  const cv::Rect& legend_rect() const { return legend_rect_; }
+  // Whether robots and targets are drawn as dots by the overlay (too small or
+  // too many for MuJoCo's bodies to show; MuJoCo's image of the static world
+  // is then rendered once and reused).
+  bool compact() const { return compact_; }
+  // Whether the last frame drew this step's delivered messages.
+  bool drew_messages() const { return drew_messages_; }
   // Wall seconds spent so far in MuJoCo's render and read-back, and in the
   // heatmap layer and overlays.
   double scene_seconds() const { return scene_seconds_; }
   double overlay_seconds() const { return overlay_seconds_; }
 
  private:
+  // What the legend shows; it is rebuilt when this changes.
+  struct LegendKey {
+    bool heat = false;
+    bool tint = false;     // sensing discs as one tint
+    bool messages = true;  // delivered messages drawn
+    bool lost = true;      // lost messages drawn
+    bool operator==(const LegendKey& o) const {
+      return heat == o.heat && tint == o.tint && messages == o.messages &&
+             lost == o.lost;
+    }
+  };
+
   void DrawHeatmap(cv::Mat* image) const;
-  // The key to the symbols, in the margin right of the workspace when there
-  // is room (a 4:3 image of a square workspace has about 90 px at 640 wide).
-  void BuildLegend(bool heat);
+  // The key to the symbols, in the column right of the workspace that the
+  // view keeps free when the image is wide enough.
+  void BuildLegend(const LegendKey& key);
+  // Whether this step's delivered messages are drawn (kAuto: the ink rule;
+  // decided once per step and graph).
+  bool MessagesShown(const FrameOverlay& overlay);
   void DrawOverlay(const FrameOverlay& overlay, cv::Mat* image);
 
   const Simulation& sim_;
@@ -106,15 +156,28 @@ class FrameRenderer {
   TopDownView view_;
   mjvCamera camera_;
   double robot_radius_;
+  double world_area_m2_;  // the workspace's floor, square metres
+  bool compact_ = false;
+  int trail_steps_ = 0;
   std::vector<std::deque<Vec2>> trails_;
   cv::Mat frame_, layer_;
+  cv::Mat background_;  // compact: MuJoCo's image of the static world
+  cv::Rect world_rect_;
   cv::Rect heat_rect_;
   cv::Mat heat_bgr_, heat_alpha_;  // over heat_rect_; empty: no heatmap
   cv::Rect legend_room_;           // empty: no room for a legend
   cv::Rect legend_rect_;           // the part the legend covers
   cv::Mat legend_;
-  bool legend_heat_ = false;
-  std::vector<cv::Point> pixels_;  // scratch: robots' floor pixels (shifted)
+  LegendKey legend_key_;
+  bool legend_built_ = false;
+  // The kAuto decision for the graph of one step.
+  int messages_step_ = -1;
+  const void* messages_graph_ = nullptr;
+  size_t messages_directed_ = 0;
+  bool messages_shown_ = true;
+  bool drew_messages_ = false;
+  std::vector<cv::Point> pixels_;    // scratch: robots' floor pixels (shifted)
+  std::vector<cv::Point> polyline_;  // scratch
   double scene_seconds_ = 0.0, overlay_seconds_ = 0.0;
 };
 

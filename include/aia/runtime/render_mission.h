@@ -24,6 +24,9 @@ struct RenderOptions {
   std::string frames_dir;            // non-empty: PNG frames written here
   int frames_every = 1;              // write video frames 0, k, 2k, ... as PNG
   double hold_seconds = 1.0;         // the final frame is held this long
+  // Communication edges drawn: auto, all, lost or none (render/frame_renderer.h
+  // EdgeMode).
+  std::string edges = "auto";
   bool progress = true;
 };
 
