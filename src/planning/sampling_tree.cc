@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <new>
@@ -146,6 +147,12 @@ constexpr std::size_t kMappedBytes = std::size_t{1} << 20;
 
 constexpr int kMaxBuckets = 64;
 
+// Below these sizes the spatial indexes are not worth their upkeep: a linear
+// scan of the open targets, of the robots. Either way the result is the
+// same.
+constexpr int kLinearTargets = 32;
+constexpr int kLinearRobots = 32;
+
 // The tours' legs are the tree's own fields, walked.
 class SamplingTree::Legs : public LegOracle {
  public:
@@ -156,6 +163,7 @@ class SamplingTree::Legs : public LegOracle {
   bool TimeVarying(int k) const override {
     return !tree_->targets_[k].is_static;
   }
+  int Distance(int from, int k) override { return tree_->FieldAt(0, k)[from]; }
 
  private:
   SamplingTree* tree_;
@@ -313,12 +321,24 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   // targets' per span of depths, when first asked for.
   slots_.assign(m_, {});
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
+  region_box_.assign(m_, Rect{});
   for (int k = 0; k < m_; ++k) {
     slots_[k].assign(targets_[k].is_static ? 1 : kMaxBuckets, AimSlot{});
     if (!targets_[k].is_static) continue;
     Slot(0, k);
-    for (const auto& [q, r] : region_) per_point[q].push_back({k, r});
+    Rect& box = region_box_[k];
+    for (const auto& [q, r] : region_) {
+      per_point[q].push_back({k, r});
+      const int x = lattice.Ix(q), y = lattice.Iy(q);
+      if (box.x0 > box.x1) {
+        box = {x, x, y, y};
+      } else {
+        box = {std::min(box.x0, x), std::max(box.x1, x), std::min(box.y0, y),
+               std::max(box.y1, y)};
+      }
+    }
   }
+  BuildTargetIndex();
   obs_begin_.assign(lattice.size() + 1, 0);
   obs_.clear();
   for (int q = 0; q < lattice.size(); ++q) {
@@ -347,8 +367,170 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   tour_makespan_ = 0;
   assigned_.assign(n_, -1);
   child_pos_.assign(n_, 0);
-  taken_.assign(m_, 0);
   open_.assign(m_, 0);
+  avail_.assign(m_, 0);
+  open_list_.clear();
+  robots_indexed_ = false;
+}
+
+void SamplingTree::BuildTargetIndex() {
+  const Lattice& lattice = problem_->map->lattice();
+  indexed_ = !any_moving_;
+  if (!indexed_) return;
+  // About two targets (or robots) per bucket.
+  const double side =
+      std::sqrt(2.0 * lattice.size() / std::max(1, std::max(n_, m_)));
+  cell_ = std::clamp(static_cast<int>(std::lround(side)), 4, 64);
+  gx_ = (lattice.nx() + cell_ - 1) / cell_;
+  gy_ = (lattice.ny() + cell_ - 1) / cell_;
+  pad_ = 0;
+  target_begin_.assign(static_cast<size_t>(gx_) * gy_ + 1, 0);
+  std::vector<int> cell_of(m_, -1);
+  for (int k = 0; k < m_; ++k) {
+    const Rect& b = region_box_[k];
+    if (b.x0 > b.x1) continue;  // no region: its field is -1 everywhere
+    const int cx = (b.x0 + b.x1) / 2, cy = (b.y0 + b.y1) / 2;
+    pad_ = std::max({pad_, cx - b.x0, b.x1 - cx, cy - b.y0, b.y1 - cy});
+    cell_of[k] = (cy / cell_) * gx_ + cx / cell_;
+    ++target_begin_[cell_of[k] + 1];
+  }
+  for (size_t c = 1; c < target_begin_.size(); ++c)
+    target_begin_[c] += target_begin_[c - 1];
+  target_cell_.assign(target_begin_.back(), 0);
+  std::vector<int> fill(target_begin_.begin(), target_begin_.end() - 1);
+  for (int k = 0; k < m_; ++k)  // ascending ids within a bucket
+    if (cell_of[k] >= 0) target_cell_[fill[cell_of[k]]++] = k;
+}
+
+void SamplingTree::BuildRobotGrid(const int* positions) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  robots_indexed_ = indexed_ && n_ > kLinearRobots;
+  if (!robots_indexed_) return;
+  robot_begin_.assign(static_cast<size_t>(gx_) * gy_ + 1, 0);
+  robot_cell_.resize(n_);
+  for (int i = 0; i < n_; ++i) {
+    if (!p.active[i]) continue;
+    const int q = positions[i];
+    ++robot_begin_[(lattice.Iy(q) / cell_) * gx_ + lattice.Ix(q) / cell_ + 1];
+  }
+  for (size_t c = 1; c < robot_begin_.size(); ++c)
+    robot_begin_[c] += robot_begin_[c - 1];
+  std::vector<int>& fill = robot_fill_;
+  fill.assign(robot_begin_.begin(), robot_begin_.end() - 1);
+  for (int i = 0; i < n_; ++i) {
+    if (!p.active[i]) continue;
+    const int q = positions[i];
+    robot_cell_[fill[(lattice.Iy(q) / cell_) * gx_ + lattice.Ix(q) / cell_]++] =
+        i;
+  }
+}
+
+namespace {
+
+// L1 distance (lattice steps) from (x, y) to a rectangle: a lower bound of
+// the BFS distance to any point in it, each move changing one coordinate by
+// one.
+inline int RectDistance(int x, int y, int x0, int x1, int y0, int y1) {
+  return std::max({0, x0 - x, x - x1}) + std::max({0, y0 - y, y - y1});
+}
+
+// Calls visit(bucket) for the buckets at Chebyshev distance r from the bucket
+// rectangle [bx0, bx1] x [by0, by1] (the rectangle itself for r = 0),
+// clipped to the grid of gx x gy buckets.
+template <typename Visit>
+void VisitRing(int bx0, int bx1, int by0, int by1, int r, int gx, int gy,
+               Visit&& visit) {
+  const int x0 = bx0 - r, x1 = bx1 + r, y0 = by0 - r, y1 = by1 + r;
+  for (int y = std::max(0, y0); y <= std::min(gy - 1, y1); ++y) {
+    if (r == 0 || y == y0 || y == y1) {
+      for (int x = std::max(0, x0); x <= std::min(gx - 1, x1); ++x)
+        visit(y * gx + x);
+    } else {
+      if (x0 >= 0) visit(y * gx + x0);
+      if (x1 < gx) visit(y * gx + x1);
+    }
+  }
+}
+
+}  // namespace
+
+int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
+                                int* dist) {
+  int best = -1, best_d = std::numeric_limits<int>::max();
+  if (!indexed_ || static_cast<int>(open_list_.size()) <= kLinearTargets) {
+    for (int k : open_list_) {
+      if (!ok[k]) continue;
+      const int d = FieldAt(depth, k)[q];
+      if (d >= 0 && d < best_d) {
+        best = k;
+        best_d = d;
+      }
+    }
+    *dist = best_d;
+    return best;
+  }
+  // Rings of buckets around q's: a target whose region's centre lies in ring
+  // r >= 1 is at least (r - 1) cell_ + 1 - pad_ steps away.
+  const Lattice& lattice = problem_->map->lattice();
+  const int x = lattice.Ix(q), y = lattice.Iy(q);
+  const int bx = x / cell_, by = y / cell_;
+  const int rings = std::max(gx_, gy_);
+  for (int r = 0; r <= rings; ++r) {
+    if (best >= 0 && (r - 1) * cell_ + 1 - pad_ > best_d) break;
+    VisitRing(bx, bx, by, by, r, gx_, gy_, [&](int c) {
+      for (int t = target_begin_[c]; t < target_begin_[c + 1]; ++t) {
+        const int k = target_cell_[t];
+        if (!ok[k]) continue;
+        const Rect& b = region_box_[k];
+        const int lb = RectDistance(x, y, b.x0, b.x1, b.y0, b.y1);
+        if (best >= 0 && (lb > best_d || (lb == best_d && k > best))) continue;
+        const int d = slots_[k][0].field[q];
+        if (d < 0) continue;
+        if (best < 0 || d < best_d || (d == best_d && k < best)) {
+          best = k;
+          best_d = d;
+        }
+      }
+    });
+  }
+  *dist = best_d;
+  return best;
+}
+
+int SamplingTree::ReachOf(int k, const int* positions) const {
+  const SamplingProblem& p = *problem_;
+  const std::vector<int>& field = slots_[k][0].field;
+  int reach = std::numeric_limits<int>::max();
+  if (!robots_indexed_) {
+    for (int i = 0; i < n_; ++i) {
+      const int f = p.active[i] ? field[positions[i]] : -1;
+      if (f >= 0) reach = std::min(reach, f);
+    }
+    return reach;
+  }
+  const Rect& b = region_box_[k];
+  if (b.x0 > b.x1) return reach;  // no region
+  const Lattice& lattice = p.map->lattice();
+  const int bx0 = b.x0 / cell_, bx1 = b.x1 / cell_;
+  const int by0 = b.y0 / cell_, by1 = b.y1 / cell_;
+  const int rings = std::max(gx_, gy_);
+  // A robot in ring r >= 1 around the region's buckets is at least
+  // (r - 1) cell_ + 1 steps away.
+  for (int r = 0; r <= rings; ++r) {
+    if (r > 0 && (r - 1) * cell_ + 1 >= reach) break;
+    VisitRing(bx0, bx1, by0, by1, r, gx_, gy_, [&](int c) {
+      for (int t = robot_begin_[c]; t < robot_begin_[c + 1]; ++t) {
+        const int q = positions[robot_cell_[t]];
+        if (RectDistance(lattice.Ix(q), lattice.Iy(q), b.x0, b.x1, b.y0,
+                         b.y1) >= reach)
+          continue;
+        const int f = field[q];
+        if (f >= 0) reach = std::min(reach, f);
+      }
+    });
+  }
+  return reach;
 }
 
 int SamplingTree::AddNode(int parent, const int* positions) {
@@ -418,6 +600,7 @@ int SamplingTree::AddNode(int parent, const int* positions) {
   // bound on the cost still to come.
   double sum = 0.0, ahead = 0.0;
   int unloc = 0;
+  bool grid_built = false;
   for (int k = 0; k < m_; ++k) {
     const double d = BlockDet(info, k);
     sum += d;
@@ -426,12 +609,11 @@ int SamplingTree::AddNode(int parent, const int* positions) {
     if (!targets_[k].is_static) continue;
     if (depth == 0 && !p.extra_at_depth1.empty() && p.extra_at_depth1[k] > 0.0)
       continue;
-    const std::vector<int>& field = slots_[k][0].field;
-    int reach = std::numeric_limits<int>::max();
-    for (int i = 0; i < n_; ++i) {
-      const int f = p.active[i] ? field[positions[i]] : -1;
-      if (f >= 0) reach = std::min(reach, f);
+    if (!grid_built) {
+      BuildRobotGrid(positions);
+      grid_built = true;
     }
+    const int reach = ReachOf(k, positions);
     if (reach != std::numeric_limits<int>::max() && reach > 1)
       ahead += d * (reach - 1);
   }
@@ -447,21 +629,16 @@ int SamplingTree::AddNode(int parent, const int* positions) {
 
 void SamplingTree::MarkOpen(int node) {
   const double* info = Info(node);
-  for (int k = 0; k < m_; ++k)
+  open_list_.clear();
+  for (int k = 0; k < m_; ++k) {
     open_[k] = BlockDet(info, k) > problem_->eps ? 1 : 0;
+    if (open_[k]) open_list_.push_back(k);
+  }
 }
 
 int SamplingTree::NearestOpen(int q, int depth) {
-  int best = -1, best_d = std::numeric_limits<int>::max();
-  for (int k = 0; k < m_; ++k) {
-    if (!open_[k]) continue;
-    const int d = FieldAt(depth, k)[q];
-    if (d >= 0 && d < best_d) {
-      best = k;
-      best_d = d;
-    }
-  }
-  return best;
+  int d = 0;
+  return NearestTarget(q, depth, open_, &d);
 }
 
 int SamplingTree::NextInTour(const std::vector<int>& tour) const {
@@ -493,25 +670,40 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   const int* pos = Pos(node);
   const int depth = depth_[node] + 1;
   MarkOpen(node);
-  for (int k = 0; k < m_; ++k) taken_[k] = open_[k] ? 0 : 2;  // 2: localized
+  std::copy(open_.begin(), open_.end(), avail_.begin());  // open, not taken
   std::fill(assigned_.begin(), assigned_.end(), -1);
   if (sorted) {
-    // Globally nearest robot-target pairs first (greedy matching).
+    // Globally nearest robot-target pairs (distance, then robot, then target)
+    // first: a greedy matching. Without listing every pair: each robot's
+    // nearest free target (NearestTarget) in a heap of (distance, robot * m +
+    // target); an entry whose target was taken meanwhile is replaced by the
+    // robot's next nearest free one. The top is then always the first pair of
+    // the sorted list of all pairs whose robot and target are both free.
     pairs_.clear();
     for (int i = 0; i < n_; ++i) {
       if (!p.active[i]) continue;
-      for (int k = 0; k < m_; ++k) {
-        if (taken_[k] != 0) continue;
-        const int d = FieldAt(depth, k)[pos[i]];
-        if (d >= 0) pairs_.push_back({d, i * m_ + k});
-      }
+      int d = 0;
+      const int k = NearestTarget(pos[i], depth, avail_, &d);
+      if (k >= 0) pairs_.push_back({d, i * m_ + k});
     }
-    std::sort(pairs_.begin(), pairs_.end());
-    for (const auto& [d, ik] : pairs_) {
-      const int i = ik / m_, k = ik % m_;
-      if (assigned_[i] >= 0 || taken_[k] != 0) continue;
+    std::make_heap(pairs_.begin(), pairs_.end(), std::greater<>());
+    int left = static_cast<int>(open_list_.size());
+    while (!pairs_.empty() && left > 0) {
+      std::pop_heap(pairs_.begin(), pairs_.end(), std::greater<>());
+      const int i = pairs_.back().second / m_, k = pairs_.back().second % m_;
+      pairs_.pop_back();
+      if (!avail_[k]) {
+        int d = 0;
+        const int next = NearestTarget(pos[i], depth, avail_, &d);
+        if (next >= 0) {
+          pairs_.push_back({d, i * m_ + next});
+          std::push_heap(pairs_.begin(), pairs_.end(), std::greater<>());
+        }
+        continue;
+      }
       assigned_[i] = k;
-      taken_[k] = 1;
+      avail_[k] = 0;
+      --left;
     }
   } else {
     // Each robot in random order takes its nearest free unlocalized target.
@@ -521,17 +713,11 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
     for (size_t a = order_.size(); a > 1; --a)
       std::swap(order_[a - 1], order_[rng.UniformInt(a)]);
     for (int i : order_) {
-      int best = -1, best_d = std::numeric_limits<int>::max();
-      for (int k = 0; k < m_; ++k) {
-        const int d = FieldAt(depth, k)[pos[i]];
-        if (taken_[k] == 0 && d >= 0 && d < best_d) {
-          best = k;
-          best_d = d;
-        }
-      }
+      int d = 0;
+      const int best = NearestTarget(pos[i], depth, avail_, &d);
       if (best >= 0) {
         assigned_[i] = best;
-        taken_[best] = 1;
+        avail_[best] = 0;
       }
     }
   }
@@ -612,7 +798,17 @@ void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
         if (v < 0) continue;
         double gain = 0.0;
         const Vec2 there = lattice.Point(v);
-        for (int k2 = 0; k2 < m_; ++k2) {
+        if (!any_moving_) {
+          // The static targets seen from v, in ascending order as below.
+          for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o) {
+            const auto& [k2, r] = obs_[o];
+            if (!open_[k2] || r <= 0.0) continue;
+            const double after = BlockDetAfter(info, k2, r);
+            gain +=
+                std::log(BlockDet(info, k2)) - std::log(std::max(after, p.eps));
+          }
+        }
+        for (int k2 = 0; k2 < m_ && any_moving_; ++k2) {
           if (!open_[k2]) continue;
           double r = 0.0;
           if (targets_[k2].is_static) {

@@ -215,6 +215,17 @@ class SamplingTree {
   void MarkOpen(int node);  // open_[k]: det Sigma_k > eps at the node
   void Assign(int node, bool sorted, Rng& rng);
   int NearestOpen(int q, int depth);
+  // Spatial indexes (all targets static; docs/design.md, Policies): targets
+  // by the centre of their observation region, robots of one configuration
+  // by their point, in square buckets of lattice points.
+  void BuildTargetIndex();
+  void BuildRobotGrid(const int* positions);
+  // The target with ok[k] != 0 nearest to q by its field (ties: the lowest
+  // id), or -1; its distance in *dist. Exactly the linear scan over open_list_.
+  int NearestTarget(int q, int depth, const std::vector<char>& ok, int* dist);
+  // min over active robots of static target k's field at their points, or
+  // INT_MAX when none reaches its region.
+  int ReachOf(int k, const int* positions) const;
   int NextInTour(const std::vector<int>& tour) const;
   Move StepToward(int q, int k, int depth, Rng* rng);
   int Bucket(int depth, int k) const;
@@ -271,10 +282,25 @@ class SamplingTree {
   long tour_budget_ = 0;
   TourPlanner tour_planner_;
   // Scratch.
-  std::vector<int> assigned_, order_, child_pos_, taken_;
+  std::vector<int> assigned_, order_, child_pos_;
   std::vector<char> open_;
   std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
+  // Spatial indexes.
+  struct Rect {
+    int x0 = 0, x1 = -1, y0 = 0,
+        y1 = -1;  // lattice coordinates; x0 > x1: empty
+  };
+  std::vector<Rect> region_box_;    // per static target, its region's bounds
+  bool indexed_ = false;            // all targets static: the indexes are used
+  int cell_ = 8, gx_ = 0, gy_ = 0;  // bucket side (lattice points), buckets
+  int pad_ = 0;  // the largest distance from a region's centre to its bounds
+  std::vector<int> target_begin_, target_cell_;  // CSR: targets per bucket
+  bool robots_indexed_ = false;  // robot_begin_ holds the current node's
+  std::vector<int> robot_begin_, robot_cell_;  // CSR: active robots
+  std::vector<int> robot_fill_;
+  std::vector<int> open_list_;  // open targets, ascending
+  std::vector<char> avail_;
   ArenaVector<double> lower_;  // per node: lower bound of the total cost
   std::vector<int> bfs_queue_;
 };
