@@ -322,10 +322,11 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   slots_.assign(m_, {});
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
   region_box_.assign(m_, Rect{});
+  static_field_.assign(m_, nullptr);
   for (int k = 0; k < m_; ++k) {
     slots_[k].assign(targets_[k].is_static ? 1 : kMaxBuckets, AimSlot{});
     if (!targets_[k].is_static) continue;
-    Slot(0, k);
+    static_field_[k] = Slot(0, k).field.data();
     Rect& box = region_box_[k];
     for (const auto& [q, r] : region_) {
       per_point[q].push_back({k, r});
@@ -338,7 +339,13 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
       }
     }
   }
-  BuildTargetIndex();
+  indexed_ = !any_moving_;
+  pad_ = 0;
+  for (const Rect& b : region_box_) {
+    if (b.x0 > b.x1) continue;
+    const int cx = (b.x0 + b.x1) / 2, cy = (b.y0 + b.y1) / 2;
+    pad_ = std::max({pad_, cx - b.x0, b.x1 - cx, cy - b.y0, b.y1 - cy});
+  }
   obs_begin_.assign(lattice.size() + 1, 0);
   obs_.clear();
   for (int q = 0; q < lattice.size(); ++q) {
@@ -370,60 +377,72 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   open_.assign(m_, 0);
   avail_.assign(m_, 0);
   open_list_.clear();
+  open_indexed_ = false;
   robots_indexed_ = false;
 }
 
-void SamplingTree::BuildTargetIndex() {
-  const Lattice& lattice = problem_->map->lattice();
-  indexed_ = !any_moving_;
-  if (!indexed_) return;
-  // About two targets (or robots) per bucket.
-  const double side =
-      std::sqrt(2.0 * lattice.size() / std::max(1, std::max(n_, m_)));
-  cell_ = std::clamp(static_cast<int>(std::lround(side)), 4, 64);
-  gx_ = (lattice.nx() + cell_ - 1) / cell_;
-  gy_ = (lattice.ny() + cell_ - 1) / cell_;
-  pad_ = 0;
-  target_begin_.assign(static_cast<size_t>(gx_) * gy_ + 1, 0);
-  std::vector<int> cell_of(m_, -1);
-  for (int k = 0; k < m_; ++k) {
-    const Rect& b = region_box_[k];
-    if (b.x0 > b.x1) continue;  // no region: its field is -1 everywhere
-    const int cx = (b.x0 + b.x1) / 2, cy = (b.y0 + b.y1) / 2;
-    pad_ = std::max({pad_, cx - b.x0, b.x1 - cx, cy - b.y0, b.y1 - cy});
-    cell_of[k] = (cy / cell_) * gx_ + cx / cell_;
-    ++target_begin_[cell_of[k] + 1];
-  }
-  for (size_t c = 1; c < target_begin_.size(); ++c)
-    target_begin_[c] += target_begin_[c - 1];
-  target_cell_.assign(target_begin_.back(), 0);
-  std::vector<int> fill(target_begin_.begin(), target_begin_.end() - 1);
-  for (int k = 0; k < m_; ++k)  // ascending ids within a bucket
-    if (cell_of[k] >= 0) target_cell_[fill[cell_of[k]]++] = k;
+void SamplingTree::Buckets::Reset(int nx, int ny, int count) {
+  const double side = std::sqrt(2.0 * nx * ny / std::max(1, count));
+  cell = std::clamp(static_cast<int>(std::lround(side)), 4, 64);
+  gx = (nx + cell - 1) / cell;
+  gy = (ny + cell - 1) / cell;
+  begin.assign(static_cast<size_t>(gx) * gy + 1, 0);
 }
 
-void SamplingTree::BuildRobotGrid(const int* positions) {
+namespace {
+
+// Fills a bucket grid's CSR from the bucket of each item (-1: left out).
+template <typename BucketOf>
+void FillBuckets(int count, BucketOf&& bucket_of, std::vector<int>* begin,
+                 std::vector<int>* items, std::vector<int>* fill) {
+  for (int t = 0; t < count; ++t) {
+    const int b = bucket_of(t);
+    if (b >= 0) ++(*begin)[b + 1];
+  }
+  for (size_t c = 1; c < begin->size(); ++c) (*begin)[c] += (*begin)[c - 1];
+  items->resize(begin->back());
+  fill->assign(begin->begin(), begin->end() - 1);
+  for (int t = 0; t < count; ++t) {
+    const int b = bucket_of(t);
+    if (b >= 0) (*items)[(*fill)[b]++] = t;
+  }
+}
+
+}  // namespace
+
+void SamplingTree::BuildOpenIndex() {
+  open_indexed_ =
+      indexed_ && static_cast<int>(open_list_.size()) > kLinearTargets;
+  if (!open_indexed_) return;
+  const Lattice& lattice = problem_->map->lattice();
+  Buckets& g = open_index_;
+  g.Reset(lattice.nx(), lattice.ny(), static_cast<int>(open_list_.size()));
+  // Items are positions in open_list_; the index holds target ids.
+  FillBuckets(
+      static_cast<int>(open_list_.size()),
+      [&](int t) {
+        const Rect& b = region_box_[open_list_[t]];
+        if (b.x0 > b.x1) return -1;  // no region: its field is -1 everywhere
+        return g.Of((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2);
+      },
+      &g.begin, &g.items, &g.fill);
+  for (int& t : g.items) t = open_list_[t];
+}
+
+void SamplingTree::BuildRobotIndex(const int* positions) {
   const SamplingProblem& p = *problem_;
   const Lattice& lattice = p.map->lattice();
   robots_indexed_ = indexed_ && n_ > kLinearRobots;
   if (!robots_indexed_) return;
-  robot_begin_.assign(static_cast<size_t>(gx_) * gy_ + 1, 0);
-  robot_cell_.resize(n_);
-  for (int i = 0; i < n_; ++i) {
-    if (!p.active[i]) continue;
-    const int q = positions[i];
-    ++robot_begin_[(lattice.Iy(q) / cell_) * gx_ + lattice.Ix(q) / cell_ + 1];
-  }
-  for (size_t c = 1; c < robot_begin_.size(); ++c)
-    robot_begin_[c] += robot_begin_[c - 1];
-  std::vector<int>& fill = robot_fill_;
-  fill.assign(robot_begin_.begin(), robot_begin_.end() - 1);
-  for (int i = 0; i < n_; ++i) {
-    if (!p.active[i]) continue;
-    const int q = positions[i];
-    robot_cell_[fill[(lattice.Iy(q) / cell_) * gx_ + lattice.Ix(q) / cell_]++] =
-        i;
-  }
+  Buckets& g = robot_index_;
+  g.Reset(lattice.nx(), lattice.ny(), n_);
+  FillBuckets(
+      n_,
+      [&](int i) {
+        if (!p.active[i]) return -1;
+        return g.Of(lattice.Ix(positions[i]), lattice.Iy(positions[i]));
+      },
+      &g.begin, &g.items, &g.fill);
 }
 
 namespace {
@@ -458,7 +477,30 @@ void VisitRing(int bx0, int bx1, int by0, int by1, int r, int gx, int gy,
 int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
                                 int* dist) {
   int best = -1, best_d = std::numeric_limits<int>::max();
-  if (!indexed_ || static_cast<int>(open_list_.size()) <= kLinearTargets) {
+  if (indexed_ && !open_indexed_) {
+    // Few open targets: in order of the L1 bound of their distance, reading
+    // a field (a cache miss, likely) only while it may beat the best.
+    near_.clear();
+    const Lattice& lattice = problem_->map->lattice();
+    const int x = lattice.Ix(q), y = lattice.Iy(q);
+    for (int k : open_list_) {
+      const Rect& b = region_box_[k];
+      if (!ok[k] || b.x0 > b.x1) continue;
+      near_.push_back({RectDistance(x, y, b.x0, b.x1, b.y0, b.y1), k});
+    }
+    std::sort(near_.begin(), near_.end());
+    for (const auto& [lb, k] : near_) {
+      if (best >= 0 && lb > best_d) break;
+      const int d = static_field_[k][q];
+      if (d >= 0 && (best < 0 || d < best_d || (d == best_d && k < best))) {
+        best = k;
+        best_d = d;
+      }
+    }
+    *dist = best_d;
+    return best;
+  }
+  if (!open_indexed_) {
     for (int k : open_list_) {
       if (!ok[k]) continue;
       const int d = FieldAt(depth, k)[q];
@@ -470,29 +512,42 @@ int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
     *dist = best_d;
     return best;
   }
-  // Rings of buckets around q's: a target whose region's centre lies in ring
-  // r >= 1 is at least (r - 1) cell_ + 1 - pad_ steps away.
+  // Best first: candidates in a heap by the L1 bound of their distance,
+  // filled ring by ring around q's bucket (a target whose region's centre
+  // lies in ring r >= 1 is at least (r - 1) cell + 1 - pad_ steps away) while
+  // the next ring could hold a better one; a field is read (a cache miss,
+  // likely) only while the bound may beat the best.
   const Lattice& lattice = problem_->map->lattice();
+  const Buckets& g = open_index_;
   const int x = lattice.Ix(q), y = lattice.Iy(q);
-  const int bx = x / cell_, by = y / cell_;
-  const int rings = std::max(gx_, gy_);
-  for (int r = 0; r <= rings; ++r) {
-    if (best >= 0 && (r - 1) * cell_ + 1 - pad_ > best_d) break;
-    VisitRing(bx, bx, by, by, r, gx_, gy_, [&](int c) {
-      for (int t = target_begin_[c]; t < target_begin_[c + 1]; ++t) {
-        const int k = target_cell_[t];
-        if (!ok[k]) continue;
-        const Rect& b = region_box_[k];
-        const int lb = RectDistance(x, y, b.x0, b.x1, b.y0, b.y1);
-        if (best >= 0 && (lb > best_d || (lb == best_d && k > best))) continue;
-        const int d = slots_[k][0].field[q];
-        if (d < 0) continue;
-        if (best < 0 || d < best_d || (d == best_d && k < best)) {
-          best = k;
-          best_d = d;
+  const int bx = x / g.cell, by = y / g.cell;
+  const int rings = std::max(g.gx, g.gy);
+  near_.clear();
+  int r = 0;
+  for (;;) {
+    while (r <= rings && (near_.empty() ||
+                          near_.front().first >= (r - 1) * g.cell + 1 - pad_)) {
+      VisitRing(bx, bx, by, by, r, g.gx, g.gy, [&](int c) {
+        for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
+          const int k = g.items[t];
+          if (!ok[k]) continue;
+          const Rect& b = region_box_[k];
+          near_.push_back({RectDistance(x, y, b.x0, b.x1, b.y0, b.y1), k});
+          std::push_heap(near_.begin(), near_.end(), std::greater<>());
         }
-      }
-    });
+      });
+      ++r;
+    }
+    if (near_.empty()) break;
+    std::pop_heap(near_.begin(), near_.end(), std::greater<>());
+    const auto [lb, k] = near_.back();
+    near_.pop_back();
+    if (best >= 0 && lb > best_d) break;
+    const int d = static_field_[k][q];
+    if (d >= 0 && (best < 0 || d < best_d || (d == best_d && k < best))) {
+      best = k;
+      best_d = d;
+    }
   }
   *dist = best_d;
   return best;
@@ -500,7 +555,7 @@ int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
 
 int SamplingTree::ReachOf(int k, const int* positions) const {
   const SamplingProblem& p = *problem_;
-  const std::vector<int>& field = slots_[k][0].field;
+  const int* field = static_field_[k];
   int reach = std::numeric_limits<int>::max();
   if (!robots_indexed_) {
     for (int i = 0; i < n_; ++i) {
@@ -512,16 +567,17 @@ int SamplingTree::ReachOf(int k, const int* positions) const {
   const Rect& b = region_box_[k];
   if (b.x0 > b.x1) return reach;  // no region
   const Lattice& lattice = p.map->lattice();
-  const int bx0 = b.x0 / cell_, bx1 = b.x1 / cell_;
-  const int by0 = b.y0 / cell_, by1 = b.y1 / cell_;
-  const int rings = std::max(gx_, gy_);
+  const Buckets& g = robot_index_;
+  const int bx0 = b.x0 / g.cell, bx1 = b.x1 / g.cell;
+  const int by0 = b.y0 / g.cell, by1 = b.y1 / g.cell;
+  const int rings = std::max(g.gx, g.gy);
   // A robot in ring r >= 1 around the region's buckets is at least
-  // (r - 1) cell_ + 1 steps away.
+  // (r - 1) cell + 1 steps away.
   for (int r = 0; r <= rings; ++r) {
-    if (r > 0 && (r - 1) * cell_ + 1 >= reach) break;
-    VisitRing(bx0, bx1, by0, by1, r, gx_, gy_, [&](int c) {
-      for (int t = robot_begin_[c]; t < robot_begin_[c + 1]; ++t) {
-        const int q = positions[robot_cell_[t]];
+    if (r > 0 && (r - 1) * g.cell + 1 >= reach) break;
+    VisitRing(bx0, bx1, by0, by1, r, g.gx, g.gy, [&](int c) {
+      for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
+        const int q = positions[g.items[t]];
         if (RectDistance(lattice.Ix(q), lattice.Iy(q), b.x0, b.x1, b.y0,
                          b.y1) >= reach)
           continue;
@@ -610,7 +666,7 @@ int SamplingTree::AddNode(int parent, const int* positions) {
     if (depth == 0 && !p.extra_at_depth1.empty() && p.extra_at_depth1[k] > 0.0)
       continue;
     if (!grid_built) {
-      BuildRobotGrid(positions);
+      BuildRobotIndex(positions);
       grid_built = true;
     }
     const int reach = ReachOf(k, positions);
@@ -634,6 +690,7 @@ void SamplingTree::MarkOpen(int node) {
     open_[k] = BlockDet(info, k) > problem_->eps ? 1 : 0;
     if (open_[k]) open_list_.push_back(k);
   }
+  BuildOpenIndex();
 }
 
 int SamplingTree::NearestOpen(int q, int depth) {
@@ -650,9 +707,17 @@ int SamplingTree::NextInTour(const std::vector<int>& tour) const {
 Move SamplingTree::StepToward(int q, int k, int depth, Rng* rng) {
   const Lattice& lattice = problem_->map->lattice();
   if (k >= 0) {
-    const std::vector<int>& f = FieldAt(depth, k);
-    if (f[q] > 0) return StepDownField(lattice, f, q);
-    if (f[q] == 0) {  // in the region already: stay inside it if possible
+    const int* f =
+        static_field_[k] ? static_field_[k] : FieldAt(depth, k).data();
+    const int here = f[q];
+    if (here > 0) {  // StepDownField
+      for (Move m : kMoves) {
+        const int v = lattice.Next(q, m);
+        if (v >= 0 && f[v] == here - 1) return m;
+      }
+      return Move::kStay;
+    }
+    if (here == 0) {  // in the region already: stay inside it if possible
       for (Move m : kMoves) {
         const int v = lattice.Next(q, m);
         if (v >= 0 && f[v] == 0) return m;

@@ -218,8 +218,8 @@ class SamplingTree {
   // Spatial indexes (all targets static; docs/design.md, Policies): targets
   // by the centre of their observation region, robots of one configuration
   // by their point, in square buckets of lattice points.
-  void BuildTargetIndex();
-  void BuildRobotGrid(const int* positions);
+  void BuildOpenIndex();
+  void BuildRobotIndex(const int* positions);
   // The target with ok[k] != 0 nearest to q by its field (ties: the lowest
   // id), or -1; its distance in *dist. Exactly the linear scan over open_list_.
   int NearestTarget(int q, int depth, const std::vector<char>& ok, int* dist);
@@ -291,15 +291,24 @@ class SamplingTree {
     int x0 = 0, x1 = -1, y0 = 0,
         y1 = -1;  // lattice coordinates; x0 > x1: empty
   };
-  std::vector<Rect> region_box_;    // per static target, its region's bounds
-  bool indexed_ = false;            // all targets static: the indexes are used
-  int cell_ = 8, gx_ = 0, gy_ = 0;  // bucket side (lattice points), buckets
+  // Items in square buckets of lattice points, as CSR.
+  struct Buckets {
+    int cell = 8, gx = 0, gy = 0;  // bucket side (lattice points), buckets
+    std::vector<int> begin, items, fill;
+    // Sized for about two of `count` items per bucket, emptied.
+    void Reset(int nx, int ny, int count);
+    int Of(int x, int y) const { return (y / cell) * gx + x / cell; }
+  };
+  std::vector<Rect> region_box_;  // per static target, its region's bounds
+  std::vector<const int*> static_field_;  // per static target, its field
+  bool indexed_ = false;  // all targets static: the indexes are used
   int pad_ = 0;  // the largest distance from a region's centre to its bounds
-  std::vector<int> target_begin_, target_cell_;  // CSR: targets per bucket
-  bool robots_indexed_ = false;  // robot_begin_ holds the current node's
-  std::vector<int> robot_begin_, robot_cell_;  // CSR: active robots
-  std::vector<int> robot_fill_;
-  std::vector<int> open_list_;  // open targets, ascending
+  Buckets open_index_;           // the open targets by their region's centre
+  bool open_indexed_ = false;    // open_index_ holds open_list_
+  Buckets robot_index_;          // a node's active robots by their point
+  bool robots_indexed_ = false;  // robot_index_ holds the current node's
+  std::vector<int> open_list_;   // open targets, ascending
+  std::vector<std::pair<int, int>> near_;  // (distance bound, target)
   std::vector<char> avail_;
   ArenaVector<double> lower_;  // per node: lower bound of the total cost
   std::vector<int> bfs_queue_;
