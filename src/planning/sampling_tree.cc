@@ -339,7 +339,7 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
       }
     }
   }
-  indexed_ = !any_moving_;
+  indexed_ = !any_moving_ && use_index_;
   pad_ = 0;
   for (const Rect& b : region_box_) {
     if (b.x0 > b.x1) continue;
@@ -737,7 +737,24 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   MarkOpen(node);
   std::copy(open_.begin(), open_.end(), avail_.begin());  // open, not taken
   std::fill(assigned_.begin(), assigned_.end(), -1);
-  if (sorted) {
+  if (sorted && !use_index_) {
+    // The definition, for tests: all pairs, sorted.
+    pairs_.clear();
+    for (int i = 0; i < n_; ++i) {
+      if (!p.active[i]) continue;
+      for (int k : open_list_) {
+        const int d = FieldAt(depth, k)[pos[i]];
+        if (d >= 0) pairs_.push_back({d, i * m_ + k});
+      }
+    }
+    std::sort(pairs_.begin(), pairs_.end());
+    for (const auto& [d, ik] : pairs_) {
+      const int i = ik / m_, k = ik % m_;
+      if (assigned_[i] >= 0 || !avail_[k]) continue;
+      assigned_[i] = k;
+      avail_[k] = 0;
+    }
+  } else if (sorted) {
     // Globally nearest robot-target pairs (distance, then robot, then target)
     // first: a greedy matching. Without listing every pair: each robot's
     // nearest free target (NearestTarget) in a heap of (distance, robot * m +
@@ -1034,6 +1051,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   AIA_CHECK(problem.map && problem.sensor && problem.belief);
   AIA_CHECK(problem.active.size() == problem.start.size());
   tour_budget_ = params.tour_budget;
+  use_index_ = params.spatial_index;
   Prepare(problem);
   // Memory guard: a node keeps n positions, `stride_` numbers and six
   // scalars, in vectors that may hold up to twice what they use.
@@ -1091,18 +1109,23 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   // finish if need be), reserves its arena at once (no copies as it grows)
   // and gives both back at the end. Taken after the seeded rollouts, which
   // mostly find a goal and so bound what is left by the anytime budget.
+  // The idle rewrite adds at most the returned path's depth: no deeper than
+  // the deepest node now plus one per node still to come.
+  const double grown = std::min(
+      static_cast<double>(node_cap_),
+      static_cast<double>(parent_.size()) +
+          static_cast<double>(params.anytime) +
+          (best_ >= 0 ? 0.0 : static_cast<double>(params.max_iterations)));
+  const double deepest =
+      *std::max_element(depth_.begin(), depth_.end()) +
+      std::max(0.0, grown - static_cast<double>(parent_.size()));
   const double rewrite_cap =
       !params.routing ? 0.0
       : params.max_depth > 0
           ? params.max_depth
-          : 2.0 * (lattice.nx() + lattice.ny()) * std::max(1, m_);
-  const double most_nodes =
-      std::min(
-          static_cast<double>(node_cap_),
-          static_cast<double>(parent_.size()) +
-              static_cast<double>(params.anytime) +
-              (best_ >= 0 ? 0.0 : static_cast<double>(params.max_iterations))) +
-      rewrite_cap;
+          : std::min(deepest,
+                     2.0 * (lattice.nx() + lattice.ny()) * std::max(1, m_));
+  const double most_nodes = grown + rewrite_cap;
   const TreeMemoryLease lease(most_nodes * ResidentNodeBytes(n_, stride_));
   if (lease.large()) {
     const auto nodes = static_cast<std::size_t>(most_nodes);
@@ -1195,12 +1218,12 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   plan.nodes = static_cast<long>(parent_.size());
   plan.iterations = it;
   plan.first_goal_iteration = first_goal_iteration_;
+  // What the nodes fill (a reserved arena's untouched pages are not
+  // resident).
   plan.arena_bytes =
-      pos_.capacity() * sizeof(int) + info_.capacity() * sizeof(double) +
-      (parent_.capacity() + depth_.capacity() + unloc_.capacity()) *
-          sizeof(int) +
-      (cost_.capacity() + det_sum_.capacity() + lower_.capacity()) *
-          sizeof(double);
+      pos_.size() * sizeof(int) + info_.size() * sizeof(double) +
+      (parent_.size() + depth_.size() + unloc_.size()) * sizeof(int) +
+      (cost_.size() + det_sum_.size() + lower_.size()) * sizeof(double);
   if (lease.large()) {  // the memory goes back to the kernel
     const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
     release(pos_);

@@ -53,6 +53,10 @@ struct SamplingParams {
   // Tours, seeded rollouts and the idle rewrite (the expert); Dec-SB's short
   // single-robot trees go without.
   bool routing = true;
+  // The spatial indexes of targets and robots (docs/design.md, Policies);
+  // false scans every open target and robot instead, with the same plans
+  // (for tests).
+  bool spatial_index = true;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -173,7 +177,7 @@ struct SamplingPlan {
   long iterations = 0;
   long first_goal_iteration = -1;
   double seconds = 0.0;
-  std::size_t arena_bytes = 0;
+  std::size_t arena_bytes = 0;  // the node storage filled
   PolicyStatus status = PolicyStatus::kOk;
 };
 
@@ -280,6 +284,7 @@ class SamplingTree {
   std::vector<std::vector<int>> tours_, makespan_tours_;
   int tour_makespan_ = 0;
   long tour_budget_ = 0;
+  bool use_index_ = true;
   TourPlanner tour_planner_;
   // Scratch.
   std::vector<int> assigned_, order_, child_pos_;
