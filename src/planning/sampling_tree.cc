@@ -488,9 +488,14 @@ int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
       if (!ok[k] || b.x0 > b.x1) continue;
       near_.push_back({RectDistance(x, y, b.x0, b.x1, b.y0, b.y1), k});
     }
-    std::sort(near_.begin(), near_.end());
-    for (const auto& [lb, k] : near_) {
+    while (!near_.empty()) {  // the least bound next, by selection
+      size_t j = 0;
+      for (size_t c = 1; c < near_.size(); ++c)
+        if (near_[c] < near_[j]) j = c;
+      const auto [lb, k] = near_[j];
       if (best >= 0 && lb > best_d) break;
+      near_[j] = near_.back();
+      near_.pop_back();
       const int d = static_field_[k][q];
       if (d >= 0 && (best < 0 || d < best_d || (d == best_d && k < best))) {
         best = k;
@@ -532,7 +537,9 @@ int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
           const int k = g.items[t];
           if (!ok[k]) continue;
           const Rect& b = region_box_[k];
-          near_.push_back({RectDistance(x, y, b.x0, b.x1, b.y0, b.y1), k});
+          const int lb = RectDistance(x, y, b.x0, b.x1, b.y0, b.y1);
+          if (best >= 0 && lb > best_d) continue;  // never read
+          near_.push_back({lb, k});
           std::push_heap(near_.begin(), near_.end(), std::greater<>());
         }
       });
