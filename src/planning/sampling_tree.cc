@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <new>
@@ -146,6 +147,12 @@ constexpr std::size_t kMappedBytes = std::size_t{1} << 20;
 
 constexpr int kMaxBuckets = 64;
 
+// Below these sizes the spatial indexes are not worth their upkeep: a linear
+// scan of the open targets, of the robots. Either way the result is the
+// same.
+constexpr int kLinearTargets = 32;
+constexpr int kLinearRobots = 32;
+
 // The tours' legs are the tree's own fields, walked.
 class SamplingTree::Legs : public LegOracle {
  public:
@@ -156,6 +163,7 @@ class SamplingTree::Legs : public LegOracle {
   bool TimeVarying(int k) const override {
     return !tree_->targets_[k].is_static;
   }
+  int Distance(int from, int k) override { return tree_->FieldAt(0, k)[from]; }
 
  private:
   SamplingTree* tree_;
@@ -313,11 +321,30 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   // targets' per span of depths, when first asked for.
   slots_.assign(m_, {});
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
+  region_box_.assign(m_, Rect{});
+  static_field_.assign(m_, nullptr);
   for (int k = 0; k < m_; ++k) {
     slots_[k].assign(targets_[k].is_static ? 1 : kMaxBuckets, AimSlot{});
     if (!targets_[k].is_static) continue;
-    Slot(0, k);
-    for (const auto& [q, r] : region_) per_point[q].push_back({k, r});
+    static_field_[k] = Slot(0, k).field.data();
+    Rect& box = region_box_[k];
+    for (const auto& [q, r] : region_) {
+      per_point[q].push_back({k, r});
+      const int x = lattice.Ix(q), y = lattice.Iy(q);
+      if (box.x0 > box.x1) {
+        box = {x, x, y, y};
+      } else {
+        box = {std::min(box.x0, x), std::max(box.x1, x), std::min(box.y0, y),
+               std::max(box.y1, y)};
+      }
+    }
+  }
+  indexed_ = !any_moving_ && use_index_;
+  pad_ = 0;
+  for (const Rect& b : region_box_) {
+    if (b.x0 > b.x1) continue;
+    const int cx = (b.x0 + b.x1) / 2, cy = (b.y0 + b.y1) / 2;
+    pad_ = std::max({pad_, cx - b.x0, b.x1 - cx, cy - b.y0, b.y1 - cy});
   }
   obs_begin_.assign(lattice.size() + 1, 0);
   obs_.clear();
@@ -347,8 +374,226 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   tour_makespan_ = 0;
   assigned_.assign(n_, -1);
   child_pos_.assign(n_, 0);
-  taken_.assign(m_, 0);
   open_.assign(m_, 0);
+  avail_.assign(m_, 0);
+  open_list_.clear();
+  open_indexed_ = false;
+  robots_indexed_ = false;
+}
+
+void SamplingTree::Buckets::Reset(int nx, int ny, int count) {
+  const double side = std::sqrt(2.0 * nx * ny / std::max(1, count));
+  cell = std::clamp(static_cast<int>(std::lround(side)), 4, 64);
+  gx = (nx + cell - 1) / cell;
+  gy = (ny + cell - 1) / cell;
+  begin.assign(static_cast<size_t>(gx) * gy + 1, 0);
+}
+
+namespace {
+
+// Fills a bucket grid's CSR from the bucket of each item (-1: left out).
+template <typename BucketOf>
+void FillBuckets(int count, BucketOf&& bucket_of, std::vector<int>* begin,
+                 std::vector<int>* items, std::vector<int>* fill) {
+  for (int t = 0; t < count; ++t) {
+    const int b = bucket_of(t);
+    if (b >= 0) ++(*begin)[b + 1];
+  }
+  for (size_t c = 1; c < begin->size(); ++c) (*begin)[c] += (*begin)[c - 1];
+  items->resize(begin->back());
+  fill->assign(begin->begin(), begin->end() - 1);
+  for (int t = 0; t < count; ++t) {
+    const int b = bucket_of(t);
+    if (b >= 0) (*items)[(*fill)[b]++] = t;
+  }
+}
+
+}  // namespace
+
+void SamplingTree::BuildOpenIndex() {
+  open_indexed_ =
+      indexed_ && static_cast<int>(open_list_.size()) > kLinearTargets;
+  if (!open_indexed_) return;
+  const Lattice& lattice = problem_->map->lattice();
+  Buckets& g = open_index_;
+  g.Reset(lattice.nx(), lattice.ny(), static_cast<int>(open_list_.size()));
+  // Items are positions in open_list_; the index holds target ids.
+  FillBuckets(
+      static_cast<int>(open_list_.size()),
+      [&](int t) {
+        const Rect& b = region_box_[open_list_[t]];
+        if (b.x0 > b.x1) return -1;  // no region: its field is -1 everywhere
+        return g.Of((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2);
+      },
+      &g.begin, &g.items, &g.fill);
+  for (int& t : g.items) t = open_list_[t];
+}
+
+void SamplingTree::BuildRobotIndex(const int* positions) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  robots_indexed_ = indexed_ && n_ > kLinearRobots;
+  if (!robots_indexed_) return;
+  Buckets& g = robot_index_;
+  g.Reset(lattice.nx(), lattice.ny(), n_);
+  FillBuckets(
+      n_,
+      [&](int i) {
+        if (!p.active[i]) return -1;
+        return g.Of(lattice.Ix(positions[i]), lattice.Iy(positions[i]));
+      },
+      &g.begin, &g.items, &g.fill);
+}
+
+namespace {
+
+// L1 distance (lattice steps) from (x, y) to a rectangle: a lower bound of
+// the BFS distance to any point in it, each move changing one coordinate by
+// one.
+inline int RectDistance(int x, int y, int x0, int x1, int y0, int y1) {
+  return std::max({0, x0 - x, x - x1}) + std::max({0, y0 - y, y - y1});
+}
+
+// Calls visit(bucket) for the buckets at Chebyshev distance r from the bucket
+// rectangle [bx0, bx1] x [by0, by1] (the rectangle itself for r = 0),
+// clipped to the grid of gx x gy buckets.
+template <typename Visit>
+void VisitRing(int bx0, int bx1, int by0, int by1, int r, int gx, int gy,
+               Visit&& visit) {
+  const int x0 = bx0 - r, x1 = bx1 + r, y0 = by0 - r, y1 = by1 + r;
+  for (int y = std::max(0, y0); y <= std::min(gy - 1, y1); ++y) {
+    if (r == 0 || y == y0 || y == y1) {
+      for (int x = std::max(0, x0); x <= std::min(gx - 1, x1); ++x)
+        visit(y * gx + x);
+    } else {
+      if (x0 >= 0) visit(y * gx + x0);
+      if (x1 < gx) visit(y * gx + x1);
+    }
+  }
+}
+
+}  // namespace
+
+int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
+                                int* dist) {
+  int best = -1, best_d = std::numeric_limits<int>::max();
+  if (indexed_ && !open_indexed_) {
+    // Few open targets: in order of the L1 bound of their distance, reading
+    // a field (a cache miss, likely) only while it may beat the best.
+    near_.clear();
+    const Lattice& lattice = problem_->map->lattice();
+    const int x = lattice.Ix(q), y = lattice.Iy(q);
+    for (int k : open_list_) {
+      const Rect& b = region_box_[k];
+      if (!ok[k] || b.x0 > b.x1) continue;
+      near_.push_back({RectDistance(x, y, b.x0, b.x1, b.y0, b.y1), k});
+    }
+    while (!near_.empty()) {  // the least bound next, by selection
+      size_t j = 0;
+      for (size_t c = 1; c < near_.size(); ++c)
+        if (near_[c] < near_[j]) j = c;
+      const auto [lb, k] = near_[j];
+      if (best >= 0 && lb > best_d) break;
+      near_[j] = near_.back();
+      near_.pop_back();
+      const int d = static_field_[k][q];
+      if (d >= 0 && (best < 0 || d < best_d || (d == best_d && k < best))) {
+        best = k;
+        best_d = d;
+      }
+    }
+    *dist = best_d;
+    return best;
+  }
+  if (!open_indexed_) {
+    for (int k : open_list_) {
+      if (!ok[k]) continue;
+      const int d = FieldAt(depth, k)[q];
+      if (d >= 0 && d < best_d) {
+        best = k;
+        best_d = d;
+      }
+    }
+    *dist = best_d;
+    return best;
+  }
+  // Best first: candidates in a heap by the L1 bound of their distance,
+  // filled ring by ring around q's bucket (a target whose region's centre
+  // lies in ring r >= 1 is at least (r - 1) cell + 1 - pad_ steps away) while
+  // the next ring could hold a better one; a field is read (a cache miss,
+  // likely) only while the bound may beat the best.
+  const Lattice& lattice = problem_->map->lattice();
+  const Buckets& g = open_index_;
+  const int x = lattice.Ix(q), y = lattice.Iy(q);
+  const int bx = x / g.cell, by = y / g.cell;
+  const int rings = std::max(g.gx, g.gy);
+  near_.clear();
+  int r = 0;
+  for (;;) {
+    while (r <= rings && (near_.empty() ||
+                          near_.front().first >= (r - 1) * g.cell + 1 - pad_)) {
+      VisitRing(bx, bx, by, by, r, g.gx, g.gy, [&](int c) {
+        for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
+          const int k = g.items[t];
+          if (!ok[k]) continue;
+          const Rect& b = region_box_[k];
+          const int lb = RectDistance(x, y, b.x0, b.x1, b.y0, b.y1);
+          if (best >= 0 && lb > best_d) continue;  // never read
+          near_.push_back({lb, k});
+          std::push_heap(near_.begin(), near_.end(), std::greater<>());
+        }
+      });
+      ++r;
+    }
+    if (near_.empty()) break;
+    std::pop_heap(near_.begin(), near_.end(), std::greater<>());
+    const auto [lb, k] = near_.back();
+    near_.pop_back();
+    if (best >= 0 && lb > best_d) break;
+    const int d = static_field_[k][q];
+    if (d >= 0 && (best < 0 || d < best_d || (d == best_d && k < best))) {
+      best = k;
+      best_d = d;
+    }
+  }
+  *dist = best_d;
+  return best;
+}
+
+int SamplingTree::ReachOf(int k, const int* positions) const {
+  const SamplingProblem& p = *problem_;
+  const int* field = static_field_[k];
+  int reach = std::numeric_limits<int>::max();
+  if (!robots_indexed_) {
+    for (int i = 0; i < n_; ++i) {
+      const int f = p.active[i] ? field[positions[i]] : -1;
+      if (f >= 0) reach = std::min(reach, f);
+    }
+    return reach;
+  }
+  const Rect& b = region_box_[k];
+  if (b.x0 > b.x1) return reach;  // no region
+  const Lattice& lattice = p.map->lattice();
+  const Buckets& g = robot_index_;
+  const int bx0 = b.x0 / g.cell, bx1 = b.x1 / g.cell;
+  const int by0 = b.y0 / g.cell, by1 = b.y1 / g.cell;
+  const int rings = std::max(g.gx, g.gy);
+  // A robot in ring r >= 1 around the region's buckets is at least
+  // (r - 1) cell + 1 steps away.
+  for (int r = 0; r <= rings; ++r) {
+    if (r > 0 && (r - 1) * g.cell + 1 >= reach) break;
+    VisitRing(bx0, bx1, by0, by1, r, g.gx, g.gy, [&](int c) {
+      for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
+        const int q = positions[g.items[t]];
+        if (RectDistance(lattice.Ix(q), lattice.Iy(q), b.x0, b.x1, b.y0,
+                         b.y1) >= reach)
+          continue;
+        const int f = field[q];
+        if (f >= 0) reach = std::min(reach, f);
+      }
+    });
+  }
+  return reach;
 }
 
 int SamplingTree::AddNode(int parent, const int* positions) {
@@ -418,6 +663,7 @@ int SamplingTree::AddNode(int parent, const int* positions) {
   // bound on the cost still to come.
   double sum = 0.0, ahead = 0.0;
   int unloc = 0;
+  bool grid_built = false;
   for (int k = 0; k < m_; ++k) {
     const double d = BlockDet(info, k);
     sum += d;
@@ -426,12 +672,11 @@ int SamplingTree::AddNode(int parent, const int* positions) {
     if (!targets_[k].is_static) continue;
     if (depth == 0 && !p.extra_at_depth1.empty() && p.extra_at_depth1[k] > 0.0)
       continue;
-    const std::vector<int>& field = slots_[k][0].field;
-    int reach = std::numeric_limits<int>::max();
-    for (int i = 0; i < n_; ++i) {
-      const int f = p.active[i] ? field[positions[i]] : -1;
-      if (f >= 0) reach = std::min(reach, f);
+    if (!grid_built) {
+      BuildRobotIndex(positions);
+      grid_built = true;
     }
+    const int reach = ReachOf(k, positions);
     if (reach != std::numeric_limits<int>::max() && reach > 1)
       ahead += d * (reach - 1);
   }
@@ -447,21 +692,17 @@ int SamplingTree::AddNode(int parent, const int* positions) {
 
 void SamplingTree::MarkOpen(int node) {
   const double* info = Info(node);
-  for (int k = 0; k < m_; ++k)
+  open_list_.clear();
+  for (int k = 0; k < m_; ++k) {
     open_[k] = BlockDet(info, k) > problem_->eps ? 1 : 0;
+    if (open_[k]) open_list_.push_back(k);
+  }
+  BuildOpenIndex();
 }
 
 int SamplingTree::NearestOpen(int q, int depth) {
-  int best = -1, best_d = std::numeric_limits<int>::max();
-  for (int k = 0; k < m_; ++k) {
-    if (!open_[k]) continue;
-    const int d = FieldAt(depth, k)[q];
-    if (d >= 0 && d < best_d) {
-      best = k;
-      best_d = d;
-    }
-  }
-  return best;
+  int d = 0;
+  return NearestTarget(q, depth, open_, &d);
 }
 
 int SamplingTree::NextInTour(const std::vector<int>& tour) const {
@@ -473,9 +714,17 @@ int SamplingTree::NextInTour(const std::vector<int>& tour) const {
 Move SamplingTree::StepToward(int q, int k, int depth, Rng* rng) {
   const Lattice& lattice = problem_->map->lattice();
   if (k >= 0) {
-    const std::vector<int>& f = FieldAt(depth, k);
-    if (f[q] > 0) return StepDownField(lattice, f, q);
-    if (f[q] == 0) {  // in the region already: stay inside it if possible
+    const int* f =
+        static_field_[k] ? static_field_[k] : FieldAt(depth, k).data();
+    const int here = f[q];
+    if (here > 0) {  // StepDownField
+      for (Move m : kMoves) {
+        const int v = lattice.Next(q, m);
+        if (v >= 0 && f[v] == here - 1) return m;
+      }
+      return Move::kStay;
+    }
+    if (here == 0) {  // in the region already: stay inside it if possible
       for (Move m : kMoves) {
         const int v = lattice.Next(q, m);
         if (v >= 0 && f[v] == 0) return m;
@@ -493,15 +742,14 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   const int* pos = Pos(node);
   const int depth = depth_[node] + 1;
   MarkOpen(node);
-  for (int k = 0; k < m_; ++k) taken_[k] = open_[k] ? 0 : 2;  // 2: localized
+  std::copy(open_.begin(), open_.end(), avail_.begin());  // open, not taken
   std::fill(assigned_.begin(), assigned_.end(), -1);
-  if (sorted) {
-    // Globally nearest robot-target pairs first (greedy matching).
+  if (sorted && !use_index_) {
+    // The definition, for tests: all pairs, sorted.
     pairs_.clear();
     for (int i = 0; i < n_; ++i) {
       if (!p.active[i]) continue;
-      for (int k = 0; k < m_; ++k) {
-        if (taken_[k] != 0) continue;
+      for (int k : open_list_) {
         const int d = FieldAt(depth, k)[pos[i]];
         if (d >= 0) pairs_.push_back({d, i * m_ + k});
       }
@@ -509,9 +757,42 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
     std::sort(pairs_.begin(), pairs_.end());
     for (const auto& [d, ik] : pairs_) {
       const int i = ik / m_, k = ik % m_;
-      if (assigned_[i] >= 0 || taken_[k] != 0) continue;
+      if (assigned_[i] >= 0 || !avail_[k]) continue;
       assigned_[i] = k;
-      taken_[k] = 1;
+      avail_[k] = 0;
+    }
+  } else if (sorted) {
+    // Globally nearest robot-target pairs (distance, then robot, then target)
+    // first: a greedy matching. Without listing every pair: each robot's
+    // nearest free target (NearestTarget) in a heap of (distance, robot * m +
+    // target); an entry whose target was taken meanwhile is replaced by the
+    // robot's next nearest free one. The top is then always the first pair of
+    // the sorted list of all pairs whose robot and target are both free.
+    pairs_.clear();
+    for (int i = 0; i < n_; ++i) {
+      if (!p.active[i]) continue;
+      int d = 0;
+      const int k = NearestTarget(pos[i], depth, avail_, &d);
+      if (k >= 0) pairs_.push_back({d, i * m_ + k});
+    }
+    std::make_heap(pairs_.begin(), pairs_.end(), std::greater<>());
+    int left = static_cast<int>(open_list_.size());
+    while (!pairs_.empty() && left > 0) {
+      std::pop_heap(pairs_.begin(), pairs_.end(), std::greater<>());
+      const int i = pairs_.back().second / m_, k = pairs_.back().second % m_;
+      pairs_.pop_back();
+      if (!avail_[k]) {
+        int d = 0;
+        const int next = NearestTarget(pos[i], depth, avail_, &d);
+        if (next >= 0) {
+          pairs_.push_back({d, i * m_ + next});
+          std::push_heap(pairs_.begin(), pairs_.end(), std::greater<>());
+        }
+        continue;
+      }
+      assigned_[i] = k;
+      avail_[k] = 0;
+      --left;
     }
   } else {
     // Each robot in random order takes its nearest free unlocalized target.
@@ -521,17 +802,11 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
     for (size_t a = order_.size(); a > 1; --a)
       std::swap(order_[a - 1], order_[rng.UniformInt(a)]);
     for (int i : order_) {
-      int best = -1, best_d = std::numeric_limits<int>::max();
-      for (int k = 0; k < m_; ++k) {
-        const int d = FieldAt(depth, k)[pos[i]];
-        if (taken_[k] == 0 && d >= 0 && d < best_d) {
-          best = k;
-          best_d = d;
-        }
-      }
+      int d = 0;
+      const int best = NearestTarget(pos[i], depth, avail_, &d);
       if (best >= 0) {
         assigned_[i] = best;
-        taken_[best] = 1;
+        avail_[best] = 0;
       }
     }
   }
@@ -612,7 +887,17 @@ void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
         if (v < 0) continue;
         double gain = 0.0;
         const Vec2 there = lattice.Point(v);
-        for (int k2 = 0; k2 < m_; ++k2) {
+        if (!any_moving_) {
+          // The static targets seen from v, in ascending order as below.
+          for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o) {
+            const auto& [k2, r] = obs_[o];
+            if (!open_[k2] || r <= 0.0) continue;
+            const double after = BlockDetAfter(info, k2, r);
+            gain +=
+                std::log(BlockDet(info, k2)) - std::log(std::max(after, p.eps));
+          }
+        }
+        for (int k2 = 0; k2 < m_ && any_moving_; ++k2) {
           if (!open_[k2]) continue;
           double r = 0.0;
           if (targets_[k2].is_static) {
@@ -773,6 +1058,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   AIA_CHECK(problem.map && problem.sensor && problem.belief);
   AIA_CHECK(problem.active.size() == problem.start.size());
   tour_budget_ = params.tour_budget;
+  use_index_ = params.spatial_index;
   Prepare(problem);
   // Memory guard: a node keeps n positions, `stride_` numbers and six
   // scalars, in vectors that may hold up to twice what they use.
@@ -830,18 +1116,23 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   // finish if need be), reserves its arena at once (no copies as it grows)
   // and gives both back at the end. Taken after the seeded rollouts, which
   // mostly find a goal and so bound what is left by the anytime budget.
+  // The idle rewrite adds at most the returned path's depth: no deeper than
+  // the deepest node now plus one per node still to come.
+  const double grown = std::min(
+      static_cast<double>(node_cap_),
+      static_cast<double>(parent_.size()) +
+          static_cast<double>(params.anytime) +
+          (best_ >= 0 ? 0.0 : static_cast<double>(params.max_iterations)));
+  const double deepest =
+      *std::max_element(depth_.begin(), depth_.end()) +
+      std::max(0.0, grown - static_cast<double>(parent_.size()));
   const double rewrite_cap =
       !params.routing ? 0.0
       : params.max_depth > 0
           ? params.max_depth
-          : 2.0 * (lattice.nx() + lattice.ny()) * std::max(1, m_);
-  const double most_nodes =
-      std::min(
-          static_cast<double>(node_cap_),
-          static_cast<double>(parent_.size()) +
-              static_cast<double>(params.anytime) +
-              (best_ >= 0 ? 0.0 : static_cast<double>(params.max_iterations))) +
-      rewrite_cap;
+          : std::min(deepest,
+                     2.0 * (lattice.nx() + lattice.ny()) * std::max(1, m_));
+  const double most_nodes = grown + rewrite_cap;
   const TreeMemoryLease lease(most_nodes * ResidentNodeBytes(n_, stride_));
   if (lease.large()) {
     const auto nodes = static_cast<std::size_t>(most_nodes);
@@ -934,12 +1225,12 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   plan.nodes = static_cast<long>(parent_.size());
   plan.iterations = it;
   plan.first_goal_iteration = first_goal_iteration_;
+  // What the nodes fill (a reserved arena's untouched pages are not
+  // resident).
   plan.arena_bytes =
-      pos_.capacity() * sizeof(int) + info_.capacity() * sizeof(double) +
-      (parent_.capacity() + depth_.capacity() + unloc_.capacity()) *
-          sizeof(int) +
-      (cost_.capacity() + det_sum_.capacity() + lower_.capacity()) *
-          sizeof(double);
+      pos_.size() * sizeof(int) + info_.size() * sizeof(double) +
+      (parent_.size() + depth_.size() + unloc_.size()) * sizeof(int) +
+      (cost_.size() + det_sum_.size() + lower_.size()) * sizeof(double);
   if (lease.large()) {  // the memory goes back to the kernel
     const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
     release(pos_);

@@ -29,6 +29,11 @@ Leg TourPlanner::CachedLeg(int from, int t, int k) {
 TourPlanner::RouteValue TourPlanner::Evaluate(int robot,
                                               const std::vector<int>& route) {
   ++evaluations_;
+  return Value(robot, route);
+}
+
+TourPlanner::RouteValue TourPlanner::Value(int robot,
+                                           const std::vector<int>& route) {
   RouteValue v;
   int t = 0, cur = (*starts_)[robot];
   if (cur < 0) {
@@ -95,53 +100,77 @@ double TourPlanner::ObjectiveWith(const std::vector<RouteValue>& values, int a,
   return makespan + 0.5 * latency / (weight_sum_ * (makespan + 1.0) + 1e-300);
 }
 
-Tours TourPlanner::Plan(const std::vector<int>& starts,
-                        const std::vector<int>& targets,
-                        const std::vector<double>& weight,
-                        const TourSettings& settings, LegOracle& legs) {
-  legs_ = &legs;
-  starts_ = &starts;
-  weight_ = &weight;
-  objective_ = settings.objective;
-  evaluations_ = 0;
-  cache_.clear();
-  const int n = static_cast<int>(starts.size());
-  Tours tours;
-  tours.order.assign(n, {});
-  std::vector<RouteValue> values(n);
-  weight_sum_ = 0.0;
-  for (int k : targets) weight_sum_ += weight[k];
-  Summarize(values);
-  std::vector<int> robots;
-  for (int i = 0; i < n; ++i)
-    if (starts[i] >= 0) robots.push_back(i);
-  if (robots.empty()) {
-    tours.unassigned = targets;
-    return tours;
+void TourPlanner::Insert(const std::vector<int>& robots,
+                         const std::vector<int>& targets,
+                         const TourSettings& settings, Tours* tours,
+                         std::vector<RouteValue>* values_out) {
+  std::vector<RouteValue>& values = *values_out;
+  const int num = static_cast<int>(targets.size());
+  // Each target's candidate robots, in ascending order: all of them, or the
+  // `candidates` whose starts are nearest (then the lowest ids).
+  const size_t cap = static_cast<size_t>(std::max(1, settings.candidates));
+  candidates_.assign(num, {});
+  inserted_.assign(num, {});
+  inserted_version_.assign(num, {});
+  std::vector<std::pair<int, int>> near;
+  for (int t = 0; t < num; ++t) {
+    std::vector<int>& c = candidates_[t];
+    if (robots.size() <= cap) {
+      c = robots;
+    } else {
+      near.clear();
+      for (int i : robots) {
+        const int d = legs_->Distance((*starts_)[i], targets[t]);
+        if (d >= 0) near.push_back({d, i});
+      }
+      if (near.size() > cap) {
+        std::nth_element(near.begin(), near.begin() + (cap - 1), near.end());
+        near.resize(cap);
+      }
+      for (const auto& [d, i] : near) c.push_back(i);
+      std::sort(c.begin(), c.end());
+    }
+    inserted_[t].assign(c.size(), {});
+    inserted_version_[t].assign(c.size(), -1);
   }
+  std::vector<long> version(tours->order.size(), 0);
 
   // Regret-2 insertion: the target whose best insertion is cheapest compared
-  // with its best insertion in another robot's route goes first.
-  std::vector<int> remaining = targets;
+  // with its best insertion in another robot's route goes first. A route's
+  // values with a target inserted are computed again only when the route has
+  // changed; the budget counts the evaluations as if they were all made anew.
+  std::vector<int> remaining(num);
+  for (int t = 0; t < num; ++t) remaining[t] = t;
   std::vector<int> trial;
   while (!remaining.empty()) {
     int pick = -1, pick_robot = -1, pick_pos = -1;
     double pick_key = -kInf, pick_best = kInf;
     RouteValue pick_value;
     for (size_t r = 0; r < remaining.size(); ++r) {
-      const int k = remaining[r];
+      const int t = remaining[r];
+      const int k = targets[t];
       double best1 = kInf, best2 = kInf;
       int robot1 = -1, pos1 = -1;
       RouteValue value1;
-      for (int i : robots) {
+      for (size_t c = 0; c < candidates_[t].size(); ++c) {
+        const int i = candidates_[t][c];
+        const std::vector<int>& route = tours->order[i];
+        std::vector<RouteValue>& inserted = inserted_[t][c];
+        if (inserted_version_[t][c] != version[i]) {
+          inserted.resize(route.size() + 1);
+          for (size_t p = 0; p <= route.size(); ++p) {
+            trial = route;
+            trial.insert(trial.begin() + p, k);
+            inserted[p] = Value(i, trial);
+          }
+          inserted_version_[t][c] = version[i];
+        }
+        evaluations_ += static_cast<long>(route.size()) + 1;
         double robot_best = kInf;
         int robot_pos = -1;
         RouteValue robot_value;
-        const std::vector<int>& route = tours.order[i];
         for (size_t p = 0; p <= route.size(); ++p) {
-          trial = route;
-          trial.insert(trial.begin() + p, k);
-          const RouteValue v = Evaluate(i, trial);
+          const RouteValue& v = inserted[p];
           const double obj = ObjectiveWith(values, i, v, -1, {});
           if (obj < robot_best) {
             robot_best = obj;
@@ -171,15 +200,44 @@ Tours TourPlanner::Plan(const std::vector<int>& starts,
       }
     }
     if (pick < 0) {  // nothing left that any robot can reach
-      tours.unassigned = remaining;
+      for (int t : remaining) tours->unassigned.push_back(targets[t]);
       break;
     }
-    std::vector<int>& route = tours.order[pick_robot];
-    route.insert(route.begin() + pick_pos, remaining[pick]);
+    std::vector<int>& route = tours->order[pick_robot];
+    route.insert(route.begin() + pick_pos, targets[remaining[pick]]);
+    ++version[pick_robot];
     values[pick_robot] = pick_value;
     Summarize(values);
     remaining.erase(remaining.begin() + pick);
   }
+}
+
+Tours TourPlanner::Plan(const std::vector<int>& starts,
+                        const std::vector<int>& targets,
+                        const std::vector<double>& weight,
+                        const TourSettings& settings, LegOracle& legs) {
+  legs_ = &legs;
+  starts_ = &starts;
+  weight_ = &weight;
+  objective_ = settings.objective;
+  evaluations_ = 0;
+  cache_.clear();
+  const int n = static_cast<int>(starts.size());
+  Tours tours;
+  tours.order.assign(n, {});
+  std::vector<RouteValue> values(n);
+  weight_sum_ = 0.0;
+  for (int k : targets) weight_sum_ += weight[k];
+  Summarize(values);
+  std::vector<int> robots;
+  for (int i = 0; i < n; ++i)
+    if (starts[i] >= 0) robots.push_back(i);
+  if (robots.empty()) {
+    tours.unassigned = targets;
+    return tours;
+  }
+
+  Insert(robots, targets, settings, &tours, &values);
 
   // Local search: relocate, swap, 2-opt; first improvement, until no move
   // improves or the budget is spent.

@@ -34,47 +34,120 @@ SamplingPlan Solve(const Team& team, long anytime, std::uint64_t seed = 1) {
   return tree.Solve(ExpertProblem(team.Context()), params, rng);
 }
 
+// Replays a plan found from the team's starts: every move valid (inside the
+// workspace, no obstacle at either end or swept), and the centralized filter
+// fed with the measurements the planner predicts (at the means) meets eps
+// exactly at step F*, with the plan's det Sigma at every step.
+void ExpectReplayMeetsEps(const Team& run, const SamplingPlan& plan) {
+  ASSERT_TRUE(plan.found);
+  ASSERT_EQ(static_cast<int>(plan.configs.size()), plan.depth + 1);
+  EXPECT_EQ(plan.configs[0], run.positions);
+  EXPECT_GE(plan.depth, plan.bound);
+  const Lattice& lat = run.world.map.lattice();
+  const double range = run.sensor.range;
+  BeliefSet central = run.central;
+  for (int d = 1; d <= plan.depth; ++d) {
+    std::vector<std::vector<Measurement>> z(run.world.NumRobots());
+    std::vector<Vec2> p(run.world.NumRobots());
+    for (int i = 0; i < run.world.NumRobots(); ++i) {
+      const int a = plan.configs[d - 1][i], b = plan.configs[d][i];
+      const Move m = MoveBetween(lat, a, b);
+      ASSERT_NE(m, Move::kStay) << "robot " << i << " at depth " << d;
+      ASSERT_TRUE(lat.Valid(a, m));
+      ASSERT_TRUE(lat.Free(b));
+      ASSERT_TRUE(run.world.map.PointFree(lat.Point(b)));
+      p[i] = lat.Point(b);
+      for (int k = 0; k < run.world.NumTargets(); ++k) {
+        const Vec2 mu = central.PositionMean(0, k);
+        if ((mu - p[i]).squaredNorm() > range * range) continue;
+        const double r =
+            PredictedPrecision(run.world.map, run.sensor, p[i], mu);
+        // y chosen so that the mean stays put: y + p = mu.
+        if (r > 0) z[i].push_back({k, mu - p[i], r});
+      }
+    }
+    CentralUpdate(z, p, &central);
+    bool all = true;
+    for (int k = 0; k < run.world.NumTargets(); ++k) {
+      EXPECT_NEAR(central.DetCovariance(0, k), plan.det[d][k],
+                  1e-9 * plan.det[d][k]);
+      all = all && central.DetCovariance(0, k) <= run.scenario.mission.eps;
+    }
+    EXPECT_EQ(all, d == plan.depth) << "depth " << d;
+  }
+}
+
 TEST(ExpertTest, PlanReplayedThroughTheCentralizedFilterMeetsEps) {
   for (std::uint64_t seed : {3, 4, 5}) {
     Team run("seed: " + std::to_string(seed) +
              "\nrobots: {count: 6}\ntargets: {count: 6}\n"
              "workspace: {obstacles: {random: {count: 30}}}\n");
-    const SamplingPlan plan = Solve(run, 2000);
-    ASSERT_TRUE(plan.found);
-    ASSERT_EQ(static_cast<int>(plan.configs.size()), plan.depth + 1);
-    EXPECT_EQ(plan.configs[0], run.positions);
-    // Replay: every move valid, the centralized filter fed with the
-    // measurements the planner predicts (at the means) meets eps exactly at
-    // step F*.
-    const Lattice& lat = run.world.map.lattice();
-    BeliefSet central = run.central;
-    for (int d = 1; d <= plan.depth; ++d) {
-      std::vector<std::vector<Measurement>> z(run.world.NumRobots());
-      std::vector<Vec2> p(run.world.NumRobots());
-      for (int i = 0; i < run.world.NumRobots(); ++i) {
-        const int a = plan.configs[d - 1][i], b = plan.configs[d][i];
-        const Move m = MoveBetween(lat, a, b);
-        ASSERT_NE(m, Move::kStay) << "robot " << i << " at depth " << d;
-        ASSERT_TRUE(lat.Valid(a, m));
-        ASSERT_TRUE(lat.Free(b));
-        p[i] = lat.Point(b);
-        for (int k = 0; k < run.world.NumTargets(); ++k) {
-          const Vec2 mu = central.PositionMean(0, k);
-          const double r =
-              PredictedPrecision(run.world.map, run.sensor, p[i], mu);
-          // y chosen so that the mean stays put: y + p = mu.
-          if (r > 0) z[i].push_back({k, mu - p[i], r});
-        }
-      }
-      CentralUpdate(z, p, &central);
-      bool all = true;
-      for (int k = 0; k < run.world.NumTargets(); ++k) {
-        EXPECT_NEAR(central.DetCovariance(0, k), plan.det[d][k],
-                    1e-9 * plan.det[d][k]);
-        all = all && central.DetCovariance(0, k) <= run.scenario.mission.eps;
-      }
-      EXPECT_EQ(all, d == plan.depth) << "depth " << d;
+    ExpectReplayMeetsEps(run, Solve(run, 2000));
+  }
+}
+
+// Issue 19: the expert at scale, in the paper's obstacle density (750 boxes
+// per 100 x 100 m); docs/design.md, Policies.
+std::string Crowd(int count, double side, int boxes, int seed) {
+  return "seed: " + std::to_string(seed) + "\nworkspace: {size: [" +
+         std::to_string(side) + ", " + std::to_string(side) +
+         "], obstacles: {random: {count: " + std::to_string(boxes) +
+         "}}}\nrobots: {count: " + std::to_string(count) +
+         "}\ntargets: {count: " + std::to_string(count) + "}\n";
+}
+
+TEST(ExpertTest, PlanForHundredsOfRobotsMeetsEps) {
+  Team run(Crowd(300, 55.0, 250, 2));
+  ExpectReplayMeetsEps(run, Solve(run, 500));
+}
+
+// 40 robots packed in the lower left corner of a 30 x 30 m world with 60
+// targets: far targets, so that the nodes' lower bounds prune.
+std::string Corner() {
+  std::string starts;
+  for (int i = 0; i < 40; ++i)
+    starts += std::string(i ? ", " : "") + "[" +
+              std::to_string(0.25 + 0.5 * (i % 8)) + ", " +
+              std::to_string(0.25 + 0.5 * (i / 8)) + "]";
+  return "seed: 8\nworkspace: {size: [30, 30], obstacles: {random: {count: "
+         "60}}}\nrobots: {count: 40, start: [" +
+         starts + "]}\ntargets: {count: 60}\n";
+}
+
+TEST(ExpertTest, SpatialIndexesChangeNoPlan) {
+  // The indexes of open targets and of robots and the heap of the
+  // nearest-first matching give the plans of the linear scans and of the
+  // sorted list of all pairs. Some robots inactive, and a world with few
+  // robots and many targets.
+  for (const auto& [yaml, inactive] :
+       {std::pair{Crowd(120, 32.0, 120, 4), 0},
+        std::pair{Crowd(100, 30.0, 100, 5), 7}, std::pair{Corner(), 0},
+        std::pair{std::string("seed: 6\nrobots: {count: 12}\n"
+                              "targets: {count: 60}\n"
+                              "workspace: {obstacles: {random: {}}}\n"),
+                  0}}) {
+    Team team(yaml);
+    SamplingProblem problem = ExpertProblem(team.Context());
+    for (size_t i = 0; i < problem.active.size(); i += 1 + inactive)
+      if (inactive > 0) problem.active[i] = 0;
+    SamplingPlan plans[2];
+    for (int linear = 0; linear < 2; ++linear) {
+      SamplingParams params;
+      params.anytime = 1500;
+      params.spatial_index = linear == 0;
+      SamplingTree tree;
+      Rng rng(2, "policy.expert");
+      plans[linear] = tree.Solve(problem, params, rng);
     }
+    ASSERT_TRUE(plans[0].found);
+    EXPECT_EQ(plans[0].configs, plans[1].configs);
+    EXPECT_EQ(plans[0].cost, plans[1].cost);
+    EXPECT_EQ(plans[0].best_cost, plans[1].best_cost);
+    EXPECT_EQ(plans[0].nodes, plans[1].nodes);
+    EXPECT_EQ(plans[0].useful_until, plans[1].useful_until);
+    ASSERT_EQ(plans[0].rollouts.size(), plans[1].rollouts.size());
+    for (size_t r = 0; r < plans[0].rollouts.size(); ++r)
+      EXPECT_EQ(plans[0].rollouts[r].cost, plans[1].rollouts[r].cost);
   }
 }
 

@@ -53,6 +53,10 @@ struct SamplingParams {
   // Tours, seeded rollouts and the idle rewrite (the expert); Dec-SB's short
   // single-robot trees go without.
   bool routing = true;
+  // The spatial indexes of targets and robots (docs/design.md, Policies);
+  // false scans every open target and robot instead, with the same plans
+  // (for tests).
+  bool spatial_index = true;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -173,7 +177,7 @@ struct SamplingPlan {
   long iterations = 0;
   long first_goal_iteration = -1;
   double seconds = 0.0;
-  std::size_t arena_bytes = 0;
+  std::size_t arena_bytes = 0;  // the node storage filled
   PolicyStatus status = PolicyStatus::kOk;
 };
 
@@ -215,6 +219,17 @@ class SamplingTree {
   void MarkOpen(int node);  // open_[k]: det Sigma_k > eps at the node
   void Assign(int node, bool sorted, Rng& rng);
   int NearestOpen(int q, int depth);
+  // Spatial indexes (all targets static; docs/design.md, Policies): targets
+  // by the centre of their observation region, robots of one configuration
+  // by their point, in square buckets of lattice points.
+  void BuildOpenIndex();
+  void BuildRobotIndex(const int* positions);
+  // The target with ok[k] != 0 nearest to q by its field (ties: the lowest
+  // id), or -1; its distance in *dist. Exactly the linear scan over open_list_.
+  int NearestTarget(int q, int depth, const std::vector<char>& ok, int* dist);
+  // min over active robots of static target k's field at their points, or
+  // INT_MAX when none reaches its region.
+  int ReachOf(int k, const int* positions) const;
   int NextInTour(const std::vector<int>& tour) const;
   Move StepToward(int q, int k, int depth, Rng* rng);
   int Bucket(int depth, int k) const;
@@ -269,12 +284,37 @@ class SamplingTree {
   std::vector<std::vector<int>> tours_, makespan_tours_;
   int tour_makespan_ = 0;
   long tour_budget_ = 0;
+  bool use_index_ = true;
   TourPlanner tour_planner_;
   // Scratch.
-  std::vector<int> assigned_, order_, child_pos_, taken_;
+  std::vector<int> assigned_, order_, child_pos_;
   std::vector<char> open_;
   std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
+  // Spatial indexes.
+  struct Rect {
+    int x0 = 0, x1 = -1, y0 = 0,
+        y1 = -1;  // lattice coordinates; x0 > x1: empty
+  };
+  // Items in square buckets of lattice points, as CSR.
+  struct Buckets {
+    int cell = 8, gx = 0, gy = 0;  // bucket side (lattice points), buckets
+    std::vector<int> begin, items, fill;
+    // Sized for about two of `count` items per bucket, emptied.
+    void Reset(int nx, int ny, int count);
+    int Of(int x, int y) const { return (y / cell) * gx + x / cell; }
+  };
+  std::vector<Rect> region_box_;  // per static target, its region's bounds
+  std::vector<const int*> static_field_;  // per static target, its field
+  bool indexed_ = false;  // all targets static: the indexes are used
+  int pad_ = 0;  // the largest distance from a region's centre to its bounds
+  Buckets open_index_;           // the open targets by their region's centre
+  bool open_indexed_ = false;    // open_index_ holds open_list_
+  Buckets robot_index_;          // a node's active robots by their point
+  bool robots_indexed_ = false;  // robot_index_ holds the current node's
+  std::vector<int> open_list_;   // open targets, ascending
+  std::vector<std::pair<int, int>> near_;  // (distance bound, target)
+  std::vector<char> avail_;
   ArenaVector<double> lower_;  // per node: lower bound of the total cost
   std::vector<int> bfs_queue_;
 };

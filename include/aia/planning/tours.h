@@ -31,6 +31,9 @@ class LegOracle {
  public:
   virtual ~LegOracle() = default;
   virtual Leg Compute(int from, int t, int k) = 0;
+  // A cheap estimate of a leg's steps from `from` at step 0 (-1: cannot be
+  // reached), used only to rank the robots nearest to a target.
+  virtual int Distance(int from, int k) { return Compute(from, 0, k).steps; }
   // Whether legs toward k depend on the departure step (moving targets).
   virtual bool TimeVarying(int k) const = 0;
 };
@@ -43,6 +46,10 @@ enum class TourObjective { kLatency, kMakespan };
 struct TourSettings {
   TourObjective objective = TourObjective::kLatency;
   long budget = 20000;  // route evaluations allowed for the local search
+  // Regret insertion tries each target in the routes of the robots whose
+  // starts are nearest to it (LegOracle::Distance), this many of them; in
+  // every route when there are no more robots than that.
+  int candidates = 80;
 };
 
 struct Tours {
@@ -69,6 +76,10 @@ class TourPlanner {
     bool feasible = true;
   };
   RouteValue Evaluate(int robot, const std::vector<int>& route);
+  RouteValue Value(int robot, const std::vector<int>& route);  // uncounted
+  void Insert(const std::vector<int>& robots, const std::vector<int>& targets,
+              const TourSettings& settings, Tours* tours,
+              std::vector<RouteValue>* values);
   void Summarize(const std::vector<RouteValue>& values);
   double Objective(const std::vector<RouteValue>& values);
   double ObjectiveWith(const std::vector<RouteValue>& values, int a,
@@ -84,6 +95,12 @@ class TourPlanner {
   double latency_ = 0.0;                      // sum over routes
   std::array<std::pair<int, int>, 3> top_{};  // largest (makespan, robot)
   std::unordered_map<std::uint64_t, Leg> cache_;
+  // Regret insertion's scratch, per target (its index in `targets`) and
+  // candidate robot: the value of the robot's route with the target inserted
+  // at each position, and the version of the route it was computed on.
+  std::vector<std::vector<int>> candidates_;
+  std::vector<std::vector<std::vector<RouteValue>>> inserted_;
+  std::vector<std::vector<long>> inserted_version_;
 };
 
 }  // namespace aia
