@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "aia/core/error.h"
 #include "aia/estimation/filter.h"
@@ -106,6 +107,28 @@ TEST(GreedyPolicyTest, FallsBackToShortestPathTowardTheNearestTarget) {
     EXPECT_EQ(dist[next], before - 1);  // every step is on a shortest path
   }
   EXPECT_EQ(dist[s.positions[0]], 0);
+}
+
+TEST(GreedyPolicyTest, TargetsAtTheSameDistanceGoToTheLowestIndex) {
+  // Two targets mirrored about the robot, far out of range: their nearest
+  // observation points are equally far, and the lower target index decides
+  // (what scanning the targets in order over a full BFS finds), whichever
+  // side it is on.
+  for (const bool right_first : {true, false}) {
+    const std::string right =
+        "{position: [18.25, 10.25], prior_mean: [18.25, 10.25]}";
+    const std::string left =
+        "{position: [2.25, 10.25], prior_mean: [2.25, 10.25]}";
+    PolicyFixture s(
+        "robots: {count: 1, start: [[10.25, 10.25]]}\n"
+        "targets: {list: [" +
+        (right_first ? right + ", " + left : left + ", " + right) + "]}\n");
+    GreedyPolicy g;
+    g.Reset(s.world.map, 1, s.world.NumTargets(), 1);
+    std::vector<Move> m(1);
+    g.Decide(s.Context(), &m);
+    EXPECT_EQ(m[0], right_first ? Move::kRight : Move::kLeft);
+  }
 }
 
 TEST(GreedyPolicyTest, IgnoresTargetsAlreadyBelowEps) {
