@@ -3,6 +3,9 @@
 // Whole decision steps are timed by `aia bench`.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <cmath>
+#include <memory>
 #include <vector>
 
 #include "aia/comm/graph.h"
@@ -11,7 +14,9 @@
 #include "aia/runtime/bench.h"
 #include "aia/runtime/episode.h"
 #include "aia/runtime/eval.h"
+#include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
+#include "aia/sim/simulation.h"
 
 namespace aia {
 namespace {
@@ -76,6 +81,44 @@ void BM_DecisionStep(benchmark::State& state) {
   for (auto _ : state) episode->Step();
 }
 BENCHMARK(BM_DecisionStep)->Arg(10)->Arg(80)->Unit(benchmark::kMillisecond);
+
+// One physics step (Simulation::StepPhysics, i.e. mj_step and its contact
+// budget) of a generated world that grows with the team as those of
+// tools/bench_scale.py: robots at rest, which is what mujoco-testspeed times
+// on the same model (passive dynamics from the start, no contact), and robots
+// driven by the waypoint spring to a random lattice neighbour, a new one
+// every 50 steps (0.5 s), as decisions drive them (they touch).
+void BM_PhysicsStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const bool driven = state.range(1) != 0;
+  Scenario s = GeneratedScenario(n, n, 1);
+  const double side = 20.0 * std::sqrt(std::max(n, 40) / 40.0);
+  s.workspace.size = Vec2(side, side);
+  s.workspace.obstacles.random->count =
+      static_cast<int>(std::lround(0.075 * side * side));
+  const std::shared_ptr<const Instance> instance = BuildInstance(s);
+  const Lattice& lattice = instance->world.map.lattice();
+  Simulation sim(instance->physics);
+  Rng rng(1, "bench.physics");
+  long steps = 0;
+  for (auto _ : state) {
+    if (driven && steps % 50 == 0) {
+      for (int i = 0; i < n; ++i) {
+        const int p = lattice.NearestFree(sim.RobotPosition(i));
+        if (p < 0) continue;
+        const int q = lattice.Next(p, kMoves[rng.UniformInt(kNumMoves)]);
+        if (q >= 0) sim.SetWaypoint(i, lattice.Point(q));
+      }
+    }
+    sim.StepPhysics();
+    ++steps;
+  }
+  state.counters["contacts"] =
+      static_cast<double>(sim.contacts_summed()) / std::max(1L, sim.mj_steps());
+}
+BENCHMARK(BM_PhysicsStep)
+    ->ArgsProduct({{80, 1000}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace aia

@@ -6,19 +6,22 @@ grow with the team: side = 20 sqrt(max(N, 40) / 40) m (the paper's 20 x 20 m
 world up to 40 robots, then 10 m^2 per robot: 100 x 100 m at 1000) with the
 paper's box density, 0.075 per m^2 (30 boxes at 20 m, 750 at 100 m). Each run
 is its own process, timed by /usr/bin/time for its peak memory. Writes
-OUT/scale.csv (one row per size: ms per step and per phase, mj_step/s inside
-episodes and mujoco-testspeed's on the same model, peak RSS), OUT/scale.png
+OUT/scale.csv (one row per size: ms per step and per phase, physics being
+the time inside mj_step; mj_step/s and contacts per mj_step inside episodes
+and mujoco-testspeed's on the same model; peak RSS), OUT/scale.png
 (ms per phase against N on log axes) and OUT/scale.md (the table, with each
-phase's growth order: the slope of log ms against log N between the two
-largest sizes). Every finished size is kept; a second call goes on.
+phase's growth order: the least-squares slope of log ms against log N from
+80 robots on). Every finished size is kept; a second call goes on.
 
 Usage:
   tools/bench_scale.py --out DIR [--sizes 10,80,200,500,1000] [--policy igbnet]
                        [--steps 10] [--repeats 3] [--aia build/aia]
+                       [--set KEY=VALUE ...]
 """
 
 import argparse
 import csv
+import json
 import math
 import os
 import re
@@ -32,7 +35,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 PHASES = ["physics", "sensing", "fusion", "policy", "rest"]
 COLUMNS = (["robots", "side_m", "boxes", "steps_per_s", "ms_step"] + PHASES +
-           ["mj_step_per_s", "testspeed_per_s", "peak_rss_mib", "wall_s"])
+           ["mj_step_pct", "mj_step_per_s", "testspeed_per_s", "contacts",
+            "testspeed_contacts", "peak_rss_mib", "wall_s"])
 
 
 def world(n):
@@ -47,6 +51,8 @@ def run_size(args, n):
            "--policy", args.policy, "--seed", str(args.seed),
            "--set", f"workspace.size=[{side:g},{side:g}]",
            "--set", f"workspace.obstacles.random.count={boxes}"]
+    for kv in args.set:
+        cmd += ["--set", kv]
     print(f"[bench_scale] {n}x{n} in {side:g} x {side:g} m, {boxes} boxes ...",
           file=sys.stderr, flush=True)
     p = subprocess.run(cmd, capture_output=True, text=True)
@@ -61,19 +67,22 @@ def run_size(args, n):
         raise RuntimeError(f"no result row in:\n{p.stdout}")
     rss_kib, wall = p.stderr.strip().splitlines()[-1].split()
     values = [float(x.rstrip("%")) for x in row[1:]]
-    rate, ms, phys, sens, fus, pol, rest, _share, mj, ts = values
-    return {"robots": n, "side_m": f"{side:g}", "boxes": boxes,
+    rate, ms, phys, sens, fus, pol, rest, share, mj, ts, con, ts_con = values
+    return {"robots": n, "side_m": f"{side:.1f}", "boxes": boxes,
             "steps_per_s": rate, "ms_step": ms, "physics": phys, "sensing": sens,
-            "fusion": fus, "policy": pol, "rest": rest, "mj_step_per_s": mj,
-            "testspeed_per_s": ts, "peak_rss_mib": round(int(rss_kib) / 1024.0, 1),
-            "wall_s": float(wall)}
+            "fusion": fus, "policy": pol, "rest": rest, "mj_step_pct": share,
+            "mj_step_per_s": mj, "testspeed_per_s": ts, "contacts": con,
+            "testspeed_contacts": ts_con,
+            "peak_rss_mib": round(int(rss_kib) / 1024.0, 1), "wall_s": float(wall)}
 
 
 def read_rows(path):
     if not os.path.isfile(path):
         return {}
     with open(path, newline="") as f:
-        return {int(r["robots"]): r for r in csv.DictReader(f)}
+        # rows of an older layout (columns missing) are measured again
+        return {int(r["robots"]): r for r in csv.DictReader(f)
+                if all(r.get(k) not in (None, "") for k in COLUMNS)}
 
 
 def write_rows(path, rows):
@@ -87,14 +96,19 @@ def write_rows(path, rows):
 
 
 def slope(rows, key):
-    ns = sorted(rows)
+    """Growth order: least-squares slope of log ms against log N over the
+    sizes from 80 robots on (all sizes when fewer than two reach 80)."""
+    ns = [n for n in sorted(rows) if n >= 80]
     if len(ns) < 2:
+        ns = sorted(rows)
+    pts = [(math.log(n), math.log(float(rows[n][key]))) for n in ns
+           if float(rows[n][key]) > 0]
+    if len(pts) < 2:
         return float("nan")
-    a, b = ns[-2], ns[-1]
-    ya, yb = float(rows[a][key]), float(rows[b][key])
-    if ya <= 0 or yb <= 0:
-        return float("nan")
-    return math.log(yb / ya) / math.log(b / a)
+    mx = sum(x for x, _ in pts) / len(pts)
+    my = sum(y for _, y in pts) / len(pts)
+    sxx = sum((x - mx) ** 2 for x, _ in pts)
+    return sum((x - mx) * (y - my) for x, y in pts) / sxx
 
 
 def main(argv=None):
@@ -107,6 +121,9 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=3, help="runs per size (medians)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the worlds")
     parser.add_argument("--aia", default="build/aia", help="the aia binary")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="another scenario key for every size, e.g. "
+                             "communication.mode=range (repeatable)")
     args = parser.parse_args(argv)
     try:
         sizes = sorted({int(s) for s in args.sizes.split(",") if s})
@@ -118,6 +135,22 @@ def main(argv=None):
         print("error: --sizes: give team sizes of at least 1", file=sys.stderr)
         return 2
     os.makedirs(args.out, exist_ok=True)
+    # A folder holds one configuration: resuming with another would mix rows.
+    settings = {"policy": args.policy, "set": args.set, "steps": args.steps,
+                "repeats": args.repeats, "seed": args.seed}
+    settings_path = os.path.join(args.out, "settings.json")
+    if os.path.isfile(settings_path):
+        with open(settings_path) as f:
+            old = json.load(f)
+        if old != settings:
+            print(f"error: {settings_path}: this folder was measured with {old}, "
+                  f"not {settings}; use another --out", file=sys.stderr)
+            return 2
+    else:
+        tmp = f"{settings_path}.tmp.{os.getpid()}"
+        with open(tmp, "w") as f:
+            json.dump(settings, f)
+        os.replace(tmp, settings_path)
     path = os.path.join(args.out, "scale.csv")
     rows = read_rows(path)
     for n in sizes:
@@ -142,27 +175,35 @@ def main(argv=None):
     ax.set_yscale("log")
     ax.set_xlabel("robots N (= targets)")
     ax.set_ylabel("ms per decision step")
-    ax.set_title(f"aia bench, policy {args.policy}, worlds growing with N", fontsize=10)
+    extra = "".join(f", {kv}" for kv in args.set)
+    ax.set_title(f"aia bench, policy {args.policy}{extra}, worlds growing with N",
+                 fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "scale.png"), dpi=120)
+    png = os.path.join(args.out, "scale.png")
+    fig.savefig(f"{png}.tmp.{os.getpid()}.png", dpi=120)
+    os.replace(f"{png}.tmp.{os.getpid()}.png", png)
 
-    with open(os.path.join(args.out, "scale.md"), "w") as f:
+    md = os.path.join(args.out, "scale.md")
+    with open(f"{md}.tmp.{os.getpid()}", "w") as f:
         f.write("| N x N | world | ms/step | physics | sensing | fusion | policy | rest "
-                "| mj_step/s (episodes) | testspeed/s | peak RSS (MiB) |\n")
-        f.write("|---|---|---|---|---|---|---|---|---|---|---|\n")
+                "| mj_step/s (episodes) | testspeed/s "
+                "| contacts (episodes / testspeed) | peak RSS (MiB) |\n")
+        f.write("|---|---|---|---|---|---|---|---|---|---|---|---|\n")
         for n in ns:
             r = rows[n]
             f.write(f"| {n}x{n} | {r['side_m']} m, {r['boxes']} boxes | "
                     f"{float(r['ms_step']):.1f} | " +
                     " | ".join(f"{float(r[p]):.1f}" for p in PHASES) +
                     f" | {float(r['mj_step_per_s']):.0f} | {float(r['testspeed_per_s']):.0f}"
+                    f" | {float(r['contacts']):.1f} / {float(r['testspeed_contacts']):.1f}"
                     f" | {float(r['peak_rss_mib']):.0f} |\n")
-        f.write("| growth (slope, two largest) | | " +
+        f.write("| growth (fitted from N = 80) | | " +
                 " | ".join(f"N^{slope(rows, k):.2f}" for k in ["ms_step"] + PHASES) +
-                " | | | |\n")
-    print(os.path.join(args.out, "scale.md"))
+                " | | | | |\n")
+    os.replace(f"{md}.tmp.{os.getpid()}", md)
+    print(md)
     return 0
 
 

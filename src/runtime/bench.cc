@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <memory>
-#include <regex>
 #include <string>
 
 #include "aia/core/error.h"
@@ -29,19 +29,35 @@ double Median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// mujoco-testspeed's "Steps per second" on a model file, or -1.
-double TestSpeed(const std::string& xml_path, int nstep) {
+// mujoco-testspeed on a model file: its "Steps per second" and "Contacts per
+// step", -1 where it did not run.
+struct TestSpeedResult {
+  double steps_per_s = -1.0, contacts = -1.0;
+};
+
+TestSpeedResult TestSpeed(const std::string& xml_path, int nstep) {
+  TestSpeedResult r;
   const std::string cmd = "mujoco-testspeed '" + xml_path + "' " +
                           std::to_string(nstep) + " 1 0.01 2>&1";
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-  if (!pipe) return -1.0;
-  std::string out;
+  if (!pipe) return r;
   char buf[512];
-  while (std::fgets(buf, sizeof(buf), pipe.get())) out += buf;
-  std::smatch m;
-  static const std::regex re("Steps per second\\s*:\\s*([0-9.]+)");
-  if (!std::regex_search(out, m, re)) return -1.0;
-  return std::stod(m[1]);
+  while (std::fgets(buf, sizeof(buf), pipe.get())) {
+    // " Steps per second     : 1234"
+    std::string line(buf);
+    const size_t colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    const std::string key = line.substr(0, colon);
+    double* into =
+        key.find("Steps per second") != std::string::npos    ? &r.steps_per_s
+        : key.find("Contacts per step") != std::string::npos ? &r.contacts
+                                                             : nullptr;
+    if (into == nullptr) continue;
+    char* end = nullptr;
+    const double v = std::strtod(line.c_str() + colon + 1, &end);
+    if (end != line.c_str() + colon + 1) *into = v;
+  }
+  return r;
 }
 
 }  // namespace
@@ -165,9 +181,10 @@ int RunBench(const BenchOptions& o) {
   std::printf(
       "aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
       o.policy.c_str(), o.steps, o.repeats);
-  std::printf("%-8s %10s %9s %9s %9s %9s %9s %9s %8s %12s %12s\n", "size",
-              "steps/s", "ms/step", "physics", "sensing", "fusion", "policy",
-              "rest", "mj_step%", "mj_step/s", "testspeed/s");
+  std::printf("%-8s %10s %9s %9s %9s %9s %9s %9s %8s %10s %11s %9s %11s\n",
+              "size", "steps/s", "ms/step", "physics", "sensing", "fusion",
+              "policy", "rest", "mj_step%", "mj_step/s", "testspeed/s",
+              "contacts", "ts_contacts");
   for (const std::string& size_text : o.sizes) {
     const auto [n, m] = ParseSize(size_text, "--sizes");
     const EvalInstance generated{size_text, n, m, o.seed};
@@ -181,7 +198,8 @@ int RunBench(const BenchOptions& o) {
     } catch (const InputError& e) {
       NameTheFlag(e, InstanceSpec(generated, setup));
     }
-    std::vector<double> rate, ms, phys, sens, fus, pol, rest, share, mjrate;
+    std::vector<double> rate, ms, phys, sens, fus, pol, rest, share, mjrate,
+        contacts;
     std::string mjcf;
     for (int r = 0; r < o.repeats; ++r) {
       auto episode = std::make_unique<Episode>(instance, policy->Create());
@@ -197,12 +215,14 @@ int RunBench(const BenchOptions& o) {
       rest.push_back(1e3 *
                      (t.total - t.physics - t.sensing - t.fusion - t.policy) /
                      steps);
+      const Simulation& sim = episode->sim();
       share.push_back(100.0 * t.physics / t.total);
-      mjrate.push_back(episode->sim().mj_steps() /
-                       episode->sim().physics_seconds());
+      mjrate.push_back(sim.mj_steps() / sim.physics_seconds());
+      contacts.push_back(static_cast<double>(sim.contacts_summed()) /
+                         std::max(1L, sim.mj_steps()));
       mjcf = episode->sim().mjcf();
     }
-    double testspeed = -1.0;
+    TestSpeedResult testspeed;
     if (!o.skip_testspeed) {
       const auto path = std::filesystem::temp_directory_path() /
                         ("aia_bench_" + size_text + "_" +
@@ -212,18 +232,21 @@ int RunBench(const BenchOptions& o) {
       std::filesystem::remove(path);
     }
     std::printf(
-        "%-8s %10.1f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %7.1f%% %12.0f "
-        "%12.0f\n",
+        "%-8s %10.1f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %7.1f%% %10.0f "
+        "%11.0f %9.2f %11.2f\n",
         size_text.c_str(), Median(rate), Median(ms), Median(phys), Median(sens),
         Median(fus), Median(pol), Median(rest), Median(share), Median(mjrate),
-        testspeed);
+        testspeed.steps_per_s, Median(contacts), testspeed.contacts);
     std::fflush(stdout);
   }
   std::printf(
-      "(per-step phase times in ms; mj_step/s is inside episodes, testspeed/s "
-      "is "
-      "mujoco-testspeed on the same generated model, 1 thread, ctrlnoise "
-      "0.01)\n");
+      "(per-step phase times in ms; physics is the time inside mj_step, "
+      "mj_step%% its share of the step, and the waypoint spring, the stall "
+      "rule and the targets' motion between physics steps are in rest; "
+      "mj_step/s and contacts (per mj_step) are inside episodes; testspeed/s "
+      "and ts_contacts are mujoco-testspeed's on the "
+      "same generated model: 1 thread, ctrlnoise 0.01, passive dynamics "
+      "from the start, the robots at rest)\n");
   return 0;
 }
 

@@ -151,6 +151,7 @@ void Simulation::StepPhysics() {
     d = data_.get();
   }
   ++mj_steps_;
+  contacts_summed_ += d->ncon;
   max_contacts_ = std::max(max_contacts_, d->ncon);
   max_constraints_ = std::max(max_constraints_, d->nefc);
   max_stack_ = std::max<long>(max_stack_, d->maxuse_stack);

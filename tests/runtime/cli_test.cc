@@ -7,6 +7,7 @@
 #include <fstream>
 #include <regex>
 #include <set>
+#include <sstream>
 
 #include "support/test_support.h"
 
@@ -105,6 +106,32 @@ TEST(CliTest, UnknownFlagAndMissingArgumentExitWith2) {
   EXPECT_EQ(RunAia({"run"}).exit_code, 2);
   EXPECT_EQ(RunAia({}).exit_code, 2);
   EXPECT_EQ(RunAia({"bench", "--sizes", "10by10"}).exit_code, 2);
+}
+
+// aia bench's row: every column a number, mujoco-testspeed's rate and
+// contacts read from its output (robots at rest there: no contact), the
+// episodes' contacts per mj_step not negative.
+TEST(CliTest, BenchRowHasEveryColumn) {
+  const auto r =
+      RunAia({"bench", "--sizes", "3x3", "--steps", "2", "--repeats", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::istringstream lines(r.out);
+  std::string line, header, row;
+  while (std::getline(lines, line)) {
+    if (line.rfind("size ", 0) == 0) header = line;
+    if (line.rfind("3x3 ", 0) == 0) row = line;
+  }
+  std::istringstream h(header), v(row);
+  std::vector<std::string> names, values;
+  for (std::string w; h >> w;) names.push_back(w);
+  for (std::string w; v >> w;) values.push_back(w);
+  ASSERT_EQ(names.size(), 13u) << header;
+  ASSERT_EQ(values.size(), names.size()) << row;
+  EXPECT_EQ(names[10], "testspeed/s");
+  EXPECT_EQ(names[12], "ts_contacts");
+  EXPECT_GT(std::stod(values[10]), 0.0) << "mujoco-testspeed did not run";
+  EXPECT_EQ(std::stod(values[12]), 0.0);
+  EXPECT_GE(std::stod(values[11]), 0.0);
 }
 
 // Flags the parser refuses read like any bad input: one `error:` line.

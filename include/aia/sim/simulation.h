@@ -147,9 +147,11 @@ class Simulation {
   // kMaxPhysicsBytes.
   void StepPhysics();
 
-  // Seconds of wall time spent inside mj_step, and its call count.
+  // Seconds of wall time spent inside mj_step, its call count, and the
+  // contacts MuJoCo held after those calls, summed.
   double physics_seconds() const { return physics_seconds_; }
   long mj_steps() const { return mj_steps_; }
+  long contacts_summed() const { return contacts_summed_; }
   // MuJoCo's warnings (mjtWarning) raised so far, by type, the overflows
   // that StepPhysics() handled by growing not counted.
   const std::array<long, mjNWARNING>& warnings() const { return warnings_; }
@@ -163,16 +165,15 @@ class Simulation {
   const mjModel* m_ = nullptr;
   MjDataPtr data_;
   std::vector<Vec2> waypoints_;
-  std::vector<Vec2> targets_;  // waypoints as displacements from the starts
-  std::vector<mjtNum> saved_;
+  std::vector<Vec2> targets_;     // waypoints as displacements from the starts
+  std::vector<mjtNum> saved_;     // time, qpos, qvel, qacc_warmstart, act
   std::vector<double> progress_;  // distance to the waypoint at a checkpoint
-  std::vector<std::uint8_t>
-      stuck_;  // qpos, qvel, act, qacc_warmstart before a step
+  std::vector<std::uint8_t> stuck_;
   std::array<long, mjNWARNING> warnings_{};
   int grows_ = 0, max_contacts_ = 0, max_constraints_ = 0;
   long max_stack_ = 0;
   double physics_seconds_ = 0.0;
-  long mj_steps_ = 0;
+  long mj_steps_ = 0, contacts_summed_ = 0;
 };
 
 // The most memory a simulation's MuJoCo arrays may take as contacts grow.
