@@ -442,7 +442,9 @@ Action AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--pool", o->network.pool, "adaptive pooling to P x P")
       ->capture_default_str();
-  cmd->add_option("--threads", o->threads, "libtorch threads (0: all cores)")
+  cmd->add_option("--threads", o->threads,
+                  "libtorch threads (0: libtorch's default, one thread with "
+                  "Debian's build)")
       ->capture_default_str();
   cmd->add_flag("--resume", o->resume,
                 "continue from OUT.ckpt (same options) if it is there");
