@@ -26,6 +26,7 @@
 #include "aia/runtime/episode.h"
 #include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
+#include "aia/runtime/observers.h"
 #include "aia/runtime/plan_command.h"
 #include "aia/runtime/ranks.h"
 
@@ -33,6 +34,10 @@ namespace aia {
 namespace {
 
 constexpr const char* kHeader =
+    "size,seed,policy,success,flowtime,fstar,bound,reversal_share,"
+    "longest_reversal_run,wall_s";
+// The header of runs.csv before the reversal columns: such rows run again.
+constexpr const char* kOlderHeader =
     "size,seed,policy,success,flowtime,fstar,bound,wall_s";
 
 bool ParseRow(const std::string& line, EvalRow* r) {
@@ -41,7 +46,7 @@ bool ParseRow(const std::string& line, EvalRow* r) {
   std::string cell;
   while (std::getline(ss, cell, ',')) f.push_back(cell);
   if (line.size() && line.back() == ',') f.push_back("");
-  if (f.size() != 8) return false;
+  if (f.size() != 10) return false;
   // Whole cells only: "12abc" is garbled, not 12.
   const auto whole = [](const std::string& cell, auto parse) {
     std::size_t used = 0;
@@ -63,10 +68,13 @@ bool ParseRow(const std::string& line, EvalRow* r) {
     r->success = f[3] == "1";
     r->flowtime = f[4].empty() ? -1 : whole(f[4], to_int);
     r->fstar = whole(f[5], to_int);
-    r->bound = whole(f[6], to_int);
-    r->wall_s = whole(f[7], [](const std::string& c, std::size_t* n) {
+    const auto to_double = [](const std::string& c, std::size_t* n) {
       return std::stod(c, n);
-    });
+    };
+    r->bound = whole(f[6], to_int);
+    r->reversal_share = whole(f[7], to_double);
+    r->longest_reversal_run = whole(f[8], to_int);
+    r->wall_s = whole(f[9], to_double);
   } catch (const std::exception&) {
     return false;
   }
@@ -412,9 +420,16 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
       MissionConfig mission = instance->scenario.mission;
       mission.max_steps = Horizon(fstar);
       Episode episode(instance, spec->Create(), mission);
+      MoveObserver moves;
+      episode.AddObserver(&moves);
       episode.Run();
       row.success = episode.success();
       row.flowtime = episode.flowtime();
+      row.reversal_share =
+          moves.moves() > 0
+              ? static_cast<double>(moves.reversals()) / moves.moves()
+              : 0.0;
+      row.longest_reversal_run = moves.longest_reversal_run();
       row.wall_s = SecondsSince(t0);
     }
     rows.push_back(row);
@@ -424,11 +439,12 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
 
 std::string FormatRow(const EvalRow& r) {
   char buf[256];
-  std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%d,%.4f\n",
+  std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%d,%.4f,%d,%.4f\n",
                 r.size.c_str(), static_cast<unsigned long long>(r.seed),
                 r.policy.c_str(), r.success ? 1 : 0,
                 r.flowtime >= 0 ? std::to_string(r.flowtime).c_str() : "",
-                r.fstar, r.bound, r.wall_s);
+                r.fstar, r.bound, r.reversal_share, r.longest_reversal_run,
+                r.wall_s);
   return buf;
 }
 
@@ -447,6 +463,9 @@ std::string Impossible(const EvalRow& r) {
   if (r.fstar < -1) return "fstar " + std::to_string(r.fstar);
   if (r.bound < -1) return "bound " + std::to_string(r.bound);
   if (!std::isfinite(r.wall_s) || r.wall_s < 0) return "wall_s";
+  if (!(r.reversal_share >= 0.0 && r.reversal_share <= 1.0))
+    return "reversal_share";
+  if (r.longest_reversal_run < 0) return "longest_reversal_run";
   if (r.flowtime < -1) return "flowtime " + std::to_string(r.flowtime);
   if (r.success && r.flowtime < 0) return "a success without a flowtime";
   if (r.success && r.fstar >= 0 && r.flowtime > Horizon(r.fstar))
@@ -470,6 +489,10 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
     ++number;
     EvalRow r;
     if (line == kHeader || line.empty()) continue;
+    if (number == 1 && line == kOlderHeader) {
+      report(number, "the header of an older aia (no reversal columns)");
+      continue;
+    }
     if (!ParseRow(line, &r)) {
       report(number, "not a row");
       continue;
@@ -502,11 +525,12 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& policies) {
   std::string out =
       "size,policy,instances,success_rate,flowtime_increase,mean_flowtime,mean_"
-      "fstar,mean_fstar_over_bound,no_expert_plan\n";
+      "fstar,mean_fstar_over_bound,no_expert_plan,reversal_share,longest_"
+      "reversal_run\n";
   for (const auto& size : sizes) {
     for (const auto& policy : policies) {
-      int n = 0, ok = 0, no_plan = 0;
-      double inc = 0.0, flow = 0.0, fstar = 0.0, gap = 0.0;
+      int n = 0, ok = 0, no_plan = 0, longest = 0;
+      double inc = 0.0, flow = 0.0, fstar = 0.0, gap = 0.0, reversals = 0.0;
       for (const EvalRow& r : rows) {
         if (r.size != size || r.policy != policy) continue;
         if (r.fstar < 0) {
@@ -521,16 +545,19 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
         flow += f;
         fstar += r.fstar;
         gap += static_cast<double>(r.fstar) / std::max(r.bound, 1);
+        reversals += r.reversal_share;
+        longest = std::max(longest, r.longest_reversal_run);
       }
       char buf[256];
       if (n == 0) {
-        std::snprintf(buf, sizeof(buf), "%s,%s,0,,,,,,%d\n", size.c_str(),
+        std::snprintf(buf, sizeof(buf), "%s,%s,0,,,,,,%d,,\n", size.c_str(),
                       policy.c_str(), no_plan);
       } else {
         std::snprintf(buf, sizeof(buf),
-                      "%s,%s,%d,%.4f,%.4f,%.3f,%.3f,%.4f,%d\n", size.c_str(),
-                      policy.c_str(), n, static_cast<double>(ok) / n, inc / n,
-                      flow / n, fstar / n, gap / n, no_plan);
+                      "%s,%s,%d,%.4f,%.4f,%.3f,%.3f,%.4f,%d,%.4f,%d\n",
+                      size.c_str(), policy.c_str(), n,
+                      static_cast<double>(ok) / n, inc / n, flow / n, fstar / n,
+                      gap / n, no_plan, reversals / n, longest);
       }
       out += buf;
     }

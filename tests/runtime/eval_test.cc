@@ -25,13 +25,16 @@ std::string WithoutWall(const std::string& csv) {
 TEST(EvalTest, SummaryCountsFailuresAsThreeFStar) {
   // Two instances with F* = 4 (lower bounds 4 and 2): one success in 6
   // steps, one failure.
-  std::vector<EvalRow> rows = {{"2x2", 0, "greedy", true, 6, 4, 4, 0.1},
-                               {"2x2", 1, "greedy", false, -1, 4, 2, 0.1},
-                               {"2x2", 2, "greedy", false, -1, -1, 0, 0.0}};
+  std::vector<EvalRow> rows = {
+      {"2x2", 0, "greedy", true, 6, 4, 4, 0.25, 2, 0.1},
+      {"2x2", 1, "greedy", false, -1, 4, 2, 0.5, 7, 0.1},
+      {"2x2", 2, "greedy", false, -1, -1, 0, 0.0, 0, 0.0}};
   const std::string csv = SummaryCsv(rows, {"2x2"}, {"greedy"});
   // success 1/2; increase mean((6-4)/4, (12-4)/4) = 1.25; F* / bound
-  // mean(1, 2) = 1.5; one instance without a plan.
-  EXPECT_NE(csv.find("2x2,greedy,2,0.5000,1.2500,9.000,4.000,1.5000,1"),
+  // mean(1, 2) = 1.5; one instance without a plan; reversal share
+  // mean(0.25, 0.5) = 0.375, the longest run 7.
+  EXPECT_NE(csv.find("2x2,greedy,2,0.5000,1.2500,9.000,4.000,1.5000,1,0.3750,"
+                     "7\n"),
             std::string::npos)
       << csv;
 }
@@ -74,6 +77,48 @@ TEST(EvalTest, RunsResumeAndDoNotDependOnThreads) {
   }
   std::filesystem::remove_all(a);
   std::filesystem::remove_all(b);
+}
+
+// The reversal columns: a random walker in the open reverses about a quarter
+// of its moves (one of four moves undoes the last), and a runs.csv written
+// before these columns (its older header) is run again, not misread.
+TEST(EvalTest, ReversalColumnsAndRowsOfAnOlderLayout) {
+  const std::string dir = testing::MakeTempDir("aia_eval_");
+  auto eval = [&] {
+    return RunAia({"eval", "--sizes", "10x10", "--seeds", "4", "--policies",
+                   "random", "--set", "workspace.obstacles.random.count=0",
+                   "--out", dir, "--threads", "2", "--quiet"});
+  };
+  ASSERT_EQ(eval().exit_code, 0);
+  const auto rows = ReadRuns(dir + "/runs.csv");
+  ASSERT_EQ(rows.size(), 4u);
+  double share = 0.0;
+  for (const auto& r : rows) {
+    share += r.reversal_share / rows.size();
+    EXPECT_GE(r.longest_reversal_run, 1);  // hundreds of moves
+  }
+  EXPECT_GT(share, 0.15);
+  EXPECT_LT(share, 0.35);
+  const std::string now = ReadFile(dir + "/runs.csv");
+  // The same rows as the older aia wrote them: no reversal columns.
+  const std::string older =
+      std::regex_replace(now, std::regex(",[0-9.]+,[0-9]+(,[0-9.]+\n)"), "$1");
+  ASSERT_EQ(older.rfind("size,seed,policy,success,flowtime,fstar,bound,"
+                        "reversal_share,longest_reversal_run,wall_s\n",
+                        0),
+            0u);
+  {
+    std::ofstream(dir + "/runs.csv") << std::regex_replace(
+        older, std::regex("reversal_share,longest_reversal_run,"), "");
+  }
+  const auto resumed = eval();
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("dropped 5 rows that will run again: line 1: the "
+                             "header of an older aia (no reversal columns)"),
+            std::string::npos)
+      << resumed.err;
+  EXPECT_EQ(WithoutWall(ReadFile(dir + "/runs.csv")), WithoutWall(now));
+  std::filesystem::remove_all(dir);
 }
 
 // `mpirun -n 2 aia eval` (ranks take instances round-robin, rank 0 writes

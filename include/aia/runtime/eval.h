@@ -97,6 +97,10 @@ struct EvalRow {
   int flowtime = -1;  // steps to success, -1 when not reached within 3 F*
   int fstar = -1;     // the expert's F*, -1 when the expert found no plan
   int bound = 0;      // the expert's lower bound on the horizon
+  // Back-and-forth: the share of the robots' moves that undo their previous
+  // move, and the most consecutive such moves of one robot (MoveObserver).
+  double reversal_share = 0.0;
+  int longest_reversal_run = 0;
   double wall_s = 0.0;
 };
 

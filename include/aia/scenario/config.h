@@ -286,7 +286,7 @@ struct PhysicsConfig {
                  .Doc("MuJoCo timestep, seconds"));
     a->Visit(AIA_FIELD(kp)
                  .In(Between(1e-3, 1e6))
-                 .Doc("waypoint actuator stiffness, N/m (critically damped); "
+                 .Doc("waypoint spring stiffness, N/m (critically damped); "
                       "timestep * sqrt(kp / robot_mass) at most 0.5"));
     a->Visit(AIA_FIELD(robot_mass).In(Between(1e-3, 1e3)).Doc("kg"));
     a->Visit(AIA_FIELD(tolerance)
