@@ -15,6 +15,15 @@ command each, built on `build/aia`:
                same worlds with a static full graph and no failure: the mean
                mission time's increase (the paper: +71.51 %), and a video.
 
+  generalization
+               every policy on worlds unlike the training ones, seeds from
+               931000: team sizes 2x2 to 80x80, 20 to 40 m at constant box
+               density, 0 and 60 boxes, sensor range 1.5 and 3 m, a range
+               graph with packet loss (aia eval, F* from the expert), the 12
+               hand-made worlds of scenarios/long, the robustness scenario
+               and a moving target (aia run): success, flowtime increase (or
+               mean steps), reversal share, with standard errors.
+
 Each writes, under --out: CSV, summary.json and PNG plots (and MP4 videos);
 --quick shrinks it to about a minute. Every piece already written is kept:
 run the command again after an interruption and it goes on.
@@ -23,6 +32,7 @@ Usage:
   tools/experiment.py scalability --out results/scalability [--quick] [--mpi 2]
   tools/experiment.py tracking --out results/tracking [--quick]
   tools/experiment.py robustness --out results/robustness [--quick]
+  tools/experiment.py generalization --out results/generalization [--quick]
 """
 
 import argparse
@@ -51,6 +61,10 @@ POLICY_COLOR = {"igbnet": "C0", "decsb": "C1", "greedy": "C2", "random": "C3", "
 
 class Failure(Exception):
     pass
+
+
+class Usage(Exception):
+    """Bad arguments found once the experiment knows its pieces: exit 2."""
 
 
 def write_atomic(path, text):
@@ -400,6 +414,223 @@ def robustness(args):
             cmd += ["--set", s]
         run(cmd)
 
+# ------------------------------------------------------------- generalization
+
+GEN_POLICIES = ["igbnet", "greedy", "decsb", "expert"]
+GEN_SEED_BASE = 931000  # disjoint from training (datasets) and model selection
+BOX_DENSITY = 0.075     # boxes per m^2: the paper's 30 in 20 x 20 m
+
+
+def gen_conditions(quick):
+    """The suite: (name, group, kind, spec). kind "eval": spec is (size,
+    [KEY=VALUE]) for aia eval's generated worlds (F* from the expert); kind
+    "files": spec is a list of scenario files run with aia run per seed."""
+    c = []
+    sizes = ["2x2", "10x10"] if quick else ["2x2", "5x5", "10x10", "20x20", "40x40", "80x80"]
+    for size in sizes:
+        c.append((f"team {size}", "team size", "eval", (size, [])))
+    for side in ([30] if quick else [20, 30, 40]):
+        boxes = int(round(BOX_DENSITY * side * side))
+        c.append((f"{side} m, {boxes} boxes", "workspace at constant density", "eval",
+                  ("10x10", [f"workspace.size=[{side},{side}]",
+                             f"workspace.obstacles.random.count={boxes}"])))
+    if not quick:
+        for boxes in [0, 60]:
+            c.append((f"{boxes} boxes", "clutter", "eval",
+                      ("10x10", [f"workspace.obstacles.random.count={boxes}"])))
+        for r in [1.5, 3]:
+            c.append((f"sensor range {r:g} m", "sensing", "eval",
+                      ("10x10", [f"sensor.range={r:g}"])))
+    c.append(("range graph 4 m, packet loss 1", "communication", "eval",
+              ("10x10", ["communication.mode=range", "communication.range=4",
+                         "communication.packet_loss_lambda=1"])))
+    long_worlds = sorted(os.path.join(ROOT, "scenarios/long", f)
+                         for f in os.listdir(os.path.join(ROOT, "scenarios/long"))
+                         if f.endswith(".yaml"))
+    # quick: the two smallest hand-made worlds (20 x 20 m)
+    small = [w for w in long_worlds if os.path.basename(w) in ("maze20.yaml", "office20.yaml")]
+    c.append(("scenarios/long (hand-made worlds)", "structured", "files",
+              (small or long_worlds[:2]) if quick else long_worlds))
+    if not quick:
+        c.append(("robustness scenario", "faults", "files",
+                  [os.path.join(ROOT, "scenarios/robustness.yaml")]))
+        c.append(("moving target (tracking scenario)", "moving targets", "files",
+                  [os.path.join(ROOT, "scenarios/tracking.yaml")]))
+    return c
+
+
+def slug(text):
+    return "".join(ch if ch.isalnum() else "_" for ch in text).strip("_")
+
+
+def mean_se(xs):
+    n = len(xs)
+    if n == 0:
+        return None, None
+    m = sum(xs) / n
+    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1)) if n > 1 else 0.0
+    return m, sd / math.sqrt(n)
+
+
+def gen_eval(args, name, size, sets, seeds, policies):
+    """One eval condition: rows per policy (success, flowtime increase,
+    reversal share), resumable through aia eval's own resume."""
+    folder = os.path.join(args.out, "eval", slug(name))
+    cmd = [args.aia, "eval", "--sizes", size, "--seeds", str(seeds), "--seed-base",
+           str(args.seed_base), "--policies", ",".join(policies), "--out", folder,
+           "--threads", str(args.threads), "--quiet"]
+    for kv in sets + args.set:
+        cmd += ["--set", kv]
+    run(cmd)
+    runs = [r for r in load_runs(os.path.join(folder, "runs.csv"))
+            if args.seed_base <= int(r["seed"]) < args.seed_base + seeds]
+    out = {}
+    for policy in policies:
+        rs = [r for r in runs if r["policy"] == policy and int(r["fstar"]) >= 0]
+        succ, inc = [], []
+        for r in rs:
+            fstar = int(r["fstar"])
+            denom = max(fstar, 1)
+            f = int(r["flowtime"]) if r["success"] == "1" else 3 * denom
+            succ.append(1.0 if r["success"] == "1" else 0.0)
+            inc.append((f - fstar) / denom)
+        out[policy] = {"n": len(rs), "success": succ, "flowtime_increase": inc,
+                       "steps": [], "reversal_share": [float(r["reversal_share"]) for r in rs],
+                       "longest_reversal_run": max([int(r["longest_reversal_run"]) for r in rs],
+                                                   default=0)}
+    return out
+
+
+def gen_files_run(args, name, scenario, seed, policy):
+    folder = os.path.join(args.out, "runs", slug(name),
+                          f"{os.path.splitext(os.path.basename(scenario))[0]}.{seed}.{policy}")
+    path = os.path.join(folder, "summary.json")
+    if not os.path.isfile(path):
+        cmd = [args.aia, "run", scenario, "--policy", policy, "--seed", str(seed),
+               "--out", folder, "--quiet"]
+        for kv in args.set:
+            cmd += ["--set", kv]
+        run(cmd, quiet=True)
+    s = json.load(open(path))
+    d = json.load(open(os.path.join(folder, "diagnostics.json")))
+    moves = d.get("moves", {})
+    total = moves.get("total", 0)
+    return {"success": bool(s["success"]),
+            "steps": s["flowtime"] if s["success"] else s["max_steps"],
+            "reversal_share": moves.get("reversals", 0) / total if total else 0.0,
+            "longest_reversal_run": moves.get("longest_reversal_run", 0)}
+
+
+def gen_files(args, name, files, seeds, policies):
+    """One condition of scenario files: every file x seed x policy with aia
+    run (each run's folder kept: a second call goes on)."""
+    jobs = [(f, args.seed_base + i, p) for f in files for i in range(seeds) for p in policies]
+    workers = args.jobs
+    with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
+        results = list(pool.map(lambda j: (j[2], gen_files_run(args, name, *j)), jobs))
+    out = {}
+    for policy in policies:
+        rs = [r for p, r in results if p == policy]
+        out[policy] = {"n": len(rs), "success": [1.0 if r["success"] else 0.0 for r in rs],
+                       "flowtime_increase": [], "steps": [float(r["steps"]) for r in rs],
+                       "reversal_share": [r["reversal_share"] for r in rs],
+                       "longest_reversal_run": max([r["longest_reversal_run"] for r in rs],
+                                                   default=0)}
+    return out
+
+
+def plot_generalization(table, path, title):
+    conds = list(dict.fromkeys(r["condition"] for r in table))
+    policies = list(dict.fromkeys(r["policy"] for r in table))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 0.45 * len(conds) + 1.8), sharey=True)
+    width = 0.8 / max(1, len(policies))
+    for j, policy in enumerate(policies):
+        for ax, key in zip(axes, ("success", "flowtime_increase", "reversal_share")):
+            ys, vals, errs = [], [], []
+            for i, c in enumerate(conds):
+                r = next((r for r in table if r["condition"] == c and r["policy"] == policy), None)
+                if r is None or r[key] is None:
+                    continue
+                ys.append(i + (j - (len(policies) - 1) / 2) * width)
+                vals.append(r[key])
+                errs.append(r[key + "_se"] or 0.0)
+            ax.barh(ys, vals, height=width, xerr=errs, color=POLICY_COLOR.get(policy),
+                    label=policy, capsize=2)
+    for ax, label in zip(axes, ("success rate", "flowtime increase (F - F*) / F*",
+                                "reversal share of moves")):
+        ax.set_title(label, fontsize=10)
+        ax.grid(axis="x", alpha=0.3)
+    axes[0].set_yticks(range(len(conds)))
+    axes[0].set_yticklabels(conds, fontsize=8)
+    axes[0].invert_yaxis()
+    axes[0].set_xlim(0, 1.05)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="upper right", ncol=len(labels))
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    save(fig, path)
+
+
+def generalization(args):
+    """Every policy on worlds unlike the training ones, fresh seeds."""
+    policies = args.policies or (["igbnet", "greedy"] if args.quick else GEN_POLICIES)
+    seeds = args.seeds or (2 if args.quick else 30)
+    file_seeds = args.file_seeds or (1 if args.quick else 4)
+    t0 = time.time()
+    conditions = gen_conditions(args.quick)
+    if args.only:
+        wanted = [w.strip().lower() for w in args.only.split(",") if w.strip()]
+        conditions = [c for c in conditions
+                      if any(w in c[0].lower() or w in c[1].lower() for w in wanted)]
+        if not conditions:
+            names = "; ".join(f"{c[0]} ({c[1]})" for c in gen_conditions(args.quick))
+            raise Usage(f"--only: '{args.only}' matches no condition (conditions: {names})")
+    table = []
+    for name, group, kind, spec in conditions:
+        print(f"[generalization] {name} ...", flush=True)
+        if kind == "eval":
+            size, sets = spec
+            res = gen_eval(args, name, size, sets, seeds, policies)
+        else:
+            res = gen_files(args, name, spec, file_seeds, policies)
+        for policy, r in res.items():
+            succ, succ_se = mean_se(r["success"])
+            inc, inc_se = mean_se(r["flowtime_increase"])
+            steps, steps_se = mean_se(r["steps"])
+            rev, rev_se = mean_se(r["reversal_share"])
+            if succ is not None and len(r["success"]) > 0:
+                succ_se = math.sqrt(succ * (1 - succ) / len(r["success"]))
+            table.append({"condition": name, "group": group, "policy": policy, "n": r["n"],
+                          "success": succ, "success_se": succ_se,
+                          "flowtime_increase": inc, "flowtime_increase_se": inc_se,
+                          "mean_steps": steps, "mean_steps_se": steps_se,
+                          "reversal_share": rev, "reversal_share_se": rev_se,
+                          "longest_reversal_run": r["longest_reversal_run"]})
+    header = ["condition", "group", "policy", "n", "success", "success_se",
+              "flowtime_increase", "flowtime_increase_se", "mean_steps", "mean_steps_se",
+              "reversal_share", "reversal_share_se", "longest_reversal_run"]
+    write_csv(os.path.join(args.out, "generalization.csv"), header,
+              [[r[h] for h in header] for r in table])
+
+    def cell(r, key, digits=2):
+        if r[key] is None:
+            return "-"
+        return f"{r[key]:.{digits}f} ± {r[key + '_se']:.{digits}f}"
+    lines = ["| condition | policy | n | success | flowtime increase | mean steps "
+             "| reversal share | longest reversal run |", "|---|---|---|---|---|---|---|---|"]
+    for r in table:
+        lines.append(f"| {r['condition']} | {r['policy']} | {r['n']} | {cell(r, 'success')} "
+                     f"| {cell(r, 'flowtime_increase')} | {cell(r, 'mean_steps', 1)} "
+                     f"| {cell(r, 'reversal_share', 3)} | {r['longest_reversal_run']} |")
+    write_atomic(os.path.join(args.out, "generalization.md"), "\n".join(lines) + "\n")
+    write_json(os.path.join(args.out, "summary.json"), {
+        "experiment": "generalization", "quick": args.quick, "policies": policies,
+        "seeds": seeds, "file_seeds": file_seeds, "seed_base": args.seed_base,
+        "sets": args.set, "wall_s_this_call": time.time() - t0, "rows": table})
+    plot_generalization(table, os.path.join(args.out, "generalization.png"),
+                        f"generalization: seeds from {args.seed_base}, error bars: 1 s.e.")
+
+
 
 def main(argv=None):
     parser = argparse.ArgumentParser(
@@ -431,11 +662,26 @@ def main(argv=None):
     r.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
     r.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="runs at once")
     r.add_argument("--no-video", action="store_true", help="skip the video")
+    g = sub.add_parser("generalization", parents=[common],
+                       help="every policy on worlds unlike the training ones")
+    g.add_argument("--policies", type=lambda t: t.split(","),
+                   help="default: " + ",".join(GEN_POLICIES) + " (quick: igbnet,greedy)")
+    g.add_argument("--seeds", type=int, help="worlds per generated condition (default 30; quick 2)")
+    g.add_argument("--file-seeds", type=int,
+                   help="seeds per scenario file (default 4; quick 1)")
+    g.add_argument("--seed-base", type=int, default=GEN_SEED_BASE,
+                   help=f"first seed (default {GEN_SEED_BASE}, disjoint from training and "
+                        "model selection)")
+    g.add_argument("--threads", type=int, default=0, help="aia eval --threads (0: all cores)")
+    g.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                   help="aia run processes at once for scenario files")
+    g.add_argument("--only", help="conditions whose name or group contains one of these "
+                                  "comma-separated words, e.g. 'team,structured'")
     args = parser.parse_args(argv)
     if not os.access(args.aia, os.X_OK):
         print(f"error: {args.aia}: not built (run tools/bootstrap.sh)", file=sys.stderr)
         return 2
-    for name in ("seeds",):
+    for name in ("seeds", "file_seeds"):
         v = getattr(args, name, None)
         if v is not None and v < 1:
             print(f"error: --{name}: must be at least 1", file=sys.stderr)
@@ -445,8 +691,11 @@ def main(argv=None):
         return 2
     os.makedirs(args.out, exist_ok=True)
     try:
-        {"scalability": scalability, "tracking": tracking, "robustness": robustness}[
-            args.experiment](args)
+        {"scalability": scalability, "tracking": tracking, "robustness": robustness,
+         "generalization": generalization}[args.experiment](args)
+    except Usage as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     except Failure as e:
         print(f"error: {e}", file=sys.stderr)
         return 2 if " exited with 2" in str(e) else 1

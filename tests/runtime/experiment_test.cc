@@ -1,6 +1,6 @@
-// tools/experiment.py: the paper's three experiments, each in its --quick
-// size, write their CSV, summary.json, plots and videos, and a second call
-// reuses what the first wrote.
+// tools/experiment.py: the paper's three experiments and the generalization
+// suite, each in its --quick size, write their CSV, summary.json, plots and
+// videos, and a second call reuses what the first wrote.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -66,6 +66,41 @@ TEST(ExperimentTest, QuickExperimentsWriteResultsPlotsAndVideos) {
   EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 1 + 2 * 5);
   EXPECT_NE(ReadFile(dir + "/r/summary.json").find("\"mission_time_increase\""),
             std::string::npos);
+  fs::remove_all(dir);
+}
+
+// The generalization suite, cut to one generated condition and the two
+// small hand-made worlds: its table has a row per condition and policy, the
+// random walker's success is exactly 0 on generated worlds, and an --only
+// that matches nothing is bad input.
+TEST(ExperimentTest, GeneralizationSuiteWritesItsTable) {
+  if (!HaveMatplotlib()) GTEST_SKIP() << "no python3-matplotlib";
+  const std::string dir = testing::MakeTempDir("aia_experiment_");
+  const auto g = RunCommand(Experiment(
+      "generalization --quick --only 'team 2x2,hand-made' --policies "
+      "greedy,random --seeds 2 --file-seeds 1 --threads 2 --jobs 2 --out " +
+      dir + "/g"));
+  ASSERT_EQ(g.exit_code, 0) << g.out << g.err;
+  for (const char* f :
+       {"generalization.csv", "generalization.md", "generalization.png",
+        "summary.json", "eval/team_2x2/runs.csv"})
+    EXPECT_TRUE(fs::exists(dir + "/g/" + f)) << f;
+  const std::string table = ReadFile(dir + "/g/generalization.csv");
+  EXPECT_EQ(table.rfind("condition,group,policy,n,success,success_se,", 0), 0u)
+      << table;
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 1 + 2 * 2) << table;
+  EXPECT_NE(table.find("team 2x2,team size,random,2,0,0,"), std::string::npos)
+      << table;
+  EXPECT_NE(
+      table.find("scenarios/long (hand-made worlds),structured,greedy,2,"),
+      std::string::npos)
+      << table;
+  const auto none = RunCommand(
+      Experiment("generalization --quick --only nothing --out " + dir + "/n"));
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("error: --only: 'nothing' matches no condition"),
+            std::string::npos)
+      << none.err;
   fs::remove_all(dir);
 }
 
