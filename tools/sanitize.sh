@@ -30,8 +30,10 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$supp/ubsan
 labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|learning|render|fuzz|runtime}
 # Left out here: the golden traces (recorded with the main build's gcc; clang's
 # floating point differs in the last bits and missions diverge from there)
-# and the two-rank MPI test (OpenMPI's plugins leak and are unloaded before
-# LeakSanitizer reports, so their leaks cannot be told from ours).
-exclude='^golden\.|TwoMpiRanksGiveTheFilesOfOneProcess'
+# the two-rank MPI test (OpenMPI's plugins leak and are unloaded before
+# LeakSanitizer reports, so their leaks cannot be told from ours), and the
+# experiment drivers (Python over aia; the commands they call run under the
+# sanitizers in the CLI tests; 2-4 minutes here).
+exclude='^golden\.|TwoMpiRanksGiveTheFilesOfOneProcess|^ExperimentTest\.'
 cd "$dir"
 exec ctest --output-on-failure -j "$jobs" --timeout 900 -L "$labels" -E "$exclude"
