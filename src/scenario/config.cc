@@ -65,11 +65,6 @@ void CheckGenerator(const Scenario& s, const FieldChecker& check) {
                                   FormatPair(g.room_size.x(), g.room_size.y()));
     }
   }
-  if (g.type == GeneratorType::kCave && StepsIn(g.cell, step) < 1) {
-    check.Fail(g.cell, "is smaller than " + step_text +
-                           ": cave rock fills whole lattice cells; got " +
-                           FormatNumber(g.cell));
-  }
   if (g.type == GeneratorType::kCorridors) {
     const int nx = StepsIn(s.workspace.size.x(), step),
               ny = StepsIn(s.workspace.size.y(), step);
@@ -123,9 +118,11 @@ void ObstaclesConfig::Validate(const FieldChecker& check) {
         ": a generated world fills the whole workspace and keeps its free "
         "space connected, which other obstacles could break; use one or the "
         "other";
-    if (random)
+    if (random && random->count > 0)
       check.Fail(*generator,
-                 "cannot be combined with workspace.obstacles.random" + why);
+                 "cannot be combined with workspace.obstacles.random (" +
+                     std::to_string(random->count) +
+                     " boxes; a count of 0 would do)" + why);
     if (!boxes.empty())
       check.Fail(*generator,
                  "cannot be combined with workspace.obstacles.boxes" + why);

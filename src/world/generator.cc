@@ -363,8 +363,7 @@ void Corridors(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
 // the others filled.
 int Cave(const Scenario& s, Rng& rng, Layout* l) {
   const GeneratorConfig& g = *s.workspace.obstacles.generator;
-  const int k = StepsIn(g.cell, s.robots.step);
-  AIA_CHECK(k >= 1);
+  const int k = std::max(1, StepsIn(g.cell, s.robots.step));
   const int cx = (l->nx + k - 1) / k, cy = (l->ny + k - 1) / k;
   const std::size_t n = static_cast<std::size_t>(cx) * cy;
   std::vector<std::uint8_t> rock(n), next(n);

@@ -123,9 +123,9 @@ struct GeneratorConfig {
   double door = 1.0;
   Vec2 room_size{3.0, 8.0};
   double loops = 0.1;
-  double fill = 0.4;
+  double fill = 0.44;
   int smoothing = 4;
-  double cell = 1.0;
+  double cell = 0.5;
 
   // Whether the type draws thin walls (maze, rooms, corridors), uses
   // corridors (maze, corridors), doors and rooms (rooms, corridors).
@@ -164,14 +164,15 @@ struct GeneratorConfig {
         "maze: share of the walls left by the spanning tree that are opened "
         "too (0: a perfect maze, one path between any two points)"));
     a->Visit(AIA_FIELD(fill).In(kUnit).Doc(
-        "cave: share of rock cells drawn before smoothing"));
+        "cave: share of rock cells drawn before smoothing (above about 0.5 "
+        "the open space breaks apart)"));
     a->Visit(AIA_FIELD(smoothing)
                  .In(Between(0, 100))
                  .Doc("cave: smoothing passes (a cell becomes rock when 5 or "
                       "more of the 9 around it, itself included, are)"));
     a->Visit(AIA_FIELD(cell).In(kLength).Doc(
         "cave: cell of the automaton, metres, rounded down to whole "
-        "robots.step, at least one"));
+        "robots.step (at least one)"));
   }
   // room_size's min is at most its max.
   void Validate(const FieldChecker& check);
@@ -204,7 +205,8 @@ struct ObstaclesConfig {
     a->Visit(AIA_FIELD(generator).Doc(
         "a seeded structured world (maze, rooms, corridors, cave) filling the "
         "workspace, drawn from the scenario seed; its free space is "
-        "connected for the robots; not combined with random, boxes or map"));
+        "connected for the robots; not combined with random boxes, boxes or "
+        "map"));
   }
   // The map exists and is a file (it is decoded when the world is built); a
   // generator comes without the other sources.
