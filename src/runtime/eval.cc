@@ -90,6 +90,19 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
       .count();
 }
 
+// The generated scenario with overrides applied. A structured world given
+// by them (workspace.obstacles.generator) takes the place of the random
+// boxes, which it cannot be combined with.
+Scenario GeneratedWith(int robots, int targets, std::uint64_t seed,
+                       const std::vector<Override>& overrides) {
+  Scenario s = GeneratedScenario(robots, targets, seed);
+  const std::string key = "workspace.obstacles.generator";
+  for (const Override& o : overrides)
+    if (o.path == key || o.path.rfind(key + ".", 0) == 0)
+      s.workspace.obstacles.random.reset();
+  return WithOverrides(s, overrides);
+}
+
 // The policy keys of the registry's declarations: "policy.p_v" -> "p_v".
 std::set<std::string> DeclaredParams(const PolicyRegistry& registry,
                                      const std::string& policy) {
@@ -126,7 +139,7 @@ std::string EffectiveText(const EvalSetup& setup, const EvalInstance& first) {
   // the sizes given (a robots.start of two robots).
   Scenario s;
   try {
-    s = WithOverrides(GeneratedScenario(1, 1, 0), setup.overrides);
+    s = GeneratedWith(1, 1, 0, setup.overrides);
   } catch (const InputError&) {
     s = InstanceScenario(first, setup);
   }
@@ -226,7 +239,7 @@ std::string FlagKey(const Override& o) {
 // The spec's scenario with its first `n` overrides, unchanged when there
 // are none.
 Scenario WithFirstOverrides(const GeneratedSpec& spec, std::size_t n) {
-  return WithOverrides(GeneratedScenario(spec.robots, spec.targets, spec.seed),
+  return GeneratedWith(spec.robots, spec.targets, spec.seed,
                        std::vector<Override>(spec.overrides.begin(),
                                              spec.overrides.begin() + n));
 }

@@ -1,5 +1,6 @@
 #include "aia/scenario/config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -19,6 +20,68 @@ bool Inside(const Vec2& p, const Vec2& size) {
   return p.x() >= 0.0 && p.y() >= 0.0 && p.x() <= size.x() && p.y() <= size.y();
 }
 
+// The generator's parameters against the robots and the workspace: every
+// width is at least one lattice step, walls fit between lattice points, and
+// the layout fits in the workspace.
+void CheckGenerator(const Scenario& s, const FieldChecker& check) {
+  const GeneratorConfig& g = *s.workspace.obstacles.generator;
+  const double step = s.robots.step, radius = s.robots.radius;
+  const std::string type = GeneratorTypeName(g.type);
+  const std::string step_text =
+      "one lattice step (robots.step " + FormatNumber(step) + ")";
+  if (g.HasWalls() && !(g.wall < step - 2 * radius)) {
+    check.Fail(g.wall, "must be less than robots.step - 2 robots.radius (" +
+                           FormatNumber(step - 2 * radius) +
+                           "): walls stand on the lines between lattice "
+                           "points, and a thicker one would touch a robot on "
+                           "the points beside it; got " +
+                           FormatNumber(g.wall));
+  }
+  if (g.HasCorridors() && StepsIn(g.corridor, step) < 1) {
+    check.Fail(g.corridor, "is narrower than " + step_text + ": the robots " +
+                               "move between lattice points, so a corridor " +
+                               "is at least one step wide; got " +
+                               FormatNumber(g.corridor));
+  }
+  if (g.HasRooms()) {
+    if (g.door < 2 * radius) {
+      check.Fail(g.door, "is narrower than a robot (robots.radius " +
+                             FormatNumber(radius) + ", " +
+                             FormatNumber(2 * radius) +
+                             " m across); a door is at least " + step_text +
+                             " wide; got " + FormatNumber(g.door));
+    }
+    if (StepsIn(g.door, step) < 1) {
+      check.Fail(g.door, "is narrower than " + step_text +
+                             ": the robots move between lattice points, so a "
+                             "door is at least one step wide; got " +
+                             FormatNumber(g.door));
+    }
+    if (g.room_size.x() < g.door) {
+      check.Fail(g.room_size, "min must be at least door (" +
+                                  FormatNumber(g.door) +
+                                  ") so that every room has a whole door, "
+                                  "got " +
+                                  FormatPair(g.room_size.x(), g.room_size.y()));
+    }
+  }
+  if (g.type == GeneratorType::kCorridors) {
+    const int nx = StepsIn(s.workspace.size.x(), step),
+              ny = StepsIn(s.workspace.size.y(), step);
+    const int need = StepsIn(g.corridor, step) + StepsIn(g.room_size.x(), step);
+    if (std::min(nx, ny) < need) {
+      check.Fail(g, "the workspace " +
+                        FormatPair(s.workspace.size.x(), s.workspace.size.y()) +
+                        " is too small for a corridor of " +
+                        FormatNumber(g.corridor) + " m with rooms of " +
+                        FormatNumber(g.room_size.x()) + " m beside it (" +
+                        FormatNumber(need * step) +
+                        " m in both directions); a larger workspace, or a "
+                        "narrower corridor or smaller rooms");
+    }
+  }
+}
+
 }  // namespace
 
 void RandomObstaclesConfig::Validate(const FieldChecker& check) {
@@ -30,7 +93,43 @@ void RandomObstaclesConfig::Validate(const FieldChecker& check) {
   }
 }
 
+const char* GeneratorTypeName(GeneratorType type) {
+  for (const auto& n : EnumNames(GeneratorType{}))
+    if (n.value == type) return n.name;
+  return "?";
+}
+
+void GeneratorConfig::Validate(const FieldChecker& check) {
+  if (!HasRooms()) return;
+  const std::string shown = FormatPair(room_size.x(), room_size.y());
+  if (room_size.x() > room_size.y())
+    check.Fail(room_size,
+               "min must not exceed max ([min, max] metres), got " + shown);
+  if (room_size.y() < 2 * room_size.x())
+    check.Fail(room_size,
+               "max must be at least twice min, so that a part larger than "
+               "max can be split into two rooms of at least min, got " +
+                   shown);
+}
+
 void ObstaclesConfig::Validate(const FieldChecker& check) {
+  if (generator) {
+    const std::string why =
+        ": a generated world fills the whole workspace and keeps its free "
+        "space connected, which other obstacles could break; use one or the "
+        "other";
+    if (random && random->count > 0)
+      check.Fail(*generator,
+                 "cannot be combined with workspace.obstacles.random (" +
+                     std::to_string(random->count) +
+                     " boxes; a count of 0 would do)" + why);
+    if (!boxes.empty())
+      check.Fail(*generator,
+                 "cannot be combined with workspace.obstacles.boxes" + why);
+    if (!map.empty())
+      check.Fail(*generator,
+                 "cannot be combined with workspace.obstacles.map" + why);
+  }
   if (map.empty()) return;
   // Only existence here: the image is decoded by world/, which owns the
   // occupancy grid.
@@ -189,6 +288,7 @@ void Scenario::Validate(const FieldChecker& check) {
                    FormatPair(size.x(), size.y()) + ", got " +
                    FormatPair(random->max_size.x(), random->max_size.y()));
   }
+  if (workspace.obstacles.generator) CheckGenerator(*this, check);
   // Obstacles are checked against positions when the world is built; here
   // only the workspace bounds [0, size] are.
   for (const Vec2& p : robots.start) {

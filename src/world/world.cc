@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,6 +17,7 @@
 #include "aia/core/error.h"
 #include "aia/core/io.h"
 #include "aia/core/rng.h"
+#include "aia/world/generator.h"
 #include "aia/world/map.h"
 
 namespace aia {
@@ -277,8 +279,14 @@ std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
 
 World World::Build(const Scenario& s) {
   World w;
-  // Obstacles: random, then explicit boxes, then the map's.
+  // Obstacles: a generated world (alone), or random, then explicit boxes,
+  // then the map's.
   std::vector<Box> obstacles;
+  std::optional<GeneratedObstacles> generated;
+  if (s.workspace.obstacles.generator) {
+    generated = GenerateObstacles(s);
+    obstacles = generated->boxes;
+  }
   if (s.workspace.obstacles.random) {
     Rng rng(s.seed, "obstacles");
     const auto boxes = RandomBoxes(s, rng);
@@ -292,6 +300,7 @@ World World::Build(const Scenario& s) {
   }
   w.map = Map(s.workspace.size, std::move(obstacles), s.workspace.cell,
               s.robots.step, s.robots.radius);
+  if (generated) CheckGeneratedLattice(s, *generated, w.map.lattice());
   const Map& map = w.map;
   const Lattice& lat = map.lattice();
   const int n = s.robots.count;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <sstream>
 #include <tuple>
 
 #include "aia/planning/decsb.h"
@@ -444,6 +445,26 @@ TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
               "--quiet"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("2 rows already done, 2 to run"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+// A structured world set on the generated instances takes the place of
+// their random boxes (the two cannot be combined): each seed its own rooms.
+TEST(EvalTest, GeneratorSetOnTheGeneratedWorlds) {
+  const std::string dir = testing::MakeTempDir("aia_eval_");
+  const auto r =
+      RunAia({"eval", "--sizes", "3x3", "--seeds", "2", "--policies", "greedy",
+              "--set", "workspace.obstacles.generator.type=rooms", "--out", dir,
+              "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string effective = ReadFile(dir + "/effective.yaml");
+  EXPECT_NE(effective.find("type: rooms"), std::string::npos) << effective;
+  EXPECT_EQ(effective.find("random:"), std::string::npos) << effective;
+  std::istringstream runs(ReadFile(dir + "/runs.csv"));
+  std::string line;
+  int rows = 0;
+  while (std::getline(runs, line)) rows += line.rfind("3x3,", 0) == 0;
+  EXPECT_EQ(rows, 2) << ReadFile(dir + "/runs.csv");
   std::filesystem::remove_all(dir);
 }
 

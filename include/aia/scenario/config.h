@@ -9,6 +9,8 @@
 #ifndef AIA_SCENARIO_CONFIG_H_
 #define AIA_SCENARIO_CONFIG_H_
 
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -90,12 +92,100 @@ struct BoxConfig {
   }
 };
 
-// Any combination of the three sources.
+// The structured worlds of workspace.obstacles.generator (docs/scenarios.md,
+// "Generated worlds").
+enum class GeneratorType { kMaze, kRooms, kCorridors, kCave };
+constexpr std::array<EnumName<GeneratorType>, 4> EnumNames(GeneratorType) {
+  return {{{GeneratorType::kMaze, "maze"},
+           {GeneratorType::kRooms, "rooms"},
+           {GeneratorType::kCorridors, "corridors"},
+           {GeneratorType::kCave, "cave"}}};
+}
+// The name a type is written with ("maze").
+const char* GeneratorTypeName(GeneratorType type);
+
+// Whole lattice steps in a length (a length a hair short of a multiple of
+// the step counts as that multiple): the unit of generated worlds.
+inline int StepsIn(double length, double step) {
+  return static_cast<int>(std::floor(length / step + 1e-9));
+}
+
+// A seeded structured world that fills the workspace, laid out on the
+// robots.step lattice (world/generator.h): widths are whole steps, thin walls
+// stand on the lines between lattice points, cave rock fills whole lattice
+// cells. One flat set of parameters; each type reads the ones it needs and
+// ignores the others (so that effective.yaml, which writes them all, reads
+// back, and --set can switch the type).
+struct GeneratorConfig {
+  GeneratorType type = GeneratorType::kMaze;  // required
+  double wall = 0.1;
+  double corridor = 2.0;
+  double door = 1.0;
+  Vec2 room_size{3.0, 8.0};
+  double loops = 0.1;
+  double fill = 0.44;
+  int smoothing = 4;
+  double cell = 0.5;
+
+  // Whether the type draws thin walls (maze, rooms, corridors), uses
+  // corridors (maze, corridors), doors and rooms (rooms, corridors).
+  bool HasWalls() const { return type != GeneratorType::kCave; }
+  bool HasCorridors() const {
+    return type == GeneratorType::kMaze || type == GeneratorType::kCorridors;
+  }
+  bool HasRooms() const {
+    return type == GeneratorType::kRooms || type == GeneratorType::kCorridors;
+  }
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(type)
+                 .Required("the kind of world: maze, rooms, corridors or cave")
+                 .Doc("maze: a spanning-tree maze with some loops; rooms: an "
+                      "office split into rooms, one door per split; "
+                      "corridors: corridors lined with rooms, joined by cross "
+                      "corridors; cave: a cellular-automaton cave"));
+    a->Visit(AIA_FIELD(wall).In(kLength).Doc(
+        "maze, rooms, corridors: wall thickness, metres; below robots.step - "
+        "2 robots.radius (walls stand between lattice points)"));
+    a->Visit(AIA_FIELD(corridor).In(kLength).Doc(
+        "maze: passage width; corridors: corridor width; metres, rounded "
+        "down to whole robots.step, at least one"));
+    a->Visit(AIA_FIELD(door).In(kLength).Doc(
+        "rooms, corridors: door width, metres, rounded down to whole "
+        "robots.step, at least one"));
+    a->Visit(AIA_FIELD(room_size)
+                 .In(kLength)
+                 .Shape("[min, max]")
+                 .Doc("rooms, corridors: side of a room, metres, rounded down "
+                      "to whole robots.step; max at least twice min, min at "
+                      "least door"));
+    a->Visit(AIA_FIELD(loops).In(kUnit).Doc(
+        "maze: share of the walls left by the spanning tree that are opened "
+        "too (0: a perfect maze, one path between any two points)"));
+    a->Visit(AIA_FIELD(fill).In(kUnit).Doc(
+        "cave: share of rock cells drawn before smoothing (above about 0.5 "
+        "the open space breaks apart)"));
+    a->Visit(AIA_FIELD(smoothing)
+                 .In(Between(0, 100))
+                 .Doc("cave: smoothing passes (a cell becomes rock when 5 or "
+                      "more of the 9 around it, itself included, are)"));
+    a->Visit(AIA_FIELD(cell).In(kLength).Doc(
+        "cave: cell of the automaton, metres, rounded down to whole "
+        "robots.step (at least one)"));
+  }
+  // room_size's min is at most its max.
+  void Validate(const FieldChecker& check);
+};
+
+// Random boxes, explicit boxes and a map image may be combined; a generator
+// takes the whole workspace and stands alone.
 struct ObstaclesConfig {
   std::optional<RandomObstaclesConfig> random;
   std::vector<BoxConfig> boxes;
   std::string map;  // absolute path of a PGM/PNG image, or empty
   double map_threshold = 0.5;
+  std::optional<GeneratorConfig> generator;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -112,8 +202,14 @@ struct ObstaclesConfig {
                  .In(kOpenUnit)
                  .Doc("map pixels darker than this fraction of white are "
                       "occupied"));
+    a->Visit(AIA_FIELD(generator).Doc(
+        "a seeded structured world (maze, rooms, corridors, cave) filling the "
+        "workspace, drawn from the scenario seed; its free space is "
+        "connected for the robots; not combined with random boxes, boxes or "
+        "map"));
   }
-  // The map exists and is a file (it is decoded when the world is built).
+  // The map exists and is a file (it is decoded when the world is built); a
+  // generator comes without the other sources.
   void Validate(const FieldChecker& check);
 };
 
