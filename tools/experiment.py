@@ -112,6 +112,16 @@ def load_runs(path):
         return list(csv.DictReader(f))
 
 
+def outcome(r):
+    """A runs.csv row's success (0 or 1) and flowtime increase (F - F*) / F*,
+    a failure counting F = 3 F* as in aia eval's summary."""
+    fstar = int(r["fstar"])
+    denom = max(fstar, 1)
+    success = r["success"] == "1"
+    f = int(r["flowtime"]) if success else 3 * denom
+    return (1.0 if success else 0.0), (f - fstar) / denom
+
+
 def scalability_table(runs, sizes, policies):
     """Per size and policy: n, success rate and flowtime increase, each with
     its standard error over the seeds (a failure counts F = 3 F*, as in
@@ -124,13 +134,8 @@ def scalability_table(runs, sizes, policies):
             n = len(rs)
             if n == 0:
                 continue
-            succ = [1.0 if r["success"] == "1" else 0.0 for r in rs]
-            inc = []
-            for r in rs:
-                fstar = int(r["fstar"])
-                denom = max(fstar, 1)
-                f = int(r["flowtime"]) if r["success"] == "1" else 3 * denom
-                inc.append((f - fstar) / denom)
+            succ = [outcome(r)[0] for r in rs]
+            inc = [outcome(r)[1] for r in rs]
             p = sum(succ) / n
             mean_inc = sum(inc) / n
             sd_inc = math.sqrt(sum((x - mean_inc) ** 2 for x in inc) / (n - 1)) if n > 1 else 0.0
@@ -487,13 +492,8 @@ def gen_eval(args, name, size, sets, seeds, policies):
     out = {}
     for policy in policies:
         rs = [r for r in runs if r["policy"] == policy and int(r["fstar"]) >= 0]
-        succ, inc = [], []
-        for r in rs:
-            fstar = int(r["fstar"])
-            denom = max(fstar, 1)
-            f = int(r["flowtime"]) if r["success"] == "1" else 3 * denom
-            succ.append(1.0 if r["success"] == "1" else 0.0)
-            inc.append((f - fstar) / denom)
+        succ = [outcome(r)[0] for r in rs]
+        inc = [outcome(r)[1] for r in rs]
         out[policy] = {"n": len(rs), "success": succ, "flowtime_increase": inc,
                        "steps": [], "reversal_share": [float(r["reversal_share"]) for r in rs],
                        "longest_reversal_run": max([int(r["longest_reversal_run"]) for r in rs],
