@@ -436,6 +436,12 @@ Action AddTrainCommand(CLI::App& app) {
   cmd->add_option("--blur", o->network.channels.blur,
                   "the heatmap's s in metres (about half the sensor range)")
       ->capture_default_str();
+  cmd->add_flag("--geodesic", o->network.channels.geodesic,
+                "a fifth channel: the heat carried along free space "
+                "(docs/learning.md, Channels)");
+  cmd->add_option("--geodesic-length", o->network.channels.geodesic_length,
+                  "the geodesic channel's decay length L in metres")
+      ->capture_default_str();
   cmd->add_option("--width", o->network.width, "feature channels")
       ->capture_default_str();
   cmd->add_option("--stem-stride", o->network.stem_stride, "stride of the stem")

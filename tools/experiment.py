@@ -446,6 +446,18 @@ def gen_conditions(quick):
         for r in [1.5, 3]:
             c.append((f"sensor range {r:g} m", "sensing", "eval",
                       ("10x10", [f"sensor.range={r:g}"])))
+    # Generated structured worlds (workspace.obstacles.generator), each at
+    # 10 robots in 30 x 30 m, and small teams in 20 x 20 m.
+    gen = ["maze", "rooms"] if quick else ["maze", "rooms", "corridors", "cave"]
+    for g in gen:
+        c.append((f"{g} 30 m", "generated structured", "eval",
+                  ("10x10", ["workspace.size=[30,30]",
+                             f"workspace.obstacles.generator.type={g}"])))
+    for size, g in ([("3x3", "rooms")] if quick else
+                    [("3x3", "rooms"), ("3x3", "maze"), ("5x5", "corridors"),
+                     ("5x5", "cave")]):
+        c.append((f"{g} 20 m, {size.split('x')[0]} robots", "generated structured",
+                  "eval", (size, [f"workspace.obstacles.generator.type={g}"])))
     c.append(("range graph 4 m, packet loss 1", "communication", "eval",
               ("10x10", ["communication.mode=range", "communication.range=4",
                          "communication.packet_loss_lambda=1"])))

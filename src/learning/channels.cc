@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <queue>
+#include <utility>
 
 #include "aia/core/check.h"
 
@@ -23,10 +25,13 @@ bool ParseChannelFrame(std::string_view text, ChannelFrame* frame) {
 }
 
 ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
-                                 const Vec2& size, const ChannelParams& params)
+                                 const Vec2& size, const ChannelParams& params,
+                                 const Lattice* lattice)
     : params_(params), size_(size) {
   AIA_CHECK(params.cell > 0.0 && params.window > 0 && params.blur >= 0.0 &&
             params.cutoff > 0.0);
+  AIA_CHECK_MSG(!params.geodesic || (lattice && params.geodesic_length > 0.0),
+                "the geodesic channel needs the map's lattice");
   occupancy_ = MakeHeatmapGrid(size, params.cell);
   heat_ = occupancy_;
   // Share of the fine cells (by their centres) inside each pixel that are
@@ -49,6 +54,32 @@ ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
         int fx = 0, fy = 0;
         occupancy.CellOf(occupancy_.CellCenter(ix, iy), &fx, &fy);
         occupancy_(ix, iy) = occupancy(fx, fy) ? 1.0f : 0.0f;
+      }
+    }
+  }
+  if (params.geodesic) {
+    // A pixel's lattice point is the one nearest its centre; a pixel step is
+    // a valid move when both pixels' points are free and are the same point
+    // or one lattice move apart.
+    const int nx = occupancy_.nx(), ny = occupancy_.ny();
+    std::vector<int> point(static_cast<std::size_t>(nx) * ny);
+    for (int iy = 0; iy < ny; ++iy)
+      for (int ix = 0; ix < nx; ++ix)
+        point[occupancy_.Index(ix, iy)] =
+            lattice->NearestPoint(occupancy_.CellCenter(ix, iy));
+    moves_.assign(point.size(), 0);
+    for (int iy = 0; iy < ny; ++iy) {
+      for (int ix = 0; ix < nx; ++ix) {
+        const int q = point[occupancy_.Index(ix, iy)];
+        if (!lattice->Free(q)) continue;
+        for (Move m : kMoves) {
+          const auto d = MoveDelta(m);
+          const int jx = ix + d[0], jy = iy + d[1];
+          if (!occupancy_.InBounds(jx, jy)) continue;
+          const int r = point[occupancy_.Index(jx, jy)];
+          if (lattice->Free(r) && (r == q || lattice->Next(q, m) == r))
+            moves_[occupancy_.Index(ix, iy)] |= 1u << static_cast<int>(m);
+        }
       }
     }
   }
@@ -87,7 +118,7 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
   float* own = out + plane;
   float* nbr = out + 2 * plane;
   float* heat = out + 3 * plane;
-  std::fill(out, out + kNumChannels * plane, 0.0f);
+  std::fill(out, out + channels() * plane, 0.0f);
   const int nx = occupancy_.nx(), ny = occupancy_.ny();
 
   if (params_.frame == ChannelFrame::kGlobal) {
@@ -100,6 +131,7 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
       occupancy_.CellOf(p, &ix, &iy);
       nbr[occupancy_.Index(ix, iy)] += 1.0f;
     }
+    if (params_.geodesic) Geodesic(0, 0, heat, out + 4 * plane);
     return;
   }
 
@@ -137,6 +169,69 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
     for (int gx = mid0; gx < mid1; ++gx)
       h[gx - x0] = std::max(h[gx - x0], row[gx]);
   }
+  if (params_.geodesic) Geodesic(x0, y0, heat, out + 4 * plane);
+}
+
+void ChannelRenderer::Geodesic(int x0, int y0, const float* heat,
+                               float* out) const {
+  // Dijkstra with the largest value first: every pixel with heat is a
+  // source; a pixel a robot cannot stand on (an obstacle, outside the
+  // workspace) gives its heat to the free pixels beside it but is given
+  // nothing. Scratch per thread: nothing is allocated once warm.
+  const int h = height_, w = width_;
+  const float decay =
+      static_cast<float>(std::exp(-params_.cell / params_.geodesic_length));
+  thread_local std::vector<std::pair<float, int>> heap;
+  heap.clear();
+  const auto mask = [&](int u, int v) -> unsigned {
+    const int gx = x0 + u, gy = y0 + v;
+    return occupancy_.InBounds(gx, gy) ? moves_[occupancy_.Index(gx, gy)] : 0u;
+  };
+  const auto free = [&](int u, int v) {
+    const int gx = x0 + u, gy = y0 + v;
+    if (!occupancy_.InBounds(gx, gy)) return false;
+    // A pixel with any valid step is free; an isolated free point has none
+    // and nothing to lead anywhere.
+    return moves_[occupancy_.Index(gx, gy)] != 0;
+  };
+  const std::size_t n = static_cast<std::size_t>(h) * w;
+  std::fill(out, out + n, 0.0f);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float value = heat[v * w + u];
+      if (value <= 0.0f) continue;
+      if (free(u, v)) out[v * w + u] = std::max(out[v * w + u], value);
+      heap.emplace_back(value, v * w + u);
+    }
+  }
+  std::make_heap(heap.begin(), heap.end());
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end());
+    const auto [value, idx] = heap.back();
+    heap.pop_back();
+    const int u = idx % w, v = idx / w;
+    const bool from_free = free(u, v);
+    if (from_free && value < out[idx]) continue;  // stale
+    const float next = value * decay;
+    if (next < 1e-6f) continue;
+    const unsigned m = from_free ? mask(u, v) : 0xFu;
+    for (Move move : kMoves) {
+      if (!(m & (1u << static_cast<int>(move)))) continue;
+      const auto d = MoveDelta(move);
+      const int ju = u + d[0], jv = v + d[1];
+      if (ju < 0 || jv < 0 || ju >= w || jv >= h || !free(ju, jv)) continue;
+      const int j = jv * w + ju;
+      if (next > out[j]) {
+        out[j] = next;
+        heap.emplace_back(next, j);
+        std::push_heap(heap.begin(), heap.end());
+      }
+    }
+  }
+  float top = 0.0f;
+  for (std::size_t i = 0; i < n; ++i) top = std::max(top, out[i]);
+  if (top > 0.0f)
+    for (std::size_t i = 0; i < n; ++i) out[i] /= top;
 }
 
 }  // namespace aia

@@ -39,15 +39,20 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
   return net;
 }
 
-IgbNetPolicy::IgbNetPolicy(std::shared_ptr<const IgbNet> net)
-    : net_(std::move(net)) {
+IgbNetPolicy::IgbNetPolicy(std::shared_ptr<const IgbNet> net,
+                           IgbNetParams params)
+    : net_(std::move(net)), params_(params) {
   AIA_CHECK(net_ != nullptr);
 }
 
 void IgbNetPolicy::Reset(const Map& map, int num_robots, int /*num_targets*/,
                          std::uint64_t /*seed*/) {
-  renderer_.emplace(map.occupancy(), map.size(), net_->config().channels);
+  renderer_.emplace(map.occupancy(), map.size(), net_->config().channels,
+                    &map.lattice());
   logits_.assign(static_cast<std::size_t>(num_robots) * kNumMoves, 0.0f);
+  last_point_.assign(num_robots, -1);
+  last_move_.assign(num_robots, Move::kStay);
+  reversals_.assign(num_robots, 0);
 }
 
 void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
@@ -108,15 +113,42 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   logits_.assign(static_cast<std::size_t>(n) * kNumMoves, 0.0f);
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < n; ++i) (*moves)[i] = Move::kStay;
+  if (static_cast<int>(last_point_.size()) < n) {  // a hand-made context
+    last_point_.resize(n, -1);
+    last_move_.resize(n, Move::kStay);
+    reversals_.resize(n, 0);
+  }
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
+    const int here = (*ctx.positions)[i];
     const float* l = batch_logits_.data() + b * kNumMoves;
     std::copy(l, l + kNumMoves, logits_.data() + i * kNumMoves);
+    // The move that brought the robot here (from where it stood at its last
+    // decision), and whether it undid the one before.
+    if (last_point_[i] >= 0 && last_point_[i] != here) {
+      Move came = Move::kStay;
+      for (Move m : kMoves)
+        if (lattice.Next(last_point_[i], m) == here) came = m;
+      if (came != Move::kStay && last_move_[i] != Move::kStay &&
+          came == Opposite(last_move_[i])) {
+        ++reversals_[i];
+      } else {
+        reversals_[i] = 0;
+      }
+      last_move_[i] = came;
+    }
+    last_point_[i] = here;
+    // Under the deadlock rule, undoing the last move again is barred while
+    // another valid move exists.
+    const bool bar =
+        params_.max_reversals > 0 && reversals_[i] >= params_.max_reversals &&
+        last_move_[i] != Move::kStay && lattice.NumValidMoves(here) > 1;
+    const int barred = bar ? static_cast<int>(Opposite(last_move_[i])) : -1;
     // The most probable valid move (ties to the lower move index).
     int best = -1;
     float best_logit = -std::numeric_limits<float>::infinity();
     for (int a = 0; a < kNumMoves; ++a) {
-      if (!lattice.Valid((*ctx.positions)[i], static_cast<Move>(a))) continue;
+      if (a == barred || !lattice.Valid(here, static_cast<Move>(a))) continue;
       if (best < 0 || l[a] > best_logit) {
         best = a;
         best_logit = l[a];
@@ -132,14 +164,14 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
 }
 
 void AddLearnedPolicies(PolicyRegistry* registry) {
-  registry->Add<NoParams, IgbNet>(
+  registry->Add<IgbNetParams, IgbNet>(
       "igbnet",
       "I-GBNet, the paper's graph network trained by imitation of the expert "
       "(docs/learning.md); each robot decides from its own belief, its "
       "neighbours' positions and the map; the model is policy.model (default "
       "models/igbnet.pt)",
       false,
-      [](const NoParams&, const Scenario& s) {
+      [](const IgbNetParams&, const Scenario& s) {
         const bool given = !s.policy.model.empty();
         const std::string path = given ? s.policy.model : DefaultModelPath();
         std::shared_ptr<const IgbNet> net;
@@ -166,8 +198,8 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
                   "this one");
         return net;
       },
-      [](const NoParams&, std::shared_ptr<const IgbNet> net) {
-        return std::make_unique<IgbNetPolicy>(std::move(net));
+      [](const IgbNetParams& params, std::shared_ptr<const IgbNet> net) {
+        return std::make_unique<IgbNetPolicy>(std::move(net), params);
       });
 }
 

@@ -23,7 +23,9 @@ namespace aia {
 namespace {
 
 constexpr const char* kFormat = "aia-igbnet";
-constexpr int kVersion = 1;
+// Version 2: the optional geodesic channel (written only when it is on, so
+// that a model without it stays readable by older builds).
+constexpr int kVersion = 2;
 constexpr const char* kMetaKey = "aia_meta";
 
 }  // namespace
@@ -31,12 +33,16 @@ constexpr const char* kMetaKey = "aia_meta";
 std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
-  j["version"] = kVersion;
+  j["version"] = channels.geodesic ? 2 : 1;
   j["frame"] = std::string(ChannelFrameName(channels.frame));
   j["cell"] = channels.cell;
   j["window"] = channels.window;
   j["blur"] = channels.blur;
   j["cutoff"] = channels.cutoff;
+  if (channels.geodesic) {
+    j["geodesic"] = true;
+    j["geodesic_length"] = channels.geodesic_length;
+  }
   j["width"] = width;
   j["stem_stride"] = stem_stride;
   j["pool"] = pool;
@@ -50,10 +56,13 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     throw std::runtime_error("its metadata is not JSON");
   if (j.value("format", "") != kFormat)
     throw std::runtime_error("not an aia I-GBNet model");
-  if (j.value("version", -1) != kVersion)
-    throw std::runtime_error("model format version " +
-                             std::to_string(j.value("version", -1)) +
-                             ", this build reads " + std::to_string(kVersion));
+  const int version = j.contains("version") && j["version"].is_number_integer()
+                          ? j["version"].get<int>()
+                          : -1;
+  if (version < 1 || version > kVersion)
+    throw std::runtime_error("model format version " + std::to_string(version) +
+                             ", this build reads 1 to " +
+                             std::to_string(kVersion));
   NetworkConfig c;
   try {
     if (!ParseChannelFrame(j.at("frame").get<std::string>(), &c.channels.frame))
@@ -62,6 +71,8 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     c.channels.window = j.at("window").get<int>();
     c.channels.blur = j.at("blur").get<double>();
     c.channels.cutoff = j.at("cutoff").get<double>();
+    c.channels.geodesic = j.value("geodesic", false);
+    c.channels.geodesic_length = j.value("geodesic_length", 5.0);
     c.width = j.at("width").get<int>();
     c.stem_stride = j.at("stem_stride").get<int>();
     c.pool = j.at("pool").get<int>();
@@ -73,9 +84,12 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
                   c.channels.window >= 1 && c.channels.window <= 4096 &&
                   std::isfinite(c.channels.blur) && c.channels.blur >= 0.0 &&
                   std::isfinite(c.channels.cutoff) && c.channels.cutoff > 0.0 &&
-                  c.width >= 1 && c.width <= 1024 && c.stem_stride >= 1 &&
-                  c.stem_stride <= 8 && c.pool >= 1 && c.pool <= 64 &&
-                  c.hidden >= 1 && c.hidden <= 65536;
+                  std::isfinite(c.channels.geodesic_length) &&
+                  c.channels.geodesic_length > 0.0 &&
+                  c.channels.geodesic_length <= 1e6 && c.width >= 1 &&
+                  c.width <= 1024 && c.stem_stride >= 1 && c.stem_stride <= 8 &&
+                  c.pool >= 1 && c.pool <= 64 && c.hidden >= 1 &&
+                  c.hidden <= 65536;
   if (!ok) throw std::runtime_error("metadata out of range");
   return c;
 }
@@ -100,11 +114,12 @@ torch::Tensor ResidualBlockImpl::forward(const torch::Tensor& x) {
 
 IgbNetModuleImpl::IgbNetModuleImpl(const NetworkConfig& c) {
   namespace nn = torch::nn;
-  stem = register_module("stem",
-                         nn::Conv2d(nn::Conv2dOptions(kNumChannels, c.width, 3)
-                                        .stride(c.stem_stride)
-                                        .padding(1)
-                                        .bias(false)));
+  stem = register_module(
+      "stem",
+      nn::Conv2d(nn::Conv2dOptions(c.channels.num_channels(), c.width, 3)
+                     .stride(c.stem_stride)
+                     .padding(1)
+                     .bias(false)));
   stem_bn = register_module("stem_bn", nn::BatchNorm2d(c.width));
   blocks = register_module("blocks", nn::ModuleList());
   for (int i = 0; i < 3; ++i) blocks->push_back(ResidualBlock(c.width));
@@ -400,9 +415,10 @@ void IgbNet::Forward(const float* images, int batch, int height, int width,
   AIA_CHECK(batch >= 0 && height > 0 && width > 0);
   if (batch == 0) return;
   torch::NoGradGuard no_grad;
-  const torch::Tensor x =
-      torch::from_blob(const_cast<float*>(images),
-                       {batch, kNumChannels, height, width}, torch::kFloat32);
+  const torch::Tensor x = torch::from_blob(
+      const_cast<float*>(images),
+      {batch, impl_->config.channels.num_channels(), height, width},
+      torch::kFloat32);
   std::shared_ptr<const FoldedNet> folded;
   {
     std::lock_guard<std::mutex> lock(impl_->folded_mutex);

@@ -49,7 +49,7 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
   for (const DatasetWorld& w : c.data.worlds) {
     const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
                   w.robot_radius);
-    c.renderers.emplace_back(map.occupancy(), w.size, channels);
+    c.renderers.emplace_back(map.occupancy(), w.size, channels, &map.lattice());
     // The split is by world: a world's samples all go one way.
     Rng rng(seed, "train/split", static_cast<std::uint64_t>(w.seed));
     c.val_world.push_back(rng.Uniform() < val_share ? 1 : 0);
@@ -99,6 +99,7 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
   if (c->val.empty()) return r;
   module->eval();
   torch::NoGradGuard no_grad;
+  const int channels = c->renderers.front().channels();
   std::vector<float> images, weights;
   std::vector<int64_t> labels;
   std::vector<char> useful;
@@ -112,7 +113,7 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
     MakeBatch(c, c->val, first, n, 1.0, &h, &w, &images, &labels, &weights,
               &useful);
     const torch::Tensor x =
-        torch::from_blob(images.data(), {n, kNumChannels, h, w});
+        torch::from_blob(images.data(), {n, channels, h, w});
     const torch::Tensor y = torch::from_blob(labels.data(), {n}, torch::kInt64);
     const torch::Tensor logits = module->forward(x);
     loss += torch::nn::functional::cross_entropy(
@@ -237,6 +238,8 @@ void CheckOptions(const TrainOptions& o) {
   if (!(c.cell >= 0.05 && c.cell <= 10.0))
     throw bad("--cell", "must be 0.05..10 m");
   if (c.window < 4 || c.window > 512) throw bad("--window", "must be 4..512");
+  if (!(c.geodesic_length > 0.0 && c.geodesic_length <= 1000.0))
+    throw bad("--geodesic-length", "must be in (0, 1000] m");
   if (o.network.width < 1 || o.network.width > 512)
     throw bad("--width", "must be 1..512");
   if (o.network.stem_stride < 1 || o.network.stem_stride > 4)
@@ -417,6 +420,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
     double loss_sum = 0.0, weight_sum = 0.0;
     long right = 0, seen = 0;
     double lr = o.lr;
+    const int channels = corpus.renderers.front().channels();
     for (long s = 0; s < steps_per_epoch; ++s) {
       const std::size_t first = static_cast<std::size_t>(s) * o.batch;
       const int n = static_cast<int>(
@@ -429,7 +433,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
       for (auto& group : optimizer.param_groups())
         static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
       const torch::Tensor x =
-          torch::from_blob(images.data(), {n, kNumChannels, h, w});
+          torch::from_blob(images.data(), {n, channels, h, w});
       const torch::Tensor y =
           torch::from_blob(labels.data(), {n}, torch::kInt64);
       const torch::Tensor wt = torch::from_blob(weights.data(), {n});
@@ -528,7 +532,8 @@ double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,
                            int batch, bool train, int iterations, int repeats) {
   IgbNet net(config, 1);
   IgbNetModule& module = net.impl().module;
-  const torch::Tensor x = torch::rand({batch, kNumChannels, height, width});
+  const torch::Tensor x =
+      torch::rand({batch, config.channels.num_channels(), height, width});
   const torch::Tensor y = torch::randint(0, kNumMoves, {batch}, torch::kInt64);
   torch::optim::Adam optimizer(module->parameters(),
                                torch::optim::AdamOptions(1e-4));

@@ -194,9 +194,7 @@ void MoveObserver::OnDecision(const Episode&, const DecisionContext&,
     const Move m = decision.applied[i];
     if (m == Move::kStay) continue;  // failed robots
     ++moves_;
-    const int a = static_cast<int>(m), b = static_cast<int>(last_[i]);
-    // kLeft/kRight and kUp/kDown are 0/1 and 2/3.
-    const bool reversal = last_[i] != Move::kStay && a != b && a / 2 == b / 2;
+    const bool reversal = last_[i] != Move::kStay && m == Opposite(last_[i]);
     if (reversal) {
       ++reversals_;
       longest_run_ = std::max(longest_run_, ++run_[i]);

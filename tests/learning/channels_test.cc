@@ -6,6 +6,8 @@
 
 #include <cmath>
 
+#include "aia/world/map.h"
+
 namespace aia {
 namespace {
 
@@ -121,6 +123,70 @@ TEST(ChannelsTest, LocalizedTargetsLeaveNoHeat) {
   std::vector<float> img(r.ImageSize());
   r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps, img.data());
   for (int i = 12; i < 16; ++i) EXPECT_EQ(img[i], 0.0f);
+}
+
+// A 4 x 3 m workspace, pixels and lattice steps of 1 m (every lattice point
+// at a pixel centre), a thin wall at x = 2 from y = 0 to 2: the door is the
+// top row. Heat 1 at pixel (3, 0) alone: the geodesic channel holds
+// gamma^d, d the number of moves round the wall, gamma = exp(-1 / L).
+struct WalledWorld {
+  Map map{{4.0, 3.0}, {Box{{1.95, 0.0}, {2.05, 2.0}}}, 0.1, 1.0, 0.1};
+  ChannelParams params = Params(ChannelFrame::kGlobal);
+  Grid<float> heat{4, 3, 1.0, 0.0f};
+  WalledWorld() {
+    params.geodesic = true;
+    params.geodesic_length = 5.0;
+  }
+};
+
+TEST(ChannelsTest, GeodesicHeatGoesRoundAWallThroughItsDoor) {
+  WalledWorld t;
+  t.heat(3, 0) = 1.0f;
+  ChannelRenderer r(t.map.occupancy(), t.map.size(), t.params,
+                    &t.map.lattice());
+  ASSERT_EQ(r.channels(), 5);
+  ASSERT_EQ(r.width(), 4);
+  ASSERT_EQ(r.height(), 3);
+  std::vector<float> img(r.ImageSize(), -1.0f);
+  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, img.data());
+  const int moves[3][4] = {{7, 6, 1, 0}, {6, 5, 2, 1}, {5, 4, 3, 2}};
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x)
+      EXPECT_NEAR(At(img, 3, 4, 4, x, y), std::pow(std::exp(-0.2), moves[y][x]),
+                  1e-6)
+          << x << ", " << y;
+  // The heat channel itself is the heat as given.
+  EXPECT_EQ(At(img, 3, 4, 3, 3, 0), 1.0f);
+  EXPECT_EQ(At(img, 3, 4, 3, 1, 0), 0.0f);
+}
+
+TEST(ChannelsTest, GeodesicHeatIsScaledToOneAndLeavesObstaclesEmpty) {
+  // The wall closed (no door): heat 0.5 at (0, 2) reaches the left half only.
+  WalledWorld t;
+  t.map = Map({4.0, 3.0}, {Box{{1.95, 0.0}, {2.05, 3.0}}}, 0.1, 1.0, 0.1);
+  t.heat(0, 2) = 0.5f;
+  ChannelRenderer r(t.map.occupancy(), t.map.size(), t.params,
+                    &t.map.lattice());
+  std::vector<float> img(r.ImageSize());
+  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, img.data());
+  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 0, 2), 1.0f);  // 0.5, divided by itself
+  EXPECT_NEAR(At(img, 3, 4, 4, 1, 0), std::exp(-0.6), 1e-6);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 2; x < 4; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
+
+  // Heat on a pixel no robot can stand on (a box fills pixel (1, 1)) is
+  // handed to the free pixels beside it, and the box's pixel holds nothing.
+  WalledWorld b;
+  b.map = Map({4.0, 3.0}, {Box{{1.0, 1.0}, {2.0, 2.0}}}, 0.1, 1.0, 0.1);
+  b.heat(1, 1) = 1.0f;
+  ChannelRenderer rb(b.map.occupancy(), b.map.size(), b.params,
+                     &b.map.lattice());
+  rb.RenderWithHeat({0.5, 0.5}, {}, b.heat, img.data());
+  EXPECT_EQ(At(img, 3, 4, 4, 1, 1), 0.0f);
+  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 1, 0), 1.0f);  // scaled: gamma / gamma
+  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 2, 1), 1.0f);
+  EXPECT_NEAR(At(img, 3, 4, 4, 3, 1), std::exp(-0.2), 1e-6);
+  EXPECT_NEAR(At(img, 3, 4, 4, 0, 0), std::exp(-0.2), 1e-6);
 }
 
 TEST(ChannelsTest, FrameNamesParse) {

@@ -100,6 +100,26 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   std::string j = c.ToJson();
   j.replace(j.find("\"width\":8"), 9, "\"width\":-3");
   EXPECT_THROW(NetworkConfig::FromJson(j), std::runtime_error);
+  // Without the geodesic channel a model is written as version 1 (readable
+  // by builds before it); with it, version 2.
+  EXPECT_NE(c.ToJson().find("\"version\":1"), std::string::npos);
+  EXPECT_EQ(c.ToJson().find("geodesic"), std::string::npos);
+  NetworkConfig g = SmallConfig();
+  g.channels.geodesic = true;
+  g.channels.geodesic_length = 7.5;
+  const NetworkConfig gb = NetworkConfig::FromJson(g.ToJson());
+  EXPECT_TRUE(gb.channels.geodesic);
+  EXPECT_EQ(gb.channels.geodesic_length, 7.5);
+  EXPECT_EQ(gb.channels.num_channels(), 5);
+  EXPECT_NE(g.ToJson().find("\"version\":2"), std::string::npos);
+  std::string future = g.ToJson();
+  future.replace(future.find("\"version\":2"), 11, "\"version\":3");
+  try {
+    NetworkConfig::FromJson(future);
+    ADD_FAILURE() << "version 3 read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "model format version 3, this build reads 1 to 2");
+  }
 }
 
 // Four robots, three targets; each robot's belief made its own so that the
@@ -120,31 +140,41 @@ void Personalize(testing::TeamFixture* f) {
     }
 }
 
+// One decision; `reset` starts a new episode first (the policy forgets).
 std::vector<Move> Decide(IgbNetPolicy* policy, const testing::TeamFixture& f,
-                         int step, const std::vector<double>& prior) {
+                         int step, const std::vector<double>& prior,
+                         bool reset = true) {
   DecisionContext ctx = f.Context();
   ctx.central = nullptr;
   ctx.step = step;
   ctx.log_det_prior = &prior;
   std::vector<Move> moves(f.world.NumRobots());
-  policy->Reset(f.world.map, f.world.NumRobots(), f.world.NumTargets(), 1);
+  if (reset)
+    policy->Reset(f.world.map, f.world.NumRobots(), f.world.NumTargets(), 1);
   policy->Decide(ctx, &moves);
   return moves;
 }
 
-std::shared_ptr<const IgbNet> TestNet(ChannelFrame frame) {
+std::shared_ptr<const IgbNet> TestNet(ChannelFrame frame,
+                                      bool geodesic = false) {
   NetworkConfig c = SmallConfig();
   c.channels.frame = frame;
   c.channels.cell = 0.5;
+  c.channels.geodesic = geodesic;
   return std::make_shared<const IgbNet>(c, 11);
 }
 
 TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
-  for (ChannelFrame frame : {ChannelFrame::kCentred, ChannelFrame::kGlobal}) {
+  for (const auto& [frame, geodesic] :
+       std::vector<std::pair<ChannelFrame, bool>>{
+           {ChannelFrame::kCentred, false},
+           {ChannelFrame::kGlobal, false},
+           {ChannelFrame::kCentred, true},
+           {ChannelFrame::kGlobal, true}}) {
     testing::TeamFixture f(kTeam);
     Personalize(&f);
     const std::vector<double> prior(3, std::log(1.0));
-    IgbNetPolicy policy(TestNet(frame));
+    IgbNetPolicy policy(TestNet(frame, geodesic));
     const std::vector<Move> moves = Decide(&policy, f, 0, prior);
     const std::vector<float> logits = policy.logits();
 
@@ -161,7 +191,7 @@ TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
     std::vector<Vec2> p;
     for (int idx : g.positions) p.push_back(g.world.map.lattice().Point(idx));
     g.comm.Update(1, p);
-    IgbNetPolicy policy2(TestNet(frame));
+    IgbNetPolicy policy2(TestNet(frame, geodesic));
     const std::vector<Move> moved = Decide(&policy2, g, 0, prior);
     for (int k = 0; k < 4; ++k) {
       EXPECT_EQ(moved[k], moves[perm[k]]) << "robot " << k;
@@ -176,15 +206,91 @@ TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
 }
 
 TEST(IgbNetPolicyTest, TheSameGraphAtAnotherStepGivesTheSameActions) {
-  testing::TeamFixture f(kTeam);
-  Personalize(&f);
+  for (bool geodesic : {false, true}) {
+    testing::TeamFixture f(kTeam);
+    Personalize(&f);
+    const std::vector<double> prior(3, std::log(1.0));
+    IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, geodesic));
+    const std::vector<Move> a = Decide(&policy, f, 0, prior);
+    const std::vector<float> la = policy.logits();
+    const std::vector<Move> b = Decide(&policy, f, 317, prior);
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(la, policy.logits());
+  }
+}
+
+// The most probable valid move other than `barred` (-1: none barred), from
+// robot i's logits.
+Move Argmax(const IgbNetPolicy& policy, const Lattice& lattice, int point,
+            int i, int barred) {
+  int best = -1;
+  for (int a = 0; a < kNumMoves; ++a) {
+    if (a == barred || !lattice.Valid(point, static_cast<Move>(a))) continue;
+    if (best < 0 || policy.logits()[i * kNumMoves + a] >
+                        policy.logits()[i * kNumMoves + best])
+      best = a;
+  }
+  return static_cast<Move>(best);
+}
+
+// Robot 0 takes the move m its network prefers at its start, then the move
+// back (one reversal), and stands where it started: with max_reversals 1 it
+// may not take m again; it takes its most probable other valid move, and
+// every other robot its most probable valid one, as without the rule. The
+// memory is per robot: relabelling the robots (their histories with them)
+// permutes the moves.
+TEST(IgbNetPolicyTest, DeadlockRuleBarsUndoingTheLastMoveAfterAReversal) {
   const std::vector<double> prior(3, std::log(1.0));
-  IgbNetPolicy policy(TestNet(ChannelFrame::kCentred));
-  const std::vector<Move> a = Decide(&policy, f, 0, prior);
-  const std::vector<float> la = policy.logits();
-  const std::vector<Move> b = Decide(&policy, f, 317, prior);
-  EXPECT_EQ(a, b);
-  EXPECT_EQ(la, policy.logits());
+  const std::vector<int> perm = {2, 0, 3, 1};
+  std::vector<Move> original;
+  for (int relabel = 0; relabel < 2; ++relabel) {
+    testing::TeamFixture f(kTeam);
+    Personalize(&f);
+    const Lattice& lattice = f.world.map.lattice();
+    const int a = f.positions[0];
+    IgbNetParams params;
+    params.max_reversals = 1;
+    IgbNetPolicy rule(TestNet(ChannelFrame::kCentred, true), params);
+    IgbNetPolicy plain(TestNet(ChannelFrame::kCentred, true));
+    const Move m = Decide(&plain, f, 0, prior)[0];
+    ASSERT_GT(lattice.NumValidMoves(a), 1);
+    const int b = lattice.Next(a, m);
+    ASSERT_GE(b, 0);
+    std::vector<std::vector<int>> history = {f.positions, f.positions,
+                                             f.positions};
+    history[1][0] = b;  // robot 0: a, b, a; the others stay put
+    std::vector<Move> last, last_plain;
+    for (int t = 0; t < 3; ++t) {
+      testing::TeamFixture g(kTeam);
+      Personalize(&g);
+      g.positions = history[t];
+      if (relabel) {
+        BeliefSet permuted = g.beliefs;
+        for (int k = 0; k < 4; ++k) {
+          g.positions[k] = history[t][perm[k]];
+          permuted.CopyRow(k, f.beliefs, perm[k]);
+        }
+        g.beliefs = permuted;
+      }
+      std::vector<Vec2> p;
+      for (int idx : g.positions) p.push_back(lattice.Point(idx));
+      g.comm.Update(1, p);
+      last = Decide(&rule, g, t, prior, t == 0);
+      last_plain = Decide(&plain, g, t, prior, t == 0);
+    }
+    const int r0 = relabel ? 1 : 0;  // robot 0's label (perm[1] == 0)
+    EXPECT_EQ(last_plain[r0], m);
+    EXPECT_NE(last[r0], m);
+    EXPECT_EQ(last[r0], Argmax(rule, lattice, a, r0, static_cast<int>(m)));
+    for (int k = 0; k < 4; ++k)
+      if (k != r0) EXPECT_EQ(last[k], last_plain[k]) << "robot " << k;
+    if (!relabel) {
+      original = last;
+    } else {
+      for (int k = 0; k < 4; ++k)
+        EXPECT_EQ(last[k], original[perm[k]]) << "robot " << k;
+    }
+  }
 }
 
 TEST(IgbNetPolicyTest, TakesOnlyValidMoves) {

@@ -43,6 +43,12 @@ inline constexpr std::array<int, 2> MoveDelta(Move m) {
   }
 }
 
+// The move that undoes m (left and right, up and down); kStay for kStay.
+inline constexpr Move Opposite(Move m) {
+  return m == Move::kStay ? Move::kStay
+                          : static_cast<Move>(static_cast<int>(m) ^ 1);
+}
+
 inline constexpr std::string_view MoveName(Move m) {
   switch (m) {
     case Move::kLeft:

@@ -7,7 +7,13 @@
 //   2 neighbours: the number of this step's neighbours (self excluded) in
 //     each pixel;
 //   3 heat: the robot's own fused belief projected as the heatmap of
-//     estimation/heatmap.h.
+//     estimation/heatmap.h;
+//   4 geodesic heat (ChannelParams::geodesic, off in the paper's networks):
+//     channel 3 carried along free space, G(p) = max_q H(q) exp(-d(p, q) /
+//     L) with d the length of the shortest path of valid lattice moves
+//     inside the image (so walls and doors shape it), 0 where a robot cannot
+//     stand, divided by its largest value in the image (so the way to heat
+//     10 or 30 m off reads alike).
 // Two frames. Global (the paper's): the whole workspace, pixel (ix, iy)
 // covering [ix, ix + 1) x [iy, iy + 1) cells of `cell` metres. Centred: a
 // window of `window` x `window` pixels of the same global pixel grid, the
@@ -27,10 +33,13 @@
 #include "aia/core/grid.h"
 #include "aia/core/types.h"
 #include "aia/estimation/heatmap.h"
+#include "aia/world/lattice.h"
 
 namespace aia {
 
+// Channels of the paper's network; the geodesic channel makes a fifth.
 inline constexpr int kNumChannels = 4;
+inline constexpr int kMaxChannels = 5;
 
 enum class ChannelFrame { kGlobal = 0, kCentred = 1 };
 std::string_view ChannelFrameName(ChannelFrame frame);
@@ -39,10 +48,14 @@ bool ParseChannelFrame(std::string_view text, ChannelFrame* frame);
 
 struct ChannelParams {
   ChannelFrame frame = ChannelFrame::kCentred;
-  double cell = 0.5;    // metres per pixel
-  int window = 40;      // centred frame: pixels per side
-  double blur = 1.0;    // the heatmap's s, metres
-  double cutoff = 4.0;  // the heatmap's cut-off, standard deviations
+  double cell = 0.5;             // metres per pixel
+  int window = 40;               // centred frame: pixels per side
+  double blur = 1.0;             // the heatmap's s, metres
+  double cutoff = 4.0;           // the heatmap's cut-off, standard deviations
+  bool geodesic = false;         // channel 4, geodesic heat
+  double geodesic_length = 5.0;  // its L, metres
+
+  int num_channels() const { return geodesic ? kMaxChannels : kNumChannels; }
 };
 
 // Renders the channels of the robots of one map. Owns scratch memory: one
@@ -50,16 +63,19 @@ struct ChannelParams {
 class ChannelRenderer {
  public:
   // `occupancy`: the map's occupancy grid (world/map.h), `size`: the
-  // workspace's size in metres.
+  // workspace's size in metres; `lattice`: the map's motion lattice, which
+  // the geodesic channel needs (read here, not kept).
   ChannelRenderer(const Grid<std::uint8_t>& occupancy, const Vec2& size,
-                  const ChannelParams& params);
+                  const ChannelParams& params,
+                  const Lattice* lattice = nullptr);
 
   const ChannelParams& params() const { return params_; }
   int height() const { return height_; }
   int width() const { return width_; }
-  // Floats per robot image: kNumChannels * height * width.
+  int channels() const { return params_.num_channels(); }
+  // Floats per robot image: channels() * height * width.
   std::size_t ImageSize() const {
-    return static_cast<std::size_t>(kNumChannels) * height_ * width_;
+    return static_cast<std::size_t>(channels()) * height_ * width_;
   }
   // The occupancy share of each global pixel.
   const Grid<float>& occupancy() const { return occupancy_; }
@@ -81,10 +97,17 @@ class ChannelRenderer {
   HeatmapParams Heatmap(double eps) const;
 
  private:
+  // Channel 4 from channel 3 of an image whose pixel (0, 0) is global pixel
+  // (x0, y0).
+  void Geodesic(int x0, int y0, const float* heat, float* out) const;
+
   ChannelParams params_;
   Vec2 size_;
   Grid<float> occupancy_;  // global pixels
   Grid<float> heat_;       // global pixels, scratch
+  // Per global pixel: bit m set when a robot at the pixel's lattice point may
+  // move to the neighbouring pixel in direction m (geodesic channel only).
+  std::vector<std::uint8_t> moves_;
   int height_ = 0, width_ = 0;
 };
 

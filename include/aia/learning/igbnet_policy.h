@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/fields.h"
 #include "aia/learning/channels.h"
 #include "aia/learning/network.h"
 #include "aia/planning/policy.h"
@@ -29,9 +30,30 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
                                             int error_line,
                                             const std::string& key);
 
+// The policy's parameters (policy.* keys; the model is policy.model).
+struct IgbNetParams {
+  // The deadlock rule (docs/learning.md, Action selection): a robot whose
+  // last `max_reversals` moves each undid the one before may not undo its
+  // last move again while another valid move exists; it takes its most
+  // probable other move. 0: the most probable valid move, always (the
+  // paper's).
+  int max_reversals = 0;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(max_reversals)
+                 .In(Between(0, 1000))
+                 .Doc("deadlock rule: reversals in a row after which a "
+                      "robot's next move may not undo its last while "
+                      "another valid move exists (0: off, the paper's "
+                      "argmax)"));
+  }
+};
+
 class IgbNetPolicy : public Policy {
  public:
-  explicit IgbNetPolicy(std::shared_ptr<const IgbNet> net);
+  explicit IgbNetPolicy(std::shared_ptr<const IgbNet> net,
+                        IgbNetParams params = {});
   std::string_view name() const override { return "igbnet"; }
   void Reset(const Map& map, int num_robots, int num_targets,
              std::uint64_t seed) override;
@@ -50,7 +72,14 @@ class IgbNetPolicy : public Policy {
   void RenderAndForward(const DecisionContext& ctx);
 
   std::shared_ptr<const IgbNet> net_;
+  IgbNetParams params_;
   std::optional<ChannelRenderer> renderer_;
+  // Per robot, what the deadlock rule remembers: its lattice point at the
+  // last decision (-1: none yet), the move that brought it to its current
+  // one (kStay: none) and how many moves in a row undid the one before.
+  std::vector<int> last_point_;
+  std::vector<Move> last_move_;
+  std::vector<int> reversals_;
   std::vector<float> images_, batch_logits_, logits_;
   std::vector<int> rows_;
   TeamHeatmap heat_;
