@@ -371,6 +371,11 @@ Action AddDatasetCommand(CLI::App& app) {
   cmd->add_option("--max-steps", o->max_steps,
                   "decision steps per episode at most (0: the scenario's)")
       ->capture_default_str();
+  cmd->add_option("--max-seconds", o->max_seconds,
+                  "skip an episode still running after this many seconds "
+                  "(recorded as done with no samples and counted; 0: no "
+                  "cap)")
+      ->capture_default_str();
   cmd->add_option("--set", o->sets, kSetHelp)->take_all()->expected(1);
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {

@@ -22,11 +22,19 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Thrown by the observer to stop an episode past --max-seconds.
+struct EpisodeOverTime {};
+
 // Records every decision step's samples; labels them with the expert.
 class DatasetObserver : public StepObserver {
  public:
-  DatasetObserver(ExpertPolicy* shadow, std::int64_t episode, int stop_after)
-      : shadow_(shadow), episode_(episode), stop_after_(stop_after) {}
+  DatasetObserver(ExpertPolicy* shadow, std::int64_t episode, int stop_after,
+                  double max_seconds)
+      : shadow_(shadow),
+        episode_(episode),
+        stop_after_(stop_after),
+        max_seconds_(max_seconds),
+        start_(Clock::now()) {}
 
   void OnStart(const Episode& e) override {
     if (shadow_) {
@@ -42,6 +50,10 @@ class DatasetObserver : public StepObserver {
                   const Decision& d) override {
     if (stop_after_ >= 0 && ctx.step >= stop_after_)
       throw std::runtime_error("stopped for a test");
+    if (max_seconds_ > 0.0 &&
+        std::chrono::duration<double>(Clock::now() - start_).count() >
+            max_seconds_)
+      throw EpisodeOverTime{};
     const int n = e.world().NumRobots();
     const Lattice& lattice = ctx.map->lattice();
     const std::vector<Move>* labels = &d.wanted;
@@ -76,6 +88,8 @@ class DatasetObserver : public StepObserver {
   const ExpertPolicy* expert_ = nullptr;  // whose plan says what is useful
   std::int64_t episode_;
   int stop_after_;
+  double max_seconds_;
+  Clock::time_point start_;
   std::vector<Move> labels_;
   std::vector<std::vector<DatasetSample>> steps_;
 };
@@ -85,6 +99,8 @@ std::string Recipe(const DatasetOptions& o) {
       "size=" + o.size + " first_seed=" + std::to_string(o.first_seed) +
       " keep=" + std::to_string(o.keep) + " policy=" + o.policy +
       " model=" + o.model + " max_steps=" + std::to_string(o.max_steps) +
+      (o.max_seconds > 0.0 ? " max_seconds=" + FormatNumber(o.max_seconds)
+                           : std::string()) +
       " shards=" + std::to_string(o.shards);
   for (const std::string& s : o.sets) r += " set=" + s;
   return r;
@@ -110,6 +126,9 @@ int RunDataset(const DatasetOptions& o) {
     throw InputError("command line", 0, "--keep", "must be 1..100000");
   if (o.max_steps < 0 || o.max_steps > 1000000)
     throw InputError("command line", 0, "--max-steps", "must be 0..1000000");
+  if (!(o.max_seconds >= 0.0 && o.max_seconds <= 1e7))
+    throw InputError("command line", 0, "--max-seconds",
+                     "must be 0..1e7 seconds");
   if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards)
     throw InputError("command line", 0, "--shard", "need 0 <= K < N");
   const auto [robots, targets] = ParseSize(o.size, "--size");
@@ -201,7 +220,7 @@ int RunDataset(const DatasetOptions& o) {
   const int mine = (o.episodes - o.shard + o.shards - 1) / o.shards;
   ProgressLine line(o.progress);
   const auto t0 = Clock::now();
-  int written = 0;
+  int written = 0, skipped = 0;
   long samples = 0;
   for (int e : todo) {
     Scenario s = base;
@@ -222,10 +241,16 @@ int RunDataset(const DatasetOptions& o) {
     Episode episode(instance, acting->Create());
     DatasetObserver observer(
         shadow, e,
-        o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3
-                                                                       : -1);
+        o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3 : -1,
+        o.max_seconds);
     episode.AddObserver(&observer);
-    episode.Run();
+    bool over_time = false;
+    try {
+      episode.Run();
+    } catch (const EpisodeOverTime&) {
+      over_time = true;  // the world is recorded, its samples dropped
+      ++skipped;
+    }
 
     // Keep `keep` random decision steps (all when fewer).
     auto& steps = observer.steps();
@@ -239,8 +264,9 @@ int RunDataset(const DatasetOptions& o) {
     order.resize(keep);
     std::sort(order.begin(), order.end());
     std::vector<DatasetSample> kept;
-    for (int i : order)
-      for (DatasetSample& d : steps[i]) kept.push_back(std::move(d));
+    if (!over_time)
+      for (int i : order)
+        for (DatasetSample& d : steps[i]) kept.push_back(std::move(d));
 
     const World& w = episode.world();
     DatasetWorld world;
@@ -254,7 +280,7 @@ int RunDataset(const DatasetOptions& o) {
     world.robots = w.NumRobots();
     world.targets = w.NumTargets();
     world.steps = episode.step();
-    world.flowtime = episode.flowtime();
+    world.flowtime = over_time ? -1 : episode.flowtime();
     world.obstacles = w.map.obstacles();
     world.log_det_prior = episode.log_det_prior();
     writer.WriteEpisode(world, kept);
@@ -272,11 +298,15 @@ int RunDataset(const DatasetOptions& o) {
   }
   line.Finish();
   const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::string skip;
+  if (o.max_seconds > 0.0)
+    skip = ", " + std::to_string(skipped) + " skipped (over --max-seconds " +
+           FormatNumber(o.max_seconds) + ")";
   std::printf(
-      "[aia dataset] %s: %d episodes written now (%zu of %d done), %ld "
+      "[aia dataset] %s: %d episodes written now (%zu of %d done)%s, %ld "
       "samples, %.1f s, %.2f episodes/s\n",
-      file.c_str(), written, writer.done().size(), mine, samples, secs,
-      written / std::max(secs, 1e-9));
+      file.c_str(), written, writer.done().size(), mine, skip.c_str(), samples,
+      secs, written / std::max(secs, 1e-9));
   return written;
 }
 

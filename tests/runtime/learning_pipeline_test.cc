@@ -116,6 +116,37 @@ TEST(DatasetTest, SigkilledCommandResumesToTheSameData) {
   fs::remove_all(dir);
 }
 
+// An episode past --max-seconds is stopped, recorded as done without
+// samples and counted; running the command again skips it.
+TEST(DatasetTest, EpisodesPastMaxSecondsAreSkippedAndCounted) {
+  const std::string dir = testing::MakeTempDir("aia_ds_");
+  const std::vector<std::string> args = {
+      "dataset", "--episodes",   "3",   "--size",  "3x3",           "--keep",
+      "2",       "--first-seed", "700", "--quiet", "--max-seconds", "1e-9",
+      "--out",   dir + "/d"};
+  const auto r = testing::RunAia(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("3 episodes written now (3 of 3 done), 3 skipped "
+                       "(over --max-seconds 1e-09)"),
+            std::string::npos)
+      << r.out;
+  const Dataset d = ReadDataset({dir + "/d"}, "--data");
+  EXPECT_EQ(d.worlds.size(), 3u);
+  EXPECT_TRUE(d.samples.empty());
+  for (const DatasetWorld& w : d.worlds) EXPECT_EQ(w.flowtime, -1);
+  const auto again = testing::RunAia(args);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.out.find("0 episodes written now (3 of 3 done), 0 skipped"),
+            std::string::npos)
+      << again.out;
+  const auto bad =
+      testing::RunAia({"dataset", "--max-seconds", "-1", "--out", dir + "/e"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.err,
+            "error: command line: --max-seconds: must be 0..1e7 seconds\n");
+  fs::remove_all(dir);
+}
+
 TEST(DatasetTest, ResumingWithAnotherRecipeIsRefused) {
   const std::string dir = testing::MakeTempDir("aia_ds_");
   DatasetOptions o = Tiny(dir);

@@ -27,7 +27,11 @@ struct DatasetOptions {
   std::string policy = "expert";       // the acting policy
   std::string model;                   // its model (igbnet)
   int max_steps = 0;                   // 0: the scenario's
-  std::vector<std::string> sets;       // --set key=value
+  // An episode still running after this many seconds of wall time is
+  // stopped and skipped: recorded as done with no samples, and counted
+  // (0: no cap). Which episodes are skipped depends on the machine's speed.
+  double max_seconds = 0.0;
+  std::vector<std::string> sets;  // --set key=value
   bool progress = true;
   // For tests: stop (throw) after this many decisions of the episode in
   // flight once `stop_after_episodes` episodes were written (-1: never).
