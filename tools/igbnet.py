@@ -83,6 +83,7 @@ def load_model(path):
     state = torch.jit.load(path, map_location="cpu").state_dict()
     meta = json.loads(bytes(state.pop("aia_meta").tolist()).decode())
     w, p = meta["width"], meta["pool"]
+    meta["channels"] = 5 if meta.get("geodesic") else 4  # docs/learning.md
 
     class Block(nn.Module):
         def __init__(self):
@@ -99,7 +100,7 @@ def load_model(path):
     class IgbNet(nn.Module):
         def __init__(self):
             super().__init__()
-            self.stem = nn.Conv2d(4, w, 3, stride=meta["stem_stride"], padding=1,
+            self.stem = nn.Conv2d(meta["channels"], w, 3, stride=meta["stem_stride"], padding=1,
                                   bias=False)
             self.stem_bn = nn.BatchNorm2d(w)
             self.blocks = nn.ModuleList([Block() for _ in range(3)])
@@ -122,13 +123,14 @@ def load_model(path):
 def check(model, images, n, h, w, logits):
     import torch
 
-    net, _ = load_model(model)
+    net, meta = load_model(model)
+    c = meta["channels"]
     with open(images, "rb") as f:
-        x = torch.tensor(struct.unpack("<%df" % (n * 4 * h * w), f.read()))
+        x = torch.tensor(struct.unpack("<%df" % (n * c * h * w), f.read()))
     with open(logits, "rb") as f:
         want = torch.tensor(struct.unpack("<%df" % (n * 4), f.read())).reshape(n, 4)
     with torch.no_grad():
-        got = net(x.reshape(n, 4, h, w))
+        got = net(x.reshape(n, c, h, w))
     diff = (got - want).abs().max().item()
     print("max |python - c++| = %.3g over %d logits" % (diff, n * 4))
     return 0 if diff <= 1e-4 else 1

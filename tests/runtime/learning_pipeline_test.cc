@@ -273,6 +273,44 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
 namespace aia {
 namespace {
 
+// The geodesic channel (a fifth input): a model trained with it renders
+// five channels from the dataset's states, is saved as format version 2,
+// and Python reads it and reproduces its logits.
+TEST(TrainTest, AGeodesicModelTrainsAndPythonReproducesIt) {
+  const std::string dir = testing::MakeTempDir("aia_train_");
+  DatasetOptions d = Tiny(dir + "/data");
+  RunDataset(d);
+  TrainOptions t = TinyTraining(dir + "/data", dir + "/g.pt");
+  t.network.channels.geodesic = true;
+  t.epochs = 2;
+  const std::vector<EpochLog> logs = Train(t);
+  ASSERT_EQ(logs.size(), 2u);
+  const auto net = IgbNet::Load(dir + "/g.pt", "g", 0, "k");
+  ASSERT_TRUE(net->config().channels.geodesic);
+  ASSERT_EQ(net->config().channels.num_channels(), 5);
+  std::vector<float> x(2 * 5 * 16 * 16, 0.1f), logits(8);
+  for (std::size_t i = 0; i < x.size(); i += 5) x[i] = 0.9f;
+  net->Forward(x.data(), 2, 16, 16, logits.data());
+  if (testing::RunCommand("/usr/bin/python3 -c 'import torch'").exit_code !=
+      0) {
+    fs::remove_all(dir);
+    GTEST_SKIP() << "python3-torch is not installed";
+  }
+  const auto write = [](const std::string& path, const std::vector<float>& v) {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(v.data(), sizeof(float), v.size(), f);
+    std::fclose(f);
+  };
+  write(dir + "/x.f32", x);
+  write(dir + "/logits.f32", logits);
+  const auto py = testing::RunCommand(
+      "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " check " +
+      dir + "/g.pt " + dir + "/x.f32 2 16 16 " + dir + "/logits.f32");
+  EXPECT_EQ(py.exit_code, 0) << py.out << py.err;
+  fs::remove_all(dir);
+}
+
 TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
   const std::string dir = testing::MakeTempDir("aia_cli_");
   const std::pair<std::vector<std::string>, std::string> cases[] = {
