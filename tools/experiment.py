@@ -38,6 +38,7 @@ Usage:
 import argparse
 import concurrent.futures
 import csv
+import io
 import json
 import math
 import os
@@ -81,11 +82,15 @@ def write_json(path, data):
 
 
 def write_csv(path, header, rows):
-    lines = [",".join(header)]
+    """RFC 4180 CSV (a field with a comma is quoted: condition names have
+    them), floats to 6 significant digits, None as an empty field."""
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(header)
     for r in rows:
-        lines.append(",".join("" if v is None else (f"{v:.6g}" if isinstance(v, float) else str(v))
-                              for v in r))
-    write_atomic(path, "\n".join(lines) + "\n")
+        w.writerow(["" if v is None else (f"{v:.6g}" if isinstance(v, float) else str(v))
+                    for v in r])
+    write_atomic(path, out.getvalue())
 
 
 def run(cmd, quiet=False):

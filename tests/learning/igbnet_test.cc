@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
@@ -120,6 +121,20 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "model format version 3, this build reads 1 to 2");
   }
+}
+
+// The paper's configuration, as earlier builds wrote it (format version 1,
+// four channels, no geodesic keys), loads and runs unchanged.
+TEST(IgbNetTest, AModelOfAnEarlierBuildLoads) {
+  const auto net = IgbNet::Load(testing::SourcePath("models/igbnet_10x10.pt"),
+                                "m", 0, "policy.model");
+  EXPECT_FALSE(net->config().channels.geodesic);
+  EXPECT_EQ(net->config().channels.num_channels(), 4);
+  const int w = net->config().channels.window;
+  std::vector<float> x(static_cast<std::size_t>(kNumChannels) * w * w, 0.0f),
+      logits(kNumMoves);
+  net->Forward(x.data(), 1, w, w, logits.data());
+  for (float l : logits) EXPECT_TRUE(std::isfinite(l));
 }
 
 // Four robots, three targets; each robot's belief made its own so that the
