@@ -442,10 +442,14 @@ Action AddTrainCommand(CLI::App& app) {
                   "the heatmap's s in metres (about half the sensor range)")
       ->capture_default_str();
   cmd->add_flag("--geodesic", o->network.channels.geodesic,
-                "a fifth channel: the heat carried along free space "
+                "a fifth channel, reach: where each unlocalized target "
+                "could be measured, carried along free space "
                 "(docs/learning.md, Channels)");
   cmd->add_option("--geodesic-length", o->network.channels.geodesic_length,
                   "the geodesic channel's decay length L in metres")
+      ->capture_default_str();
+  cmd->add_option("--observe-range", o->network.channels.observe_range,
+                  "the reach channel's observation range in metres")
       ->capture_default_str();
   cmd->add_option("--width", o->network.width, "feature channels")
       ->capture_default_str();

@@ -58,6 +58,8 @@ ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
     }
   }
   if (params.geodesic) {
+    AIA_CHECK(params.observe_range > 0.0);
+    fine_ = occupancy;
     // A pixel's lattice point is the one nearest its centre; a pixel step is
     // a valid move when both pixels' points are free and are the same point
     // or one lattice move apart.
@@ -105,14 +107,18 @@ void ChannelRenderer::Render(const Vec2& self,
                              const std::vector<double>& log_det_prior,
                              double eps, float* out) {
   ProjectHeatmap(targets, log_det_prior, Heatmap(eps), &heat_);
-  RenderWithHeat(self, neighbours, heat_, out);
+  RenderWithHeat(self, neighbours, heat_, &targets, &log_det_prior, eps, out);
 }
 
 void ChannelRenderer::RenderWithHeat(const Vec2& self,
                                      const std::vector<Vec2>& neighbours,
                                      const Grid<float>& field,
-                                     float* out) const {
+                                     const std::vector<HeatSource>* targets,
+                                     const std::vector<double>* log_det_prior,
+                                     double eps, float* out) const {
   AIA_CHECK(field.nx() == occupancy_.nx() && field.ny() == occupancy_.ny());
+  AIA_CHECK_MSG(!params_.geodesic || (targets && log_det_prior),
+                "channel 4 needs the robot's belief");
   const std::size_t plane = static_cast<std::size_t>(height_) * width_;
   float* occ = out;
   float* own = out + plane;
@@ -131,7 +137,8 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
       occupancy_.CellOf(p, &ix, &iy);
       nbr[occupancy_.Index(ix, iy)] += 1.0f;
     }
-    if (params_.geodesic) Geodesic(0, 0, heat, out + 4 * plane);
+    if (params_.geodesic)
+      Reach(0, 0, *targets, *log_det_prior, eps, out + 4 * plane);
     return;
   }
 
@@ -169,18 +176,42 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
     for (int gx = mid0; gx < mid1; ++gx)
       h[gx - x0] = std::max(h[gx - x0], row[gx]);
   }
-  if (params_.geodesic) Geodesic(x0, y0, heat, out + 4 * plane);
+  if (params_.geodesic)
+    Reach(x0, y0, *targets, *log_det_prior, eps, out + 4 * plane);
 }
 
-void ChannelRenderer::Geodesic(int x0, int y0, const float* heat,
-                               float* out) const {
-  // Dijkstra with the largest value first: every pixel with heat is a
-  // source; a pixel a robot cannot stand on (an obstacle, outside the
-  // workspace) gives its heat to the free pixels beside it but is given
-  // nothing. Scratch per thread: nothing is allocated once warm.
+bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
+  // Samples every half fine cell (no cell is stepped over); the cell under
+  // b itself is not asked (a mean estimated inside a wall is seen from
+  // beside it).
+  const Vec2 d = b - a;
+  const double len = d.norm();
+  const double step = 0.5 * fine_.cell();
+  const int n = static_cast<int>(std::ceil(len / step));
+  int bx = 0, by = 0;
+  fine_.CellOf(b, &bx, &by);
+  for (int i = 0; i < n; ++i) {
+    int ix = 0, iy = 0;
+    fine_.CellOf(a + d * (static_cast<double>(i) / n), &ix, &iy);
+    if (ix == bx && iy == by) break;
+    if (fine_(ix, iy)) return false;
+  }
+  return true;
+}
+
+void ChannelRenderer::Reach(int x0, int y0,
+                            const std::vector<HeatSource>& targets,
+                            const std::vector<double>& log_det_prior,
+                            double eps, float* out) const {
+  // Dijkstra with the largest value first from every target's observation
+  // pixels; a pixel a robot cannot stand on (the border pixel a far
+  // observation pixel folds onto may be one) gives its value to the free
+  // pixels beside it but is given nothing. Scratch per thread: nothing is
+  // allocated once warm.
   const int h = height_, w = width_;
+  const double cell = params_.cell;
   const float decay =
-      static_cast<float>(std::exp(-params_.cell / params_.geodesic_length));
+      static_cast<float>(std::exp(-cell / params_.geodesic_length));
   thread_local std::vector<std::pair<float, int>> heap;
   heap.clear();
   const auto mask = [&](int u, int v) -> unsigned {
@@ -196,12 +227,41 @@ void ChannelRenderer::Geodesic(int x0, int y0, const float* heat,
   };
   const std::size_t n = static_cast<std::size_t>(h) * w;
   std::fill(out, out + n, 0.0f);
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const float value = heat[v * w + u];
-      if (value <= 0.0f) continue;
-      if (free(u, v)) out[v * w + u] = std::max(out[v * w + u], value);
-      heap.emplace_back(value, v * w + u);
+  const int reach = static_cast<int>(std::ceil(params_.observe_range / cell));
+  const double r2 = params_.observe_range * params_.observe_range;
+  for (std::size_t k = 0; k < targets.size(); ++k) {
+    const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
+    if (wk <= 0.0) continue;
+    int mx = 0, my = 0;
+    occupancy_.CellOf(targets[k].mean, &mx, &my);
+    // A target whose observation pixels all lie beyond the window: one
+    // source at the border, counting the moves beyond it.
+    const int mu = mx - x0, mv = my - y0;
+    if (mu < -reach || mv < -reach || mu >= w + reach || mv >= h + reach) {
+      const int bu = std::clamp(mu, 0, w - 1), bv = std::clamp(mv, 0, h - 1);
+      const int beyond = std::abs(mu - bu) + std::abs(mv - bv) - reach;
+      const float value =
+          static_cast<float>(wk * std::pow(decay, std::max(beyond, 0)));
+      if (value < 1e-6f) continue;
+      if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
+      heap.emplace_back(value, bv * w + bu);
+      continue;
+    }
+    for (int gy = my - reach; gy <= my + reach; ++gy) {
+      for (int gx = mx - reach; gx <= mx + reach; ++gx) {
+        if (!occupancy_.InBounds(gx, gy) || !moves_[occupancy_.Index(gx, gy)])
+          continue;
+        const Vec2 c = occupancy_.CellCenter(gx, gy);
+        if ((c - targets[k].mean).squaredNorm() > r2 ||
+            !Sees(c, targets[k].mean))
+          continue;
+        const int u = gx - x0, v = gy - y0;
+        const int bu = std::clamp(u, 0, w - 1), bv = std::clamp(v, 0, h - 1);
+        const float value = static_cast<float>(
+            wk * std::pow(decay, std::abs(u - bu) + std::abs(v - bv)));
+        if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
+        heap.emplace_back(value, bv * w + bu);
+      }
     }
   }
   std::make_heap(heap.begin(), heap.end());

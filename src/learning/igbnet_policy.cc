@@ -72,7 +72,9 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
   if (static_cast<int>(worker_heat_.size()) < workers) {
     worker_heat_.resize(workers, renderer_->occupancy());
     worker_neighbours_.resize(workers);
+    worker_targets_.resize(workers);
   }
+  const bool geodesic = renderer_->params().geodesic;
   // Chunks of kForwardBatch robots: each rendered and run through the
   // network by one thread (libtorch runs single-threaded inside), so that a
   // robot's logits depend on its chunk, never on the number of threads.
@@ -90,9 +92,14 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
         neighbours.clear();
         for (int j : ctx.comm->Neighbors(i))
           if (j != i) neighbours.push_back(lattice.Point((*ctx.positions)[j]));
+        std::vector<HeatSource>* targets = nullptr;
+        if (geodesic) {
+          targets = &worker_targets_[worker];
+          HeatSources(*ctx.beliefs, i, targets);
+        }
         renderer_->RenderWithHeat(lattice.Point((*ctx.positions)[i]),
-                                  neighbours, heat_.Robot(b, &heat),
-                                  images_.data() + b * size);
+                                  neighbours, heat_.Robot(b, &heat), targets,
+                                  prior, ctx.eps, images_.data() + b * size);
       }
       net_->Forward(images_.data() + begin * size, end - begin,
                     renderer_->height(), renderer_->width(),

@@ -42,6 +42,7 @@ std::string NetworkConfig::ToJson() const {
   if (channels.geodesic) {
     j["geodesic"] = true;
     j["geodesic_length"] = channels.geodesic_length;
+    j["observe_range"] = channels.observe_range;
   }
   j["width"] = width;
   j["stem_stride"] = stem_stride;
@@ -73,6 +74,7 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     c.channels.cutoff = j.at("cutoff").get<double>();
     c.channels.geodesic = j.value("geodesic", false);
     c.channels.geodesic_length = j.value("geodesic_length", 5.0);
+    c.channels.observe_range = j.value("observe_range", 2.0);
     c.width = j.at("width").get<int>();
     c.stem_stride = j.at("stem_stride").get<int>();
     c.pool = j.at("pool").get<int>();
@@ -80,16 +82,18 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(std::string("metadata: ") + e.what());
   }
-  const bool ok = std::isfinite(c.channels.cell) && c.channels.cell > 0.0 &&
-                  c.channels.window >= 1 && c.channels.window <= 4096 &&
-                  std::isfinite(c.channels.blur) && c.channels.blur >= 0.0 &&
-                  std::isfinite(c.channels.cutoff) && c.channels.cutoff > 0.0 &&
-                  std::isfinite(c.channels.geodesic_length) &&
-                  c.channels.geodesic_length > 0.0 &&
-                  c.channels.geodesic_length <= 1e6 && c.width >= 1 &&
-                  c.width <= 1024 && c.stem_stride >= 1 && c.stem_stride <= 8 &&
-                  c.pool >= 1 && c.pool <= 64 && c.hidden >= 1 &&
-                  c.hidden <= 65536;
+  const bool ok =
+      std::isfinite(c.channels.cell) && c.channels.cell > 0.0 &&
+      c.channels.window >= 1 && c.channels.window <= 4096 &&
+      std::isfinite(c.channels.blur) && c.channels.blur >= 0.0 &&
+      std::isfinite(c.channels.cutoff) && c.channels.cutoff > 0.0 &&
+      std::isfinite(c.channels.geodesic_length) &&
+      c.channels.geodesic_length > 0.0 && c.channels.geodesic_length <= 1e6 &&
+      std::isfinite(c.channels.observe_range) &&
+      c.channels.observe_range > 0.0 && c.channels.observe_range <= 1e3 &&
+      c.width >= 1 && c.width <= 1024 && c.stem_stride >= 1 &&
+      c.stem_stride <= 8 && c.pool >= 1 && c.pool <= 64 && c.hidden >= 1 &&
+      c.hidden <= 65536;
   if (!ok) throw std::runtime_error("metadata out of range");
   return c;
 }

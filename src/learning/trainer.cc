@@ -240,6 +240,8 @@ void CheckOptions(const TrainOptions& o) {
   if (c.window < 4 || c.window > 512) throw bad("--window", "must be 4..512");
   if (!(c.geodesic_length > 0.0 && c.geodesic_length <= 1000.0))
     throw bad("--geodesic-length", "must be in (0, 1000] m");
+  if (!(c.observe_range > 0.0 && c.observe_range <= 100.0))
+    throw bad("--observe-range", "must be in (0, 100] m");
   if (o.network.width < 1 || o.network.width > 512)
     throw bad("--width", "must be 1..512");
   if (o.network.stem_stride < 1 || o.network.stem_stride > 4)

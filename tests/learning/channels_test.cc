@@ -127,66 +127,87 @@ TEST(ChannelsTest, LocalizedTargetsLeaveNoHeat) {
 
 // A 4 x 3 m workspace, pixels and lattice steps of 1 m (every lattice point
 // at a pixel centre), a thin wall at x = 2 from y = 0 to 2: the door is the
-// top row. Heat 1 at pixel (3, 0) alone: the geodesic channel holds
-// gamma^d, d the number of moves round the wall, gamma = exp(-1 / L).
+// top row. gamma = exp(-1 / L), L = 5 m.
 struct WalledWorld {
   Map map{{4.0, 3.0}, {Box{{1.95, 0.0}, {2.05, 2.0}}}, 0.1, 1.0, 0.1};
   ChannelParams params = Params(ChannelFrame::kGlobal);
   Grid<float> heat{4, 3, 1.0, 0.0f};
+  std::vector<double> log_det_prior{std::log(100.0), std::log(100.0)};
+  double eps = 0.01;
   WalledWorld() {
     params.geodesic = true;
     params.geodesic_length = 5.0;
+    params.observe_range = 1.0;
+  }
+  // A target at `mean` with det Sigma = det: weight log(det / eps) /
+  // log(100 / eps).
+  static HeatSource Target(const Vec2& mean, double det) {
+    HeatSource t;
+    t.mean = mean;
+    t.cov = Mat2::Identity() * std::sqrt(det);
+    t.log_det = std::log(det);
+    return t;
   }
 };
 
-TEST(ChannelsTest, GeodesicHeatGoesRoundAWallThroughItsDoor) {
+// A target at pixel (2, 0), just right of the wall: its observation pixels
+// (within 1 m, seeing the mean) are (2, 0), (3, 0) and (2, 1); (1, 0) is 1 m
+// off but behind the wall. The channel holds gamma^d, d the moves to the
+// nearest of them round the wall through the door.
+TEST(ChannelsTest, ReachGoesRoundAWallThroughItsDoor) {
   WalledWorld t;
-  t.heat(3, 0) = 1.0f;
+  t.log_det_prior.resize(1);
+  const std::vector<HeatSource> targets = {
+      WalledWorld::Target({2.5, 0.5}, 1.0)};
   ChannelRenderer r(t.map.occupancy(), t.map.size(), t.params,
                     &t.map.lattice());
   ASSERT_EQ(r.channels(), 5);
   ASSERT_EQ(r.width(), 4);
   ASSERT_EQ(r.height(), 3);
   std::vector<float> img(r.ImageSize(), -1.0f);
-  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, img.data());
-  const int moves[3][4] = {{7, 6, 1, 0}, {6, 5, 2, 1}, {5, 4, 3, 2}};
+  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                   img.data());
+  const int moves[3][4] = {{5, 4, 0, 0}, {4, 3, 0, 1}, {3, 2, 1, 2}};
   for (int y = 0; y < 3; ++y)
     for (int x = 0; x < 4; ++x)
       EXPECT_NEAR(At(img, 3, 4, 4, x, y), std::pow(std::exp(-0.2), moves[y][x]),
                   1e-6)
           << x << ", " << y;
-  // The heat channel itself is the heat as given.
-  EXPECT_EQ(At(img, 3, 4, 3, 3, 0), 1.0f);
-  EXPECT_EQ(At(img, 3, 4, 3, 1, 0), 0.0f);
+  // The heat channel is the heat as given.
+  EXPECT_EQ(At(img, 3, 4, 3, 3, 0), 0.0f);
+  // Render() projects the same belief: the same channel 4.
+  std::vector<float> again(r.ImageSize());
+  r.Render({0.5, 0.5}, {}, targets, t.log_det_prior, t.eps, again.data());
+  for (int i = 4 * 12; i < 5 * 12; ++i) EXPECT_EQ(again[i], img[i]) << i;
 }
 
-TEST(ChannelsTest, GeodesicHeatIsScaledToOneAndLeavesObstaclesEmpty) {
-  // The wall closed (no door): heat 0.5 at (0, 2) reaches the left half only.
+// The wall closed (no door): a target on each side, weights 0.5 (left) and
+// 0.25 (right); the channel is scaled by its largest value, each side sees
+// its own target only, and a localized target (det <= eps) counts nothing.
+TEST(ChannelsTest, ReachIsScaledToOneAndWallsSeparateTargets) {
   WalledWorld t;
   t.map = Map({4.0, 3.0}, {Box{{1.95, 0.0}, {2.05, 3.0}}}, 0.1, 1.0, 0.1);
-  t.heat(0, 2) = 0.5f;
+  const std::vector<HeatSource> targets = {
+      WalledWorld::Target({0.5, 2.5}, 1.0),   // w = 0.5
+      WalledWorld::Target({3.5, 0.5}, 0.1)};  // w = log(10) / log(1e4) = 0.25
   ChannelRenderer r(t.map.occupancy(), t.map.size(), t.params,
                     &t.map.lattice());
   std::vector<float> img(r.ImageSize());
-  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, img.data());
-  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 0, 2), 1.0f);  // 0.5, divided by itself
-  EXPECT_NEAR(At(img, 3, 4, 4, 1, 0), std::exp(-0.6), 1e-6);
+  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                   img.data());
+  const double g = std::exp(-0.2);
+  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 0, 2), 1.0f);  // 0.5 / 0.5
+  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 1, 2), 1.0f);  // observes it too
+  EXPECT_NEAR(At(img, 3, 4, 4, 1, 0), g * g, 1e-6);
+  EXPECT_NEAR(At(img, 3, 4, 4, 3, 0), 0.5, 1e-6);          // 0.25 / 0.5
+  EXPECT_NEAR(At(img, 3, 4, 4, 2, 2), 0.5 * g * g, 1e-6);  // via (2, 1)
+  std::vector<HeatSource> localized = targets;
+  localized[0].log_det = std::log(t.eps);
+  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, &localized, &t.log_det_prior, t.eps,
+                   img.data());
+  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 3, 0), 1.0f);  // now the largest
   for (int y = 0; y < 3; ++y)
-    for (int x = 2; x < 4; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
-
-  // Heat on a pixel no robot can stand on (a box fills pixel (1, 1)) is
-  // handed to the free pixels beside it, and the box's pixel holds nothing.
-  WalledWorld b;
-  b.map = Map({4.0, 3.0}, {Box{{1.0, 1.0}, {2.0, 2.0}}}, 0.1, 1.0, 0.1);
-  b.heat(1, 1) = 1.0f;
-  ChannelRenderer rb(b.map.occupancy(), b.map.size(), b.params,
-                     &b.map.lattice());
-  rb.RenderWithHeat({0.5, 0.5}, {}, b.heat, img.data());
-  EXPECT_EQ(At(img, 3, 4, 4, 1, 1), 0.0f);
-  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 1, 0), 1.0f);  // scaled: gamma / gamma
-  EXPECT_FLOAT_EQ(At(img, 3, 4, 4, 2, 1), 1.0f);
-  EXPECT_NEAR(At(img, 3, 4, 4, 3, 1), std::exp(-0.2), 1e-6);
-  EXPECT_NEAR(At(img, 3, 4, 4, 0, 0), std::exp(-0.2), 1e-6);
+    for (int x = 0; x < 2; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
 }
 
 TEST(ChannelsTest, FrameNamesParse) {

@@ -8,12 +8,16 @@
 //     each pixel;
 //   3 heat: the robot's own fused belief projected as the heatmap of
 //     estimation/heatmap.h;
-//   4 geodesic heat (ChannelParams::geodesic, off in the paper's networks):
-//     channel 3 carried along free space, G(p) = max_q H(q) exp(-d(p, q) /
-//     L) with d the length of the shortest path of valid lattice moves
-//     inside the image (so walls and doors shape it), 0 where a robot cannot
-//     stand, divided by its largest value in the image (so the way to heat
-//     10 or 30 m off reads alike).
+//   4 reach (ChannelParams::geodesic, off in the paper's networks): where
+//     the robot could measure each unlocalized target of its belief, carried
+//     along free space. A target's observation pixels are the free pixels
+//     within `observe_range` of its mean that see the mean (no occupied cell
+//     of the map on the segment); each holds the target's heat weight w_k.
+//     G(p) = max over observation pixels q of w(q) exp(-d(p, q) / L), d the
+//     number of valid lattice moves inside the image (so walls and doors
+//     shape it); observation pixels beyond the window count at the window's
+//     border with the moves beyond it; 0 where a robot cannot stand; divided
+//     by its largest value in the image.
 // Two frames. Global (the paper's): the whole workspace, pixel (ix, iy)
 // covering [ix, ix + 1) x [iy, iy + 1) cells of `cell` metres. Centred: a
 // window of `window` x `window` pixels of the same global pixel grid, the
@@ -37,7 +41,7 @@
 
 namespace aia {
 
-// Channels of the paper's network; the geodesic channel makes a fifth.
+// Channels of the paper's network; the reach channel makes a fifth.
 inline constexpr int kNumChannels = 4;
 inline constexpr int kMaxChannels = 5;
 
@@ -52,8 +56,9 @@ struct ChannelParams {
   int window = 40;               // centred frame: pixels per side
   double blur = 1.0;             // the heatmap's s, metres
   double cutoff = 4.0;           // the heatmap's cut-off, standard deviations
-  bool geodesic = false;         // channel 4, geodesic heat
+  bool geodesic = false;         // channel 4, reach
   double geodesic_length = 5.0;  // its L, metres
+  double observe_range = 2.0;    // its observation pixels' range, metres
 
   int num_channels() const { return geodesic ? kMaxChannels : kNumChannels; }
 };
@@ -64,7 +69,7 @@ class ChannelRenderer {
  public:
   // `occupancy`: the map's occupancy grid (world/map.h), `size`: the
   // workspace's size in metres; `lattice`: the map's motion lattice, which
-  // the geodesic channel needs (read here, not kept).
+  // the reach channel needs (read here, not kept).
   ChannelRenderer(const Grid<std::uint8_t>& occupancy, const Vec2& size,
                   const ChannelParams& params,
                   const Lattice* lattice = nullptr);
@@ -89,24 +94,36 @@ class ChannelRenderer {
               const std::vector<HeatSource>& targets,
               const std::vector<double>& log_det_prior, double eps, float* out);
   // The same with the robot's heatmap given, on a grid shaped like
-  // occupancy() (a team's heatmaps: estimation/heatmap.h, TeamHeatmap).
+  // occupancy() (a team's heatmaps: estimation/heatmap.h, TeamHeatmap);
+  // channel 4 needs the belief too (`targets`, `log_det_prior`, `eps`).
   // Thread-safe.
   void RenderWithHeat(const Vec2& self, const std::vector<Vec2>& neighbours,
-                      const Grid<float>& heat, float* out) const;
+                      const Grid<float>& heat, float* out) const {
+    RenderWithHeat(self, neighbours, heat, nullptr, nullptr, 0.0, out);
+  }
+  void RenderWithHeat(const Vec2& self, const std::vector<Vec2>& neighbours,
+                      const Grid<float>& heat,
+                      const std::vector<HeatSource>* targets,
+                      const std::vector<double>* log_det_prior, double eps,
+                      float* out) const;
   // The heatmap parameters of these channels at a mission's eps.
   HeatmapParams Heatmap(double eps) const;
 
  private:
-  // Channel 4 from channel 3 of an image whose pixel (0, 0) is global pixel
-  // (x0, y0).
-  void Geodesic(int x0, int y0, const float* heat, float* out) const;
+  // Channel 4 of an image whose pixel (0, 0) is global pixel (x0, y0).
+  void Reach(int x0, int y0, const std::vector<HeatSource>& targets,
+             const std::vector<double>& log_det_prior, double eps,
+             float* out) const;
+  // No occupied cell of the map on the segment from a to b.
+  bool Sees(const Vec2& a, const Vec2& b) const;
 
   ChannelParams params_;
   Vec2 size_;
-  Grid<float> occupancy_;  // global pixels
-  Grid<float> heat_;       // global pixels, scratch
+  Grid<float> occupancy_;    // global pixels
+  Grid<float> heat_;         // global pixels, scratch
+  Grid<std::uint8_t> fine_;  // the map's occupancy (channel 4 only)
   // Per global pixel: bit m set when a robot at the pixel's lattice point may
-  // move to the neighbouring pixel in direction m (geodesic channel only).
+  // move to the neighbouring pixel in direction m (reach channel only).
   std::vector<std::uint8_t> moves_;
   int height_ = 0, width_ = 0;
 };

@@ -86,6 +86,7 @@ class IgbNetPolicy : public Policy {
   // Per worker thread (ParallelFor): a heatmap and the neighbours' points.
   std::vector<Grid<float>> worker_heat_;
   std::vector<std::vector<Vec2>> worker_neighbours_;
+  std::vector<std::vector<HeatSource>> worker_targets_;  // channel 4
   std::vector<double> no_prior_;
 };
 
