@@ -93,6 +93,21 @@ ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
   }
 }
 
+bool ChannelRenderer::ImagePixel(const Vec2& self, const Vec2& p, int* u,
+                                 int* v) const {
+  int px = 0, py = 0;
+  occupancy_.CellOf(p, &px, &py);
+  if (params_.frame == ChannelFrame::kCentred) {
+    int cx = 0, cy = 0;
+    occupancy_.CellOf(self, &cx, &cy);
+    px -= cx - params_.window / 2;
+    py -= cy - params_.window / 2;
+  }
+  *u = px;
+  *v = py;
+  return px >= 0 && py >= 0 && px < width_ && py < height_;
+}
+
 HeatmapParams ChannelRenderer::Heatmap(double eps) const {
   HeatmapParams hp;
   hp.eps = eps;

@@ -53,6 +53,7 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int /*num_targets*/,
   last_point_.assign(num_robots, -1);
   last_move_.assign(num_robots, Move::kStay);
   reversals_.assign(num_robots, 0);
+  climbing_.assign(num_robots, 0);
 }
 
 void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
@@ -124,6 +125,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     last_point_.resize(n, -1);
     last_move_.resize(n, Move::kStay);
     reversals_.resize(n, 0);
+    climbing_.resize(n, 0);
   }
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
@@ -145,10 +147,24 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
       last_move_[i] = came;
     }
     last_point_[i] = here;
+    // Deadlocked with the reach channel: climb it while a neighbour is
+    // higher.
+    if (params_.max_reversals > 0 && renderer_->params().geodesic) {
+      if (reversals_[i] >= params_.max_reversals) climbing_[i] = 1;
+      if (climbing_[i]) {
+        const Move up = ReachAscent(b, here, lattice);
+        if (up != Move::kStay) {
+          (*moves)[i] = up;
+          continue;
+        }
+        climbing_[i] = 0;
+      }
+    }
     // Under the deadlock rule, undoing the last move again is barred while
     // another valid move exists.
     const bool bar =
-        params_.max_reversals > 0 && reversals_[i] >= params_.max_reversals &&
+        params_.max_reversals > 0 && !renderer_->params().geodesic &&
+        reversals_[i] >= params_.max_reversals &&
         last_move_[i] != Move::kStay && lattice.NumValidMoves(here) > 1;
     const int barred = bar ? static_cast<int>(Opposite(last_move_[i])) : -1;
     // The most probable valid move (ties to the lower move index).
@@ -168,6 +184,28 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     (*moves)[i] = static_cast<Move>(best);
   }
   return status;
+}
+
+Move IgbNetPolicy::ReachAscent(std::size_t b, int here,
+                               const Lattice& lattice) const {
+  const ChannelRenderer& r = *renderer_;
+  const std::size_t plane = static_cast<std::size_t>(r.height()) * r.width();
+  const float* reach = images_.data() + b * r.ImageSize() + 4 * plane;
+  const Vec2 self = lattice.Point(here);
+  int u = 0, v = 0;
+  if (!r.ImagePixel(self, self, &u, &v)) return Move::kStay;
+  float top = reach[v * r.width() + u];
+  Move best = Move::kStay;
+  for (Move m : kMoves) {
+    const int next = lattice.Next(here, m);
+    if (next < 0 || !r.ImagePixel(self, lattice.Point(next), &u, &v)) continue;
+    const float value = reach[v * r.width() + u];
+    if (value > top) {  // ties to the lower move index
+      top = value;
+      best = m;
+    }
+  }
+  return best;
 }
 
 void AddLearnedPolicies(PolicyRegistry* registry) {

@@ -11,6 +11,7 @@
 
 #include "aia/core/error.h"
 #include "aia/core/rng.h"
+#include "aia/estimation/heatmap.h"
 #include "aia/learning/igbnet_policy.h"
 #include "aia/learning/network.h"
 #include "support/team_fixture.h"
@@ -250,11 +251,13 @@ Move Argmax(const IgbNetPolicy& policy, const Lattice& lattice, int point,
 
 // Robot 0 takes the move m its network prefers at its start, then the move
 // back (one reversal), and stands where it started: with max_reversals 1 it
-// may not take m again; it takes its most probable other valid move, and
-// every other robot its most probable valid one, as without the rule. The
-// memory is per robot: relabelling the robots (their histories with them)
-// permutes the moves.
-TEST(IgbNetPolicyTest, DeadlockRuleBarsUndoingTheLastMoveAfterAReversal) {
+// is deadlocked. Without the reach channel it may not take m again and
+// takes its most probable other valid move; with it, it takes the valid
+// move to the highest neighbouring value of its channel 4 (or its
+// network's move when none is higher). Every other robot takes its most
+// probable valid move, as without the rule. The memory is per robot:
+// relabelling the robots (their histories with them) permutes the moves.
+void CheckDeadlockRule(bool geodesic) {
   const std::vector<double> prior(3, std::log(1.0));
   const std::vector<int> perm = {2, 0, 3, 1};
   std::vector<Move> original;
@@ -265,8 +268,9 @@ TEST(IgbNetPolicyTest, DeadlockRuleBarsUndoingTheLastMoveAfterAReversal) {
     const int a = f.positions[0];
     IgbNetParams params;
     params.max_reversals = 1;
-    IgbNetPolicy rule(TestNet(ChannelFrame::kCentred, true), params);
-    IgbNetPolicy plain(TestNet(ChannelFrame::kCentred, true));
+    const auto net = TestNet(ChannelFrame::kCentred, geodesic);
+    IgbNetPolicy rule(net, params);
+    IgbNetPolicy plain(net);
     const Move m = Decide(&plain, f, 0, prior)[0];
     ASSERT_GT(lattice.NumValidMoves(a), 1);
     const int b = lattice.Next(a, m);
@@ -295,8 +299,38 @@ TEST(IgbNetPolicyTest, DeadlockRuleBarsUndoingTheLastMoveAfterAReversal) {
     }
     const int r0 = relabel ? 1 : 0;  // robot 0's label (perm[1] == 0)
     EXPECT_EQ(last_plain[r0], m);
-    EXPECT_NE(last[r0], m);
-    EXPECT_EQ(last[r0], Argmax(rule, lattice, a, r0, static_cast<int>(m)));
+    if (!geodesic) {
+      EXPECT_NE(last[r0], m);
+      EXPECT_EQ(last[r0], Argmax(rule, lattice, a, r0, static_cast<int>(m)));
+    } else {
+      // Robot 0's channel 4, rendered here from its belief.
+      ChannelRenderer r(f.world.map.occupancy(), f.world.map.size(),
+                        net->config().channels, &lattice);
+      std::vector<HeatSource> targets;
+      HeatSources(f.beliefs, 0, &targets);
+      std::vector<Vec2> nbrs;
+      for (int j : f.comm.Neighbors(0))
+        if (j != 0) nbrs.push_back(lattice.Point(f.positions[j]));
+      std::vector<float> img(r.ImageSize());
+      r.Render(lattice.Point(a), nbrs, targets, prior, f.scenario.mission.eps,
+               img.data());
+      const float* reach = img.data() + 4 * r.height() * r.width();
+      const auto at = [&](int point) {
+        int u = 0, v = 0;
+        EXPECT_TRUE(
+            r.ImagePixel(lattice.Point(a), lattice.Point(point), &u, &v));
+        return reach[v * r.width() + u];
+      };
+      Move want = Move::kStay;
+      float top = at(a);
+      for (Move mv : kMoves)
+        if (lattice.Next(a, mv) >= 0 && at(lattice.Next(a, mv)) > top) {
+          top = at(lattice.Next(a, mv));
+          want = mv;
+        }
+      if (want == Move::kStay) want = last_plain[r0];
+      EXPECT_EQ(last[r0], want);
+    }
     for (int k = 0; k < 4; ++k)
       if (k != r0) EXPECT_EQ(last[k], last_plain[k]) << "robot " << k;
     if (!relabel) {
@@ -306,6 +340,14 @@ TEST(IgbNetPolicyTest, DeadlockRuleBarsUndoingTheLastMoveAfterAReversal) {
         EXPECT_EQ(last[k], original[perm[k]]) << "robot " << k;
     }
   }
+}
+
+TEST(IgbNetPolicyTest, DeadlockRuleBarsUndoingTheLastMoveAfterAReversal) {
+  CheckDeadlockRule(false);
+}
+
+TEST(IgbNetPolicyTest, DeadlockRuleClimbsTheReachChannel) {
+  CheckDeadlockRule(true);
 }
 
 TEST(IgbNetPolicyTest, TakesOnlyValidMoves) {

@@ -106,6 +106,9 @@ class ChannelRenderer {
                       const std::vector<HeatSource>* targets,
                       const std::vector<double>* log_det_prior, double eps,
                       float* out) const;
+  // The pixel (u, v) of point p in the image of a robot at `self`; false
+  // when p lies outside it.
+  bool ImagePixel(const Vec2& self, const Vec2& p, int* u, int* v) const;
   // The heatmap parameters of these channels at a mission's eps.
   HeatmapParams Heatmap(double eps) const;
 

@@ -33,20 +33,23 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
 // The policy's parameters (policy.* keys; the model is policy.model).
 struct IgbNetParams {
   // The deadlock rule (docs/learning.md, Action selection): a robot whose
-  // last `max_reversals` moves each undid the one before may not undo its
-  // last move again while another valid move exists; it takes its most
-  // probable other move. 0: the most probable valid move, always (the
-  // paper's).
+  // last `max_reversals` moves each undid the one before is deadlocked.
+  // With the reach channel it then climbs that channel (the valid move to
+  // the highest neighbouring value) until no neighbour is higher; without
+  // it, it may not undo its last move again while another valid move
+  // exists and takes its most probable other move. 0: the most probable
+  // valid move, always (the paper's).
   int max_reversals = 0;
 
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(max_reversals)
                  .In(Between(0, 1000))
-                 .Doc("deadlock rule: reversals in a row after which a "
-                      "robot's next move may not undo its last while "
-                      "another valid move exists (0: off, the paper's "
-                      "argmax)"));
+                 .Doc("deadlock rule: reversals in a row after which a robot "
+                      "climbs the reach channel until no neighbour is higher "
+                      "(without that channel: may not undo its last move "
+                      "while another valid move exists); 0: off, the "
+                      "paper's argmax"));
   }
 };
 
@@ -80,6 +83,10 @@ class IgbNetPolicy : public Policy {
   std::vector<int> last_point_;
   std::vector<Move> last_move_;
   std::vector<int> reversals_;
+  std::vector<char> climbing_;  // climbing the reach channel (deadlocked)
+  // The valid move from `here` to the highest channel-4 value of robot row
+  // b's image, if higher than here; kStay otherwise.
+  Move ReachAscent(std::size_t b, int here, const Lattice& lattice) const;
   std::vector<float> images_, batch_logits_, logits_;
   std::vector<int> rows_;
   TeamHeatmap heat_;
