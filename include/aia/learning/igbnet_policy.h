@@ -39,7 +39,7 @@ struct IgbNetParams {
   // it, it may not undo its last move again while another valid move
   // exists and takes its most probable other move. 0: the most probable
   // valid move, always (the paper's).
-  int max_reversals = 0;
+  int max_reversals = 1;
 
   template <typename Archive>
   void Serialize(Archive* a) {
