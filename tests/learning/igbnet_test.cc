@@ -270,7 +270,9 @@ void CheckDeadlockRule(bool geodesic) {
     params.max_reversals = 1;
     const auto net = TestNet(ChannelFrame::kCentred, geodesic);
     IgbNetPolicy rule(net, params);
-    IgbNetPolicy plain(net);
+    IgbNetParams argmax;
+    argmax.max_reversals = 0;  // the default is 1
+    IgbNetPolicy plain(net, argmax);
     const Move m = Decide(&plain, f, 0, prior)[0];
     ASSERT_GT(lattice.NumValidMoves(a), 1);
     const int b = lattice.Next(a, m);
