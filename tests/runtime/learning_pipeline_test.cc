@@ -180,6 +180,32 @@ TrainOptions TinyTraining(const std::string& data, const std::string& out) {
   return t;
 }
 
+// Whether Debian's python3-torch is there (tools/igbnet.py needs it).
+bool PythonHasTorch() {
+  return testing::RunCommand("/usr/bin/python3 -c 'import torch'").exit_code ==
+         0;
+}
+
+// tools/igbnet.py loads `model` and reproduces `logits` from the `batch`
+// images `x` of 16 x 16 pixels (files written into `dir`).
+void ExpectPythonReproduces(const std::string& dir, const std::string& model,
+                            const std::vector<float>& x,
+                            const std::vector<float>& logits, int batch) {
+  const auto write = [](const std::string& path, const std::vector<float>& v) {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(v.data(), sizeof(float), v.size(), f);
+    std::fclose(f);
+  };
+  write(dir + "/x.f32", x);
+  write(dir + "/logits.f32", logits);
+  const auto py = testing::RunCommand(
+      "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " check " +
+      model + " " + dir + "/x.f32 " + std::to_string(batch) + " 16 16 " + dir +
+      "/logits.f32");
+  EXPECT_EQ(py.exit_code, 0) << py.out << py.err;
+}
+
 TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
   const std::string dir = testing::MakeTempDir("aia_train_");
   DatasetOptions d = Tiny(dir + "/data");
@@ -218,23 +244,11 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
 
   // Python (Debian's python3-torch) loads the model and reproduces the C++
   // logits on the same input.
-  if (testing::RunCommand("/usr/bin/python3 -c 'import torch'").exit_code !=
-      0) {
+  if (!PythonHasTorch()) {
     fs::remove_all(dir);
     GTEST_SKIP() << "python3-torch is not installed";
   }
-  const auto write = [](const std::string& path, const std::vector<float>& v) {
-    std::FILE* f = std::fopen(path.c_str(), "wb");
-    ASSERT_NE(f, nullptr);
-    std::fwrite(v.data(), sizeof(float), v.size(), f);
-    std::fclose(f);
-  };
-  write(dir + "/x.f32", x);
-  write(dir + "/logits.f32", la);
-  const auto py = testing::RunCommand(
-      "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " check " +
-      dir + "/a.pt " + dir + "/x.f32 3 16 16 " + dir + "/logits.f32");
-  EXPECT_EQ(py.exit_code, 0) << py.out << py.err;
+  ExpectPythonReproduces(dir, dir + "/a.pt", x, la, 3);
 
   // Files whose metadata does not match their tensors, or from another
   // format version, are bad input: one line, exit 2.
@@ -291,23 +305,11 @@ TEST(TrainTest, AGeodesicModelTrainsAndPythonReproducesIt) {
   std::vector<float> x(2 * 5 * 16 * 16, 0.1f), logits(8);
   for (std::size_t i = 0; i < x.size(); i += 5) x[i] = 0.9f;
   net->Forward(x.data(), 2, 16, 16, logits.data());
-  if (testing::RunCommand("/usr/bin/python3 -c 'import torch'").exit_code !=
-      0) {
+  if (!PythonHasTorch()) {
     fs::remove_all(dir);
     GTEST_SKIP() << "python3-torch is not installed";
   }
-  const auto write = [](const std::string& path, const std::vector<float>& v) {
-    std::FILE* f = std::fopen(path.c_str(), "wb");
-    ASSERT_NE(f, nullptr);
-    std::fwrite(v.data(), sizeof(float), v.size(), f);
-    std::fclose(f);
-  };
-  write(dir + "/x.f32", x);
-  write(dir + "/logits.f32", logits);
-  const auto py = testing::RunCommand(
-      "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " check " +
-      dir + "/g.pt " + dir + "/x.f32 2 16 16 " + dir + "/logits.f32");
-  EXPECT_EQ(py.exit_code, 0) << py.out << py.err;
+  ExpectPythonReproduces(dir, dir + "/g.pt", x, logits, 2);
   fs::remove_all(dir);
 }
 
