@@ -219,12 +219,39 @@ void ChannelRenderer::Reach(int x0, int y0,
                             const std::vector<HeatSource>& targets,
                             const std::vector<double>& log_det_prior,
                             double eps, float* out) const {
+  const int margin =
+      params_.frame == ChannelFrame::kCentred ? params_.reach_margin : 0;
+  if (margin == 0) {
+    ReachRegion(x0, y0, width_, height_, targets, log_det_prior, eps, out);
+    return;
+  }
+  // Over the window and `margin` pixels around it, then cropped and scaled
+  // again.
+  const int w = width_ + 2 * margin, h = height_ + 2 * margin;
+  thread_local std::vector<float> region;
+  region.resize(static_cast<std::size_t>(w) * h);
+  ReachRegion(x0 - margin, y0 - margin, w, h, targets, log_det_prior, eps,
+              region.data());
+  float top = 0.0f;
+  for (int v = 0; v < height_; ++v)
+    for (int u = 0; u < width_; ++u) {
+      const float value = region[(v + margin) * w + u + margin];
+      out[v * width_ + u] = value;
+      top = std::max(top, value);
+    }
+  if (top > 0.0f)
+    for (int i = 0; i < width_ * height_; ++i) out[i] /= top;
+}
+
+void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
+                                  const std::vector<HeatSource>& targets,
+                                  const std::vector<double>& log_det_prior,
+                                  double eps, float* out) const {
   // Dijkstra with the largest value first from every target's observation
   // pixels; a pixel a robot cannot stand on (the border pixel a far
   // observation pixel folds onto may be one) gives its value to the free
   // pixels beside it but is given nothing. Scratch per thread: nothing is
   // allocated once warm.
-  const int h = height_, w = width_;
   const double cell = params_.cell;
   const float decay =
       static_cast<float>(std::exp(-cell / params_.geodesic_length));

@@ -43,6 +43,7 @@ std::string NetworkConfig::ToJson() const {
     j["geodesic"] = true;
     j["geodesic_length"] = channels.geodesic_length;
     j["observe_range"] = channels.observe_range;
+    if (channels.reach_margin) j["reach_margin"] = channels.reach_margin;
   }
   j["width"] = width;
   j["stem_stride"] = stem_stride;
@@ -75,6 +76,7 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     c.channels.geodesic = j.value("geodesic", false);
     c.channels.geodesic_length = j.value("geodesic_length", 5.0);
     c.channels.observe_range = j.value("observe_range", 2.0);
+    c.channels.reach_margin = j.value("reach_margin", 0);
     c.width = j.at("width").get<int>();
     c.stem_stride = j.at("stem_stride").get<int>();
     c.pool = j.at("pool").get<int>();

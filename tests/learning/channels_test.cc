@@ -210,6 +210,41 @@ TEST(ChannelsTest, ReachIsScaledToOneAndWallsSeparateTargets) {
     for (int x = 0; x < 2; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
 }
 
+// A centred 3 x 3 window at the left end of an 8 x 3 m corridor, a wall at
+// x = 3 with a door in the top row, a target at (6.5, 0.5) beyond the
+// window. Alone, the window folds the target onto its border pixel (2, 0),
+// straight through the wall; computed over 5 pixels around the window, the
+// way through the door makes (2, 2) the window's highest pixel.
+TEST(ChannelsTest, ReachOverAMarginSeesTheWayRoundBeyondTheWindow) {
+  WalledWorld t;
+  t.map = Map({8.0, 3.0}, {Box{{2.95, 0.0}, {3.05, 2.0}}}, 0.1, 1.0, 0.1);
+  t.params.frame = ChannelFrame::kCentred;
+  t.params.window = 3;
+  t.heat = Grid<float>(8, 3, 1.0, 0.0f);
+  t.log_det_prior.resize(1);
+  const std::vector<HeatSource> targets = {
+      WalledWorld::Target({6.5, 0.5}, 1.0)};
+  const auto render = [&](int margin) {
+    ChannelParams p = t.params;
+    p.reach_margin = margin;
+    ChannelRenderer r(t.map.occupancy(), t.map.size(), p, &t.map.lattice());
+    std::vector<float> img(r.ImageSize());
+    r.RenderWithHeat({1.5, 1.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                     img.data());
+    return std::vector<float>(img.begin() + 4 * 9, img.end());
+  };
+  const double g = std::exp(-0.2);
+  const std::vector<float> alone = render(0), wide = render(5);
+  // Pixel (u, v) is index v * 3 + u; gamma^(moves from the highest pixel).
+  for (int v = 0; v < 3; ++v)
+    for (int u = 0; u < 3; ++u) {
+      EXPECT_NEAR(alone[v * 3 + u], std::pow(g, (2 - u) + v), 1e-6)
+          << u << ", " << v;
+      EXPECT_NEAR(wide[v * 3 + u], std::pow(g, (2 - u) + (2 - v)), 1e-6)
+          << u << ", " << v;
+    }
+}
+
 TEST(ChannelsTest, FrameNamesParse) {
   ChannelFrame f = ChannelFrame::kGlobal;
   EXPECT_TRUE(ParseChannelFrame("centred", &f));

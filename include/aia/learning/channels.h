@@ -59,6 +59,9 @@ struct ChannelParams {
   bool geodesic = false;         // channel 4, reach
   double geodesic_length = 5.0;  // its L, metres
   double observe_range = 2.0;    // its observation pixels' range, metres
+  // Centred frame: channel 4 is computed over the window and this many
+  // pixels around it, then cropped (0: the window alone).
+  int reach_margin = 0;
 
   int num_channels() const { return geodesic ? kMaxChannels : kNumChannels; }
 };
@@ -117,6 +120,11 @@ class ChannelRenderer {
   void Reach(int x0, int y0, const std::vector<HeatSource>& targets,
              const std::vector<double>& log_det_prior, double eps,
              float* out) const;
+  // Channel 4 over the w x h pixels from global pixel (x0, y0), scaled to 1.
+  void ReachRegion(int x0, int y0, int w, int h,
+                   const std::vector<HeatSource>& targets,
+                   const std::vector<double>& log_det_prior, double eps,
+                   float* out) const;
   // No occupied cell of the map on the segment from a to b.
   bool Sees(const Vec2& a, const Vec2& b) const;
 
