@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <queue>
 #include <utility>
 
@@ -255,13 +254,7 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   const double cell = params_.cell;
   const float decay =
       static_cast<float>(std::exp(-cell / params_.geodesic_length));
-  const double log_decay = std::log(static_cast<double>(decay));
-  // Sources as log values, scaled below by the largest (the channel is
-  // scaled to 1 anyway): a target far beyond the window still shows the
-  // way however small its value.
-  thread_local std::vector<std::pair<double, int>> sources;
   thread_local std::vector<std::pair<float, int>> heap;
-  sources.clear();
   heap.clear();
   const auto mask = [&](int u, int v) -> unsigned {
     const int gx = x0 + u, gy = y0 + v;
@@ -281,7 +274,6 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
     if (wk <= 0.0) continue;
-    const double log_wk = std::log(wk);
     int mx = 0, my = 0;
     occupancy_.CellOf(targets[k].mean, &mx, &my);
     // A target whose observation pixels all lie beyond the window: one
@@ -290,8 +282,11 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
     if (mu < -reach || mv < -reach || mu >= w + reach || mv >= h + reach) {
       const int bu = std::clamp(mu, 0, w - 1), bv = std::clamp(mv, 0, h - 1);
       const int beyond = std::abs(mu - bu) + std::abs(mv - bv) - reach;
-      sources.emplace_back(log_wk + std::max(beyond, 0) * log_decay,
-                           bv * w + bu);
+      const float value =
+          static_cast<float>(wk * std::pow(decay, std::max(beyond, 0)));
+      if (value < 1e-6f) continue;
+      if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
+      heap.emplace_back(value, bv * w + bu);
       continue;
     }
     for (int gy = my - reach; gy <= my + reach; ++gy) {
@@ -304,20 +299,12 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
           continue;
         const int u = gx - x0, v = gy - y0;
         const int bu = std::clamp(u, 0, w - 1), bv = std::clamp(v, 0, h - 1);
-        sources.emplace_back(
-            log_wk + (std::abs(u - bu) + std::abs(v - bv)) * log_decay,
-            bv * w + bu);
+        const float value = static_cast<float>(
+            wk * std::pow(decay, std::abs(u - bu) + std::abs(v - bv)));
+        if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
+        heap.emplace_back(value, bv * w + bu);
       }
     }
-  }
-  double top_log = -std::numeric_limits<double>::infinity();
-  for (const auto& [l, idx] : sources) top_log = std::max(top_log, l);
-  for (const auto& [l, idx] : sources) {
-    const float value = static_cast<float>(std::exp(l - top_log));
-    if (value < 1e-6f) continue;
-    const int u = idx % w, v = idx / w;
-    if (free(u, v)) out[idx] = std::max(out[idx], value);
-    heap.emplace_back(value, idx);
   }
   std::make_heap(heap.begin(), heap.end());
   while (!heap.empty()) {
