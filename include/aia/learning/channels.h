@@ -98,12 +98,9 @@ class ChannelRenderer {
               const std::vector<double>& log_det_prior, double eps, float* out);
   // The same with the robot's heatmap given, on a grid shaped like
   // occupancy() (a team's heatmaps: estimation/heatmap.h, TeamHeatmap);
-  // channel 4 needs the belief too (`targets`, `log_det_prior`, `eps`).
+  // channel 4 needs the belief too (`targets`, `log_det_prior`, `eps`;
+  // may be null without it).
   // Thread-safe.
-  void RenderWithHeat(const Vec2& self, const std::vector<Vec2>& neighbours,
-                      const Grid<float>& heat, float* out) const {
-    RenderWithHeat(self, neighbours, heat, nullptr, nullptr, 0.0, out);
-  }
   void RenderWithHeat(const Vec2& self, const std::vector<Vec2>& neighbours,
                       const Grid<float>& heat,
                       const std::vector<HeatSource>* targets,
