@@ -7,6 +7,7 @@
 
 #include "aia/core/check.h"
 #include "aia/core/error.h"
+#include "aia/planning/information.h"
 
 #ifndef AIA_SOURCE_DIR
 #define AIA_SOURCE_DIR "."
@@ -45,7 +46,7 @@ IgbNetPolicy::IgbNetPolicy(std::shared_ptr<const IgbNet> net,
   AIA_CHECK(net_ != nullptr);
 }
 
-void IgbNetPolicy::Reset(const Map& map, int num_robots, int /*num_targets*/,
+void IgbNetPolicy::Reset(const Map& map, int num_robots, int num_targets,
                          std::uint64_t /*seed*/) {
   renderer_.emplace(map.occupancy(), map.size(), net_->config().channels,
                     &map.lattice());
@@ -53,7 +54,8 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int /*num_targets*/,
   last_point_.assign(num_robots, -1);
   last_move_.assign(num_robots, Move::kStay);
   reversals_.assign(num_robots, 0);
-  climbing_.assign(num_robots, 0);
+  escaping_.assign(num_robots, 0);
+  search_.Reset(num_robots, num_targets);
 }
 
 void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
@@ -76,6 +78,7 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
     worker_targets_.resize(workers);
   }
   const bool geodesic = renderer_->params().geodesic;
+  const bool searching = searching_ && geodesic;
   // Chunks of kForwardBatch robots: each rendered and run through the
   // network by one thread (libtorch runs single-threaded inside), so that a
   // robot's logits depend on its chunk, never on the number of threads.
@@ -97,6 +100,9 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
         if (geodesic) {
           targets = &worker_targets_[worker];
           HeatSources(*ctx.beliefs, i, targets);
+          if (searching)
+            for (std::size_t k = 0; k < targets->size(); ++k)
+              (*targets)[k].mean = search_.Aim(i, static_cast<int>(k));
         }
         renderer_->RenderWithHeat(lattice.Point((*ctx.positions)[i]),
                                   neighbours, heat_.Robot(b, &heat), targets,
@@ -117,6 +123,13 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   rows_.clear();
   for (int i = 0; i < n; ++i)
     if (ctx.comm->Active(i)) rows_.push_back(i);
+  // What each robot missed so far (a hand-made context may lack the sensor
+  // or differ from Reset's team: then no memory).
+  searching_ = params_.search && ctx.sensor &&
+               search_.num_robots() == n &&
+               search_.num_targets() == ctx.beliefs->layout().num_targets();
+  if (searching_)
+    for (int i : rows_) search_.Update(ctx, i);
   RenderAndForward(ctx);
   logits_.assign(static_cast<std::size_t>(n) * kNumMoves, 0.0f);
   PolicyStatus status = PolicyStatus::kOk;
@@ -125,7 +138,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     last_point_.resize(n, -1);
     last_move_.resize(n, Move::kStay);
     reversals_.resize(n, 0);
-    climbing_.resize(n, 0);
+    escaping_.resize(n, 0);
   }
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
@@ -147,31 +160,23 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
       last_move_[i] = came;
     }
     last_point_[i] = here;
-    // Deadlocked with the reach channel: climb it while a neighbour is
-    // higher.
-    if (params_.max_reversals > 0 && renderer_->params().geodesic) {
-      if (reversals_[i] >= params_.max_reversals) climbing_[i] = 1;
-      if (climbing_[i]) {
-        const Move up = ReachAscent(b, here, lattice);
-        if (up != Move::kStay) {
-          (*moves)[i] = up;
-          continue;
-        }
-        climbing_[i] = 0;
+    // Deadlocked: walk toward the nearest point that sees an open target
+    // until the robot stands on one.
+    if (params_.max_reversals > 0 && reversals_[i] >= params_.max_reversals)
+      escaping_[i] = 1;
+    if (escaping_[i]) {
+      const Move out = Escape(ctx, i);
+      if (out != Move::kStay) {
+        (*moves)[i] = out;
+        continue;
       }
+      escaping_[i] = 0;
     }
-    // Under the deadlock rule, undoing the last move again is barred while
-    // another valid move exists.
-    const bool bar =
-        params_.max_reversals > 0 && !renderer_->params().geodesic &&
-        reversals_[i] >= params_.max_reversals &&
-        last_move_[i] != Move::kStay && lattice.NumValidMoves(here) > 1;
-    const int barred = bar ? static_cast<int>(Opposite(last_move_[i])) : -1;
     // The most probable valid move (ties to the lower move index).
     int best = -1;
     float best_logit = -std::numeric_limits<float>::infinity();
     for (int a = 0; a < kNumMoves; ++a) {
-      if (a == barred || !lattice.Valid(here, static_cast<Move>(a))) continue;
+      if (!lattice.Valid(here, static_cast<Move>(a))) continue;
       if (best < 0 || l[a] > best_logit) {
         best = a;
         best_logit = l[a];
@@ -186,26 +191,23 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   return status;
 }
 
-Move IgbNetPolicy::ReachAscent(std::size_t b, int here,
-                               const Lattice& lattice) const {
-  const ChannelRenderer& r = *renderer_;
-  const std::size_t plane = static_cast<std::size_t>(r.height()) * r.width();
-  const float* reach = images_.data() + b * r.ImageSize() + 4 * plane;
-  const Vec2 self = lattice.Point(here);
-  int u = 0, v = 0;
-  if (!r.ImagePixel(self, self, &u, &v)) return Move::kStay;
-  float top = reach[v * r.width() + u];
-  Move best = Move::kStay;
-  for (Move m : kMoves) {
-    const int next = lattice.Next(here, m);
-    if (next < 0 || !r.ImagePixel(self, lattice.Point(next), &u, &v)) continue;
-    const float value = reach[v * r.width() + u];
-    if (value > top) {  // ties to the lower move index
-      top = value;
-      best = m;
-    }
+Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
+  if (!ctx.sensor) return Move::kStay;
+  const Lattice& lattice = ctx.map->lattice();
+  const int here = (*ctx.positions)[i];
+  const int m = ctx.beliefs->layout().num_targets();
+  const double log_eps = std::log(ctx.eps);
+  aims_.resize(m);
+  open_.assign(m, 0);
+  for (int k = 0; k < m; ++k) {
+    if (ctx.beliefs->LogDetCovariance(i, k) <= log_eps) continue;
+    aims_[k] = searching_ ? search_.Aim(i, k) : ctx.beliefs->PositionMean(i, k);
+    open_[k] = 1;
+    if (PredictedPrecision(*ctx.map, *ctx.sensor, lattice.Point(here),
+                           aims_[k]) > 0.0)
+      return Move::kStay;  // it is where it can measure
   }
-  return best;
+  return toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_, open_);
 }
 
 void AddLearnedPolicies(PolicyRegistry* registry) {

@@ -74,79 +74,16 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
 }
 
 Move GreedyPolicy::TowardNearestTarget(const DecisionContext& ctx, int robot) {
-  const Lattice& lattice = ctx.map->lattice();
-  const SensorModel& sensor = *ctx.sensor;
   const double log_eps = std::log(ctx.eps);
-  const int p = (*ctx.positions)[robot];
-  // The targets still above eps in this robot's belief, by the lattice point
-  // nearest their mean; their observation points are the points of the
-  // (2 span + 1)^2 window around it from which the target is seen.
-  const int span =
-      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
   const int num_blocks = static_cast<int>(blocks_.size());
-  centres_.resize(num_blocks);
+  aims_.resize(num_blocks);
   open_.assign(num_blocks, 0);
-  bool any_open = false;
   for (int k = 0; k < num_blocks; ++k) {
-    if (blocks_[k].logdet_sigma <= log_eps) continue;
-    const int c = lattice.NearestPoint(blocks_[k].mu);
-    centres_[k] = Vec2(lattice.Ix(c), lattice.Iy(c));
-    open_[k] = 1;
-    any_open = true;
+    aims_[k] = blocks_[k].mu;
+    open_[k] = blocks_[k].logdet_sigma > log_eps ? 1 : 0;
   }
-  if (!any_open) return Move::kStay;
-  const double radius = 1.5 * span;  // covers the window's corners
-  open_index_.Build(centres_, radius, &open_);
-
-  // BFS from the robot, remembering each point's first move, popped in order
-  // of distance. The first distance that holds an observation point decides;
-  // among its points the one of the lowest target, then the lowest point
-  // index (row by row), which is what scanning every target's window over a
-  // full BFS in that order finds, at the cost of the BFS out to that distance.
-  const int n = lattice.size();
-  if (static_cast<int>(dist_.size()) != n) {
-    dist_.assign(n, -1);
-    first_.assign(n, Move::kStay);
-    queue_.resize(n);
-  }
-  size_t head = 0, tail = 0;
-  dist_[p] = 0;
-  queue_[tail++] = p;
-  int best_k = -1, best_q = -1, best_dist = 0;
-  while (head < tail) {
-    const int u = queue_[head++];
-    const int d = dist_[u];
-    if (best_k >= 0 && d > best_dist) break;
-    if (d >= 1) {
-      const int ux = lattice.Ix(u), uy = lattice.Iy(u);
-      near_.clear();
-      open_index_.Near(centres_, Vec2(ux, uy), radius, &near_);
-      for (int k : near_) {  // ascending
-        if (best_k >= 0 && (k > best_k || (k == best_k && u > best_q))) break;
-        if (std::abs(static_cast<int>(centres_[k].x()) - ux) > span ||
-            std::abs(static_cast<int>(centres_[k].y()) - uy) > span)
-          continue;
-        if (PredictedPrecision(*ctx.map, sensor, lattice.Point(u),
-                               blocks_[k].mu) <= 0.0)
-          continue;
-        best_k = k;
-        best_q = u;
-        best_dist = d;
-        break;
-      }
-    }
-    if (best_k >= 0) continue;  // the rest of this distance only
-    for (Move m : kMoves) {
-      const int v = lattice.Next(u, m);
-      if (v < 0 || dist_[v] >= 0) continue;
-      dist_[v] = d + 1;
-      first_[v] = (u == p) ? m : first_[u];
-      queue_[tail++] = v;
-    }
-  }
-  const Move move = best_k < 0 ? Move::kStay : first_[best_q];
-  for (size_t i = 0; i < tail; ++i) dist_[queue_[i]] = -1;
-  return move;
+  return toward_.FirstMove(*ctx.map, *ctx.sensor, (*ctx.positions)[robot],
+                           aims_, open_);
 }
 
 }  // namespace aia

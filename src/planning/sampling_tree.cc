@@ -17,6 +17,7 @@
 #include "aia/core/check.h"
 #include "aia/estimation/filter.h"
 #include "aia/planning/information.h"
+#include "aia/planning/search.h"
 #include "aia/world/lattice.h"
 
 namespace aia {
@@ -211,52 +212,25 @@ void SamplingTree::RegionOf(const Vec2& x,
 bool SamplingTree::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
                            const std::vector<int>* missed, Vec2* aim,
                            std::vector<std::pair<int, double>>* region) {
+  // Among candidates of one ring, the one whose region is nearest to a robot.
   const SamplingProblem& p = *problem_;
-  const Lattice& lattice = p.map->lattice();
-  // A point some missed lattice point would have measured is ruled out.
-  auto searched = [&](const Vec2& x) {
-    if (!missed) return false;
-    for (int q : *missed)
-      if (PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), x) > 0.0)
-        return true;
-    return false;
-  };
-  // The mean first, then rings of the prior at growing Mahalanobis radius:
-  // on the first ring with candidates, the one whose region is nearest to a
-  // robot.
-  Eigen::LLT<Eigen::Matrix2d> llt(cov);
-  const Eigen::Matrix2d l = llt.info() == Eigen::Success
-                                ? Eigen::Matrix2d(llt.matrixL())
-                                : Eigen::Matrix2d::Identity();
-  const double sigma = std::sqrt(std::max(cov(0, 0), cov(1, 1)));
-  constexpr int kRings = 16;  // to 4 sigma
-  constexpr double kRingStep = 0.25;
-  for (int ring = 0; ring <= kRings; ++ring) {
-    const double rho = ring * kRingStep;
-    const int count =
-        ring == 0 ? 1
-                  : std::clamp(static_cast<int>(std::ceil(
-                                   2.0 * M_PI * rho * sigma / lattice.step())),
-                               8, 64);
-    int best = std::numeric_limits<int>::max();
-    for (int a = 0; a < count; ++a) {
-      const double theta = 2.0 * M_PI * a / count;
-      const Vec2 x =
-          mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta));
-      if (!p.map->PointFree(x) || searched(x)) continue;
-      RegionOf(x, &trial_region_);
-      int near = std::numeric_limits<int>::max();
-      for (const auto& [q, r] : trial_region_) near = std::min(near, reach_[q]);
-      if (trial_region_.empty() || near >= best) continue;
-      best = near;
-      *aim = x;
-      region->swap(trial_region_);
-    }
-    if (best != std::numeric_limits<int>::max()) return true;
+  const bool found = SearchAim(
+      *p.map, *p.sensor, mean, cov, missed,
+      [&](const Vec2& x) {
+        RegionOf(x, &trial_region_);
+        if (trial_region_.empty()) return -1;
+        int near = std::numeric_limits<int>::max();
+        for (const auto& [q, r] : trial_region_)
+          near = std::min(near, reach_[q]);
+        return near;
+      },
+      aim);
+  if (found) {
+    RegionOf(*aim, region);
+  } else {
+    region->clear();
   }
-  *aim = mean;
-  region->clear();
-  return false;
+  return found;
 }
 
 SamplingTree::AimSlot& SamplingTree::Slot(int depth, int k) {

@@ -235,121 +235,111 @@ TEST(IgbNetPolicyTest, TheSameGraphAtAnotherStepGivesTheSameActions) {
   }
 }
 
-// The most probable valid move other than `barred` (-1: none barred), from
-// robot i's logits.
-Move Argmax(const IgbNetPolicy& policy, const Lattice& lattice, int point,
-            int i, int barred) {
-  int best = -1;
-  for (int a = 0; a < kNumMoves; ++a) {
-    if (a == barred || !lattice.Valid(point, static_cast<Move>(a))) continue;
-    if (best < 0 || policy.logits()[i * kNumMoves + a] >
-                        policy.logits()[i * kNumMoves + best])
-      best = a;
-  }
-  return static_cast<Move>(best);
-}
+// A 12 x 2 m corridor: robot 0 at its west end, robot 1 beside it, one
+// target believed at (10, 1.25), seen (sensor 2 m) from (8.25, 1.25) but
+// from nowhere nearer the robots: the only shortest path to a point that
+// sees it runs east along y = 1.25, 14 moves.
+const char* kCorridor = R"(
+workspace: {size: [12, 2]}
+robots: {count: 2, step: 0.5, start: [[1.25, 1.25], [1.25, 0.75]]}
+targets: {list: [{position: [10.5, 1.25], prior_mean: [10.0, 1.25]}]}
+sensor: {range: 2.0}
+)";
 
-// Robot 0 takes the move m its network prefers at its start, then the move
-// back (one reversal), and stands where it started: with max_reversals 1 it
-// is deadlocked. Without the reach channel it may not take m again and
-// takes its most probable other valid move; with it, it takes the valid
-// move to the highest neighbouring value of its channel 4 (or its
-// network's move when none is higher). Every other robot takes its most
-// probable valid move, as without the rule. The memory is per robot:
-// relabelling the robots (their histories with them) permutes the moves.
-void CheckDeadlockRule(bool geodesic) {
-  const std::vector<double> prior(3, std::log(1.0));
-  const std::vector<int> perm = {2, 0, 3, 1};
-  std::vector<Move> original;
-  for (int relabel = 0; relabel < 2; ++relabel) {
-    testing::TeamFixture f(kTeam);
-    Personalize(&f);
-    const Lattice& lattice = f.world.map.lattice();
-    const int a = f.positions[0];
-    IgbNetParams params;
-    params.max_reversals = 1;
-    const auto net = TestNet(ChannelFrame::kCentred, geodesic);
-    IgbNetPolicy rule(net, params);
-    IgbNetParams argmax;
-    argmax.max_reversals = 0;  // the default is 1
-    IgbNetPolicy plain(net, argmax);
-    const Move m = Decide(&plain, f, 0, prior)[0];
-    ASSERT_GT(lattice.NumValidMoves(a), 1);
-    const int b = lattice.Next(a, m);
-    ASSERT_GE(b, 0);
-    std::vector<std::vector<int>> history = {f.positions, f.positions,
-                                             f.positions};
-    history[1][0] = b;  // robot 0: a, b, a; the others stay put
-    std::vector<Move> last, last_plain;
-    for (int t = 0; t < 3; ++t) {
-      testing::TeamFixture g(kTeam);
-      Personalize(&g);
-      g.positions = history[t];
-      if (relabel) {
-        BeliefSet permuted = g.beliefs;
-        for (int k = 0; k < 4; ++k) {
-          g.positions[k] = history[t][perm[k]];
-          permuted.CopyRow(k, f.beliefs, perm[k]);
-        }
-        g.beliefs = permuted;
+// Robot `r` (of 2) takes the move m its network prefers at its start, then
+// the move back (one reversal), and stands where it started: with
+// max_reversals 1 it is deadlocked and walks east toward the point that
+// sees the target, whatever its network prefers; the other robot, which
+// stayed put, takes its network's move, as without the rule. Relabelling
+// the robots (their histories with them) permutes the moves: the memory is
+// per robot.
+TEST(IgbNetPolicyTest, DeadlockRuleWalksTowardTheNearestOpenTarget) {
+  const std::vector<double> prior(1, std::log(1.0));
+  int overruled = 0;  // cases where the network alone would not go east
+  for (bool geodesic : {false, true}) {
+    for (int r : {0, 1}) {
+      testing::TeamFixture f(kCorridor);
+      if (r == 1) std::swap(f.positions[0], f.positions[1]);
+      const Lattice& lattice = f.world.map.lattice();
+      const auto net = TestNet(ChannelFrame::kCentred, geodesic);
+      IgbNetPolicy rule(net);  // max_reversals 1, the default
+      IgbNetParams argmax;
+      argmax.max_reversals = 0;
+      IgbNetPolicy plain(net, argmax);
+      const int a = f.positions[r];
+      const Move m = Decide(&plain, f, 0, prior)[r];
+      const int b = lattice.Next(a, m);
+      ASSERT_GE(b, 0);
+      std::vector<Move> last, last_plain;
+      for (int t = 0; t < 3; ++t) {
+        testing::TeamFixture g(kCorridor);
+        g.positions = f.positions;
+        if (t == 1) g.positions[r] = b;  // a, b, a
+        std::vector<Vec2> p;
+        for (int idx : g.positions) p.push_back(lattice.Point(idx));
+        g.comm.Update(1, p);
+        last = Decide(&rule, g, t, prior, t == 0);
+        last_plain = Decide(&plain, g, t, prior, t == 0);
       }
-      std::vector<Vec2> p;
-      for (int idx : g.positions) p.push_back(lattice.Point(idx));
-      g.comm.Update(1, p);
-      last = Decide(&rule, g, t, prior, t == 0);
-      last_plain = Decide(&plain, g, t, prior, t == 0);
-    }
-    const int r0 = relabel ? 1 : 0;  // robot 0's label (perm[1] == 0)
-    EXPECT_EQ(last_plain[r0], m);
-    if (!geodesic) {
-      EXPECT_NE(last[r0], m);
-      EXPECT_EQ(last[r0], Argmax(rule, lattice, a, r0, static_cast<int>(m)));
-    } else {
-      // Robot 0's channel 4, rendered here from its belief.
-      ChannelRenderer r(f.world.map.occupancy(), f.world.map.size(),
-                        net->config().channels, &lattice);
-      std::vector<HeatSource> targets;
-      HeatSources(f.beliefs, 0, &targets);
-      std::vector<Vec2> nbrs;
-      for (int j : f.comm.Neighbors(0))
-        if (j != 0) nbrs.push_back(lattice.Point(f.positions[j]));
-      std::vector<float> img(r.ImageSize());
-      r.Render(lattice.Point(a), nbrs, targets, prior, f.scenario.mission.eps,
-               img.data());
-      const float* reach = img.data() + 4 * r.height() * r.width();
-      const auto at = [&](int point) {
-        int u = 0, v = 0;
-        EXPECT_TRUE(
-            r.ImagePixel(lattice.Point(a), lattice.Point(point), &u, &v));
-        return reach[v * r.width() + u];
-      };
-      Move want = Move::kStay;
-      float top = at(a);
-      for (Move mv : kMoves)
-        if (lattice.Next(a, mv) >= 0 && at(lattice.Next(a, mv)) > top) {
-          top = at(lattice.Next(a, mv));
-          want = mv;
-        }
-      if (want == Move::kStay) want = last_plain[r0];
-      EXPECT_EQ(last[r0], want);
-    }
-    for (int k = 0; k < 4; ++k)
-      if (k != r0) EXPECT_EQ(last[k], last_plain[k]) << "robot " << k;
-    if (!relabel) {
-      original = last;
-    } else {
-      for (int k = 0; k < 4; ++k)
-        EXPECT_EQ(last[k], original[perm[k]]) << "robot " << k;
+      EXPECT_EQ(last[r], Move::kRight) << "geodesic " << geodesic;
+      EXPECT_EQ(last[1 - r], last_plain[1 - r]) << "geodesic " << geodesic;
+      overruled += last_plain[r] != Move::kRight;
     }
   }
+  EXPECT_GT(overruled, 0);
 }
 
-TEST(IgbNetPolicyTest, DeadlockRuleBarsUndoingTheLastMoveAfterAReversal) {
-  CheckDeadlockRule(false);
+TEST(IgbNetPolicyTest, DeadlockRuleHandsBackWhereTheRobotCanMeasure) {
+  // The same reversal at (8.75, 1.25), which sees the target's mean: the
+  // robot takes its network's move. (Without the search memory, which would
+  // move the aim once the robot measured nothing there.)
+  const std::vector<double> prior(1, std::log(1.0));
+  testing::TeamFixture f(kCorridor);
+  const Lattice& lattice = f.world.map.lattice();
+  f.positions[0] = lattice.NearestPoint(Vec2(8.75, 1.25));
+  const auto net = TestNet(ChannelFrame::kCentred, true);
+  IgbNetParams params;
+  params.search = false;
+  IgbNetPolicy rule(net, params);
+  IgbNetParams argmax = params;
+  argmax.max_reversals = 0;
+  IgbNetPolicy plain(net, argmax);
+  const int a = f.positions[0];
+  const Move m = Decide(&plain, f, 0, prior)[0];
+  std::vector<Move> last, last_plain;
+  for (int t = 0; t < 3; ++t) {
+    testing::TeamFixture g(kCorridor);
+    g.positions = f.positions;
+    if (t == 1) g.positions[0] = lattice.Next(a, m);
+    last = Decide(&rule, g, t, prior, t == 0);
+    last_plain = Decide(&plain, g, t, prior, t == 0);
+  }
+  EXPECT_EQ(last, last_plain);
 }
 
-TEST(IgbNetPolicyTest, DeadlockRuleClimbsTheReachChannel) {
-  CheckDeadlockRule(true);
+TEST(IgbNetPolicyTest, SearchMemoryIsPerRobot) {
+  // In the corridor, one robot stands where it sees the target's mean, the
+  // other far from it; their beliefs stay as they are for three decisions
+  // (nothing measured). The first remembers its own point, the second
+  // nothing; swapping their labels swaps what they remember.
+  const std::vector<double> prior(1, std::log(1.0));
+  std::vector<std::vector<int>> missed[2];
+  for (int swap = 0; swap < 2; ++swap) {
+    testing::TeamFixture f(kCorridor);
+    const Lattice& lattice = f.world.map.lattice();
+    f.positions[1 - swap] = lattice.NearestPoint(Vec2(8.75, 1.25));
+    std::vector<Vec2> p;
+    for (int idx : f.positions) p.push_back(lattice.Point(idx));
+    f.comm.Update(1, p);
+    IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, true));
+    for (int t = 0; t < 3; ++t) Decide(&policy, f, t, prior, t == 0);
+    for (int i = 0; i < 2; ++i) missed[swap].push_back(policy.search().Missed(i, 0));
+    EXPECT_EQ(missed[swap][1 - swap],
+              std::vector<int>{lattice.NearestPoint(Vec2(8.75, 1.25))});
+    EXPECT_TRUE(missed[swap][swap].empty());
+  }
+  EXPECT_EQ(missed[1][0], missed[0][1]);
+  EXPECT_EQ(missed[1][1], missed[0][0]);
 }
 
 TEST(IgbNetPolicyTest, TakesOnlyValidMoves) {

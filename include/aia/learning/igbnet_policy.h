@@ -17,6 +17,7 @@
 #include "aia/learning/network.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/registry.h"
+#include "aia/planning/search.h"
 
 namespace aia {
 
@@ -33,23 +34,32 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
 // The policy's parameters (policy.* keys; the model is policy.model).
 struct IgbNetParams {
   // The deadlock rule (docs/learning.md, Action selection): a robot whose
-  // last `max_reversals` moves each undid the one before is deadlocked.
-  // With the reach channel it then climbs that channel (the valid move to
-  // the highest neighbouring value) until no neighbour is higher; without
-  // it, it may not undo its last move again while another valid move
-  // exists and takes its most probable other move. 0: the most probable
-  // valid move, always (the paper's).
+  // last `max_reversals` moves each undid the one before is deadlocked. It
+  // then walks a shortest lattice path toward the nearest point that sees
+  // an open target (where its search memory aims) and hands back to the
+  // network once it stands on one. 0: the most probable valid move, always
+  // (the paper's).
   int max_reversals = 1;
+  // The search memory (planning/search.h; docs/learning.md, Search memory):
+  // each robot remembers the points from which it saw a static target's
+  // aim but measured nothing; channel 4 and the deadlock rule lead to the
+  // part of the prior no such point rules out instead of the mean. false:
+  // the mean, always.
+  bool search = true;
 
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(max_reversals)
                  .In(Between(0, 1000))
                  .Doc("deadlock rule: reversals in a row after which a robot "
-                      "climbs the reach channel until no neighbour is higher "
-                      "(without that channel: may not undo its last move "
-                      "while another valid move exists); 0: off, the "
-                      "paper's argmax"));
+                      "walks a shortest path toward the nearest point that "
+                      "sees an open target, then hands back to the network; "
+                      "0: off, the paper's argmax"));
+    a->Visit(AIA_FIELD(search).Doc(
+        "search memory: a robot that saw where a static target is believed "
+        "to be and measured nothing aims channel 4 and the deadlock rule at "
+        "the nearest part of the prior its missed points do not rule out "
+        "(false: always the mean)"));
   }
 };
 
@@ -62,6 +72,9 @@ class IgbNetPolicy : public Policy {
              std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,
                       std::vector<Move>* moves) override;
+  // What each robot learned from its missed measurements (empty until the
+  // first decision; unused with `search` false).
+  const SearchMemory& search() const { return search_; }
   // The last step's logits, robot-major (4 per robot; zero for inactive
   // robots), for tools and tests.
   const std::vector<float>& logits() const { return logits_; }
@@ -83,10 +96,16 @@ class IgbNetPolicy : public Policy {
   std::vector<int> last_point_;
   std::vector<Move> last_move_;
   std::vector<int> reversals_;
-  std::vector<char> climbing_;  // climbing the reach channel (deadlocked)
-  // The valid move from `here` to the highest channel-4 value of robot row
-  // b's image, if higher than here; kStay otherwise.
-  Move ReachAscent(std::size_t b, int here, const Lattice& lattice) const;
+  std::vector<char> escaping_;  // deadlocked, walking toward a target
+  SearchMemory search_;
+  bool searching_ = false;  // this step's aims are search_'s
+  // The deadlock rule's move for robot i: toward the nearest point that sees
+  // an open target's aim; kStay where the robot sees one, or none is
+  // reachable. Scratch: toward_, aims_, open_.
+  Move Escape(const DecisionContext& ctx, int i);
+  TowardNearestAim toward_;
+  std::vector<Vec2> aims_;
+  std::vector<std::uint8_t> open_;
   std::vector<float> images_, batch_logits_, logits_;
   std::vector<int> rows_;
   TeamHeatmap heat_;

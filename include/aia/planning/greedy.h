@@ -11,10 +11,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "aia/core/point_grid.h"
 #include "aia/core/rng.h"
 #include "aia/planning/information.h"
 #include "aia/planning/policy.h"
+#include "aia/planning/search.h"
 
 namespace aia {
 
@@ -33,12 +33,9 @@ class GreedyPolicy : public Policy {
 
   std::vector<Rng> rngs_;
   std::vector<PredictedBlock> blocks_;
-  std::vector<Vec2> centres_;       // lattice coordinates of targets' means
+  std::vector<Vec2> aims_;          // the targets' predicted means
   std::vector<std::uint8_t> open_;  // above eps in this robot's belief
-  PointGrid open_index_;
-  std::vector<int> near_;
-  std::vector<int> dist_, queue_;  // dist_ is -1 outside a BFS
-  std::vector<Move> first_;
+  TowardNearestAim toward_;
 };
 
 }  // namespace aia

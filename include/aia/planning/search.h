@@ -1,0 +1,148 @@
+// Searching a static target's prior after missed measurements
+// (docs/design.md, Policies; docs/learning.md, Search memory). A robot whose
+// lattice point sees where a target is believed to be, and whose belief did
+// not shrink, learned that the target is not anywhere that point would have
+// measured: the Kalman filter cannot say so (it has no measurement to fuse),
+// so a policy that only reads the belief would return to the same points
+// forever. The aim is then moved to the nearest part of the prior that no
+// missed point rules out. The expert searches so over the centralized belief;
+// SearchMemory keeps the same per robot, from its own belief and its own
+// points only.
+#ifndef AIA_PLANNING_SEARCH_H_
+#define AIA_PLANNING_SEARCH_H_
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cstdint>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "aia/core/point_grid.h"
+#include "aia/core/types.h"
+#include "aia/planning/information.h"
+#include "aia/planning/policy.h"
+#include "aia/world/map.h"
+
+namespace aia {
+
+// Where to look for a target believed at N(mean, cov) that the lattice points
+// `missed` (may be null) did not measure. x is ruled out when a point of
+// `missed` would have measured a target at x. Tried in order: the mean, then
+// rings of the prior at Mahalanobis radius 0.25, 0.5, ..., 4 (8 to 64 points
+// each); a free point that is not ruled out is a candidate when cost(x) >= 0
+// (an int; the caller says what is near, -1: x cannot be observed). The
+// first ring (the mean alone being the first) with a candidate decides: its
+// candidate of least cost, ties to the first in angle order. Returns false,
+// aim = mean, when no ring has one.
+template <typename Cost>
+bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
+               const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
+               Vec2* aim);
+
+// What one team's robots learned from their own missed measurements of
+// static targets, per robot and target: the lattice points from which the
+// robot saw its aim without its belief shrinking, and the aim that follows
+// (SearchAim; the mean while nothing is missed). Moving targets are not
+// searched (their aim is the mean). Nothing in it depends on the step
+// number; robot i's memory depends on robot i's belief row and points only.
+class SearchMemory {
+ public:
+  void Reset(int num_robots, int num_targets);
+  // Robot i after this step's fusion, at its lattice point: a belief that
+  // did not shrink while the point saw the aim adds the point to what the
+  // robot missed (and moves the aim); one that shrank clears it (the mean
+  // moved and the search is over). The first call only records the belief.
+  void Update(const DecisionContext& ctx, int robot);
+  // Where robot i looks for target k (its belief's mean until it missed).
+  const Vec2& Aim(int robot, int k) const { return slot(robot, k).aim; }
+  const std::vector<int>& Missed(int robot, int k) const {
+    return slot(robot, k).missed;
+  }
+  int num_robots() const { return num_robots_; }
+  int num_targets() const { return num_targets_; }
+
+ private:
+  struct Slot {
+    double log_det = std::numeric_limits<double>::quiet_NaN();  // last seen
+    Vec2 mean{0.0, 0.0};
+    Vec2 aim{0.0, 0.0};
+    std::vector<int> missed;
+  };
+  const Slot& slot(int i, int k) const {
+    return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
+  }
+  int num_robots_ = 0, num_targets_ = 0;
+  std::vector<Slot> slots_;
+};
+
+// The first move of a shortest lattice path from point p to the nearest
+// lattice point (one move away or more) predicted to measure a target at one
+// of the aims whose `open` flag is set; among the points at that distance,
+// the one of the lowest target, then the lowest point index. kStay when no
+// such point is reachable. What greedy does where no move gains anything,
+// and the igbnet deadlock rule where the reach channel is flat. Reuses its
+// scratch: nothing is allocated once warm.
+class TowardNearestAim {
+ public:
+  Move FirstMove(const Map& map, const SensorModel& sensor, int p,
+                 const std::vector<Vec2>& aims,
+                 const std::vector<std::uint8_t>& open);
+
+ private:
+  std::vector<Vec2> centres_;  // lattice coordinates of the open aims
+  std::vector<std::uint8_t> open_;
+  PointGrid open_index_;
+  std::vector<int> near_;
+  std::vector<int> dist_, queue_;  // dist_ is -1 outside a BFS
+  std::vector<Move> first_;
+};
+
+// ---------------------------------------------------------------------------
+
+template <typename Cost>
+bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
+               const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
+               Vec2* aim) {
+  const Lattice& lattice = map.lattice();
+  // A point some missed lattice point would have measured is ruled out.
+  auto searched = [&](const Vec2& x) {
+    if (!missed) return false;
+    for (int q : *missed)
+      if (PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
+        return true;
+    return false;
+  };
+  Eigen::LLT<Mat2> llt(cov);
+  const Mat2 l =
+      llt.info() == Eigen::Success ? Mat2(llt.matrixL()) : Mat2::Identity();
+  const double sigma = std::sqrt(std::max(cov(0, 0), cov(1, 1)));
+  constexpr int kRings = 16;  // to 4 sigma
+  constexpr double kRingStep = 0.25;
+  for (int ring = 0; ring <= kRings; ++ring) {
+    const double rho = ring * kRingStep;
+    const int count =
+        ring == 0 ? 1
+                  : std::clamp(static_cast<int>(std::ceil(
+                                   2.0 * M_PI * rho * sigma / lattice.step())),
+                               8, 64);
+    int best = std::numeric_limits<int>::max();
+    for (int a = 0; a < count; ++a) {
+      const double theta = 2.0 * M_PI * a / count;
+      const Vec2 x =
+          mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta));
+      if (!map.PointFree(x) || searched(x)) continue;
+      const int c = cost(x);
+      if (c < 0 || c >= best) continue;
+      best = c;
+      *aim = x;
+    }
+    if (best != std::numeric_limits<int>::max()) return true;
+  }
+  *aim = mean;
+  return false;
+}
+
+}  // namespace aia
+
+#endif  // AIA_PLANNING_SEARCH_H_

@@ -1,0 +1,151 @@
+#include "aia/planning/search.h"
+
+#include <cstdlib>
+
+#include "aia/core/check.h"
+
+namespace aia {
+
+void SearchMemory::Reset(int num_robots, int num_targets) {
+  AIA_CHECK(num_robots >= 0 && num_targets >= 0);
+  num_robots_ = num_robots;
+  num_targets_ = num_targets;
+  slots_.assign(static_cast<std::size_t>(num_robots) * num_targets, Slot{});
+}
+
+void SearchMemory::Update(const DecisionContext& ctx, int robot) {
+  AIA_CHECK(robot >= 0 && robot < num_robots_);
+  const BeliefSet& beliefs = *ctx.beliefs;
+  AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
+  const Map& map = *ctx.map;
+  const SensorModel& sensor = *ctx.sensor;
+  const Lattice& lattice = map.lattice();
+  const int here = (*ctx.positions)[robot];
+  const Vec2 p = lattice.Point(here);
+  const double log_eps = std::log(ctx.eps);
+  const int span =
+      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  // Near: the lattice distance (|dx| + |dy|) from the robot to the nearest
+  // point of its own component that would measure a target at x.
+  const auto cost = [&](const Vec2& x) {
+    const int c = lattice.NearestPoint(x);
+    const int component = lattice.components()[here];
+    int best = -1;
+    for (int iy = std::max(0, lattice.Iy(c) - span);
+         iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy) {
+      for (int ix = std::max(0, lattice.Ix(c) - span);
+           ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
+        const int q = lattice.Index(ix, iy);
+        if (!lattice.Free(q) || lattice.components()[q] != component) continue;
+        const int d = std::abs(ix - lattice.Ix(here)) +
+                      std::abs(iy - lattice.Iy(here));
+        if (best >= 0 && d >= best) continue;
+        if (PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
+          best = d;
+      }
+    }
+    return best;
+  };
+  for (int k = 0; k < num_targets_; ++k) {
+    Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+    const double now = beliefs.LogDetCovariance(robot, k);
+    const bool first = std::isnan(s.log_det);
+    const bool shrank = !first && now < s.log_det + std::log1p(-1e-9);
+    s.log_det = now;
+    s.mean = beliefs.PositionMean(robot, k);
+    if (first || shrank || now <= log_eps || !beliefs.layout().is_static(k))
+      s.missed.clear();
+    if (s.missed.empty()) s.aim = s.mean;
+    if (first || shrank || now <= log_eps || !beliefs.layout().is_static(k))
+      continue;
+    // Nothing measured, though this point sees the aim: the target is not
+    // anywhere the point would have measured.
+    if (PredictedPrecision(map, sensor, p, s.aim) <= 0.0 ||
+        std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
+      continue;
+    s.missed.push_back(here);
+    const Mat2 cov = beliefs.PositionCovariance(robot, k);
+    if (!SearchAim(map, sensor, s.mean, cov, &s.missed, cost, &s.aim)) {
+      // The prior is searched to 4 sigma: forget, and search it again.
+      s.missed.clear();
+      s.aim = s.mean;
+    }
+  }
+}
+
+Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
+                                int p, const std::vector<Vec2>& aims,
+                                const std::vector<std::uint8_t>& open) {
+  AIA_CHECK(aims.size() == open.size());
+  const Lattice& lattice = map.lattice();
+  // The open aims by the lattice point nearest them; their observation points
+  // are the points of the (2 span + 1)^2 window around it from which the aim
+  // is seen.
+  const int span =
+      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  const int num_aims = static_cast<int>(aims.size());
+  centres_.resize(num_aims);
+  open_.assign(num_aims, 0);
+  bool any_open = false;
+  for (int k = 0; k < num_aims; ++k) {
+    if (!open[k]) continue;
+    const int c = lattice.NearestPoint(aims[k]);
+    centres_[k] = Vec2(lattice.Ix(c), lattice.Iy(c));
+    open_[k] = 1;
+    any_open = true;
+  }
+  if (!any_open) return Move::kStay;
+  const double radius = 1.5 * span;  // covers the window's corners
+  open_index_.Build(centres_, radius, &open_);
+
+  // BFS from the robot, remembering each point's first move, popped in order
+  // of distance. The first distance that holds an observation point decides;
+  // among its points the one of the lowest target, then the lowest point
+  // index (row by row), which is what scanning every target's window over a
+  // full BFS in that order finds, at the cost of the BFS out to that distance.
+  const int n = lattice.size();
+  if (static_cast<int>(dist_.size()) != n) {
+    dist_.assign(n, -1);
+    first_.assign(n, Move::kStay);
+    queue_.resize(n);
+  }
+  size_t head = 0, tail = 0;
+  dist_[p] = 0;
+  queue_[tail++] = p;
+  int best_k = -1, best_q = -1, best_dist = 0;
+  while (head < tail) {
+    const int u = queue_[head++];
+    const int d = dist_[u];
+    if (best_k >= 0 && d > best_dist) break;
+    if (d >= 1) {
+      const int ux = lattice.Ix(u), uy = lattice.Iy(u);
+      near_.clear();
+      open_index_.Near(centres_, Vec2(ux, uy), radius, &near_);
+      for (int k : near_) {  // ascending
+        if (best_k >= 0 && (k > best_k || (k == best_k && u > best_q))) break;
+        if (std::abs(static_cast<int>(centres_[k].x()) - ux) > span ||
+            std::abs(static_cast<int>(centres_[k].y()) - uy) > span)
+          continue;
+        if (PredictedPrecision(map, sensor, lattice.Point(u), aims[k]) <= 0.0)
+          continue;
+        best_k = k;
+        best_q = u;
+        best_dist = d;
+        break;
+      }
+    }
+    if (best_k >= 0) continue;  // the rest of this distance only
+    for (Move m : kMoves) {
+      const int v = lattice.Next(u, m);
+      if (v < 0 || dist_[v] >= 0) continue;
+      dist_[v] = d + 1;
+      first_[v] = (u == p) ? m : first_[u];
+      queue_[tail++] = v;
+    }
+  }
+  const Move move = best_k < 0 ? Move::kStay : first_[best_q];
+  for (size_t i = 0; i < tail; ++i) dist_[queue_[i]] = -1;
+  return move;
+}
+
+}  // namespace aia
