@@ -54,7 +54,9 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int num_targets,
   last_point_.assign(num_robots, -1);
   last_move_.assign(num_robots, Move::kStay);
   reversals_.assign(num_robots, 0);
-  escaping_.assign(num_robots, 0);
+  walked_.assign(num_robots, 0);
+  decisions_ = 0;
+  rule_moves_ = 0;
   search_.Reset(num_robots, num_targets);
 }
 
@@ -125,8 +127,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     if (ctx.comm->Active(i)) rows_.push_back(i);
   // What each robot missed so far (a hand-made context may lack the sensor
   // or differ from Reset's team: then no memory).
-  searching_ = params_.search && ctx.sensor &&
-               search_.num_robots() == n &&
+  searching_ = params_.search && ctx.sensor && search_.num_robots() == n &&
                search_.num_targets() == ctx.beliefs->layout().num_targets();
   if (searching_)
     for (int i : rows_) search_.Update(ctx, i);
@@ -138,7 +139,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     last_point_.resize(n, -1);
     last_move_.resize(n, Move::kStay);
     reversals_.resize(n, 0);
-    escaping_.resize(n, 0);
+    walked_.resize(n, 0);
   }
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
@@ -161,16 +162,22 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     }
     last_point_[i] = here;
     // Deadlocked: walk toward the nearest point that sees an open target
-    // until the robot stands on one.
-    if (params_.max_reversals > 0 && reversals_[i] >= params_.max_reversals)
-      escaping_[i] = 1;
-    if (escaping_[i]) {
-      const Move out = Escape(ctx, i);
+    // until the robot stands on one (or has walked max_walk moves).
+    ++decisions_;
+    if (params_.max_reversals > 0 && reversals_[i] >= params_.max_reversals &&
+        walked_[i] == 0)
+      walked_[i] = 1;
+    if (walked_[i] > 0) {
+      const Move out = (params_.max_walk == 0 || walked_[i] <= params_.max_walk)
+                           ? Escape(ctx, i)
+                           : Move::kStay;
       if (out != Move::kStay) {
+        ++walked_[i];
+        ++rule_moves_;
         (*moves)[i] = out;
         continue;
       }
-      escaping_[i] = 0;
+      walked_[i] = 0;
     }
     // The most probable valid move (ties to the lower move index).
     int best = -1;
@@ -208,6 +215,12 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
       return Move::kStay;  // it is where it can measure
   }
   return toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_, open_);
+}
+
+std::vector<std::pair<std::string, long>> IgbNetPolicy::Counters() const {
+  return {{"decisions", decisions_},
+          {"rule_moves", rule_moves_},
+          {"misses", search_.misses()}};
 }
 
 void AddLearnedPolicies(PolicyRegistry* registry) {

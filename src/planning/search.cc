@@ -11,6 +11,7 @@ void SearchMemory::Reset(int num_robots, int num_targets) {
   num_robots_ = num_robots;
   num_targets_ = num_targets;
   slots_.assign(static_cast<std::size_t>(num_robots) * num_targets, Slot{});
+  misses_ = 0;
 }
 
 void SearchMemory::Update(const DecisionContext& ctx, int robot) {
@@ -37,8 +38,8 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
            ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
         const int q = lattice.Index(ix, iy);
         if (!lattice.Free(q) || lattice.components()[q] != component) continue;
-        const int d = std::abs(ix - lattice.Ix(here)) +
-                      std::abs(iy - lattice.Iy(here));
+        const int d =
+            std::abs(ix - lattice.Ix(here)) + std::abs(iy - lattice.Iy(here));
         if (best >= 0 && d >= best) continue;
         if (PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
           best = d;
@@ -64,6 +65,7 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
         std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
       continue;
     s.missed.push_back(here);
+    ++misses_;
     const Mat2 cov = beliefs.PositionCovariance(robot, k);
     if (!SearchAim(map, sensor, s.mean, cov, &s.missed, cost, &s.aim)) {
       // The prior is searched to 4 sigma: forget, and search it again.
@@ -74,8 +76,8 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
 }
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
-                                int p, const std::vector<Vec2>& aims,
-                                const std::vector<std::uint8_t>& open) {
+                                 int p, const std::vector<Vec2>& aims,
+                                 const std::vector<std::uint8_t>& open) {
   AIA_CHECK(aims.size() == open.size());
   const Lattice& lattice = map.lattice();
   // The open aims by the lattice point nearest them; their observation points

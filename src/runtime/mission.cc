@@ -260,6 +260,10 @@ MissionSummary MissionRunner::Run() {
     statuses[std::string(PolicyStatusName(static_cast<PolicyStatus>(s)))] =
         e.stats().statuses[s];
   d["policy_status"] = statuses;
+  nlohmann::ordered_json counters = nlohmann::ordered_json::object();
+  for (const auto& [name, count] : e.policy().Counters())
+    counters[name] = count;
+  d["policy_counters"] = counters;
   const EpisodeStats& st = e.stats();
   d["physics"] = {{"steps", e.step()},
                   {"timeouts", st.physics_timeouts},

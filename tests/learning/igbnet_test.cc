@@ -289,6 +289,42 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksTowardTheNearestOpenTarget) {
   EXPECT_GT(overruled, 0);
 }
 
+TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
+  // Robot 0 reverses once (a, b, a), walks one move east (the rule's), and
+  // with max_walk 1 takes its network's move at the next point; the
+  // counters say 1 rule move of 8 decisions.
+  const std::vector<double> prior(1, std::log(1.0));
+  testing::TeamFixture f(kCorridor);
+  const Lattice& lattice = f.world.map.lattice();
+  const auto net = TestNet(ChannelFrame::kCentred, true);
+  IgbNetParams params;
+  params.max_walk = 1;
+  IgbNetPolicy rule(net, params);
+  IgbNetParams argmax = params;
+  argmax.max_reversals = 0;
+  IgbNetPolicy plain(net, argmax);
+  const int a = f.positions[0];
+  const Move m = Decide(&plain, f, 0, prior)[0];
+  const int b = lattice.Next(a, m);
+  ASSERT_GE(b, 0);
+  const int c = lattice.Next(a, Move::kRight);
+  std::vector<Move> last, last_plain;
+  for (int t = 0; t < 4; ++t) {
+    testing::TeamFixture g(kCorridor);
+    g.positions = f.positions;
+    if (t == 1) g.positions[0] = b;
+    if (t == 3) g.positions[0] = c;  // where the rule's move took it
+    last = Decide(&rule, g, t, prior, t == 0);
+    last_plain = Decide(&plain, g, t, prior, t == 0);
+    if (t == 2) EXPECT_EQ(last[0], Move::kRight);
+  }
+  EXPECT_EQ(last, last_plain);
+  const auto counters = rule.Counters();
+  ASSERT_EQ(counters.size(), 3u);
+  EXPECT_EQ(counters[0], (std::pair<std::string, long>{"decisions", 8}));
+  EXPECT_EQ(counters[1], (std::pair<std::string, long>{"rule_moves", 1}));
+}
+
 TEST(IgbNetPolicyTest, DeadlockRuleHandsBackWhereTheRobotCanMeasure) {
   // The same reversal at (8.75, 1.25), which sees the target's mean: the
   // robot takes its network's move. (Without the search memory, which would
@@ -333,7 +369,8 @@ TEST(IgbNetPolicyTest, SearchMemoryIsPerRobot) {
     f.comm.Update(1, p);
     IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, true));
     for (int t = 0; t < 3; ++t) Decide(&policy, f, t, prior, t == 0);
-    for (int i = 0; i < 2; ++i) missed[swap].push_back(policy.search().Missed(i, 0));
+    for (int i = 0; i < 2; ++i)
+      missed[swap].push_back(policy.search().Missed(i, 0));
     EXPECT_EQ(missed[swap][1 - swap],
               std::vector<int>{lattice.NearestPoint(Vec2(8.75, 1.25))});
     EXPECT_TRUE(missed[swap][swap].empty());

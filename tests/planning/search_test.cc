@@ -85,19 +85,22 @@ TEST(SearchMemoryTest, MovingTargetsAreNotSearched) {
   EXPECT_TRUE(memory.Missed(0, 0).empty());
 }
 
-TEST(SearchMemoryTest, RelabellingRobotsPermutesTheMemoryAndTheStepDoesNotEnter) {
+TEST(SearchMemoryTest,
+     RelabellingRobotsPermutesTheMemoryAndTheStepDoesNotEnter) {
   // Robot A sees the mean, robot B (far away) does not. The same team with
   // the labels swapped remembers the same, swapped; the step number given
   // in the context changes nothing.
   const std::string tail =
       "]}\n"
       "targets: {list: [{position: [8.0, 8.0], prior_mean: [6.1, 5.25]}]}\n";
-  Team ab("workspace: {size: [10.0, 10.0]}\n"
-          "robots: {count: 2, start: [[4.25, 5.25], [1.25, 1.25]" +
-          tail);
-  Team ba("workspace: {size: [10.0, 10.0]}\n"
-          "robots: {count: 2, start: [[1.25, 1.25], [4.25, 5.25]" +
-          tail);
+  Team ab(
+      "workspace: {size: [10.0, 10.0]}\n"
+      "robots: {count: 2, start: [[4.25, 5.25], [1.25, 1.25]" +
+      tail);
+  Team ba(
+      "workspace: {size: [10.0, 10.0]}\n"
+      "robots: {count: 2, start: [[1.25, 1.25], [4.25, 5.25]" +
+      tail);
   SearchMemory mab, mba;
   mab.Reset(2, 1);
   mba.Reset(2, 1);

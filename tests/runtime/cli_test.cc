@@ -332,8 +332,9 @@ TEST(CliTest, RunWritesItsResultFiles) {
   EXPECT_EQ(estimate.rfind("step,target,robot,error_m,nees\n", 0), 0u);
   EXPECT_EQ(std::count(estimate.begin(), estimate.end(), '\n'), 1 + 7 * 2);
   const std::string diagnostics = ReadFile(out + "/diagnostics.json");
-  for (const char* key : {"\"policy_status\"", "\"no_valid_move\"",
-                          "\"timeouts\"", "\"rmse_m\"", "\"mean_nees\""})
+  for (const char* key :
+       {"\"policy_status\"", "\"no_valid_move\"", "\"policy_counters\"",
+        "\"timeouts\"", "\"rmse_m\"", "\"mean_nees\""})
     EXPECT_NE(diagnostics.find(key), std::string::npos) << key;
   fs::remove_all(out);
 }

@@ -40,6 +40,9 @@ struct IgbNetParams {
   // network once it stands on one. 0: the most probable valid move, always
   // (the paper's).
   int max_reversals = 1;
+  // Moves a deadlocked robot walks at most before it hands back to the
+  // network; 0: until it stands where it can measure.
+  int max_walk = 0;
   // The search memory (planning/search.h; docs/learning.md, Search memory):
   // each robot remembers the points from which it saw a static target's
   // aim but measured nothing; channel 4 and the deadlock rule lead to the
@@ -55,6 +58,11 @@ struct IgbNetParams {
                       "walks a shortest path toward the nearest point that "
                       "sees an open target, then hands back to the network; "
                       "0: off, the paper's argmax"));
+    a->Visit(AIA_FIELD(max_walk)
+                 .In(Between(0, 100000))
+                 .Doc("deadlock rule: moves a deadlocked robot walks at "
+                      "most before it hands back to the network; 0: until "
+                      "it stands where it can measure"));
     a->Visit(AIA_FIELD(search).Doc(
         "search memory: a robot that saw where a static target is believed "
         "to be and measured nothing aims channel 4 and the deadlock rule at "
@@ -75,6 +83,9 @@ class IgbNetPolicy : public Policy {
   // What each robot learned from its missed measurements (empty until the
   // first decision; unused with `search` false).
   const SearchMemory& search() const { return search_; }
+  // decisions (robot moves decided), rule_moves (made by the deadlock
+  // rule), misses (points added to the search memory), since Reset.
+  std::vector<std::pair<std::string, long>> Counters() const override;
   // The last step's logits, robot-major (4 per robot; zero for inactive
   // robots), for tools and tests.
   const std::vector<float>& logits() const { return logits_; }
@@ -96,7 +107,9 @@ class IgbNetPolicy : public Policy {
   std::vector<int> last_point_;
   std::vector<Move> last_move_;
   std::vector<int> reversals_;
-  std::vector<char> escaping_;  // deadlocked, walking toward a target
+  // Moves walked since the robot was found deadlocked (0: not walking).
+  std::vector<int> walked_;
+  long decisions_ = 0, rule_moves_ = 0;
   SearchMemory search_;
   bool searching_ = false;  // this step's aims are search_'s
   // The deadlock rule's move for robot i: toward the nearest point that sees

@@ -6,7 +6,9 @@
 #define AIA_PLANNING_POLICY_H_
 
 #include <cstdint>
+#include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "aia/comm/graph.h"
@@ -63,6 +65,12 @@ class Policy {
   // rule replaces it (and counts it).
   virtual PolicyStatus Decide(const DecisionContext& ctx,
                               std::vector<Move>* moves) = 0;
+  // Named counts the policy kept since Reset (diagnostics.json's "policy";
+  // e.g. how many of igbnet's moves its deadlock rule made). None by
+  // default.
+  virtual std::vector<std::pair<std::string, long>> Counters() const {
+    return {};
+  }
 };
 
 }  // namespace aia

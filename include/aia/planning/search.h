@@ -13,8 +13,8 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -61,6 +61,8 @@ class SearchMemory {
   }
   int num_robots() const { return num_robots_; }
   int num_targets() const { return num_targets_; }
+  // Points added to any robot's misses since Reset.
+  long misses() const { return misses_; }
 
  private:
   struct Slot {
@@ -73,6 +75,7 @@ class SearchMemory {
     return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
   }
   int num_robots_ = 0, num_targets_ = 0;
+  long misses_ = 0;
   std::vector<Slot> slots_;
 };
 
