@@ -289,6 +289,44 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksTowardTheNearestOpenTarget) {
   EXPECT_GT(overruled, 0);
 }
 
+TEST(IgbNetPolicyTest, DeadlockRuleLeavesANeighboursNearerTargetToIt) {
+  // Robot 0 in the middle of the corridor, deadlocked; one target believed
+  // 3.75 m east of it, one 4.75 m west (each seen from 1.75 m away: 4 moves
+  // east, 6 west). Robot 1 nearer to neither: robot 0 walks east, to the
+  // nearer. Robot 1 beside the east target: robot 0 leaves it and walks
+  // west.
+  const char* yaml = R"(
+workspace: {size: [12, 2]}
+robots: {count: 2, step: 0.5, start: [[6.25, 1.25], [6.25, 0.25]]}
+targets: {list: [{position: [10.5, 1.25], prior_mean: [10.0, 1.25]},
+                 {position: [1.0, 1.25], prior_mean: [1.5, 1.25]}]}
+sensor: {range: 2.0}
+)";
+  const std::vector<double> prior(2, std::log(1.0));
+  for (const Vec2& other : {Vec2(6.25, 0.25), Vec2(9.75, 0.75)}) {
+    testing::TeamFixture f(yaml);
+    const Lattice& lattice = f.world.map.lattice();
+    f.positions[1] = lattice.NearestPoint(other);
+    const auto net = TestNet(ChannelFrame::kCentred, true);
+    IgbNetPolicy rule(net);
+    IgbNetParams argmax;
+    argmax.max_reversals = 0;
+    IgbNetPolicy plain(net, argmax);
+    const int a = f.positions[0];
+    const int b = lattice.Next(a, Decide(&plain, f, 0, prior)[0]);
+    ASSERT_GE(b, 0);
+    std::vector<Move> last;
+    for (int t = 0; t < 3; ++t) {
+      testing::TeamFixture g(yaml);
+      g.positions = f.positions;
+      if (t == 1) g.positions[0] = b;  // a, b, a
+      last = Decide(&rule, g, t, prior, t == 0);
+    }
+    EXPECT_EQ(last[0], other.x() < 9.0 ? Move::kRight : Move::kLeft)
+        << "robot 1 at " << other.transpose();
+  }
+}
+
 TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
   // Robot 0 reverses once (a, b, a), walks one move east (the rule's), and
   // with max_walk 1 takes its network's move at the next point; the

@@ -36,8 +36,9 @@ struct IgbNetParams {
   // The deadlock rule (docs/learning.md, Action selection): a robot whose
   // last `max_reversals` moves each undid the one before is deadlocked. It
   // then walks a shortest lattice path toward the nearest point that sees
-  // an open target (where its search memory aims) and hands back to the
-  // network once it stands on one. 0: the most probable valid move, always
+  // an open target (where its search memory aims; targets a neighbour is
+  // nearer to are left to it) and hands back to the network once it stands
+  // on one. 0: the most probable valid move, always
   // (the paper's).
   int max_reversals = 1;
   // Moves a deadlocked robot walks at most before it hands back to the
@@ -113,12 +114,14 @@ class IgbNetPolicy : public Policy {
   SearchMemory search_;
   bool searching_ = false;  // this step's aims are search_'s
   // The deadlock rule's move for robot i: toward the nearest point that sees
-  // an open target's aim; kStay where the robot sees one, or none is
-  // reachable. Scratch: toward_, aims_, open_.
+  // an open target's aim, among the targets no neighbour in this step's
+  // graph is nearer to (all open targets when each is); kStay where the
+  // robot sees one, or none is reachable. Scratch: toward_, aims_, open_,
+  // claimed_.
   Move Escape(const DecisionContext& ctx, int i);
   TowardNearestAim toward_;
   std::vector<Vec2> aims_;
-  std::vector<std::uint8_t> open_;
+  std::vector<std::uint8_t> open_, claimed_;
   std::vector<float> images_, batch_logits_, logits_;
   std::vector<int> rows_;
   TeamHeatmap heat_;
