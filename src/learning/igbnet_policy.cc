@@ -129,8 +129,10 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   // or differ from Reset's team: then no memory).
   searching_ = params_.search && ctx.sensor && search_.num_robots() == n &&
                search_.num_targets() == ctx.beliefs->layout().num_targets();
-  if (searching_)
+  if (searching_) {
     for (int i : rows_) search_.Update(ctx, i);
+    if (params_.share_search) search_.Share(ctx, rows_);
+  }
   RenderAndForward(ctx);
   logits_.assign(static_cast<std::size_t>(n) * kNumMoves, 0.0f);
   PolicyStatus status = PolicyStatus::kOk;

@@ -14,16 +14,11 @@ void SearchMemory::Reset(int num_robots, int num_targets) {
   misses_ = 0;
 }
 
-void SearchMemory::Update(const DecisionContext& ctx, int robot) {
-  AIA_CHECK(robot >= 0 && robot < num_robots_);
-  const BeliefSet& beliefs = *ctx.beliefs;
-  AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
+bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   const Map& map = *ctx.map;
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
   const int here = (*ctx.positions)[robot];
-  const Vec2 p = lattice.Point(here);
-  const double log_eps = std::log(ctx.eps);
   const int span =
       static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
   // Near: the lattice distance (|dx| + |dy|) from the robot to the nearest
@@ -47,6 +42,25 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
     }
     return best;
   };
+  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
+  if (SearchAim(map, sensor, s.mean, cov, &s.missed, cost, &s.aim)) return true;
+  // The prior is searched to 4 sigma: forget, and search it again.
+  s.missed.clear();
+  s.aim = s.mean;
+  return false;
+}
+
+void SearchMemory::Update(const DecisionContext& ctx, int robot) {
+  AIA_CHECK(robot >= 0 && robot < num_robots_);
+  const BeliefSet& beliefs = *ctx.beliefs;
+  AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
+  const Map& map = *ctx.map;
+  const SensorModel& sensor = *ctx.sensor;
+  const Lattice& lattice = map.lattice();
+  const int here = (*ctx.positions)[robot];
+  const Vec2 p = lattice.Point(here);
+  const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
     const double now = beliefs.LogDetCovariance(robot, k);
@@ -54,11 +68,11 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
     const bool shrank = !first && now < s.log_det + std::log1p(-1e-9);
     s.log_det = now;
     s.mean = beliefs.PositionMean(robot, k);
-    if (first || shrank || now <= log_eps || !beliefs.layout().is_static(k))
-      s.missed.clear();
+    const bool searching =
+        !first && !shrank && now > log_eps && beliefs.layout().is_static(k);
+    if (!searching) s.missed.clear();
     if (s.missed.empty()) s.aim = s.mean;
-    if (first || shrank || now <= log_eps || !beliefs.layout().is_static(k))
-      continue;
+    if (!searching) continue;
     // Nothing measured, though this point sees the aim: the target is not
     // anywhere the point would have measured.
     if (PredictedPrecision(map, sensor, p, s.aim) <= 0.0 ||
@@ -66,12 +80,41 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
       continue;
     s.missed.push_back(here);
     ++misses_;
-    const Mat2 cov = beliefs.PositionCovariance(robot, k);
-    if (!SearchAim(map, sensor, s.mean, cov, &s.missed, cost, &s.aim)) {
-      // The prior is searched to 4 sigma: forget, and search it again.
-      s.missed.clear();
-      s.aim = s.mean;
+    Reaim(ctx, robot, k);
+  }
+}
+
+void SearchMemory::Share(const DecisionContext& ctx,
+                         const std::vector<int>& robots) {
+  // What each robot's neighbours missed, from the lists as Update left them
+  // (so the order of the robots does not matter), added to its own.
+  const double log_eps = std::log(ctx.eps);
+  incoming_.clear();
+  for (int i : robots) {
+    for (int k = 0; k < num_targets_; ++k) {
+      const Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
+      if (std::isnan(s.log_det) || s.log_det <= log_eps ||
+          !ctx.beliefs->layout().is_static(k))
+        continue;
+      for (int j : ctx.comm->Neighbors(i)) {
+        if (j == i) continue;
+        for (int q :
+             slots_[static_cast<std::size_t>(j) * num_targets_ + k].missed)
+          if (std::find(s.missed.begin(), s.missed.end(), q) == s.missed.end())
+            incoming_.push_back({i, k, q});
+      }
     }
+  }
+  std::sort(incoming_.begin(), incoming_.end());
+  incoming_.erase(std::unique(incoming_.begin(), incoming_.end()),
+                  incoming_.end());
+  for (std::size_t a = 0; a < incoming_.size();) {
+    const int i = incoming_[a][0], k = incoming_[a][1];
+    Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
+    for (; a < incoming_.size() && incoming_[a][0] == i && incoming_[a][1] == k;
+         ++a)
+      s.missed.push_back(incoming_[a][2]);
+    Reaim(ctx, i, k);
   }
 }
 

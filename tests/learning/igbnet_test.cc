@@ -14,6 +14,7 @@
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/igbnet_policy.h"
 #include "aia/learning/network.h"
+#include "aia/planning/information.h"
 #include "support/team_fixture.h"
 #include "support/test_support.h"
 
@@ -394,8 +395,8 @@ TEST(IgbNetPolicyTest, DeadlockRuleHandsBackWhereTheRobotCanMeasure) {
 TEST(IgbNetPolicyTest, SearchMemoryIsPerRobot) {
   // In the corridor, one robot stands where it sees the target's mean, the
   // other far from it; their beliefs stay as they are for three decisions
-  // (nothing measured). The first remembers its own point, the second
-  // nothing; swapping their labels swaps what they remember.
+  // (nothing measured). Without sharing, the first remembers its own point,
+  // the second nothing; swapping their labels swaps what they remember.
   const std::vector<double> prior(1, std::log(1.0));
   std::vector<std::vector<int>> missed[2];
   for (int swap = 0; swap < 2; ++swap) {
@@ -405,7 +406,9 @@ TEST(IgbNetPolicyTest, SearchMemoryIsPerRobot) {
     std::vector<Vec2> p;
     for (int idx : f.positions) p.push_back(lattice.Point(idx));
     f.comm.Update(1, p);
-    IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, true));
+    IgbNetParams own;
+    own.share_search = false;
+    IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, true), own);
     for (int t = 0; t < 3; ++t) Decide(&policy, f, t, prior, t == 0);
     for (int i = 0; i < 2; ++i)
       missed[swap].push_back(policy.search().Missed(i, 0));
@@ -415,6 +418,38 @@ TEST(IgbNetPolicyTest, SearchMemoryIsPerRobot) {
   }
   EXPECT_EQ(missed[1][0], missed[0][1]);
   EXPECT_EQ(missed[1][1], missed[0][0]);
+}
+
+TEST(IgbNetPolicyTest, NeighboursShareWhatTheyMissed) {
+  // The same, sharing (the default): the far robot, a neighbour in the full
+  // graph, takes in the other's missed point and aims where it does not
+  // see; in a graph without that edge it does not.
+  const std::vector<double> prior(1, std::log(1.0));
+  for (bool connected : {true, false}) {
+    CommParams cp;
+    if (!connected) {
+      cp.mode = CommMode::kRange;
+      cp.range = 2.0;  // the robots stand 7.5 m apart
+    }
+    testing::TeamFixture f(kCorridor, cp);
+    const Lattice& lattice = f.world.map.lattice();
+    const int seer = lattice.NearestPoint(Vec2(8.75, 1.25));
+    f.positions[1] = seer;
+    std::vector<Vec2> p;
+    for (int idx : f.positions) p.push_back(lattice.Point(idx));
+    f.comm.Update(1, p);
+    IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, true));
+    for (int t = 0; t < 3; ++t) Decide(&policy, f, t, prior, t == 0);
+    EXPECT_EQ(policy.search().Missed(1, 0), std::vector<int>{seer});
+    if (connected) {
+      EXPECT_EQ(policy.search().Missed(0, 0), std::vector<int>{seer});
+      EXPECT_EQ(PredictedPrecision(f.world.map, f.sensor, lattice.Point(seer),
+                                   policy.search().Aim(0, 0)),
+                0.0);
+    } else {
+      EXPECT_TRUE(policy.search().Missed(0, 0).empty());
+    }
+  }
 }
 
 TEST(IgbNetPolicyTest, TakesOnlyValidMoves) {

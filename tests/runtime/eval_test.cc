@@ -484,11 +484,10 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
   const std::string effective = ReadFile(dir + "/e/effective.yaml");
   const auto sha = testing::RunCommand("sha256sum '" + model + "'");
   ASSERT_EQ(sha.exit_code, 0);
-  EXPECT_NE(
-      effective.find(
-          "#   igbnet: {max_reversals: 1, max_walk: 0, search: true}; model " +
-          model + " sha256 " + sha.out.substr(0, 64) + "\n"),
-      std::string::npos)
+  EXPECT_NE(effective.find("#   igbnet: {max_reversals: 1, max_walk: 0, "
+                           "search: true, share_search: true}; model " +
+                           model + " sha256 " + sha.out.substr(0, 64) + "\n"),
+            std::string::npos)
       << effective;
   EXPECT_EQ(eval().exit_code, 0);  // the same model resumes
   std::filesystem::copy_file(testing::SourcePath("models/igbnet.pt"), model,

@@ -50,6 +50,9 @@ struct IgbNetParams {
   // part of the prior no such point rules out instead of the mean. false:
   // the mean, always.
   bool search = true;
+  // With the search memory: each robot also takes in the points its
+  // neighbours in this step's graph missed (a message beside the belief).
+  bool share_search = true;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -69,6 +72,11 @@ struct IgbNetParams {
         "to be and measured nothing aims channel 4 and the deadlock rule at "
         "the nearest part of the prior its missed points do not rule out "
         "(false: always the mean)"));
+    a->Visit(
+        AIA_FIELD(share_search)
+            .Doc("search memory: each robot also takes in the points its "
+                 "neighbours "
+                 "in this step's graph missed (false: its own misses only)"));
   }
 };
 

@@ -13,6 +13,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -54,6 +55,10 @@ class SearchMemory {
   // robot missed (and moves the aim); one that shrank clears it (the mean
   // moved and the search is over). The first call only records the belief.
   void Update(const DecisionContext& ctx, int robot);
+  // After every robot's Update: each robot among `robots` adds the points
+  // its neighbours in this step's graph missed (for the static targets
+  // still open in its own belief) and moves its aims accordingly.
+  void Share(const DecisionContext& ctx, const std::vector<int>& robots);
   // Where robot i looks for target k (its belief's mean until it missed).
   const Vec2& Aim(int robot, int k) const { return slot(robot, k).aim; }
   const std::vector<int>& Missed(int robot, int k) const {
@@ -74,8 +79,12 @@ class SearchMemory {
   const Slot& slot(int i, int k) const {
     return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
   }
+  // SearchAim for robot's target k from its memory (forgets a prior
+  // searched to 4 sigma); false then.
+  bool Reaim(const DecisionContext& ctx, int robot, int k);
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
+  std::vector<std::array<int, 3>> incoming_;  // Share's (robot, target, point)
   std::vector<Slot> slots_;
 };
 
