@@ -216,30 +216,27 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
                            aims_[k]) > 0.0)
       return Move::kStay;  // it is where it can measure
   }
-  {
-    // Leave to a neighbour the open targets it is nearer to (straight line;
-    // ties to the lower index); all of them when each is nearer to one.
-    const Vec2 p = lattice.Point(here);
-    claimed_.assign(open_.begin(), open_.end());
-    bool any = false;
-    for (int k = 0; k < m; ++k) {
-      if (!open_[k]) continue;
-      const double mine = (aims_[k] - p).squaredNorm();
-      for (int j : ctx.comm->Neighbors(i)) {
-        if (j == i) continue;
-        const double theirs =
-            (aims_[k] - lattice.Point((*ctx.positions)[j])).squaredNorm();
-        if (theirs < mine || (theirs == mine && j < i)) {
-          claimed_[k] = 0;
-          break;
-        }
+  // Leave to a neighbour the open targets it is nearer to (straight line;
+  // ties to the lower index); all of them when each is nearer to one.
+  const Vec2 p = lattice.Point(here);
+  claimed_.assign(open_.begin(), open_.end());
+  bool any = false;
+  for (int k = 0; k < m; ++k) {
+    if (!open_[k]) continue;
+    const double mine = (aims_[k] - p).squaredNorm();
+    for (int j : ctx.comm->Neighbors(i)) {
+      if (j == i) continue;
+      const double theirs =
+          (aims_[k] - lattice.Point((*ctx.positions)[j])).squaredNorm();
+      if (theirs < mine || (theirs == mine && j < i)) {
+        claimed_[k] = 0;
+        break;
       }
-      any = any || claimed_[k];
     }
-    if (any)
-      return toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_, claimed_);
+    any = any || claimed_[k];
   }
-  return toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_, open_);
+  return toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_,
+                           any ? claimed_ : open_);
 }
 
 std::vector<std::pair<std::string, long>> IgbNetPolicy::Counters() const {

@@ -38,8 +38,7 @@ struct IgbNetParams {
   // then walks a shortest lattice path toward the nearest point that sees
   // an open target (where its search memory aims; targets a neighbour is
   // nearer to are left to it) and hands back to the network once it stands
-  // on one. 0: the most probable valid move, always
-  // (the paper's).
+  // on one. 0: the most probable valid move, always (the paper's).
   int max_reversals = 1;
   // Moves a deadlocked robot walks at most before it hands back to the
   // network; 0: until it stands where it can measure.
@@ -72,11 +71,10 @@ struct IgbNetParams {
         "to be and measured nothing aims channel 4 and the deadlock rule at "
         "the nearest part of the prior its missed points do not rule out "
         "(false: always the mean)"));
-    a->Visit(
-        AIA_FIELD(share_search)
-            .Doc("search memory: each robot also takes in the points its "
-                 "neighbours "
-                 "in this step's graph missed (false: its own misses only)"));
+    a->Visit(AIA_FIELD(share_search)
+                 .Doc("search memory: each robot also takes in the points its "
+                      "neighbours in this step's graph missed (false: its own "
+                      "misses only)"));
   }
 };
 
