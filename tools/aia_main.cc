@@ -455,6 +455,10 @@ Action AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--stem-stride", o->network.stem_stride, "stride of the stem")
       ->capture_default_str();
+  cmd->add_option("--message-hops", o->message_hops,
+                  "K: hops of learned message passing over the "
+                  "communication graph (0: none; default: --init's, else "
+                  "0; docs/learning.md, Network)");
   cmd->add_option("--pool", o->network.pool, "adaptive pooling to P x P")
       ->capture_default_str();
   cmd->add_option("--threads", o->threads,

@@ -107,12 +107,26 @@ def load_model(path):
             self.pool = nn.AdaptiveAvgPool2d(p)
             self.fc1 = nn.Linear(w * p * p, meta["hidden"])
             self.fc2 = nn.Linear(meta["hidden"], 4)
+            self.hops = meta.get("message_hops", 0)
+            for k in range(1, self.hops + 1):  # message passing: M_1..M_K
+                setattr(self, "message%d" % k,
+                        nn.Linear(meta["hidden"], meta["hidden"], bias=False))
 
-        def forward(self, x):
+        def forward(self, x, neighbours=None):
+            """Logits of a batch of robots; `neighbours[b]` lists the rows
+            robot b hears (message passing; None: each robot alone)."""
             x = torch.relu(self.stem_bn(self.stem(x)))
             for b in self.blocks:
                 x = b(x)
-            return self.fc2(torch.relu(self.fc1(self.pool(x).flatten(1))))
+            z = torch.relu(self.fc1(self.pool(x).flatten(1)))
+            if self.hops == 0 or neighbours is None:
+                return self.fc2(z)
+            h, hop = z, z
+            for k in range(1, self.hops + 1):
+                hop = torch.stack([hop[n].mean(0) if n else torch.zeros_like(hop[0])
+                                   for n in neighbours])
+                h = h + getattr(self, "message%d" % k)(hop)
+            return self.fc2(torch.relu(h))
 
     net = IgbNet()
     net.load_state_dict(state)

@@ -87,6 +87,9 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
   const int count = static_cast<int>(rows_.size());
   const int chunks = (count + kForwardBatch - 1) / kForwardBatch;
   batch_logits_.resize(rows_.size() * kNumMoves);
+  const bool passing = net_->config().message_hops > 0;
+  const int hidden = net_->config().hidden;
+  if (passing) features_.resize(rows_.size() * hidden);
   ParallelFor(chunks, 1, [&](int c0, int c1, int worker) {
     Grid<float>& heat = worker_heat_[worker];
     std::vector<Vec2>& neighbours = worker_neighbours_[worker];
@@ -110,11 +113,29 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
                                   neighbours, heat_.Robot(b, &heat), targets,
                                   prior, ctx.eps, images_.data() + b * size);
       }
-      net_->Forward(images_.data() + begin * size, end - begin,
+      if (passing)
+        net_->Embed(images_.data() + begin * size, end - begin,
                     renderer_->height(), renderer_->width(),
-                    batch_logits_.data() + begin * kNumMoves);
+                    features_.data() + begin * hidden);
+      else
+        net_->Forward(images_.data() + begin * size, end - begin,
+                      renderer_->height(), renderer_->width(),
+                      batch_logits_.data() + begin * kNumMoves);
     }
   });
+  if (!passing) return;
+  // The team's features over this step's graph among the active robots.
+  row_of_.assign(ctx.positions->size(), -1);
+  for (int b = 0; b < count; ++b) row_of_[rows_[b]] = b;
+  graph_.offsets.assign(1, 0);
+  graph_.neighbours.clear();
+  for (int b = 0; b < count; ++b) {
+    for (int j : ctx.comm->Neighbors(rows_[b]))
+      if (j != rows_[b] && row_of_[j] >= 0)
+        graph_.neighbours.push_back(row_of_[j]);
+    graph_.offsets.push_back(static_cast<int>(graph_.neighbours.size()));
+  }
+  net_->Head(features_.data(), graph_, batch_logits_.data());
 }
 
 PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,

@@ -4,6 +4,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <exception>
@@ -23,9 +24,10 @@ namespace aia {
 namespace {
 
 constexpr const char* kFormat = "aia-igbnet";
-// Version 2: the optional geodesic channel (written only when it is on, so
-// that a model without it stays readable by older builds).
-constexpr int kVersion = 2;
+// Version 2: the optional geodesic channel; version 3: message passing
+// (each written only when it is on, so that a model without it stays
+// readable by older builds).
+constexpr int kVersion = 3;
 constexpr const char* kMetaKey = "aia_meta";
 
 }  // namespace
@@ -33,7 +35,7 @@ constexpr const char* kMetaKey = "aia_meta";
 std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
-  j["version"] = channels.geodesic ? 2 : 1;
+  j["version"] = message_hops > 0 ? 3 : channels.geodesic ? 2 : 1;
   j["frame"] = std::string(ChannelFrameName(channels.frame));
   j["cell"] = channels.cell;
   j["window"] = channels.window;
@@ -49,6 +51,7 @@ std::string NetworkConfig::ToJson() const {
   j["stem_stride"] = stem_stride;
   j["pool"] = pool;
   j["hidden"] = hidden;
+  if (message_hops > 0) j["message_hops"] = message_hops;
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
@@ -81,6 +84,7 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     c.stem_stride = j.at("stem_stride").get<int>();
     c.pool = j.at("pool").get<int>();
     c.hidden = j.at("hidden").get<int>();
+    c.message_hops = j.value("message_hops", 0);
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(std::string("metadata: ") + e.what());
   }
@@ -95,7 +99,8 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
       c.channels.observe_range > 0.0 && c.channels.observe_range <= 1e3 &&
       c.width >= 1 && c.width <= 1024 && c.stem_stride >= 1 &&
       c.stem_stride <= 8 && c.pool >= 1 && c.pool <= 64 && c.hidden >= 1 &&
-      c.hidden <= 65536;
+      c.hidden <= 65536 && c.message_hops >= 0 &&
+      c.message_hops <= kMaxMessageHops;
   if (!ok) throw std::runtime_error("metadata out of range");
   return c;
 }
@@ -133,13 +138,66 @@ IgbNetModuleImpl::IgbNetModuleImpl(const NetworkConfig& c) {
       "pool", nn::AdaptiveAvgPool2d(nn::AdaptiveAvgPool2dOptions(c.pool)));
   fc1 = register_module("fc1", nn::Linear(c.width * c.pool * c.pool, c.hidden));
   fc2 = register_module("fc2", nn::Linear(c.hidden, kNumMoves));
+  for (int k = 1; k <= c.message_hops; ++k) {
+    messages.push_back(register_module(
+        "message" + std::to_string(k),
+        nn::Linear(nn::LinearOptions(c.hidden, c.hidden).bias(false))));
+  }
 }
 
-torch::Tensor IgbNetModuleImpl::forward(const torch::Tensor& input) {
+torch::Tensor IgbNetModuleImpl::embed(const torch::Tensor& input) {
   torch::Tensor x = torch::relu(stem_bn(stem(input)));
   for (const auto& block : *blocks) x = block->as<ResidualBlock>()->forward(x);
   x = pool(x).flatten(1);
-  return fc2(torch::relu(fc1(x)));
+  return torch::relu(fc1(x));
+}
+
+torch::Tensor IgbNetModuleImpl::head(const torch::Tensor& z,
+                                     const GraphTensors* graph) {
+  if (messages.empty() || !graph) return fc2(z);
+  torch::Tensor h = z, hop = z;
+  for (torch::nn::Linear& m : messages) {
+    hop = torch::zeros_like(hop).index_add(0, graph->dst,
+                                           hop.index_select(0, graph->src)) *
+          graph->inv_degree.unsqueeze(1);
+    h = h + m(hop);
+  }
+  return fc2(torch::relu(h));
+}
+
+torch::Tensor IgbNetModuleImpl::forward(const torch::Tensor& input) {
+  return head(embed(input), nullptr);
+}
+
+torch::Tensor IgbNetModuleImpl::forward(const torch::Tensor& input,
+                                        const GraphTensors& graph) {
+  return head(embed(input), &graph);
+}
+
+GraphTensors ToTensors(const TeamGraph& graph) {
+  const int n = graph.rows();
+  AIA_CHECK(n >= 0 && graph.offsets.front() == 0 &&
+            graph.offsets.back() == static_cast<int>(graph.neighbours.size()));
+  std::vector<int64_t> src, dst;
+  std::vector<float> inv(n, 0.0f);
+  src.reserve(graph.neighbours.size());
+  dst.reserve(graph.neighbours.size());
+  for (int b = 0; b < n; ++b) {
+    const int d = graph.offsets[b + 1] - graph.offsets[b];
+    AIA_CHECK(d >= 0);
+    if (d > 0) inv[b] = 1.0f / static_cast<float>(d);
+    for (int e = graph.offsets[b]; e < graph.offsets[b + 1]; ++e) {
+      const int j = graph.neighbours[e];
+      AIA_CHECK_MSG(j >= 0 && j < n && j != b, "a neighbour outside the batch");
+      src.push_back(j);
+      dst.push_back(b);
+    }
+  }
+  const auto ints = [](const std::vector<int64_t>& v) {
+    return torch::tensor(torch::ArrayRef<int64_t>(v), torch::kInt64);
+  };
+  return {ints(src), ints(dst),
+          torch::tensor(torch::ArrayRef<float>(inv), torch::kFloat32)};
 }
 
 IgbNet::IgbNet() : impl_(std::make_unique<Impl>()) {}
@@ -175,9 +233,9 @@ FoldedNet Fold(IgbNetModule& module) {
   return f;
 }
 
-torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
-                            const NetworkConfig& config,
-                            const torch::Tensor& input) {
+torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
+                          const NetworkConfig& config,
+                          const torch::Tensor& input) {
   torch::Tensor x = torch::relu(
       torch::conv2d(input, f.stem_w, f.stem_b, config.stem_stride, 1));
   for (const auto& b : f.blocks) {
@@ -186,7 +244,13 @@ torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
     x = torch::relu(y + x);
   }
   x = module->pool(x).flatten(1);
-  return module->fc2(torch::relu(module->fc1(x)));
+  return torch::relu(module->fc1(x));
+}
+
+torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
+                            const NetworkConfig& config,
+                            const torch::Tensor& input) {
+  return module->fc2(FoldedEmbed(f, module, config, input));
 }
 
 IgbNet::IgbNet(const NetworkConfig& config, std::uint64_t seed) : IgbNet() {
@@ -416,6 +480,13 @@ void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
   WriteFileAtomic(path, bytes);
 }
 
+std::shared_ptr<const FoldedNet> IgbNet::Folded() const {
+  std::lock_guard<std::mutex> lock(impl_->folded_mutex);
+  if (!impl_->folded)
+    impl_->folded = std::make_shared<const FoldedNet>(Fold(impl_->module));
+  return impl_->folded;
+}
+
 void IgbNet::Forward(const float* images, int batch, int height, int width,
                      float* logits) const {
   AIA_CHECK(batch >= 0 && height > 0 && width > 0);
@@ -425,17 +496,83 @@ void IgbNet::Forward(const float* images, int batch, int height, int width,
       const_cast<float*>(images),
       {batch, impl_->config.channels.num_channels(), height, width},
       torch::kFloat32);
-  std::shared_ptr<const FoldedNet> folded;
-  {
-    std::lock_guard<std::mutex> lock(impl_->folded_mutex);
-    if (!impl_->folded)
-      impl_->folded = std::make_shared<const FoldedNet>(Fold(impl_->module));
-    folded = impl_->folded;
-  }
   const torch::Tensor y =
-      FoldedForward(*folded, impl_->module, impl_->config, x).contiguous();
+      FoldedForward(*Folded(), impl_->module, impl_->config, x).contiguous();
   std::memcpy(logits, y.data_ptr<float>(),
               sizeof(float) * static_cast<std::size_t>(batch) * kNumMoves);
+}
+
+void IgbNet::Embed(const float* images, int batch, int height, int width,
+                   float* features) const {
+  AIA_CHECK(batch >= 0 && height > 0 && width > 0);
+  if (batch == 0) return;
+  torch::NoGradGuard no_grad;
+  const torch::Tensor x = torch::from_blob(
+      const_cast<float*>(images),
+      {batch, impl_->config.channels.num_channels(), height, width},
+      torch::kFloat32);
+  const torch::Tensor z =
+      FoldedEmbed(*Folded(), impl_->module, impl_->config, x).contiguous();
+  std::memcpy(features, z.data_ptr<float>(),
+              sizeof(float) * static_cast<std::size_t>(batch) *
+                  impl_->config.hidden);
+}
+
+void IgbNet::Head(const float* features, const TeamGraph& graph,
+                  float* logits) const {
+  const int n = graph.rows();
+  const int hidden = impl_->config.hidden;
+  const int hops = impl_->config.message_hops;
+  AIA_CHECK(n >= 0 && graph.offsets.front() == 0 &&
+            graph.offsets.back() == static_cast<int>(graph.neighbours.size()));
+  if (n == 0) return;
+  const std::size_t size = static_cast<std::size_t>(n) * hidden;
+  // S^k z for k = 1..K, hop by hop over the whole team (the mean over each
+  // robot's neighbours, in the order the graph lists them).
+  std::vector<float> taps(size * hops, 0.0f);
+  for (int k = 0; k < hops; ++k) {
+    const float* from = k == 0 ? features : taps.data() + (k - 1) * size;
+    float* to = taps.data() + k * size;
+    for (int b = 0; b < n; ++b) {
+      const int d = graph.offsets[b + 1] - graph.offsets[b];
+      if (d == 0) continue;
+      float* out = to + static_cast<std::size_t>(b) * hidden;
+      for (int e = graph.offsets[b]; e < graph.offsets[b + 1]; ++e) {
+        const int j = graph.neighbours[e];
+        AIA_CHECK_MSG(j >= 0 && j < n && j != b,
+                      "a neighbour outside the batch");
+        const float* in = from + static_cast<std::size_t>(j) * hidden;
+        for (int c = 0; c < hidden; ++c) out[c] += in[c];
+      }
+      const float inv = 1.0f / static_cast<float>(d);
+      for (int c = 0; c < hidden; ++c) out[c] *= inv;
+    }
+  }
+  // The layers in fixed chunks of rows, so that a robot's logits do not
+  // depend on the number of threads.
+  constexpr int kChunk = 32;
+  IgbNetModule& module = impl_->module;
+  ParallelFor((n + kChunk - 1) / kChunk, 1, [&](int c0, int c1, int) {
+    torch::NoGradGuard no_grad;
+    for (int c = c0; c < c1; ++c) {
+      const int begin = c * kChunk, rows = std::min(n, begin + kChunk) - begin;
+      const auto rows_of = [&](const float* base) {
+        return torch::from_blob(
+            const_cast<float*>(base) + static_cast<std::size_t>(begin) * hidden,
+            {rows, hidden}, torch::kFloat32);
+      };
+      torch::Tensor h = rows_of(features);
+      if (hops > 0) {
+        for (int k = 0; k < hops; ++k)
+          h = h + module->messages[k](rows_of(taps.data() + k * size));
+        h = torch::relu(h);
+      }
+      const torch::Tensor y = module->fc2(h).contiguous();
+      std::memcpy(logits + static_cast<std::size_t>(begin) * kNumMoves,
+                  y.data_ptr<float>(),
+                  sizeof(float) * static_cast<std::size_t>(rows) * kNumMoves);
+    }
+  });
 }
 
 void SetInferenceThreads(int threads) {

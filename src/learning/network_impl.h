@@ -22,14 +22,33 @@ struct ResidualBlockImpl : torch::nn::Module {
 };
 TORCH_MODULE(ResidualBlock);
 
+// A batch's graph as tensors for message passing: edge e carries row
+// src[e]'s features to row dst[e]; inv_degree[b] is 1 / (b's neighbours), 0
+// for a robot without any.
+struct GraphTensors {
+  torch::Tensor src, dst, inv_degree;
+};
+GraphTensors ToTensors(const TeamGraph& graph);
+
 struct IgbNetModuleImpl : torch::nn::Module {
   explicit IgbNetModuleImpl(const NetworkConfig& config);
-  torch::Tensor forward(const torch::Tensor& x);  // N x 4 x H x W -> N x 4
+  // N x C x H x W -> N x 4, each robot alone.
+  torch::Tensor forward(const torch::Tensor& x);
+  // The same with message passing over `graph` (its rows are the batch's).
+  torch::Tensor forward(const torch::Tensor& x, const GraphTensors& graph);
+  // The hidden features z = relu(fc1(pooled stem and blocks)), N x hidden.
+  torch::Tensor embed(const torch::Tensor& x);
+  // z -> logits: fc2(relu(z + sum_k M_k S^k z)) (fc2(z) without hops).
+  torch::Tensor head(const torch::Tensor& z, const GraphTensors* graph);
   torch::nn::Conv2d stem{nullptr};
   torch::nn::BatchNorm2d stem_bn{nullptr};
   torch::nn::ModuleList blocks;
   torch::nn::AdaptiveAvgPool2d pool{nullptr};
   torch::nn::Linear fc1{nullptr}, fc2{nullptr};
+  // M_1..M_K (hidden x hidden, no bias; `aia train --init` zeroes the hops
+  // it adds, so that the extended network starts as the same function);
+  // registered only when K > 0, so older model files keep their names.
+  std::vector<torch::nn::Linear> messages;
 };
 TORCH_MODULE(IgbNetModule);
 
@@ -49,6 +68,9 @@ FoldedNet Fold(IgbNetModule& module);
 torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
                             const NetworkConfig& config,
                             const torch::Tensor& x);
+// The hidden features (IgbNetModuleImpl::embed) through the folded layers.
+torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
+                          const NetworkConfig& config, const torch::Tensor& x);
 
 struct IgbNet::Impl {
   NetworkConfig config;

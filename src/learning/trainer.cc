@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numeric>
 #include <sstream>
@@ -36,7 +37,90 @@ struct Corpus {
   std::vector<ChannelRenderer> renderers;
   std::vector<char> val_world;
   std::vector<int> train, val;  // sample indices
+  // For message passing: each sample's neighbours among the samples of its
+  // world and step (matched by position; a neighbour the dataset holds no
+  // sample of, one the expert kept still, is left out), and the steps as
+  // sample ranges [step_begin[g], step_begin[g + 1]).
+  std::vector<std::vector<int>> neighbours;
+  std::vector<int> step_begin;
 };
+
+// Fills c->neighbours and c->step_begin (samples come sorted by world, step
+// and robot).
+void LinkNeighbours(Corpus* c) {
+  const std::vector<DatasetSample>& s = c->data.samples;
+  const int n = static_cast<int>(s.size());
+  c->neighbours.assign(n, {});
+  c->step_begin.clear();
+  std::map<std::pair<double, double>, int> at;
+  for (int b = 0; b < n;) {
+    int e = b;
+    while (e < n && s[e].world == s[b].world && s[e].step == s[b].step) ++e;
+    c->step_begin.push_back(b);
+    at.clear();
+    for (int i = b; i < e; ++i)
+      at.emplace(std::make_pair(s[i].position.x(), s[i].position.y()), i);
+    for (int i = b; i < e; ++i)
+      for (const Vec2& p : s[i].neighbours) {
+        const auto it = at.find({p.x(), p.y()});
+        if (it != at.end() && it->second != i)
+          c->neighbours[i].push_back(it->second);
+      }
+    b = e;
+  }
+  c->step_begin.push_back(n);
+}
+
+// The rows a batch of `centres` renders: the centres first, then every
+// sample within `hops` links of one (their outputs need them), and the
+// graph among those rows.
+void GraphRows(const Corpus& c, const std::vector<int>& centres, int hops,
+               std::vector<int>* rows, TeamGraph* graph) {
+  *rows = centres;
+  std::map<int, int> row_of;
+  for (int b = 0; b < static_cast<int>(centres.size()); ++b)
+    row_of.emplace(centres[b], b);
+  std::size_t frontier = 0;
+  for (int k = 0; k < hops; ++k) {
+    const std::size_t end = rows->size();
+    for (std::size_t r = frontier; r < end; ++r)
+      for (int j : c.neighbours[(*rows)[r]])
+        if (row_of.emplace(j, static_cast<int>(rows->size())).second)
+          rows->push_back(j);
+    frontier = end;
+  }
+  graph->offsets.assign(1, 0);
+  graph->neighbours.clear();
+  for (int i : *rows) {
+    for (int j : c.neighbours[i]) {
+      const auto it = row_of.find(j);
+      if (it != row_of.end()) graph->neighbours.push_back(it->second);
+    }
+    graph->offsets.push_back(static_cast<int>(graph->neighbours.size()));
+  }
+}
+
+// The batches of one pass over `samples` (in this order) for message
+// passing: whole steps, each batch the samples of consecutive steps until it
+// holds `batch` or more. `samples` must list each step's samples together.
+std::vector<std::vector<int>> StepBatches(const Corpus& c,
+                                          const std::vector<int>& samples,
+                                          int batch) {
+  std::vector<std::vector<int>> out(1);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    out.back().push_back(samples[i]);
+    const bool step_ends =
+        i + 1 == samples.size() ||
+        c.data.samples[samples[i + 1]].world !=
+            c.data.samples[samples[i]].world ||
+        c.data.samples[samples[i + 1]].step != c.data.samples[samples[i]].step;
+    if (step_ends && static_cast<int>(out.back().size()) >= batch &&
+        i + 1 < samples.size())
+      out.emplace_back();
+  }
+  if (out.back().empty()) out.pop_back();
+  return out;
+}
 
 Corpus LoadCorpus(const std::vector<std::string>& paths,
                   const ChannelParams& channels, double val_share,
@@ -65,12 +149,12 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
   return c;
 }
 
-// Renders samples idx[first, first + n) into `images`, labels and weights.
-void MakeBatch(Corpus* c, const std::vector<int>& idx, std::size_t first, int n,
-               double weak_weight, int* height, int* width,
-               std::vector<float>* images, std::vector<int64_t>* labels,
-               std::vector<float>* weights, std::vector<char>* useful) {
-  const ChannelRenderer& r0 = c->renderers[c->data.samples[idx[first]].world];
+// Renders samples idx[0, n) into `images`, labels and weights.
+void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
+               int* height, int* width, std::vector<float>* images,
+               std::vector<int64_t>* labels, std::vector<float>* weights,
+               std::vector<char>* useful) {
+  const ChannelRenderer& r0 = c->renderers[c->data.samples[idx[0]].world];
   *height = r0.height();
   *width = r0.width();
   const std::size_t size = r0.ImageSize();
@@ -79,7 +163,7 @@ void MakeBatch(Corpus* c, const std::vector<int>& idx, std::size_t first, int n,
   weights->resize(n);
   useful->resize(n);
   for (int b = 0; b < n; ++b) {
-    const DatasetSample& s = c->data.samples[idx[first + b]];
+    const DatasetSample& s = c->data.samples[idx[b]];
     ChannelRenderer& r = c->renderers[s.world];
     if (r.height() != *height || r.width() != *width)
       throw InputError("command line", 0, "--data",
@@ -94,7 +178,7 @@ void MakeBatch(Corpus* c, const std::vector<int>& idx, std::size_t first, int n,
   }
 }
 
-ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
+ValidationResult Evaluate(IgbNetModule& module, Corpus* c, int hops) {
   ValidationResult r;  // NaN: no held-out samples
   if (c->val.empty()) return r;
   module->eval();
@@ -106,16 +190,34 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c) {
   long useful_n = 0, useful_right = 0, right = 0;
   double loss = 0.0;
   constexpr int kBatch = 128;
-  for (std::size_t first = 0; first < c->val.size(); first += kBatch) {
-    const int n =
-        static_cast<int>(std::min<std::size_t>(kBatch, c->val.size() - first));
+  std::vector<std::vector<int>> batches;
+  if (hops > 0) {
+    batches = StepBatches(*c, c->val, kBatch);
+  } else {
+    for (std::size_t first = 0; first < c->val.size(); first += kBatch)
+      batches.emplace_back(
+          c->val.begin() + first,
+          c->val.begin() + std::min(c->val.size(), first + kBatch));
+  }
+  std::vector<int> rows;
+  TeamGraph graph;
+  for (const std::vector<int>& centres : batches) {
+    const int n = static_cast<int>(centres.size());
+    if (hops > 0) {
+      GraphRows(*c, centres, hops, &rows, &graph);
+    } else {
+      rows = centres;
+    }
+    const int m = static_cast<int>(rows.size());
     int h = 0, w = 0;
-    MakeBatch(c, c->val, first, n, 1.0, &h, &w, &images, &labels, &weights,
+    MakeBatch(c, rows.data(), m, 1.0, &h, &w, &images, &labels, &weights,
               &useful);
     const torch::Tensor x =
-        torch::from_blob(images.data(), {n, channels, h, w});
+        torch::from_blob(images.data(), {m, channels, h, w});
     const torch::Tensor y = torch::from_blob(labels.data(), {n}, torch::kInt64);
-    const torch::Tensor logits = module->forward(x);
+    const torch::Tensor logits =
+        hops > 0 ? module->forward(x, ToTensors(graph)).narrow(0, 0, n)
+                 : module->forward(x);
     loss += torch::nn::functional::cross_entropy(
                 logits, y,
                 torch::nn::functional::CrossEntropyFuncOptions().reduction(
@@ -248,6 +350,9 @@ void CheckOptions(const TrainOptions& o) {
     throw bad("--stem-stride", "must be 1..4");
   if (o.network.pool < 1 || o.network.pool > 32)
     throw bad("--pool", "must be 1..32");
+  if (o.message_hops < -1 || o.message_hops > kMaxMessageHops)
+    throw bad("--message-hops",
+              "must be 0.." + std::to_string(kMaxMessageHops));
 }
 
 }  // namespace
@@ -323,9 +428,31 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
   if (!o.init.empty()) {
     net = IgbNet::Load(o.init, "command line", 0, "--init");
     o.network = net->config();
+    if (o.message_hops >= 0 && o.message_hops != o.network.message_hops) {
+      if (o.message_hops < o.network.message_hops)
+        throw InputError("command line", 0, "--message-hops",
+                         "the --init model passes messages over " +
+                             std::to_string(o.network.message_hops) +
+                             " hops; it can be extended, not cut");
+      // The same weights; the new hops' layers start at zero.
+      o.network.message_hops = o.message_hops;
+      auto wider = std::make_unique<IgbNet>(o.network, o.seed);
+      torch::NoGradGuard no_grad;
+      IgbNetModule& from = net->impl().module;
+      IgbNetModule& to = wider->impl().module;
+      auto params = to->named_parameters();
+      auto buffers = to->named_buffers();
+      for (const auto& p : from->named_parameters()) params[p.key()].copy_(p.value());
+      for (const auto& b : from->named_buffers()) buffers[b.key()].copy_(b.value());
+      for (std::size_t k = from->messages.size(); k < to->messages.size(); ++k)
+        to->messages[k]->weight.zero_();
+      net = std::move(wider);
+    }
   } else {
+    if (o.message_hops >= 0) o.network.message_hops = o.message_hops;
     net = std::make_unique<IgbNet>(o.network, o.seed);
   }
+  const int hops = o.network.message_hops;
   CheckOutputsAreNotInputs(o);
   IgbNetModule& module = net->impl().module;
   torch::optim::Adam optimizer(
@@ -389,6 +516,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
   if (corpus.train.empty())
     throw InputError("command line", 0, "--data",
                      "leaves no training samples after the split");
+  if (hops > 0) LinkNeighbours(&corpus);
   if (o.progress)
     std::fprintf(stderr,
                  "[train] %zu worlds, %zu samples: %zu for training, %zu held "
@@ -402,10 +530,12 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
   const long steps_per_epoch =
       (static_cast<long>(corpus.train.size()) + o.batch - 1) / o.batch;
   const long total_steps = steps_per_epoch * o.epochs;
-  const auto lr_at = [&](long step) {
-    return o.lr_min + 0.5 * (o.lr - o.lr_min) *
-                          (1.0 + std::cos(M_PI * static_cast<double>(step) /
-                                          static_cast<double>(total_steps)));
+  // `step` counts batches of --batch samples (fractional with message
+  // passing, whose batches are whole steps).
+  const auto lr_at = [&](double step) {
+    return o.lr_min +
+           0.5 * (o.lr - o.lr_min) *
+               (1.0 + std::cos(M_PI * step / static_cast<double>(total_steps)));
   };
 
   std::vector<float> images, weights;
@@ -416,30 +546,73 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
     const auto t0 = Clock::now();
     std::vector<int> order = corpus.train;
     Rng rng(o.seed, "train/shuffle", static_cast<std::uint64_t>(epoch));
-    for (std::size_t i = order.size(); i > 1; --i)
-      std::swap(order[i - 1], order[rng.UniformInt(i)]);
+    std::vector<std::vector<int>> batches;
+    if (hops > 0) {
+      // Whole steps in a shuffled order, so that a robot's neighbours are
+      // in its batch.
+      std::vector<std::pair<int, int>> steps;  // ranges of `order`
+      for (std::size_t i = 0; i < order.size();) {
+        std::size_t e = i + 1;
+        const DatasetSample& a = corpus.data.samples[order[i]];
+        while (e < order.size() &&
+               corpus.data.samples[order[e]].world == a.world &&
+               corpus.data.samples[order[e]].step == a.step)
+          ++e;
+        steps.emplace_back(static_cast<int>(i), static_cast<int>(e));
+        i = e;
+      }
+      for (std::size_t i = steps.size(); i > 1; --i)
+        std::swap(steps[i - 1], steps[rng.UniformInt(i)]);
+      std::vector<int> shuffled;
+      shuffled.reserve(order.size());
+      for (const auto& [b, e] : steps)
+        shuffled.insert(shuffled.end(), order.begin() + b, order.begin() + e);
+      batches = StepBatches(corpus, shuffled, o.batch);
+    } else {
+      for (std::size_t i = order.size(); i > 1; --i)
+        std::swap(order[i - 1], order[rng.UniformInt(i)]);
+      for (long s = 0; s < steps_per_epoch; ++s) {
+        const std::size_t first = static_cast<std::size_t>(s) * o.batch;
+        batches.emplace_back(
+            order.begin() + first,
+            order.begin() + std::min(order.size(), first + o.batch));
+      }
+    }
     module->train();
     double loss_sum = 0.0, weight_sum = 0.0;
-    long right = 0, seen = 0;
+    long right = 0, seen = 0, consumed = 0;
     double lr = o.lr;
     const int channels = corpus.renderers.front().channels();
-    for (long s = 0; s < steps_per_epoch; ++s) {
-      const std::size_t first = static_cast<std::size_t>(s) * o.batch;
-      const int n = static_cast<int>(
-          std::min<std::size_t>(o.batch, order.size() - first));
-      if (n < 2) break;  // batch norm needs two samples
+    std::vector<int> rows;
+    TeamGraph graph;
+    const long num_batches = static_cast<long>(batches.size());
+    for (long s = 0; s < num_batches; ++s) {
+      const std::vector<int>& centres = batches[s];
+      const int n = static_cast<int>(centres.size());
+      if (hops > 0) {
+        GraphRows(corpus, centres, hops, &rows, &graph);
+      } else {
+        rows = centres;
+      }
+      const int m = static_cast<int>(rows.size());
+      if (m < 2) break;  // batch norm needs two samples
       int h = 0, w = 0;
-      MakeBatch(&corpus, order, first, n, o.weak_weight, &h, &w, &images,
+      MakeBatch(&corpus, rows.data(), m, o.weak_weight, &h, &w, &images,
                 &labels, &weights, &useful);
-      lr = lr_at(epoch * steps_per_epoch + s);
+      lr = lr_at(static_cast<double>(epoch * steps_per_epoch) +
+                 (hops > 0 ? static_cast<double>(consumed) / o.batch
+                           : static_cast<double>(s)));
+      consumed += n;
       for (auto& group : optimizer.param_groups())
         static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
       const torch::Tensor x =
-          torch::from_blob(images.data(), {n, channels, h, w});
+          torch::from_blob(images.data(), {m, channels, h, w});
       const torch::Tensor y =
           torch::from_blob(labels.data(), {n}, torch::kInt64);
       const torch::Tensor wt = torch::from_blob(weights.data(), {n});
-      const torch::Tensor logits = module->forward(x);
+      const torch::Tensor logits =
+          hops > 0 ? module->forward(x, ToTensors(graph)).narrow(0, 0, n)
+                   : module->forward(x);
       const torch::Tensor per = torch::nn::functional::cross_entropy(
           logits, y,
           torch::nn::functional::CrossEntropyFuncOptions().reduction(
@@ -455,11 +628,11 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
       const torch::Tensor pred = logits.argmax(1);
       right += (pred == y).sum().item<int64_t>();
       seen += n;
-      if (o.progress && isatty(2) && (s % 50 == 0 || s + 1 == steps_per_epoch))
+      if (o.progress && isatty(2) && (s % 50 == 0 || s + 1 == num_batches))
         std::fprintf(stderr,
                      "\r[train] epoch %d/%d  batch %ld/%ld  loss %.4f  acc "
                      "%.3f  %.0f samples/s   ",
-                     epoch + 1, o.epochs, s + 1, steps_per_epoch,
+                     epoch + 1, o.epochs, s + 1, num_batches,
                      loss_sum / std::max(weight_sum, 1e-12),
                      static_cast<double>(right) / std::max(seen, 1L),
                      seen / std::max(Seconds(t0), 1e-9));
@@ -470,7 +643,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
     e.train_loss = loss_sum / std::max(weight_sum, 1e-12);
     e.train_acc = static_cast<double>(right) / std::max(seen, 1L);
     e.samples = seen;
-    const ValidationResult v = Evaluate(module, &corpus);
+    const ValidationResult v = Evaluate(module, &corpus, hops);
     e.val_loss = v.loss;
     e.val_acc = v.acc;
     e.val_acc_useful = v.acc_useful;
@@ -527,7 +700,9 @@ ValidationResult Validate(const std::string& model,
                          std::to_string(corpus.data.worlds.size()) +
                          " worlds of --data: nothing to validate on (a larger "
                          "--val-share, or more worlds)");
-  return Evaluate(net->impl().module, &corpus);
+  const int hops = net->config().message_hops;
+  if (hops > 0) LinkNeighbours(&corpus);
+  return Evaluate(net->impl().module, &corpus, hops);
 }
 
 double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,

@@ -115,14 +115,95 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   EXPECT_EQ(gb.channels.geodesic_length, 7.5);
   EXPECT_EQ(gb.channels.num_channels(), 5);
   EXPECT_NE(g.ToJson().find("\"version\":2"), std::string::npos);
-  std::string future = g.ToJson();
-  future.replace(future.find("\"version\":2"), 11, "\"version\":3");
+  // Message passing: version 3, hops 0..8.
+  NetworkConfig mp = g;
+  mp.message_hops = 3;
+  EXPECT_NE(mp.ToJson().find("\"version\":3"), std::string::npos);
+  EXPECT_EQ(NetworkConfig::FromJson(mp.ToJson()).message_hops, 3);
+  EXPECT_EQ(NetworkConfig::FromJson(g.ToJson()).message_hops, 0);
+  std::string hops = mp.ToJson();
+  hops.replace(hops.find("\"message_hops\":3"), 16, "\"message_hops\":9");
+  EXPECT_THROW(NetworkConfig::FromJson(hops), std::runtime_error);
+  std::string future = mp.ToJson();
+  future.replace(future.find("\"version\":3"), 11, "\"version\":4");
   try {
     NetworkConfig::FromJson(future);
-    ADD_FAILURE() << "version 3 read";
+    ADD_FAILURE() << "version 4 read";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model format version 3, this build reads 1 to 2");
+    EXPECT_STREQ(e.what(), "model format version 4, this build reads 1 to 3");
   }
+}
+
+// A path 0 - 1 - 2 - 3 and robot 4 alone, as a TeamGraph under the
+// relabelling `perm` (robot k of the relabelled team is robot perm[k]).
+TeamGraph PathGraph(const std::vector<int>& perm) {
+  const std::vector<std::vector<int>> edges = {{1}, {0, 2}, {1, 3}, {2}, {}};
+  std::vector<int> label(perm.size());
+  for (std::size_t k = 0; k < perm.size(); ++k) label[perm[k]] = k;
+  TeamGraph g;
+  for (std::size_t k = 0; k < perm.size(); ++k) {
+    for (int j : edges[perm[k]]) g.neighbours.push_back(label[j]);
+    g.offsets.push_back(static_cast<int>(g.neighbours.size()));
+  }
+  return g;
+}
+
+// Message passing over K = 2 hops: a robot's logits depend on the robots
+// within two links and on no other (changing robot 3 changes robots 1, 2
+// and 3, not 0 nor 4); a robot alone gets Forward's logits; relabelling the
+// robots permutes the logits; the same call twice gives the same numbers
+// (no state, no notion of time); save and load keep it.
+TEST(IgbNetTest, MessagePassingIsLocalEquivariantAndStateless) {
+  NetworkConfig c = SmallConfig();
+  c.message_hops = 2;
+  IgbNet net(c, 5);
+  const int n = 5, h = 16, w = 16;
+  const std::size_t image = static_cast<std::size_t>(kNumChannels) * h * w;
+  const std::vector<int> identity = {0, 1, 2, 3, 4};
+  const auto logits_of = [&](const IgbNet& m, const std::vector<float>& x,
+                             const TeamGraph& g) {
+    std::vector<float> z(n * c.hidden), l(n * kNumMoves);
+    m.Embed(x.data(), n, h, w, z.data());
+    m.Head(z.data(), g, l.data());
+    return l;
+  };
+  const auto row = [](const std::vector<float>& l, int i) {
+    return std::vector<float>(l.begin() + i * kNumMoves,
+                              l.begin() + (i + 1) * kNumMoves);
+  };
+  const std::vector<float> x = RandomImages(n, h, w, 9);
+  const std::vector<float> a = logits_of(net, x, PathGraph(identity));
+  EXPECT_EQ(a, logits_of(net, x, PathGraph(identity)));
+
+  std::vector<float> alone(n * kNumMoves);
+  net.Forward(x.data(), n, h, w, alone.data());
+  for (int m = 0; m < kNumMoves; ++m)
+    EXPECT_NEAR(a[4 * kNumMoves + m], alone[4 * kNumMoves + m], 1e-5);
+  EXPECT_NE(row(a, 1), row(alone, 1));  // the messages do change robot 1
+
+  std::vector<float> y = x;
+  for (std::size_t v = 3 * image; v < 4 * image; ++v) y[v] = 1.0f - y[v];
+  const std::vector<float> b = logits_of(net, y, PathGraph(identity));
+  EXPECT_EQ(row(b, 0), row(a, 0));
+  EXPECT_EQ(row(b, 4), row(a, 4));
+  for (int i : {1, 2, 3}) EXPECT_NE(row(b, i), row(a, i)) << "robot " << i;
+
+  const std::vector<int> perm = {3, 0, 4, 1, 2};
+  std::vector<float> px(x.size());
+  for (int k = 0; k < n; ++k)
+    std::copy(x.begin() + perm[k] * image, x.begin() + (perm[k] + 1) * image,
+              px.begin() + k * image);
+  const std::vector<float> p = logits_of(net, px, PathGraph(perm));
+  for (int k = 0; k < n; ++k)
+    for (int m = 0; m < kNumMoves; ++m)
+      EXPECT_NEAR(p[k * kNumMoves + m], a[perm[k] * kNumMoves + m], 1e-5);
+
+  const std::string dir = testing::MakeTempDir("aia_net_");
+  net.Save(dir + "/mp.pt");
+  const auto loaded = IgbNet::Load(dir + "/mp.pt", "f", 0, "k");
+  EXPECT_EQ(loaded->config().message_hops, 2);
+  EXPECT_EQ(logits_of(*loaded, x, PathGraph(identity)), a);
+  fs::remove_all(dir);
 }
 
 // The paper's configuration, as earlier builds wrote it (format version 1,
@@ -173,25 +254,34 @@ std::vector<Move> Decide(IgbNetPolicy* policy, const testing::TeamFixture& f,
 }
 
 std::shared_ptr<const IgbNet> TestNet(ChannelFrame frame,
-                                      bool geodesic = false) {
+                                      bool geodesic = false, int hops = 0) {
   NetworkConfig c = SmallConfig();
   c.channels.frame = frame;
   c.channels.cell = 0.5;
   c.channels.geodesic = geodesic;
+  c.message_hops = hops;
   return std::make_shared<const IgbNet>(c, 11);
 }
 
+// With message passing (the last two cases) the logits agree to rounding:
+// a robot's neighbours are summed in another order.
 TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
-  for (const auto& [frame, geodesic] :
-       std::vector<std::pair<ChannelFrame, bool>>{
-           {ChannelFrame::kCentred, false},
-           {ChannelFrame::kGlobal, false},
-           {ChannelFrame::kCentred, true},
-           {ChannelFrame::kGlobal, true}}) {
+  struct Case {
+    ChannelFrame frame;
+    bool geodesic;
+    int hops;
+  };
+  for (const auto& [frame, geodesic, hops] :
+       std::vector<Case>{{ChannelFrame::kCentred, false, 0},
+                         {ChannelFrame::kGlobal, false, 0},
+                         {ChannelFrame::kCentred, true, 0},
+                         {ChannelFrame::kGlobal, true, 0},
+                         {ChannelFrame::kCentred, true, 1},
+                         {ChannelFrame::kCentred, true, 2}}) {
     testing::TeamFixture f(kTeam);
     Personalize(&f);
     const std::vector<double> prior(3, std::log(1.0));
-    IgbNetPolicy policy(TestNet(frame, geodesic));
+    IgbNetPolicy policy(TestNet(frame, geodesic, hops));
     const std::vector<Move> moves = Decide(&policy, f, 0, prior);
     const std::vector<float> logits = policy.logits();
 
@@ -208,13 +298,24 @@ TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
     std::vector<Vec2> p;
     for (int idx : g.positions) p.push_back(g.world.map.lattice().Point(idx));
     g.comm.Update(1, p);
-    IgbNetPolicy policy2(TestNet(frame, geodesic));
+    IgbNetPolicy policy2(TestNet(frame, geodesic, hops));
     const std::vector<Move> moved = Decide(&policy2, g, 0, prior);
     for (int k = 0; k < 4; ++k) {
       EXPECT_EQ(moved[k], moves[perm[k]]) << "robot " << k;
-      for (int m = 0; m < kNumMoves; ++m)
-        EXPECT_EQ(policy2.logits()[k * kNumMoves + m],
-                  logits[perm[k] * kNumMoves + m]);
+      for (int m = 0; m < kNumMoves; ++m) {
+        const float got = policy2.logits()[k * kNumMoves + m],
+                    want = logits[perm[k] * kNumMoves + m];
+        if (hops == 0) {
+          EXPECT_EQ(got, want);
+        } else {
+          EXPECT_NEAR(got, want, 1e-5);
+        }
+      }
+    }
+    if (hops > 0) {  // the messages matter: without them the logits differ
+      IgbNetPolicy alone(TestNet(frame, geodesic, 0));
+      Decide(&alone, f, 0, prior);
+      EXPECT_NE(alone.logits(), logits);
     }
     // Not a degenerate network: the robots do not all agree.
     EXPECT_NE(std::vector<float>(logits.begin(), logits.begin() + 4),
@@ -223,11 +324,12 @@ TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
 }
 
 TEST(IgbNetPolicyTest, TheSameGraphAtAnotherStepGivesTheSameActions) {
-  for (bool geodesic : {false, true}) {
+  for (const auto& [geodesic, hops] :
+       std::vector<std::pair<bool, int>>{{false, 0}, {true, 0}, {true, 2}}) {
     testing::TeamFixture f(kTeam);
     Personalize(&f);
     const std::vector<double> prior(3, std::log(1.0));
-    IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, geodesic));
+    IgbNetPolicy policy(TestNet(ChannelFrame::kCentred, geodesic, hops));
     const std::vector<Move> a = Decide(&policy, f, 0, prior);
     const std::vector<float> la = policy.logits();
     const std::vector<Move> b = Decide(&policy, f, 317, prior);

@@ -313,6 +313,64 @@ TEST(TrainTest, AGeodesicModelTrainsAndPythonReproducesIt) {
   fs::remove_all(dir);
 }
 
+// Message passing: a fresh model with two hops trains (its batches whole
+// steps) and a stopped run resumes to the same model; a model without hops
+// extends to one hop (--init, --message-hops 1) and trains on; cutting hops
+// is refused; Python loads it and reproduces the logits of robots alone.
+TEST(TrainTest, AMessagePassingModelTrainsResumesAndExtends) {
+  const std::string dir = testing::MakeTempDir("aia_train_");
+  DatasetOptions d = Tiny(dir + "/data");
+  d.episodes = 6;
+  RunDataset(d);
+  TrainOptions t = TinyTraining(dir + "/data", dir + "/mp.pt");
+  t.message_hops = 2;
+  const std::vector<EpochLog> logs = Train(t);
+  ASSERT_EQ(logs.size(), 4u);
+  EXPECT_LT(logs.back().train_loss, logs.front().train_loss);
+  EXPECT_EQ(IgbNet::Load(dir + "/mp.pt", "m", 0, "k")->config().message_hops,
+            2);
+  TrainOptions r = TinyTraining(dir + "/data", dir + "/mp_r.pt");
+  r.message_hops = 2;
+  r.stop_after_epochs = 1;
+  Train(r);
+  r.stop_after_epochs = 0;
+  r.resume = true;
+  EXPECT_EQ(Train(r).back().train_loss, logs.back().train_loss);
+
+  TrainOptions plain = TinyTraining(dir + "/data", dir + "/plain.pt");
+  plain.epochs = 1;
+  Train(plain);
+  TrainOptions ext = TinyTraining(dir + "/data", dir + "/ext.pt");
+  ext.init = dir + "/plain.pt";
+  ext.message_hops = 1;
+  ext.epochs = 1;
+  ASSERT_EQ(Train(ext).size(), 1u);
+  EXPECT_EQ(IgbNet::Load(dir + "/ext.pt", "m", 0, "k")->config().message_hops,
+            1);
+  TrainOptions cut = TinyTraining(dir + "/data", dir + "/cut.pt");
+  cut.init = dir + "/mp.pt";
+  cut.message_hops = 1;
+  try {
+    Train(cut);
+    ADD_FAILURE() << "hops cut";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.Format().find("--message-hops: the --init model passes "
+                              "messages over 2 hops"),
+              std::string::npos)
+        << e.Format();
+  }
+  if (!PythonHasTorch()) {
+    fs::remove_all(dir);
+    GTEST_SKIP() << "python3-torch is not installed";
+  }
+  const auto net = IgbNet::Load(dir + "/mp.pt", "m", 0, "k");
+  std::vector<float> x(2 * kNumChannels * 16 * 16, 0.2f), logits(8);
+  for (std::size_t i = 0; i < x.size(); i += 3) x[i] = 0.7f;
+  net->Forward(x.data(), 2, 16, 16, logits.data());
+  ExpectPythonReproduces(dir, dir + "/mp.pt", x, logits, 2);
+  fs::remove_all(dir);
+}
+
 TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
   const std::string dir = testing::MakeTempDir("aia_cli_");
   const std::pair<std::vector<std::string>, std::string> cases[] = {
@@ -325,6 +383,8 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
       {{"train", "--data", dir, "--out", dir + "/m.pt"}, "holds no dataset"},
       {{"train", "--data", dir, "--frame", "polar"}, "--frame: 'polar'"},
       {{"train", "--data", dir, "--lr", "2"}, "--lr: must be"},
+      {{"train", "--data", dir, "--message-hops", "9"},
+       "--message-hops: must be 0..8"},
       {{"train", "--data", dir, "--init", dir + "/none.pt"},
        "--init: '" + dir + "/none.pt': no such model file"},
   };

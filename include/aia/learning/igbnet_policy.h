@@ -130,6 +130,11 @@ class IgbNetPolicy : public Policy {
   std::vector<std::uint8_t> open_, claimed_;
   std::vector<float> images_, batch_logits_, logits_;
   std::vector<int> rows_;
+  // Message passing (a model with message_hops > 0): the rows' hidden
+  // features, their graph in row indices, each robot's row (-1: inactive).
+  std::vector<float> features_;
+  TeamGraph graph_;
+  std::vector<int> row_of_;
   TeamHeatmap heat_;
   // Per worker thread (ParallelFor): a heatmap and the neighbours' points.
   std::vector<Grid<float>> worker_heat_;

@@ -2,7 +2,11 @@
 // blocks (Conv3x3-BN-ReLU-Conv3x3-BN, skip, ReLU), adaptive average pooling
 // to a fixed pool x pool grid (any workspace size maps to the same size) and
 // an MLP to 4 logits, one per move (core/types.h order: left, right, up,
-// down). libtorch stays behind this header: only src/learning/network.cc and
+// down). Optionally (message_hops K > 0) the robots exchange their hidden
+// features over this step's communication graph before the last layer: a
+// K-tap graph filter h_i = relu(z_i + sum_k M_k (S^k z)_i), S the mean over a
+// robot's neighbours, so the network stays equivariant to relabelling the
+// robots and has no notion of time. libtorch stays behind this header: only src/learning/network.cc and
 // the trainer include it.
 #ifndef AIA_LEARNING_NETWORK_H_
 #define AIA_LEARNING_NETWORK_H_
@@ -11,11 +15,14 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "aia/core/hash.h"
 #include "aia/learning/channels.h"
 
 namespace aia {
+
+inline constexpr int kMaxMessageHops = 8;
 
 struct NetworkConfig {
   ChannelParams channels;
@@ -23,12 +30,26 @@ struct NetworkConfig {
   int stem_stride = 2;  // the stem's stride (docs/learning.md, Speed)
   int pool = 5;         // P: adaptive pooling to P x P
   int hidden = 128;     // the MLP's hidden units
+  // K: hops of learned message passing over the communication graph (0:
+  // none, each robot alone; the paper's network).
+  int message_hops = 0;
 
   // The model file's metadata (JSON), and back; FromJson throws
   // std::runtime_error on anything missing or out of range.
   std::string ToJson() const;
   static NetworkConfig FromJson(const std::string& json);
 };
+
+// A team's communication graph for message passing: the neighbours of row b
+// of a batch are rows neighbours[offsets[b] .. offsets[b + 1]); offsets has
+// batch + 1 entries. Self-loops and rows outside the batch are not allowed.
+struct TeamGraph {
+  std::vector<int> offsets{0};
+  std::vector<int> neighbours;
+  int rows() const { return static_cast<int>(offsets.size()) - 1; }
+};
+
+struct FoldedNet;  // src/learning/network_impl.h
 
 class IgbNet {
  public:
@@ -56,8 +77,18 @@ class IgbNet {
   // Inference (evaluation mode, no gradients; safe from several threads):
   // `images` holds `batch` images of kNumChannels x height x width floats;
   // writes batch x 4 logits.
+  // With message_hops > 0 every robot of the batch counts as alone (no
+  // neighbours); the team's call is Embed and Head below.
   void Forward(const float* images, int batch, int height, int width,
                float* logits) const;
+  // The two halves of Forward for message passing: Embed writes batch x
+  // hidden features (the MLP's hidden layer); Head takes the whole team's
+  // features and its graph (graph.rows() robots) and writes their logits.
+  // Head's result for a robot does not depend on PolicyThreads().
+  void Embed(const float* images, int batch, int height, int width,
+             float* features) const;
+  void Head(const float* features, const TeamGraph& graph,
+            float* logits) const;
   // Number of trainable parameters.
   std::int64_t NumParameters() const;
 
@@ -68,6 +99,8 @@ class IgbNet {
 
  private:
   IgbNet();
+  // The folded layers for inference, built at the first call.
+  std::shared_ptr<const FoldedNet> Folded() const;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -20,6 +20,10 @@ struct TrainOptions {
   std::string out = "models/igbnet.pt";
   std::string init;  // start from this model (DAgger rounds); empty: fresh
   NetworkConfig network;
+  // Message passing hops K (NetworkConfig::message_hops); -1: network's, or
+  // --init's. From an --init model with fewer hops, its weights are kept and
+  // the new hops start at zero (the same function).
+  int message_hops = -1;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
