@@ -55,8 +55,10 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int num_targets,
   last_move_.assign(num_robots, Move::kStay);
   reversals_.assign(num_robots, 0);
   walked_.assign(num_robots, 0);
+  goal_.assign(num_robots, -1);
   decisions_ = 0;
   rule_moves_ = 0;
+  rule_stays_ = 0;
   search_.Reset(num_robots, num_targets);
 }
 
@@ -163,6 +165,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     last_move_.resize(n, Move::kStay);
     reversals_.resize(n, 0);
     walked_.resize(n, 0);
+    goal_.resize(n, -1);
   }
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
@@ -188,8 +191,10 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     // until the robot stands on one (or has walked max_walk moves).
     ++decisions_;
     if (params_.max_reversals > 0 && reversals_[i] >= params_.max_reversals &&
-        walked_[i] == 0)
+        walked_[i] == 0) {
       walked_[i] = 1;
+      goal_[i] = -1;
+    }
     if (walked_[i] > 0) {
       const Move out = (params_.max_walk == 0 || walked_[i] <= params_.max_walk)
                            ? Escape(ctx, i)
@@ -216,6 +221,19 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
       status = PolicyStatus::kNoValidMove;
       continue;
     }
+    if (params_.no_undo && last_move_[i] != Move::kStay &&
+        static_cast<Move>(best) == Opposite(last_move_[i])) {
+      goal_[i] = -1;
+      const Move out = Escape(ctx, i);
+      if (out == Move::kStay) {
+        ++rule_stays_;
+        continue;
+      }
+      walked_[i] = 2;  // the walk's first move, as above
+      ++rule_moves_;
+      (*moves)[i] = out;
+      continue;
+    }
     (*moves)[i] = static_cast<Move>(best);
   }
   return status;
@@ -237,6 +255,16 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
                            aims_[k]) > 0.0)
       return Move::kStay;  // it is where it can measure
   }
+  // The walk's target while it is open and reachable.
+  int& goal = goal_[i];
+  if (goal >= 0 && goal < m && open_[goal]) {
+    claimed_.assign(m, 0);
+    claimed_[goal] = 1;
+    const Move move =
+        toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_, claimed_);
+    if (move != Move::kStay) return move;
+  }
+  goal = -1;
   // Leave to a neighbour the open targets it is nearer to (straight line;
   // ties to the lower index); all of them when each is nearer to one.
   const Vec2 p = lattice.Point(here);
@@ -257,12 +285,13 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
     any = any || claimed_[k];
   }
   return toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_,
-                           any ? claimed_ : open_);
+                           any ? claimed_ : open_, &goal);
 }
 
 std::vector<std::pair<std::string, long>> IgbNetPolicy::Counters() const {
   return {{"decisions", decisions_},
           {"rule_moves", rule_moves_},
+          {"rule_stays", rule_stays_},
           {"misses", search_.misses()}};
 }
 

@@ -120,8 +120,10 @@ void SearchMemory::Share(const DecisionContext& ctx,
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
                                  int p, const std::vector<Vec2>& aims,
-                                 const std::vector<std::uint8_t>& open) {
+                                 const std::vector<std::uint8_t>& open,
+                                 int* target) {
   AIA_CHECK(aims.size() == open.size());
+  if (target) *target = -1;
   const Lattice& lattice = map.lattice();
   // The open aims by the lattice point nearest them; their observation points
   // are the points of the (2 span + 1)^2 window around it from which the aim
@@ -190,6 +192,7 @@ Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
   }
   const Move move = best_k < 0 ? Move::kStay : first_[best_q];
   for (size_t i = 0; i < tail; ++i) dist_[queue_[i]] = -1;
+  if (target) *target = move == Move::kStay ? -1 : best_k;
   return move;
 }
 

@@ -430,6 +430,107 @@ sensor: {range: 2.0}
   }
 }
 
+// The walk keeps its target: robot 0, deadlocked, leaves the east target to
+// robot 1 beside it and walks west; robot 1 then runs west past it, so that
+// robot 1 is nearer the west target and the east one is nobody's. Robot 0
+// still walks west (choosing afresh it would turn east, as the same state
+// given to a fresh policy shows); once the west target is localized it
+// turns east.
+TEST(IgbNetPolicyTest, DeadlockRuleKeepsItsTargetWhenClaimsChange) {
+  const char* yaml = R"(
+workspace: {size: [12, 2]}
+robots: {count: 2, step: 0.5, start: [[6.25, 1.25], [9.75, 0.75]]}
+targets: {list: [{position: [10.5, 1.25], prior_mean: [10.0, 1.25]},
+                 {position: [1.0, 1.25], prior_mean: [1.5, 1.25]}]}
+sensor: {range: 2.0}
+)";
+  const std::vector<double> prior(2, std::log(1.0));
+  testing::TeamFixture f(yaml);
+  const Lattice& lattice = f.world.map.lattice();
+  const auto net = TestNet(ChannelFrame::kCentred, true);
+  IgbNetPolicy rule(net);
+  IgbNetParams argmax;
+  argmax.max_reversals = 0;
+  IgbNetPolicy plain(net, argmax);
+  const int a = f.positions[0];
+  const int b = lattice.Next(a, Decide(&plain, f, 0, prior)[0]);
+  ASSERT_GE(b, 0);
+  std::vector<Move> last;
+  testing::TeamFixture g(yaml);
+  for (int t = 0; t < 3; ++t) {
+    g.positions = f.positions;
+    if (t == 1) g.positions[0] = b;  // a, b, a
+    last = Decide(&rule, g, t, prior, t == 0);
+  }
+  ASSERT_EQ(last[0], Move::kLeft);
+  g.positions[0] = lattice.Next(a, Move::kLeft);
+  g.positions[1] = lattice.NearestPoint(Vec2(3.25, 0.25));
+  EXPECT_EQ(Decide(&rule, g, 3, prior, false)[0], Move::kLeft);
+  // A fresh policy, deadlocked in this state, heads east.
+  IgbNetPolicy fresh(net);
+  testing::TeamFixture h(yaml);
+  h.positions = g.positions;
+  const int c = h.positions[0];
+  const int d = lattice.Next(c, Decide(&plain, h, 0, prior)[0]);
+  ASSERT_GE(d, 0);
+  std::vector<Move> again;
+  for (int t = 0; t < 3; ++t) {
+    testing::TeamFixture k(yaml);
+    k.positions = h.positions;
+    if (t == 1) k.positions[0] = d;
+    again = Decide(&fresh, k, t, prior, t == 0);
+  }
+  EXPECT_EQ(again[0], Move::kRight);
+  // The west target localized (in robot 0's belief): the walk turns east.
+  testing::TeamFixture done(yaml);
+  done.positions = g.positions;
+  done.beliefs.Omega(0, 1) *= 1e6;
+  done.beliefs.Xi(0, 1) *= 1e6;
+  EXPECT_EQ(Decide(&rule, done, 4, prior, false)[0], Move::kRight);
+}
+
+// policy.no_undo: where the network would take robot 0 back where it came
+// from, it walks toward the target (east) or stays instead, and the
+// counters say so; elsewhere it takes the network's move.
+TEST(IgbNetPolicyTest, NoUndoNeverTakesTheNetworksUndoMove) {
+  const std::vector<double> prior(1, std::log(1.0));
+  int undos = 0;
+  for (bool geodesic : {false, true}) {
+    const auto net = TestNet(ChannelFrame::kCentred, geodesic);
+    IgbNetParams argmax;
+    argmax.max_reversals = 0;
+    IgbNetParams no_undo;
+    no_undo.no_undo = true;
+    for (const Vec2& at : {Vec2(3.25, 1.25), Vec2(4.75, 0.75), Vec2(2.25, 0.25),
+                           Vec2(5.25, 1.75)}) {
+      testing::TeamFixture f(kCorridor);
+      const Lattice& lattice = f.world.map.lattice();
+      f.positions[0] = lattice.NearestPoint(at);
+      IgbNetPolicy plain(net, argmax);
+      const Move q = Decide(&plain, f, 0, prior)[0];
+      const int from = lattice.Next(f.positions[0], q);
+      ASSERT_GE(from, 0);
+      // Robot 0 came from `from` (by the move Opposite(q)); q undoes it.
+      IgbNetPolicy policy(net, no_undo);
+      testing::TeamFixture g(kCorridor);
+      g.positions = f.positions;
+      g.positions[0] = from;
+      Decide(&policy, g, 0, prior);
+      const Move m = Decide(&policy, f, 1, prior, false)[0];
+      const Move came = Opposite(q);
+      const long rule_moves = policy.Counters()[1].second;
+      const long rule_stays = policy.Counters()[2].second;
+      EXPECT_TRUE(m == Move::kRight || m == Move::kStay) << at.transpose();
+      if (q != Move::kRight) {
+        EXPECT_NE(m, q);
+        EXPECT_EQ(rule_moves + rule_stays, 1);
+      }
+      undos += came != Move::kStay;
+    }
+  }
+  EXPECT_GT(undos, 0);
+}
+
 TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
   // Robot 0 reverses once (a, b, a), walks one move east (the rule's), and
   // with max_walk 1 takes its network's move at the next point; the
@@ -461,9 +562,10 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
   }
   EXPECT_EQ(last, last_plain);
   const auto counters = rule.Counters();
-  ASSERT_EQ(counters.size(), 3u);
+  ASSERT_EQ(counters.size(), 4u);
   EXPECT_EQ(counters[0], (std::pair<std::string, long>{"decisions", 8}));
   EXPECT_EQ(counters[1], (std::pair<std::string, long>{"rule_moves", 1}));
+  EXPECT_EQ(counters[2], (std::pair<std::string, long>{"rule_stays", 0}));
 }
 
 TEST(IgbNetPolicyTest, DeadlockRuleHandsBackWhereTheRobotCanMeasure) {

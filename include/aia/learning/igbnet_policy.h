@@ -52,6 +52,10 @@ struct IgbNetParams {
   // With the search memory: each robot also takes in the points its
   // neighbours in this step's graph missed (a message beside the belief).
   bool share_search = true;
+  // A network move that would undo the robot's last move is not taken: the
+  // robot starts the deadlock rule's walk instead, or stays where it can
+  // measure an open target or has nowhere to walk (a stay is no reversal).
+  bool no_undo = false;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -75,6 +79,10 @@ struct IgbNetParams {
                  .Doc("search memory: each robot also takes in the points its "
                       "neighbours in this step's graph missed (false: its own "
                       "misses only)"));
+    a->Visit(AIA_FIELD(no_undo).Doc(
+        "a network move that would undo the robot's last move is replaced "
+        "by the deadlock rule's walk, or a stay where the robot can measure "
+        "an open target or has nowhere to walk"));
   }
 };
 
@@ -116,13 +124,18 @@ class IgbNetPolicy : public Policy {
   std::vector<int> reversals_;
   // Moves walked since the robot was found deadlocked (0: not walking).
   std::vector<int> walked_;
-  long decisions_ = 0, rule_moves_ = 0;
+  // The target a walk heads for, chosen at its first move and kept until
+  // the robot can measure, the target is localized or it cannot be reached
+  // (-1: none yet), so that claims that change as the robots move do not
+  // turn the walk around.
+  std::vector<int> goal_;
+  long decisions_ = 0, rule_moves_ = 0, rule_stays_ = 0;
   SearchMemory search_;
   bool searching_ = false;  // this step's aims are search_'s
   // The deadlock rule's move for robot i: toward the nearest point that sees
-  // an open target's aim, among the targets no neighbour in this step's
-  // graph is nearer to (all open targets when each is); kStay where the
-  // robot sees one, or none is reachable. Scratch: toward_, aims_, open_,
+  // the aim of the walk's target (goal_), or, choosing one, of an open
+  // target no neighbour in this step's graph is nearer to (all open targets
+  // when each is); kStay where the robot sees one, or none is reachable. Scratch: toward_, aims_, open_,
   // claimed_.
   Move Escape(const DecisionContext& ctx, int i);
   TowardNearestAim toward_;

@@ -93,13 +93,15 @@ class SearchMemory {
 // of the aims whose `open` flag is set; among the points at that distance,
 // the one of the lowest target, then the lowest point index. kStay when no
 // such point is reachable. What greedy does where no move gains anything,
-// and the igbnet deadlock rule where the reach channel is flat. Reuses its
+// and the igbnet deadlock rule where the reach channel is flat. `target`, when
+// given, receives the target the move heads for (-1 with kStay). Reuses its
 // scratch: nothing is allocated once warm.
 class TowardNearestAim {
  public:
   Move FirstMove(const Map& map, const SensorModel& sensor, int p,
                  const std::vector<Vec2>& aims,
-                 const std::vector<std::uint8_t>& open);
+                 const std::vector<std::uint8_t>& open,
+                 int* target = nullptr);
 
  private:
   std::vector<Vec2> centres_;  // lattice coordinates of the open aims
