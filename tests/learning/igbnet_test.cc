@@ -368,6 +368,7 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksTowardTheNearestOpenTarget) {
       IgbNetPolicy rule(net);  // max_reversals 1, the default
       IgbNetParams argmax;
       argmax.max_reversals = 0;
+      argmax.no_undo = false;
       IgbNetPolicy plain(net, argmax);
       const int a = f.positions[r];
       const Move m = Decide(&plain, f, 0, prior)[r];
@@ -414,6 +415,7 @@ sensor: {range: 2.0}
     IgbNetPolicy rule(net);
     IgbNetParams argmax;
     argmax.max_reversals = 0;
+    argmax.no_undo = false;
     IgbNetPolicy plain(net, argmax);
     const int a = f.positions[0];
     const int b = lattice.Next(a, Decide(&plain, f, 0, prior)[0]);
@@ -451,6 +453,7 @@ sensor: {range: 2.0}
   IgbNetPolicy rule(net);
   IgbNetParams argmax;
   argmax.max_reversals = 0;
+  argmax.no_undo = false;
   IgbNetPolicy plain(net, argmax);
   const int a = f.positions[0];
   const int b = lattice.Next(a, Decide(&plain, f, 0, prior)[0]);
@@ -499,6 +502,7 @@ TEST(IgbNetPolicyTest, NoUndoNeverTakesTheNetworksUndoMove) {
     const auto net = TestNet(ChannelFrame::kCentred, geodesic);
     IgbNetParams argmax;
     argmax.max_reversals = 0;
+    argmax.no_undo = false;
     IgbNetParams no_undo;
     no_undo.no_undo = true;
     for (const Vec2& at : {Vec2(3.25, 1.25), Vec2(4.75, 0.75), Vec2(2.25, 0.25),
@@ -544,6 +548,7 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
   IgbNetPolicy rule(net, params);
   IgbNetParams argmax = params;
   argmax.max_reversals = 0;
+  argmax.no_undo = false;
   IgbNetPolicy plain(net, argmax);
   const int a = f.positions[0];
   const Move m = Decide(&plain, f, 0, prior)[0];
@@ -571,7 +576,8 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
 TEST(IgbNetPolicyTest, DeadlockRuleHandsBackWhereTheRobotCanMeasure) {
   // The same reversal at (8.75, 1.25), which sees the target's mean: the
   // robot takes its network's move. (Without the search memory, which would
-  // move the aim once the robot measured nothing there.)
+  // move the aim once the robot measured nothing there, and without no_undo,
+  // which would keep it there.)
   const std::vector<double> prior(1, std::log(1.0));
   testing::TeamFixture f(kCorridor);
   const Lattice& lattice = f.world.map.lattice();
@@ -579,9 +585,11 @@ TEST(IgbNetPolicyTest, DeadlockRuleHandsBackWhereTheRobotCanMeasure) {
   const auto net = TestNet(ChannelFrame::kCentred, true);
   IgbNetParams params;
   params.search = false;
+  params.no_undo = false;
   IgbNetPolicy rule(net, params);
   IgbNetParams argmax = params;
   argmax.max_reversals = 0;
+  argmax.no_undo = false;
   IgbNetPolicy plain(net, argmax);
   const int a = f.positions[0];
   const Move m = Decide(&plain, f, 0, prior)[0];

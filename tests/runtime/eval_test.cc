@@ -485,7 +485,8 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
   const auto sha = testing::RunCommand("sha256sum '" + model + "'");
   ASSERT_EQ(sha.exit_code, 0);
   EXPECT_NE(effective.find("#   igbnet: {max_reversals: 1, max_walk: 0, "
-                           "search: true, share_search: true}; model " +
+                           "search: true, share_search: true, no_undo: "
+                           "true}; model " +
                            model + " sha256 " + sha.out.substr(0, 64) + "\n"),
             std::string::npos)
       << effective;

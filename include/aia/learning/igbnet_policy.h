@@ -55,7 +55,7 @@ struct IgbNetParams {
   // A network move that would undo the robot's last move is not taken: the
   // robot starts the deadlock rule's walk instead, or stays where it can
   // measure an open target or has nowhere to walk (a stay is no reversal).
-  bool no_undo = false;
+  bool no_undo = true;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -82,7 +82,8 @@ struct IgbNetParams {
     a->Visit(AIA_FIELD(no_undo).Doc(
         "a network move that would undo the robot's last move is replaced "
         "by the deadlock rule's walk, or a stay where the robot can measure "
-        "an open target or has nowhere to walk"));
+        "an open target or has nowhere to walk (false: the network's "
+        "move)"));
   }
 };
 
