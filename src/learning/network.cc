@@ -513,9 +513,9 @@ void IgbNet::Embed(const float* images, int batch, int height, int width,
       torch::kFloat32);
   const torch::Tensor z =
       FoldedEmbed(*Folded(), impl_->module, impl_->config, x).contiguous();
-  std::memcpy(features, z.data_ptr<float>(),
-              sizeof(float) * static_cast<std::size_t>(batch) *
-                  impl_->config.hidden);
+  std::memcpy(
+      features, z.data_ptr<float>(),
+      sizeof(float) * static_cast<std::size_t>(batch) * impl_->config.hidden);
 }
 
 void IgbNet::Head(const float* features, const TeamGraph& graph,

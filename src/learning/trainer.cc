@@ -442,8 +442,10 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
       IgbNetModule& to = wider->impl().module;
       auto params = to->named_parameters();
       auto buffers = to->named_buffers();
-      for (const auto& p : from->named_parameters()) params[p.key()].copy_(p.value());
-      for (const auto& b : from->named_buffers()) buffers[b.key()].copy_(b.value());
+      for (const auto& p : from->named_parameters())
+        params[p.key()].copy_(p.value());
+      for (const auto& b : from->named_buffers())
+        buffers[b.key()].copy_(b.value());
       for (std::size_t k = from->messages.size(); k < to->messages.size(); ++k)
         to->messages[k]->weight.zero_();
       net = std::move(wider);

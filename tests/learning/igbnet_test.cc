@@ -253,8 +253,8 @@ std::vector<Move> Decide(IgbNetPolicy* policy, const testing::TeamFixture& f,
   return moves;
 }
 
-std::shared_ptr<const IgbNet> TestNet(ChannelFrame frame,
-                                      bool geodesic = false, int hops = 0) {
+std::shared_ptr<const IgbNet> TestNet(ChannelFrame frame, bool geodesic = false,
+                                      int hops = 0) {
   NetworkConfig c = SmallConfig();
   c.channels.frame = frame;
   c.channels.cell = 0.5;

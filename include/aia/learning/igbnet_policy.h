@@ -136,8 +136,8 @@ class IgbNetPolicy : public Policy {
   // The deadlock rule's move for robot i: toward the nearest point that sees
   // the aim of the walk's target (goal_), or, choosing one, of an open
   // target no neighbour in this step's graph is nearer to (all open targets
-  // when each is); kStay where the robot sees one, or none is reachable. Scratch: toward_, aims_, open_,
-  // claimed_.
+  // when each is); kStay where the robot sees one, or none is reachable.
+  // Scratch: toward_, aims_, open_, claimed_.
   Move Escape(const DecisionContext& ctx, int i);
   TowardNearestAim toward_;
   std::vector<Vec2> aims_;

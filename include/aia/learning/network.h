@@ -6,8 +6,8 @@
 // features over this step's communication graph before the last layer: a
 // K-tap graph filter h_i = relu(z_i + sum_k M_k (S^k z)_i), S the mean over a
 // robot's neighbours, so the network stays equivariant to relabelling the
-// robots and has no notion of time. libtorch stays behind this header: only src/learning/network.cc and
-// the trainer include it.
+// robots and has no notion of time. libtorch stays behind this header: only
+// src/learning/network.cc and the trainer include it.
 #ifndef AIA_LEARNING_NETWORK_H_
 #define AIA_LEARNING_NETWORK_H_
 
@@ -87,8 +87,7 @@ class IgbNet {
   // Head's result for a robot does not depend on PolicyThreads().
   void Embed(const float* images, int batch, int height, int width,
              float* features) const;
-  void Head(const float* features, const TeamGraph& graph,
-            float* logits) const;
+  void Head(const float* features, const TeamGraph& graph, float* logits) const;
   // Number of trainable parameters.
   std::int64_t NumParameters() const;
 

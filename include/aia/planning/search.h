@@ -100,8 +100,7 @@ class TowardNearestAim {
  public:
   Move FirstMove(const Map& map, const SensorModel& sensor, int p,
                  const std::vector<Vec2>& aims,
-                 const std::vector<std::uint8_t>& open,
-                 int* target = nullptr);
+                 const std::vector<std::uint8_t>& open, int* target = nullptr);
 
  private:
   std::vector<Vec2> centres_;  // lattice coordinates of the open aims
