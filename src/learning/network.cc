@@ -487,8 +487,8 @@ std::shared_ptr<const FoldedNet> IgbNet::Folded() const {
   return impl_->folded;
 }
 
-void IgbNet::Forward(const float* images, int batch, int height, int width,
-                     float* logits) const {
+void IgbNet::Infer(const float* images, int batch, int height, int width,
+                   bool embed, float* out) const {
   AIA_CHECK(batch >= 0 && height > 0 && width > 0);
   if (batch == 0) return;
   torch::NoGradGuard no_grad;
@@ -496,26 +496,22 @@ void IgbNet::Forward(const float* images, int batch, int height, int width,
       const_cast<float*>(images),
       {batch, impl_->config.channels.num_channels(), height, width},
       torch::kFloat32);
+  const std::shared_ptr<const FoldedNet> folded = Folded();
   const torch::Tensor y =
-      FoldedForward(*Folded(), impl_->module, impl_->config, x).contiguous();
-  std::memcpy(logits, y.data_ptr<float>(),
-              sizeof(float) * static_cast<std::size_t>(batch) * kNumMoves);
+      (embed ? FoldedEmbed(*folded, impl_->module, impl_->config, x)
+             : FoldedForward(*folded, impl_->module, impl_->config, x))
+          .contiguous();
+  std::memcpy(out, y.data_ptr<float>(), sizeof(float) * y.numel());
+}
+
+void IgbNet::Forward(const float* images, int batch, int height, int width,
+                     float* logits) const {
+  Infer(images, batch, height, width, false, logits);
 }
 
 void IgbNet::Embed(const float* images, int batch, int height, int width,
                    float* features) const {
-  AIA_CHECK(batch >= 0 && height > 0 && width > 0);
-  if (batch == 0) return;
-  torch::NoGradGuard no_grad;
-  const torch::Tensor x = torch::from_blob(
-      const_cast<float*>(images),
-      {batch, impl_->config.channels.num_channels(), height, width},
-      torch::kFloat32);
-  const torch::Tensor z =
-      FoldedEmbed(*Folded(), impl_->module, impl_->config, x).contiguous();
-  std::memcpy(
-      features, z.data_ptr<float>(),
-      sizeof(float) * static_cast<std::size_t>(batch) * impl_->config.hidden);
+  Infer(images, batch, height, width, true, features);
 }
 
 void IgbNet::Head(const float* features, const TeamGraph& graph,

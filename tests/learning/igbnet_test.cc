@@ -393,6 +393,34 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksTowardTheNearestOpenTarget) {
   EXPECT_GT(overruled, 0);
 }
 
+// Robot 0 of `yaml`, the team at `positions`, takes the move `net` alone
+// prefers there and then stands where it started again (a, b, a: one
+// reversal); returns what `rule` (fresh) decides at the third step, where
+// its deadlock rule takes over.
+std::vector<Move> Deadlocked(IgbNetPolicy* rule,
+                             const std::shared_ptr<const IgbNet>& net,
+                             const char* yaml,
+                             const std::vector<int>& positions,
+                             const std::vector<double>& prior) {
+  IgbNetParams argmax;
+  argmax.max_reversals = 0;
+  argmax.no_undo = false;
+  IgbNetPolicy plain(net, argmax);
+  testing::TeamFixture f(yaml);
+  f.positions = positions;
+  const int b =
+      f.world.map.lattice().Next(positions[0], Decide(&plain, f, 0, prior)[0]);
+  EXPECT_GE(b, 0);
+  std::vector<Move> last;
+  for (int t = 0; t < 3; ++t) {
+    testing::TeamFixture g(yaml);
+    g.positions = positions;
+    if (t == 1) g.positions[0] = b;
+    last = Decide(rule, g, t, prior, t == 0);
+  }
+  return last;
+}
+
 TEST(IgbNetPolicyTest, DeadlockRuleLeavesANeighboursNearerTargetToIt) {
   // Robot 0 in the middle of the corridor, deadlocked; one target believed
   // 3.75 m east of it, one 4.75 m west (each seen from 1.75 m away: 4 moves
@@ -409,24 +437,11 @@ sensor: {range: 2.0}
   const std::vector<double> prior(2, std::log(1.0));
   for (const Vec2& other : {Vec2(6.25, 0.25), Vec2(9.75, 0.75)}) {
     testing::TeamFixture f(yaml);
-    const Lattice& lattice = f.world.map.lattice();
-    f.positions[1] = lattice.NearestPoint(other);
+    f.positions[1] = f.world.map.lattice().NearestPoint(other);
     const auto net = TestNet(ChannelFrame::kCentred, true);
     IgbNetPolicy rule(net);
-    IgbNetParams argmax;
-    argmax.max_reversals = 0;
-    argmax.no_undo = false;
-    IgbNetPolicy plain(net, argmax);
-    const int a = f.positions[0];
-    const int b = lattice.Next(a, Decide(&plain, f, 0, prior)[0]);
-    ASSERT_GE(b, 0);
-    std::vector<Move> last;
-    for (int t = 0; t < 3; ++t) {
-      testing::TeamFixture g(yaml);
-      g.positions = f.positions;
-      if (t == 1) g.positions[0] = b;  // a, b, a
-      last = Decide(&rule, g, t, prior, t == 0);
-    }
+    const std::vector<Move> last =
+        Deadlocked(&rule, net, yaml, f.positions, prior);
     EXPECT_EQ(last[0], other.x() < 9.0 ? Move::kRight : Move::kLeft)
         << "robot 1 at " << other.transpose();
   }
@@ -447,43 +462,17 @@ targets: {list: [{position: [10.5, 1.25], prior_mean: [10.0, 1.25]},
 sensor: {range: 2.0}
 )";
   const std::vector<double> prior(2, std::log(1.0));
-  testing::TeamFixture f(yaml);
-  const Lattice& lattice = f.world.map.lattice();
+  testing::TeamFixture g(yaml);
+  const Lattice& lattice = g.world.map.lattice();
   const auto net = TestNet(ChannelFrame::kCentred, true);
   IgbNetPolicy rule(net);
-  IgbNetParams argmax;
-  argmax.max_reversals = 0;
-  argmax.no_undo = false;
-  IgbNetPolicy plain(net, argmax);
-  const int a = f.positions[0];
-  const int b = lattice.Next(a, Decide(&plain, f, 0, prior)[0]);
-  ASSERT_GE(b, 0);
-  std::vector<Move> last;
-  testing::TeamFixture g(yaml);
-  for (int t = 0; t < 3; ++t) {
-    g.positions = f.positions;
-    if (t == 1) g.positions[0] = b;  // a, b, a
-    last = Decide(&rule, g, t, prior, t == 0);
-  }
-  ASSERT_EQ(last[0], Move::kLeft);
-  g.positions[0] = lattice.Next(a, Move::kLeft);
+  ASSERT_EQ(Deadlocked(&rule, net, yaml, g.positions, prior)[0], Move::kLeft);
+  g.positions[0] = lattice.Next(g.positions[0], Move::kLeft);
   g.positions[1] = lattice.NearestPoint(Vec2(3.25, 0.25));
   EXPECT_EQ(Decide(&rule, g, 3, prior, false)[0], Move::kLeft);
   // A fresh policy, deadlocked in this state, heads east.
   IgbNetPolicy fresh(net);
-  testing::TeamFixture h(yaml);
-  h.positions = g.positions;
-  const int c = h.positions[0];
-  const int d = lattice.Next(c, Decide(&plain, h, 0, prior)[0]);
-  ASSERT_GE(d, 0);
-  std::vector<Move> again;
-  for (int t = 0; t < 3; ++t) {
-    testing::TeamFixture k(yaml);
-    k.positions = h.positions;
-    if (t == 1) k.positions[0] = d;
-    again = Decide(&fresh, k, t, prior, t == 0);
-  }
-  EXPECT_EQ(again[0], Move::kRight);
+  EXPECT_EQ(Deadlocked(&fresh, net, yaml, g.positions, prior)[0], Move::kRight);
   // The west target localized (in robot 0's belief): the walk turns east.
   testing::TeamFixture done(yaml);
   done.positions = g.positions;

@@ -100,6 +100,9 @@ class IgbNet {
   IgbNet();
   // The folded layers for inference, built at the first call.
   std::shared_ptr<const FoldedNet> Folded() const;
+  // Forward (embed false: logits) or Embed (true: hidden features).
+  void Infer(const float* images, int batch, int height, int width, bool embed,
+             float* out) const;
   std::unique_ptr<Impl> impl_;
 };
 
