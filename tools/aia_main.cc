@@ -327,6 +327,10 @@ Action AddBenchCommand(CLI::App& app) {
                 "time the expert's solve (C-SB) instead of episodes");
   cmd->add_flag("--network", bench->network,
                 "time I-GBNet's network alone (inference and training)");
+  cmd->add_option("--policy-threads", bench->policy_threads,
+                  "threads of a learned policy's rendering and inference "
+                  "(aia run uses every core)")
+      ->capture_default_str();
   cmd->add_option("--seeds", bench->seeds, "with --expert: worlds per size")
       ->capture_default_str();
   cmd->add_option("--set", bench->sets,

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "aia/core/error.h"
+#include "aia/learning/network.h"
 #include "aia/learning/trainer.h"
 #include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
@@ -170,6 +171,10 @@ int RunBench(const BenchOptions& o) {
                          " do not fit in 64 bits (the largest seed is "
                          "18446744073709551615); give a smaller --seed");
   }
+  if (o.policy_threads < 1 || o.policy_threads > 256)
+    throw InputError("command line", 0, "--policy-threads",
+                     "must be in [1, 256]");
+  SetPolicyThreads(o.policy_threads);
   if (o.network) return RunNetworkBench(o);
   if (o.expert) return RunExpertBench(o);
   const PolicyRegistry registry = AllPolicies();
@@ -179,8 +184,10 @@ int RunBench(const BenchOptions& o) {
   const EvalSetup setup =
       MakeEvalSetup({o.policy}, o.sets, registry, Instances(o));
   std::printf(
-      "aia bench: policy %s, %d decision steps x %d runs per size (medians)\n",
-      o.policy.c_str(), o.steps, o.repeats);
+      "aia bench: policy %s, %d decision steps x %d runs per size (medians), "
+      "%d policy thread%s\n",
+      o.policy.c_str(), o.steps, o.repeats, o.policy_threads,
+      o.policy_threads == 1 ? "" : "s");
   std::printf("%-8s %10s %9s %9s %9s %9s %9s %9s %8s %10s %11s %9s %11s\n",
               "size", "steps/s", "ms/step", "physics", "sensing", "fusion",
               "policy", "rest", "mj_step%", "mj_step/s", "testspeed/s",

@@ -172,6 +172,8 @@ TEST(CliTest, BenchCountsOutOfRangeExitWith2) {
       {{"bench", "--expert", "--seeds", "0"},
        "--seeds: must be in [1, 100000]"},
       {{"bench", "--steps", "1000001"}, "--steps: must be in [1, 1000000]"},
+      {{"bench", "--policy-threads", "0"},
+       "--policy-threads: must be in [1, 256]"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = RunAia(args);

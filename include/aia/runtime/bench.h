@@ -29,6 +29,9 @@ struct BenchOptions {
   // --network: time I-GBNet's network alone (inference at 10 and 80 robots
   // per batch, training at batch 16) for stem strides 1 and 2.
   bool network = false;
+  // Threads of a learned policy's rendering and inference (SetPolicyThreads;
+  // `aia run` uses every core, `aia eval` one per worker).
+  int policy_threads = 1;
 };
 
 int RunBench(const BenchOptions& options);
