@@ -517,58 +517,15 @@ void IgbNet::Embed(const float* images, int batch, int height, int width,
 void IgbNet::Head(const float* features, const TeamGraph& graph,
                   float* logits) const {
   const int n = graph.rows();
-  const int hidden = impl_->config.hidden;
-  const int hops = impl_->config.message_hops;
-  AIA_CHECK(n >= 0 && graph.offsets.front() == 0 &&
-            graph.offsets.back() == static_cast<int>(graph.neighbours.size()));
   if (n == 0) return;
-  const std::size_t size = static_cast<std::size_t>(n) * hidden;
-  // S^k z for k = 1..K, hop by hop over the whole team (the mean over each
-  // robot's neighbours, in the order the graph lists them).
-  std::vector<float> taps(size * hops, 0.0f);
-  for (int k = 0; k < hops; ++k) {
-    const float* from = k == 0 ? features : taps.data() + (k - 1) * size;
-    float* to = taps.data() + k * size;
-    for (int b = 0; b < n; ++b) {
-      const int d = graph.offsets[b + 1] - graph.offsets[b];
-      if (d == 0) continue;
-      float* out = to + static_cast<std::size_t>(b) * hidden;
-      for (int e = graph.offsets[b]; e < graph.offsets[b + 1]; ++e) {
-        const int j = graph.neighbours[e];
-        AIA_CHECK_MSG(j >= 0 && j < n && j != b,
-                      "a neighbour outside the batch");
-        const float* in = from + static_cast<std::size_t>(j) * hidden;
-        for (int c = 0; c < hidden; ++c) out[c] += in[c];
-      }
-      const float inv = 1.0f / static_cast<float>(d);
-      for (int c = 0; c < hidden; ++c) out[c] *= inv;
-    }
-  }
-  // The layers in fixed chunks of rows, so that a robot's logits do not
-  // depend on the number of threads.
-  constexpr int kChunk = 32;
-  IgbNetModule& module = impl_->module;
-  ParallelFor((n + kChunk - 1) / kChunk, 1, [&](int c0, int c1, int) {
-    torch::NoGradGuard no_grad;
-    for (int c = c0; c < c1; ++c) {
-      const int begin = c * kChunk, rows = std::min(n, begin + kChunk) - begin;
-      const auto rows_of = [&](const float* base) {
-        return torch::from_blob(
-            const_cast<float*>(base) + static_cast<std::size_t>(begin) * hidden,
-            {rows, hidden}, torch::kFloat32);
-      };
-      torch::Tensor h = rows_of(features);
-      if (hops > 0) {
-        for (int k = 0; k < hops; ++k)
-          h = h + module->messages[k](rows_of(taps.data() + k * size));
-        h = torch::relu(h);
-      }
-      const torch::Tensor y = module->fc2(h).contiguous();
-      std::memcpy(logits + static_cast<std::size_t>(begin) * kNumMoves,
-                  y.data_ptr<float>(),
-                  sizeof(float) * static_cast<std::size_t>(rows) * kNumMoves);
-    }
-  });
+  // The training graph's layers on the whole team at once, on the calling
+  // thread: S^k z in the graph's order, then M_k and fc2.
+  torch::NoGradGuard no_grad;
+  const GraphTensors g = ToTensors(graph);
+  const torch::Tensor z = torch::from_blob(
+      const_cast<float*>(features), {n, impl_->config.hidden}, torch::kFloat32);
+  const torch::Tensor y = impl_->module->head(z, &g).contiguous();
+  std::memcpy(logits, y.data_ptr<float>(), sizeof(float) * y.numel());
 }
 
 void SetInferenceThreads(int threads) {

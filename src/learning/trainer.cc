@@ -39,24 +39,25 @@ struct Corpus {
   std::vector<int> train, val;  // sample indices
   // For message passing: each sample's neighbours among the samples of its
   // world and step (matched by position; a neighbour the dataset holds no
-  // sample of, one the expert kept still, is left out), and the steps as
-  // sample ranges [step_begin[g], step_begin[g + 1]).
+  // sample of, one the expert kept still, is left out).
   std::vector<std::vector<int>> neighbours;
-  std::vector<int> step_begin;
 };
 
-// Fills c->neighbours and c->step_begin (samples come sorted by world, step
-// and robot).
+// Whether samples a and b are robots of the same world at the same step.
+bool SameStep(const Corpus& c, int a, int b) {
+  const DatasetSample &x = c.data.samples[a], &y = c.data.samples[b];
+  return x.world == y.world && x.step == y.step;
+}
+
+// Fills c->neighbours (samples come sorted by world, step and robot).
 void LinkNeighbours(Corpus* c) {
   const std::vector<DatasetSample>& s = c->data.samples;
   const int n = static_cast<int>(s.size());
   c->neighbours.assign(n, {});
-  c->step_begin.clear();
   std::map<std::pair<double, double>, int> at;
   for (int b = 0; b < n;) {
     int e = b;
-    while (e < n && s[e].world == s[b].world && s[e].step == s[b].step) ++e;
-    c->step_begin.push_back(b);
+    while (e < n && SameStep(*c, e, b)) ++e;
     at.clear();
     for (int i = b; i < e; ++i)
       at.emplace(std::make_pair(s[i].position.x(), s[i].position.y()), i);
@@ -68,7 +69,6 @@ void LinkNeighbours(Corpus* c) {
       }
     b = e;
   }
-  c->step_begin.push_back(n);
 }
 
 // The rows a batch of `centres` renders: the centres first, then every
@@ -110,10 +110,7 @@ std::vector<std::vector<int>> StepBatches(const Corpus& c,
   for (std::size_t i = 0; i < samples.size(); ++i) {
     out.back().push_back(samples[i]);
     const bool step_ends =
-        i + 1 == samples.size() ||
-        c.data.samples[samples[i + 1]].world !=
-            c.data.samples[samples[i]].world ||
-        c.data.samples[samples[i + 1]].step != c.data.samples[samples[i]].step;
+        i + 1 == samples.size() || !SameStep(c, samples[i + 1], samples[i]);
     if (step_ends && static_cast<int>(out.back().size()) >= batch &&
         i + 1 < samples.size())
       out.emplace_back();
@@ -555,11 +552,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
       std::vector<std::pair<int, int>> steps;  // ranges of `order`
       for (std::size_t i = 0; i < order.size();) {
         std::size_t e = i + 1;
-        const DatasetSample& a = corpus.data.samples[order[i]];
-        while (e < order.size() &&
-               corpus.data.samples[order[e]].world == a.world &&
-               corpus.data.samples[order[e]].step == a.step)
-          ++e;
+        while (e < order.size() && SameStep(corpus, order[e], order[i])) ++e;
         steps.emplace_back(static_cast<int>(i), static_cast<int>(e));
         i = e;
       }

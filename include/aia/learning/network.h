@@ -84,7 +84,8 @@ class IgbNet {
   // The two halves of Forward for message passing: Embed writes batch x
   // hidden features (the MLP's hidden layer); Head takes the whole team's
   // features and its graph (graph.rows() robots) and writes their logits.
-  // Head's result for a robot does not depend on PolicyThreads().
+  // Head runs on the calling thread (its result does not depend on
+  // PolicyThreads()), through the same layers as training.
   void Embed(const float* images, int batch, int height, int width,
              float* features) const;
   void Head(const float* features, const TeamGraph& graph, float* logits) const;
