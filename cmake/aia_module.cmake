@@ -2,7 +2,7 @@
 # built from src/NAME/*.cc with public headers in include/aia/NAME/. DEPS are
 # the libraries its public headers use (passed on to its consumers);
 # PRIVATE_DEPS those only its sources use (yaml-cpp, OpenCV's image codecs,
-# OSMesa, JSON, later libtorch), so that they do not leak into every module
+# OSMesa, JSON, libtorch), so that they do not leak into every module
 # above. The allowed links are the layering below (also in docs/design.md);
 # a link that runs upward is a configure error.
 set(AIA_LAYERS_core        "")

@@ -34,7 +34,7 @@
 
 // jemalloc (linked into build/aia) keeps freed pages instead of returning
 // them to the kernel on every libtorch call, which halves libtorch's speed
-// on glibc's allocator (../shared/docs/PLATFORM.md).
+// on glibc's allocator (docs/learning.md, Network).
 extern "C" {
 const char* malloc_conf = "dirty_decay_ms:-1,muzzy_decay_ms:-1";
 }

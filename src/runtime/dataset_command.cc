@@ -22,9 +22,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Thrown by the observer to stop an episode past --max-seconds.
-struct EpisodeOverTime {};
-
 // Records every decision step's samples; labels them with the expert.
 class DatasetObserver : public StepObserver {
  public:
@@ -46,14 +43,18 @@ class DatasetObserver : public StepObserver {
     }
   }
 
-  void OnDecision(const Episode& e, const DecisionContext& ctx,
-                  const Decision& d) override {
-    if (stop_after_ >= 0 && ctx.step >= stop_after_)
-      throw std::runtime_error("stopped for a test");
+  ObserverStatus OnDecision(const Episode& e, const DecisionContext& ctx,
+                            const Decision& d) override {
+    if (stop_after_ >= 0 && ctx.step >= stop_after_) {
+      killed_ = true;
+      return ObserverStatus::kStop;
+    }
     if (max_seconds_ > 0.0 &&
         std::chrono::duration<double>(Clock::now() - start_).count() >
-            max_seconds_)
-      throw EpisodeOverTime{};
+            max_seconds_) {
+      over_time_ = true;
+      return ObserverStatus::kStop;
+    }
     const int n = e.world().NumRobots();
     const Lattice& lattice = ctx.map->lattice();
     const std::vector<Move>* labels = &d.wanted;
@@ -79,9 +80,15 @@ class DatasetObserver : public StepObserver {
       step.push_back(std::move(s));
     }
     steps_.push_back(std::move(step));
+    return ObserverStatus::kContinue;
   }
 
   std::vector<std::vector<DatasetSample>>& steps() { return steps_; }
+  // Stopped past --max-seconds: the world is recorded, its samples dropped.
+  bool over_time() const { return over_time_; }
+  // Stopped by the test hook (DatasetOptions::stop_after_episodes): the run
+  // ends here, as if killed.
+  bool killed() const { return killed_; }
 
  private:
   ExpertPolicy* shadow_;
@@ -90,6 +97,8 @@ class DatasetObserver : public StepObserver {
   int stop_after_;
   double max_seconds_;
   Clock::time_point start_;
+  bool over_time_ = false;
+  bool killed_ = false;
   std::vector<Move> labels_;
   std::vector<std::vector<DatasetSample>> steps_;
 };
@@ -244,13 +253,13 @@ int RunDataset(const DatasetOptions& o) {
         o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3 : -1,
         o.max_seconds);
     episode.AddObserver(&observer);
-    bool over_time = false;
-    try {
-      episode.Run();
-    } catch (const EpisodeOverTime&) {
-      over_time = true;  // the world is recorded, its samples dropped
-      ++skipped;
+    episode.Run();
+    if (observer.killed()) {
+      line.Finish();
+      return written;
     }
+    const bool over_time = observer.over_time();
+    skipped += over_time ? 1 : 0;
 
     // Keep `keep` random decision steps (all when fewer).
     auto& steps = observer.steps();

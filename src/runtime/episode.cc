@@ -97,6 +97,7 @@ void Episode::Run() {
 }
 
 bool Episode::done() const {
+  if (stopped_) return true;
   if (step_ >= mission_.max_steps) return true;
   if (success() && mission_.stop_at_success) return true;
   return comm_.NumActive() == 0;
@@ -169,7 +170,9 @@ void Episode::Step() {
   }
   times_.policy += Since(t0);
   const Decision decision{moves_, applied_, status};
-  for (StepObserver* o : observers_) o->OnDecision(*this, ctx, decision);
+  for (StepObserver* o : observers_)
+    stopped_ |= o->OnDecision(*this, ctx, decision) == ObserverStatus::kStop;
+  if (stopped_) return;
 
   // Targets move and robots drive to their waypoints.
   MoveTargets();
@@ -196,7 +199,8 @@ void Episode::Step() {
   }
   Observe();
   times_.total += Since(t_step);
-  for (StepObserver* o : observers_) o->OnStep(*this);
+  for (StepObserver* o : observers_)
+    stopped_ |= o->OnStep(*this) == ObserverStatus::kStop;
 }
 
 void Episode::Observe() {

@@ -170,13 +170,14 @@ ProgressObserver::ProgressObserver(std::string label, bool enabled,
                                    std::function<std::string()> extra)
     : label_(std::move(label)), line_(enabled), extra_(std::move(extra)) {}
 
-void ProgressObserver::OnStep(const Episode& e) {
+ObserverStatus ProgressObserver::OnStep(const Episode& e) {
   char buf[160];
   std::snprintf(buf, sizeof(buf), "[%s] %s  step %d/%d  localized %d/%d",
                 label_.c_str(), std::string(e.policy().name()).c_str(),
                 e.step(), e.mission().max_steps, e.NumLocalized(),
                 e.world().NumTargets());
   line_.Update(extra_ ? std::string(buf) + "  " + extra_() : std::string(buf));
+  return ObserverStatus::kContinue;
 }
 
 void ProgressObserver::OnEnd(const Episode&) { line_.Finish(); }
@@ -188,8 +189,8 @@ void MoveObserver::OnStart(const Episode& e) {
   longest_run_ = 0;
 }
 
-void MoveObserver::OnDecision(const Episode&, const DecisionContext&,
-                              const Decision& decision) {
+ObserverStatus MoveObserver::OnDecision(const Episode&, const DecisionContext&,
+                                        const Decision& decision) {
   for (size_t i = 0; i < decision.applied.size(); ++i) {
     const Move m = decision.applied[i];
     if (m == Move::kStay) continue;  // failed robots
@@ -203,6 +204,7 @@ void MoveObserver::OnDecision(const Episode&, const DecisionContext&,
     }
     last_[i] = m;
   }
+  return ObserverStatus::kContinue;
 }
 
 }  // namespace aia

@@ -111,9 +111,10 @@ class VideoObserver : public StepObserver {
     AfterStep(e);
     Emit(e);
   }
-  void OnDecision(const Episode&, const DecisionContext&,
-                  const Decision&) override {
+  ObserverStatus OnDecision(const Episode&, const DecisionContext&,
+                            const Decision&) override {
     step_start_ = sim_time_;
+    return ObserverStatus::kContinue;
   }
   void OnSubstep(const Episode& e, double elapsed) override {
     sim_time_ = step_start_ + elapsed;
@@ -122,7 +123,10 @@ class VideoObserver : public StepObserver {
       next_frame_ += frame_dt_;
     }
   }
-  void OnStep(const Episode& e) override { AfterStep(e); }
+  ObserverStatus OnStep(const Episode& e) override {
+    AfterStep(e);
+    return ObserverStatus::kContinue;
+  }
   // The state after the last step's fusion, held `hold` seconds.
   void OnEnd(const Episode& e) override {
     const cv::Mat& last = Emit(e);

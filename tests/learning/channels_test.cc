@@ -175,7 +175,7 @@ TEST(ChannelsTest, ReachGoesRoundAWallThroughItsDoor) {
           << x << ", " << y;
   // The heat channel is the heat as given.
   EXPECT_EQ(At(img, 3, 4, 3, 3, 0), 0.0f);
-  // Render() projects the same belief: the same channel 4.
+  // Render() projects the same belief: the same heat channel (3).
   std::vector<float> again(r.ImageSize());
   r.Render({0.5, 0.5}, {}, targets, t.log_det_prior, t.eps, again.data());
   for (int i = 4 * 12; i < 5 * 12; ++i) EXPECT_EQ(again[i], img[i]) << i;

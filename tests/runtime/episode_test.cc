@@ -153,24 +153,32 @@ class CountingObserver : public StepObserver {
     ++starts;
     EXPECT_EQ(e.step(), 0);
   }
-  void OnDecision(const Episode& e, const DecisionContext& ctx,
-                  const Decision& d) override {
+  ObserverStatus OnDecision(const Episode& e, const DecisionContext& ctx,
+                            const Decision& d) override {
     ++decisions;
     EXPECT_EQ(ctx.step, e.step());
     // The whole team's context, whatever the acting policy was given.
     EXPECT_NE(ctx.central, nullptr);
     EXPECT_EQ(d.wanted.size(), d.applied.size());
     statuses.push_back(d.status);
+    return ctx.step == stop_at_decision ? ObserverStatus::kStop
+                                        : ObserverStatus::kContinue;
   }
   void OnSubstep(const Episode&, double elapsed) override {
     ++substeps;
     EXPECT_GT(elapsed, 0.0);
   }
-  void OnStep(const Episode&) override { ++steps; }
+  ObserverStatus OnStep(const Episode& e) override {
+    ++steps;
+    return e.step() == stop_after_step ? ObserverStatus::kStop
+                                       : ObserverStatus::kContinue;
+  }
   void OnEnd(const Episode& e) override {
     ++ends;
     EXPECT_TRUE(e.done());
   }
+  int stop_at_decision = -1;  // stop the episode at this step's decision
+  int stop_after_step = -1;   // or after this step
   int starts = 0, decisions = 0, substeps = 0, steps = 0, ends = 0;
   std::vector<PolicyStatus> statuses;
 };
@@ -200,6 +208,53 @@ TEST(EpisodeObserverTest, EveryCallbackOnceInItsPlace) {
       e->stats().statuses[static_cast<int>(PolicyStatus::kOk)],
       std::count(a.statuses.begin(), a.statuses.end(), PolicyStatus::kOk));
   EXPECT_GT(e->stats().sim_seconds, 0.0);
+  EXPECT_FALSE(e->stopped());
+}
+
+TEST(EpisodeObserverTest, AnObserverStopsTheEpisodeAfterAStepOrBeforeAMove) {
+  Scenario s = ScenarioFromYaml(kSmall);
+  s.policy.name = "greedy";
+  s.mission.max_steps = 7;
+  s.mission.stop_at_success = false;
+  {
+    auto e = MakeEpisode(s, AllPolicies());
+    CountingObserver stopper, other;
+    stopper.stop_after_step = 3;
+    e->AddObserver(&stopper);
+    e->AddObserver(&other);
+    e->Run();
+    EXPECT_TRUE(e->stopped());
+    EXPECT_TRUE(e->done());
+    EXPECT_EQ(e->step(), 3);
+    for (const CountingObserver* o : {&stopper, &other}) {
+      EXPECT_EQ(o->steps, 3);
+      EXPECT_EQ(o->decisions, 3);
+      EXPECT_EQ(o->ends, 1);
+    }
+    const std::vector<Vec2> at = e->robot_positions();
+    e->Step();  // does nothing once stopped
+    EXPECT_EQ(e->step(), 3);
+    EXPECT_EQ(e->robot_positions(), at);
+  }
+  // Stopped at the decision of step 2: that step is not made and nothing
+  // moves, yet every observer saw the decision.
+  auto e = MakeEpisode(s, AllPolicies());
+  CountingObserver first, stopper;
+  stopper.stop_at_decision = 2;
+  e->AddObserver(&first);
+  e->AddObserver(&stopper);
+  std::vector<Vec2> before;
+  while (!e->done()) {
+    before = e->robot_positions();
+    e->Step();
+  }
+  EXPECT_TRUE(e->stopped());
+  EXPECT_EQ(e->step(), 2);
+  EXPECT_EQ(e->robot_positions(), before);
+  for (const CountingObserver* o : {&first, &stopper}) {
+    EXPECT_EQ(o->decisions, 3);
+    EXPECT_EQ(o->steps, 2);
+  }
 }
 
 // A policy that records whether it was given the centralized belief.
@@ -254,14 +309,15 @@ class LabellingObserver : public StepObserver {
     teacher_->Reset(e.world().map, e.world().NumRobots(),
                     e.world().NumTargets(), e.scenario().seed);
   }
-  void OnDecision(const Episode&, const DecisionContext& ctx,
-                  const Decision& d) override {
+  ObserverStatus OnDecision(const Episode&, const DecisionContext& ctx,
+                            const Decision& d) override {
     std::vector<Move> labels(d.wanted.size());
     teacher_->Decide(ctx, &labels);
     for (std::size_t i = 0; i < labels.size(); ++i) {
       ++samples;
       agree += labels[i] == d.wanted[i] ? 1 : 0;
     }
+    return ObserverStatus::kContinue;
   }
   int samples = 0, agree = 0;
 

@@ -1,4 +1,4 @@
-// The uncertainty heatmap (docs/rendering.md, The heatmap) (channel 4 of
+// The uncertainty heatmap (docs/rendering.md, The heatmap) (channel 3, heat, of
 // I-GBNet's input, and the translucent layer of `aia render --heatmap`): robot
 // i's fused belief projected onto a grid over the workspace,
 //   H(c) = sum_k w_k exp(-1/2 (c - mu_k)' (Sigma_k + s^2 I)^-1 (c - mu_k)),

@@ -27,7 +27,7 @@ inline constexpr int kMaxMessageHops = 8;
 struct NetworkConfig {
   ChannelParams channels;
   int width = 32;       // feature channels of the stem and the blocks
-  int stem_stride = 2;  // the stem's stride (docs/learning.md, Speed)
+  int stem_stride = 2;  // the stem's stride (docs/learning.md, Network)
   int pool = 5;         // P: adaptive pooling to P x P
   int hidden = 128;     // the MLP's hidden units
   // K: hops of learned message passing over the communication graph (0:

@@ -33,8 +33,9 @@ struct DatasetOptions {
   double max_seconds = 0.0;
   std::vector<std::string> sets;  // --set key=value
   bool progress = true;
-  // For tests: stop (throw) after this many decisions of the episode in
-  // flight once `stop_after_episodes` episodes were written (-1: never).
+  // For tests: once `stop_after_episodes` episodes were written, end the run
+  // after 3 decisions of the next one without writing it, as a kill would
+  // (-1: never).
   int stop_after_episodes = -1;
 };
 

@@ -58,6 +58,16 @@ struct Decision {
   PolicyStatus status;
 };
 
+// What an observer tells the loop after a decision or a step (Drake's
+// monitors return a status the same way).
+enum class ObserverStatus {
+  kContinue,
+  // End the episode: after a decision, before anything moves (the step is
+  // not counted; every observer still sees the decision); after a step,
+  // there. Run() still calls every OnEnd, and Episode::stopped() says so.
+  kStop,
+};
+
 // Watches an episode. Called on the loop's thread, in the order added; the
 // episode's state is read-only to it.
 class StepObserver {
@@ -70,13 +80,17 @@ class StepObserver {
   // team's (the centralized belief included, whatever the acting policy
   // was given), so that an observer can ask another policy what it would
   // have done (dataset labels).
-  virtual void OnDecision(const Episode& /*episode*/,
-                          const DecisionContext& /*context*/,
-                          const Decision& /*decision*/) {}
+  virtual ObserverStatus OnDecision(const Episode& /*episode*/,
+                                    const DecisionContext& /*context*/,
+                                    const Decision& /*decision*/) {
+    return ObserverStatus::kContinue;
+  }
   // After each physics substep; `elapsed`: simulated seconds into the step.
   virtual void OnSubstep(const Episode& /*episode*/, double /*elapsed*/) {}
   // After each step's sensing, fusion and judging.
-  virtual void OnStep(const Episode& /*episode*/) {}
+  virtual ObserverStatus OnStep(const Episode& /*episode*/) {
+    return ObserverStatus::kContinue;
+  }
   // Once, from Run(), when the episode is done.
   virtual void OnEnd(const Episode& /*episode*/) {}
 };
@@ -101,7 +115,10 @@ class Episode {
   void Run();
   // One decision step. Does nothing once done().
   void Step();
+  // The mission is over (max_steps, success, no robot left) or an observer
+  // stopped it.
   bool done() const;
+  bool stopped() const { return stopped_; }  // by an observer
 
   int step() const { return step_; }
   bool success() const { return flowtime_ >= 0; }
@@ -176,6 +193,7 @@ class Episode {
   int num_targets_ = 0;
   int step_ = 0;
   int flowtime_ = -1;
+  bool stopped_ = false;
   bool all_localized_ = false;
   int localized_steps_ = 0;
   long invalid_moves_ = 0;

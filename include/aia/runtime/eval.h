@@ -1,6 +1,6 @@
 // `aia eval`: the scalability experiment (docs/design.md, Evaluation), in three
-// pieces so that a sweep can be spread over processes (a later MPI driver only
-// hands out instances):
+// pieces so that a sweep can be spread over processes (MPI ranks, ranks.h,
+// only hand out instances):
 //   1. EnumerateInstances: every (size, seed) of the experiment;
 //   2. RunInstance: one instance, a pure function of the instance and the
 //      setup: the world is built once, the expert's F* computed, then each

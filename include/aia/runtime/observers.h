@@ -24,7 +24,10 @@ class TraceObserver : public StepObserver {
                 bool robot_columns = true);
   ~TraceObserver() override;
   void OnStart(const Episode& e) override { Write(e); }
-  void OnStep(const Episode& e) override { Write(e); }
+  ObserverStatus OnStep(const Episode& e) override {
+    Write(e);
+    return ObserverStatus::kContinue;
+  }
   void OnEnd(const Episode& e) override;
 
  private:
@@ -44,7 +47,10 @@ class EstimateObserver : public StepObserver {
   explicit EstimateObserver(const std::string& csv_path = "");
   ~EstimateObserver() override;
   void OnStart(const Episode& e) override { Score(e); }
-  void OnStep(const Episode& e) override { Score(e); }
+  ObserverStatus OnStep(const Episode& e) override {
+    Score(e);
+    return ObserverStatus::kContinue;
+  }
   void OnEnd(const Episode& e) override;
 
   // Over every step and target so far: sqrt(mean error^2), and mean NEES.
@@ -70,8 +76,8 @@ class EstimateObserver : public StepObserver {
 class MoveObserver : public StepObserver {
  public:
   void OnStart(const Episode& e) override;
-  void OnDecision(const Episode& e, const DecisionContext& ctx,
-                  const Decision& decision) override;
+  ObserverStatus OnDecision(const Episode& e, const DecisionContext& ctx,
+                            const Decision& decision) override;
 
   long moves() const { return moves_; }
   long reversals() const { return reversals_; }
@@ -102,7 +108,7 @@ class ProgressObserver : public StepObserver {
  public:
   ProgressObserver(std::string label, bool enabled,
                    std::function<std::string()> extra = {});
-  void OnStep(const Episode& e) override;
+  ObserverStatus OnStep(const Episode& e) override;
   void OnEnd(const Episode& e) override;
 
  private:
