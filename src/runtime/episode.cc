@@ -31,7 +31,12 @@ BeliefLayout MakeBeliefLayout(const World& world) {
 
 Episode::Episode(std::shared_ptr<const Instance> instance,
                  std::unique_ptr<Policy> policy)
-    : Episode(instance, std::move(policy), instance->scenario.mission) {}
+    : Episode(instance, std::move(policy), instance->scenario.mission) {
+  AIA_CHECK(policy_ != nullptr);
+}
+
+Episode::Episode(std::shared_ptr<const Instance> instance)
+    : Episode(instance, nullptr, instance->scenario.mission) {}
 
 Episode::Episode(std::shared_ptr<const Instance> instance,
                  std::unique_ptr<Policy> policy, const MissionConfig& mission)
@@ -41,7 +46,6 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
       policy_(std::move(policy)),
       layout_(MakeBeliefLayout(instance_->world)),
       target_rng_(instance_->scenario.seed, "targets.motion") {
-  AIA_CHECK(policy_ != nullptr);
   const Scenario& scenario = instance_->scenario;
   const World& world = instance_->world;
   const int n = world.NumRobots();
@@ -78,7 +82,7 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   det_.assign(static_cast<size_t>(n) * num_targets_, 1.0);
   min_det_.assign(num_targets_, 1.0);
   best_.assign(num_targets_, -1);
-  policy_->Reset(world.map, n, num_targets_, scenario.seed);
+  if (policy_) policy_->Reset(world.map, n, num_targets_, scenario.seed);
   Observe();  // step 0: measurements at the starts, fused with the prior
   times_ = PhaseTimes{};  // phase times are those of the decision steps
 }
@@ -89,10 +93,17 @@ void Episode::AddObserver(StepObserver* observer) {
 }
 
 void Episode::Run() {
+  AIA_CHECK_MSG(policy_ != nullptr, "an episode without a policy cannot run");
   for (StepObserver* o : observers_) o->OnStart(*this);
   // Ctrl-C (when the command installed the handler) ends the mission after
   // the step in progress; what was done is written as usual.
-  while (!done() && !Interrupted()) Step();
+  while (!done()) {
+    if (Interrupted()) {
+      interrupted_ = true;
+      break;
+    }
+    Step();
+  }
   for (StepObserver* o : observers_) o->OnEnd(*this);
 }
 
@@ -143,6 +154,7 @@ DecisionContext Episode::Context() const {
 }
 
 void Episode::Step() {
+  AIA_CHECK_MSG(policy_ != nullptr, "an episode without a policy cannot step");
   if (done()) return;
   const auto t_step = Clock::now();
   const int n = instance_->world.NumRobots();

@@ -16,7 +16,6 @@
 #include <vector>
 
 #include "aia/core/error.h"
-#include "aia/core/interrupt.h"
 #include "aia/core/io.h"
 #include "aia/learning/igbnet_policy.h"
 #include "aia/learning/network.h"
@@ -202,7 +201,7 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   j["failed_robots"] = failed;
   j["wall_s"] = s.wall_s;
   // Only for a mission stopped by Ctrl-C, whose steps end early.
-  if (Interrupted()) j["interrupted"] = true;
+  if (e.interrupted()) j["interrupted"] = true;
   return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 

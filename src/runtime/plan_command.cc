@@ -9,7 +9,6 @@
 #include "aia/core/check.h"
 #include "aia/core/error.h"
 #include "aia/core/io.h"
-#include "aia/planning/random_policy.h"
 #include "aia/runtime/episode.h"
 #include "aia/scenario/loader.h"
 
@@ -24,10 +23,9 @@ double PeakRssMiB() {
 SamplingPlan PlanFromStart(std::shared_ptr<const Instance> instance,
                            const ExpertParams& params,
                            std::optional<long> budget) {
-  // The plan is made on the state at step 0, which does not depend on the
-  // policy: any policy will do to set up the episode.
+  // The plan is made on the state at step 0, which no policy has touched.
   const std::uint64_t seed = instance->scenario.seed;
-  const Episode episode(std::move(instance), std::make_unique<RandomPolicy>());
+  const Episode episode(std::move(instance));
   SamplingParams sampling = params;
   if (budget) sampling.anytime = *budget;
   SamplingTree tree;

@@ -104,6 +104,10 @@ class Episode {
           std::unique_ptr<Policy> policy);
   Episode(std::shared_ptr<const Instance> instance,
           std::unique_ptr<Policy> policy, const MissionConfig& mission);
+  // The state at step 0 only, with no policy (planning from the start, as
+  // `aia plan` and eval's F* do): Context() and the accessors work, Run()
+  // and Step() refuse, policy() must not be called.
+  explicit Episode(std::shared_ptr<const Instance> instance);
   // Beliefs point into the episode (their layout): it stays where it is.
   Episode(const Episode&) = delete;
   Episode& operator=(const Episode&) = delete;
@@ -119,6 +123,8 @@ class Episode {
   // stopped it.
   bool done() const;
   bool stopped() const { return stopped_; }  // by an observer
+  // Run() ended early on Ctrl-C (core/interrupt.h), steps left undone.
+  bool interrupted() const { return interrupted_; }
 
   int step() const { return step_; }
   bool success() const { return flowtime_ >= 0; }
@@ -194,6 +200,7 @@ class Episode {
   int step_ = 0;
   int flowtime_ = -1;
   bool stopped_ = false;
+  bool interrupted_ = false;
   bool all_localized_ = false;
   int localized_steps_ = 0;
   long invalid_moves_ = 0;
