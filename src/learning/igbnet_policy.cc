@@ -296,13 +296,11 @@ std::vector<std::pair<std::string, long>> IgbNetPolicy::Counters() const {
 }
 
 void AddLearnedPolicies(PolicyRegistry* registry) {
-  registry->Add<IgbNetParams, IgbNet>(
-      "igbnet",
+  registry->Add<IgbNetPolicy, IgbNetParams, IgbNet>(
       "I-GBNet, the paper's graph network trained by imitation of the expert "
       "(docs/learning.md); each robot decides from its own belief, its "
       "neighbours' positions and the map; the model is policy.model (default "
       "models/igbnet.pt)",
-      false,
       [](const IgbNetParams&, const Scenario& s) {
         const bool given = !s.policy.model.empty();
         const std::string path = given ? s.policy.model : DefaultModelPath();

@@ -69,25 +69,20 @@ std::string PolicyRegistry::UnknownPolicy(const std::string& name) const {
 
 PolicyRegistry BuiltinPolicies() {
   PolicyRegistry r;
-  r.Add<NoParams>(
-      "random", "a uniformly random valid move per robot (Random-Walker)",
-      false, [](const NoParams&) { return std::make_unique<RandomPolicy>(); });
-  r.Add<NoParams>(
-      "greedy",
+  r.Add<RandomPolicy, NoParams>(
+      "a uniformly random valid move per robot (Random-Walker)",
+      [](const NoParams&) { return std::make_unique<RandomPolicy>(); });
+  r.Add<GreedyPolicy, NoParams>(
       "one-step largest drop of the robot's own log det, else a shortest path "
       "to the nearest unlocalized target",
-      false, [](const NoParams&) { return std::make_unique<GreedyPolicy>(); });
-  r.Add<ExpertParams>(
-      "expert",
+      [](const NoParams&) { return std::make_unique<GreedyPolicy>(); });
+  r.Add<ExpertPolicy, ExpertParams>(
       "C-SB: centralized sampling-based tree over the team and the "
       "centralized filter",
-      true,
       [](const ExpertParams& p) { return std::make_unique<ExpertPolicy>(p); });
-  r.Add<DecSbParams>(
-      "decsb",
+  r.Add<DecSbPolicy, DecSbParams>(
       "Dec-SB: one receding-horizon sampling tree per robot on its own DKF "
       "belief",
-      false,
       [](const DecSbParams& p) { return std::make_unique<DecSbPolicy>(p); });
   return r;
 }

@@ -240,6 +240,24 @@ TEST(RegistryTest, DescribeListsEveryPolicyWithItsParameters) {
   EXPECT_TRUE(info[0].params.empty());
 }
 
+// A policy's name and whether it is centralized are stated once, in its
+// class: the registry, its specs and the policies it makes agree.
+TEST(RegistryTest, NamesAndCentralizedFlagsComeFromThePolicyClass) {
+  const PolicyRegistry registry = BuiltinPolicies();
+  for (const PolicyInfo& info : registry.Describe()) {
+    Scenario s = ScenarioFromYaml("robots: {count: 1}\ntargets: {count: 1}\n");
+    s.policy.name = info.name;
+    const auto spec = registry.Resolve(s);
+    const auto policy = spec->Create();
+    EXPECT_EQ(spec->name(), info.name);
+    EXPECT_EQ(policy->name(), info.name);
+    EXPECT_EQ(spec->centralized(), info.centralized) << info.name;
+    EXPECT_EQ(policy->centralized(), info.centralized) << info.name;
+  }
+  EXPECT_TRUE(ExpertPolicy(ExpertParams{}).centralized());
+  EXPECT_FALSE(GreedyPolicy().centralized());
+}
+
 // A stand-in for a learned policy: its model is a shared resource, loaded
 // once when the policy is resolved and shared by every policy made from it.
 struct ToyModel {
@@ -252,18 +270,23 @@ struct ToyParams {
     a->Visit(AIA_FIELD(scale).In(AtLeast(1)).Doc("a parameter"));
   }
 };
-class ToyPolicy : public RandomPolicy {
+class ToyPolicy : public NamedPolicy<ToyPolicy> {
  public:
+  static constexpr std::string_view kName = "toy";
   explicit ToyPolicy(std::shared_ptr<const ToyModel> model)
       : model_(std::move(model)) {}
+  void Reset(const Map&, int, int, std::uint64_t) override {}
+  PolicyStatus Decide(const DecisionContext&, std::vector<Move>*) override {
+    return PolicyStatus::kOk;
+  }
   std::shared_ptr<const ToyModel> model_;
 };
 
 TEST(RegistryTest, SharedResourceIsLoadedOncePerResolve) {
   PolicyRegistry r;
   int loads = 0;
-  r.Add<ToyParams, ToyModel>(
-      "toy", "a policy with a model", false,
+  r.Add<ToyPolicy, ToyParams, ToyModel>(
+      "a policy with a model",
       [&loads](const ToyParams& p, const Scenario& scenario) {
         ++loads;
         EXPECT_EQ(scenario.policy.name, "toy");

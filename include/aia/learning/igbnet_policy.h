@@ -87,11 +87,11 @@ struct IgbNetParams {
   }
 };
 
-class IgbNetPolicy : public Policy {
+class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
  public:
   explicit IgbNetPolicy(std::shared_ptr<const IgbNet> net,
                         IgbNetParams params = {});
-  std::string_view name() const override { return "igbnet"; }
+  static constexpr std::string_view kName = "igbnet";
   void Reset(const Map& map, int num_robots, int num_targets,
              std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,

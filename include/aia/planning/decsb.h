@@ -39,10 +39,10 @@ struct DecSbParams {
   SamplingParams Sampling() const;
 };
 
-class DecSbPolicy : public Policy {
+class DecSbPolicy : public NamedPolicy<DecSbPolicy> {
  public:
   explicit DecSbPolicy(const DecSbParams& params);
-  std::string_view name() const override { return "decsb"; }
+  static constexpr std::string_view kName = "decsb";
   void Reset(const Map& map, int num_robots, int num_targets,
              std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,

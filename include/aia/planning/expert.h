@@ -27,11 +27,11 @@ using ExpertParams = SamplingParams;
 // with the centralized belief as the root (ctx.central must be given).
 SamplingProblem ExpertProblem(const DecisionContext& ctx);
 
-class ExpertPolicy : public Policy {
+class ExpertPolicy : public NamedPolicy<ExpertPolicy> {
  public:
   explicit ExpertPolicy(const ExpertParams& params);
-  std::string_view name() const override { return "expert"; }
-  bool centralized() const override { return true; }
+  static constexpr std::string_view kName = "expert";
+  static constexpr bool kCentralized = true;
   void Reset(const Map& map, int num_robots, int num_targets,
              std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,

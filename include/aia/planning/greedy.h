@@ -18,9 +18,9 @@
 
 namespace aia {
 
-class GreedyPolicy : public Policy {
+class GreedyPolicy : public NamedPolicy<GreedyPolicy> {
  public:
-  std::string_view name() const override { return "greedy"; }
+  static constexpr std::string_view kName = "greedy";
   void Reset(const Map& map, int num_robots, int num_targets,
              std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -71,6 +72,26 @@ class Policy {
   virtual std::vector<std::pair<std::string, long>> Counters() const {
     return {};
   }
+};
+
+// Whether a policy class states `static constexpr bool kCentralized = true`.
+template <typename P, typename = void>
+struct IsCentralizedPolicy : std::false_type {};
+template <typename P>
+struct IsCentralizedPolicy<P, std::void_t<decltype(P::kCentralized)>>
+    : std::bool_constant<P::kCentralized> {};
+
+// A policy class names itself once, for its objects and for the registry
+// (PolicyRegistry::Add<P> reads the same constants):
+//   class GreedyPolicy : public NamedPolicy<GreedyPolicy> {
+//    public:
+//     static constexpr std::string_view kName = "greedy";
+//     // and, for a centralized one: static constexpr bool kCentralized = true;
+template <typename P>
+class NamedPolicy : public Policy {
+ public:
+  std::string_view name() const final { return P::kName; }
+  bool centralized() const final { return IsCentralizedPolicy<P>::value; }
 };
 
 }  // namespace aia

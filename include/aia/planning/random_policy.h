@@ -9,9 +9,9 @@
 
 namespace aia {
 
-class RandomPolicy : public Policy {
+class RandomPolicy : public NamedPolicy<RandomPolicy> {
  public:
-  std::string_view name() const override { return "random"; }
+  static constexpr std::string_view kName = "random";
   void Reset(const Map& map, int num_robots, int num_targets,
              std::uint64_t seed) override;
   PolicyStatus Decide(const DecisionContext& ctx,

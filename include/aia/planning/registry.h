@@ -78,17 +78,16 @@ class PolicyRegistry {
   using ResourceFactory = std::function<std::unique_ptr<Policy>(
       const Params&, std::shared_ptr<const Resource>)>;
 
-  // A policy whose parameters are the struct `Params`.
-  template <typename Params>
-  void Add(const std::string& name, const std::string& description,
-           bool centralized, Factory<Params> make);
+  // The policy class P (a NamedPolicy: its name and whether it is
+  // centralized come from P) with parameters the struct `Params`.
+  template <typename P, typename Params>
+  void Add(const std::string& description, Factory<Params> make);
 
   // A policy that also needs a shared, read-only resource (a learned model):
   // `load` runs once per Resolve() (once per process for a command), and
   // every policy Create()d from the spec shares what it returned.
-  template <typename Params, typename Resource>
-  void Add(const std::string& name, const std::string& description,
-           bool centralized, Loader<Params, Resource> load,
+  template <typename P, typename Params, typename Resource>
+  void Add(const std::string& description, Loader<Params, Resource> load,
            ResourceFactory<Params, Resource> make);
 
   bool Has(const std::string& name) const;
@@ -172,10 +171,10 @@ Params PolicyRegistry::ReadParams(const std::string& name,
   return params;
 }
 
-template <typename Params>
-void PolicyRegistry::Add(const std::string& name,
-                         const std::string& description, bool centralized,
-                         Factory<Params> make) {
+template <typename P, typename Params>
+void PolicyRegistry::Add(const std::string& description, Factory<Params> make) {
+  const std::string name(P::kName);
+  const bool centralized = IsCentralizedPolicy<P>::value;
   Entry e;
   e.info = {name, description, centralized, FieldDocs::Of(Params{}, "policy")};
   e.resolve = [name, centralized,
@@ -186,11 +185,12 @@ void PolicyRegistry::Add(const std::string& name,
   Put(std::move(e));
 }
 
-template <typename Params, typename Resource>
-void PolicyRegistry::Add(const std::string& name,
-                         const std::string& description, bool centralized,
+template <typename P, typename Params, typename Resource>
+void PolicyRegistry::Add(const std::string& description,
                          Loader<Params, Resource> load,
                          ResourceFactory<Params, Resource> make) {
+  const std::string name(P::kName);
+  const bool centralized = IsCentralizedPolicy<P>::value;
   Entry e;
   e.info = {name, description, centralized, FieldDocs::Of(Params{}, "policy")};
   e.resolve = [name, centralized, load,
