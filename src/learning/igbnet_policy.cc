@@ -299,8 +299,8 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
   registry->Add<IgbNetPolicy, IgbNetParams, IgbNet>(
       "I-GBNet, the paper's graph network trained by imitation of the expert "
       "(docs/learning.md); each robot decides from its own belief, its "
-      "neighbours' positions and the map; the model is policy.model (default "
-      "models/igbnet.pt)",
+      "neighbours' positions and the map",
+      "models/igbnet.pt",
       [](const IgbNetParams&, const Scenario& s) {
         const bool given = !s.policy.model.empty();
         const std::string path = given ? s.policy.model : DefaultModelPath();

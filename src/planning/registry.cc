@@ -30,6 +30,17 @@ void PolicyRegistry::Put(Entry entry) {
   entries_.push_back(std::move(entry));
 }
 
+std::vector<FieldDoc> PolicyRegistry::ModelFieldDocs(
+    const std::string& default_model) {
+  std::vector<FieldDoc> docs;
+  for (FieldDoc& d : FieldDocs::Of(PolicyConfig{}, "policy")) {
+    if (d.key == "policy.model") d.default_value = default_model;
+    if (d.key == "policy.model" || d.key == "policy.model_sha256")
+      docs.push_back(std::move(d));
+  }
+  return docs;
+}
+
 bool PolicyRegistry::Has(const std::string& name) const {
   for (const Entry& e : entries_)
     if (e.info.name == name) return true;

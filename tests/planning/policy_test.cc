@@ -286,7 +286,7 @@ TEST(RegistryTest, SharedResourceIsLoadedOncePerResolve) {
   PolicyRegistry r;
   int loads = 0;
   r.Add<ToyPolicy, ToyParams, ToyModel>(
-      "a policy with a model",
+      "a policy with a model", "toy.pt",
       [&loads](const ToyParams& p, const Scenario& scenario) {
         ++loads;
         EXPECT_EQ(scenario.policy.name, "toy");
@@ -306,6 +306,13 @@ TEST(RegistryTest, SharedResourceIsLoadedOncePerResolve) {
   const auto* b = static_cast<const ToyPolicy*>(episodes[2].get());
   EXPECT_EQ(a->model_.get(), b->model_.get());
   EXPECT_EQ(a->model_->weights, 30);
+  // Its model file is listed first among its parameters.
+  const std::vector<FieldDoc> params = r.Describe()[0].params;
+  ASSERT_EQ(params.size(), 3u);
+  EXPECT_EQ(params[0].key, "policy.model");
+  EXPECT_EQ(params[0].default_value, "toy.pt");
+  EXPECT_EQ(params[1].key, "policy.model_sha256");
+  EXPECT_EQ(params[2].key, "policy.scale");
 }
 
 TEST(TeamBestTest, ActiveRowWithTheSmallestDetLowestIndexFirst) {

@@ -85,9 +85,12 @@ class PolicyRegistry {
 
   // A policy that also needs a shared, read-only resource (a learned model):
   // `load` runs once per Resolve() (once per process for a command), and
-  // every policy Create()d from the spec shares what it returned.
+  // every policy Create()d from the spec shares what it returned. Its model
+  // file is the scenario's policy.model (and policy.model_sha256), listed
+  // first among its parameters with `default_model` as the default.
   template <typename P, typename Params, typename Resource>
-  void Add(const std::string& description, Loader<Params, Resource> load,
+  void Add(const std::string& description, const std::string& default_model,
+           Loader<Params, Resource> load,
            ResourceFactory<Params, Resource> make);
 
   bool Has(const std::string& name) const;
@@ -110,6 +113,8 @@ class PolicyRegistry {
   };
   void Put(Entry entry);
 
+  // policy.model and policy.model_sha256 as PolicyConfig declares them.
+  static std::vector<FieldDoc> ModelFieldDocs(const std::string& default_model);
   template <typename Params>
   static Params ReadParams(const std::string& name, const Scenario& scenario);
 
@@ -187,12 +192,15 @@ void PolicyRegistry::Add(const std::string& description, Factory<Params> make) {
 
 template <typename P, typename Params, typename Resource>
 void PolicyRegistry::Add(const std::string& description,
+                         const std::string& default_model,
                          Loader<Params, Resource> load,
                          ResourceFactory<Params, Resource> make) {
   const std::string name(P::kName);
   const bool centralized = IsCentralizedPolicy<P>::value;
   Entry e;
-  e.info = {name, description, centralized, FieldDocs::Of(Params{}, "policy")};
+  e.info = {name, description, centralized, ModelFieldDocs(default_model)};
+  for (FieldDoc& d : FieldDocs::Of(Params{}, "policy"))
+    e.info.params.push_back(std::move(d));
   e.resolve = [name, centralized, load,
                make](const Scenario& s) -> std::shared_ptr<const PolicySpec> {
     const Params params = ReadParams<Params>(name, s);
