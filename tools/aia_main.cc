@@ -412,8 +412,9 @@ Action AddTrainCommand(CLI::App& app) {
       ->take_all()
       ->check(kPath);
   cmd->add_option("--out", o->out,
-                  "model file; OUT.ckpt and OUT(.pt->.train.csv) beside it")
-      ->capture_default_str()
+                  "model file to write (required to train; the shipped one "
+                  "is models/igbnet.pt); OUT.ckpt and OUT(.pt->.train.csv) "
+                  "beside it")
       ->check(kPath);
   cmd->add_option("--init", o->init, "start from this model (DAgger rounds)")
       ->check(kPath);

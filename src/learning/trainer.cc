@@ -318,7 +318,6 @@ void CheckOptions(const TrainOptions& o) {
   const auto bad = [](const std::string& flag, const std::string& what) {
     return InputError("command line", 0, flag, what);
   };
-  if (o.out.empty()) throw bad("--out", "is required");
   if (o.epochs < 1 || o.epochs > 100000)
     throw bad("--epochs", "must be 1..100000");
   if (o.batch < 1 || o.batch > 65536) throw bad("--batch", "must be 1..65536");
@@ -350,6 +349,8 @@ void CheckOptions(const TrainOptions& o) {
   if (o.message_hops < -1 || o.message_hops > kMaxMessageHops)
     throw bad("--message-hops",
               "must be 0.." + std::to_string(kMaxMessageHops));
+  if (o.out.empty())
+    throw bad("--out", "is required (the model file to write)");
 }
 
 }  // namespace

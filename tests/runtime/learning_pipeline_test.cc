@@ -383,9 +383,12 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
       {{"train", "--data", dir, "--out", dir + "/m.pt"}, "holds no dataset"},
       {{"train", "--data", dir, "--frame", "polar"}, "--frame: 'polar'"},
       {{"train", "--data", dir, "--lr", "2"}, "--lr: must be"},
+      // No default model file: the shipped one is never replaced by accident.
+      {{"train", "--data", dir}, "--out: is required"},
       {{"train", "--data", dir, "--message-hops", "9"},
        "--message-hops: must be 0..8"},
-      {{"train", "--data", dir, "--init", dir + "/none.pt"},
+      {{"train", "--data", dir, "--init", dir + "/none.pt", "--out",
+        dir + "/m.pt"},
        "--init: '" + dir + "/none.pt': no such model file"},
   };
   for (const auto& [args, message] : cases) {

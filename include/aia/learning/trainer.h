@@ -17,7 +17,9 @@ namespace aia {
 
 struct TrainOptions {
   std::vector<std::string> data;  // dataset folders or files
-  std::string out = "models/igbnet.pt";
+  // The model file (required: no default, so that no run replaces the
+  // shipped models/igbnet.pt by accident).
+  std::string out;
   std::string init;  // start from this model (DAgger rounds); empty: fresh
   NetworkConfig network;
   // Message passing hops K (NetworkConfig::message_hops); -1: network's, or
