@@ -16,10 +16,13 @@
 #include <memory>
 #include <new>
 #include <optional>
+#include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "aia/core/error.h"
+#include "aia/core/field_io.h"
 #include "aia/core/interrupt.h"
 #include "aia/learning/trainer.h"
 #include "aia/runtime/bench.h"
@@ -80,6 +83,70 @@ const CLI::Validator kPath(
       return v.empty() ? "an empty path; give a file or folder" : "";
     },
     "", "PATH");
+
+// Flags declared by a struct's fields (core/fields.h): each field's flag is
+// aia::FlagName of its key, its help the field's documentation, its default
+// the member's value; enumerations are read by name after parsing (Apply),
+// with the scenario keys' error form. Ranges are checked where the struct
+// is used (aia::CheckFlags).
+class DeclaredFlags {
+ public:
+  explicit DeclaredFlags(CLI::App* cmd) : cmd_(cmd) {}
+
+  // Every field of *value but those in `skip`; *value must outlive the
+  // command.
+  template <typename T>
+  void Add(T* value, std::set<std::string> skip = {}) {
+    skip_ = std::move(skip);
+    value->Serialize(this);
+  }
+  // Reads the enumerations given by name.
+  void Apply() const {
+    for (const auto& apply : after_) apply();
+  }
+
+  template <typename T>
+  void Visit(const aia::Field<T>& f) {
+    if (skip_.count(std::string(f.name))) return;
+    const std::string flag = aia::FlagName(f.name);
+    const std::string help(f.doc);
+    if constexpr (std::is_same_v<T, bool>) {
+      cmd_->add_flag(flag, *f.value, help);
+    } else if constexpr (std::is_enum_v<T>) {
+      auto text = std::make_shared<std::string>(
+          aia::FieldWriter::Write(*f.value, f)->scalar);
+      cmd_->add_option(flag, *text, help)->capture_default_str();
+      T* out = f.value;
+      after_.push_back([text, out, flag] {
+        EnumFlag<T> e;
+        aia::ConfigNode node = aia::ConfigNode::Map();
+        node.Set("value", aia::ConfigNode::Scalar(*text)).SetOrigin(flag);
+        aia::ReadFields(node, aia::ReadOptions{"command line", "", ""}, "", &e);
+        *out = e.value;
+      });
+    } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+      cmd_->add_option(flag, *f.value, help)
+          ->transform(kUnsigned)
+          ->capture_default_str();
+    } else {
+      cmd_->add_option(flag, *f.value, help)->capture_default_str();
+    }
+  }
+
+ private:
+  template <typename E>
+  struct EnumFlag {
+    E value{};
+    template <typename A>
+    void Serialize(A* a) {
+      a->Visit(aia::Field<E>("value", &value));
+    }
+  };
+
+  CLI::App* cmd_;
+  std::set<std::string> skip_;
+  std::vector<std::function<void()>> after_;
+};
 
 // The scenario flags of the mission commands; their values are read after
 // parsing (only the flags given override the scenario).
@@ -401,7 +468,6 @@ Action AddDatasetCommand(CLI::App& app) {
 
 Action AddTrainCommand(CLI::App& app) {
   auto o = std::make_shared<aia::TrainOptions>();
-  auto frame = std::make_shared<std::string>("centred");
   auto quiet = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "train",
@@ -418,58 +484,10 @@ Action AddTrainCommand(CLI::App& app) {
       ->check(kPath);
   cmd->add_option("--init", o->init, "start from this model (DAgger rounds)")
       ->check(kPath);
-  cmd->add_option("--epochs", o->epochs, "epochs")->capture_default_str();
-  cmd->add_option("--batch", o->batch, "batch size")->capture_default_str();
-  cmd->add_option("--lr", o->lr, "learning rate at the start (cosine)")
-      ->capture_default_str();
-  cmd->add_option("--lr-min", o->lr_min, "learning rate at the end")
-      ->capture_default_str();
-  cmd->add_option("--weight-decay", o->weight_decay, "Adam's weight decay")
-      ->capture_default_str();
-  cmd->add_option("--weak-weight", o->weak_weight,
-                  "weight of samples whose robot had no useful work left "
-                  "(0 masks them)")
-      ->capture_default_str();
-  cmd->add_option("--val-share", o->val_share,
-                  "share of the worlds held out for validation")
-      ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "initialization, split and shuffling")
-      ->transform(kUnsigned)
-      ->capture_default_str();
-  cmd->add_option("--frame", *frame, "input frame: centred or global")
-      ->capture_default_str();
-  cmd->add_option("--cell", o->network.channels.cell, "metres per pixel")
-      ->capture_default_str();
-  cmd->add_option("--window", o->network.channels.window,
-                  "centred frame: pixels per side")
-      ->capture_default_str();
-  cmd->add_option("--blur", o->network.channels.blur,
-                  "the heatmap's s in metres (about half the sensor range)")
-      ->capture_default_str();
-  cmd->add_flag("--geodesic", o->network.channels.geodesic,
-                "a fifth channel, reach: where each unlocalized target "
-                "could be measured, carried along free space "
-                "(docs/learning.md, Channels)");
-  cmd->add_option("--geodesic-length", o->network.channels.geodesic_length,
-                  "the geodesic channel's decay length L in metres")
-      ->capture_default_str();
-  cmd->add_option("--observe-range", o->network.channels.observe_range,
-                  "the reach channel's observation range in metres")
-      ->capture_default_str();
-  cmd->add_option("--width", o->network.width, "feature channels")
-      ->capture_default_str();
-  cmd->add_option("--stem-stride", o->network.stem_stride, "stride of the stem")
-      ->capture_default_str();
-  cmd->add_option("--message-hops", o->message_hops,
-                  "K: hops of learned message passing over the "
-                  "communication graph (0: none; default: --init's, else "
-                  "0; docs/learning.md, Network)");
-  cmd->add_option("--pool", o->network.pool, "adaptive pooling to P x P")
-      ->capture_default_str();
-  cmd->add_option("--threads", o->threads,
-                  "libtorch threads (0: libtorch's default, one thread with "
-                  "Debian's build)")
-      ->capture_default_str();
+  // The hyperparameters and the network, as their structs declare them.
+  auto declared = std::make_shared<DeclaredFlags>(cmd);
+  declared->Add(o.get());
+  declared->Add(&o->network, {"message_hops"});  // set by --message-hops
   cmd->add_flag("--resume", o->resume,
                 "continue from OUT.ckpt (same options) if it is there");
   auto validate = std::make_shared<std::string>();
@@ -480,9 +498,7 @@ Action AddTrainCommand(CLI::App& app) {
   cmd->add_flag("--quiet", *quiet, "no progress lines");
   return [=]() {
     if (!cmd->parsed()) return -1;
-    if (!aia::ParseChannelFrame(*frame, &o->network.channels.frame))
-      throw aia::InputError("command line", 0, "--frame",
-                            "'" + *frame + "' is not centred or global");
+    declared->Apply();
     o->progress = !*quiet;
     if (!validate->empty()) {
       const aia::ValidationResult v =

@@ -523,4 +523,22 @@ Eigen::MatrixXd FieldReader::ReadMatrix(const ConfigNode& node,
   return m;
 }
 
+std::string FlagName(std::string_view key) {
+  const std::string_view::size_type dot = key.find_last_of('.');
+  std::string flag =
+      "--" +
+      std::string(dot == std::string_view::npos ? key : key.substr(dot + 1));
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return flag;
+}
+
+void SetFlagOrigins(ConfigNode* node) {
+  for (ConfigNode::Entry& e : node->entries) {
+    if (e.value.IsMap())
+      SetFlagOrigins(&e.value);
+    else
+      e.value.SetOrigin(FlagName(e.key));
+  }
+}
+
 }  // namespace aia

@@ -10,18 +10,19 @@
 namespace aia {
 
 std::string_view ChannelFrameName(ChannelFrame frame) {
-  return frame == ChannelFrame::kGlobal ? "global" : "centred";
+  for (const auto& n : EnumNames(ChannelFrame{}))
+    if (n.value == frame) return n.name;
+  return "unknown";
 }
 
 bool ParseChannelFrame(std::string_view text, ChannelFrame* frame) {
-  if (text == "global") {
-    *frame = ChannelFrame::kGlobal;
-  } else if (text == "centred" || text == "centered") {
-    *frame = ChannelFrame::kCentred;
-  } else {
-    return false;
+  for (const auto& n : EnumNames(ChannelFrame{})) {
+    if (text == n.name) {
+      *frame = n.value;
+      return true;
+    }
   }
-  return true;
+  return false;
 }
 
 ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,

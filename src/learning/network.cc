@@ -13,10 +13,12 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "aia/core/check.h"
 #include "aia/core/error.h"
+#include "aia/core/field_io.h"
 #include "aia/core/io.h"
 #include "network_impl.h"
 
@@ -32,31 +34,74 @@ constexpr const char* kMetaKey = "aia_meta";
 
 }  // namespace
 
+namespace {
+
+// Writes declared fields into a JSON object with their own types (an
+// integer stays an integer, an enumeration is its name).
+class JsonFieldWriter {
+ public:
+  explicit JsonFieldWriter(nlohmann::json* out) : out_(out) {}
+  template <typename T>
+  void Visit(const Field<T>& f) {
+    if constexpr (std::is_enum_v<T>) {
+      for (const auto& n : EnumNames(T{})) {
+        if (n.value == *f.value) {
+          (*out_)[std::string(f.name)] = n.name;
+          break;
+        }
+      }
+    } else {
+      (*out_)[std::string(f.name)] = *f.value;
+    }
+  }
+
+ private:
+  nlohmann::json* out_;
+};
+
+// A flat JSON object of scalars as a ConfigNode mapping (numbers and
+// booleans plain, so that the field reader types them as it does YAML).
+ConfigNode ConfigFromJson(const nlohmann::json& j) {
+  ConfigNode node = ConfigNode::Map();
+  for (const auto& [key, v] : j.items()) {
+    ConfigNode value;
+    if (v.is_boolean()) {
+      value = ConfigNode::Scalar(v.get<bool>() ? "true" : "false");
+    } else if (v.is_number_integer()) {
+      value = ConfigNode::Scalar(v.dump());
+    } else if (v.is_number_float()) {
+      value = ConfigNode::Scalar(field_text::ShortestReal(v.get<double>()));
+    } else if (v.is_string()) {
+      value = ConfigNode::Scalar(v.get<std::string>());
+    } else {
+      value = ConfigNode::Scalar(v.dump(), ConfigNode::Style::kQuoted);
+    }
+    node.Set(key, std::move(value));
+  }
+  return node;
+}
+
+}  // namespace
+
 std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
   j["version"] = message_hops > 0 ? 3 : channels.geodesic ? 2 : 1;
-  j["frame"] = std::string(ChannelFrameName(channels.frame));
-  j["cell"] = channels.cell;
-  j["window"] = channels.window;
-  j["blur"] = channels.blur;
-  j["cutoff"] = channels.cutoff;
-  if (channels.geodesic) {
-    j["geodesic"] = true;
-    j["geodesic_length"] = channels.geodesic_length;
-    j["observe_range"] = channels.observe_range;
-    if (channels.reach_margin) j["reach_margin"] = channels.reach_margin;
+  JsonFieldWriter writer(&j);
+  const_cast<NetworkConfig*>(this)->Serialize(&writer);
+  // A feature that is off is not written, so that a model without it keeps
+  // the older version (and the bytes older builds wrote).
+  if (!channels.geodesic) {
+    for (const char* key : {"geodesic", "geodesic_length", "observe_range"})
+      j.erase(key);
   }
-  j["width"] = width;
-  j["stem_stride"] = stem_stride;
-  j["pool"] = pool;
-  j["hidden"] = hidden;
-  if (message_hops > 0) j["message_hops"] = message_hops;
+  if (!channels.geodesic || channels.reach_margin == 0) j.erase("reach_margin");
+  if (message_hops == 0) j.erase("message_hops");
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 NetworkConfig NetworkConfig::FromJson(const std::string& text) {
-  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
   if (j.is_discarded() || !j.is_object())
     throw std::runtime_error("its metadata is not JSON");
   if (j.value("format", "") != kFormat)
@@ -68,40 +113,22 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     throw std::runtime_error("model format version " + std::to_string(version) +
                              ", this build reads 1 to " +
                              std::to_string(kVersion));
+  j.erase("format");
+  j.erase("version");
+  // What every version writes; the other keys default to "off".
+  for (const char* key : {"frame", "cell", "window", "blur", "cutoff", "width",
+                          "stem_stride", "pool", "hidden"})
+    if (!j.contains(key))
+      throw std::runtime_error(std::string("metadata: ") + key +
+                               ": is missing");
   NetworkConfig c;
   try {
-    if (!ParseChannelFrame(j.at("frame").get<std::string>(), &c.channels.frame))
-      throw std::runtime_error("unknown frame");
-    c.channels.cell = j.at("cell").get<double>();
-    c.channels.window = j.at("window").get<int>();
-    c.channels.blur = j.at("blur").get<double>();
-    c.channels.cutoff = j.at("cutoff").get<double>();
-    c.channels.geodesic = j.value("geodesic", false);
-    c.channels.geodesic_length = j.value("geodesic_length", 5.0);
-    c.channels.observe_range = j.value("observe_range", 2.0);
-    c.channels.reach_margin = j.value("reach_margin", 0);
-    c.width = j.at("width").get<int>();
-    c.stem_stride = j.at("stem_stride").get<int>();
-    c.pool = j.at("pool").get<int>();
-    c.hidden = j.at("hidden").get<int>();
-    c.message_hops = j.value("message_hops", 0);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(std::string("metadata: ") + e.what());
+    ReadOptions options;
+    options.file = "metadata";
+    ReadFields(ConfigFromJson(j), options, "", &c);
+  } catch (const InputError& e) {
+    throw std::runtime_error("metadata: " + e.key() + ": " + e.message());
   }
-  const bool ok =
-      std::isfinite(c.channels.cell) && c.channels.cell > 0.0 &&
-      c.channels.window >= 1 && c.channels.window <= 4096 &&
-      std::isfinite(c.channels.blur) && c.channels.blur >= 0.0 &&
-      std::isfinite(c.channels.cutoff) && c.channels.cutoff > 0.0 &&
-      std::isfinite(c.channels.geodesic_length) &&
-      c.channels.geodesic_length > 0.0 && c.channels.geodesic_length <= 1e6 &&
-      std::isfinite(c.channels.observe_range) &&
-      c.channels.observe_range > 0.0 && c.channels.observe_range <= 1e3 &&
-      c.width >= 1 && c.width <= 1024 && c.stem_stride >= 1 &&
-      c.stem_stride <= 8 && c.pool >= 1 && c.pool <= 64 && c.hidden >= 1 &&
-      c.hidden <= 65536 && c.message_hops >= 0 &&
-      c.message_hops <= kMaxMessageHops;
-  if (!ok) throw std::runtime_error("metadata out of range");
   return c;
 }
 

@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "aia/core/error.h"
+#include "aia/core/field_io.h"
 #include "aia/core/io.h"
 #include "aia/core/rng.h"
 #include "aia/learning/dataset.h"
@@ -314,43 +315,16 @@ std::vector<EpochLog> ParseLog(const std::string& text) {
   return logs;
 }
 
+// Every flag against its declaration (TrainOptions and NetworkConfig), with
+// the scenario keys' error form: `command line: --flag: what`.
 void CheckOptions(const TrainOptions& o) {
-  const auto bad = [](const std::string& flag, const std::string& what) {
-    return InputError("command line", 0, flag, what);
-  };
-  if (o.epochs < 1 || o.epochs > 100000)
-    throw bad("--epochs", "must be 1..100000");
-  if (o.batch < 1 || o.batch > 65536) throw bad("--batch", "must be 1..65536");
-  if (!(o.lr > 0.0 && o.lr < 1.0)) throw bad("--lr", "must be in (0, 1)");
-  if (!(o.lr_min >= 0.0 && o.lr_min <= o.lr))
-    throw bad("--lr-min", "must be in [0, --lr]");
-  if (!(o.weight_decay >= 0.0 && o.weight_decay < 1.0))
-    throw bad("--weight-decay", "must be in [0, 1)");
-  if (!(o.weak_weight >= 0.0 && o.weak_weight <= 1.0))
-    throw bad("--weak-weight", "must be in [0, 1]");
-  if (!(o.val_share >= 0.0 && o.val_share < 1.0))
-    throw bad("--val-share", "must be in [0, 1)");
-  if (o.threads < 0 || o.threads > 1024)
-    throw bad("--threads", "must be 0..1024");
-  const ChannelParams& c = o.network.channels;
-  if (!(c.cell >= 0.05 && c.cell <= 10.0))
-    throw bad("--cell", "must be 0.05..10 m");
-  if (c.window < 4 || c.window > 512) throw bad("--window", "must be 4..512");
-  if (!(c.geodesic_length > 0.0 && c.geodesic_length <= 1000.0))
-    throw bad("--geodesic-length", "must be in (0, 1000] m");
-  if (!(c.observe_range > 0.0 && c.observe_range <= 100.0))
-    throw bad("--observe-range", "must be in (0, 100] m");
-  if (o.network.width < 1 || o.network.width > 512)
-    throw bad("--width", "must be 1..512");
-  if (o.network.stem_stride < 1 || o.network.stem_stride > 4)
-    throw bad("--stem-stride", "must be 1..4");
-  if (o.network.pool < 1 || o.network.pool > 32)
-    throw bad("--pool", "must be 1..32");
-  if (o.message_hops < -1 || o.message_hops > kMaxMessageHops)
-    throw bad("--message-hops",
-              "must be 0.." + std::to_string(kMaxMessageHops));
+  TrainOptions own = o;
+  CheckFlags(&own);
+  NetworkConfig network = o.network;
+  CheckFlags(&network);
   if (o.out.empty())
-    throw bad("--out", "is required (the model file to write)");
+    throw InputError("command line", 0, "--out",
+                     "is required (the model file to write)");
 }
 
 }  // namespace

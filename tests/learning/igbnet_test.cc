@@ -10,6 +10,8 @@
 #include <numeric>
 
 #include "aia/core/error.h"
+#include "aia/core/hash.h"
+#include "aia/core/io.h"
 #include "aia/core/rng.h"
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/igbnet_policy.h"
@@ -132,6 +134,46 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "model format version 4, this build reads 1 to 3");
   }
+}
+
+// The metadata is read through NetworkConfig's declarations (the ranges
+// `aia train` checks its flags against): errors name the key.
+TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
+  const auto error = [](std::string json, const std::string& from,
+                        const std::string& to) {
+    json.replace(json.find(from), from.size(), to);
+    try {
+      NetworkConfig::FromJson(json);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string j = SmallConfig().ToJson();
+  EXPECT_EQ(error(j, "\"width\":8", "\"width\":-3"),
+            "metadata: width: must be an integer in [1, 512], got -3");
+  EXPECT_EQ(error(j, "\"window\":16", "\"window\":2"),
+            "metadata: window: must be an integer in [4, 512], got 2");
+  EXPECT_EQ(error(j, "\"frame\":\"centred\"", "\"frame\":\"polar\""),
+            "metadata: frame: must be global, centred or centered, got polar");
+  EXPECT_EQ(error(j, "\"width\":8,", ""), "metadata: width: is missing");
+  EXPECT_EQ(error(j, "\"width\":8", "\"width\":8,\"depth\":2"),
+            "metadata: depth: unknown key; valid top-level keys: frame, "
+            "cell, window, blur, cutoff, geodesic, geodesic_length, "
+            "observe_range, reach_margin, width, stem_stride, pool, hidden, "
+            "message_hops");
+}
+
+// The shipped model written again is the same file, byte for byte: the
+// metadata written through the declarations is what the older writer wrote.
+TEST(IgbNetTest, TheShippedModelSavedAgainIsTheSameFile) {
+  const std::string shipped = std::string(AIA_SOURCE_DIR) + "/models/igbnet.pt";
+  const auto net = IgbNet::Load(shipped, "f", 0, "k");
+  const std::string dir = testing::MakeTempDir("aia_net_");
+  net->Save(dir + "/again.pt");
+  EXPECT_EQ(Sha256Hex(ReadFile(dir + "/again.pt", 1 << 26)),
+            Sha256Hex(ReadFile(shipped, 1 << 26)));
+  fs::remove_all(dir);
 }
 
 // A path 0 - 1 - 2 - 3 and robot 4 alone, as a TeamGraph under the

@@ -381,12 +381,19 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
       {{"train", "--data", dir + "/none", "--out", dir + "/m.pt"},
        "no such file or folder"},
       {{"train", "--data", dir, "--out", dir + "/m.pt"}, "holds no dataset"},
-      {{"train", "--data", dir, "--frame", "polar"}, "--frame: 'polar'"},
+      {{"train", "--data", dir, "--frame", "polar"},
+       "--frame: must be global, centred or centered, got polar"},
       {{"train", "--data", dir, "--lr", "2"}, "--lr: must be"},
+      // The flags are checked by the fields' declarations (the ranges the
+      // model file's metadata is read with), in the scenario keys' form.
+      {{"train", "--data", dir, "--window", "2"},
+       "error: command line: --window: must be an integer in [4, 512], got 2"},
+      {{"train", "--data", dir, "--lr", "0.01", "--lr-min", "0.1"},
+       "error: command line: --lr-min: must be at most --lr"},
       // No default model file: the shipped one is never replaced by accident.
       {{"train", "--data", dir}, "--out: is required"},
       {{"train", "--data", dir, "--message-hops", "9"},
-       "--message-hops: must be 0..8"},
+       "--message-hops: must be an integer in [-1, 8], got 9"},
       {{"train", "--data", dir, "--init", dir + "/none.pt", "--out",
         dir + "/m.pt"},
        "--init: '" + dir + "/none.pt': no such model file"},

@@ -121,11 +121,16 @@ FieldNames NamesOf(T* value) {
   return names;
 }
 
+// "a | b | c" with separator " | "; with " or ": "a, b or c".
 template <typename E>
 std::string EnumChoices(const std::string& separator) {
   std::vector<std::string> names;
   for (const auto& n : EnumNames(E{})) names.emplace_back(n.name);
-  return field_text::Join(names, separator);
+  if (separator != " or " || names.size() < 3)
+    return field_text::Join(names, separator);
+  const std::string last = names.back();
+  names.pop_back();
+  return field_text::Join(names, ", ") + " or " + last;
 }
 
 }  // namespace internal
@@ -666,6 +671,23 @@ KeySources ReadFields(const ConfigNode& node, const ReadOptions& options,
   FieldReader reader(options);
   reader.ReadStruct(node, key, value);
   return reader.sources();
+}
+
+// Command-line flags declared by a struct's fields: the flag of key
+// "a.stem_stride" is "--stem-stride" (its last name, '-' for '_').
+std::string FlagName(std::string_view key);
+// Marks every value below `node` (a mapping) as set by its key's flag.
+void SetFlagOrigins(ConfigNode* node);
+
+// Checks a struct whose fields were set from command-line flags against
+// their declarations (ranges, types, Validate()): it is written and read
+// back with each key standing for its flag, so that an error reads
+// `command line: --flag: what`, as for the scenario's keys.
+template <typename T>
+void CheckFlags(T* value) {
+  ConfigNode node = FieldWriter::WriteStruct(*value);
+  SetFlagOrigins(&node);
+  ReadFields(node, ReadOptions{"command line", "", ""}, "", value);
 }
 
 }  // namespace aia

@@ -29,11 +29,13 @@
 #ifndef AIA_LEARNING_CHANNELS_H_
 #define AIA_LEARNING_CHANNELS_H_
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "aia/core/fields.h"
 #include "aia/core/grid.h"
 #include "aia/core/types.h"
 #include "aia/estimation/heatmap.h"
@@ -46,6 +48,12 @@ inline constexpr int kNumChannels = 4;
 inline constexpr int kMaxChannels = 5;
 
 enum class ChannelFrame { kGlobal = 0, kCentred = 1 };
+// Read by name ("centered" too); written as the first name of the value.
+constexpr std::array<EnumName<ChannelFrame>, 3> EnumNames(ChannelFrame) {
+  return {{{ChannelFrame::kGlobal, "global"},
+           {ChannelFrame::kCentred, "centred"},
+           {ChannelFrame::kCentred, "centered"}}};
+}
 std::string_view ChannelFrameName(ChannelFrame frame);
 // "global" or "centred" (also "centered"); false for anything else.
 bool ParseChannelFrame(std::string_view text, ChannelFrame* frame);
@@ -64,6 +72,39 @@ struct ChannelParams {
   int reach_margin = 0;
 
   int num_channels() const { return geodesic ? kMaxChannels : kNumChannels; }
+
+  // Declared once (core/fields.h) for the model file's metadata and for
+  // `aia train`'s flags (each key is the flag with '-' for '_').
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(frame).Doc(
+        "input frame: centred (a window around the robot) or global (the "
+        "whole workspace)"));
+    a->Visit(AIA_FIELD(cell).In(Between(0.05, 10.0)).Doc("metres per pixel"));
+    a->Visit(AIA_FIELD(window)
+                 .In(Between(4, 512))
+                 .Doc("centred frame: pixels per side"));
+    a->Visit(AIA_FIELD(blur)
+                 .In(Between(0.0, 100.0))
+                 .Doc("the heatmap's s in metres (about half the sensor "
+                      "range)"));
+    a->Visit(AIA_FIELD(cutoff)
+                 .In({0.0, 100.0, true, false})
+                 .Doc("the heatmap's cut-off, standard deviations"));
+    a->Visit(AIA_FIELD(geodesic).Doc(
+        "a fifth channel, reach: where each unlocalized target could be "
+        "measured, carried along free space (docs/learning.md, Channels)"));
+    a->Visit(AIA_FIELD(geodesic_length)
+                 .In({0.0, 1000.0, true, false})
+                 .Doc("the reach channel's decay length L in metres"));
+    a->Visit(AIA_FIELD(observe_range)
+                 .In({0.0, 100.0, true, false})
+                 .Doc("the reach channel's observation range in metres"));
+    a->Visit(AIA_FIELD(reach_margin)
+                 .In(Between(0, 512))
+                 .Doc("centred frame: pixels around the window the reach "
+                      "channel is computed over before the crop"));
+  }
 };
 
 // Renders the channels of the robots of one map. Owns scratch memory: one

@@ -34,8 +34,30 @@ struct NetworkConfig {
   // none, each robot alone; the paper's network).
   int message_hops = 0;
 
+  // Declared once, for the model file's metadata and `aia train`'s flags:
+  // the channels' keys sit beside the network's (the metadata is flat).
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    channels.Serialize(a);
+    a->Visit(AIA_FIELD(width)
+                 .In(Between(1, 512))
+                 .Doc("feature channels of the stem and the blocks"));
+    a->Visit(AIA_FIELD(stem_stride)
+                 .In(Between(1, 4))
+                 .Doc("stride of the stem (docs/learning.md, Network)"));
+    a->Visit(
+        AIA_FIELD(pool).In(Between(1, 32)).Doc("P: adaptive pooling to P x P"));
+    a->Visit(
+        AIA_FIELD(hidden).In(Between(1, 4096)).Doc("the MLP's hidden units"));
+    a->Visit(AIA_FIELD(message_hops)
+                 .In(Between(0, kMaxMessageHops))
+                 .Doc("K: hops of learned message passing over the "
+                      "communication graph (0: none)"));
+  }
+
   // The model file's metadata (JSON), and back; FromJson throws
-  // std::runtime_error on anything missing or out of range.
+  // std::runtime_error on anything missing or out of range (the ranges
+  // above).
   std::string ToJson() const;
   static NetworkConfig FromJson(const std::string& json);
 };

@@ -42,6 +42,44 @@ struct TrainOptions {
   // For tests of --resume: return after this many epochs of this run, as a
   // killed run would (0: run them all).
   int stop_after_epochs = 0;
+
+  // The hyperparameters, declared once for `aia train`'s flags and their
+  // checks (the network's are NetworkConfig's; paths and modes are not
+  // declared here).
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(epochs).In(Between(1, 100000)).Doc("epochs"));
+    a->Visit(AIA_FIELD(batch).In(Between(1, 65536)).Doc("batch size"));
+    a->Visit(
+        AIA_FIELD(lr).In(kOpenUnit).Doc("learning rate at the start (cosine)"));
+    a->Visit(AIA_FIELD(lr_min)
+                 .In({0.0, 1.0, false, true})
+                 .Doc("learning rate at the end (at most --lr)"));
+    a->Visit(AIA_FIELD(weight_decay)
+                 .In({0.0, 1.0, false, true})
+                 .Doc("Adam's weight decay"));
+    a->Visit(AIA_FIELD(weak_weight)
+                 .In(kUnit)
+                 .Doc("weight of samples whose robot had no useful work left "
+                      "(0 masks them)"));
+    a->Visit(AIA_FIELD(val_share)
+                 .In({0.0, 1.0, false, true})
+                 .Doc("share of the worlds held out for validation"));
+    a->Visit(AIA_FIELD(seed).Doc("initialization, split and shuffling"));
+    a->Visit(AIA_FIELD(threads)
+                 .In(Between(0, 1024))
+                 .Doc("libtorch threads (0: libtorch's default, one thread "
+                      "with Debian's build)"));
+    a->Visit(AIA_FIELD(message_hops)
+                 .In(Between(-1, kMaxMessageHops))
+                 .Doc("K: hops of learned message passing over the "
+                      "communication graph (0: none; -1, the default: "
+                      "--init's, else 0; docs/learning.md, Network)"));
+  }
+  // lr_min <= lr.
+  void Validate(const FieldChecker& check) const {
+    if (lr_min > lr) check.Fail(lr_min, "must be at most --lr");
+  }
 };
 
 struct EpochLog {
