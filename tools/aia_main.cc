@@ -419,19 +419,13 @@ Action AddDatasetCommand(CLI::App& app) {
   cmd->add_option("--out", o->out, "dataset folder (one SQLite file per shard)")
       ->required()
       ->check(kPath);
-  cmd->add_option("--episodes", o->episodes, "episodes in all shards")
-      ->capture_default_str();
+  auto declared = std::make_shared<DeclaredFlags>(cmd);
+  declared->Add(o.get());
   cmd->add_option("--shard", *shard,
                   "K/N: this process writes episodes e with e % N == K "
                   "(under mpirun: the rank and the number of ranks)")
       ->capture_default_str();
   cmd->add_option("--size", o->size, "robots x targets of the worlds")
-      ->capture_default_str();
-  cmd->add_option("--first-seed", o->first_seed,
-                  "episode e uses seed FIRST+e (aia eval uses 0..)")
-      ->transform(kUnsigned)
-      ->capture_default_str();
-  cmd->add_option("--keep", o->keep, "random decision steps kept per episode")
       ->capture_default_str();
   cmd->add_option("--policy", o->policy,
                   "acting policy (igbnet for DAgger; labels always come "
@@ -439,18 +433,11 @@ Action AddDatasetCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--model", o->model, "model of a learned acting policy")
       ->check(kPath);
-  cmd->add_option("--max-steps", o->max_steps,
-                  "decision steps per episode at most (0: the scenario's)")
-      ->capture_default_str();
-  cmd->add_option("--max-seconds", o->max_seconds,
-                  "skip an episode still running after this many seconds "
-                  "(recorded as done with no samples and counted; 0: no "
-                  "cap)")
-      ->capture_default_str();
   cmd->add_option("--set", o->sets, kSetHelp)->take_all()->expected(1);
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;
+    declared->Apply();
     aia::ParseShard(*shard, &o->shard, &o->shards);
     const aia::Ranks& ranks = aia::Ranks::Get();
     if (ranks.distributed()) {  // under mpirun: one shard per rank

@@ -390,99 +390,280 @@ void CheckOutputsAreNotInputs(const TrainOptions& o) {
 
 }  // namespace
 
+namespace {
+
+// The network to train: --init's (its architecture and channels; extended
+// by message layers that start at zero, the same function, when
+// --message-hops asks for more hops), or a fresh one. o->network becomes
+// its configuration.
+std::unique_ptr<IgbNet> NetworkToTrain(TrainOptions* o) {
+  if (o->init.empty()) {
+    if (o->message_hops >= 0) o->network.message_hops = o->message_hops;
+    return std::make_unique<IgbNet>(o->network, o->seed);
+  }
+  std::unique_ptr<IgbNet> net =
+      IgbNet::Load(o->init, "command line", 0, "--init");
+  o->network = net->config();
+  if (o->message_hops < 0 || o->message_hops == o->network.message_hops)
+    return net;
+  if (o->message_hops < o->network.message_hops)
+    throw InputError("command line", 0, "--message-hops",
+                     "the --init model passes messages over " +
+                         std::to_string(o->network.message_hops) +
+                         " hops; it can be extended, not cut");
+  o->network.message_hops = o->message_hops;
+  auto wider = std::make_unique<IgbNet>(o->network, o->seed);
+  torch::NoGradGuard no_grad;
+  IgbNetModule& from = net->impl().module;
+  IgbNetModule& to = wider->impl().module;
+  auto params = to->named_parameters();
+  auto buffers = to->named_buffers();
+  for (const auto& p : from->named_parameters())
+    params[p.key()].copy_(p.value());
+  for (const auto& b : from->named_buffers())
+    buffers[b.key()].copy_(b.value());
+  for (std::size_t k = from->messages.size(); k < to->messages.size(); ++k)
+    to->messages[k]->weight.zero_();
+  return wider;
+}
+
+// One training run at a time in OUT's folder (an flock on the folder,
+// released when the run ends or dies); then the temporary files that killed
+// runs left there are removed.
+std::unique_ptr<FileLock> LockOutputFolder(const std::string& out) {
+  std::filesystem::path parent = std::filesystem::path(out).parent_path();
+  if (parent.empty()) parent = ".";
+  std::unique_ptr<FileLock> lock;
+  try {
+    MakeDirs(parent.string());
+    lock = std::make_unique<FileLock>(parent.string());
+    CheckReplaceableFile(out);
+  } catch (const std::runtime_error& e) {
+    throw InputError("command line", 0, "--out", e.what());
+  }
+  // OUT, OUT.ckpt and the log share OUT's name without ".pt".
+  std::string prefix = std::filesystem::path(out).filename().string();
+  if (prefix.size() > 3 && prefix.compare(prefix.size() - 3, 3, ".pt") == 0)
+    prefix.resize(prefix.size() - 3);
+  RemoveStaleTemporaries(parent.string(), prefix);
+  return lock;
+}
+
+// --resume: the model, optimizer state and log of the checkpoint, which must
+// have been written with the same options (`key`). Returns the epochs done.
+int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
+                         IgbNetModule& module, torch::optim::Adam* optimizer,
+                         std::vector<EpochLog>* logs) {
+  try {
+    torch::serialize::InputArchive archive, model_archive, optim_archive;
+    archive.load_from(ckpt);
+    torch::Tensor t;
+    archive.read("options", t, true);
+    if (TensorString(t) != key)
+      throw InputError(ckpt, 0, "--resume",
+                       "was written with other options; run without "
+                       "--resume or with the same options");
+    archive.read("epoch", t, true);
+    const int done = static_cast<int>(t.item<int64_t>());
+    archive.read("model", model_archive);
+    archive.read("optimizer", optim_archive);
+    module->load(model_archive);
+    optimizer->load(optim_archive);
+    archive.read("log", t, true);
+    *logs = ParseLog(TensorString(t));
+    return done;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(ckpt, 0, "--resume",
+                     std::string("cannot read the checkpoint: ") + e.what());
+  }
+}
+
+// Cosine from lr to lr_min over every batch of every epoch.
+struct LrSchedule {
+  double lr, lr_min;
+  long total_steps;
+  // `step` counts batches of --batch samples (fractional with message
+  // passing, whose batches are whole steps).
+  double At(double step) const {
+    return lr_min + 0.5 * (lr - lr_min) *
+                        (1.0 + std::cos(M_PI * step /
+                                        static_cast<double>(total_steps)));
+  }
+};
+
+// An epoch's batches of training samples, shuffled by the epoch's stream.
+// With message passing, whole steps are shuffled, so that a robot's
+// neighbours are in its batch.
+std::vector<std::vector<int>> EpochBatches(const Corpus& corpus,
+                                           const TrainOptions& o, int epoch,
+                                           long steps_per_epoch, int hops) {
+  std::vector<int> order = corpus.train;
+  Rng rng(o.seed, "train/shuffle", static_cast<std::uint64_t>(epoch));
+  std::vector<std::vector<int>> batches;
+  if (hops > 0) {
+    std::vector<std::pair<int, int>> steps;  // ranges of `order`
+    for (std::size_t i = 0; i < order.size();) {
+      std::size_t e = i + 1;
+      while (e < order.size() && SameStep(corpus, order[e], order[i])) ++e;
+      steps.emplace_back(static_cast<int>(i), static_cast<int>(e));
+      i = e;
+    }
+    for (std::size_t i = steps.size(); i > 1; --i)
+      std::swap(steps[i - 1], steps[rng.UniformInt(i)]);
+    std::vector<int> shuffled;
+    shuffled.reserve(order.size());
+    for (const auto& [b, e] : steps)
+      shuffled.insert(shuffled.end(), order.begin() + b, order.begin() + e);
+    return StepBatches(corpus, shuffled, o.batch);
+  }
+  for (std::size_t i = order.size(); i > 1; --i)
+    std::swap(order[i - 1], order[rng.UniformInt(i)]);
+  for (long s = 0; s < steps_per_epoch; ++s) {
+    const std::size_t first = static_cast<std::size_t>(s) * o.batch;
+    batches.emplace_back(order.begin() + first,
+                         order.begin() + std::min(order.size(), first + o.batch));
+  }
+  return batches;
+}
+
+// Scratch memory of the batches, kept across epochs.
+struct BatchScratch {
+  std::vector<float> images, weights;
+  std::vector<int64_t> labels;
+  std::vector<char> useful;
+  std::vector<int> rows;
+  TeamGraph graph;
+};
+
+// One epoch of Adam steps over `batches`: the log's training columns (lr,
+// loss, accuracy, samples).
+EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
+                    Corpus* corpus,
+                    const std::vector<std::vector<int>>& batches,
+                    const TrainOptions& o, const LrSchedule& schedule,
+                    int epoch, long steps_per_epoch, int hops,
+                    BatchScratch* b) {
+  const auto t0 = Clock::now();
+  module->train();
+  double loss_sum = 0.0, weight_sum = 0.0;
+  long right = 0, seen = 0, consumed = 0;
+  double lr = o.lr;
+  const int channels = corpus->renderers.front().channels();
+  const long num_batches = static_cast<long>(batches.size());
+  for (long s = 0; s < num_batches; ++s) {
+    const std::vector<int>& centres = batches[s];
+    const int n = static_cast<int>(centres.size());
+    if (hops > 0) {
+      GraphRows(*corpus, centres, hops, &b->rows, &b->graph);
+    } else {
+      b->rows = centres;
+    }
+    const int m = static_cast<int>(b->rows.size());
+    if (m < 2) break;  // batch norm needs two samples
+    int h = 0, w = 0;
+    MakeBatch(corpus, b->rows.data(), m, o.weak_weight, &h, &w, &b->images,
+              &b->labels, &b->weights, &b->useful);
+    lr = schedule.At(static_cast<double>(epoch * steps_per_epoch) +
+                     (hops > 0 ? static_cast<double>(consumed) / o.batch
+                               : static_cast<double>(s)));
+    consumed += n;
+    for (auto& group : optimizer->param_groups())
+      static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+    const torch::Tensor x =
+        torch::from_blob(b->images.data(), {m, channels, h, w});
+    const torch::Tensor y =
+        torch::from_blob(b->labels.data(), {n}, torch::kInt64);
+    const torch::Tensor wt = torch::from_blob(b->weights.data(), {n});
+    const torch::Tensor logits =
+        hops > 0 ? module->forward(x, ToTensors(b->graph)).narrow(0, 0, n)
+                 : module->forward(x);
+    const torch::Tensor per = torch::nn::functional::cross_entropy(
+        logits, y,
+        torch::nn::functional::CrossEntropyFuncOptions().reduction(
+            torch::kNone));
+    const double wsum = wt.sum().item<double>();
+    if (wsum <= 0.0) continue;
+    const torch::Tensor loss = (per * wt).sum() / wsum;
+    optimizer->zero_grad();
+    loss.backward();
+    optimizer->step();
+    loss_sum += loss.item<double>() * wsum;
+    weight_sum += wsum;
+    const torch::Tensor pred = logits.argmax(1);
+    right += (pred == y).sum().item<int64_t>();
+    seen += n;
+    if (o.progress && isatty(2) && (s % 50 == 0 || s + 1 == num_batches))
+      std::fprintf(stderr,
+                   "\r[train] epoch %d/%d  batch %ld/%ld  loss %.4f  acc "
+                   "%.3f  %.0f samples/s   ",
+                   epoch + 1, o.epochs, s + 1, num_batches,
+                   loss_sum / std::max(weight_sum, 1e-12),
+                   static_cast<double>(right) / std::max(seen, 1L),
+                   seen / std::max(Seconds(t0), 1e-9));
+  }
+  EpochLog e;
+  e.epoch = epoch + 1;
+  e.lr = lr;
+  e.train_loss = loss_sum / std::max(weight_sum, 1e-12);
+  e.train_acc = static_cast<double>(right) / std::max(seen, 1L);
+  e.samples = seen;
+  return e;
+}
+
+// After an epoch: the model (OUT), the checkpoint (model, optimizer, epochs
+// done, options, log) and the log (CSV), each written atomically.
+void SaveEpoch(const TrainOptions& o, const IgbNet& net, IgbNetModule& module,
+               torch::optim::Adam& optimizer, const std::string& key,
+               const std::vector<EpochLog>& logs) {
+  std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
+  if (!parent.empty()) MakeDirs(parent.string());
+  net.Save(o.out);
+  {
+    torch::serialize::OutputArchive archive, model_archive, optim_archive;
+    module->save(model_archive);
+    optimizer.save(optim_archive);
+    archive.write("model", model_archive);
+    archive.write("optimizer", optim_archive);
+    archive.write("epoch", torch::tensor(static_cast<int64_t>(logs.back().epoch)),
+                  true);
+    archive.write("options", StringTensor(key), true);
+    std::ostringstream log;
+    log.precision(17);
+    for (const EpochLog& l : logs)
+      log << l.epoch << ' ' << l.lr << ' ' << l.train_loss << ' '
+          << l.train_acc << ' ' << l.val_loss << ' ' << l.val_acc << ' '
+          << l.val_acc_useful << ' ' << l.samples << ' ' << l.seconds << '\n';
+    archive.write("log", StringTensor(log.str()), true);
+    SaveArchiveAtomic(archive, CheckpointPath(o.out));
+  }
+  std::string csv = kLogHeader;
+  for (const EpochLog& l : logs) csv += LogLine(l);
+  WriteFileAtomic(TrainLogPath(o.out), csv);
+}
+
+}  // namespace
+
 std::vector<EpochLog> Train(const TrainOptions& options) {
   TrainOptions o = options;
   CheckOptions(o);
   if (o.threads > 0) torch::set_num_threads(o.threads);
-
-  // The network: from --init (its architecture and channels), or fresh.
-  std::unique_ptr<IgbNet> net;
-  if (!o.init.empty()) {
-    net = IgbNet::Load(o.init, "command line", 0, "--init");
-    o.network = net->config();
-    if (o.message_hops >= 0 && o.message_hops != o.network.message_hops) {
-      if (o.message_hops < o.network.message_hops)
-        throw InputError("command line", 0, "--message-hops",
-                         "the --init model passes messages over " +
-                             std::to_string(o.network.message_hops) +
-                             " hops; it can be extended, not cut");
-      // The same weights; the new hops' layers start at zero.
-      o.network.message_hops = o.message_hops;
-      auto wider = std::make_unique<IgbNet>(o.network, o.seed);
-      torch::NoGradGuard no_grad;
-      IgbNetModule& from = net->impl().module;
-      IgbNetModule& to = wider->impl().module;
-      auto params = to->named_parameters();
-      auto buffers = to->named_buffers();
-      for (const auto& p : from->named_parameters())
-        params[p.key()].copy_(p.value());
-      for (const auto& b : from->named_buffers())
-        buffers[b.key()].copy_(b.value());
-      for (std::size_t k = from->messages.size(); k < to->messages.size(); ++k)
-        to->messages[k]->weight.zero_();
-      net = std::move(wider);
-    }
-  } else {
-    if (o.message_hops >= 0) o.network.message_hops = o.message_hops;
-    net = std::make_unique<IgbNet>(o.network, o.seed);
-  }
+  const std::unique_ptr<IgbNet> net = NetworkToTrain(&o);
   const int hops = o.network.message_hops;
   CheckOutputsAreNotInputs(o);
   IgbNetModule& module = net->impl().module;
   torch::optim::Adam optimizer(
       module->parameters(),
       torch::optim::AdamOptions(o.lr).weight_decay(o.weight_decay));
-
-  const std::string ckpt = CheckpointPath(o.out);
-  // One training run at a time in OUT's folder (an flock on the folder,
-  // released when the run ends or dies); then the temporary files that
-  // killed runs left there are removed.
-  std::unique_ptr<FileLock> lock;
-  {
-    std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
-    if (parent.empty()) parent = ".";
-    try {
-      MakeDirs(parent.string());
-      lock = std::make_unique<FileLock>(parent.string());
-      CheckReplaceableFile(o.out);
-    } catch (const std::runtime_error& e) {
-      throw InputError("command line", 0, "--out", e.what());
-    }
-    // OUT, OUT.ckpt and the log share OUT's name without ".pt".
-    std::string prefix = std::filesystem::path(o.out).filename().string();
-    if (prefix.size() > 3 && prefix.compare(prefix.size() - 3, 3, ".pt") == 0)
-      prefix.resize(prefix.size() - 3);
-    RemoveStaleTemporaries(parent.string(), prefix);
-  }
+  const std::unique_ptr<FileLock> lock = LockOutputFolder(o.out);
   const std::string key = OptionsKey(o);
+  const std::string ckpt = CheckpointPath(o.out);
   int start = 0;
   std::vector<EpochLog> logs;
   std::error_code ec;
-  if (o.resume && std::filesystem::is_regular_file(ckpt, ec)) {
-    try {
-      torch::serialize::InputArchive archive, model_archive, optim_archive;
-      archive.load_from(ckpt);
-      torch::Tensor t;
-      archive.read("options", t, true);
-      if (TensorString(t) != key)
-        throw InputError(ckpt, 0, "--resume",
-                         "was written with other options; run without "
-                         "--resume or with the same options");
-      archive.read("epoch", t, true);
-      start = static_cast<int>(t.item<int64_t>());
-      archive.read("model", model_archive);
-      archive.read("optimizer", optim_archive);
-      module->load(model_archive);
-      optimizer.load(optim_archive);
-      archive.read("log", t, true);
-      logs = ParseLog(TensorString(t));
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw InputError(ckpt, 0, "--resume",
-                       std::string("cannot read the checkpoint: ") + e.what());
-    }
-  }
+  if (o.resume && std::filesystem::is_regular_file(ckpt, ec))
+    start = ResumeFromCheckpoint(ckpt, key, module, &optimizer, &logs);
   if (start >= o.epochs) return logs;
 
   Corpus corpus = LoadCorpus(o.data, o.network.channels, o.val_share, o.seed,
@@ -503,116 +684,15 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
 
   const long steps_per_epoch =
       (static_cast<long>(corpus.train.size()) + o.batch - 1) / o.batch;
-  const long total_steps = steps_per_epoch * o.epochs;
-  // `step` counts batches of --batch samples (fractional with message
-  // passing, whose batches are whole steps).
-  const auto lr_at = [&](double step) {
-    return o.lr_min +
-           0.5 * (o.lr - o.lr_min) *
-               (1.0 + std::cos(M_PI * step / static_cast<double>(total_steps)));
-  };
-
-  std::vector<float> images, weights;
-  std::vector<int64_t> labels;
-  std::vector<char> useful;
+  const LrSchedule schedule{o.lr, o.lr_min, steps_per_epoch * o.epochs};
+  BatchScratch scratch;
   for (int epoch = start; epoch < o.epochs; ++epoch) {
     if (o.stop_after_epochs > 0 && epoch - start >= o.stop_after_epochs) break;
     const auto t0 = Clock::now();
-    std::vector<int> order = corpus.train;
-    Rng rng(o.seed, "train/shuffle", static_cast<std::uint64_t>(epoch));
-    std::vector<std::vector<int>> batches;
-    if (hops > 0) {
-      // Whole steps in a shuffled order, so that a robot's neighbours are
-      // in its batch.
-      std::vector<std::pair<int, int>> steps;  // ranges of `order`
-      for (std::size_t i = 0; i < order.size();) {
-        std::size_t e = i + 1;
-        while (e < order.size() && SameStep(corpus, order[e], order[i])) ++e;
-        steps.emplace_back(static_cast<int>(i), static_cast<int>(e));
-        i = e;
-      }
-      for (std::size_t i = steps.size(); i > 1; --i)
-        std::swap(steps[i - 1], steps[rng.UniformInt(i)]);
-      std::vector<int> shuffled;
-      shuffled.reserve(order.size());
-      for (const auto& [b, e] : steps)
-        shuffled.insert(shuffled.end(), order.begin() + b, order.begin() + e);
-      batches = StepBatches(corpus, shuffled, o.batch);
-    } else {
-      for (std::size_t i = order.size(); i > 1; --i)
-        std::swap(order[i - 1], order[rng.UniformInt(i)]);
-      for (long s = 0; s < steps_per_epoch; ++s) {
-        const std::size_t first = static_cast<std::size_t>(s) * o.batch;
-        batches.emplace_back(
-            order.begin() + first,
-            order.begin() + std::min(order.size(), first + o.batch));
-      }
-    }
-    module->train();
-    double loss_sum = 0.0, weight_sum = 0.0;
-    long right = 0, seen = 0, consumed = 0;
-    double lr = o.lr;
-    const int channels = corpus.renderers.front().channels();
-    std::vector<int> rows;
-    TeamGraph graph;
-    const long num_batches = static_cast<long>(batches.size());
-    for (long s = 0; s < num_batches; ++s) {
-      const std::vector<int>& centres = batches[s];
-      const int n = static_cast<int>(centres.size());
-      if (hops > 0) {
-        GraphRows(corpus, centres, hops, &rows, &graph);
-      } else {
-        rows = centres;
-      }
-      const int m = static_cast<int>(rows.size());
-      if (m < 2) break;  // batch norm needs two samples
-      int h = 0, w = 0;
-      MakeBatch(&corpus, rows.data(), m, o.weak_weight, &h, &w, &images,
-                &labels, &weights, &useful);
-      lr = lr_at(static_cast<double>(epoch * steps_per_epoch) +
-                 (hops > 0 ? static_cast<double>(consumed) / o.batch
-                           : static_cast<double>(s)));
-      consumed += n;
-      for (auto& group : optimizer.param_groups())
-        static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
-      const torch::Tensor x =
-          torch::from_blob(images.data(), {m, channels, h, w});
-      const torch::Tensor y =
-          torch::from_blob(labels.data(), {n}, torch::kInt64);
-      const torch::Tensor wt = torch::from_blob(weights.data(), {n});
-      const torch::Tensor logits =
-          hops > 0 ? module->forward(x, ToTensors(graph)).narrow(0, 0, n)
-                   : module->forward(x);
-      const torch::Tensor per = torch::nn::functional::cross_entropy(
-          logits, y,
-          torch::nn::functional::CrossEntropyFuncOptions().reduction(
-              torch::kNone));
-      const double wsum = wt.sum().item<double>();
-      if (wsum <= 0.0) continue;
-      const torch::Tensor loss = (per * wt).sum() / wsum;
-      optimizer.zero_grad();
-      loss.backward();
-      optimizer.step();
-      loss_sum += loss.item<double>() * wsum;
-      weight_sum += wsum;
-      const torch::Tensor pred = logits.argmax(1);
-      right += (pred == y).sum().item<int64_t>();
-      seen += n;
-      if (o.progress && isatty(2) && (s % 50 == 0 || s + 1 == num_batches))
-        std::fprintf(stderr,
-                     "\r[train] epoch %d/%d  batch %ld/%ld  loss %.4f  acc "
-                     "%.3f  %.0f samples/s   ",
-                     epoch + 1, o.epochs, s + 1, num_batches,
-                     loss_sum / std::max(weight_sum, 1e-12),
-                     static_cast<double>(right) / std::max(seen, 1L),
-                     seen / std::max(Seconds(t0), 1e-9));
-    }
-    EpochLog e;
-    e.epoch = epoch + 1;
-    e.lr = lr;
-    e.train_loss = loss_sum / std::max(weight_sum, 1e-12);
-    e.train_acc = static_cast<double>(right) / std::max(seen, 1L);
-    e.samples = seen;
+    const std::vector<std::vector<int>> batches =
+        EpochBatches(corpus, o, epoch, steps_per_epoch, hops);
+    EpochLog e = TrainEpoch(module, &optimizer, &corpus, batches, o, schedule,
+                            epoch, steps_per_epoch, hops, &scratch);
     const ValidationResult v = Evaluate(module, &corpus, hops);
     e.val_loss = v.loss;
     e.val_acc = v.acc;
@@ -620,32 +700,7 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
     e.seconds = Seconds(t0);
     logs.push_back(e);
     module->eval();
-
-    // Model, checkpoint and log, each written atomically.
-    std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
-    if (!parent.empty()) MakeDirs(parent.string());
-    net->Save(o.out);
-    {
-      torch::serialize::OutputArchive archive, model_archive, optim_archive;
-      module->save(model_archive);
-      optimizer.save(optim_archive);
-      archive.write("model", model_archive);
-      archive.write("optimizer", optim_archive);
-      archive.write("epoch", torch::tensor(static_cast<int64_t>(epoch + 1)),
-                    true);
-      archive.write("options", StringTensor(key), true);
-      std::ostringstream log;
-      log.precision(17);
-      for (const EpochLog& l : logs)
-        log << l.epoch << ' ' << l.lr << ' ' << l.train_loss << ' '
-            << l.train_acc << ' ' << l.val_loss << ' ' << l.val_acc << ' '
-            << l.val_acc_useful << ' ' << l.samples << ' ' << l.seconds << '\n';
-      archive.write("log", StringTensor(log.str()), true);
-      SaveArchiveAtomic(archive, ckpt);
-    }
-    std::string csv = kLogHeader;
-    for (const EpochLog& l : logs) csv += LogLine(l);
-    WriteFileAtomic(TrainLogPath(o.out), csv);
+    SaveEpoch(o, *net, module, optimizer, key, logs);
     if (o.progress)
       std::fprintf(stderr,
                    "%s[train] epoch %d/%d: loss %.4f acc %.3f | %s | %.0f s, "

@@ -934,9 +934,9 @@ void SamplingTree::Select() {
 
 void SamplingTree::Register(int child, const SamplingParams& params) {
   last_ = child;
-  if (unloc_[child] < unloc_[effort_] ||
-      (unloc_[child] == unloc_[effort_] && det_sum_[child] < det_sum_[effort_]))
-    effort_ = child;
+  if (unloc_[child] < unloc_[best_partial_] ||
+      (unloc_[child] == unloc_[best_partial_] && det_sum_[child] < det_sum_[best_partial_]))
+    best_partial_ = child;
   if (unloc_[child] == 0) {
     if (best_ < 0) first_goal_iteration_ = iteration_;
     if (cost_[child] <= j_min_ + tol_) {
@@ -1026,26 +1026,11 @@ int SamplingTree::RewriteIdle(int end) {
   return v;
 }
 
-SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
-                                 const SamplingParams& params, Rng& rng) {
-  const auto t0 = std::chrono::steady_clock::now();
-  AIA_CHECK(problem.map && problem.sensor && problem.belief);
-  AIA_CHECK(problem.active.size() == problem.start.size());
-  tour_budget_ = params.tour_budget;
-  use_index_ = params.spatial_index;
-  Prepare(problem);
-  // Memory guard: a node keeps n positions, `stride_` numbers and six
-  // scalars, in vectors that may hold up to twice what they use.
-  const double node_bytes = 2.0 * (4.0 * n_ + 8.0 * stride_ + 40.0);
-  node_cap_ = std::min<long>(params.max_nodes,
-                             static_cast<long>(kMaxTreeBytes / node_bytes));
-  const Lattice& lattice = problem.map->lattice();
-  SamplingPlan plan;
-
+int SamplingTree::StartRoot(const SamplingProblem& problem, int* bound) {
   const int root = AddNode(-1, problem.start.data());
   if (levels_.empty()) levels_.resize(1);
   levels_[0].push_back(root);
-  effort_ = root;
+  best_partial_ = root;
   last_ = root;
   if (unloc_[root] == 0) {
     goals_.push_back(root);
@@ -1054,6 +1039,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   }
   // The lower bound on the horizon.
   MarkOpen(root);
+  *bound = 0;
   for (int k = 0; k < m_; ++k) {
     if (!open_[k]) continue;
     int nearest = -1;
@@ -1064,34 +1050,32 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
         if (f >= 0 && (nearest < 0 || f < nearest)) nearest = f;
       }
     }
-    plan.bound = std::max(plan.bound, std::max(nearest, 1));
+    *bound = std::max(*bound, std::max(nearest, 1));
   }
+  return root;
+}
 
-  // Seeded rollouts.
-  if (params.routing && best_ != root) {
-    PlanTours();
-    const std::pair<RolloutKind, const char*> kinds[] = {
-        {RolloutKind::kTours, "tours"},
-        {RolloutKind::kMakespanTours, "makespan_tours"},
-        {RolloutKind::kNearest, "nearest"},
-        {RolloutKind::kGreedy, "greedy"}};
-    for (const auto& [kind, name] : kinds) {
-      const int end = Rollout(kind, params);
-      plan.rollouts.push_back(
-          {name, unloc_[end] == 0, depth_[end], cost_[end]});
-    }
-    last_ = root;
+void SamplingTree::SeededRollouts(const SamplingParams& params, int root,
+                                  SamplingPlan* plan) {
+  PlanTours();
+  const std::pair<RolloutKind, const char*> kinds[] = {
+      {RolloutKind::kTours, "tours"},
+      {RolloutKind::kMakespanTours, "makespan_tours"},
+      {RolloutKind::kNearest, "nearest"},
+      {RolloutKind::kGreedy, "greedy"}};
+  for (const auto& [kind, name] : kinds) {
+    const int end = Rollout(kind, params);
+    plan->rollouts.push_back({name, unloc_[end] == 0, depth_[end], cost_[end]});
   }
+  last_ = root;
+}
 
-  // The most nodes this solve can make from here: one per iteration (before
-  // a first goal and after it, all within node_cap_) and the idle rewrite's
-  // path. A solve that may need a large arena takes that much of the
-  // process's budget of tree memory first (waiting for other trees to
-  // finish if need be), reserves its arena at once (no copies as it grows)
-  // and gives both back at the end. Taken after the seeded rollouts, which
-  // mostly find a goal and so bound what is left by the anytime budget.
-  // The idle rewrite adds at most the returned path's depth: no deeper than
-  // the deepest node now plus one per node still to come.
+double SamplingTree::MostNodes(const SamplingParams& params) const {
+  const Lattice& lattice = problem_->map->lattice();
+  // One node per iteration (before a first goal and after it, all within
+  // node_cap_) and the idle rewrite's path, which adds at most the returned
+  // path's depth: no deeper than the deepest node now plus one per node
+  // still to come.
   const double grown = std::min(
       static_cast<double>(node_cap_),
       static_cast<double>(parent_.size()) +
@@ -1106,118 +1090,155 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
           ? params.max_depth
           : std::min(deepest,
                      2.0 * (lattice.nx() + lattice.ny()) * std::max(1, m_));
-  const double most_nodes = grown + rewrite_cap;
-  const TreeMemoryLease lease(most_nodes * ResidentNodeBytes(n_, stride_));
-  if (lease.large()) {
-    const auto nodes = static_cast<std::size_t>(most_nodes);
-    pos_.reserve(nodes * n_);
-    info_.reserve(nodes * stride_);
-    for (auto* v : {&parent_, &depth_, &unloc_}) v->reserve(nodes);
-    for (auto* v : {&cost_, &det_sum_, &lower_}) v->reserve(nodes);
-  }
+  return grown + rewrite_cap;
+}
 
-  long since_goal = 0;
-  long& it = iteration_;
-  while (best_ != root) {
-    if (best_ >= 0 && since_goal >= params.anytime) break;
-    if (best_ < 0 && it >= params.max_iterations) break;
-    if (static_cast<long>(parent_.size()) >= node_cap_) break;
-    ++it;
-    if (best_ >= 0) ++since_goal;
-    // f_V: with probability p_V the deepest node of the branch being grown
-    // (the newest node), so that each branch is rolled out to a goal; else a
-    // node from a uniformly drawn level (shallow levels get their share, which
-    // is where different plans branch off).
-    int node = -1;
-    if (rng.Uniform() < params.p_v && Expandable(last_, params)) {
-      node = last_;
-    } else {
-      while (!levels_.empty() && levels_.back().empty()) levels_.pop_back();
-      if (levels_.empty()) break;  // nothing left worth expanding
-      auto& level = levels_[rng.UniformInt(levels_.size())];
-      if (!level.empty()) {
-        const size_t j = rng.UniformInt(level.size());
-        if (Expandable(level[j], params)) {
-          node = level[j];
-        } else {  // pruned for good: the bound only tightens
-          level[j] = level.back();
-          level.pop_back();
-        }
-      }
-    }
-    if (node < 0) continue;
-    // f_U: the tours, or a nearest-first assignment.
-    const bool follow_tours = !tours_.empty() && rng.Uniform() < params.p_tour;
-    if (follow_tours) {
-      MarkOpen(node);
-      for (int i = 0; i < n_; ++i) {
-        if (!problem.active[i]) continue;
-        assigned_[i] = NextInTour(tours_[i]);
-        if (assigned_[i] < 0)
-          assigned_[i] = NearestOpen(Pos(node)[i], depth_[node] + 1);
-      }
-    } else {
-      Assign(node, rng.Uniform() < params.p_sorted, rng);
-    }
-    const int* from = Pos(node);
+void SamplingTree::ReserveArena(double nodes) {
+  const auto count = static_cast<std::size_t>(nodes);
+  pos_.reserve(count * n_);
+  info_.reserve(count * stride_);
+  for (auto* v : {&parent_, &depth_, &unloc_}) v->reserve(count);
+  for (auto* v : {&cost_, &det_sum_, &lower_}) v->reserve(count);
+}
+
+void SamplingTree::ReleaseArena() {
+  const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  release(pos_);
+  release(info_);
+  release(parent_);
+  release(depth_);
+  release(unloc_);
+  release(cost_);
+  release(det_sum_);
+  release(lower_);
+  release(levels_);
+  release(goals_);
+}
+
+int SamplingTree::SelectNode(const SamplingParams& params, Rng& rng) {
+  // f_V: with probability p_V the deepest node of the branch being grown (the
+  // newest node), so that each branch is rolled out to a goal; else a node
+  // from a uniformly drawn level (shallow levels get their share, which is
+  // where different plans branch off).
+  if (rng.Uniform() < params.p_v && Expandable(last_, params)) return last_;
+  while (!levels_.empty() && levels_.back().empty()) levels_.pop_back();
+  if (levels_.empty()) return kNothingToExpand;
+  auto& level = levels_[rng.UniformInt(levels_.size())];
+  if (level.empty()) return -1;
+  const size_t j = rng.UniformInt(level.size());
+  if (Expandable(level[j], params)) return level[j];
+  level[j] = level.back();  // pruned for good: the bound only tightens
+  level.pop_back();
+  return -1;
+}
+
+void SamplingTree::Expand(int node, const SamplingParams& params, Rng& rng) {
+  const SamplingProblem& problem = *problem_;
+  const Lattice& lattice = problem.map->lattice();
+  // f_U: the tours, or a nearest-first assignment.
+  const bool follow_tours = !tours_.empty() && rng.Uniform() < params.p_tour;
+  if (follow_tours) {
+    MarkOpen(node);
     for (int i = 0; i < n_; ++i) {
-      const int q = from[i];
-      child_pos_[i] = q;
       if (!problem.active[i]) continue;
-      const int k = assigned_[i];
-      const Move move = (k >= 0 && rng.Uniform() < params.p_u)
-                            ? StepToward(q, k, depth_[node] + 1, &rng)
-                            : RandomValidMove(lattice, q, rng);
-      child_pos_[i] = lattice.Next(q, move);
-      if (child_pos_[i] < 0) child_pos_[i] = q;
+      assigned_[i] = NextInTour(tours_[i]);
+      if (assigned_[i] < 0)
+        assigned_[i] = NearestOpen(Pos(node)[i], depth_[node] + 1);
     }
-    Register(AddNode(node, child_pos_.data()), params);
+  } else {
+    Assign(node, rng.Uniform() < params.p_sorted, rng);
   }
+  const int* from = Pos(node);
+  for (int i = 0; i < n_; ++i) {
+    const int q = from[i];
+    child_pos_[i] = q;
+    if (!problem.active[i]) continue;
+    const int k = assigned_[i];
+    const Move move = (k >= 0 && rng.Uniform() < params.p_u)
+                          ? StepToward(q, k, depth_[node] + 1, &rng)
+                          : RandomValidMove(lattice, q, rng);
+    child_pos_[i] = lattice.Next(q, move);
+    if (child_pos_[i] < 0) child_pos_[i] = q;
+  }
+  Register(AddNode(node, child_pos_.data()), params);
+}
 
-  plan.found = best_ >= 0;
-  plan.best_cost = plan.found ? j_min_ : 0.0;
-  int end = plan.found ? best_ : effort_;
-  if (plan.found && params.routing) end = RewriteIdle(end);
-  plan.status = plan.found ? PolicyStatus::kOk : PolicyStatus::kBudgetExhausted;
-  plan.depth = depth_[end];
-  plan.cost = cost_[end];
-  plan.configs.assign(plan.depth + 1, std::vector<int>(n_));
-  plan.det.assign(plan.depth + 1, std::vector<double>(m_));
-  std::vector<int> path(plan.depth + 1);
+void SamplingTree::ExtractPlan(const SamplingParams& params,
+                               SamplingPlan* plan) {
+  plan->found = best_ >= 0;
+  plan->best_cost = plan->found ? j_min_ : 0.0;
+  int end = plan->found ? best_ : best_partial_;
+  if (plan->found && params.routing) end = RewriteIdle(end);
+  plan->status =
+      plan->found ? PolicyStatus::kOk : PolicyStatus::kBudgetExhausted;
+  plan->depth = depth_[end];
+  plan->cost = cost_[end];
+  plan->configs.assign(plan->depth + 1, std::vector<int>(n_));
+  plan->det.assign(plan->depth + 1, std::vector<double>(m_));
+  std::vector<int> path(plan->depth + 1);
   for (int v = end; v >= 0; v = parent_[v]) {
     const int d = depth_[v];
     path[d] = v;
     std::copy(pos_.begin() + static_cast<size_t>(v) * n_,
               pos_.begin() + static_cast<size_t>(v + 1) * n_,
-              plan.configs[d].begin());
-    for (int k = 0; k < m_; ++k) plan.det[d][k] = BlockDet(Info(v), k);
+              plan->configs[d].begin());
+    for (int k = 0; k < m_; ++k) plan->det[d][k] = BlockDet(Info(v), k);
   }
-  UsefulUntil(path, &plan.useful_until);
-  plan.aims.resize(m_);
-  for (int k = 0; k < m_; ++k) plan.aims[k] = MeasurePoint(0, k);
-  plan.tour_makespan = tour_makespan_;
-  plan.nodes = static_cast<long>(parent_.size());
-  plan.iterations = it;
-  plan.first_goal_iteration = first_goal_iteration_;
+  UsefulUntil(path, &plan->useful_until);
+  plan->aims.resize(m_);
+  for (int k = 0; k < m_; ++k) plan->aims[k] = MeasurePoint(0, k);
+  plan->tour_makespan = tour_makespan_;
+  plan->nodes = static_cast<long>(parent_.size());
+  plan->iterations = iteration_;
+  plan->first_goal_iteration = first_goal_iteration_;
   // What the nodes fill (a reserved arena's untouched pages are not
   // resident).
-  plan.arena_bytes =
+  plan->arena_bytes =
       pos_.size() * sizeof(int) + info_.size() * sizeof(double) +
       (parent_.size() + depth_.size() + unloc_.size()) * sizeof(int) +
       (cost_.size() + det_sum_.size() + lower_.size()) * sizeof(double);
-  if (lease.large()) {  // the memory goes back to the kernel
-    const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
-    release(pos_);
-    release(info_);
-    release(parent_);
-    release(depth_);
-    release(unloc_);
-    release(cost_);
-    release(det_sum_);
-    release(lower_);
-    release(levels_);
-    release(goals_);
+}
+
+SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
+                                 const SamplingParams& params, Rng& rng) {
+  const auto t0 = std::chrono::steady_clock::now();
+  AIA_CHECK(problem.map && problem.sensor && problem.belief);
+  AIA_CHECK(problem.active.size() == problem.start.size());
+  tour_budget_ = params.tour_budget;
+  use_index_ = params.spatial_index;
+  Prepare(problem);
+  // Memory guard: a node keeps n positions, `stride_` numbers and six
+  // scalars, in vectors that may hold up to twice what they use.
+  const double node_bytes = 2.0 * (4.0 * n_ + 8.0 * stride_ + 40.0);
+  node_cap_ = std::min<long>(params.max_nodes,
+                             static_cast<long>(kMaxTreeBytes / node_bytes));
+  SamplingPlan plan;
+  const int root = StartRoot(problem, &plan.bound);
+  if (params.routing && best_ != root) SeededRollouts(params, root, &plan);
+
+  // A solve that may need a large arena takes that much of the process's
+  // budget of tree memory first (waiting for other trees to finish if need
+  // be), reserves its arena at once (no copies as it grows) and gives both
+  // back at the end. Taken after the seeded rollouts, which mostly find a
+  // goal and so bound what is left by the anytime budget.
+  const double most_nodes = MostNodes(params);
+  const TreeMemoryLease lease(most_nodes * ResidentNodeBytes(n_, stride_));
+  if (lease.large()) ReserveArena(most_nodes);
+
+  long since_goal = 0;
+  while (best_ != root) {
+    if (best_ >= 0 && since_goal >= params.anytime) break;
+    if (best_ < 0 && iteration_ >= params.max_iterations) break;
+    if (static_cast<long>(parent_.size()) >= node_cap_) break;
+    ++iteration_;
+    if (best_ >= 0) ++since_goal;
+    const int node = SelectNode(params, rng);
+    if (node == kNothingToExpand) break;
+    if (node >= 0) Expand(node, params, rng);
   }
+
+  ExtractPlan(params, &plan);
+  if (lease.large()) ReleaseArena();  // the memory goes back to the kernel
   plan.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
           .count();

@@ -103,6 +103,62 @@ class DatasetObserver : public StepObserver {
   std::vector<std::vector<DatasetSample>> steps_;
 };
 
+// `keep` random decision steps of an episode (all when fewer), in step
+// order, drawn from the episode's own stream.
+std::vector<DatasetSample> KeptSamples(
+    std::vector<std::vector<DatasetSample>>* steps, int keep_at_most,
+    std::uint64_t seed) {
+  std::vector<int> order(steps->size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    order[i] = static_cast<int>(i);
+  Rng rng(seed, "dataset/keep");
+  const int keep = std::min<int>(keep_at_most, static_cast<int>(order.size()));
+  for (int i = 0; i < keep; ++i)
+    std::swap(order[i], order[i + rng.UniformInt(order.size() - i)]);
+  order.resize(keep);
+  std::sort(order.begin(), order.end());
+  std::vector<DatasetSample> kept;
+  for (int i : order)
+    for (DatasetSample& d : (*steps)[i]) kept.push_back(std::move(d));
+  return kept;
+}
+
+// The world record of episode `e` (flowtime -1 when it was stopped over
+// time).
+DatasetWorld EpisodeWorld(const Episode& episode, int e, bool over_time) {
+  const World& w = episode.world();
+  DatasetWorld world;
+  world.episode = e;
+  world.seed = static_cast<std::int64_t>(episode.scenario().seed);
+  world.size = w.map.size();
+  world.map_cell = w.map.occupancy().cell();
+  world.lattice_step = w.map.lattice().step();
+  world.robot_radius = w.map.robot_radius();
+  world.eps = episode.mission().eps;
+  world.robots = w.NumRobots();
+  world.targets = w.NumTargets();
+  world.steps = episode.step();
+  world.flowtime = over_time ? -1 : episode.flowtime();
+  world.obstacles = w.map.obstacles();
+  world.log_det_prior = episode.log_det_prior();
+  return world;
+}
+
+// One shard set per folder: `aia train --data` reads them all, and sets of
+// two counts hold the same episodes.
+void CheckOneShardSet(const std::string& out, int shards) {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(out, ec)) {
+    const int n = ShardCount(entry.path().string());
+    if (n != 0 && n != shards)
+      throw InputError("command line", 0, "--shard",
+                       out + " holds shards of a set of " + std::to_string(n) +
+                           " ('" + entry.path().string() + "'), not of " +
+                           std::to_string(shards) +
+                           ": use the same N, or another folder");
+  }
+}
+
 std::string Recipe(const DatasetOptions& o) {
   std::string r =
       "size=" + o.size + " first_seed=" + std::to_string(o.first_seed) +
@@ -129,15 +185,10 @@ void ParseShard(const std::string& text, int* shard, int* shards) {
 int RunDataset(const DatasetOptions& o) {
   if (o.out.empty())
     throw InputError("command line", 0, "--out", "is required");
-  if (o.episodes < 1 || o.episodes > 10000000)
-    throw InputError("command line", 0, "--episodes", "must be 1..10000000");
-  if (o.keep < 1 || o.keep > 100000)
-    throw InputError("command line", 0, "--keep", "must be 1..100000");
-  if (o.max_steps < 0 || o.max_steps > 1000000)
-    throw InputError("command line", 0, "--max-steps", "must be 0..1000000");
-  if (!(o.max_seconds >= 0.0 && o.max_seconds <= 1e7))
-    throw InputError("command line", 0, "--max-seconds",
-                     "must be 0..1e7 seconds");
+  {
+    DatasetOptions counts = o;
+    CheckFlags(&counts);  // their declarations: `--flag: what`
+  }
   if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards)
     throw InputError("command line", 0, "--shard", "need 0 <= K < N");
   const auto [robots, targets] = ParseSize(o.size, "--size");
@@ -203,20 +254,7 @@ int RunDataset(const DatasetOptions& o) {
                            "-of-" + std::to_string(o.shards) + ".sqlite";
   CheckNotAnInput(file, "--out", MissionInputs(base, acting.get()),
                   "the shard written");
-  // One shard set per folder: `aia train --data` reads them all, and sets of
-  // two counts hold the same episodes.
-  {
-    std::error_code ec;
-    for (const auto& entry : std::filesystem::directory_iterator(o.out, ec)) {
-      const int n = ShardCount(entry.path().string());
-      if (n != 0 && n != o.shards)
-        throw InputError("command line", 0, "--shard",
-                         o.out + " holds shards of a set of " +
-                             std::to_string(n) + " ('" + entry.path().string() +
-                             "'), not of " + std::to_string(o.shards) +
-                             ": use the same N, or another folder");
-    }
-  }
+  CheckOneShardSet(o.out, o.shards);
   // One writer per shard (the ranks of an mpirun share the folder): an
   // flock on the shard file itself, which SQLite's own (fcntl) locks leave
   // alone; an empty new file is an empty database to SQLite.
@@ -261,38 +299,9 @@ int RunDataset(const DatasetOptions& o) {
     const bool over_time = observer.over_time();
     skipped += over_time ? 1 : 0;
 
-    // Keep `keep` random decision steps (all when fewer).
-    auto& steps = observer.steps();
-    std::vector<int> order(steps.size());
-    for (std::size_t i = 0; i < order.size(); ++i)
-      order[i] = static_cast<int>(i);
-    Rng rng(s.seed, "dataset/keep");
-    const int keep = std::min<int>(o.keep, static_cast<int>(order.size()));
-    for (int i = 0; i < keep; ++i)
-      std::swap(order[i], order[i + rng.UniformInt(order.size() - i)]);
-    order.resize(keep);
-    std::sort(order.begin(), order.end());
     std::vector<DatasetSample> kept;
-    if (!over_time)
-      for (int i : order)
-        for (DatasetSample& d : steps[i]) kept.push_back(std::move(d));
-
-    const World& w = episode.world();
-    DatasetWorld world;
-    world.episode = e;
-    world.seed = static_cast<std::int64_t>(s.seed);
-    world.size = w.map.size();
-    world.map_cell = w.map.occupancy().cell();
-    world.lattice_step = w.map.lattice().step();
-    world.robot_radius = w.map.robot_radius();
-    world.eps = episode.mission().eps;
-    world.robots = w.NumRobots();
-    world.targets = w.NumTargets();
-    world.steps = episode.step();
-    world.flowtime = over_time ? -1 : episode.flowtime();
-    world.obstacles = w.map.obstacles();
-    world.log_det_prior = episode.log_det_prior();
-    writer.WriteEpisode(world, kept);
+    if (!over_time) kept = KeptSamples(&observer.steps(), o.keep, s.seed);
+    writer.WriteEpisode(EpisodeWorld(episode, e, over_time), kept);
     ++written;
     samples += static_cast<long>(kept.size());
     const double secs =

@@ -578,7 +578,12 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
   return out;
 }
 
-int RunEval(const EvalOptions& o) {
+namespace {
+
+// The flags that need no scenario: counts, the output folder, and sizes and
+// policies listed once (one listed twice would write every row twice, and
+// each resume would drop both copies and run them again).
+void CheckEvalFlags(const EvalOptions& o) {
   if (o.seeds < 1)
     throw InputError("command line", 0, "--seeds", "must be at least 1");
   if (o.threads < 0)
@@ -586,9 +591,6 @@ int RunEval(const EvalOptions& o) {
   if (o.out_dir.empty())
     throw InputError("command line", 0, "--out",
                      "an output folder is required");
-  const PolicyRegistry registry = AllPolicies();
-  // A size or a policy listed twice would write every row twice, and each
-  // resume would drop both copies and run them again: refused.
   for (std::size_t i = 0; i < o.sizes.size(); ++i) {
     const auto size = ParseSize(o.sizes[i], "--sizes");
     for (std::size_t j = 0; j < i; ++j)
@@ -604,106 +606,335 @@ int RunEval(const EvalOptions& o) {
       if (o.policies[i] == o.policies[j])
         throw InputError("command line", 0, "--policies",
                          "'" + o.policies[i] + "' is listed twice");
-  // One process: Ctrl-C writes the rows done (below). Under mpirun the
-  // launcher owns the signals.
-  if (!Ranks::Get().distributed()) InstallInterruptHandler();
+}
+
+// --policies, or every registered policy but the expert.
+std::vector<std::string> PoliciesToRun(const EvalOptions& o,
+                                       const PolicyRegistry& registry) {
   std::vector<std::string> policies = o.policies;
   if (policies.empty()) {
     for (const auto& name : registry.Names())
       if (name != "expert") policies.push_back(name);
   }
+  return policies;
+}
+
+// No file written may be an input (a model, a map image).
+void CheckOutputsAreNotInputs(const EvalOptions& o, const EvalSetup& setup,
+                              const EvalInstance& first) {
+  std::vector<InputFile> inputs =
+      MissionInputs(InstanceScenario(first, setup), nullptr);
+  for (const auto& p : setup.policies)
+    for (const InputFile& f : MissionInputs(Scenario{}, p.get()))
+      inputs.push_back(f);
+  for (const char* name : {"runs.csv", "summary.csv", "effective.yaml"})
+    CheckNotAnInput(o.out_dir + "/" + name, "--out", inputs,
+                    "written into the output folder");
+}
+
+// Rank 0's resume: locks the output folder, refuses one that holds results
+// of another configuration, keeps the rows already there (a row cut short
+// by an interruption, garbled, impossible or duplicated is reported, dropped
+// and run again), rewrites runs.csv cleanly and writes effective.yaml.
+std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
+                                  const std::string& effective) {
+  const std::string effective_path = out_dir + "/effective.yaml";
+  const std::string runs_path = out_dir + "/runs.csv";
+  MakeOutputDir(out_dir, "--out", /*lock=*/true);
+  if (std::ifstream old(effective_path); old) {
+    std::stringstream text;
+    text << old.rdbuf();
+    const std::string why = Mismatch(text.str(), effective);
+    if (!why.empty())
+      throw InputError("command line", 0, "--out",
+                       out_dir + " holds results of another configuration (" +
+                           why + "; see its effective.yaml): use a new folder");
+  }
+  std::vector<std::string> problems;
+  std::vector<EvalRow> rows = ReadRuns(runs_path, &problems);
+  if (!problems.empty()) {
+    std::string shown;
+    for (size_t i = 0; i < problems.size() && i < 5; ++i)
+      shown += (i ? "; " : "") + problems[i];
+    if (problems.size() > 5)
+      shown += "; ... (" + std::to_string(problems.size() - 5) + " more)";
+    std::fprintf(stderr,
+                 "aia eval: %s: dropped %zu rows that will run again: %s\n",
+                 runs_path.c_str(), problems.size(), shown.c_str());
+  }
+  std::string text = std::string(kHeader) + "\n";
+  for (const auto& r : rows) text += FormatRow(r);
+  WriteFileAtomic(runs_path, text);
+  WriteFileAtomic(effective_path, effective);
+  return rows;
+}
+
+// One instance's policies still to run.
+struct Work {
+  const EvalInstance* instance;
+  std::vector<std::string> todo;
+};
+
+// The runs not in `done`, and this rank's round-robin share of them (the
+// same split on every rank); *total_runs counts every rank's runs.
+std::vector<Work> WorkLeft(const std::vector<EvalInstance>& instances,
+                           const std::vector<std::string>& policies,
+                           const std::vector<EvalRow>& done_rows,
+                           const Ranks& ranks, int* total_runs) {
+  std::set<std::tuple<std::string, std::uint64_t, std::string>> done;
+  for (const auto& r : done_rows) done.insert({r.size, r.seed, r.policy});
+  std::vector<Work> work;
+  *total_runs = 0;
+  for (const EvalInstance& inst : instances) {
+    Work w{&inst, {}};
+    for (const auto& p : policies)
+      if (!done.count({inst.size, inst.seed, p})) w.todo.push_back(p);
+    *total_runs += static_cast<int>(w.todo.size());
+    if (!w.todo.empty()) work.push_back(std::move(w));
+  }
+  std::vector<Work> mine;
+  for (size_t i = 0; i < work.size(); ++i)
+    if (static_cast<int>(i % ranks.size()) == ranks.rank())
+      mine.push_back(std::move(work[i]));
+  return mine;
+}
+
+// Where finished rows go. On rank 0 each is appended to runs.csv as it
+// finishes (its own, and those the other ranks send), so that an
+// interrupted eval loses only the runs in flight; the other ranks send
+// theirs to rank 0. Record() and WriteResults() are called under mutex().
+class RowSink {
+ public:
+  RowSink(const EvalOptions& o, const std::vector<std::string>& policies,
+          std::vector<EvalRow> rows, int total_runs, bool root, Ranks* ranks)
+      : options_(o),
+        policies_(policies),
+        runs_path_(o.out_dir + "/runs.csv"),
+        rows_(std::move(rows)),
+        total_runs_(total_runs),
+        root_(root),
+        ranks_(ranks),
+        progress_(o.progress && root) {
+    if (!root_) return;
+    fd_ = ::open(runs_path_.c_str(), O_WRONLY | O_APPEND);
+    if (fd_ < 0)
+      throw std::runtime_error("cannot write '" + runs_path_ +
+                               "': " + std::strerror(errno));
+  }
+  ~RowSink() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  RowSink(const RowSink&) = delete;
+  RowSink& operator=(const RowSink&) = delete;
+
+  std::mutex& mutex() { return mu_; }
+  const std::string& runs_path() const { return runs_path_; }
+  std::size_t rows() const { return rows_.size(); }
+
+  void Record(const EvalRow& row) {
+    const std::string line = FormatRow(row);
+    if (!root_) {
+      ranks_->SendLine(line);
+      return;
+    }
+    if (::write(fd_, line.data(), line.size()) !=
+        static_cast<ssize_t>(line.size()))
+      throw std::runtime_error("cannot write '" + runs_path_ + "': " +
+                               std::strerror(errno != 0 ? errno : ENOSPC));
+    rows_.push_back(row);
+    ++finished_;
+    char buf[200];
+    std::snprintf(buf, sizeof(buf),
+                  "[aia eval] %d/%d runs  (last: %s seed %llu)", finished_,
+                  total_runs_, row.size.c_str(),
+                  static_cast<unsigned long long>(row.seed));
+    progress_.Update(buf);
+  }
+
+  // The appended rows on disk, and the progress line ended.
+  void Flush() {
+    progress_.Finish();
+    if (fd_ >= 0) ::fsync(fd_);
+  }
+
+  // runs.csv rewritten in canonical order (so that the files do not depend
+  // on the thread count) and summary.csv of this eval's seeds; returns the
+  // summary.
+  std::string WriteResults() {
+    std::map<std::string, size_t> size_rank, policy_rank;
+    for (size_t i = 0; i < options_.sizes.size(); ++i)
+      size_rank.emplace(options_.sizes[i], i);
+    for (size_t i = 0; i < policies_.size(); ++i)
+      policy_rank.emplace(policies_[i], i);
+    const auto rank = [](const std::map<std::string, size_t>& m,
+                         const std::string& k) {
+      const auto it = m.find(k);
+      return it == m.end() ? m.size() : it->second;
+    };
+    std::stable_sort(
+        rows_.begin(), rows_.end(), [&](const EvalRow& a, const EvalRow& b) {
+          return std::make_tuple(rank(size_rank, a.size), a.size, a.seed,
+                                 rank(policy_rank, a.policy), a.policy) <
+                 std::make_tuple(rank(size_rank, b.size), b.size, b.seed,
+                                 rank(policy_rank, b.policy), b.policy);
+        });
+    std::string text = std::string(kHeader) + "\n";
+    for (const auto& r : rows_) text += FormatRow(r);
+    WriteFileAtomic(runs_path_, text);
+    const std::uint64_t lo = options_.seed_base;
+    const std::uint64_t hi = lo + static_cast<std::uint64_t>(options_.seeds);
+    std::vector<EvalRow> in_range;
+    for (const auto& r : rows_)
+      if (r.seed >= lo && r.seed < hi) in_range.push_back(r);
+    const std::string summary =
+        SummaryCsv(in_range, options_.sizes, policies_);
+    WriteFileAtomic(options_.out_dir + "/summary.csv", summary);
+    return summary;
+  }
+
+ private:
+  const EvalOptions& options_;
+  const std::vector<std::string>& policies_;
+  std::string runs_path_;
+  std::vector<EvalRow> rows_;
+  int total_runs_;
+  int finished_ = 0;
+  bool root_;
+  Ranks* ranks_;
+  ProgressLine progress_;
+  int fd_ = -1;
+  std::mutex mu_;
+};
+
+// The threads to run on: --threads, or all cores shared among the ranks on
+// this machine; never more than there is work.
+int WorkerThreads(int requested, std::size_t work) {
+  int threads = requested;
+  if (threads == 0) {
+    threads = static_cast<int>(std::thread::hardware_concurrency());
+    if (const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE"))
+      threads /= std::max(1, std::atoi(local));
+  }
+  return std::max(
+      1, std::min<int>(threads, static_cast<int>(std::max<size_t>(work, 1))));
+}
+
+// The work queue: `threads` workers take instances in turn and record their
+// rows; the first failure of a run (bad input found in it, say: a generated
+// world that cannot be built) stops the handing out and is kept as it is.
+// Start() returns at once; Wait() joins.
+class WorkQueue {
+ public:
+  WorkQueue(const std::vector<Work>& work, const EvalSetup& setup,
+            RowSink* sink)
+      : work_(work), setup_(setup), sink_(sink) {}
+
+  void Start(int threads) {
+    running_ = threads;
+    for (int t = 0; t < threads; ++t)
+      pool_.emplace_back([this]() {
+        Worker();
+        --running_;
+      });
+  }
+  // Whether a worker is still running; in one process, Ctrl-C ends the
+  // wait early.
+  bool WaitUnlessInterrupted(bool interruptible) {
+    while (running_ > 0 && !(interruptible && Interrupted()))
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return running_ == 0;
+  }
+  void Join() {
+    for (auto& t : pool_) t.join();
+  }
+  std::exception_ptr failure() const { return failure_; }
+
+ private:
+  void Worker() {
+    while (!Interrupted()) {
+      const size_t w = next_.fetch_add(1);
+      if (w >= work_.size()) return;
+      try {
+        const std::vector<EvalRow> result =
+            RunInstance(*work_[w].instance, setup_, work_[w].todo);
+        std::lock_guard<std::mutex> lock(sink_->mutex());
+        for (const EvalRow& row : result) sink_->Record(row);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(sink_->mutex());
+        if (!failure_) failure_ = std::current_exception();
+        next_ = work_.size();  // stop handing out work
+      }
+    }
+  }
+
+  const std::vector<Work>& work_;
+  const EvalSetup& setup_;
+  RowSink* sink_;
+  std::atomic<size_t> next_{0};
+  std::atomic<int> running_{0};
+  std::vector<std::thread> pool_;
+  std::exception_ptr failure_;  // under the sink's mutex
+};
+
+// Rank 0 under mpirun: the rows the other ranks send, recorded as they
+// come; the first problem is kept in *error.
+std::thread ReceiveRemoteRows(Ranks* ranks, RowSink* sink, std::string* error,
+                              std::string* remote_error) {
+  return std::thread([ranks, sink, error, remote_error]() {
+    *remote_error = ranks->ReceiveAll([&](const std::string& line) {
+      EvalRow row;
+      std::string text = line;
+      if (!text.empty() && text.back() == '\n') text.pop_back();
+      std::lock_guard<std::mutex> lock(sink->mutex());
+      if (!ParseRow(text, &row)) {
+        if (error->empty()) *error = "a rank sent a bad row";
+        return;
+      }
+      try {
+        sink->Record(row);
+      } catch (const std::exception& e) {
+        if (error->empty()) *error = e.what();
+      }
+    });
+  });
+}
+
+}  // namespace
+
+int RunEval(const EvalOptions& o) {
+  CheckEvalFlags(o);
+  const PolicyRegistry registry = AllPolicies();
+  // One process: Ctrl-C writes the rows done (below). Under mpirun the
+  // launcher owns the signals.
+  Ranks& ranks = Ranks::Get();
+  if (!ranks.distributed()) InstallInterruptHandler();
+  const std::vector<std::string> policies = PoliciesToRun(o, registry);
   const std::vector<EvalInstance> instances =
       EnumerateInstances(o.sizes, o.seeds, o.seed_base);
   if (instances.empty())
     throw InputError("command line", 0, "--sizes", "give at least one size");
   const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry, instances);
-  {  // No file written may be an input (a model, a map image).
-    std::vector<InputFile> inputs =
-        MissionInputs(InstanceScenario(instances.front(), setup), nullptr);
-    for (const auto& p : setup.policies)
-      for (const InputFile& f : MissionInputs(Scenario{}, p.get()))
-        inputs.push_back(f);
-    for (const char* name : {"runs.csv", "summary.csv", "effective.yaml"})
-      CheckNotAnInput(o.out_dir + "/" + name, "--out", inputs,
-                      "written into the output folder");
-  }
+  CheckOutputsAreNotInputs(o, setup, instances.front());
 
-  // Under mpirun, rank 0 alone checks and rewrites the folder; then every
-  // rank reads the rows already done and takes its share of the rest.
-  Ranks& ranks = Ranks::Get();
+  // Rank 0 alone checks and rewrites the folder; then every rank reads the
+  // rows already done and takes its share of the rest.
   const bool root = ranks.rank() == 0;
   const std::string effective_path = o.out_dir + "/effective.yaml";
-  const std::string effective = EffectiveText(setup, instances.front());
-  const std::string runs_path = o.out_dir + "/runs.csv";
   std::vector<EvalRow> rows;
   if (root) {
     try {
-      MakeOutputDir(o.out_dir, "--out", /*lock=*/true);
-      // Finished rows are kept only for the same configuration.
-      if (std::ifstream old(effective_path); old) {
-        std::stringstream text;
-        text << old.rdbuf();
-        const std::string why = Mismatch(text.str(), effective);
-        if (!why.empty())
-          throw InputError("command line", 0, "--out",
-                           o.out_dir +
-                               " holds results of another "
-                               "configuration (" +
-                               why +
-                               "; see its effective.yaml): use a new "
-                               "folder");
-      }
-      // Resume: keep the rows already there, rewritten cleanly; a row cut
-      // short by an interruption, garbled, impossible or duplicated is
-      // reported, dropped and run again.
-      std::vector<std::string> problems;
-      rows = ReadRuns(runs_path, &problems);
-      if (!problems.empty()) {
-        std::string shown;
-        for (size_t i = 0; i < problems.size() && i < 5; ++i)
-          shown += (i ? "; " : "") + problems[i];
-        if (problems.size() > 5)
-          shown += "; ... (" + std::to_string(problems.size() - 5) + " more)";
-        std::fprintf(stderr,
-                     "aia eval: %s: dropped %zu rows that will run again: "
-                     "%s\n",
-                     runs_path.c_str(), problems.size(), shown.c_str());
-      }
-      std::string text = std::string(kHeader) + "\n";
-      for (const auto& r : rows) text += FormatRow(r);
-      WriteFileAtomic(runs_path, text);
-      WriteFileAtomic(effective_path, effective);
+      rows = ResumeFolder(o.out_dir,
+                          EffectiveText(setup, instances.front()));
     } catch (...) {
       ranks.AgreeFromRoot(false);  // the other ranks stop quietly
       throw;
     }
   }
   if (!ranks.AgreeFromRoot(true)) return 2;
-  if (!root) rows = ReadRuns(runs_path);
-  std::set<std::tuple<std::string, std::uint64_t, std::string>> done;
-  for (const auto& r : rows) done.insert({r.size, r.seed, r.policy});
-
-  struct Work {
-    const EvalInstance* instance;
-    std::vector<std::string> todo;
-  };
-  std::vector<Work> work;
+  if (!root) rows = ReadRuns(o.out_dir + "/runs.csv");
   int total_runs = 0;
-  for (const EvalInstance& inst : instances) {
-    Work w{&inst, {}};
-    for (const auto& p : policies)
-      if (!done.count({inst.size, inst.seed, p})) w.todo.push_back(p);
-    total_runs += static_cast<int>(w.todo.size());
-    if (w.todo.empty()) continue;
-    work.push_back(std::move(w));
-  }
-  {  // Round-robin over the ranks: the same split on every rank.
-    std::vector<Work> mine;
-    for (size_t i = 0; i < work.size(); ++i)
-      if (static_cast<int>(i % ranks.size()) == ranks.rank())
-        mine.push_back(std::move(work[i]));
-    work = std::move(mine);
-  }
+  const std::vector<Work> work =
+      WorkLeft(instances, policies, rows, ranks, &total_runs);
   if (root) {
     std::printf(
         "aia eval: %zu sizes x %d seeds x %zu policies; %zu rows already "
@@ -715,169 +946,47 @@ int RunEval(const EvalOptions& o) {
     std::fflush(stdout);
   }
 
-  // Rank 0 appends every row to runs.csv as it finishes (its own, and those
-  // the other ranks send), so that an interrupted eval loses only runs in
-  // flight.
-  int fd = -1;
-  if (root) {
-    fd = ::open(runs_path.c_str(), O_WRONLY | O_APPEND);
-    if (fd < 0)
-      throw std::runtime_error("cannot write '" + runs_path +
-                               "': " + std::strerror(errno));
-  }
-  std::mutex mu;
-  std::atomic<size_t> next{0};
-  int finished = 0;
-  ProgressLine progress(o.progress && root);
-  std::string first_error;
-  std::exception_ptr first_failure;  // of a run
-  // Under mu.
-  const auto record = [&](const EvalRow& row, const std::string& size,
-                          std::uint64_t seed) {
-    const std::string line = FormatRow(row);
-    if (!root) {
-      ranks.SendLine(line);
-      return;
-    }
-    if (::write(fd, line.data(), line.size()) !=
-        static_cast<ssize_t>(line.size()))
-      throw std::runtime_error("cannot write '" + runs_path + "': " +
-                               std::strerror(errno != 0 ? errno : ENOSPC));
-    rows.push_back(row);
-    ++finished;
-    char buf[200];
-    std::snprintf(buf, sizeof(buf),
-                  "[aia eval] %d/%d runs  (last: %s seed %llu)", finished,
-                  total_runs, size.c_str(),
-                  static_cast<unsigned long long>(seed));
-    progress.Update(buf);
-  };
-  auto worker = [&]() {
-    while (!Interrupted()) {
-      const size_t w = next.fetch_add(1);
-      if (w >= work.size()) return;
-      try {
-        const std::vector<EvalRow> result =
-            RunInstance(*work[w].instance, setup, work[w].todo);
-        std::lock_guard<std::mutex> lock(mu);
-        for (const EvalRow& row : result)
-          record(row, work[w].instance->size, work[w].instance->seed);
-      } catch (...) {
-        // Kept as it is: bad input found in a run (a generated world that
-        // cannot be built) is still bad input.
-        std::lock_guard<std::mutex> lock(mu);
-        if (!first_failure) first_failure = std::current_exception();
-        next = work.size();  // stop handing out work
-      }
-    }
-  };
+  RowSink sink(o, policies, std::move(rows), total_runs, root, &ranks);
+  std::string first_error, remote_error;
   std::thread receiver;
-  std::string remote_error;
-  if (root && ranks.distributed()) {
-    receiver = std::thread([&]() {
-      remote_error = ranks.ReceiveAll([&](const std::string& line) {
-        EvalRow row;
-        std::string text = line;
-        if (!text.empty() && text.back() == '\n') text.pop_back();
-        std::lock_guard<std::mutex> lock(mu);
-        if (!ParseRow(text, &row)) {
-          if (first_error.empty()) first_error = "a rank sent a bad row";
-          return;
-        }
-        try {
-          record(row, row.size, row.seed);
-        } catch (const std::exception& e) {
-          if (first_error.empty()) first_error = e.what();
-        }
-      });
-    });
-  }
-  int threads = o.threads;
-  if (threads == 0) {
-    // All cores, shared among the ranks on this machine.
-    threads = static_cast<int>(std::thread::hardware_concurrency());
-    if (const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE"))
-      threads /= std::max(1, std::atoi(local));
-  }
-  threads = std::max(
-      1, std::min<int>(threads,
-                       static_cast<int>(std::max<size_t>(work.size(), 1))));
-  std::vector<std::thread> pool;
-  std::atomic<int> running{threads};
-  for (int t = 0; t < threads; ++t)
-    pool.emplace_back([&]() {
-      worker();
-      --running;
-    });
-  // Canonical order, so the files do not depend on the thread count.
-  std::map<std::string, size_t> size_rank, policy_rank;
-  for (size_t i = 0; i < o.sizes.size(); ++i) size_rank.emplace(o.sizes[i], i);
-  for (size_t i = 0; i < policies.size(); ++i)
-    policy_rank.emplace(policies[i], i);
-  const auto write_results = [&]() {
-    auto rank = [](const std::map<std::string, size_t>& m,
-                   const std::string& k) {
-      const auto it = m.find(k);
-      return it == m.end() ? m.size() : it->second;
-    };
-    std::stable_sort(
-        rows.begin(), rows.end(), [&](const EvalRow& a, const EvalRow& b) {
-          return std::make_tuple(rank(size_rank, a.size), a.size, a.seed,
-                                 rank(policy_rank, a.policy), a.policy) <
-                 std::make_tuple(rank(size_rank, b.size), b.size, b.seed,
-                                 rank(policy_rank, b.policy), b.policy);
-        });
-    std::string text = std::string(kHeader) + "\n";
-    for (const auto& r : rows) text += FormatRow(r);
-    WriteFileAtomic(runs_path, text);
-    std::vector<EvalRow> in_range;
-    for (const auto& r : rows)
-      if (r.seed >= o.seed_base &&
-          r.seed < o.seed_base + static_cast<std::uint64_t>(o.seeds))
-        in_range.push_back(r);
-    const std::string summary = SummaryCsv(in_range, o.sizes, policies);
-    WriteFileAtomic(o.out_dir + "/summary.csv", summary);
-    return summary;
-  };
+  if (root && ranks.distributed())
+    receiver = ReceiveRemoteRows(&ranks, &sink, &first_error, &remote_error);
+  WorkQueue queue(work, setup, &sink);
+  queue.Start(WorkerThreads(o.threads, work.size()));
   // Ctrl-C (one process): the rows finished so far are written, with the
   // summary of what is done, and the runs in flight are abandoned.
-  while (running > 0 && !(root && !ranks.distributed() && Interrupted()))
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  if (running > 0) {
-    std::lock_guard<std::mutex> lock(mu);  // no row is being appended
-    progress.Finish();
-    ::fsync(fd);
-    write_results();
+  if (!queue.WaitUnlessInterrupted(root && !ranks.distributed())) {
+    std::lock_guard<std::mutex> lock(sink.mutex());  // no row is appended
+    sink.Flush();
+    sink.WriteResults();
     std::fprintf(stderr,
                  "aia eval: interrupted; %zu rows written to %s (summary.csv "
                  "covers them); run the same command to go on\n",
-                 rows.size(), runs_path.c_str());
+                 sink.rows(), sink.runs_path().c_str());
     std::fflush(stderr);
     std::_Exit(kInterruptedExitCode);
   }
-  for (auto& t : pool) t.join();
+  queue.Join();
   if (!root) {
-    ranks.SendDone(first_failure ? Message(first_failure) : first_error);
+    ranks.SendDone(queue.failure() ? Message(queue.failure()) : first_error);
     return 0;  // rank 0 reports
   }
   if (receiver.joinable()) receiver.join();
-  progress.Finish();
-  ::fsync(fd);
-  ::close(fd);
-  if (first_failure) std::rethrow_exception(first_failure);
+  sink.Flush();
+  if (queue.failure()) std::rethrow_exception(queue.failure());
   if (first_error.empty()) first_error = remote_error;
   if (!first_error.empty()) throw std::runtime_error(first_error);
 
-  const std::string summary = write_results();
+  const std::string summary = sink.WriteResults();
   if (Interrupted()) {
     std::fprintf(stderr,
                  "aia eval: interrupted; %zu rows written to %s; run the same "
                  "command to go on\n",
-                 rows.size(), runs_path.c_str());
+                 sink.rows(), sink.runs_path().c_str());
     return kInterruptedExitCode;
   }
   std::printf("%s", summary.c_str());
-  std::printf("wrote %s, %s/summary.csv and %s\n", runs_path.c_str(),
+  std::printf("wrote %s, %s/summary.csv and %s\n", sink.runs_path().c_str(),
               o.out_dir.c_str(), effective_path.c_str());
   return 0;
 }

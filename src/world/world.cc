@@ -277,15 +277,16 @@ std::vector<Box> BoxesFromImage(const std::vector<std::uint8_t>& gray, int cols,
   return boxes;
 }
 
-World World::Build(const Scenario& s) {
-  World w;
-  // Obstacles: a generated world (alone), or random, then explicit boxes,
-  // then the map's.
+namespace {
+
+// A generated world (alone), or random boxes, then explicit boxes, then the
+// map image's; *generated holds what the generator made.
+std::vector<Box> AllObstacles(const Scenario& s,
+                              std::optional<GeneratedObstacles>* generated) {
   std::vector<Box> obstacles;
-  std::optional<GeneratedObstacles> generated;
   if (s.workspace.obstacles.generator) {
-    generated = GenerateObstacles(s);
-    obstacles = generated->boxes;
+    *generated = GenerateObstacles(s);
+    obstacles = (*generated)->boxes;
   }
   if (s.workspace.obstacles.random) {
     Rng rng(s.seed, "obstacles");
@@ -298,14 +299,17 @@ World World::Build(const Scenario& s) {
     const auto boxes = MapBoxes(s);
     obstacles.insert(obstacles.end(), boxes.begin(), boxes.end());
   }
-  w.map = Map(s.workspace.size, std::move(obstacles), s.workspace.cell,
-              s.robots.step, s.robots.radius);
-  if (generated) CheckGeneratedLattice(s, *generated, w.map.lattice());
-  const Map& map = w.map;
+  return obstacles;
+}
+
+// The given starts, each checked (outside every obstacle, snapping to a free
+// lattice point of its own), or random distinct free points of the largest
+// connected component, so that every robot can reach every other robot's
+// region.
+std::vector<int> RobotStarts(const Scenario& s, const Map& map) {
   const Lattice& lat = map.lattice();
   const int n = s.robots.count;
-
-  // Robot starts.
+  std::vector<int> starts;
   if (!s.robots.start.empty()) {
     for (int i = 0; i < n; ++i) {
       const std::string key = "robots.start[" + std::to_string(i) + "]";
@@ -325,62 +329,71 @@ World World::Build(const Scenario& s) {
                  ", which is not free (obstacle or wall within the robot "
                  "radius)");
       for (int j = 0; j < i; ++j) {
-        if (w.robot_starts[j] == idx)
+        if (starts[j] == idx)
           Fail(s, key,
                "start " + Fmt(p) + " snaps to the same lattice point " +
                    Fmt(lat.Point(idx)) + " as robot " + std::to_string(j));
       }
-      w.robot_starts.push_back(idx);
+      starts.push_back(idx);
     }
-  } else {
-    // Random distinct free points of the largest connected component, so that
-    // every robot can reach every other robot's region.
-    std::vector<int> pool;
-    for (int idx = 0; idx < lat.size(); ++idx)
-      if (lat.Free(idx) && lat.components()[idx] == 0) pool.push_back(idx);
-    if (lat.NumFree() == 0)
-      Fail(s, "robots.count", "the workspace has no free lattice point");
-    if (n > static_cast<int>(pool.size()))
-      Fail(s, "robots.count",
-           std::to_string(n) + " robots but only " +
-               std::to_string(pool.size()) +
-               " free lattice points in the largest connected region (" +
-               std::to_string(lat.NumFree()) + " free in all)");
-    Rng rng(s.seed, "starts");
-    for (int i = 0; i < n; ++i) {  // partial Fisher-Yates
-      const size_t j = i + rng.UniformInt(pool.size() - i);
-      std::swap(pool[i], pool[j]);
-      w.robot_starts.push_back(pool[i]);
+    return starts;
+  }
+  std::vector<int> pool;
+  for (int idx = 0; idx < lat.size(); ++idx)
+    if (lat.Free(idx) && lat.components()[idx] == 0) pool.push_back(idx);
+  if (lat.NumFree() == 0)
+    Fail(s, "robots.count", "the workspace has no free lattice point");
+  if (n > static_cast<int>(pool.size()))
+    Fail(s, "robots.count",
+         std::to_string(n) + " robots but only " + std::to_string(pool.size()) +
+             " free lattice points in the largest connected region (" +
+             std::to_string(lat.NumFree()) + " free in all)");
+  Rng rng(s.seed, "starts");
+  for (int i = 0; i < n; ++i) {  // partial Fisher-Yates
+    const size_t j = i + rng.UniformInt(pool.size() - i);
+    std::swap(pool[i], pool[j]);
+    starts.push_back(pool[i]);
+  }
+  return starts;
+}
+
+// Targets are placed, and prior means drawn, where some lattice point that a
+// robot can reach sees them (in range and in sight).
+class TargetPlacer {
+ public:
+  TargetPlacer(const Scenario& s, const Map& map, const std::vector<int>& starts)
+      : s_(s),
+        map_(map),
+        lat_(map.lattice()),
+        reachable_(lat_.size(), 0),
+        reach_(0.9 * s.sensor.range),
+        prior_rng_(s.seed, "priors") {
+    for (int idx = 0; idx < lat_.size(); ++idx) {
+      if (!lat_.Free(idx)) continue;
+      for (int r : starts)
+        if (lat_.components()[idx] == lat_.components()[r]) reachable_[idx] = 1;
     }
   }
 
-  // Targets are placed, and prior means drawn, where some lattice point that
-  // a robot can reach sees them (in range and in sight).
-  std::vector<char> reachable(lat.size(), 0);
-  for (int idx = 0; idx < lat.size(); ++idx) {
-    if (!lat.Free(idx)) continue;
-    for (int r : w.robot_starts)
-      if (lat.components()[idx] == lat.components()[r]) reachable[idx] = 1;
-  }
-  const double reach = 0.9 * s.sensor.range;
-  const double clearance = 0.05;
-  auto observable = [&](const Vec2& p) {
-    const int cx = lat.Ix(lat.NearestPoint(p)),
-              cy = lat.Iy(lat.NearestPoint(p));
-    const int k = static_cast<int>(std::ceil(reach / lat.step())) + 1;
-    for (int iy = std::max(0, cy - k); iy <= std::min(lat.ny() - 1, cy + k);
+  // Whether some reachable lattice point sees `p`.
+  bool Observable(const Vec2& p) const {
+    const int cx = lat_.Ix(lat_.NearestPoint(p)),
+              cy = lat_.Iy(lat_.NearestPoint(p));
+    const int k = static_cast<int>(std::ceil(reach_ / lat_.step())) + 1;
+    for (int iy = std::max(0, cy - k); iy <= std::min(lat_.ny() - 1, cy + k);
          ++iy)
-      for (int ix = std::max(0, cx - k); ix <= std::min(lat.nx() - 1, cx + k);
+      for (int ix = std::max(0, cx - k); ix <= std::min(lat_.nx() - 1, cx + k);
            ++ix) {
-        const int idx = lat.Index(ix, iy);
-        if (!reachable[idx] || (lat.Point(idx) - p).norm() > reach) continue;
-        if (!s.sensor.line_of_sight || map.LineOfSight(lat.Point(idx), p))
+        const int idx = lat_.Index(ix, iy);
+        if (!reachable_[idx] || (lat_.Point(idx) - p).norm() > reach_) continue;
+        if (!s_.sensor.line_of_sight || map_.LineOfSight(lat_.Point(idx), p))
           return true;
       }
     return false;
-  };
-  Rng prior_rng(s.seed, "priors");
-  auto add_target = [&](const Vec2& pos, const TargetConfig* cfg) {
+  }
+
+  // The target at `pos` (cfg: its list entry, or null) with its prior.
+  void Add(const Vec2& pos, const TargetConfig* cfg, World* w) {
     TargetPrior prior;
     prior.model = cfg ? cfg->dynamics : TargetModel{};
     const int d = prior.model.dim();
@@ -388,75 +401,100 @@ World World::Build(const Scenario& s) {
     x0.head<2>() = pos;
     if (d == 4 && cfg) x0.tail<2>() = cfg->velocity;
     const double sigma =
-        (cfg && cfg->prior_sigma) ? *cfg->prior_sigma : s.targets.prior_sigma;
+        (cfg && cfg->prior_sigma) ? *cfg->prior_sigma : s_.targets.prior_sigma;
     prior.cov = sigma * sigma * Eigen::MatrixXd::Identity(d, d);
     // Default prior mean: the truth plus an offset drawn from
-    // N(0, prior_offset^2 I), redrawn (a few times) until the mean lies in free
-    // space where a reachable point sees it: the robots know the map, so their
-    // prior puts its mean where the target could be observed. Drawn
-    // even when a mean is given, so the other targets' draws do not depend on
-    // it.
-    const double offset = s.targets.prior_offset;
+    // N(0, prior_offset^2 I), redrawn (a few times) until the mean lies in
+    // free space where a reachable point sees it: the robots know the map,
+    // so their prior puts its mean where the target could be observed. Drawn
+    // even when a mean is given, so the other targets' draws do not depend
+    // on it.
+    const double offset = s_.targets.prior_offset;
     prior.mean = x0;
     for (int attempt = 0; attempt < 20; ++attempt) {
       Eigen::VectorXd draw(d);
-      for (int c = 0; c < d; ++c) draw[c] = offset * prior_rng.Normal();
+      for (int c = 0; c < d; ++c) draw[c] = offset * prior_rng_.Normal();
       prior.mean = x0 + draw;
-      if (map.PointFree(prior.mean.head<2>()) &&
-          observable(prior.mean.head<2>()))
+      if (map_.PointFree(prior.mean.head<2>()) &&
+          Observable(prior.mean.head<2>()))
         break;
       prior.mean = x0;
     }
     if (cfg && cfg->prior_mean) prior.mean.head<2>() = *cfg->prior_mean;
-    w.priors.push_back(std::move(prior));
-    w.truth.targets.push_back(std::move(x0));
-  };
-  if (!s.targets.list.empty()) {
-    for (size_t k = 0; k < s.targets.list.size(); ++k) {
-      const std::string key =
-          "targets.list[" + std::to_string(k) + "].position";
-      const Vec2& p = s.targets.list[k].position;
-      if (!map.PointFree(p)) {
-        const Vec2& size = map.size();
-        if (p.x() < 0 || p.y() < 0 || p.x() > size.x() || p.y() > size.y())
-          Fail(s, key,
-               "target " + Fmt(p) + " is outside the workspace " + Fmt(size));
-        Fail(s, key, "target " + Fmt(p) + " is inside an obstacle");
+    w->priors.push_back(std::move(prior));
+    w->truth.targets.push_back(std::move(x0));
+  }
+
+  // The listed targets (each checked), or `targets.count` random static ones
+  // in free space, each observable.
+  void PlaceAll(World* w) {
+    if (!s_.targets.list.empty()) {
+      for (size_t k = 0; k < s_.targets.list.size(); ++k) {
+        const std::string key =
+            "targets.list[" + std::to_string(k) + "].position";
+        const Vec2& p = s_.targets.list[k].position;
+        if (!map_.PointFree(p)) {
+          const Vec2& size = map_.size();
+          if (p.x() < 0 || p.y() < 0 || p.x() > size.x() || p.y() > size.y())
+            Fail(s_, key,
+                 "target " + Fmt(p) + " is outside the workspace " + Fmt(size));
+          Fail(s_, key, "target " + Fmt(p) + " is inside an obstacle");
+        }
+        Add(p, &s_.targets.list[k], w);
       }
-      add_target(p, &s.targets.list[k]);
+      return;
     }
-  } else {
-    // Random static targets in free space, each observable (in range and in
-    // sight) from some lattice point that the robots can reach.
-    Rng rng(s.seed, "targets");
-    for (int k = 0; k < s.targets.count; ++k) {
+    const double clearance = 0.05;
+    Rng rng(s_.seed, "targets");
+    for (int k = 0; k < s_.targets.count; ++k) {
       bool placed = false;
       for (int attempt = 0; attempt < 10000 && !placed; ++attempt) {
-        const Vec2 p(rng.Uniform(clearance, map.size().x() - clearance),
-                     rng.Uniform(clearance, map.size().y() - clearance));
+        const Vec2 p(rng.Uniform(clearance, map_.size().x() - clearance),
+                     rng.Uniform(clearance, map_.size().y() - clearance));
         bool clear = true;
-        for (const Box& b : map.obstacles())
+        for (const Box& b : map_.obstacles())
           if (PointBoxDistanceSq(p, b) < clearance * clearance) clear = false;
-        if (!clear || !observable(p)) continue;
-        add_target(p, nullptr);
+        if (!clear || !Observable(p)) continue;
+        Add(p, nullptr, w);
         placed = true;
       }
       if (!placed)
-        Fail(s, "targets.count",
+        Fail(s_, "targets.count",
              "cannot place target " + std::to_string(k) +
                  " where the robots could observe it (the free space is too "
                  "small or cut off)");
     }
   }
 
+ private:
+  const Scenario& s_;
+  const Map& map_;
+  const Lattice& lat_;
+  std::vector<char> reachable_;
+  double reach_;
+  Rng prior_rng_;
+};
+
+}  // namespace
+
+World World::Build(const Scenario& s) {
+  World w;
+  std::optional<GeneratedObstacles> generated;
+  w.map = Map(s.workspace.size, AllObstacles(s, &generated), s.workspace.cell,
+              s.robots.step, s.robots.radius);
+  if (generated) CheckGeneratedLattice(s, *generated, w.map.lattice());
+  w.robot_starts = RobotStarts(s, w.map);
+  TargetPlacer(s, w.map, w.robot_starts).PlaceAll(&w);
+
   // MuJoCo's broad phase needs stack memory quadratic in the number of
   // geoms (the MJCF sizes it so): keep models to a size that fits.
+  const int n = s.robots.count;
   const int bodies =
-      n + w.NumTargets() + static_cast<int>(map.obstacles().size());
+      n + w.NumTargets() + static_cast<int>(w.map.obstacles().size());
   if (bodies > kMaxBodies)
     Fail(s, s.targets.list.empty() ? "targets.count" : "targets.list",
          std::to_string(n) + " robots, " + std::to_string(w.NumTargets()) +
-             " targets and " + std::to_string(map.obstacles().size()) +
+             " targets and " + std::to_string(w.map.obstacles().size()) +
              " obstacle boxes make " + std::to_string(bodies) +
              " bodies; aia simulates at most " + std::to_string(kMaxBodies));
 

@@ -250,6 +250,24 @@ class SamplingTree {
   void Register(int child, const SamplingParams& params);
   bool Expandable(int v, const SamplingParams& params) const;
   void Select();
+  // Solve()'s steps. The root at the start configuration (a goal when every
+  // target is localized there), and the lower bound on the horizon.
+  int StartRoot(const SamplingProblem& problem, int* bound);
+  // The tours and the four seeded rollouts (greedy, nearest, the tours).
+  void SeededRollouts(const SamplingParams& params, int root,
+                      SamplingPlan* plan);
+  // The most nodes the rest of the solve can make.
+  double MostNodes(const SamplingParams& params) const;
+  void ReserveArena(double nodes);
+  void ReleaseArena();
+  // f_V: a node to expand, -1 for none this iteration, or kNothingToExpand.
+  static constexpr int kNothingToExpand = -2;
+  int SelectNode(const SamplingParams& params, Rng& rng);
+  // f_U and the child it makes.
+  void Expand(int node, const SamplingParams& params, Rng& rng);
+  // The returned path (the best goal, idle moves rewritten, or the best
+  // partial node) and what the plan reports.
+  void ExtractPlan(const SamplingParams& params, SamplingPlan* plan);
   void UsefulUntil(const std::vector<int>& path, std::vector<int>* until);
   int RewriteIdle(int end);
 
@@ -278,7 +296,9 @@ class SamplingTree {
   // Search state.
   std::vector<int> goals_;  // goal nodes within the tolerance of j_min_
   double j_min_ = 0.0, tol_ = 0.0;
-  int best_ = -1, effort_ = 0, last_ = 0;
+  // The best goal, the best partial node (fewest unlocalized targets, then
+  // the smallest det sum: returned when no goal is found) and the newest.
+  int best_ = -1, best_partial_ = 0, last_ = 0;
   long first_goal_iteration_ = -1, iteration_ = 0;
   // Tours.
   std::vector<std::vector<int>> tours_, makespan_tours_;

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/fields.h"
+
 namespace aia {
 
 struct DatasetOptions {
@@ -37,6 +39,29 @@ struct DatasetOptions {
   // after 3 decisions of the next one without writing it, as a kill would
   // (-1: never).
   int stop_after_episodes = -1;
+
+  // The counts, declared once for `aia dataset`'s flags and their checks
+  // (core/fields.h; the size, shard, policy and paths are parsed apart).
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(episodes)
+                 .In(Between(1, 10000000))
+                 .Doc("episodes in all shards"));
+    a->Visit(AIA_FIELD(first_seed).Doc(
+        "episode e uses seed FIRST+e (aia eval uses 0..)"));
+    a->Visit(AIA_FIELD(keep)
+                 .In(Between(1, 100000))
+                 .Doc("random decision steps kept per episode"));
+    a->Visit(AIA_FIELD(max_steps)
+                 .In(Between(0, 1000000))
+                 .Doc("decision steps per episode at most (0: the "
+                      "scenario's)"));
+    a->Visit(AIA_FIELD(max_seconds)
+                 .In(Between(0.0, 1e7))
+                 .Doc("skip an episode still running after this many seconds "
+                      "(recorded as done with no samples and counted; 0: no "
+                      "cap)"));
+  }
 };
 
 // Returns the number of episodes written by this run.
