@@ -420,8 +420,7 @@ std::unique_ptr<IgbNet> NetworkToTrain(TrainOptions* o) {
   auto buffers = to->named_buffers();
   for (const auto& p : from->named_parameters())
     params[p.key()].copy_(p.value());
-  for (const auto& b : from->named_buffers())
-    buffers[b.key()].copy_(b.value());
+  for (const auto& b : from->named_buffers()) buffers[b.key()].copy_(b.value());
   for (std::size_t k = from->messages.size(); k < to->messages.size(); ++k)
     to->messages[k]->weight.zero_();
   return wider;
@@ -487,9 +486,9 @@ struct LrSchedule {
   // `step` counts batches of --batch samples (fractional with message
   // passing, whose batches are whole steps).
   double At(double step) const {
-    return lr_min + 0.5 * (lr - lr_min) *
-                        (1.0 + std::cos(M_PI * step /
-                                        static_cast<double>(total_steps)));
+    return lr_min +
+           0.5 * (lr - lr_min) *
+               (1.0 + std::cos(M_PI * step / static_cast<double>(total_steps)));
   }
 };
 
@@ -522,8 +521,9 @@ std::vector<std::vector<int>> EpochBatches(const Corpus& corpus,
     std::swap(order[i - 1], order[rng.UniformInt(i)]);
   for (long s = 0; s < steps_per_epoch; ++s) {
     const std::size_t first = static_cast<std::size_t>(s) * o.batch;
-    batches.emplace_back(order.begin() + first,
-                         order.begin() + std::min(order.size(), first + o.batch));
+    batches.emplace_back(
+        order.begin() + first,
+        order.begin() + std::min(order.size(), first + o.batch));
   }
   return batches;
 }
@@ -626,15 +626,15 @@ void SaveEpoch(const TrainOptions& o, const IgbNet& net, IgbNetModule& module,
     optimizer.save(optim_archive);
     archive.write("model", model_archive);
     archive.write("optimizer", optim_archive);
-    archive.write("epoch", torch::tensor(static_cast<int64_t>(logs.back().epoch)),
-                  true);
+    archive.write("epoch",
+                  torch::tensor(static_cast<int64_t>(logs.back().epoch)), true);
     archive.write("options", StringTensor(key), true);
     std::ostringstream log;
     log.precision(17);
     for (const EpochLog& l : logs)
-      log << l.epoch << ' ' << l.lr << ' ' << l.train_loss << ' '
-          << l.train_acc << ' ' << l.val_loss << ' ' << l.val_acc << ' '
-          << l.val_acc_useful << ' ' << l.samples << ' ' << l.seconds << '\n';
+      log << l.epoch << ' ' << l.lr << ' ' << l.train_loss << ' ' << l.train_acc
+          << ' ' << l.val_loss << ' ' << l.val_acc << ' ' << l.val_acc_useful
+          << ' ' << l.samples << ' ' << l.seconds << '\n';
     archive.write("log", StringTensor(log.str()), true);
     SaveArchiveAtomic(archive, CheckpointPath(o.out));
   }

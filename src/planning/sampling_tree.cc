@@ -935,7 +935,8 @@ void SamplingTree::Select() {
 void SamplingTree::Register(int child, const SamplingParams& params) {
   last_ = child;
   if (unloc_[child] < unloc_[best_partial_] ||
-      (unloc_[child] == unloc_[best_partial_] && det_sum_[child] < det_sum_[best_partial_]))
+      (unloc_[child] == unloc_[best_partial_] &&
+       det_sum_[child] < det_sum_[best_partial_]))
     best_partial_ = child;
   if (unloc_[child] == 0) {
     if (best_ < 0) first_goal_iteration_ = iteration_;

@@ -109,8 +109,7 @@ std::vector<DatasetSample> KeptSamples(
     std::vector<std::vector<DatasetSample>>* steps, int keep_at_most,
     std::uint64_t seed) {
   std::vector<int> order(steps->size());
-  for (std::size_t i = 0; i < order.size(); ++i)
-    order[i] = static_cast<int>(i);
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   Rng rng(seed, "dataset/keep");
   const int keep = std::min<int>(keep_at_most, static_cast<int>(order.size()));
   for (int i = 0; i < keep; ++i)

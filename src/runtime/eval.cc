@@ -786,8 +786,7 @@ class RowSink {
     std::vector<EvalRow> in_range;
     for (const auto& r : rows_)
       if (r.seed >= lo && r.seed < hi) in_range.push_back(r);
-    const std::string summary =
-        SummaryCsv(in_range, options_.sizes, policies_);
+    const std::string summary = SummaryCsv(in_range, options_.sizes, policies_);
     WriteFileAtomic(options_.out_dir + "/summary.csv", summary);
     return summary;
   }
@@ -923,8 +922,7 @@ int RunEval(const EvalOptions& o) {
   std::vector<EvalRow> rows;
   if (root) {
     try {
-      rows = ResumeFolder(o.out_dir,
-                          EffectiveText(setup, instances.front()));
+      rows = ResumeFolder(o.out_dir, EffectiveText(setup, instances.front()));
     } catch (...) {
       ranks.AgreeFromRoot(false);  // the other ranks stop quietly
       throw;

@@ -361,7 +361,8 @@ std::vector<int> RobotStarts(const Scenario& s, const Map& map) {
 // robot can reach sees them (in range and in sight).
 class TargetPlacer {
  public:
-  TargetPlacer(const Scenario& s, const Map& map, const std::vector<int>& starts)
+  TargetPlacer(const Scenario& s, const Map& map,
+               const std::vector<int>& starts)
       : s_(s),
         map_(map),
         lat_(map.lattice()),

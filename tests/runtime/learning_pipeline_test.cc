@@ -143,7 +143,8 @@ TEST(DatasetTest, EpisodesPastMaxSecondsAreSkippedAndCounted) {
       testing::RunAia({"dataset", "--max-seconds", "-1", "--out", dir + "/e"});
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_EQ(bad.err,
-            "error: command line: --max-seconds: must be 0..1e7 seconds\n");
+            "error: command line: --max-seconds: must be a number in [0, "
+            "10000000], got -1\n");
   fs::remove_all(dir);
 }
 

@@ -47,8 +47,8 @@ struct DatasetOptions {
     a->Visit(AIA_FIELD(episodes)
                  .In(Between(1, 10000000))
                  .Doc("episodes in all shards"));
-    a->Visit(AIA_FIELD(first_seed).Doc(
-        "episode e uses seed FIRST+e (aia eval uses 0..)"));
+    a->Visit(AIA_FIELD(first_seed)
+                 .Doc("episode e uses seed FIRST+e (aia eval uses 0..)"));
     a->Visit(AIA_FIELD(keep)
                  .In(Between(1, 100000))
                  .Doc("random decision steps kept per episode"));
