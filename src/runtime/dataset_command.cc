@@ -158,6 +158,45 @@ void CheckOneShardSet(const std::string& out, int shards) {
   }
 }
 
+// The generated scenario of the episodes (seed: the first one) with the
+// flags' overrides: --policy, --set (not of what the episodes set), --model,
+// --max-steps; seeds first_seed + e must fit in 64 bits.
+GeneratedSpec DatasetSpec(const DatasetOptions& o) {
+  const auto [robots, targets] = ParseSize(o.size, "--size");
+  GeneratedSpec spec;
+  spec.size = o.size;
+  spec.size_flag = "--size";
+  spec.robots = robots;
+  spec.targets = targets;
+  spec.seed = o.first_seed;
+  spec.overrides = {{"--policy", "policy.name", o.policy}};
+  for (const std::string& s : o.sets) {
+    Override ov = ParseSetFlag(s);
+    if (ov.path == "seed" || ov.path == "robots.count" ||
+        ov.path == "targets.count" || ov.path == "policy.name")
+      throw InputError("command line", 0, "--set",
+                       ov.path + " is given by --first-seed, --size, --policy");
+    spec.overrides.push_back(ov);
+  }
+  if (!o.model.empty())
+    spec.overrides.push_back({"--model", "policy.model", o.model});
+  if (o.max_steps > 0)
+    spec.overrides.push_back(
+        {"--max-steps", "mission.max_steps", std::to_string(o.max_steps)});
+  const std::uint64_t last = static_cast<std::uint64_t>(o.episodes - 1);
+  if (last > std::numeric_limits<std::uint64_t>::max() - o.first_seed) {
+    throw InputError(
+        "command line", 0, "--first-seed",
+        "seeds " + std::to_string(o.first_seed) + " .. " +
+            std::to_string(o.first_seed) + " + " + std::to_string(last) +
+            " do not fit in 64 bits (the largest seed is "
+            "18446744073709551615); with --episodes " +
+            std::to_string(o.episodes) + ", --first-seed must be at most " +
+            std::to_string(std::numeric_limits<std::uint64_t>::max() - last));
+  }
+  return spec;
+}
+
 std::string Recipe(const DatasetOptions& o) {
   std::string r =
       "size=" + o.size + " first_seed=" + std::to_string(o.first_seed) +
@@ -190,48 +229,11 @@ int RunDataset(const DatasetOptions& o) {
   }
   if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards)
     throw InputError("command line", 0, "--shard", "need 0 <= K < N");
-  const auto [robots, targets] = ParseSize(o.size, "--size");
-
   const PolicyRegistry registry = AllPolicies();
   if (!registry.Has(o.policy))
     throw InputError("command line", 0, "--policy",
                      registry.UnknownPolicy(o.policy));
-  std::vector<Override> overrides;
-  for (const std::string& s : o.sets) {
-    Override ov = ParseSetFlag(s);
-    if (ov.path == "seed" || ov.path == "robots.count" ||
-        ov.path == "targets.count" || ov.path == "policy.name")
-      throw InputError("command line", 0, "--set",
-                       ov.path + " is given by --first-seed, --size, --policy");
-    overrides.push_back(ov);
-  }
-  if (!o.model.empty())
-    overrides.push_back({"--model", "policy.model", o.model});
-  if (o.max_steps > 0)
-    overrides.push_back(
-        {"--max-steps", "mission.max_steps", std::to_string(o.max_steps)});
-  if (static_cast<std::uint64_t>(o.episodes - 1) >
-      std::numeric_limits<std::uint64_t>::max() - o.first_seed) {
-    throw InputError(
-        "command line", 0, "--first-seed",
-        "seeds " + std::to_string(o.first_seed) + " .. " +
-            std::to_string(o.first_seed) + " + " +
-            std::to_string(o.episodes - 1) +
-            " do not fit in 64 bits (the largest seed is "
-            "18446744073709551615); with --episodes " +
-            std::to_string(o.episodes) + ", --first-seed must be at most " +
-            std::to_string(std::numeric_limits<std::uint64_t>::max() -
-                           static_cast<std::uint64_t>(o.episodes - 1)));
-  }
-  GeneratedSpec spec;
-  spec.size = o.size;
-  spec.size_flag = "--size";
-  spec.robots = robots;
-  spec.targets = targets;
-  spec.seed = o.first_seed;
-  spec.overrides = {{"--policy", "policy.name", o.policy}};
-  spec.overrides.insert(spec.overrides.end(), overrides.begin(),
-                        overrides.end());
+  GeneratedSpec spec = DatasetSpec(o);
   const Scenario base = ReadGenerated(spec);
   const std::shared_ptr<const PolicySpec> acting = registry.Resolve(base);
   Scenario expert_scenario = base;
