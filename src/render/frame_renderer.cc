@@ -80,6 +80,30 @@ void DrawTargetMarker(cv::Mat* image, const Vec2& center, double half,
                 kShift);
 }
 
+// An X of half-width `arm` (fixed point) through `p`: a target's mean, a
+// failed robot.
+void DrawCross(cv::Mat* image, const cv::Point& p, int arm,
+               const cv::Scalar& color, int thickness) {
+  cv::line(*image, p + cv::Point(-arm, -arm), p + cv::Point(arm, arm), color,
+           thickness, cv::LINE_AA, kShift);
+  cv::line(*image, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm), color,
+           thickness, cv::LINE_AA, kShift);
+}
+
+// A failed robot: a grey disc of radius `radius`, crossed (fixed point).
+void DrawFailedRobot(cv::Mat* image, const cv::Point& p, int radius, int arm,
+                     int thickness) {
+  cv::circle(*image, p, radius, kFailed, cv::FILLED, cv::LINE_AA, kShift);
+  DrawCross(image, p, arm, kFailed, thickness);
+}
+
+// A target's 2-sigma ellipse with axes (a, b) in fixed point.
+void DrawEllipse(cv::Mat* image, const cv::Point& p, int a, int b, double angle,
+                 const cv::Scalar& color, int thickness) {
+  cv::ellipse(*image, p, cv::Size(a, b), angle, 0.0, 360.0, color, thickness,
+              cv::LINE_AA, kShift);
+}
+
 // The legend's column: 140 pixels at 480 rows, growing with the image.
 constexpr double kLegendColumn = 140.0;
 // The column is kept only when it shrinks the workspace by at most this much
@@ -96,8 +120,11 @@ constexpr int kMinTrail = 5;
 // Border walls' thickness outside the workspace (world/mjcf.cc).
 constexpr double kWallThickness = 0.1;
 
-const cv::Scalar kPaper(236, 236, 236);  // the legend's background
-const cv::Scalar kTint(120, 215, 250);   // sensing discs as one tint
+const cv::Scalar kPaper(236, 236, 236);      // the legend's background
+const cv::Scalar kTint(120, 215, 250);       // sensing discs as one tint
+const cv::Scalar kLegendOff(200, 200, 200);  // a legend row for what is off
+// MuJoCo's target spheres (world/mjcf.cc), in BGR.
+const cv::Scalar kTargetBgr(25, 25, 217);
 constexpr double kDiscAlpha = 0.18, kTintAlpha = 0.22;
 
 double Unit(int image_height) { return std::max(1.0, image_height / 480.0); }
@@ -224,40 +251,121 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
   BuildLegend(legend_key_);
 }
 
+std::vector<std::pair<FrameRenderer::LegendIcon, const char*>>
+FrameRenderer::LegendRowsFor(const LegendKey& key) const {
+  std::vector<std::pair<LegendIcon, const char*>> rows = {
+      {LegendIcon::kRobot, "robot"},
+      {LegendIcon::kSensing, key.tint ? "sensed area" : "sensing range"},
+      {LegendIcon::kMessage, key.messages ? "message" : "message: off"},
+      {LegendIcon::kLost, key.lost ? "lost message" : "lost: off"}};
+  // Compact: the target is the marker coloured by det Sigma.
+  if (!compact_) rows.push_back({LegendIcon::kTarget, "target"});
+  rows.push_back(
+      {LegendIcon::kUncertain, compact_ ? "target, det > eps" : "det > eps"});
+  rows.push_back(
+      {LegendIcon::kLocalized, compact_ ? "target, det <= eps" : "det <= eps"});
+  rows.push_back({LegendIcon::kFailed, "failed robot"});
+  if (key.heat) rows.push_back({LegendIcon::kHeat, "heat"});
+  return rows;
+}
+
+void FrameRenderer::DrawLegendIcon(LegendIcon icon, double cy,
+                                   const LegendKey& key) {
+  const double unit = Unit(view_.height());
+  const int thin = static_cast<int>(std::lround(unit));
+  const int thick = static_cast<int>(std::lround(2 * unit));
+  const LegendGeometry g = LegendRows(view_.height());
+  const int row = g.row, pad = g.pad;
+  const double cx = pad + 0.5 * g.icon;
+  const Vec2 c(cx + 0.5, cy + 0.5);  // continuous coordinates of the centre
+  const cv::Point p = Fixed(c);
+  const double r = 0.36 * row;
+  const Vec2 left(pad + 0.5, cy + 0.5), right(pad + g.icon + 0.5, cy + 0.5);
+  switch (icon) {
+    case LegendIcon::kRobot:
+      cv::circle(legend_, p, FixedLength(0.22 * row), RobotBgr(0), cv::FILLED,
+                 cv::LINE_AA, kShift);
+      cv::circle(legend_, p, FixedLength(0.22 * row), kBlack, thin, cv::LINE_AA,
+                 kShift);
+      break;
+    case LegendIcon::kSensing:
+      if (key.tint) {
+        cv::circle(legend_, p, FixedLength(r),
+                   kTint * kTintAlpha + kPaper * (1.0 - kTintAlpha), cv::FILLED,
+                   cv::LINE_AA, kShift);
+        break;
+      }
+      cv::circle(legend_, p, FixedLength(r), RobotBgr(3) * 0.25 + kPaper * 0.75,
+                 cv::FILLED, cv::LINE_AA, kShift);
+      cv::circle(legend_, p, FixedLength(r), RobotBgr(3, 0.8), thin,
+                 cv::LINE_AA, kShift);
+      break;
+    case LegendIcon::kMessage:
+      cv::line(legend_, Fixed(left), Fixed(right),
+               key.messages ? kEdge : kLegendOff, thin, cv::LINE_AA, kShift);
+      break;
+    case LegendIcon::kLost:
+      DashedLine(&legend_, left, right, key.lost ? kLost : kLegendOff, thin,
+                 5 * unit, 4 * unit);
+      break;
+    case LegendIcon::kTarget:
+      cv::circle(legend_, p, FixedLength(0.12 * row), kTargetBgr, cv::FILLED,
+                 cv::LINE_AA, kShift);
+      cv::circle(legend_, p, FixedLength(0.26 * row), kBlack, thin, cv::LINE_AA,
+                 kShift);
+      break;
+    case LegendIcon::kUncertain:
+    case LegendIcon::kLocalized: {
+      const cv::Scalar color =
+          icon == LegendIcon::kUncertain ? kUnlocalized : kLocalized;
+      const int a = FixedLength(0.46 * g.icon), b = FixedLength(r);
+      if (compact_) {
+        DrawEllipse(&legend_, p, a, b, 0.0, color, thin);
+        DrawTargetMarker(&legend_, c, 0.16 * row, color,
+                         icon == LegendIcon::kUncertain ? thin : 0);
+        break;
+      }
+      DrawEllipse(&legend_, p, a, b, 0.0, color, thick);
+      DrawCross(&legend_, p, FixedLength(0.12 * row), color, thick);
+      break;
+    }
+    case LegendIcon::kFailed:
+      DrawFailedRobot(&legend_, p, FixedLength(0.2 * row),
+                      FixedLength(0.3 * row), thick);
+      break;
+    case LegendIcon::kHeat: {
+      // The heat scale, H from 0 (left) to 1, as DrawHeatmap blends it.
+      const int x0 = pad, w = g.icon, y0 = static_cast<int>(cy - 0.3 * row);
+      const int h = std::max(2, static_cast<int>(0.6 * row));
+      cv::Mat value(1, w, CV_8U), shade, color;
+      for (int x = 0; x < w; ++x)
+        value.at<unsigned char>(0, x) =
+            static_cast<unsigned char>(255 * x / std::max(1, w - 1));
+      value.convertTo(shade, CV_8U, 0.55, 0.2 * 255.0);
+      cv::applyColorMap(shade, color, cv::COLORMAP_INFERNO);
+      for (int x = 0; x < w; ++x) {
+        const double a =
+            settings_.heat_alpha * value.at<unsigned char>(0, x) / 255.0;
+        const cv::Vec3b c3 = color.at<cv::Vec3b>(0, x);
+        const cv::Scalar blended(a * c3[0] + (1 - a) * kPaper[0],
+                                 a * c3[1] + (1 - a) * kPaper[1],
+                                 a * c3[2] + (1 - a) * kPaper[2]);
+        cv::line(legend_, {x0 + x, y0}, {x0 + x, y0 + h - 1}, blended, 1);
+      }
+      break;
+    }
+  }
+}
+
 void FrameRenderer::BuildLegend(const LegendKey& key) {
   legend_key_ = key;
   legend_built_ = true;
   if (legend_room_.empty()) return;
   legend_rect_ = legend_room_;
-  const double unit = Unit(view_.height());
-  const int thin = static_cast<int>(std::lround(unit));
-  const int thick = static_cast<int>(std::lround(2 * unit));
   const LegendGeometry g = LegendRows(view_.height());
   const int row = g.row, icon = g.icon, pad = g.pad;
-  enum Icon {
-    kRobotIcon,
-    kSensingIcon,
-    kMessageIcon,
-    kLostIcon,
-    kTargetIcon,
-    kUncertainIcon,
-    kLocalizedIcon,
-    kFailedIcon,
-    kHeatIcon
-  };
-  std::vector<std::pair<Icon, const char*>> rows = {
-      {kRobotIcon, "robot"},
-      {kSensingIcon, key.tint ? "sensed area" : "sensing range"},
-      {kMessageIcon, key.messages ? "message" : "message: off"},
-      {kLostIcon, key.lost ? "lost message" : "lost: off"}};
-  // Compact: the target is the marker coloured by det Sigma.
-  if (!compact_) rows.push_back({kTargetIcon, "target"});
-  rows.push_back(
-      {kUncertainIcon, compact_ ? "target, det > eps" : "det > eps"});
-  rows.push_back(
-      {kLocalizedIcon, compact_ ? "target, det <= eps" : "det <= eps"});
-  rows.push_back({kFailedIcon, "failed robot"});
-  if (key.heat) rows.push_back({kHeatIcon, "heat"});
+  const std::vector<std::pair<LegendIcon, const char*>> rows =
+      LegendRowsFor(key);
   const int font = cv::FONT_HERSHEY_SIMPLEX;
   const int text_room = legend_rect_.width - icon - 3 * pad;
   double scale = row / 42.0;
@@ -276,101 +384,7 @@ void FrameRenderer::BuildLegend(const LegendKey& key) {
                 cv::Scalar(150, 150, 150), 1);
   for (size_t i = 0; i < rows.size(); ++i) {
     const double cy = pad + (i + 0.5) * row;
-    const double cx = pad + 0.5 * icon;
-    const Vec2 c(cx + 0.5, cy + 0.5);  // continuous coordinates of the centre
-    const cv::Point p = Fixed(c);
-    const double r = 0.36 * row;
-    const Vec2 left(pad + 0.5, cy + 0.5), right(pad + icon + 0.5, cy + 0.5);
-    switch (rows[i].first) {
-      case kRobotIcon:
-        cv::circle(legend_, p, FixedLength(0.22 * row), RobotBgr(0), cv::FILLED,
-                   cv::LINE_AA, kShift);
-        cv::circle(legend_, p, FixedLength(0.22 * row), kBlack, thin,
-                   cv::LINE_AA, kShift);
-        break;
-      case kSensingIcon:
-        if (key.tint) {
-          cv::circle(legend_, p, FixedLength(r),
-                     kTint * kTintAlpha + kPaper * (1.0 - kTintAlpha),
-                     cv::FILLED, cv::LINE_AA, kShift);
-          break;
-        }
-        cv::circle(legend_, p, FixedLength(r),
-                   RobotBgr(3) * 0.25 + kPaper * 0.75, cv::FILLED, cv::LINE_AA,
-                   kShift);
-        cv::circle(legend_, p, FixedLength(r), RobotBgr(3, 0.8), thin,
-                   cv::LINE_AA, kShift);
-        break;
-      case kMessageIcon:
-        cv::line(legend_, Fixed(left), Fixed(right),
-                 key.messages ? kEdge : cv::Scalar(200, 200, 200), thin,
-                 cv::LINE_AA, kShift);
-        break;
-      case kLostIcon:
-        DashedLine(&legend_, left, right,
-                   key.lost ? kLost : cv::Scalar(200, 200, 200), thin, 5 * unit,
-                   4 * unit);
-        break;
-      case kTargetIcon:
-        cv::circle(legend_, p, FixedLength(0.12 * row), cv::Scalar(25, 25, 217),
-                   cv::FILLED, cv::LINE_AA, kShift);
-        cv::circle(legend_, p, FixedLength(0.26 * row), kBlack, thin,
-                   cv::LINE_AA, kShift);
-        break;
-      case kUncertainIcon:
-      case kLocalizedIcon: {
-        const cv::Scalar color =
-            rows[i].first == kUncertainIcon ? kUnlocalized : kLocalized;
-        if (compact_) {
-          cv::ellipse(legend_, p,
-                      cv::Size(FixedLength(0.46 * icon), FixedLength(r)), 0.0,
-                      0.0, 360.0, color, thin, cv::LINE_AA, kShift);
-          DrawTargetMarker(&legend_, c, 0.16 * row, color,
-                           rows[i].first == kUncertainIcon ? thin : 0);
-          break;
-        }
-        cv::ellipse(legend_, p,
-                    cv::Size(FixedLength(0.46 * icon), FixedLength(r)), 0.0,
-                    0.0, 360.0, color, thick, cv::LINE_AA, kShift);
-        const int arm = FixedLength(0.12 * row);
-        cv::line(legend_, p + cv::Point(-arm, -arm), p + cv::Point(arm, arm),
-                 color, thick, cv::LINE_AA, kShift);
-        cv::line(legend_, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm),
-                 color, thick, cv::LINE_AA, kShift);
-        break;
-      }
-      case kFailedIcon: {
-        cv::circle(legend_, p, FixedLength(0.2 * row), kFailed, cv::FILLED,
-                   cv::LINE_AA, kShift);
-        const int arm = FixedLength(0.3 * row);
-        cv::line(legend_, p + cv::Point(-arm, -arm), p + cv::Point(arm, arm),
-                 kFailed, thick, cv::LINE_AA, kShift);
-        cv::line(legend_, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm),
-                 kFailed, thick, cv::LINE_AA, kShift);
-        break;
-      }
-      case kHeatIcon: {
-        // The heat scale, H from 0 (left) to 1, as DrawHeatmap blends it.
-        const int x0 = pad, w = icon, y0 = static_cast<int>(cy - 0.3 * row);
-        const int h = std::max(2, static_cast<int>(0.6 * row));
-        cv::Mat value(1, w, CV_8U), shade, color;
-        for (int x = 0; x < w; ++x)
-          value.at<unsigned char>(0, x) =
-              static_cast<unsigned char>(255 * x / std::max(1, w - 1));
-        value.convertTo(shade, CV_8U, 0.55, 0.2 * 255.0);
-        cv::applyColorMap(shade, color, cv::COLORMAP_INFERNO);
-        for (int x = 0; x < w; ++x) {
-          const double a =
-              settings_.heat_alpha * value.at<unsigned char>(0, x) / 255.0;
-          const cv::Vec3b c3 = color.at<cv::Vec3b>(0, x);
-          const cv::Scalar blended(a * c3[0] + (1 - a) * kPaper[0],
-                                   a * c3[1] + (1 - a) * kPaper[1],
-                                   a * c3[2] + (1 - a) * kPaper[2]);
-          cv::line(legend_, {x0 + x, y0}, {x0 + x, y0 + h - 1}, blended, 1);
-        }
-        break;
-      }
-    }
+    DrawLegendIcon(rows[i].first, cy, key);
     const char* label = rows[i].second;
     const cv::Size size = cv::getTextSize(label, font, scale, 1, &baseline);
     cv::putText(
@@ -494,22 +508,12 @@ bool FrameRenderer::MessagesShown(const FrameOverlay& o) {
   return messages_shown_;
 }
 
-void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
+bool FrameRenderer::DrawSensingAndMessages(const FrameOverlay& o,
+                                           cv::Mat* image, bool* tint_out) {
   const int n = static_cast<int>(o.robots.size());
-  const int m = static_cast<int>(o.targets.size());
-  AIA_CHECK(n == static_cast<int>(trails_.size()) &&
-            o.active.size() == o.robots.size());
-  // Line widths and marker sizes grow with the image; 1 px at 480 rows.
   const double unit = Unit(view_.height());
   const int thin = static_cast<int>(std::lround(unit));
-  const int thick = static_cast<int>(std::lround(2 * unit));
   const double floor_scale = view_.Scale(0.0);
-  const double robot_px = robot_radius_ * view_.Scale(2 * kRobotHalfHeight);
-  const double area_px = world_area_m2_ * floor_scale * floor_scale;
-
-  pixels_.resize(n);
-  for (int i = 0; i < n; ++i) pixels_[i] = Fixed(view_.ToPixel(o.robots[i]));
-
   // Translucent layers over the workspace (clipped to its walls, as sensing
   // and messages are): sensing discs, then delivered messages. Discs that
   // would cover the workspace more than once over (n pi r^2 > its area) are
@@ -519,6 +523,7 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
                          FixedLength(world_rect_.y));
   const int range_px = FixedLength(o.sensor_range * floor_scale);
   const bool tint = n * kPi * o.sensor_range * o.sensor_range > world_area_m2_;
+  *tint_out = tint;
   world.copyTo(layer_);
   for (int i = 0; i < n; ++i)
     if (o.active[i])
@@ -555,36 +560,52 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
       if (o.active[i])
         cv::circle(world, pixels_[i] - offset, range_px, RobotBgr(i, 0.8), thin,
                    cv::LINE_AA, kShift);
+  return messages;
+}
 
-  // Lost messages: red dashes from sender to receiver, shifted to the right
-  // of that direction so that the two directions of a pair stay apart.
-  if (o.lost != nullptr && settings_.edges != EdgeMode::kNone) {
-    for (const auto& [receiver, sender] : *o.lost) {
-      const Vec2 a = view_.ToPixel(o.robots[sender]),
-                 b = view_.ToPixel(o.robots[receiver]);
-      Vec2 d = b - a;
-      if (d.norm() < 1e-9) continue;
-      d.normalize();
-      const Vec2 side = 1.5 * unit * Vec2(-d.y(), d.x());
-      DashedLine(image, a + side, b + side, kLost, thin, 5 * unit, 4 * unit);
-    }
+void FrameRenderer::DrawLostMessages(const FrameOverlay& o, cv::Mat* image) {
+  // Red dashes from sender to receiver, shifted to the right of that
+  // direction so that the two directions of a pair stay apart.
+  if (o.lost == nullptr || settings_.edges == EdgeMode::kNone) return;
+  const double unit = Unit(view_.height());
+  const int thin = static_cast<int>(std::lround(unit));
+  for (const auto& [receiver, sender] : *o.lost) {
+    const Vec2 a = view_.ToPixel(o.robots[sender]),
+               b = view_.ToPixel(o.robots[receiver]);
+    Vec2 d = b - a;
+    if (d.norm() < 1e-9) continue;
+    d.normalize();
+    const Vec2 side = 1.5 * unit * Vec2(-d.y(), d.x());
+    DashedLine(image, a + side, b + side, kLost, thin, 5 * unit, 4 * unit);
   }
+}
 
-  // Trails: the recorded decision-step positions, closed by the position now.
-  for (int i = 0; i < n; ++i) {
+void FrameRenderer::DrawTrails(const FrameOverlay& o, cv::Mat* image) {
+  // The recorded decision-step positions, closed by the position now.
+  const int thin = static_cast<int>(std::lround(Unit(view_.height())));
+  for (size_t i = 0; i < o.robots.size(); ++i) {
     polyline_.clear();
     for (const Vec2& p : trails_[i])
       polyline_.push_back(Fixed(view_.ToPixel(p)));
     polyline_.push_back(pixels_[i]);
     if (polyline_.size() >= 2)
-      cv::polylines(*image, polyline_, false, RobotBgr(i, 0.7), thin,
-                    cv::LINE_AA, kShift);
+      cv::polylines(*image, polyline_, false,
+                    RobotBgr(static_cast<int>(i), 0.7), thin, cv::LINE_AA,
+                    kShift);
   }
+}
 
-  // Targets: the best estimate's 2-sigma ellipse, a cross at its mean joined
-  // to the truth, and a ring around the true position. Compact: a square at
-  // the truth in the estimate's colour, the ellipse thin and drawn only
-  // where it reaches beyond the square, no cross.
+void FrameRenderer::DrawTargets(const FrameOverlay& o, cv::Mat* image) {
+  // The best estimate's 2-sigma ellipse, a cross at its mean joined to the
+  // truth, and a ring around the true position. Compact: a square at the
+  // truth in the estimate's colour, the ellipse thin and drawn only where it
+  // reaches beyond the square, no cross.
+  const double unit = Unit(view_.height());
+  const int thin = static_cast<int>(std::lround(unit));
+  const int thick = static_cast<int>(std::lround(2 * unit));
+  const double floor_scale = view_.Scale(0.0);
+  const double area_px = world_area_m2_ * floor_scale * floor_scale;
+  const int m = static_cast<int>(o.targets.size());
   const int max_axis = 4 * std::max(image->cols, image->rows);
   const double spacing_t = std::sqrt(area_px / std::max(1, m));
   const double half = std::max(1.5, std::min(3.0 * unit, 0.15 * spacing_t));
@@ -610,25 +631,30 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
     const double angle = -std::atan2(major.y(), major.x()) * 180.0 / kPi;
     if (compact_) {
       if (a > 1.5 * half)
-        cv::ellipse(*image, mean, cv::Size(FixedLength(a), FixedLength(b)),
-                    angle, 0.0, 360.0, color, thin, cv::LINE_AA, kShift);
+        DrawEllipse(image, mean, FixedLength(a), FixedLength(b), angle, color,
+                    thin);
       DrawTargetMarker(image, truth_px, half, color, t.det <= o.eps ? 0 : thin);
       continue;
     }
-    cv::ellipse(*image, mean, cv::Size(FixedLength(a), FixedLength(b)), angle,
-                0.0, 360.0, color, thick, cv::LINE_AA, kShift);
-    const int arm = FixedLength(3.0 * unit);
-    cv::line(*image, mean + cv::Point(-arm, -arm), mean + cv::Point(arm, arm),
-             color, thick, cv::LINE_AA, kShift);
-    cv::line(*image, mean + cv::Point(-arm, arm), mean + cv::Point(arm, -arm),
-             color, thick, cv::LINE_AA, kShift);
+    DrawEllipse(image, mean, FixedLength(a), FixedLength(b), angle, color,
+                thick);
+    DrawCross(image, mean, FixedLength(3.0 * unit), color, thick);
     cv::circle(*image, truth,
                FixedLength(std::max(4.0 * unit, 0.16 * floor_scale)), kBlack,
                thin, cv::LINE_AA, kShift);
   }
+}
 
-  // Robots: a dark ring around MuJoCo's disc; compact, a dot in the robot's
-  // colour, ringed; a failed robot greyed and crossed.
+void FrameRenderer::DrawRobots(const FrameOverlay& o, cv::Mat* image) {
+  // A dark ring around MuJoCo's disc; compact, a dot in the robot's colour,
+  // ringed; a failed robot greyed and crossed.
+  const int n = static_cast<int>(o.robots.size());
+  const double unit = Unit(view_.height());
+  const int thin = static_cast<int>(std::lround(unit));
+  const int thick = static_cast<int>(std::lround(2 * unit));
+  const double floor_scale = view_.Scale(0.0);
+  const double robot_px = robot_radius_ * view_.Scale(2 * kRobotHalfHeight);
+  const double area_px = world_area_m2_ * floor_scale * floor_scale;
   const double spacing_r = std::sqrt(area_px / std::max(1, n));
   const double dot =
       std::max(1.5, std::min(std::max(robot_px, 2.5 * unit), 0.3 * spacing_r));
@@ -646,24 +672,13 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
                  cv::LINE_AA, kShift);
       continue;
     }
-    cv::circle(*image, p, ring, kFailed, cv::FILLED, cv::LINE_AA, kShift);
-    const int arm = FixedLength(std::max(2.0 * robot_px, 5.0 * unit));
-    cv::line(*image, p + cv::Point(-arm, -arm), p + cv::Point(arm, arm),
-             kFailed, thick, cv::LINE_AA, kShift);
-    cv::line(*image, p + cv::Point(-arm, arm), p + cv::Point(arm, -arm),
-             kFailed, thick, cv::LINE_AA, kShift);
+    DrawFailedRobot(image, p, ring,
+                    FixedLength(std::max(2.0 * robot_px, 5.0 * unit)), thick);
   }
+}
 
-  // The legend follows what was drawn.
-  LegendKey key;
-  key.heat = !heat_bgr_.empty();
-  key.tint = tint;
-  key.messages = messages ||
-                 (settings_.edges == EdgeMode::kAuto && o.neighbors == nullptr);
-  key.lost = settings_.edges != EdgeMode::kNone;
-  if (!legend_built_ || !(key == legend_key_)) BuildLegend(key);
-
-  // The heads-up line, in the band kept free above the workspace.
+void FrameRenderer::DrawHeadsUp(const FrameOverlay& o, cv::Mat* image) const {
+  // In the band kept free above the workspace.
   const int band = view_.band_px();
   cv::rectangle(*image, cv::Rect(0, 0, image->cols, band),
                 cv::Scalar(32, 32, 32), cv::FILLED);
@@ -686,6 +701,29 @@ void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
   const cv::Size fitted = cv::getTextSize(text, font, font_scale, 1, &baseline);
   cv::putText(*image, text, cv::Point(margin, (band + fitted.height) / 2), font,
               font_scale, cv::Scalar(235, 235, 235), 1, cv::LINE_AA);
+}
+
+void FrameRenderer::DrawOverlay(const FrameOverlay& o, cv::Mat* image) {
+  const int n = static_cast<int>(o.robots.size());
+  AIA_CHECK(n == static_cast<int>(trails_.size()) &&
+            o.active.size() == o.robots.size());
+  pixels_.resize(n);
+  for (int i = 0; i < n; ++i) pixels_[i] = Fixed(view_.ToPixel(o.robots[i]));
+  bool tint = false;
+  const bool messages = DrawSensingAndMessages(o, image, &tint);
+  DrawLostMessages(o, image);
+  DrawTrails(o, image);
+  DrawTargets(o, image);
+  DrawRobots(o, image);
+  // The legend follows what was drawn.
+  LegendKey key;
+  key.heat = !heat_bgr_.empty();
+  key.tint = tint;
+  key.messages = messages ||
+                 (settings_.edges == EdgeMode::kAuto && o.neighbors == nullptr);
+  key.lost = settings_.edges != EdgeMode::kNone;
+  if (!legend_built_ || !(key == legend_key_)) BuildLegend(key);
+  DrawHeadsUp(o, image);
 }
 
 }  // namespace aia

@@ -141,14 +141,42 @@ class FrameRenderer {
     }
   };
 
+  enum class LegendIcon {
+    kRobot,
+    kSensing,
+    kMessage,
+    kLost,
+    kTarget,
+    kUncertain,
+    kLocalized,
+    kFailed,
+    kHeat
+  };
+
   void DrawHeatmap(cv::Mat* image) const;
   // The key to the symbols, in the column right of the workspace that the
-  // view keeps free when the image is wide enough.
+  // view keeps free when the image is wide enough; drawn with the overlay's
+  // own glyphs.
   void BuildLegend(const LegendKey& key);
+  std::vector<std::pair<LegendIcon, const char*>> LegendRowsFor(
+      const LegendKey& key) const;
+  // One row's icon, centred at height `cy` of the legend.
+  void DrawLegendIcon(LegendIcon icon, double cy, const LegendKey& key);
   // Whether this step's delivered messages are drawn (kAuto: the ink rule;
   // decided once per step and graph).
   bool MessagesShown(const FrameOverlay& overlay);
+  // The overlays, in drawing order: sensing discs and delivered messages
+  // (returns whether messages were shown; *tint: the discs as one tint),
+  // lost messages, trails, targets, robots, then the legend and the
+  // heads-up line.
   void DrawOverlay(const FrameOverlay& overlay, cv::Mat* image);
+  bool DrawSensingAndMessages(const FrameOverlay& o, cv::Mat* image,
+                              bool* tint);
+  void DrawLostMessages(const FrameOverlay& o, cv::Mat* image);
+  void DrawTrails(const FrameOverlay& o, cv::Mat* image);
+  void DrawTargets(const FrameOverlay& o, cv::Mat* image);
+  void DrawRobots(const FrameOverlay& o, cv::Mat* image);
+  void DrawHeadsUp(const FrameOverlay& o, cv::Mat* image) const;
 
   const Simulation& sim_;
   FrameSettings settings_;
