@@ -123,8 +123,9 @@ constexpr double kWallThickness = 0.1;
 const cv::Scalar kPaper(236, 236, 236);      // the legend's background
 const cv::Scalar kTint(120, 215, 250);       // sensing discs as one tint
 const cv::Scalar kLegendOff(200, 200, 200);  // a legend row for what is off
-// MuJoCo's target spheres (world/mjcf.cc), in BGR.
-const cv::Scalar kTargetBgr(25, 25, 217);
+// MuJoCo's target spheres (world/mjcf.h), in BGR.
+const cv::Scalar kTargetBgr(255.0 * kTargetRgb[2], 255.0 * kTargetRgb[1],
+                            255.0 * kTargetRgb[0]);
 constexpr double kDiscAlpha = 0.18, kTintAlpha = 0.22;
 
 double Unit(int image_height) { return std::max(1.0, image_height / 480.0); }

@@ -167,7 +167,9 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
     const Vec2 p = world.TargetStart(k);
     x << "    <body name=\"target" << k << "\" mocap=\"true\" pos=\""
       << Num(p.x()) << " " << Num(p.y())
-      << " 0.08\"><geom type=\"sphere\" size=\"0.1\" rgba=\"0.85 0.1 0.1 1\" "
+      << " 0.08\"><geom type=\"sphere\" size=\"0.1\" rgba=\""
+      << Num(kTargetRgb[0]) << " " << Num(kTargetRgb[1]) << " "
+      << Num(kTargetRgb[2]) << " 1\" "
       << "contype=\"0\" conaffinity=\"0\" group=\"" << kGroupAgent
       << "\"/></body>\n";
   }

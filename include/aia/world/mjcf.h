@@ -19,6 +19,9 @@ inline constexpr int kGroupFloor = 0;
 inline constexpr int kGroupObstacle = 1;
 inline constexpr int kGroupAgent = 2;  // robots and targets
 
+// The targets' spheres, red (the video's legend draws the same colour).
+inline constexpr double kTargetRgb[3] = {0.85, 0.1, 0.1};
+
 inline constexpr double kObstacleHeight = 0.5;
 inline constexpr double kRobotHalfHeight = 0.05;
 inline constexpr double kSensorHeight = 0.05;  // z of sensing rays
