@@ -33,53 +33,14 @@
 namespace aia {
 namespace {
 
-constexpr const char* kHeader =
-    "size,seed,policy,success,flowtime,fstar,bound,reversal_share,"
-    "longest_reversal_run,wall_s";
+// runs.csv's header (EvalRow::Columns).
+const std::string& RunsHeader() {
+  static const std::string header = CsvHeader<EvalRow>();
+  return header;
+}
 // The header of runs.csv before the reversal columns: such rows run again.
 constexpr const char* kOlderHeader =
     "size,seed,policy,success,flowtime,fstar,bound,wall_s";
-
-bool ParseRow(const std::string& line, EvalRow* r) {
-  std::vector<std::string> f;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, ',')) f.push_back(cell);
-  if (line.size() && line.back() == ',') f.push_back("");
-  if (f.size() != 10) return false;
-  // Whole cells only: "12abc" is garbled, not 12.
-  const auto whole = [](const std::string& cell, auto parse) {
-    std::size_t used = 0;
-    const auto v = parse(cell, &used);
-    if (used != cell.size()) throw std::invalid_argument(cell);
-    return v;
-  };
-  const auto to_int = [](const std::string& c, std::size_t* n) {
-    return std::stoi(c, n);
-  };
-  try {
-    r->size = f[0];
-    if (f[1].empty() || f[1][0] == '-') return false;
-    r->seed = whole(f[1], [](const std::string& c, std::size_t* n) {
-      return std::stoull(c, n);
-    });
-    r->policy = f[2];
-    if (f[3] != "0" && f[3] != "1") return false;
-    r->success = f[3] == "1";
-    r->flowtime = f[4].empty() ? -1 : whole(f[4], to_int);
-    r->fstar = whole(f[5], to_int);
-    const auto to_double = [](const std::string& c, std::size_t* n) {
-      return std::stod(c, n);
-    };
-    r->bound = whole(f[6], to_int);
-    r->reversal_share = whole(f[7], to_double);
-    r->longest_reversal_run = whole(f[8], to_int);
-    r->wall_s = whole(f[9], to_double);
-  } catch (const std::exception&) {
-    return false;
-  }
-  return !r->size.empty() && !r->policy.empty();
-}
 
 // Horizon and denominator of an instance: 3 F* steps, with F* = 0 (targets
 // all localized at the start) counted as 1 so that the ratio is defined.
@@ -450,17 +411,6 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
   return rows;
 }
 
-std::string FormatRow(const EvalRow& r) {
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), "%s,%llu,%s,%d,%s,%d,%d,%.4f,%d,%.4f\n",
-                r.size.c_str(), static_cast<unsigned long long>(r.seed),
-                r.policy.c_str(), r.success ? 1 : 0,
-                r.flowtime >= 0 ? std::to_string(r.flowtime).c_str() : "",
-                r.fstar, r.bound, r.reversal_share, r.longest_reversal_run,
-                r.wall_s);
-  return buf;
-}
-
 // Why a parsed row cannot be a run's result, or "".
 std::string Impossible(const EvalRow& r) {
   int robots = 0, targets = 0;
@@ -501,12 +451,12 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
   while (std::getline(in, line)) {
     ++number;
     EvalRow r;
-    if (line == kHeader || line.empty()) continue;
+    if (line == RunsHeader() || line.empty()) continue;
     if (number == 1 && line == kOlderHeader) {
       report(number, "the header of an older aia (no reversal columns)");
       continue;
     }
-    if (!ParseRow(line, &r)) {
+    if (!ParseCsvLine(line, &r)) {
       report(number, "not a row");
       continue;
     }
@@ -662,8 +612,8 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
                  "aia eval: %s: dropped %zu rows that will run again: %s\n",
                  runs_path.c_str(), problems.size(), shown.c_str());
   }
-  std::string text = std::string(kHeader) + "\n";
-  for (const auto& r : rows) text += FormatRow(r);
+  std::string text = RunsHeader() + "\n";
+  for (const auto& r : rows) text += CsvLine(r);
   WriteFileAtomic(runs_path, text);
   WriteFileAtomic(effective_path, effective);
   return rows;
@@ -732,7 +682,7 @@ class RowSink {
   std::size_t rows() const { return rows_.size(); }
 
   void Record(const EvalRow& row) {
-    const std::string line = FormatRow(row);
+    const std::string line = CsvLine(row);
     if (!root_) {
       ranks_->SendLine(line);
       return;
@@ -778,8 +728,8 @@ class RowSink {
                  std::make_tuple(rank(size_rank, b.size), b.size, b.seed,
                                  rank(policy_rank, b.policy), b.policy);
         });
-    std::string text = std::string(kHeader) + "\n";
-    for (const auto& r : rows_) text += FormatRow(r);
+    std::string text = RunsHeader() + "\n";
+    for (const auto& r : rows_) text += CsvLine(r);
     WriteFileAtomic(runs_path_, text);
     const std::uint64_t lo = options_.seed_base;
     const std::uint64_t hi = lo + static_cast<std::uint64_t>(options_.seeds);
@@ -885,7 +835,7 @@ std::thread ReceiveRemoteRows(Ranks* ranks, RowSink* sink, std::string* error,
       std::string text = line;
       if (!text.empty() && text.back() == '\n') text.pop_back();
       std::lock_guard<std::mutex> lock(sink->mutex());
-      if (!ParseRow(text, &row)) {
+      if (!ParseCsvLine(text, &row)) {
         if (error->empty()) *error = "a rank sent a bad row";
         return;
       }

@@ -23,6 +23,33 @@ std::string WithoutWall(const std::string& csv) {
   return std::regex_replace(csv, std::regex(",[0-9.]+\n"), ",X\n");
 }
 
+// runs.csv's row is declared once (EvalRow::Columns): its header is the one
+// tools/plot_eval.py and the docs name, and a row reads back as written.
+TEST(EvalTest, TheRunsRowRoundTripsThroughItsDeclaration) {
+  EXPECT_EQ(CsvHeader<EvalRow>(),
+            "size,seed,policy,success,flowtime,fstar,bound,reversal_share,"
+            "longest_reversal_run,wall_s");
+  EvalRow r;
+  r.size = "10x10";
+  r.seed = 931000;
+  r.policy = "igbnet";
+  r.success = true;
+  r.flowtime = 17;
+  r.fstar = 15;
+  r.bound = 9;
+  r.reversal_share = 0.04166;
+  r.longest_reversal_run = 2;
+  r.wall_s = 1.5;
+  const std::string line = CsvLine(r);
+  EXPECT_EQ(line, "10x10,931000,igbnet,1,17,15,9,0.0417,2,1.5000\n");
+  EvalRow back;
+  ASSERT_TRUE(ParseCsvLine(line.substr(0, line.size() - 1), &back));
+  EXPECT_EQ(CsvLine(back), line);
+  r.success = false;
+  r.flowtime = -1;  // not reached: an empty cell
+  EXPECT_EQ(CsvLine(r), "10x10,931000,igbnet,0,,15,9,0.0417,2,1.5000\n");
+}
+
 TEST(EvalTest, SummaryCountsFailuresAsThreeFStar) {
   // Two instances with F* = 4 (lower bounds 4 and 2): one success in 6
   // steps, one failure.

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/csv.h"
 #include "aia/planning/expert.h"
 #include "aia/planning/registry.h"
 #include "aia/scenario/config.h"
@@ -102,6 +103,22 @@ struct EvalRow {
   double reversal_share = 0.0;
   int longest_reversal_run = 0;
   double wall_s = 0.0;
+
+  // runs.csv's columns, declared once (core/csv.h): header, writer and
+  // reader.
+  template <typename C>
+  void Columns(C* c) {
+    c->Column("size", &size);
+    c->Column("seed", &seed);
+    c->Column("policy", &policy);
+    c->Column("success", &success);
+    c->Column("flowtime", &flowtime, CsvFormat::EmptyIs(-1));
+    c->Column("fstar", &fstar);
+    c->Column("bound", &bound);
+    c->Column("reversal_share", &reversal_share, CsvFormat::Fixed(4));
+    c->Column("longest_reversal_run", &longest_reversal_run);
+    c->Column("wall_s", &wall_s, CsvFormat::Fixed(4));
+  }
 };
 
 // How an instance's scenario is generated (with "--sizes" as its flag).
