@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 
 #include "aia/core/field_io.h"
@@ -9,10 +10,17 @@
 namespace aia {
 namespace csv_internal {
 
-std::string FormatReal(double v, int digits) {
-  if (digits < 0) return field_text::ShortestReal(v);
+std::string FormatReal(double v, const CsvFormat& f, bool exact) {
+  if (exact) return std::isnan(v) ? "nan" : field_text::ShortestReal(v);
+  if (f.nan_empty && std::isnan(v)) return "";
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  if (f.digits >= 0) {
+    std::snprintf(buf, sizeof buf, "%.*f", f.digits, v);
+  } else if (f.significant > 0) {
+    std::snprintf(buf, sizeof buf, "%.*g", f.significant, v);
+  } else {
+    return field_text::ShortestReal(v);
+  }
   return buf;
 }
 
@@ -43,10 +51,10 @@ std::optional<double> ParseReal(const std::string& cell) {
   return v;
 }
 
-std::vector<std::string> SplitCells(const std::string& line) {
+std::vector<std::string> SplitCells(const std::string& line, char separator) {
   std::vector<std::string> cells(1);
   for (char c : line) {
-    if (c == ',')
+    if (c == separator)
       cells.emplace_back();
     else
       cells.back() += c;

@@ -263,53 +263,15 @@ std::string TensorString(torch::Tensor t) {
   return std::string(reinterpret_cast<const char*>(t.data_ptr()), t.numel());
 }
 
-constexpr const char* kLogHeader =
-    "epoch,lr,train_loss,train_acc,val_loss,val_acc,val_acc_useful,samples,"
-    "seconds\n";
-
-// A validation figure, or an empty field when there was none (NaN).
-std::string Field(double v) {
-  if (std::isnan(v)) return "";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6f", v);
-  return buf;
-}
-
-std::string LogLine(const EpochLog& e) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "%d,%.6g,%.6f,%.6f,%s,%s,%s,%ld,%.2f\n",
-                e.epoch, e.lr, e.train_loss, e.train_acc,
-                Field(e.val_loss).c_str(), Field(e.val_acc).c_str(),
-                Field(e.val_acc_useful).c_str(), e.samples, e.seconds);
-  return buf;
-}
-
-// The checkpoint's log, one epoch per line (NaN written as "nan", which
-// strtod reads back and operator>> does not).
+// The checkpoint's log: one ExactLine per epoch (NaN as "nan"). A log of an
+// older build (space-separated too, reals with 17 digits) reads the same.
 std::vector<EpochLog> ParseLog(const std::string& text) {
   std::vector<EpochLog> logs;
   std::istringstream in(text);
   std::string line;
   while (std::getline(in, line)) {
-    const char* p = line.c_str();
-    char* end = nullptr;
-    double v[9];
-    int n = 0;
-    for (; n < 9; ++n, p = end) {
-      v[n] = std::strtod(p, &end);
-      if (end == p) break;
-    }
-    if (n != 9) break;
     EpochLog e;
-    e.epoch = static_cast<int>(v[0]);
-    e.lr = v[1];
-    e.train_loss = v[2];
-    e.train_acc = v[3];
-    e.val_loss = v[4];
-    e.val_acc = v[5];
-    e.val_acc_useful = v[6];
-    e.samples = static_cast<long>(v[7]);
-    e.seconds = v[8];
+    if (!ParseExactLine(line, &e)) break;
     logs.push_back(e);
   }
   return logs;
@@ -638,8 +600,8 @@ void SaveEpoch(const TrainOptions& o, const IgbNet& net, IgbNetModule& module,
     archive.write("log", StringTensor(log.str()), true);
     SaveArchiveAtomic(archive, CheckpointPath(o.out));
   }
-  std::string csv = kLogHeader;
-  for (const EpochLog& l : logs) csv += LogLine(l);
+  std::string csv = CsvHeader<EpochLog>() + "\n";
+  for (const EpochLog& l : logs) csv += CsvLine(l);
   WriteFileAtomic(TrainLogPath(o.out), csv);
 }
 

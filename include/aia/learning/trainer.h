@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/csv.h"
 #include "aia/learning/network.h"
 
 namespace aia {
@@ -93,6 +94,21 @@ struct EpochLog {
                                 // (NaN: none of them had useful work)
   long samples = 0;             // training samples seen in the epoch
   double seconds = 0.0;         // wall time of the epoch
+
+  // The log's columns, declared once (core/csv.h): OUT.train.csv (CsvLine)
+  // and the checkpoint's exact log (ExactLine) are both this list.
+  template <typename C>
+  void Columns(C* c) {
+    c->Column("epoch", &epoch);
+    c->Column("lr", &lr, CsvFormat::Significant(6));
+    c->Column("train_loss", &train_loss, CsvFormat::Fixed(6));
+    c->Column("train_acc", &train_acc, CsvFormat::Fixed(6));
+    c->Column("val_loss", &val_loss, CsvFormat::Fixed(6, true));
+    c->Column("val_acc", &val_acc, CsvFormat::Fixed(6, true));
+    c->Column("val_acc_useful", &val_acc_useful, CsvFormat::Fixed(6, true));
+    c->Column("samples", &samples);
+    c->Column("seconds", &seconds, CsvFormat::Fixed(2));
+  }
 };
 
 // "val loss L acc A (useful U)", or "val: none" without validation samples.
