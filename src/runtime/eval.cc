@@ -486,10 +486,7 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
 std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& sizes,
                        const std::vector<std::string>& policies) {
-  std::string out =
-      "size,policy,instances,success_rate,flowtime_increase,mean_flowtime,mean_"
-      "fstar,mean_fstar_over_bound,no_expert_plan,reversal_share,longest_"
-      "reversal_run\n";
+  std::string out = CsvHeader<SummaryRow>() + "\n";
   for (const auto& size : sizes) {
     for (const auto& policy : policies) {
       int n = 0, ok = 0, no_plan = 0, longest = 0;
@@ -511,18 +508,21 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
         reversals += r.reversal_share;
         longest = std::max(longest, r.longest_reversal_run);
       }
-      char buf[256];
-      if (n == 0) {
-        std::snprintf(buf, sizeof(buf), "%s,%s,0,,,,,,%d,,\n", size.c_str(),
-                      policy.c_str(), no_plan);
-      } else {
-        std::snprintf(buf, sizeof(buf),
-                      "%s,%s,%d,%.4f,%.4f,%.3f,%.3f,%.4f,%d,%.4f,%d\n",
-                      size.c_str(), policy.c_str(), n,
-                      static_cast<double>(ok) / n, inc / n, flow / n, fstar / n,
-                      gap / n, no_plan, reversals / n, longest);
+      SummaryRow row;
+      row.size = size;
+      row.policy = policy;
+      row.instances = n;
+      row.no_expert_plan = no_plan;
+      if (n > 0) {
+        row.success_rate = static_cast<double>(ok) / n;
+        row.flowtime_increase = inc / n;
+        row.mean_flowtime = flow / n;
+        row.mean_fstar = fstar / n;
+        row.mean_fstar_over_bound = gap / n;
+        row.reversal_share = reversals / n;
+        row.longest_reversal_run = longest;
       }
-      out += buf;
+      out += CsvLine(row);
     }
   }
   return out;

@@ -48,6 +48,20 @@ TEST(EvalTest, TheRunsRowRoundTripsThroughItsDeclaration) {
   r.success = false;
   r.flowtime = -1;  // not reached: an empty cell
   EXPECT_EQ(CsvLine(r), "10x10,931000,igbnet,0,,15,9,0.0417,2,1.5000\n");
+  // summary.csv likewise; a size and policy without any expert plan has
+  // empty figures.
+  EXPECT_EQ(CsvHeader<SummaryRow>(),
+            "size,policy,instances,success_rate,flowtime_increase,mean_"
+            "flowtime,mean_fstar,mean_fstar_over_bound,no_expert_plan,"
+            "reversal_share,longest_reversal_run");
+  SummaryRow none;
+  none.size = "2x2";
+  none.policy = "greedy";
+  none.no_expert_plan = 3;
+  EXPECT_EQ(CsvLine(none), "2x2,greedy,0,,,,,,3,,\n");
+  SummaryRow back_none;
+  ASSERT_TRUE(ParseCsvLine("2x2,greedy,0,,,,,,3,,", &back_none));
+  EXPECT_EQ(CsvLine(back_none), CsvLine(none));
 }
 
 TEST(EvalTest, SummaryCountsFailuresAsThreeFStar) {

@@ -13,6 +13,7 @@
 #define AIA_RUNTIME_EVAL_H_
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -145,6 +146,38 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
                               std::vector<std::string>* problems = nullptr);
 
 // summary.csv text from rows, sizes and policies in the given order.
+// One row of summary.csv: a size and a policy over the instances with an
+// expert plan (no figures, empty cells, when there is none).
+struct SummaryRow {
+  std::string size, policy;
+  int instances = 0;
+  double success_rate = kNaN, flowtime_increase = kNaN, mean_flowtime = kNaN,
+         mean_fstar = kNaN, mean_fstar_over_bound = kNaN;
+  int no_expert_plan = 0;
+  double reversal_share = kNaN;
+  int longest_reversal_run = -1;
+
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  // summary.csv's columns, declared once (core/csv.h).
+  template <typename C>
+  void Columns(C* c) {
+    c->Column("size", &size);
+    c->Column("policy", &policy);
+    c->Column("instances", &instances);
+    c->Column("success_rate", &success_rate, CsvFormat::Fixed(4, true));
+    c->Column("flowtime_increase", &flowtime_increase,
+              CsvFormat::Fixed(4, true));
+    c->Column("mean_flowtime", &mean_flowtime, CsvFormat::Fixed(3, true));
+    c->Column("mean_fstar", &mean_fstar, CsvFormat::Fixed(3, true));
+    c->Column("mean_fstar_over_bound", &mean_fstar_over_bound,
+              CsvFormat::Fixed(4, true));
+    c->Column("no_expert_plan", &no_expert_plan);
+    c->Column("reversal_share", &reversal_share, CsvFormat::Fixed(4, true));
+    c->Column("longest_reversal_run", &longest_reversal_run,
+              CsvFormat::EmptyIs(-1));
+  }
+};
+
 std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& sizes,
                        const std::vector<std::string>& policies);
