@@ -102,7 +102,8 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
         const int i = rows_[b];
         neighbours.clear();
         for (int j : ctx.comm->Neighbors(i))
-          if (j != i) neighbours.push_back(lattice.Point((*ctx.positions)[j]));
+          if (j != i)
+            neighbours.push_back(lattice.Point((*ctx.robot_lattice)[j]));
         std::vector<HeatSource>* targets = nullptr;
         if (geodesic) {
           targets = &worker_targets_[worker];
@@ -111,7 +112,7 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
             for (std::size_t k = 0; k < targets->size(); ++k)
               (*targets)[k].mean = search_.Aim(i, static_cast<int>(k));
         }
-        renderer_->RenderWithHeat(lattice.Point((*ctx.positions)[i]),
+        renderer_->RenderWithHeat(lattice.Point((*ctx.robot_lattice)[i]),
                                   neighbours, heat_.Robot(b, &heat), targets,
                                   prior, ctx.eps, images_.data() + b * size);
       }
@@ -127,7 +128,7 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
   });
   if (!passing) return;
   // The team's features over this step's graph among the active robots.
-  row_of_.assign(ctx.positions->size(), -1);
+  row_of_.assign(ctx.robot_lattice->size(), -1);
   for (int b = 0; b < count; ++b) row_of_[rows_[b]] = b;
   graph_.offsets.assign(1, 0);
   graph_.neighbours.clear();
@@ -169,7 +170,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   }
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
-    const int here = (*ctx.positions)[i];
+    const int here = (*ctx.robot_lattice)[i];
     const float* l = batch_logits_.data() + b * kNumMoves;
     std::copy(l, l + kNumMoves, logits_.data() + i * kNumMoves);
     // The move that brought the robot here (from where it stood at its last
@@ -242,7 +243,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
 Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
   if (!ctx.sensor) return Move::kStay;
   const Lattice& lattice = ctx.map->lattice();
-  const int here = (*ctx.positions)[i];
+  const int here = (*ctx.robot_lattice)[i];
   const int m = ctx.beliefs->layout().num_targets();
   const double log_eps = std::log(ctx.eps);
   aims_.resize(m);
@@ -276,7 +277,7 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
     for (int j : ctx.comm->Neighbors(i)) {
       if (j == i) continue;
       const double theirs =
-          (aims_[k] - lattice.Point((*ctx.positions)[j])).squaredNorm();
+          (aims_[k] - lattice.Point((*ctx.robot_lattice)[j])).squaredNorm();
       if (theirs < mine || (theirs == mine && j < i)) {
         claimed_[k] = 0;
         break;

@@ -38,7 +38,7 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
   for (int j = 0; j < n; ++j) {
     const auto& plan = plans_[j];
     next_[j] =
-        (plan.size() >= 3 && plan[1] == (*ctx.positions)[j]) ? plan[2] : -1;
+        (plan.size() >= 3 && plan[1] == (*ctx.robot_lattice)[j]) ? plan[2] : -1;
   }
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < n; ++i) {
@@ -60,7 +60,7 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
     problem.map = ctx.map;
     problem.sensor = ctx.sensor;
     problem.eps = ctx.eps;
-    problem.start = {(*ctx.positions)[i]};
+    problem.start = {(*ctx.robot_lattice)[i]};
     problem.active = {1};
     problem.belief = ctx.beliefs;
     problem.belief_row = i;

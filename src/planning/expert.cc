@@ -15,7 +15,7 @@ SamplingProblem ExpertProblem(const DecisionContext& ctx) {
   p.map = ctx.map;
   p.sensor = ctx.sensor;
   p.eps = ctx.eps;
-  p.start = *ctx.positions;
+  p.start = *ctx.robot_lattice;
   p.active = ctx.comm->active();
   p.belief = ctx.central;
   p.belief_row = 0;
@@ -54,8 +54,8 @@ void ExpertPolicy::RecordMisses(const DecisionContext& ctx) {
       continue;
     }
     // Nothing measured this step: every robot with the aim in sight missed.
-    for (int i = 0; i < static_cast<int>(ctx.positions->size()); ++i) {
-      const int q = (*ctx.positions)[i];
+    for (int i = 0; i < static_cast<int>(ctx.robot_lattice->size()); ++i) {
+      const int q = (*ctx.robot_lattice)[i];
       if (!ctx.comm->Active(i) ||
           PredictedPrecision(*ctx.map, *ctx.sensor, lattice.Point(q),
                              plan_.aims[k]) <= 0.0)
@@ -72,7 +72,7 @@ bool ExpertPolicy::NeedsReplan(const DecisionContext& ctx) const {
       index_ + 1 >= static_cast<int>(plan_.configs.size()))
     return true;
   if (!ctx.beliefs->layout().all_static()) return true;  // targets move
-  if (*ctx.positions != plan_.configs[index_])
+  if (*ctx.robot_lattice != plan_.configs[index_])
     return true;  // physics disagreed
   if (team_best_) return false;
   // A planned measurement that did not happen: the centralized belief is far
@@ -125,7 +125,7 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
     if (m == Move::kStay && ctx.comm->Active(i)) {
       // Nothing planned for this robot (depth-0 plan or no valid move): any
       // valid move, as the world rule would pick.
-      m = RandomValidMove(lattice, (*ctx.positions)[i], rng_);
+      m = RandomValidMove(lattice, (*ctx.robot_lattice)[i], rng_);
     }
     (*moves)[i] = m;
   }

@@ -25,7 +25,7 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
   for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
     (*moves)[i] = Move::kStay;
     if (!ctx.comm->Active(i)) continue;
-    const int p = (*ctx.positions)[i];
+    const int p = (*ctx.robot_lattice)[i];
     const Vec2 here = lattice.Point(p);
     for (int k = 0; k < num_targets; ++k)
       PredictBlock(*ctx.beliefs, i, k, &blocks_[k]);
@@ -82,7 +82,7 @@ Move GreedyPolicy::TowardNearestTarget(const DecisionContext& ctx, int robot) {
     aims_[k] = blocks_[k].mu;
     open_[k] = blocks_[k].logdet_sigma > log_eps ? 1 : 0;
   }
-  return toward_.FirstMove(*ctx.map, *ctx.sensor, (*ctx.positions)[robot],
+  return toward_.FirstMove(*ctx.map, *ctx.sensor, (*ctx.robot_lattice)[robot],
                            aims_, open_);
 }
 

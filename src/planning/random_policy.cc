@@ -13,7 +13,7 @@ PolicyStatus RandomPolicy::Decide(const DecisionContext& ctx,
   const Lattice& lattice = ctx.map->lattice();
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
-    (*moves)[i] = RandomValidMove(lattice, (*ctx.positions)[i], rngs_[i]);
+    (*moves)[i] = RandomValidMove(lattice, (*ctx.robot_lattice)[i], rngs_[i]);
     if ((*moves)[i] == Move::kStay && ctx.comm->Active(i))
       status = PolicyStatus::kNoValidMove;
   }

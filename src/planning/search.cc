@@ -18,7 +18,7 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   const Map& map = *ctx.map;
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
-  const int here = (*ctx.positions)[robot];
+  const int here = (*ctx.robot_lattice)[robot];
   const int span =
       static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
   // Near: the lattice distance (|dx| + |dy|) from the robot to the nearest
@@ -58,7 +58,7 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
   const Map& map = *ctx.map;
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
-  const int here = (*ctx.positions)[robot];
+  const int here = (*ctx.robot_lattice)[robot];
   const Vec2 p = lattice.Point(here);
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {

@@ -70,9 +70,10 @@ class DatasetObserver : public StepObserver {
       s.episode = episode_;
       s.step = ctx.step;
       s.robot = i;
-      s.position = lattice.Point((*ctx.positions)[i]);
+      s.position = lattice.Point((*ctx.robot_lattice)[i]);
       for (int j : ctx.comm->Neighbors(i))
-        if (j != i) s.neighbours.push_back(lattice.Point((*ctx.positions)[j]));
+        if (j != i)
+          s.neighbours.push_back(lattice.Point((*ctx.robot_lattice)[j]));
       HeatSources(*ctx.beliefs, i, &s.targets);
       s.label = (*labels)[i];
       s.useful = expert_ && expert_->LastMoveUseful(i);

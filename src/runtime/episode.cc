@@ -145,7 +145,7 @@ DecisionContext Episode::Context() const {
   ctx.map = &instance_->world.map;
   ctx.sensor = &instance_->scenario.sensor;
   ctx.eps = mission_.eps;
-  ctx.positions = &robot_idx_;
+  ctx.robot_lattice = &robot_idx_;
   ctx.comm = &comm_;
   ctx.beliefs = &fused_;
   ctx.central = &central_;

@@ -54,7 +54,7 @@ struct TeamFixture {
     c.map = &world.map;
     c.sensor = &sensor;
     c.eps = scenario.mission.eps;
-    c.positions = &positions;
+    c.robot_lattice = &positions;
     c.comm = &comm;
     c.beliefs = &beliefs;
     c.central = &central;

@@ -40,7 +40,8 @@ struct DecisionContext {
   const Map* map = nullptr;
   const SensorModel* sensor = nullptr;
   double eps = 0.1;
-  const std::vector<int>* positions = nullptr;  // lattice index of each robot
+  const std::vector<int>* robot_lattice =
+      nullptr;                        // lattice index of each robot
   const CommNetwork* comm = nullptr;  // this step's graph and the active robots
   const BeliefSet* beliefs = nullptr;  // robot i's fused belief in row i
   const BeliefSet* central = nullptr;  // the centralized filter; null unless
