@@ -57,6 +57,29 @@ bool ConfigNode::Erase(const std::string& key) {
   return true;
 }
 
+bool SameValue(const ConfigNode& a, const ConfigNode& b) {
+  if (a.kind != b.kind) return false;
+  switch (a.kind) {
+    case ConfigNode::Kind::kNull:
+      return true;
+    case ConfigNode::Kind::kScalar:
+      return a.scalar == b.scalar && a.style == b.style && a.tag == b.tag;
+    case ConfigNode::Kind::kList:
+      if (a.items.size() != b.items.size()) return false;
+      for (std::size_t i = 0; i < a.items.size(); ++i)
+        if (!SameValue(a.items[i], b.items[i])) return false;
+      return true;
+    case ConfigNode::Kind::kMap:
+      if (a.entries.size() != b.entries.size()) return false;
+      for (const ConfigNode::Entry& e : a.entries) {
+        const ConfigNode* other = b.Find(e.key);
+        if (other == nullptr || !SameValue(e.value, *other)) return false;
+      }
+      return true;
+  }
+  return false;
+}
+
 void ConfigNode::SetOrigin(const std::string& flag) {
   origin = flag;
   for (ConfigNode& item : items) item.SetOrigin(flag);

@@ -29,6 +29,7 @@
 #include "aia/runtime/observers.h"
 #include "aia/runtime/plan_command.h"
 #include "aia/runtime/ranks.h"
+#include "aia/scenario/yaml.h"
 
 namespace aia {
 namespace {
@@ -142,9 +143,20 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
     }
     return std::make_pair(body, policies);
   };
+  // Compared as YAML documents: the same scenario written another way (key
+  // order, quoting style of a number aside, indentation) is the same.
+  const auto same = [](const std::string& a, const std::string& b) {
+    if (a == b) return true;
+    try {
+      return SameValue(ParseYaml(a, "effective.yaml"),
+                       ParseYaml(b, "effective.yaml"));
+    } catch (const InputError&) {
+      return false;  // not YAML: not the same
+    }
+  };
   const auto [old_body, old_policies] = split(old_text);
   const auto [new_body, new_policies] = split(new_text);
-  if (old_body != new_body) return "the scenario differs (--set)";
+  if (!same(old_body, new_body)) return "the scenario differs (--set)";
   for (const auto& [name, params] : new_policies) {
     const auto it = old_policies.find(name);
     if (it == old_policies.end() || it->second == params) continue;
@@ -155,7 +167,8 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
     };
     const auto [old_params, old_model] = cut(it->second);
     const auto [new_params, new_model] = cut(params);
-    if (old_params != new_params) return name + "'s parameters differ";
+    if (!same(old_params, new_params)) return name + "'s parameters differ";
+    if (old_model == new_model) continue;
     return name + "'s model file differs: " +
            (old_model.empty()
                 ? std::string("the folder does not record which was used")

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "aia/core/io.h"
 #include "aia/planning/decsb.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/ranks.h"
@@ -473,6 +474,25 @@ TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
   auto r = eval({"--set", "sensor.range=3"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("2 rows already done, 0 to run"), std::string::npos);
+  // ... also when its effective.yaml was written another way (it is
+  // compared as a YAML document; here every indentation is doubled).
+  {
+    std::istringstream in(ReadFile(dir + "/effective.yaml"));
+    std::string line, wider;
+    while (std::getline(in, line)) {
+      const std::size_t indent = line.find_first_not_of(' ');
+      if (line.rfind("#", 0) == 0 || indent == std::string::npos)
+        wider += line + "\n";
+      else
+        wider += std::string(2 * indent, ' ') + line.substr(indent) + "\n";
+    }
+    ASSERT_NE(wider, ReadFile(dir + "/effective.yaml"));
+    WriteFileAtomic(dir + "/effective.yaml", wider);
+  }
+  r = eval({"--set", "sensor.range=3"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 rows already done, 0 to run"), std::string::npos)
+      << r.out;
   // ... another does not mix its rows in.
   r = eval({});
   EXPECT_EQ(r.exit_code, 2);

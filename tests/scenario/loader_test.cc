@@ -705,6 +705,21 @@ TEST(OverrideTest, SetValueIsOneDocumentInUtf8) {
   EXPECT_TRUE(ParseYamlValue("", "--set").IsNull());
 }
 
+// Two documents hold the same value whatever their layout and key order; a
+// scalar's text, style and the order of a list count.
+TEST(YamlTest, SameValueIgnoresLayoutAndKeyOrderOnly) {
+  const auto same = [](const std::string& a, const std::string& b) {
+    return SameValue(ParseYaml(a, "a"), ParseYaml(b, "b"));
+  };
+  EXPECT_TRUE(
+      same("a: 1\nb: {c: [1, 2]}\n", "b:\n    c:\n    - 1\n    - 2\na: 1\n"));
+  EXPECT_FALSE(same("a: 1\n", "a: \"1\"\n"));
+  EXPECT_FALSE(same("a: 1\n", "a: 1.0\n"));
+  EXPECT_FALSE(same("a: [1, 2]\n", "a: [2, 1]\n"));
+  EXPECT_FALSE(same("a: 1\n", "a: 1\nb: 2\n"));
+  EXPECT_FALSE(same("a: {}\n", "a: []\n"));
+}
+
 // Seeds take the whole unsigned 64-bit range and nothing beyond it.
 TEST(OverrideTest, SeedsBeyond64BitsAreRefusedAtTheirLine) {
   const std::string yaml =

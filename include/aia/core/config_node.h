@@ -62,6 +62,11 @@ struct ConfigNode::Entry {
   ConfigNode value;
 };
 
+// Whether two trees hold the same value, whatever their lines and origins and
+// the order of a mapping's keys (a scalar's text and style count: `5` is not
+// `"5"`).
+bool SameValue(const ConfigNode& a, const ConfigNode& b);
+
 // The node as it was written, roughly (enough to recognize it in a message):
 // `[20, 20]`, `"5"`, `!!float 0.1`, `{a: 1}`; "nothing" for an empty value.
 // At most `max_chars` characters ("..." marks a cut).
