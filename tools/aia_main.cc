@@ -339,12 +339,8 @@ Action AddEvalCommand(CLI::App& app) {
   cmd->add_option("--sizes", eval->sizes, "robots x targets, e.g. 10x10,20x20")
       ->delimiter(',')
       ->capture_default_str();
-  cmd->add_option("--seeds", eval->seeds, "worlds per size")
-      ->capture_default_str();
-  cmd->add_option("--seed-base", eval->seed_base,
-                  "first seed (seeds B .. B+n-1)")
-      ->transform(kUnsigned)
-      ->capture_default_str();
+  auto declared = std::make_shared<DeclaredFlags>(cmd);
+  declared->Add(eval.get());
   cmd->add_option(
          "--policies", eval->policies,
          "policies to score (default: every registered one but the expert)")
@@ -359,13 +355,10 @@ Action AddEvalCommand(CLI::App& app) {
                   "output folder (runs.csv, summary.csv, effective.yaml)")
       ->required()
       ->check(kPath);
-  cmd->add_option("--threads", eval->threads,
-                  "worker threads per process (0: all cores, shared among "
-                  "the MPI ranks on a machine)")
-      ->capture_default_str();
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;
+    declared->Apply();
     eval->progress = !*quiet;
     return aia::RunEval(*eval);
   };
@@ -378,14 +371,8 @@ Action AddBenchCommand(CLI::App& app) {
   cmd->add_option("--sizes", bench->sizes, "robots x targets, e.g. 10x10,80x80")
       ->delimiter(',')
       ->capture_default_str();
-  cmd->add_option("--steps", bench->steps, "decision steps per run")
-      ->capture_default_str();
-  cmd->add_option("--repeats", bench->repeats,
-                  "runs per size (median reported)")
-      ->capture_default_str();
-  cmd->add_option("--seed", bench->seed, "seed of the generated worlds")
-      ->transform(kUnsigned)
-      ->capture_default_str();
+  auto declared = std::make_shared<DeclaredFlags>(cmd);
+  declared->Add(bench.get());
   cmd->add_option("--policy", bench->policy, "policy to time")
       ->capture_default_str();
   cmd->add_flag("--no-testspeed", bench->skip_testspeed,
@@ -394,18 +381,16 @@ Action AddBenchCommand(CLI::App& app) {
                 "time the expert's solve (C-SB) instead of episodes");
   cmd->add_flag("--network", bench->network,
                 "time I-GBNet's network alone (inference and training)");
-  cmd->add_option("--policy-threads", bench->policy_threads,
-                  "threads of a learned policy's rendering and inference "
-                  "(aia run uses every core)")
-      ->capture_default_str();
-  cmd->add_option("--seeds", bench->seeds, "with --expert: worlds per size")
-      ->capture_default_str();
   cmd->add_option("--set", bench->sets,
                   "override a key of the generated scenarios, e.g. --set "
                   "sensor.range=3 (repeatable)")
       ->take_all()
       ->expected(1);
-  return [=]() { return cmd->parsed() ? aia::RunBench(*bench) : -1; };
+  return [=]() {
+    if (!cmd->parsed()) return -1;
+    declared->Apply();
+    return aia::RunBench(*bench);
+  };
 }
 
 Action AddDatasetCommand(CLI::App& app) {

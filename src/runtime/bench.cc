@@ -148,20 +148,10 @@ int RunNetworkBench(const BenchOptions& o) {
 }
 
 int RunBench(const BenchOptions& o) {
-  // Every mode reports medians of a few runs; --steps has mission.max_steps'
-  // range.
-  constexpr int kMaxRepeats = 1000, kMaxSeeds = 100000;
-  if (o.repeats < 1 || o.repeats > kMaxRepeats)
-    throw InputError("command line", 0, "--repeats",
-                     "must be in [1, " + std::to_string(kMaxRepeats) + "]");
-  if (o.seeds < 1 || o.seeds > kMaxSeeds)
-    throw InputError("command line", 0, "--seeds",
-                     "must be in [1, " + std::to_string(kMaxSeeds) + "]");
-  if (o.steps < 1 || o.steps > limits::kMaxSteps)
-    throw InputError("command line", 0, "--steps",
-                     "must be in [1, " +
-                         std::to_string(static_cast<int>(limits::kMaxSteps)) +
-                         "] (mission.max_steps' range)");
+  {
+    BenchOptions counts = o;
+    CheckFlags(&counts);  // their declarations: `--flag: what`
+  }
   if (o.expert && static_cast<std::uint64_t>(o.seeds - 1) >
                       std::numeric_limits<std::uint64_t>::max() - o.seed) {
     throw InputError("command line", 0, "--seed",
@@ -171,9 +161,6 @@ int RunBench(const BenchOptions& o) {
                          " do not fit in 64 bits (the largest seed is "
                          "18446744073709551615); give a smaller --seed");
   }
-  if (o.policy_threads < 1 || o.policy_threads > 256)
-    throw InputError("command line", 0, "--policy-threads",
-                     "must be in [1, 256]");
   SetPolicyThreads(o.policy_threads);
   if (o.network) return RunNetworkBench(o);
   if (o.expert) return RunExpertBench(o);

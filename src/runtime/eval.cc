@@ -547,10 +547,10 @@ namespace {
 // policies listed once (one listed twice would write every row twice, and
 // each resume would drop both copies and run them again).
 void CheckEvalFlags(const EvalOptions& o) {
-  if (o.seeds < 1)
-    throw InputError("command line", 0, "--seeds", "must be at least 1");
-  if (o.threads < 0)
-    throw InputError("command line", 0, "--threads", "must be >= 0");
+  {
+    EvalOptions counts = o;
+    CheckFlags(&counts);  // their declarations: `--flag: what`
+  }
   if (o.out_dir.empty())
     throw InputError("command line", 0, "--out",
                      "an output folder is required");

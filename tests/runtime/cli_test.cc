@@ -167,13 +167,20 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
 TEST(CliTest, BenchCountsOutOfRangeExitWith2) {
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"bench", "--network", "--repeats", "0"},
-       "--repeats: must be in [1, 1000]"},
-      {{"bench", "--repeats", "100000"}, "--repeats: must be in [1, 1000]"},
+       "--repeats: must be an integer in [1, 1000], got 0"},
+      {{"bench", "--repeats", "100000"},
+       "--repeats: must be an integer in [1, 1000], got 100000"},
       {{"bench", "--expert", "--seeds", "0"},
-       "--seeds: must be in [1, 100000]"},
-      {{"bench", "--steps", "1000001"}, "--steps: must be in [1, 1000000]"},
+       "--seeds: must be an integer in [1, 100000], got 0"},
+      {{"bench", "--steps", "1000001"},
+       "--steps: must be an integer in [1, 1000000], got 1000001"},
       {{"bench", "--policy-threads", "0"},
-       "--policy-threads: must be in [1, 256]"},
+       "--policy-threads: must be an integer in [1, 256], got 0"},
+      // aia eval's counts, from the same kind of declaration.
+      {{"eval", "--seeds", "0", "--out", "/nonexistent/aia_eval"},
+       "--seeds: must be an integer >= 1, got 0"},
+      {{"eval", "--threads", "-1", "--out", "/nonexistent/aia_eval"},
+       "--threads: must be an integer >= 0, got -1"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = RunAia(args);

@@ -32,6 +32,25 @@ struct BenchOptions {
   // Threads of a learned policy's rendering and inference (SetPolicyThreads;
   // `aia run` uses every core, `aia eval` one per worker).
   int policy_threads = 1;
+
+  // The counts, declared once for `aia bench`'s flags and their checks.
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(steps)
+                 .In(Between(1, limits::kMaxSteps))
+                 .Doc("decision steps per run (mission.max_steps' range)"));
+    a->Visit(AIA_FIELD(repeats)
+                 .In(Between(1, 1000))
+                 .Doc("runs per size (median reported)"));
+    a->Visit(AIA_FIELD(seed).Doc("seed of the generated worlds"));
+    a->Visit(AIA_FIELD(seeds)
+                 .In(Between(1, 100000))
+                 .Doc("with --expert: worlds per size"));
+    a->Visit(AIA_FIELD(policy_threads)
+                 .In(Between(1, 256))
+                 .Doc("threads of a learned policy's rendering and inference "
+                      "(aia run uses every core)"));
+  }
 };
 
 int RunBench(const BenchOptions& options);

@@ -192,6 +192,18 @@ struct EvalOptions {
   std::string out_dir;
   int threads = 0;  // 0: all cores
   bool progress = true;
+
+  // The counts, declared once for `aia eval`'s flags and their checks.
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(seeds).In(AtLeast(1)).Doc("worlds per size"));
+    a->Visit(AIA_FIELD(seed_base).Doc("first seed (seeds B .. B+n-1)"));
+    a->Visit(AIA_FIELD(threads)
+                 .In(AtLeast(0))
+                 .Doc("worker threads per process (0: all cores, shared among "
+                      "the MPI "
+                      "ranks on a machine)"));
+  }
 };
 
 int RunEval(const EvalOptions& options);
