@@ -250,12 +250,9 @@ Action AddRenderCommand(CLI::App& app) {
   cmd->add_option("--frames", render->frames_dir,
                   "also write frames as PNG into this folder")
       ->check(kPath);
-  cmd->add_option("--frames-every", render->frames_every,
-                  "with --frames: write every k-th frame")
-      ->capture_default_str();
-  cmd->add_option("--hold", render->hold_seconds,
-                  "seconds the final frame is held")
-      ->capture_default_str();
+  // --frames-every and --hold, as RenderOptions declares them.
+  auto declared = std::make_shared<DeclaredFlags>(cmd);
+  declared->Add(render.get());
   cmd->add_option("--edges", render->edges,
                   "communication edges drawn: auto (lost messages, and the "
                   "delivered ones while they stay readable), all, lost or "
@@ -264,6 +261,7 @@ Action AddRenderCommand(CLI::App& app) {
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;
+    declared->Apply();
     render->overrides = flags->Get();
     const char* names[] = {"--width", "--height", "--fps", "--heatmap"};
     std::optional<int>* targets[] = {&render->width, &render->height,

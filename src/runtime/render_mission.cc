@@ -68,12 +68,10 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
                         "] (at most one frame per physics step of " +
                         FormatNumber(s.physics.timestep) + " s), got " +
                         std::to_string(s.render.fps));
-  if (o.frames_every < 1)
-    throw InputError(
-        "command line", 0, "--frames-every",
-        "must be at least 1, got " + std::to_string(o.frames_every));
-  if (!(o.hold_seconds >= 0.0 && o.hold_seconds <= 60.0))
-    throw InputError("command line", 0, "--hold", "must be in [0, 60] seconds");
+  {
+    RenderOptions flags = o;
+    CheckFlags(&flags);  // their declarations: `--flag: what`
+  }
   EdgeMode mode;
   if (!ParseEdgeMode(o.edges, &mode))
     throw InputError("command line", 0, "--edges",
@@ -130,7 +128,7 @@ class VideoObserver : public StepObserver {
   // The state after the last step's fusion, held `hold` seconds.
   void OnEnd(const Episode& e) override {
     const cv::Mat& last = Emit(e);
-    held_ = static_cast<int>(std::lround(options_.hold_seconds * fps_));
+    held_ = static_cast<int>(std::lround(options_.hold * fps_));
     for (int h = 0; h < held_; ++h) video_->Write(last);
   }
 

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "aia/core/fields.h"
 #include "aia/runtime/mission.h"
 
 namespace aia {
@@ -23,11 +24,22 @@ struct RenderOptions {
   std::optional<int> heatmap_robot;  // render.follow_robot; -1: none
   std::string frames_dir;            // non-empty: PNG frames written here
   int frames_every = 1;              // write video frames 0, k, 2k, ... as PNG
-  double hold_seconds = 1.0;         // the final frame is held this long
+  double hold = 1.0;                 // seconds the final frame is held
   // Communication edges drawn: auto, all, lost or none (render/frame_renderer.h
   // EdgeMode).
   std::string edges = "auto";
   bool progress = true;
+
+  // The video's own flags, declared once (their help and range checks).
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(frames_every)
+                 .In(AtLeast(1))
+                 .Doc("with --frames: write every k-th frame"));
+    a->Visit(AIA_FIELD(hold)
+                 .In(Between(0.0, 60.0))
+                 .Doc("seconds the final frame is held"));
+  }
 };
 
 struct RenderResult {
