@@ -210,6 +210,31 @@ class VideoObserver : public StepObserver {
 
 }  // namespace
 
+namespace {
+
+// Neither the video nor the files next to it may replace an input (the
+// scenario may be FILE.effective.yaml of an earlier render); the folders
+// are made. The folder is not locked (renders of other scenarios may share
+// it), but what killed renders left there (a partial video, temporaries of
+// their result files) is removed: only files whose process is gone.
+void PrepareOutputs(const RenderOptions& options,
+                    const PreparedMission& mission, const std::string& prefix) {
+  const fs::path out(options.out_file);
+  const std::vector<InputFile> inputs =
+      MissionInputs(mission.scenario, mission.policy.get());
+  CheckNotAnInput(options.out_file, "--out", inputs);
+  for (const std::string& name : MissionFileNames())
+    CheckNotAnInput(prefix + name, "--out", inputs,
+                    "written next to the video");
+  MakeOutputDir(out.parent_path().string(), "--out");
+  MakeOutputDir(options.frames_dir, "--frames");
+  RemoveStaleTemporaries(
+      out.parent_path().empty() ? "." : out.parent_path().string());
+  if (!options.frames_dir.empty()) RemoveStaleTemporaries(options.frames_dir);
+}
+
+}  // namespace
+
 RenderResult RenderMission(const RenderOptions& options) {
   const PolicyRegistry registry = AllPolicies();
   Scenario scenario =
@@ -226,22 +251,7 @@ RenderResult RenderMission(const RenderOptions& options) {
       (out.parent_path() / (out.stem().string() + ".")).string();
 
   const PreparedMission mission = PrepareMission(scenario, registry);
-  // Neither the video nor the files next to it may replace an input (the
-  // scenario may be FILE.effective.yaml of an earlier render).
-  const std::vector<InputFile> inputs =
-      MissionInputs(mission.scenario, mission.policy.get());
-  CheckNotAnInput(options.out_file, "--out", inputs);
-  for (const std::string& name : MissionFileNames())
-    CheckNotAnInput(prefix + name, "--out", inputs,
-                    "written next to the video");
-  MakeOutputDir(out.parent_path().string(), "--out");
-  MakeOutputDir(options.frames_dir, "--frames");
-  // The folder is not locked (renders of other scenarios may share it), but
-  // what killed renders left there (a partial video, temporaries of their
-  // result files) is removed: only files whose process is gone.
-  RemoveStaleTemporaries(
-      out.parent_path().empty() ? "." : out.parent_path().string());
-  if (!options.frames_dir.empty()) RemoveStaleTemporaries(options.frames_dir);
+  PrepareOutputs(options, mission, prefix);
   const int fps = scenario.render.fps;
   const int width = scenario.render.width, height = scenario.render.height;
 
