@@ -14,7 +14,7 @@
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/dataset.h"
 #include "aia/planning/expert.h"
-#include "aia/runtime/eval.h"
+#include "aia/runtime/generated.h"
 #include "aia/runtime/mission.h"
 
 namespace aia {

@@ -21,41 +21,11 @@
 #include "aia/core/csv.h"
 #include "aia/planning/expert.h"
 #include "aia/planning/registry.h"
+#include "aia/runtime/generated.h"
 #include "aia/scenario/config.h"
 #include "aia/scenario/loader.h"
 
 namespace aia {
-
-// The generated worlds of the experiments (docs/design.md, Evaluation): 20 x 20
-// m, 30 random boxes, N robots and M random static targets, all drawn from
-// `seed`.
-Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed);
-
-// "10x10" -> (10, 10); throws InputError naming `flag` on anything else.
-std::pair<int, int> ParseSize(const std::string& text, const std::string& flag);
-
-// A generated scenario as a command makes it from its flags: a size (given
-// to `size_flag` as `size`), a seed and the overrides (--set).
-struct GeneratedSpec {
-  std::string size;  // as given, e.g. "10x10"
-  std::string size_flag = "--sizes";
-  int robots = 0;
-  int targets = 0;
-  std::uint64_t seed = 0;
-  std::vector<Override> overrides;
-};
-
-// The spec's scenario, read back and checked as a file's would be.
-// InputErrors name the flag behind them (NameTheFlag).
-Scenario ReadGenerated(const GeneratedSpec& spec);
-
-// An InputError about a generated scenario, which has no file, as one about
-// the command-line flag behind it: the size's flag when the size alone is
-// refused, else the first override that makes the scenario invalid, or
-// (when every read passes) its world fail to build. One that names a flag
-// already is thrown as it is.
-[[noreturn]] void NameTheFlag(const InputError& error,
-                              const GeneratedSpec& spec);
 
 // One world of the experiment.
 struct EvalInstance {
