@@ -23,12 +23,11 @@
 #include "aia/runtime/episode.h"
 #include "aia/runtime/instance.h"
 #include "aia/runtime/observers.h"
+#include "aia/runtime/outputs.h"
+#include "aia/runtime/policies.h"
 #include "aia/scenario/loader.h"
 
 namespace aia {
-
-// Every policy aia knows (planning's built-ins plus the learned ones).
-PolicyRegistry AllPolicies();
 
 // The scenario flags of the mission commands, in the order they apply:
 // --policy, --seed, --max-steps, then each --set.
@@ -47,23 +46,6 @@ struct CommandOverrides {
 // for tests and tools; commands share instances and resolved policies).
 std::unique_ptr<Episode> MakeEpisode(const Scenario& scenario,
                                      const PolicyRegistry& registry);
-
-// Checks an output file named by a flag before any work: InputError (exit
-// code 2) naming the flag when the path exists and is not a regular file.
-void CheckOutputFile(const std::string& path, const std::string& flag);
-
-// Creates an output folder named by a flag; InputError (exit code 2) naming
-// the flag when it cannot be created or written. With `lock`, the folder is
-// this process's until it ends (an flock on the folder: a second job
-// writing into it is refused with an InputError), and temporary files that
-// killed jobs left there are removed.
-void MakeOutputDir(const std::string& dir, const std::string& flag,
-                   bool lock = false);
-
-// Locks `path` (a folder, or a file that is created if needed) until the
-// process ends; InputError naming the flag when another process holds it.
-// Taking a path this process holds already does nothing.
-void LockOutput(const std::string& path, const std::string& flag);
 
 // A mission ready to run: the scenario as overridden, its policy resolved
 // (parameters checked, resources loaded) and its instance built.

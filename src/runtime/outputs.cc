@@ -1,0 +1,66 @@
+#include "aia/runtime/outputs.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include "aia/core/error.h"
+#include "aia/core/io.h"
+
+namespace aia {
+
+void LockOutput(const std::string& path, const std::string& flag) {
+  // Held until the process ends (the kernel releases it on any exit); a
+  // path this process holds already is not locked again.
+  static std::mutex mu;
+  static std::map<std::string, std::unique_ptr<FileLock>> held;
+  std::error_code ec;
+  std::string key = std::filesystem::weakly_canonical(path, ec).string();
+  if (ec) key = path;
+  const std::lock_guard<std::mutex> guard(mu);
+  if (held.count(key)) return;
+  try {
+    held.emplace(key, std::make_unique<FileLock>(path));
+  } catch (const std::runtime_error& e) {
+    throw InputError("command line", 0, flag, e.what());
+  }
+}
+
+void CheckOutputFile(const std::string& path, const std::string& flag) {
+  try {
+    CheckReplaceableFile(path);
+  } catch (const std::runtime_error& e) {
+    throw InputError("command line", 0, flag, e.what());
+  }
+}
+
+void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
+  if (dir.empty()) return;
+  try {
+    MakeDirs(dir);
+  } catch (const std::exception& e) {
+    throw InputError("command line", 0, flag, e.what());
+  }
+  // A file is created and removed again: permissions, read-only file
+  // systems and folders like /proc all answer this the same way.
+  const std::string probe =
+      dir + "/.aia-probe.tmp." + std::to_string(::getpid());
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+  if (fd < 0)
+    throw InputError(
+        "command line", 0, flag,
+        "cannot write into '" + dir + "': " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+  if (!lock) return;
+  LockOutput(dir, flag);
+  RemoveStaleTemporaries(dir);
+}
+
+}  // namespace aia
