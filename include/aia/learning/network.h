@@ -6,8 +6,10 @@
 // features over this step's communication graph before the last layer: a
 // K-tap graph filter h_i = relu(z_i + sum_k M_k (S^k z)_i), S the mean over a
 // robot's neighbours, so the network stays equivariant to relabelling the
-// robots and has no notion of time. libtorch stays behind this header: only
-// src/learning/network.cc and the trainer include it.
+// robots and has no notion of time. libtorch stays behind this header: it
+// lives in a plugin, libaia_torch.so (src/learning/torch/), that the first
+// network made or loaded brings in (src/learning/torch_backend.cc), so that a
+// process which never uses one starts without it.
 #ifndef AIA_LEARNING_NETWORK_H_
 #define AIA_LEARNING_NETWORK_H_
 
@@ -71,12 +73,14 @@ struct TeamGraph {
   int rows() const { return static_cast<int>(offsets.size()) - 1; }
 };
 
-struct FoldedNet;  // src/learning/network_impl.h
+class TorchNet;       // src/learning/torch/torch_net.h
+struct TorchBackend;  // src/learning/torch_backend.h
 
 class IgbNet {
  public:
   // A freshly initialized network (libtorch's default initialization,
-  // seeded).
+  // seeded). This and Load bring libtorch in; a missing or broken plugin is
+  // a std::runtime_error.
   IgbNet(const NetworkConfig& config, std::uint64_t seed);
   ~IgbNet();
   IgbNet(const IgbNet&) = delete;
@@ -114,22 +118,14 @@ class IgbNet {
   // Number of trainable parameters.
   std::int64_t NumParameters() const;
 
-  struct Impl;  // the libtorch module (src/learning/network_impl.h)
-  // The module to change (training): forgets what Forward folded.
-  Impl& impl();
-  const Impl& impl() const { return *impl_; }
-
  private:
-  IgbNet();
-  // The folded layers for inference, built at the first call.
-  std::shared_ptr<const FoldedNet> Folded() const;
-  // Forward (embed false: logits) or Embed (true: hidden features).
-  void Infer(const float* images, int batch, int height, int width, bool embed,
-             float* out) const;
-  std::unique_ptr<Impl> impl_;
+  IgbNet(const TorchBackend* backend, TorchNet* net);
+  const TorchBackend* backend_;  // the plugin's table
+  TorchNet* net_;                // owned; made and destroyed by the plugin
 };
 
-// Sets libtorch's intra-op threads (0: leave its default).
+// Sets libtorch's intra-op threads (0: leave its default); both load
+// libtorch.
 void SetInferenceThreads(int threads);
 int InferenceThreads();
 

@@ -1,16 +1,20 @@
-// The libtorch side of learning/network.h: private to src/learning (the
-// network and the trainer); nothing else includes torch.
-#ifndef AIA_SRC_LEARNING_NETWORK_IMPL_H_
-#define AIA_SRC_LEARNING_NETWORK_IMPL_H_
+// The libtorch side of learning/network.h, inside the plugin libaia_torch.so
+// (src/learning/torch/, loaded by src/learning/torch_backend.cc at the first
+// use of a network): the network and the trainer. Nothing outside this
+// folder includes torch.
+#ifndef AIA_SRC_LEARNING_TORCH_TORCH_NET_H_
+#define AIA_SRC_LEARNING_TORCH_TORCH_NET_H_
 
 #include <torch/torch.h>
 
 #include <array>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "aia/learning/network.h"
+#include "aia/learning/trainer.h"
 
 namespace aia {
 
@@ -72,16 +76,60 @@ torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
 torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
                           const NetworkConfig& config, const torch::Tensor& x);
 
-struct IgbNet::Impl {
+// The network of learning/network.h (IgbNet forwards every call here through
+// the plugin's table, torch_backend.h).
+class TorchNet {
+ public:
+  // A freshly initialized network (libtorch's default initialization,
+  // seeded).
+  TorchNet(const NetworkConfig& config, std::uint64_t seed);
+  ~TorchNet();
+  TorchNet(const TorchNet&) = delete;
+  TorchNet& operator=(const TorchNet&) = delete;
+  // As IgbNet::Load.
+  static std::unique_ptr<TorchNet> Load(const std::string& path,
+                                        const std::string& error_file,
+                                        int error_line, const std::string& key);
+  void Save(const std::string& path) const;
+  const NetworkConfig& config() const;
+  const FileIdentity& file() const;
+  // Forward (embed false: logits) or Embed (true: hidden features).
+  void Infer(const float* images, int batch, int height, int width, bool embed,
+             float* out) const;
+  void Head(const float* features, const TeamGraph& graph, float* logits) const;
+  std::int64_t NumParameters() const;
+
+  struct Impl;
+  // The module to change (training): forgets what Infer folded.
+  Impl& impl();
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  TorchNet();
+  // The folded layers for inference, built at the first call.
+  std::shared_ptr<const FoldedNet> Folded() const;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct TorchNet::Impl {
   NetworkConfig config;
   FileIdentity file;
   IgbNetModule module{nullptr};
-  // Built by the first Forward, dropped by IgbNet::impl() (through which
+  // Built by the first Infer, dropped by TorchNet::impl() (through which
   // training changes the module).
   std::mutex folded_mutex;
   std::shared_ptr<const FoldedNet> folded;
 };
 
+// learning/trainer.h's Train, Validate and MeasureNetworkSpeed (IgbNet's
+// side calls them through the plugin's table).
+std::vector<EpochLog> TorchTrain(const TrainOptions& options);
+ValidationResult TorchValidate(const std::string& model,
+                               const std::vector<std::string>& data,
+                               double val_share, std::uint64_t seed);
+double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
+                         int batch, bool train, int iterations, int repeats);
+
 }  // namespace aia
 
-#endif  // AIA_SRC_LEARNING_NETWORK_IMPL_H_
+#endif  // AIA_SRC_LEARNING_TORCH_TORCH_NET_H_

@@ -1,0 +1,442 @@
+#include <caffe2/serialize/versions.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <mutex>
+#include <stdexcept>
+#include <vector>
+
+#include "aia/core/check.h"
+#include "aia/core/error.h"
+#include "aia/core/io.h"
+#include "torch_net.h"
+
+namespace aia {
+namespace {
+
+// The metadata's JSON (its format and versions) is NetworkConfig's
+// (src/learning/network.cc).
+constexpr const char* kMetaKey = "aia_meta";
+
+}  // namespace
+
+ResidualBlockImpl::ResidualBlockImpl(int width) {
+  namespace nn = torch::nn;
+  const auto conv = [width] {
+    return nn::Conv2d(
+        nn::Conv2dOptions(width, width, 3).padding(1).bias(false));
+  };
+  conv1 = register_module("conv1", conv());
+  bn1 = register_module("bn1", nn::BatchNorm2d(width));
+  conv2 = register_module("conv2", conv());
+  bn2 = register_module("bn2", nn::BatchNorm2d(width));
+}
+
+torch::Tensor ResidualBlockImpl::forward(const torch::Tensor& x) {
+  torch::Tensor y = torch::relu(bn1(conv1(x)));
+  y = bn2(conv2(y));
+  return torch::relu(y + x);
+}
+
+IgbNetModuleImpl::IgbNetModuleImpl(const NetworkConfig& c) {
+  namespace nn = torch::nn;
+  stem = register_module(
+      "stem",
+      nn::Conv2d(nn::Conv2dOptions(c.channels.num_channels(), c.width, 3)
+                     .stride(c.stem_stride)
+                     .padding(1)
+                     .bias(false)));
+  stem_bn = register_module("stem_bn", nn::BatchNorm2d(c.width));
+  blocks = register_module("blocks", nn::ModuleList());
+  for (int i = 0; i < 3; ++i) blocks->push_back(ResidualBlock(c.width));
+  pool = register_module(
+      "pool", nn::AdaptiveAvgPool2d(nn::AdaptiveAvgPool2dOptions(c.pool)));
+  fc1 = register_module("fc1", nn::Linear(c.width * c.pool * c.pool, c.hidden));
+  fc2 = register_module("fc2", nn::Linear(c.hidden, kNumMoves));
+  for (int k = 1; k <= c.message_hops; ++k) {
+    messages.push_back(register_module(
+        "message" + std::to_string(k),
+        nn::Linear(nn::LinearOptions(c.hidden, c.hidden).bias(false))));
+  }
+}
+
+torch::Tensor IgbNetModuleImpl::embed(const torch::Tensor& input) {
+  torch::Tensor x = torch::relu(stem_bn(stem(input)));
+  for (const auto& block : *blocks) x = block->as<ResidualBlock>()->forward(x);
+  x = pool(x).flatten(1);
+  return torch::relu(fc1(x));
+}
+
+torch::Tensor IgbNetModuleImpl::head(const torch::Tensor& z,
+                                     const GraphTensors* graph) {
+  if (messages.empty() || !graph) return fc2(z);
+  torch::Tensor h = z, hop = z;
+  for (torch::nn::Linear& m : messages) {
+    hop = torch::zeros_like(hop).index_add(0, graph->dst,
+                                           hop.index_select(0, graph->src)) *
+          graph->inv_degree.unsqueeze(1);
+    h = h + m(hop);
+  }
+  return fc2(torch::relu(h));
+}
+
+torch::Tensor IgbNetModuleImpl::forward(const torch::Tensor& input) {
+  return head(embed(input), nullptr);
+}
+
+torch::Tensor IgbNetModuleImpl::forward(const torch::Tensor& input,
+                                        const GraphTensors& graph) {
+  return head(embed(input), &graph);
+}
+
+GraphTensors ToTensors(const TeamGraph& graph) {
+  const int n = graph.rows();
+  AIA_CHECK(n >= 0 && graph.offsets.front() == 0 &&
+            graph.offsets.back() == static_cast<int>(graph.neighbours.size()));
+  std::vector<int64_t> src, dst;
+  std::vector<float> inv(n, 0.0f);
+  src.reserve(graph.neighbours.size());
+  dst.reserve(graph.neighbours.size());
+  for (int b = 0; b < n; ++b) {
+    const int d = graph.offsets[b + 1] - graph.offsets[b];
+    AIA_CHECK(d >= 0);
+    if (d > 0) inv[b] = 1.0f / static_cast<float>(d);
+    for (int e = graph.offsets[b]; e < graph.offsets[b + 1]; ++e) {
+      const int j = graph.neighbours[e];
+      AIA_CHECK_MSG(j >= 0 && j < n && j != b, "a neighbour outside the batch");
+      src.push_back(j);
+      dst.push_back(b);
+    }
+  }
+  const auto ints = [](const std::vector<int64_t>& v) {
+    return torch::tensor(torch::ArrayRef<int64_t>(v), torch::kInt64);
+  };
+  return {ints(src), ints(dst),
+          torch::tensor(torch::ArrayRef<float>(inv), torch::kFloat32)};
+}
+
+TorchNet::TorchNet() : impl_(std::make_unique<Impl>()) {}
+
+TorchNet::Impl& TorchNet::impl() {
+  std::lock_guard<std::mutex> lock(impl_->folded_mutex);
+  impl_->folded.reset();
+  return *impl_;
+}
+
+namespace {
+
+std::pair<torch::Tensor, torch::Tensor> FoldInto(
+    const torch::nn::Conv2d& conv, const torch::nn::BatchNorm2d& bn) {
+  const torch::Tensor g =
+      bn->weight / torch::sqrt(bn->running_var + bn->options.eps());
+  return {(conv->weight * g.view({-1, 1, 1, 1})).contiguous(),
+          (bn->bias - bn->running_mean * g).contiguous()};
+}
+
+}  // namespace
+
+FoldedNet Fold(IgbNetModule& module) {
+  torch::NoGradGuard no_grad;
+  FoldedNet f;
+  std::tie(f.stem_w, f.stem_b) = FoldInto(module->stem, module->stem_bn);
+  for (const auto& b : *module->blocks) {
+    const auto* block = b->as<ResidualBlock>();
+    const auto [w1, b1] = FoldInto(block->conv1, block->bn1);
+    const auto [w2, b2] = FoldInto(block->conv2, block->bn2);
+    f.blocks.push_back({w1, b1, w2, b2});
+  }
+  return f;
+}
+
+torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
+                          const NetworkConfig& config,
+                          const torch::Tensor& input) {
+  torch::Tensor x = torch::relu(
+      torch::conv2d(input, f.stem_w, f.stem_b, config.stem_stride, 1));
+  for (const auto& b : f.blocks) {
+    torch::Tensor y = torch::relu(torch::conv2d(x, b[0], b[1], 1, 1));
+    y = torch::conv2d(y, b[2], b[3], 1, 1);
+    x = torch::relu(y + x);
+  }
+  x = module->pool(x).flatten(1);
+  return torch::relu(module->fc1(x));
+}
+
+torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
+                            const NetworkConfig& config,
+                            const torch::Tensor& input) {
+  return module->fc2(FoldedEmbed(f, module, config, input));
+}
+
+TorchNet::TorchNet(const NetworkConfig& config, std::uint64_t seed)
+    : TorchNet() {
+  torch::manual_seed(seed);
+  impl_->config = config;
+  impl_->module = IgbNetModule(config);
+  impl_->module->eval();
+}
+
+TorchNet::~TorchNet() = default;
+
+const NetworkConfig& TorchNet::config() const { return impl_->config; }
+
+const FileIdentity& TorchNet::file() const { return impl_->file; }
+
+std::int64_t TorchNet::NumParameters() const {
+  std::int64_t n = 0;
+  for (const auto& p : impl_->module->parameters()) n += p.numel();
+  return n;
+}
+
+namespace {
+
+// TorchScript code entries are a few KiB; the bound keeps a lying header
+// from making libtorch allocate gigabytes (found by fuzzing).
+constexpr std::uint32_t kMaxDeflatedEntry = 64u << 20;
+
+// Why the model file's zip container is not intact, or "". TorchScript's
+// reader does not check the entries' CRC-32s, and its parser crashes on some
+// corrupted code entries (found by fuzzing); a damaged file is refused
+// here instead. Torch stores tensors and pickles and deflates code: both are
+// unpacked and checked.
+std::string ZipDamage(const std::string& b) {
+  const auto u16 = [&](std::size_t at) -> std::uint32_t {
+    return static_cast<unsigned char>(b[at]) |
+           static_cast<unsigned char>(b[at + 1]) << 8;
+  };
+  const auto u32 = [&](std::size_t at) -> std::uint32_t {
+    return u16(at) | u16(at + 2) << 16;
+  };
+  // End of central directory: the last "PK\5\6" within 64 KiB of the end.
+  if (b.size() < 22) return "not a zip container";
+  std::size_t eocd = std::string::npos;
+  for (std::size_t i = b.size() - 22 + 1; i-- > 0 && b.size() - i <= 65557;)
+    if (u32(i) == 0x06054b50) {
+      eocd = i;
+      break;
+    }
+  if (eocd == std::string::npos) return "not a zip container (no directory)";
+  const std::uint32_t entries = u16(eocd + 10);
+  std::size_t at = u32(eocd + 16);
+  if (entries == 0xffff || at == 0xffffffffu)
+    return "a zip64 container (model files are far below 4 GiB)";
+  // libtorch's reader leaks its zip state when its constructor throws, so
+  // what it checks there (entries, one folder, a version record) is checked
+  // here first.
+  if (entries == 0) return "an empty zip container";
+  if (u16(eocd + 4) != 0 || u16(eocd + 6) != 0 || u16(eocd + 8) != entries)
+    return "a multi-disk zip container";
+  std::string folder;
+  bool has_version = false;
+  for (std::uint32_t e = 0; e < entries; ++e) {
+    if (at + 46 > b.size() || u32(at) != 0x02014b50 ||
+        at + 46 + u16(at + 28) + u16(at + 30) + u16(at + 32) > b.size())
+      return "damaged zip directory";
+    const std::string_view entry_name(b.data() + at + 46, u16(at + 28));
+    if (e == 0) {
+      const auto slash = entry_name.find('/');
+      if (slash == std::string_view::npos || slash == 0)
+        return "not a torch archive (no top folder)";
+      folder = entry_name.substr(0, slash + 1);
+    }
+    const bool is_version = entry_name.size() == folder.size() + 7 &&
+                            entry_name.substr(0, folder.size()) == folder &&
+                            entry_name.substr(folder.size()) == "version";
+    const std::uint32_t method = u16(at + 10), crc = u32(at + 16),
+                        size = u32(at + 20), unpacked = u32(at + 24),
+                        name = u16(at + 28), extra = u16(at + 30),
+                        comment = u16(at + 32), local = u32(at + 42);
+    const std::string entry = "zip entry " + std::to_string(e);
+    if (std::size_t{local} + 30 > b.size() || u32(local) != 0x04034b50)
+      return "damaged " + entry;
+    const std::size_t data =
+        std::size_t{local} + 30 + u16(local + 26) + u16(local + 28);
+    if (data + size > b.size()) return entry + " is cut short";
+    const auto* packed = reinterpret_cast<const Bytef*>(b.data() + data);
+    std::uint32_t got = 0;
+    if (method == 0) {  // stored: tensors and pickles
+      if (unpacked != size) return entry + " has two different sizes";
+      got = static_cast<std::uint32_t>(crc32(0L, packed, size));
+    } else if (method == 8) {  // deflated: TorchScript code, a few KiB
+      // libtorch allocates the declared size before inflating, so a lying
+      // header is checked here first.
+      if (unpacked > kMaxDeflatedEntry)
+        return entry + " declares " + std::to_string(unpacked) +
+               " bytes unpacked (at most " + std::to_string(kMaxDeflatedEntry) +
+               ")";
+      std::string out(unpacked, '\0');
+      z_stream z{};
+      if (inflateInit2(&z, -MAX_WBITS) != Z_OK) return "zlib failed";
+      z.next_in = const_cast<Bytef*>(packed);
+      z.avail_in = size;
+      z.next_out = reinterpret_cast<Bytef*>(out.data());
+      z.avail_out = unpacked;
+      const int rc = inflate(&z, Z_FINISH);
+      const bool whole = rc == Z_STREAM_END && z.total_out == unpacked;
+      inflateEnd(&z);
+      if (!whole) return entry + " does not unpack to its declared size";
+      got = static_cast<std::uint32_t>(
+          crc32(0L, reinterpret_cast<const Bytef*>(out.data()), unpacked));
+    } else {
+      return entry + " uses compression method " + std::to_string(method) +
+             " (model files store or deflate)";
+    }
+    if (got != crc)
+      return entry + " fails its CRC-32 check (the file is damaged)";
+    if (is_version) {  // a small number in the range this libtorch reads
+      char* end = nullptr;
+      const std::string text = method == 0 ? b.substr(data, size) : "";
+      const long version = std::strtol(text.c_str(), &end, 10);
+      if (text.empty() || text.size() > 4 ||
+          version < static_cast<long>(
+                        caffe2::serialize::kMinSupportedFileFormatVersion) ||
+          version > static_cast<long>(
+                        caffe2::serialize::kMaxSupportedFileFormatVersion) ||
+          (*end != '\0' && *end != '\n'))
+        return "not a torch archive (version record '" + text.substr(0, 8) +
+               "')";
+      has_version = true;
+    }
+    at += 46 + name + extra + comment;
+  }
+  if (!has_version) return "not a torch archive (no version record)";
+  return "";
+}
+
+}  // namespace
+
+std::unique_ptr<TorchNet> TorchNet::Load(const std::string& path,
+                                         const std::string& error_file,
+                                         int error_line,
+                                         const std::string& key) {
+  const auto fail = [&](const std::string& what) {
+    return InputError(error_file, error_line, key, "'" + path + "': " + what);
+  };
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw fail("no such model file (train one with `aia train`)");
+  // Read once: the bytes checked, hashed and loaded are the same.
+  std::string bytes;
+  try {
+    bytes = ReadFile(path, std::uintmax_t{1} << 31);
+  } catch (const std::exception& e) {
+    throw fail(std::string("not a readable model: ") + e.what());
+  }
+  if (const std::string damage = ZipDamage(bytes); !damage.empty())
+    throw fail("not a readable model: " + damage);
+  std::unique_ptr<TorchNet> net(new TorchNet());
+  const std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+  net->impl_->file.path =
+      (ec ? std::filesystem::path(path) : absolute).lexically_normal().string();
+  net->impl_->file.sha256 = Sha256Hex(bytes);
+  try {
+    torch::serialize::InputArchive archive;
+    archive.load_from(bytes.data(), bytes.size());
+    torch::Tensor meta;
+    if (!archive.try_read(kMetaKey, meta, /*is_buffer=*/true))
+      throw std::runtime_error("not an aia I-GBNet model (no metadata)");
+    meta = meta.to(torch::kUInt8).contiguous();
+    const std::string json(reinterpret_cast<const char*>(meta.data_ptr()),
+                           meta.numel());
+    net->impl_->config = NetworkConfig::FromJson(json);
+    net->impl_->module = IgbNetModule(net->impl_->config);
+    // Loading replaces tensors whatever their shape: check them after.
+    std::vector<std::pair<std::string, std::vector<int64_t>>> shapes;
+    for (const auto& p : net->impl_->module->named_parameters())
+      shapes.emplace_back(p.key(), p.value().sizes().vec());
+    for (const auto& b : net->impl_->module->named_buffers())
+      shapes.emplace_back(b.key(), b.value().sizes().vec());
+    net->impl_->module->load(archive);
+    auto params = net->impl_->module->named_parameters();
+    auto buffers = net->impl_->module->named_buffers();
+    for (const auto& [name, shape] : shapes) {
+      const torch::Tensor* t = params.find(name);
+      if (!t) t = buffers.find(name);
+      if (!t || t->sizes().vec() != shape)
+        throw std::runtime_error("tensor '" + name +
+                                 "' does not match the model's metadata");
+      if (t->is_floating_point() && !torch::isfinite(*t).all().item<bool>())
+        throw std::runtime_error("tensor '" + name + "' is not finite");
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const c10::Error& e) {
+    std::string what = e.what_without_backtrace();
+    const auto nl = what.find('\n');
+    if (nl != std::string::npos) what.resize(nl);
+    throw fail("not a readable model (" + what + ")");
+  } catch (const std::exception& e) {
+    throw fail(e.what());
+  }
+  net->impl_->module->eval();
+  return net;
+}
+
+void TorchNet::Save(const std::string& path) const {
+  torch::serialize::OutputArchive archive;
+  impl_->module->save(archive);
+  const std::string json = impl_->config.ToJson();
+  torch::Tensor meta =
+      torch::empty({static_cast<int64_t>(json.size())}, torch::kUInt8);
+  std::memcpy(meta.data_ptr(), json.data(), json.size());
+  archive.write(kMetaKey, meta, /*is_buffer=*/true);
+  SaveArchiveAtomic(archive, path);
+}
+
+void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
+                       const std::string& path) {
+  // Serialized into memory, then written by aia's own atomic writer: a
+  // failed write (a full disk) is one "cannot write 'PATH': <errno text>"
+  // error and leaves no temporary file, where libtorch's own file writer
+  // aborts the process with a backtrace.
+  std::string bytes;
+  archive.save_to([&bytes](const void* data, std::size_t size) {
+    bytes.append(static_cast<const char*>(data), size);
+    return size;
+  });
+  WriteFileAtomic(path, bytes);
+}
+
+std::shared_ptr<const FoldedNet> TorchNet::Folded() const {
+  std::lock_guard<std::mutex> lock(impl_->folded_mutex);
+  if (!impl_->folded)
+    impl_->folded = std::make_shared<const FoldedNet>(Fold(impl_->module));
+  return impl_->folded;
+}
+
+void TorchNet::Infer(const float* images, int batch, int height, int width,
+                     bool embed, float* out) const {
+  AIA_CHECK(batch >= 0 && height > 0 && width > 0);
+  if (batch == 0) return;
+  torch::NoGradGuard no_grad;
+  const torch::Tensor x = torch::from_blob(
+      const_cast<float*>(images),
+      {batch, impl_->config.channels.num_channels(), height, width},
+      torch::kFloat32);
+  const std::shared_ptr<const FoldedNet> folded = Folded();
+  const torch::Tensor y =
+      (embed ? FoldedEmbed(*folded, impl_->module, impl_->config, x)
+             : FoldedForward(*folded, impl_->module, impl_->config, x))
+          .contiguous();
+  std::memcpy(out, y.data_ptr<float>(), sizeof(float) * y.numel());
+}
+
+void TorchNet::Head(const float* features, const TeamGraph& graph,
+                    float* logits) const {
+  const int n = graph.rows();
+  if (n == 0) return;
+  // The training graph's layers on the whole team at once, on the calling
+  // thread: S^k z in the graph's order, then M_k and fc2.
+  torch::NoGradGuard no_grad;
+  const GraphTensors g = ToTensors(graph);
+  const torch::Tensor z = torch::from_blob(
+      const_cast<float*>(features), {n, impl_->config.hidden}, torch::kFloat32);
+  const torch::Tensor y = impl_->module->head(z, &g).contiguous();
+  std::memcpy(logits, y.data_ptr<float>(), sizeof(float) * y.numel());
+}
+
+}  // namespace aia

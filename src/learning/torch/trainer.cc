@@ -1,0 +1,701 @@
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <sstream>
+
+#include "aia/core/error.h"
+#include "aia/core/field_io.h"
+#include "aia/core/io.h"
+#include "aia/core/rng.h"
+#include "aia/learning/dataset.h"
+#include "aia/world/map.h"
+#include "torch_net.h"
+
+namespace aia {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The dataset with one channel renderer per world.
+struct Corpus {
+  Dataset data;
+  std::vector<ChannelRenderer> renderers;
+  std::vector<char> val_world;
+  std::vector<int> train, val;  // sample indices
+  // For message passing: each sample's neighbours among the samples of its
+  // world and step (matched by position; a neighbour the dataset holds no
+  // sample of, one the expert kept still, is left out).
+  std::vector<std::vector<int>> neighbours;
+};
+
+// Whether samples a and b are robots of the same world at the same step.
+bool SameStep(const Corpus& c, int a, int b) {
+  const DatasetSample &x = c.data.samples[a], &y = c.data.samples[b];
+  return x.world == y.world && x.step == y.step;
+}
+
+// Fills c->neighbours (samples come sorted by world, step and robot).
+void LinkNeighbours(Corpus* c) {
+  const std::vector<DatasetSample>& s = c->data.samples;
+  const int n = static_cast<int>(s.size());
+  c->neighbours.assign(n, {});
+  std::map<std::pair<double, double>, int> at;
+  for (int b = 0; b < n;) {
+    int e = b;
+    while (e < n && SameStep(*c, e, b)) ++e;
+    at.clear();
+    for (int i = b; i < e; ++i)
+      at.emplace(std::make_pair(s[i].position.x(), s[i].position.y()), i);
+    for (int i = b; i < e; ++i)
+      for (const Vec2& p : s[i].neighbours) {
+        const auto it = at.find({p.x(), p.y()});
+        if (it != at.end() && it->second != i)
+          c->neighbours[i].push_back(it->second);
+      }
+    b = e;
+  }
+}
+
+// The rows a batch of `centres` renders: the centres first, then every
+// sample within `hops` links of one (their outputs need them), and the
+// graph among those rows.
+void GraphRows(const Corpus& c, const std::vector<int>& centres, int hops,
+               std::vector<int>* rows, TeamGraph* graph) {
+  *rows = centres;
+  std::map<int, int> row_of;
+  for (int b = 0; b < static_cast<int>(centres.size()); ++b)
+    row_of.emplace(centres[b], b);
+  std::size_t frontier = 0;
+  for (int k = 0; k < hops; ++k) {
+    const std::size_t end = rows->size();
+    for (std::size_t r = frontier; r < end; ++r)
+      for (int j : c.neighbours[(*rows)[r]])
+        if (row_of.emplace(j, static_cast<int>(rows->size())).second)
+          rows->push_back(j);
+    frontier = end;
+  }
+  graph->offsets.assign(1, 0);
+  graph->neighbours.clear();
+  for (int i : *rows) {
+    for (int j : c.neighbours[i]) {
+      const auto it = row_of.find(j);
+      if (it != row_of.end()) graph->neighbours.push_back(it->second);
+    }
+    graph->offsets.push_back(static_cast<int>(graph->neighbours.size()));
+  }
+}
+
+// The batches of one pass over `samples` (in this order) for message
+// passing: whole steps, each batch the samples of consecutive steps until it
+// holds `batch` or more. `samples` must list each step's samples together.
+std::vector<std::vector<int>> StepBatches(const Corpus& c,
+                                          const std::vector<int>& samples,
+                                          int batch) {
+  std::vector<std::vector<int>> out(1);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    out.back().push_back(samples[i]);
+    const bool step_ends =
+        i + 1 == samples.size() || !SameStep(c, samples[i + 1], samples[i]);
+    if (step_ends && static_cast<int>(out.back().size()) >= batch &&
+        i + 1 < samples.size())
+      out.emplace_back();
+  }
+  if (out.back().empty()) out.pop_back();
+  return out;
+}
+
+Corpus LoadCorpus(const std::vector<std::string>& paths,
+                  const ChannelParams& channels, double val_share,
+                  std::uint64_t seed, double weak_weight) {
+  Corpus c;
+  c.data = ReadDataset(paths, "--data");
+  if (c.data.samples.empty())
+    throw InputError("command line", 0, "--data", "holds no samples");
+  c.renderers.reserve(c.data.worlds.size());
+  for (const DatasetWorld& w : c.data.worlds) {
+    const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
+                  w.robot_radius);
+    c.renderers.emplace_back(map.occupancy(), w.size, channels, &map.lattice());
+    // The split is by world: a world's samples all go one way.
+    Rng rng(seed, "train/split", static_cast<std::uint64_t>(w.seed));
+    c.val_world.push_back(rng.Uniform() < val_share ? 1 : 0);
+  }
+  for (int i = 0; i < static_cast<int>(c.data.samples.size()); ++i) {
+    const DatasetSample& s = c.data.samples[i];
+    if (c.val_world[s.world]) {
+      c.val.push_back(i);
+    } else if (s.useful || weak_weight > 0.0) {
+      c.train.push_back(i);
+    }
+  }
+  return c;
+}
+
+// Renders samples idx[0, n) into `images`, labels and weights.
+void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
+               int* height, int* width, std::vector<float>* images,
+               std::vector<int64_t>* labels, std::vector<float>* weights,
+               std::vector<char>* useful) {
+  const ChannelRenderer& r0 = c->renderers[c->data.samples[idx[0]].world];
+  *height = r0.height();
+  *width = r0.width();
+  const std::size_t size = r0.ImageSize();
+  images->resize(size * n);
+  labels->resize(n);
+  weights->resize(n);
+  useful->resize(n);
+  for (int b = 0; b < n; ++b) {
+    const DatasetSample& s = c->data.samples[idx[b]];
+    ChannelRenderer& r = c->renderers[s.world];
+    if (r.height() != *height || r.width() != *width)
+      throw InputError("command line", 0, "--data",
+                       "worlds of different sizes in the global frame; use "
+                       "--frame centred or one workspace size");
+    const DatasetWorld& w = c->data.worlds[s.world];
+    r.Render(s.position, s.neighbours, s.targets, w.log_det_prior, w.eps,
+             images->data() + b * size);
+    (*labels)[b] = static_cast<int64_t>(s.label);
+    (*weights)[b] = s.useful ? 1.0f : static_cast<float>(weak_weight);
+    (*useful)[b] = s.useful;
+  }
+}
+
+ValidationResult Evaluate(IgbNetModule& module, Corpus* c, int hops) {
+  ValidationResult r;  // NaN: no held-out samples
+  if (c->val.empty()) return r;
+  module->eval();
+  torch::NoGradGuard no_grad;
+  const int channels = c->renderers.front().channels();
+  std::vector<float> images, weights;
+  std::vector<int64_t> labels;
+  std::vector<char> useful;
+  long useful_n = 0, useful_right = 0, right = 0;
+  double loss = 0.0;
+  constexpr int kBatch = 128;
+  std::vector<std::vector<int>> batches;
+  if (hops > 0) {
+    batches = StepBatches(*c, c->val, kBatch);
+  } else {
+    for (std::size_t first = 0; first < c->val.size(); first += kBatch)
+      batches.emplace_back(
+          c->val.begin() + first,
+          c->val.begin() + std::min(c->val.size(), first + kBatch));
+  }
+  std::vector<int> rows;
+  TeamGraph graph;
+  for (const std::vector<int>& centres : batches) {
+    const int n = static_cast<int>(centres.size());
+    if (hops > 0) {
+      GraphRows(*c, centres, hops, &rows, &graph);
+    } else {
+      rows = centres;
+    }
+    const int m = static_cast<int>(rows.size());
+    int h = 0, w = 0;
+    MakeBatch(c, rows.data(), m, 1.0, &h, &w, &images, &labels, &weights,
+              &useful);
+    const torch::Tensor x =
+        torch::from_blob(images.data(), {m, channels, h, w});
+    const torch::Tensor y = torch::from_blob(labels.data(), {n}, torch::kInt64);
+    const torch::Tensor logits =
+        hops > 0 ? module->forward(x, ToTensors(graph)).narrow(0, 0, n)
+                 : module->forward(x);
+    loss += torch::nn::functional::cross_entropy(
+                logits, y,
+                torch::nn::functional::CrossEntropyFuncOptions().reduction(
+                    torch::kSum))
+                .item<double>();
+    const torch::Tensor pred = logits.argmax(1);
+    const auto* p = pred.data_ptr<int64_t>();
+    for (int b = 0; b < n; ++b) {
+      const bool ok = p[b] == labels[b];
+      right += ok;
+      if (useful[b]) {
+        ++useful_n;
+        useful_right += ok;
+      }
+    }
+  }
+  r.samples = static_cast<long>(c->val.size());
+  r.loss = loss / r.samples;
+  r.acc = static_cast<double>(right) / r.samples;
+  r.acc_useful = useful_n ? static_cast<double>(useful_right) / useful_n
+                          : std::numeric_limits<double>::quiet_NaN();
+  return r;
+}
+
+std::string OptionsKey(const TrainOptions& o) {
+  std::ostringstream s;
+  s.precision(17);
+  s << o.network.ToJson() << " epochs=" << o.epochs << " batch=" << o.batch
+    << " lr=" << o.lr << " lr_min=" << o.lr_min
+    << " weight_decay=" << o.weight_decay << " weak_weight=" << o.weak_weight
+    << " val_share=" << o.val_share << " seed=" << o.seed << " init=" << o.init;
+  for (const std::string& d : o.data) s << " data=" << d;
+  return s.str();
+}
+
+torch::Tensor StringTensor(const std::string& text) {
+  torch::Tensor t =
+      torch::empty({static_cast<int64_t>(text.size())}, torch::kUInt8);
+  std::memcpy(t.data_ptr(), text.data(), text.size());
+  return t;
+}
+
+std::string TensorString(torch::Tensor t) {
+  t = t.to(torch::kUInt8).contiguous();
+  return std::string(reinterpret_cast<const char*>(t.data_ptr()), t.numel());
+}
+
+// The checkpoint's log: one ExactLine per epoch (NaN as "nan"). A log of an
+// older build (space-separated too, reals with 17 digits) reads the same.
+std::vector<EpochLog> ParseLog(const std::string& text) {
+  std::vector<EpochLog> logs;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    EpochLog e;
+    if (!ParseExactLine(line, &e)) break;
+    logs.push_back(e);
+  }
+  return logs;
+}
+
+// Every flag against its declaration (TrainOptions and NetworkConfig), with
+// the scenario keys' error form: `command line: --flag: what`.
+void CheckOptions(const TrainOptions& o) {
+  TrainOptions own = o;
+  CheckFlags(&own);
+  NetworkConfig network = o.network;
+  CheckFlags(&network);
+  if (o.out.empty())
+    throw InputError("command line", 0, "--out",
+                     "is required (the model file to write)");
+}
+
+// No file written (the model, its checkpoint, its log) may be a file read:
+// a dataset file of --data, or the --init model. --init M --out M is
+// refused too: the first epoch would replace the starting point, so a run
+// started again (or one killed before its first checkpoint) would start
+// from a half-trained model.
+void CheckOutputsAreNotInputs(const TrainOptions& o) {
+  std::vector<InputFile> inputs;
+  for (const std::string& f : DatasetFiles(o.data, "--data"))
+    inputs.push_back({f, "a dataset file of --data"});
+  if (!o.init.empty())
+    inputs.push_back({o.init, "the model to start from (--init)"});
+  const std::pair<std::string, std::string> outputs[] = {
+      {o.out, ""},
+      {CheckpointPath(o.out), "the checkpoint written next to the model"},
+      {TrainLogPath(o.out), "the log written next to the model"}};
+  for (const auto& [path, written] : outputs) {
+    CheckNotAnInput(path, "--out", inputs, written);
+    // A new *.sqlite file in a --data folder would be read as data next
+    // time.
+    const std::filesystem::path p(path);
+    if (p.extension() != ".sqlite") continue;
+    for (const std::string& d : o.data) {
+      std::filesystem::path parent = p.parent_path();
+      if (parent.empty()) parent = ".";
+      std::error_code ec;
+      if (std::filesystem::is_directory(d, ec) && SameFile(parent.string(), d))
+        throw InputError("command line", 0, "--out",
+                         "'" + path + "'" +
+                             (written.empty() ? "" : " (" + written + ")") +
+                             " would be read as a dataset file of --data '" +
+                             d + "'; choose another path");
+    }
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// The network to train: --init's (its architecture and channels; extended
+// by message layers that start at zero, the same function, when
+// --message-hops asks for more hops), or a fresh one. o->network becomes
+// its configuration.
+std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
+  if (o->init.empty()) {
+    if (o->message_hops >= 0) o->network.message_hops = o->message_hops;
+    return std::make_unique<TorchNet>(o->network, o->seed);
+  }
+  std::unique_ptr<TorchNet> net =
+      TorchNet::Load(o->init, "command line", 0, "--init");
+  o->network = net->config();
+  if (o->message_hops < 0 || o->message_hops == o->network.message_hops)
+    return net;
+  if (o->message_hops < o->network.message_hops)
+    throw InputError("command line", 0, "--message-hops",
+                     "the --init model passes messages over " +
+                         std::to_string(o->network.message_hops) +
+                         " hops; it can be extended, not cut");
+  o->network.message_hops = o->message_hops;
+  auto wider = std::make_unique<TorchNet>(o->network, o->seed);
+  torch::NoGradGuard no_grad;
+  IgbNetModule& from = net->impl().module;
+  IgbNetModule& to = wider->impl().module;
+  auto params = to->named_parameters();
+  auto buffers = to->named_buffers();
+  for (const auto& p : from->named_parameters())
+    params[p.key()].copy_(p.value());
+  for (const auto& b : from->named_buffers()) buffers[b.key()].copy_(b.value());
+  for (std::size_t k = from->messages.size(); k < to->messages.size(); ++k)
+    to->messages[k]->weight.zero_();
+  return wider;
+}
+
+// One training run at a time in OUT's folder (an flock on the folder,
+// released when the run ends or dies); then the temporary files that killed
+// runs left there are removed.
+std::unique_ptr<FileLock> LockOutputFolder(const std::string& out) {
+  std::filesystem::path parent = std::filesystem::path(out).parent_path();
+  if (parent.empty()) parent = ".";
+  std::unique_ptr<FileLock> lock;
+  try {
+    MakeDirs(parent.string());
+    lock = std::make_unique<FileLock>(parent.string());
+    CheckReplaceableFile(out);
+  } catch (const std::runtime_error& e) {
+    throw InputError("command line", 0, "--out", e.what());
+  }
+  // OUT, OUT.ckpt and the log share OUT's name without ".pt".
+  std::string prefix = std::filesystem::path(out).filename().string();
+  if (prefix.size() > 3 && prefix.compare(prefix.size() - 3, 3, ".pt") == 0)
+    prefix.resize(prefix.size() - 3);
+  RemoveStaleTemporaries(parent.string(), prefix);
+  return lock;
+}
+
+// --resume: the model, optimizer state and log of the checkpoint, which must
+// have been written with the same options (`key`). Returns the epochs done.
+int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
+                         IgbNetModule& module, torch::optim::Adam* optimizer,
+                         std::vector<EpochLog>* logs) {
+  try {
+    torch::serialize::InputArchive archive, model_archive, optim_archive;
+    archive.load_from(ckpt);
+    torch::Tensor t;
+    archive.read("options", t, true);
+    if (TensorString(t) != key)
+      throw InputError(ckpt, 0, "--resume",
+                       "was written with other options; run without "
+                       "--resume or with the same options");
+    archive.read("epoch", t, true);
+    const int done = static_cast<int>(t.item<int64_t>());
+    archive.read("model", model_archive);
+    archive.read("optimizer", optim_archive);
+    module->load(model_archive);
+    optimizer->load(optim_archive);
+    archive.read("log", t, true);
+    *logs = ParseLog(TensorString(t));
+    return done;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(ckpt, 0, "--resume",
+                     std::string("cannot read the checkpoint: ") + e.what());
+  }
+}
+
+// Cosine from lr to lr_min over every batch of every epoch.
+struct LrSchedule {
+  double lr, lr_min;
+  long total_steps;
+  // `step` counts batches of --batch samples (fractional with message
+  // passing, whose batches are whole steps).
+  double At(double step) const {
+    return lr_min +
+           0.5 * (lr - lr_min) *
+               (1.0 + std::cos(M_PI * step / static_cast<double>(total_steps)));
+  }
+};
+
+// An epoch's batches of training samples, shuffled by the epoch's stream.
+// With message passing, whole steps are shuffled, so that a robot's
+// neighbours are in its batch.
+std::vector<std::vector<int>> EpochBatches(const Corpus& corpus,
+                                           const TrainOptions& o, int epoch,
+                                           long steps_per_epoch, int hops) {
+  std::vector<int> order = corpus.train;
+  Rng rng(o.seed, "train/shuffle", static_cast<std::uint64_t>(epoch));
+  std::vector<std::vector<int>> batches;
+  if (hops > 0) {
+    std::vector<std::pair<int, int>> steps;  // ranges of `order`
+    for (std::size_t i = 0; i < order.size();) {
+      std::size_t e = i + 1;
+      while (e < order.size() && SameStep(corpus, order[e], order[i])) ++e;
+      steps.emplace_back(static_cast<int>(i), static_cast<int>(e));
+      i = e;
+    }
+    for (std::size_t i = steps.size(); i > 1; --i)
+      std::swap(steps[i - 1], steps[rng.UniformInt(i)]);
+    std::vector<int> shuffled;
+    shuffled.reserve(order.size());
+    for (const auto& [b, e] : steps)
+      shuffled.insert(shuffled.end(), order.begin() + b, order.begin() + e);
+    return StepBatches(corpus, shuffled, o.batch);
+  }
+  for (std::size_t i = order.size(); i > 1; --i)
+    std::swap(order[i - 1], order[rng.UniformInt(i)]);
+  for (long s = 0; s < steps_per_epoch; ++s) {
+    const std::size_t first = static_cast<std::size_t>(s) * o.batch;
+    batches.emplace_back(
+        order.begin() + first,
+        order.begin() + std::min(order.size(), first + o.batch));
+  }
+  return batches;
+}
+
+// Scratch memory of the batches, kept across epochs.
+struct BatchScratch {
+  std::vector<float> images, weights;
+  std::vector<int64_t> labels;
+  std::vector<char> useful;
+  std::vector<int> rows;
+  TeamGraph graph;
+};
+
+// One epoch of Adam steps over `batches`: the log's training columns (lr,
+// loss, accuracy, samples).
+EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
+                    Corpus* corpus,
+                    const std::vector<std::vector<int>>& batches,
+                    const TrainOptions& o, const LrSchedule& schedule,
+                    int epoch, long steps_per_epoch, int hops,
+                    BatchScratch* b) {
+  const auto t0 = Clock::now();
+  module->train();
+  double loss_sum = 0.0, weight_sum = 0.0;
+  long right = 0, seen = 0, consumed = 0;
+  double lr = o.lr;
+  const int channels = corpus->renderers.front().channels();
+  const long num_batches = static_cast<long>(batches.size());
+  for (long s = 0; s < num_batches; ++s) {
+    const std::vector<int>& centres = batches[s];
+    const int n = static_cast<int>(centres.size());
+    if (hops > 0) {
+      GraphRows(*corpus, centres, hops, &b->rows, &b->graph);
+    } else {
+      b->rows = centres;
+    }
+    const int m = static_cast<int>(b->rows.size());
+    if (m < 2) break;  // batch norm needs two samples
+    int h = 0, w = 0;
+    MakeBatch(corpus, b->rows.data(), m, o.weak_weight, &h, &w, &b->images,
+              &b->labels, &b->weights, &b->useful);
+    lr = schedule.At(static_cast<double>(epoch * steps_per_epoch) +
+                     (hops > 0 ? static_cast<double>(consumed) / o.batch
+                               : static_cast<double>(s)));
+    consumed += n;
+    for (auto& group : optimizer->param_groups())
+      static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+    const torch::Tensor x =
+        torch::from_blob(b->images.data(), {m, channels, h, w});
+    const torch::Tensor y =
+        torch::from_blob(b->labels.data(), {n}, torch::kInt64);
+    const torch::Tensor wt = torch::from_blob(b->weights.data(), {n});
+    const torch::Tensor logits =
+        hops > 0 ? module->forward(x, ToTensors(b->graph)).narrow(0, 0, n)
+                 : module->forward(x);
+    const torch::Tensor per = torch::nn::functional::cross_entropy(
+        logits, y,
+        torch::nn::functional::CrossEntropyFuncOptions().reduction(
+            torch::kNone));
+    const double wsum = wt.sum().item<double>();
+    if (wsum <= 0.0) continue;
+    const torch::Tensor loss = (per * wt).sum() / wsum;
+    optimizer->zero_grad();
+    loss.backward();
+    optimizer->step();
+    loss_sum += loss.item<double>() * wsum;
+    weight_sum += wsum;
+    const torch::Tensor pred = logits.argmax(1);
+    right += (pred == y).sum().item<int64_t>();
+    seen += n;
+    if (o.progress && isatty(2) && (s % 50 == 0 || s + 1 == num_batches))
+      std::fprintf(stderr,
+                   "\r[train] epoch %d/%d  batch %ld/%ld  loss %.4f  acc "
+                   "%.3f  %.0f samples/s   ",
+                   epoch + 1, o.epochs, s + 1, num_batches,
+                   loss_sum / std::max(weight_sum, 1e-12),
+                   static_cast<double>(right) / std::max(seen, 1L),
+                   seen / std::max(Seconds(t0), 1e-9));
+  }
+  EpochLog e;
+  e.epoch = epoch + 1;
+  e.lr = lr;
+  e.train_loss = loss_sum / std::max(weight_sum, 1e-12);
+  e.train_acc = static_cast<double>(right) / std::max(seen, 1L);
+  e.samples = seen;
+  return e;
+}
+
+// After an epoch: the model (OUT), the checkpoint (model, optimizer, epochs
+// done, options, log) and the log (CSV), each written atomically.
+void SaveEpoch(const TrainOptions& o, const TorchNet& net, IgbNetModule& module,
+               torch::optim::Adam& optimizer, const std::string& key,
+               const std::vector<EpochLog>& logs) {
+  std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
+  if (!parent.empty()) MakeDirs(parent.string());
+  net.Save(o.out);
+  {
+    torch::serialize::OutputArchive archive, model_archive, optim_archive;
+    module->save(model_archive);
+    optimizer.save(optim_archive);
+    archive.write("model", model_archive);
+    archive.write("optimizer", optim_archive);
+    archive.write("epoch",
+                  torch::tensor(static_cast<int64_t>(logs.back().epoch)), true);
+    archive.write("options", StringTensor(key), true);
+    std::ostringstream log;
+    log.precision(17);
+    for (const EpochLog& l : logs)
+      log << l.epoch << ' ' << l.lr << ' ' << l.train_loss << ' ' << l.train_acc
+          << ' ' << l.val_loss << ' ' << l.val_acc << ' ' << l.val_acc_useful
+          << ' ' << l.samples << ' ' << l.seconds << '\n';
+    archive.write("log", StringTensor(log.str()), true);
+    SaveArchiveAtomic(archive, CheckpointPath(o.out));
+  }
+  std::string csv = CsvHeader<EpochLog>() + "\n";
+  for (const EpochLog& l : logs) csv += CsvLine(l);
+  WriteFileAtomic(TrainLogPath(o.out), csv);
+}
+
+}  // namespace
+
+std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
+  TrainOptions o = options;
+  CheckOptions(o);
+  if (o.threads > 0) torch::set_num_threads(o.threads);
+  const std::unique_ptr<TorchNet> net = NetworkToTrain(&o);
+  const int hops = o.network.message_hops;
+  CheckOutputsAreNotInputs(o);
+  IgbNetModule& module = net->impl().module;
+  torch::optim::Adam optimizer(
+      module->parameters(),
+      torch::optim::AdamOptions(o.lr).weight_decay(o.weight_decay));
+  const std::unique_ptr<FileLock> lock = LockOutputFolder(o.out);
+  const std::string key = OptionsKey(o);
+  const std::string ckpt = CheckpointPath(o.out);
+  int start = 0;
+  std::vector<EpochLog> logs;
+  std::error_code ec;
+  if (o.resume && std::filesystem::is_regular_file(ckpt, ec))
+    start = ResumeFromCheckpoint(ckpt, key, module, &optimizer, &logs);
+  if (start >= o.epochs) return logs;
+
+  Corpus corpus = LoadCorpus(o.data, o.network.channels, o.val_share, o.seed,
+                             o.weak_weight);
+  if (corpus.train.empty())
+    throw InputError("command line", 0, "--data",
+                     "leaves no training samples after the split");
+  if (hops > 0) LinkNeighbours(&corpus);
+  if (o.progress)
+    std::fprintf(stderr,
+                 "[train] %zu worlds, %zu samples: %zu for training, %zu held "
+                 "out (%zu worlds); %lld parameters\n",
+                 corpus.data.worlds.size(), corpus.data.samples.size(),
+                 corpus.train.size(), corpus.val.size(),
+                 static_cast<std::size_t>(std::count(
+                     corpus.val_world.begin(), corpus.val_world.end(), 1)),
+                 static_cast<long long>(net->NumParameters()));
+
+  const long steps_per_epoch =
+      (static_cast<long>(corpus.train.size()) + o.batch - 1) / o.batch;
+  const LrSchedule schedule{o.lr, o.lr_min, steps_per_epoch * o.epochs};
+  BatchScratch scratch;
+  for (int epoch = start; epoch < o.epochs; ++epoch) {
+    if (o.stop_after_epochs > 0 && epoch - start >= o.stop_after_epochs) break;
+    const auto t0 = Clock::now();
+    const std::vector<std::vector<int>> batches =
+        EpochBatches(corpus, o, epoch, steps_per_epoch, hops);
+    EpochLog e = TrainEpoch(module, &optimizer, &corpus, batches, o, schedule,
+                            epoch, steps_per_epoch, hops, &scratch);
+    const ValidationResult v = Evaluate(module, &corpus, hops);
+    e.val_loss = v.loss;
+    e.val_acc = v.acc;
+    e.val_acc_useful = v.acc_useful;
+    e.seconds = Seconds(t0);
+    logs.push_back(e);
+    module->eval();
+    SaveEpoch(o, *net, module, optimizer, key, logs);
+    if (o.progress)
+      std::fprintf(stderr,
+                   "%s[train] epoch %d/%d: loss %.4f acc %.3f | %s | %.0f s, "
+                   "%.0f samples/s\n",
+                   isatty(2) ? "\r" : "", e.epoch, o.epochs, e.train_loss,
+                   e.train_acc, ValidationText(e).c_str(), e.seconds,
+                   e.samples / std::max(e.seconds, 1e-9));
+  }
+  return logs;
+}
+
+ValidationResult TorchValidate(const std::string& model,
+                               const std::vector<std::string>& data,
+                               double val_share, std::uint64_t seed) {
+  std::unique_ptr<TorchNet> net =
+      TorchNet::Load(model, "command line", 0, "--validate");
+  Corpus corpus =
+      LoadCorpus(data, net->config().channels, val_share, seed, 1.0);
+  if (corpus.val.empty())
+    throw InputError("command line", 0, "--val-share",
+                     "holds out none of the " +
+                         std::to_string(corpus.data.worlds.size()) +
+                         " worlds of --data: nothing to validate on (a larger "
+                         "--val-share, or more worlds)");
+  const int hops = net->config().message_hops;
+  if (hops > 0) LinkNeighbours(&corpus);
+  return Evaluate(net->impl().module, &corpus, hops);
+}
+
+double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
+                         int batch, bool train, int iterations, int repeats) {
+  TorchNet net(config, 1);
+  IgbNetModule& module = net.impl().module;
+  const torch::Tensor x =
+      torch::rand({batch, config.channels.num_channels(), height, width});
+  const torch::Tensor y = torch::randint(0, kNumMoves, {batch}, torch::kInt64);
+  torch::optim::Adam optimizer(module->parameters(),
+                               torch::optim::AdamOptions(1e-4));
+  std::vector<float> images(x.numel()), logits(batch * kNumMoves);
+  std::memcpy(images.data(), x.data_ptr<float>(), images.size() * 4);
+  const auto once = [&] {
+    if (train) {
+      module->train();
+      const torch::Tensor loss =
+          torch::nn::functional::cross_entropy(module->forward(x), y);
+      optimizer.zero_grad();
+      loss.backward();
+      optimizer.step();
+    } else {
+      net.Infer(images.data(), batch, height, width, false, logits.data());
+    }
+  };
+  for (int i = 0; i < 3; ++i) once();
+  std::vector<double> rates;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = Clock::now();
+    for (int i = 0; i < iterations; ++i) once();
+    rates.push_back(batch * iterations / Seconds(t0));
+  }
+  std::sort(rates.begin(), rates.end());
+  return rates[rates.size() / 2];
+}
+
+}  // namespace aia
