@@ -1,10 +1,8 @@
 #include "aia/runtime/episode.h"
 
-#include <Eigen/LU>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 
 #include "aia/core/check.h"
 #include "aia/core/interrupt.h"
@@ -21,12 +19,27 @@ double Since(Clock::time_point t0) {
 // Targets move during the first part of a step's physics, so video is smooth.
 constexpr double kTargetMotionSeconds = 0.25;
 
+std::vector<TargetModel> TargetModels(const World& world) {
+  std::vector<TargetModel> models;
+  for (const TargetPrior& p : world.priors) models.push_back(p.model);
+  return models;
+}
+
+// Every robot starts at the prior the scenario tells it.
+TeamEstimate PriorEstimate(const World& world) {
+  std::vector<Eigen::VectorXd> means;
+  std::vector<Eigen::MatrixXd> covs;
+  for (const TargetPrior& p : world.priors) {
+    means.push_back(p.mean);
+    covs.push_back(p.cov);
+  }
+  return TeamEstimate(TargetModels(world), world.NumRobots(), means, covs);
+}
+
 }  // namespace
 
 BeliefLayout MakeBeliefLayout(const World& world) {
-  std::vector<TargetModel> models;
-  for (const TargetPrior& p : world.priors) models.push_back(p.model);
-  return BeliefLayout(std::move(models));
+  return BeliefLayout(TargetModels(world));
 }
 
 Episode::Episode(std::shared_ptr<const Instance> instance,
@@ -44,29 +57,18 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
       mission_(mission),
       sim_(instance_->physics),
       policy_(std::move(policy)),
-      layout_(MakeBeliefLayout(instance_->world)),
+      estimate_(PriorEstimate(instance_->world)),
       target_rng_(instance_->scenario.seed, "targets.motion") {
   const Scenario& scenario = instance_->scenario;
   const World& world = instance_->world;
   const int n = world.NumRobots();
   num_targets_ = world.NumTargets();
 
-  std::vector<Eigen::VectorXd> means;
-  std::vector<Eigen::MatrixXd> covs;
   for (int k = 0; k < num_targets_; ++k) {
-    means.push_back(world.priors[k].mean);
-    covs.push_back(world.priors[k].cov);
-    log_det_prior_.push_back(std::log(world.priors[k].cov.determinant()));
     target_state_.push_back(world.truth.targets[k]);
     target_pos_.push_back(world.TargetStart(k));
   }
   target_prev_ = target_pos_;
-  predicted_ = BeliefSet(&layout_, n);
-  fused_ = BeliefSet(&layout_, n);
-  central_ = BeliefSet(&layout_, 1);
-  predicted_.SetPrior(means, covs);
-  fused_.SetPrior(means, covs);
-  central_.SetPrior(means, covs);
 
   comm_ = CommNetwork(scenario.communication, n, world.truth.failures,
                       scenario.seed);
@@ -79,9 +81,6 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   }
   moves_.assign(n, Move::kStay);
   applied_.assign(n, Move::kStay);
-  det_.assign(static_cast<size_t>(n) * num_targets_, 1.0);
-  min_det_.assign(num_targets_, 1.0);
-  best_.assign(num_targets_, -1);
   if (policy_) policy_->Reset(world.map, n, num_targets_, scenario.seed);
   Observe();  // step 0: measurements at the starts, fused with the prior
   times_ = PhaseTimes{};  // phase times are those of the decision steps
@@ -115,18 +114,15 @@ bool Episode::done() const {
 }
 
 int Episode::NumLocalized() const {
-  int count = 0;
-  for (int k = 0; k < num_targets_; ++k)
-    count += min_det_[k] <= mission_.eps ? 1 : 0;
-  return count;
+  return estimate_.NumLocalized(mission_.eps);
 }
 
 void Episode::MoveTargets() {
   const World& world = instance_->world;
   for (int k = 0; k < num_targets_; ++k) {
-    const TargetModel& model = layout_.model(k);
+    const TargetModel& model = estimate_.layout().model(k);
     target_prev_[k] = target_pos_[k];
-    if (layout_.is_static(k)) continue;
+    if (estimate_.layout().is_static(k)) continue;
     Eigen::VectorXd& x = target_state_[k];
     Eigen::VectorXd next = model.A * x + model.b;
     const double sd = std::sqrt(model.q);
@@ -147,9 +143,9 @@ DecisionContext Episode::Context() const {
   ctx.eps = mission_.eps;
   ctx.robot_lattice = &robot_idx_;
   ctx.comm = &comm_;
-  ctx.beliefs = &fused_;
-  ctx.central = &central_;
-  ctx.log_det_prior = &log_det_prior_;
+  ctx.beliefs = &estimate_.fused();
+  ctx.central = &estimate_.central();
+  ctx.log_det_prior = &estimate_.log_det_prior();
   return ctx;
 }
 
@@ -216,7 +212,6 @@ void Episode::Step() {
 }
 
 void Episode::Observe() {
-  const int n = instance_->world.NumRobots();
   auto t0 = Clock::now();
   comm_.Update(step_, robot_pos_);
   Sense(sim_, instance_->scenario.sensor, robot_pos_, target_pos_,
@@ -226,42 +221,26 @@ void Episode::Observe() {
   t0 = Clock::now();
   // Predict (not at step 0: the prior is the belief at time 0), exchange over
   // this step's graph, fuse with the robot's own measurements.
-  predicted_.data() = fused_.data();
-  if (step_ > 0) {
-    try {
-      Predict(&predicted_);
-      Predict(&central_);
-    } catch (const EstimateDiverged& e) {
-      // Unstable dynamics that no robot measures: the model, not the robots,
-      // makes the mission impossible; stop with the key to blame.
-      const int k = e.target();
-      throw instance_->scenario.ErrorAt(
-          k >= 0 ? "targets.list[" + std::to_string(k) + "].dynamics"
-                 : "targets",
-          "the estimate of target " + std::to_string(k) + " diverges at step " +
-              std::to_string(step_) + ": " + e.what() +
-              " (the dynamics are unstable and no robot measures the target; "
-              "a stable A, or robots that reach it sooner)");
-    }
+  try {
+    estimate_.Update(step_ > 0, comm_.AllNeighbors(),
+                     instance_->scenario.communication.kappa_self, z_,
+                     robot_pos_, comm_.active());
+  } catch (const EstimateDiverged& e) {
+    // Unstable dynamics that no robot measures: the model, not the robots,
+    // makes the mission impossible; stop with the key to blame.
+    const int k = e.target();
+    throw instance_->scenario.ErrorAt(
+        k >= 0 ? "targets.list[" + std::to_string(k) + "].dynamics" : "targets",
+        "the estimate of target " + std::to_string(k) + " diverges at step " +
+            std::to_string(step_) + ": " + e.what() +
+            " (the dynamics are unstable and no robot measures the target; "
+            "a stable A, or robots that reach it sooner)");
   }
-  MakeDkfWeights(comm_.AllNeighbors(),
-                 instance_->scenario.communication.kappa_self, &weights_);
-  Fuse(predicted_, weights_, z_, robot_pos_, &fused_);
-  CentralUpdate(z_, robot_pos_, &central_);
 
   // Judge the mission on the active robots' best estimates.
-  for (int i = 0; i < n; ++i)
-    for (int k = 0; k < num_targets_; ++k)
-      det_[static_cast<size_t>(i) * num_targets_ + k] =
-          fused_.DetCovariance(i, k);
-  TeamBestRows(det_, num_targets_, comm_.active(), &best_);
   bool all = true;
-  for (int k = 0; k < num_targets_; ++k) {
-    const int b = best_[k];
-    min_det_[k] = b < 0 ? std::numeric_limits<double>::infinity()
-                        : det_[static_cast<size_t>(b) * num_targets_ + k];
-    if (!(min_det_[k] <= mission_.eps)) all = false;
-  }
+  for (int k = 0; k < num_targets_; ++k)
+    if (!(estimate_.MinDet(k) <= mission_.eps)) all = false;
   all_localized_ = all;
   if (all) {
     ++localized_steps_;

@@ -17,6 +17,7 @@
 #include "aia/estimation/belief.h"
 #include "aia/estimation/filter.h"
 #include "aia/estimation/sensor_model.h"
+#include "aia/estimation/team_estimate.h"
 #include "aia/planning/policy.h"
 #include "aia/runtime/instance.h"
 #include "aia/scenario/config.h"
@@ -141,8 +142,11 @@ class Episode {
   const Simulation& sim() const { return sim_; }
   const Policy& policy() const { return *policy_; }
   const CommNetwork& comm() const { return comm_; }
-  const BeliefSet& beliefs() const { return fused_; }
-  const BeliefSet& central() const { return central_; }
+  // What the team knows (the fused beliefs, the centralized one, the best
+  // estimates); the accessors below read it.
+  const TeamEstimate& estimate() const { return estimate_; }
+  const BeliefSet& beliefs() const { return estimate_.fused(); }
+  const BeliefSet& central() const { return estimate_.central(); }
   const SensorModel& sensor() const { return scenario().sensor; }
   const std::vector<Vec2>& robot_positions() const { return robot_pos_; }
   const std::vector<int>& robot_lattice() const { return robot_idx_; }
@@ -156,15 +160,17 @@ class Episode {
   }
   // det Sigma_i^k of robot i's fused belief, row-major N x M.
   double Det(int robot, int target) const {
-    return det_[robot * num_targets_ + target];
+    return estimate_.Det(robot, target);
   }
   // The team's best estimate of target k (estimation/belief.h): the active
   // robot whose belief has the smallest det Sigma_k, or -1 if none is active.
-  int BestRobot(int target) const { return best_[target]; }
+  int BestRobot(int target) const { return estimate_.BestRobot(target); }
   // min over active robots of det Sigma_i^k.
-  double MinDet(int target) const { return min_det_[target]; }
+  double MinDet(int target) const { return estimate_.MinDet(target); }
   // log det Sigma_0^k per target (what the robots were told).
-  const std::vector<double>& log_det_prior() const { return log_det_prior_; }
+  const std::vector<double>& log_det_prior() const {
+    return estimate_.log_det_prior();
+  }
   const PhaseTimes& times() const { return times_; }
   const EpisodeStats& stats() const { return stats_; }
   // The whole team's view of the current step (the centralized belief
@@ -180,10 +186,8 @@ class Episode {
   MissionConfig mission_;
   Simulation sim_;
   std::unique_ptr<Policy> policy_;
-  BeliefLayout layout_;
-  BeliefSet predicted_, fused_, central_;
+  TeamEstimate estimate_;
   CommNetwork comm_;
-  DkfWeights weights_;
   SensingScratch sensing_;
   std::vector<Rng> sensor_rngs_, rule_rngs_;
   Rng target_rng_;
@@ -192,9 +196,6 @@ class Episode {
   std::vector<int> robot_idx_;
   std::vector<Move> moves_, applied_;
   std::vector<std::vector<Measurement>> z_;
-  std::vector<double> det_, min_det_;
-  std::vector<double> log_det_prior_;  // per target, of Sigma_0
-  std::vector<int> best_;
   std::vector<StepObserver*> observers_;
   int num_targets_ = 0;
   int step_ = 0;
