@@ -197,18 +197,13 @@ Action AddRunCommand(CLI::App& app) {
   cmd->add_option("--out", run->out_dir,
                   "output directory (default: renders/<scenario name>)")
       ->check(kPath);
-  auto trace = std::make_shared<std::string>("auto");
-  cmd->add_option("--trace", *trace,
-                  "trace.csv per step and target: full (every robot's det "
-                  "Sigma), min (the team's min_det only) or auto (full up to "
-                  "100 robots)")
-      ->capture_default_str();
+  // --trace, as RunOptions declares it.
+  auto declared = std::make_shared<DeclaredFlags>(cmd);
+  declared->Add(run.get());
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;
-    if (!aia::ParseTraceMode(*trace, &run->trace))
-      throw aia::InputError("command line", 0, "--trace",
-                            "'" + *trace + "' is not auto, full or min");
+    declared->Apply();
     run->overrides = flags->Get();
     run->progress = !*quiet;
     aia::InstallInterruptHandler();  // Ctrl-C: write what is done, exit 130
@@ -250,14 +245,9 @@ Action AddRenderCommand(CLI::App& app) {
   cmd->add_option("--frames", render->frames_dir,
                   "also write frames as PNG into this folder")
       ->check(kPath);
-  // --frames-every and --hold, as RenderOptions declares them.
+  // --frames-every, --hold and --edges, as RenderOptions declares them.
   auto declared = std::make_shared<DeclaredFlags>(cmd);
   declared->Add(render.get());
-  cmd->add_option("--edges", render->edges,
-                  "communication edges drawn: auto (lost messages, and the "
-                  "delivered ones while they stay readable), all, lost or "
-                  "none")
-      ->capture_default_str();
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;

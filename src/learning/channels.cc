@@ -9,22 +9,6 @@
 
 namespace aia {
 
-std::string_view ChannelFrameName(ChannelFrame frame) {
-  for (const auto& n : EnumNames(ChannelFrame{}))
-    if (n.value == frame) return n.name;
-  return "unknown";
-}
-
-bool ParseChannelFrame(std::string_view text, ChannelFrame* frame) {
-  for (const auto& n : EnumNames(ChannelFrame{})) {
-    if (text == n.name) {
-      *frame = n.value;
-      return true;
-    }
-  }
-  return false;
-}
-
 ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
                                  const Vec2& size, const ChannelParams& params,
                                  const Lattice* lattice)

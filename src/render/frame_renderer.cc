@@ -166,31 +166,6 @@ int HudBandPixels(int image_height) {
   return std::max(12, static_cast<int>(std::lround(0.055 * image_height)));
 }
 
-bool ParseEdgeMode(const std::string& text, EdgeMode* mode) {
-  for (EdgeMode m :
-       {EdgeMode::kAuto, EdgeMode::kAll, EdgeMode::kLost, EdgeMode::kNone}) {
-    if (text == EdgeModeName(m)) {
-      *mode = m;
-      return true;
-    }
-  }
-  return false;
-}
-
-const char* EdgeModeName(EdgeMode mode) {
-  switch (mode) {
-    case EdgeMode::kAll:
-      return "all";
-    case EdgeMode::kLost:
-      return "lost";
-    case EdgeMode::kNone:
-      return "none";
-    case EdgeMode::kAuto:
-      break;
-  }
-  return "auto";
-}
-
 int TrailSteps(int trail_steps, int robots) {
   if (trail_steps <= 0) return 0;
   return std::min(trail_steps,

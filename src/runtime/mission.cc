@@ -143,19 +143,6 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
-bool ParseTraceMode(const std::string& text, TraceMode* mode) {
-  if (text == "auto") {
-    *mode = TraceMode::kAuto;
-  } else if (text == "full") {
-    *mode = TraceMode::kFull;
-  } else if (text == "min") {
-    *mode = TraceMode::kMin;
-  } else {
-    return false;
-  }
-  return true;
-}
-
 bool TraceHasRobotColumns(TraceMode mode, int num_robots) {
   return mode == TraceMode::kFull ||
          (mode == TraceMode::kAuto && num_robots <= kTraceFullRobots);

@@ -72,10 +72,6 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
     RenderOptions flags = o;
     CheckFlags(&flags);  // their declarations: `--flag: what`
   }
-  EdgeMode mode;
-  if (!ParseEdgeMode(o.edges, &mode))
-    throw InputError("command line", 0, "--edges",
-                     "must be auto, all, lost or none, got '" + o.edges + "'");
 }
 
 // Films the episode: a frame every 1/fps seconds of simulated time, taken
@@ -267,7 +263,7 @@ RenderResult RenderMission(const RenderOptions& options) {
   FrameSettings settings;
   settings.scene.width = width;
   settings.scene.height = height;
-  ParseEdgeMode(options.edges, &settings.edges);  // checked above
+  settings.edges = options.edges;
   FrameRenderer renderer(runner.episode().sim(), mission.instance->world.map,
                          settings);
   try {
@@ -315,7 +311,7 @@ RenderResult RenderMission(const RenderOptions& options) {
                                filming.write_seconds();
   v["render_frames_per_second"] =
       video_seconds > 0.0 ? r.frames / video_seconds : 0.0;
-  v["edges"] = EdgeModeName(settings.edges);
+  v["edges"] = EnumNameOf(settings.edges);
   v["compact"] = renderer.compact();
   // Where the wall time went (the mission's own phases are in
   // diagnostics.json and `aia bench`); mission: the rest (start-up, policy,

@@ -245,13 +245,18 @@ TEST(ChannelsTest, ReachOverAMarginSeesTheWayRoundBeyondTheWindow) {
     }
 }
 
+// Declared names (core/fields.h): "centered" reads as "centred", which is
+// the name written.
 TEST(ChannelsTest, FrameNamesParse) {
   ChannelFrame f = ChannelFrame::kGlobal;
-  EXPECT_TRUE(ParseChannelFrame("centred", &f));
+  EXPECT_TRUE(ParseEnumName("centred", &f));
   EXPECT_EQ(f, ChannelFrame::kCentred);
-  EXPECT_TRUE(ParseChannelFrame("global", &f));
+  EXPECT_TRUE(ParseEnumName("global", &f));
   EXPECT_EQ(f, ChannelFrame::kGlobal);
-  EXPECT_FALSE(ParseChannelFrame("local", &f));
+  EXPECT_TRUE(ParseEnumName("centered", &f));
+  EXPECT_STREQ(EnumNameOf(f), "centred");
+  EXPECT_FALSE(ParseEnumName("local", &f));
+  EXPECT_EQ(f, ChannelFrame::kCentred);
 }
 
 }  // namespace

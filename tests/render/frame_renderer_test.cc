@@ -203,7 +203,7 @@ TEST_F(FrameRendererTest, EdgesFlagChoosesWhatIsDrawn) {
        {Case{EdgeMode::kAuto, true, true}, Case{EdgeMode::kAll, true, true},
         Case{EdgeMode::kLost, false, true},
         Case{EdgeMode::kNone, false, false}}) {
-    SCOPED_TRACE(EdgeModeName(c.mode));
+    SCOPED_TRACE(EnumNameOf(c.mode));
     settings_.edges = c.mode;
     FrameRenderer renderer(sim_, world_.map, settings_);
     overlay_.neighbors = &no_neighbors;
@@ -229,12 +229,12 @@ TEST(EdgeModeTest, NamesRoundTrip) {
   for (EdgeMode m :
        {EdgeMode::kAuto, EdgeMode::kAll, EdgeMode::kLost, EdgeMode::kNone}) {
     EdgeMode parsed = EdgeMode::kAuto;
-    EXPECT_TRUE(ParseEdgeMode(EdgeModeName(m), &parsed));
+    EXPECT_TRUE(ParseEnumName(EnumNameOf(m), &parsed));
     EXPECT_EQ(parsed, m);
   }
   EdgeMode parsed = EdgeMode::kAll;
-  EXPECT_FALSE(ParseEdgeMode("some", &parsed));
-  EXPECT_FALSE(ParseEdgeMode("", &parsed));
+  EXPECT_FALSE(ParseEnumName("some", &parsed));
+  EXPECT_FALSE(ParseEnumName("", &parsed));
   EXPECT_EQ(parsed, EdgeMode::kAll);
 }
 

@@ -132,8 +132,9 @@ TEST(ScaleTest, TraceOfManyRobotsKeepsTheTeamColumnOnly) {
   r = testing::RunAia(
       {"run", scenario, "--trace", "some", "--out", dir + "/bad"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err,
-            "error: command line: --trace: 'some' is not auto, full or min\n");
+  EXPECT_EQ(
+      r.err,
+      "error: command line: --trace: must be auto, full or min, got some\n");
   fs::remove_all(dir);
 }
 

@@ -159,6 +159,26 @@ struct EnumName {
   const char* name;
 };
 
+// The name `value` is declared with (the first, when it has several).
+template <typename E>
+const char* EnumNameOf(E value) {
+  for (const auto& n : EnumNames(E{}))
+    if (n.value == value) return n.name;
+  return "?";
+}
+// The value declared as `text`; false (and *value unchanged) for any other
+// text.
+template <typename E>
+bool ParseEnumName(std::string_view text, E* value) {
+  for (const auto& n : EnumNames(E{})) {
+    if (text == n.name) {
+      *value = n.value;
+      return true;
+    }
+  }
+  return false;
+}
+
 // What Validate() functions use to report a field: the reader knows each
 // field's key, the line it came from and how it was written.
 class FieldChecker {

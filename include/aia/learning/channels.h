@@ -54,9 +54,6 @@ constexpr std::array<EnumName<ChannelFrame>, 3> EnumNames(ChannelFrame) {
            {ChannelFrame::kCentred, "centred"},
            {ChannelFrame::kCentred, "centered"}}};
 }
-std::string_view ChannelFrameName(ChannelFrame frame);
-// "global" or "centred" (also "centered"); false for anything else.
-bool ParseChannelFrame(std::string_view text, ChannelFrame* frame);
 
 struct ChannelParams {
   ChannelFrame frame = ChannelFrame::kCentred;

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "aia/core/grid.h"
+#include "aia/render/edge_mode.h"
 #include "aia/core/types.h"
 #include "aia/render/scene.h"
 #include "aia/render/view.h"
@@ -60,17 +61,6 @@ struct FrameOverlay {
   std::vector<TargetOverlay> targets;
   int heatmap_robot = -1;  // named in the heads-up line (the layer: SetHeatmap)
 };
-
-// Which communication edges a frame draws (`aia render --edges`).
-enum class EdgeMode {
-  kAuto,  // lost messages; delivered ones while they stay readable
-  kAll,   // every pair that exchanged a message, and the lost messages
-  kLost,  // the lost messages only
-  kNone,  // no edges
-};
-// "auto", "all", "lost", "none" -> the mode; false for anything else.
-bool ParseEdgeMode(const std::string& text, EdgeMode* mode);
-const char* EdgeModeName(EdgeMode mode);
 
 struct FrameSettings {
   SceneSettings scene;

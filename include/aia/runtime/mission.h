@@ -11,6 +11,7 @@
 #ifndef AIA_RUNTIME_MISSION_H_
 #define AIA_RUNTIME_MISSION_H_
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/fields.h"
 #include "aia/core/io.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
@@ -96,9 +98,12 @@ std::string SummaryJson(const MissionSummary& summary, const Episode& episode);
 // kTraceFullRobots robots, kMin beyond (a 1000 x 1000 mission would write
 // 12 MB a step).
 enum class TraceMode { kAuto, kFull, kMin };
+constexpr std::array<EnumName<TraceMode>, 3> EnumNames(TraceMode) {
+  return {{{TraceMode::kAuto, "auto"},
+           {TraceMode::kFull, "full"},
+           {TraceMode::kMin, "min"}}};
+}
 inline constexpr int kTraceFullRobots = 100;
-// "auto", "full" or "min"; false for anything else.
-bool ParseTraceMode(const std::string& text, TraceMode* mode);
 bool TraceHasRobotColumns(TraceMode mode, int num_robots);
 
 // Runs a prepared mission with the standard observers (trace, estimate,
@@ -134,6 +139,14 @@ struct RunOptions {
   std::string out_dir;  // empty: renders/<scenario file stem>
   bool progress = true;
   TraceMode trace = TraceMode::kAuto;
+
+  // `aia run`'s own flags, declared once.
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(trace).Doc(
+        "trace.csv per step and target: full (every robot's det Sigma), min "
+        "(the team's min_det only) or auto (full up to 100 robots)"));
+  }
 };
 
 // `aia run`: runs the mission, writes the result files under DIR/ and prints

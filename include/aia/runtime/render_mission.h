@@ -10,6 +10,7 @@
 #include <string>
 
 #include "aia/core/fields.h"
+#include "aia/render/edge_mode.h"
 #include "aia/runtime/mission.h"
 
 namespace aia {
@@ -25,9 +26,7 @@ struct RenderOptions {
   std::string frames_dir;            // non-empty: PNG frames written here
   int frames_every = 1;              // write video frames 0, k, 2k, ... as PNG
   double hold = 1.0;                 // seconds the final frame is held
-  // Communication edges drawn: auto, all, lost or none (render/frame_renderer.h
-  // EdgeMode).
-  std::string edges = "auto";
+  EdgeMode edges = EdgeMode::kAuto;  // render/frame_renderer.h
   bool progress = true;
 
   // The video's own flags, declared once (their help and range checks).
@@ -39,6 +38,9 @@ struct RenderOptions {
     a->Visit(AIA_FIELD(hold)
                  .In(Between(0.0, 60.0))
                  .Doc("seconds the final frame is held"));
+    a->Visit(AIA_FIELD(edges).Doc(
+        "communication edges drawn: auto (lost messages, and the delivered "
+        "ones while they stay readable), all, lost or none"));
   }
 };
 
