@@ -1,0 +1,338 @@
+// Where each target is seen (planning/sampling_tree.h): the aims the tree
+// plans for, their observation regions and BFS fields, and the spatial
+// indexes of open targets and robots.
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "aia/core/check.h"
+#include "aia/planning/information.h"
+#include "aia/planning/sampling_tree.h"
+#include "aia/planning/search.h"
+#include "aia/world/lattice.h"
+#include "sampling_tree_internal.h"
+
+namespace aia {
+
+// Below these sizes the spatial indexes are not worth their upkeep: a linear
+// scan of the open targets, of the robots. Either way the result is the
+// same.
+constexpr int kLinearTargets = 32;
+constexpr int kLinearRobots = 32;
+
+const Vec2& SamplingTree::MeanAt(int depth, int k) {
+  while (static_cast<int>(means_.size()) <= depth) {
+    std::vector<Vec2> next(m_);
+    for (int j = 0; j < m_; ++j) {
+      if (!targets_[j].is_static)
+        full_mean_[j] = models_[j]->A * full_mean_[j] + models_[j]->b;
+      next[j] = full_mean_[j].head<2>();
+    }
+    means_.push_back(std::move(next));
+  }
+  return means_[depth][k];
+}
+
+int SamplingTree::Bucket(int depth, int k) const {
+  if (targets_[k].is_static) return 0;
+  return std::min(depth / kBucket, kMaxBuckets - 1);
+}
+
+void SamplingTree::RegionOf(const Vec2& x,
+                            std::vector<std::pair<int, double>>* region) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  const int span =
+      static_cast<int>(std::ceil(p.sensor->range / lattice.step())) + 1;
+  region->clear();
+  const int c = lattice.NearestPoint(x);
+  for (int iy = std::max(0, lattice.Iy(c) - span);
+       iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy) {
+    for (int ix = std::max(0, lattice.Ix(c) - span);
+         ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
+      const int q = lattice.Index(ix, iy);
+      if (!lattice.Free(q) || reach_[q] < 0) continue;
+      const double r =
+          PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), x);
+      if (r > 0.0) region->push_back({q, r});
+    }
+  }
+}
+
+bool SamplingTree::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
+                           const std::vector<int>* missed, Vec2* aim,
+                           std::vector<std::pair<int, double>>* region) {
+  // Among candidates of one ring, the one whose region is nearest to a robot.
+  const SamplingProblem& p = *problem_;
+  const bool found = SearchAim(
+      *p.map, *p.sensor, mean, cov, missed,
+      [&](const Vec2& x) {
+        RegionOf(x, &trial_region_);
+        if (trial_region_.empty()) return -1;
+        int near = std::numeric_limits<int>::max();
+        for (const auto& [q, r] : trial_region_)
+          near = std::min(near, reach_[q]);
+        return near;
+      },
+      aim);
+  if (found) {
+    RegionOf(*aim, region);
+  } else {
+    region->clear();
+  }
+  return found;
+}
+
+SamplingTree::AimSlot& SamplingTree::Slot(int depth, int k) {
+  AimSlot& slot = slots_[k][Bucket(depth, k)];
+  if (slot.ready) return slot;
+  const SamplingProblem& p = *problem_;
+  const int b = Bucket(depth, k);
+  const Vec2 mean = targets_[k].is_static
+                        ? means_[0][k]
+                        : MeanAt(b * kBucket + kBucket / 2, k);
+  const Eigen::MatrixXd sigma =
+      p.belief->Covariance(p.belief_row, k).topLeftCorner(2, 2);
+  const std::vector<int>* missed =
+      (targets_[k].is_static && static_cast<int>(p.missed.size()) > k)
+          ? &p.missed[k]
+          : nullptr;
+  FindAim(mean, Eigen::Matrix2d(sigma), missed, &slot.point, &region_);
+  slot.at_mean = !targets_[k].is_static && slot.point == mean;
+  std::vector<int> sources;
+  sources.reserve(region_.size());
+  for (const auto& [q, r] : region_) sources.push_back(q);
+  BfsDistances(p.map->lattice(), sources.data(),
+               static_cast<int>(sources.size()), &slot.field, &bfs_queue_);
+  slot.ready = true;
+  return slot;
+}
+
+Vec2 SamplingTree::MeasurePoint(int depth, int k) {
+  const AimSlot& slot = Slot(depth, k);
+  return slot.at_mean ? MeanAt(depth, k) : slot.point;
+}
+
+void SamplingTree::Buckets::Reset(int nx, int ny, int count) {
+  const double side = std::sqrt(2.0 * nx * ny / std::max(1, count));
+  cell = std::clamp(static_cast<int>(std::lround(side)), 4, 64);
+  gx = (nx + cell - 1) / cell;
+  gy = (ny + cell - 1) / cell;
+  begin.assign(static_cast<size_t>(gx) * gy + 1, 0);
+}
+
+namespace {
+
+// Fills a bucket grid's CSR from the bucket of each item (-1: left out).
+template <typename BucketOf>
+void FillBuckets(int count, BucketOf&& bucket_of, std::vector<int>* begin,
+                 std::vector<int>* items, std::vector<int>* fill) {
+  for (int t = 0; t < count; ++t) {
+    const int b = bucket_of(t);
+    if (b >= 0) ++(*begin)[b + 1];
+  }
+  for (size_t c = 1; c < begin->size(); ++c) (*begin)[c] += (*begin)[c - 1];
+  items->resize(begin->back());
+  fill->assign(begin->begin(), begin->end() - 1);
+  for (int t = 0; t < count; ++t) {
+    const int b = bucket_of(t);
+    if (b >= 0) (*items)[(*fill)[b]++] = t;
+  }
+}
+
+}  // namespace
+
+void SamplingTree::BuildOpenIndex() {
+  open_indexed_ =
+      indexed_ && static_cast<int>(open_list_.size()) > kLinearTargets;
+  if (!open_indexed_) return;
+  const Lattice& lattice = problem_->map->lattice();
+  Buckets& g = open_index_;
+  g.Reset(lattice.nx(), lattice.ny(), static_cast<int>(open_list_.size()));
+  // Items are positions in open_list_; the index holds target ids.
+  FillBuckets(
+      static_cast<int>(open_list_.size()),
+      [&](int t) {
+        const Rect& b = region_box_[open_list_[t]];
+        if (b.x0 > b.x1) return -1;  // no region: its field is -1 everywhere
+        return g.Of((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2);
+      },
+      &g.begin, &g.items, &g.fill);
+  for (int& t : g.items) t = open_list_[t];
+}
+
+void SamplingTree::BuildRobotIndex(const int* positions) {
+  const SamplingProblem& p = *problem_;
+  const Lattice& lattice = p.map->lattice();
+  robots_indexed_ = indexed_ && n_ > kLinearRobots;
+  if (!robots_indexed_) return;
+  Buckets& g = robot_index_;
+  g.Reset(lattice.nx(), lattice.ny(), n_);
+  FillBuckets(
+      n_,
+      [&](int i) {
+        if (!p.active[i]) return -1;
+        return g.Of(lattice.Ix(positions[i]), lattice.Iy(positions[i]));
+      },
+      &g.begin, &g.items, &g.fill);
+}
+
+namespace {
+
+// L1 distance (lattice steps) from (x, y) to a rectangle: a lower bound of
+// the BFS distance to any point in it, each move changing one coordinate by
+// one.
+inline int RectDistance(int x, int y, int x0, int x1, int y0, int y1) {
+  return std::max({0, x0 - x, x - x1}) + std::max({0, y0 - y, y - y1});
+}
+
+// Calls visit(bucket) for the buckets at Chebyshev distance r from the bucket
+// rectangle [bx0, bx1] x [by0, by1] (the rectangle itself for r = 0),
+// clipped to the grid of gx x gy buckets.
+template <typename Visit>
+void VisitRing(int bx0, int bx1, int by0, int by1, int r, int gx, int gy,
+               Visit&& visit) {
+  const int x0 = bx0 - r, x1 = bx1 + r, y0 = by0 - r, y1 = by1 + r;
+  for (int y = std::max(0, y0); y <= std::min(gy - 1, y1); ++y) {
+    if (r == 0 || y == y0 || y == y1) {
+      for (int x = std::max(0, x0); x <= std::min(gx - 1, x1); ++x)
+        visit(y * gx + x);
+    } else {
+      if (x0 >= 0) visit(y * gx + x0);
+      if (x1 < gx) visit(y * gx + x1);
+    }
+  }
+}
+
+}  // namespace
+
+int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
+                                int* dist) {
+  int best = -1, best_d = std::numeric_limits<int>::max();
+  if (indexed_ && !open_indexed_) {
+    // Few open targets: in order of the L1 bound of their distance, reading
+    // a field (a cache miss, likely) only while it may beat the best.
+    near_.clear();
+    const Lattice& lattice = problem_->map->lattice();
+    const int x = lattice.Ix(q), y = lattice.Iy(q);
+    for (int k : open_list_) {
+      const Rect& b = region_box_[k];
+      if (!ok[k] || b.x0 > b.x1) continue;
+      near_.push_back({RectDistance(x, y, b.x0, b.x1, b.y0, b.y1), k});
+    }
+    while (!near_.empty()) {  // the least bound next, by selection
+      size_t j = 0;
+      for (size_t c = 1; c < near_.size(); ++c)
+        if (near_[c] < near_[j]) j = c;
+      const auto [lb, k] = near_[j];
+      if (best >= 0 && lb > best_d) break;
+      near_[j] = near_.back();
+      near_.pop_back();
+      const int d = static_field_[k][q];
+      if (d >= 0 && (best < 0 || d < best_d || (d == best_d && k < best))) {
+        best = k;
+        best_d = d;
+      }
+    }
+    *dist = best_d;
+    return best;
+  }
+  if (!open_indexed_) {
+    for (int k : open_list_) {
+      if (!ok[k]) continue;
+      const int d = FieldAt(depth, k)[q];
+      if (d >= 0 && d < best_d) {
+        best = k;
+        best_d = d;
+      }
+    }
+    *dist = best_d;
+    return best;
+  }
+  // Best first: candidates in a heap by the L1 bound of their distance,
+  // filled ring by ring around q's bucket (a target whose region's centre
+  // lies in ring r >= 1 is at least (r - 1) cell + 1 - pad_ steps away) while
+  // the next ring could hold a better one; a field is read (a cache miss,
+  // likely) only while the bound may beat the best.
+  const Lattice& lattice = problem_->map->lattice();
+  const Buckets& g = open_index_;
+  const int x = lattice.Ix(q), y = lattice.Iy(q);
+  const int bx = x / g.cell, by = y / g.cell;
+  const int rings = std::max(g.gx, g.gy);
+  near_.clear();
+  int r = 0;
+  for (;;) {
+    while (r <= rings && (near_.empty() ||
+                          near_.front().first >= (r - 1) * g.cell + 1 - pad_)) {
+      VisitRing(bx, bx, by, by, r, g.gx, g.gy, [&](int c) {
+        for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
+          const int k = g.items[t];
+          if (!ok[k]) continue;
+          const Rect& b = region_box_[k];
+          const int lb = RectDistance(x, y, b.x0, b.x1, b.y0, b.y1);
+          if (best >= 0 && lb > best_d) continue;  // never read
+          near_.push_back({lb, k});
+          std::push_heap(near_.begin(), near_.end(), std::greater<>());
+        }
+      });
+      ++r;
+    }
+    if (near_.empty()) break;
+    std::pop_heap(near_.begin(), near_.end(), std::greater<>());
+    const auto [lb, k] = near_.back();
+    near_.pop_back();
+    if (best >= 0 && lb > best_d) break;
+    const int d = static_field_[k][q];
+    if (d >= 0 && (best < 0 || d < best_d || (d == best_d && k < best))) {
+      best = k;
+      best_d = d;
+    }
+  }
+  *dist = best_d;
+  return best;
+}
+
+int SamplingTree::ReachOf(int k, const int* positions) const {
+  const SamplingProblem& p = *problem_;
+  const int* field = static_field_[k];
+  int reach = std::numeric_limits<int>::max();
+  if (!robots_indexed_) {
+    for (int i = 0; i < n_; ++i) {
+      const int f = p.active[i] ? field[positions[i]] : -1;
+      if (f >= 0) reach = std::min(reach, f);
+    }
+    return reach;
+  }
+  const Rect& b = region_box_[k];
+  if (b.x0 > b.x1) return reach;  // no region
+  const Lattice& lattice = p.map->lattice();
+  const Buckets& g = robot_index_;
+  const int bx0 = b.x0 / g.cell, bx1 = b.x1 / g.cell;
+  const int by0 = b.y0 / g.cell, by1 = b.y1 / g.cell;
+  const int rings = std::max(g.gx, g.gy);
+  // A robot in ring r >= 1 around the region's buckets is at least
+  // (r - 1) cell + 1 steps away.
+  for (int r = 0; r <= rings; ++r) {
+    if (r > 0 && (r - 1) * g.cell + 1 >= reach) break;
+    VisitRing(bx0, bx1, by0, by1, r, g.gx, g.gy, [&](int c) {
+      for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
+        const int q = positions[g.items[t]];
+        if (RectDistance(lattice.Ix(q), lattice.Iy(q), b.x0, b.x1, b.y0,
+                         b.y1) >= reach)
+          continue;
+        const int f = field[q];
+        if (f >= 0) reach = std::min(reach, f);
+      }
+    });
+  }
+  return reach;
+}
+
+int SamplingTree::NearestOpen(int q, int depth) {
+  int d = 0;
+  return NearestTarget(q, depth, open_, &d);
+}
+
+}  // namespace aia
