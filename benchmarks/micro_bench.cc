@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "aia/comm/graph.h"
+#include "aia/commands/bench.h"
+#include "aia/commands/eval.h"
 #include "aia/estimation/filter.h"
 #include "aia/planning/expert.h"
-#include "aia/runtime/bench.h"
 #include "aia/runtime/episode.h"
-#include "aia/runtime/eval.h"
 #include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
 #include "aia/sim/simulation.h"

@@ -21,19 +21,20 @@
 #include <type_traits>
 #include <vector>
 
+#include "aia/commands/bench.h"
+#include "aia/commands/catalog.h"
+#include "aia/commands/dataset_command.h"
+#include "aia/commands/eval.h"
+#include "aia/commands/plan_command.h"
+#include "aia/commands/ranks.h"
+#include "aia/commands/render_mission.h"
+#include "aia/commands/run_command.h"
+#include "aia/commands/world_command.h"
 #include "aia/core/error.h"
 #include "aia/core/field_io.h"
 #include "aia/core/interrupt.h"
 #include "aia/learning/trainer.h"
-#include "aia/runtime/bench.h"
-#include "aia/runtime/catalog.h"
-#include "aia/runtime/dataset_command.h"
-#include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
-#include "aia/runtime/plan_command.h"
-#include "aia/runtime/ranks.h"
-#include "aia/runtime/render_mission.h"
-#include "aia/runtime/world_command.h"
 
 // jemalloc (linked into build/aia) keeps freed pages instead of returning
 // them to the kernel on every libtorch call, which halves libtorch's speed

@@ -27,7 +27,7 @@ supp=$PWD/tools/sanitizers
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:suppressions=$supp/asan.supp
 export LSAN_OPTIONS=suppressions=$supp/lsan.supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$supp/ubsan.supp
-labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|learning|render|fuzz|runtime}
+labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|learning|render|fuzz|runtime|commands}
 # Left out here: the golden traces (recorded with the main build's gcc; clang's
 # floating point differs in the last bits and missions diverge from there)
 # the two-rank MPI test (OpenMPI's plugins leak and are unloaded before

@@ -1,4 +1,4 @@
-#include "aia/runtime/bench.h"
+#include "aia/commands/bench.h"
 
 #include <unistd.h>
 
@@ -12,12 +12,12 @@
 #include <memory>
 #include <string>
 
+#include "aia/commands/eval.h"
+#include "aia/commands/plan_command.h"
 #include "aia/core/error.h"
 #include "aia/learning/network.h"
 #include "aia/learning/trainer.h"
-#include "aia/runtime/eval.h"
 #include "aia/runtime/mission.h"
-#include "aia/runtime/plan_command.h"
 #include "aia/scenario/config.h"
 
 namespace aia {

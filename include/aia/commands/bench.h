@@ -1,8 +1,8 @@
 // `aia bench`: decision steps per second on generated worlds, the share of
 // wall time inside mj_step, where a step's time goes, and mujoco-testspeed's
 // figure on the same generated model.
-#ifndef AIA_RUNTIME_BENCH_H_
-#define AIA_RUNTIME_BENCH_H_
+#ifndef AIA_COMMANDS_BENCH_H_
+#define AIA_COMMANDS_BENCH_H_
 
 #include <cstdint>
 #include <string>
@@ -57,4 +57,4 @@ int RunBench(const BenchOptions& options);
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_BENCH_H_
+#endif  // AIA_COMMANDS_BENCH_H_

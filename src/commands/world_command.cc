@@ -1,4 +1,4 @@
-#include "aia/runtime/world_command.h"
+#include "aia/commands/world_command.h"
 
 #include <cstdio>
 #include <filesystem>

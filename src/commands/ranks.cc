@@ -1,4 +1,4 @@
-#include "aia/runtime/ranks.h"
+#include "aia/commands/ranks.h"
 
 #include <chrono>
 #include <cstdlib>

@@ -9,10 +9,10 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "aia/commands/dataset_command.h"
 #include "aia/learning/dataset.h"
 #include "aia/learning/network.h"
 #include "aia/learning/trainer.h"
-#include "aia/runtime/dataset_command.h"
 #include "support/test_support.h"
 
 namespace aia {

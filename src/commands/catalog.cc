@@ -1,4 +1,4 @@
-#include "aia/runtime/catalog.h"
+#include "aia/commands/catalog.h"
 
 #include <algorithm>
 

@@ -3,8 +3,8 @@
 // simulation; optionally every k-th frame as PNG. The mission runs and ends
 // exactly as under `aia run` (same seed, same outcome); its summary and trace
 // are written next to the video.
-#ifndef AIA_RUNTIME_RENDER_MISSION_H_
-#define AIA_RUNTIME_RENDER_MISSION_H_
+#ifndef AIA_COMMANDS_RENDER_MISSION_H_
+#define AIA_COMMANDS_RENDER_MISSION_H_
 
 #include <optional>
 #include <string>
@@ -65,4 +65,4 @@ RenderResult RenderMission(const RenderOptions& options);
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_RENDER_MISSION_H_
+#endif  // AIA_COMMANDS_RENDER_MISSION_H_

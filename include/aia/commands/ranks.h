@@ -3,8 +3,8 @@
 // eval hands instances out round-robin and rank 0 writes every row, dataset
 // gives each rank its own shard. Without MPI, or started without mpirun, a
 // job is one rank of one. No MPI type leaves ranks.cc.
-#ifndef AIA_RUNTIME_RANKS_H_
-#define AIA_RUNTIME_RANKS_H_
+#ifndef AIA_COMMANDS_RANKS_H_
+#define AIA_COMMANDS_RANKS_H_
 
 #include <functional>
 #include <string>
@@ -50,4 +50,4 @@ class Ranks {
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_RANKS_H_
+#endif  // AIA_COMMANDS_RANKS_H_

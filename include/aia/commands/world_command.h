@@ -1,8 +1,8 @@
 // `aia world`: a scenario's generated world as one MJCF file (obstacles,
 // robots at their starts, targets at their true initial positions), to open
 // in MuJoCo's own viewer (mujoco-simulate) or load with Python's `mujoco`.
-#ifndef AIA_RUNTIME_WORLD_COMMAND_H_
-#define AIA_RUNTIME_WORLD_COMMAND_H_
+#ifndef AIA_COMMANDS_WORLD_COMMAND_H_
+#define AIA_COMMANDS_WORLD_COMMAND_H_
 
 #include <string>
 
@@ -22,4 +22,4 @@ int RunWorldCommand(const WorldOptions& options);
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_WORLD_COMMAND_H_
+#endif  // AIA_COMMANDS_WORLD_COMMAND_H_

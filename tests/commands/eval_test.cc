@@ -1,4 +1,4 @@
-#include "aia/runtime/eval.h"
+#include "aia/commands/eval.h"
 
 #include <gtest/gtest.h>
 
@@ -8,10 +8,10 @@
 #include <sstream>
 #include <tuple>
 
+#include "aia/commands/ranks.h"
 #include "aia/core/io.h"
 #include "aia/planning/decsb.h"
 #include "aia/runtime/mission.h"
-#include "aia/runtime/ranks.h"
 #include "support/test_support.h"
 
 namespace aia {

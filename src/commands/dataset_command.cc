@@ -1,4 +1,4 @@
-#include "aia/runtime/dataset_command.h"
+#include "aia/commands/dataset_command.h"
 
 #include <algorithm>
 #include <chrono>

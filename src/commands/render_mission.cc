@@ -1,4 +1,4 @@
-#include "aia/runtime/render_mission.h"
+#include "aia/commands/render_mission.h"
 
 #include <Eigen/LU>
 #include <algorithm>

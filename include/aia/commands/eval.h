@@ -9,8 +9,8 @@
 // RunEval drives them on a thread pool, writing DIR/runs.csv (one row per
 // instance and policy, appended as they finish, so an interrupted eval
 // resumes), DIR/summary.csv and DIR/effective.yaml.
-#ifndef AIA_RUNTIME_EVAL_H_
-#define AIA_RUNTIME_EVAL_H_
+#ifndef AIA_COMMANDS_EVAL_H_
+#define AIA_COMMANDS_EVAL_H_
 
 #include <cstdint>
 #include <limits>
@@ -180,4 +180,4 @@ int RunEval(const EvalOptions& options);
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_EVAL_H_
+#endif  // AIA_COMMANDS_EVAL_H_

@@ -1,4 +1,4 @@
-#include "aia/runtime/eval.h"
+#include "aia/commands/eval.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -20,6 +20,8 @@
 #include <sstream>
 #include <thread>
 
+#include "aia/commands/plan_command.h"
+#include "aia/commands/ranks.h"
 #include "aia/core/error.h"
 #include "aia/core/interrupt.h"
 #include "aia/core/io.h"
@@ -27,8 +29,6 @@
 #include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/observers.h"
-#include "aia/runtime/plan_command.h"
-#include "aia/runtime/ranks.h"
 #include "aia/scenario/yaml.h"
 
 namespace aia {

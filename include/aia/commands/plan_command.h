@@ -1,7 +1,7 @@
 // `aia plan`: the expert alone on a scenario's initial state: its plan, F*,
 // solve time, nodes grown and peak memory.
-#ifndef AIA_RUNTIME_PLAN_COMMAND_H_
-#define AIA_RUNTIME_PLAN_COMMAND_H_
+#ifndef AIA_COMMANDS_PLAN_COMMAND_H_
+#define AIA_COMMANDS_PLAN_COMMAND_H_
 
 #include <optional>
 #include <string>
@@ -35,4 +35,4 @@ int RunPlanCommand(const PlanOptions& options);
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_PLAN_COMMAND_H_
+#endif  // AIA_COMMANDS_PLAN_COMMAND_H_

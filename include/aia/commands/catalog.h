@@ -1,8 +1,8 @@
 // `aia policies` and `aia schema`: what can be configured, generated from the
 // declarations themselves (each policy's parameters, each scenario key), as
 // text for the terminal or as the Markdown tables of docs/scenarios.md.
-#ifndef AIA_RUNTIME_CATALOG_H_
-#define AIA_RUNTIME_CATALOG_H_
+#ifndef AIA_COMMANDS_CATALOG_H_
+#define AIA_COMMANDS_CATALOG_H_
 
 #include <string>
 
@@ -19,4 +19,4 @@ std::string ScenarioSchema(bool markdown);
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_CATALOG_H_
+#endif  // AIA_COMMANDS_CATALOG_H_

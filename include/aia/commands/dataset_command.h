@@ -8,8 +8,8 @@
 // over shards (e % shards == shard), each shard one SQLite file in the
 // folder, one transaction per episode: a killed run resumes where it
 // stopped and loses at most the episode in flight.
-#ifndef AIA_RUNTIME_DATASET_COMMAND_H_
-#define AIA_RUNTIME_DATASET_COMMAND_H_
+#ifndef AIA_COMMANDS_DATASET_COMMAND_H_
+#define AIA_COMMANDS_DATASET_COMMAND_H_
 
 #include <cstdint>
 #include <string>
@@ -72,4 +72,4 @@ void ParseShard(const std::string& text, int* shard, int* shards);
 
 }  // namespace aia
 
-#endif  // AIA_RUNTIME_DATASET_COMMAND_H_
+#endif  // AIA_COMMANDS_DATASET_COMMAND_H_

@@ -1,4 +1,4 @@
-#include "aia/runtime/plan_command.h"
+#include "aia/commands/plan_command.h"
 
 #include <sys/resource.h>
 

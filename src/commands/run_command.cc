@@ -1,0 +1,48 @@
+#include "aia/commands/run_command.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "aia/core/io.h"
+#include "aia/scenario/loader.h"
+
+namespace aia {
+
+MissionSummary RunMission(const RunOptions& options) {
+  const PolicyRegistry registry = AllPolicies();
+  PreparedMission mission =
+      PrepareMission(LoadScenario(options.scenario_path,
+                                  options.overrides.ToOverrides(registry)),
+                     registry);
+  std::string out = options.out_dir;
+  if (out.empty())
+    out = "renders/" +
+          std::filesystem::path(options.scenario_path).stem().string();
+  // The folder may hold the scenario itself (DIR/effective.yaml of an
+  // earlier run): none of the files written may be an input.
+  const std::vector<InputFile> inputs =
+      MissionInputs(mission.scenario, mission.policy.get());
+  for (const std::string& name : MissionFileNames())
+    CheckNotAnInput(out + "/" + name, "--out", inputs,
+                    "written into the output folder");
+  MakeOutputDir(out, "--out", /*lock=*/true);
+
+  MissionRunner runner(mission, out + "/", "aia run", options.progress, {},
+                       options.trace);
+  const MissionSummary summary = runner.Run();
+  WriteFileAtomic(out + "/summary.json",
+                  SummaryJson(summary, runner.episode()));
+  std::printf(
+      "%s: policy %s, seed %llu: %s in %d steps (%d robots, %d targets, %ld "
+      "invalid moves), %.2f s -> %s/\n",
+      mission.scenario.name.c_str(), summary.policy.c_str(),
+      static_cast<unsigned long long>(summary.seed),
+      summary.success ? "success" : "no success",
+      summary.success ? summary.flowtime : summary.steps, summary.robots,
+      summary.targets, summary.invalid_moves, summary.wall_s, out.c_str());
+  return summary;
+}
+
+}  // namespace aia
