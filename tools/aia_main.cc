@@ -105,12 +105,20 @@ class DeclaredFlags {
   void Apply() const {
     for (const auto& apply : after_) apply();
   }
+  // The flags of these declarations given on the command line.
+  std::vector<std::string> Given() const {
+    std::vector<std::string> given;
+    for (const std::string& flag : flags_)
+      if (cmd_->count(flag) > 0) given.push_back(flag);
+    return given;
+  }
 
   template <typename T>
   void Visit(const aia::Field<T>& f) {
     if (skip_.count(std::string(f.name))) return;
     const std::string flag = aia::FlagName(f.name);
     const std::string help(f.doc);
+    flags_.push_back(flag);
     if constexpr (std::is_same_v<T, bool>) {
       cmd_->add_flag(flag, *f.value, help);
     } else if constexpr (std::is_enum_v<T>) {
@@ -145,6 +153,7 @@ class DeclaredFlags {
   };
 
   CLI::App* cmd_;
+  std::vector<std::string> flags_;
   std::set<std::string> skip_;
   std::vector<std::function<void()>> after_;
 };
@@ -448,7 +457,8 @@ Action AddTrainCommand(CLI::App& app) {
   // The hyperparameters and the network, as their structs declare them.
   auto declared = std::make_shared<DeclaredFlags>(cmd);
   declared->Add(o.get());
-  declared->Add(&o->network, {"message_hops"});  // set by --message-hops
+  auto network = std::make_shared<DeclaredFlags>(cmd);
+  network->Add(&o->network, {"message_hops"});  // set by --message-hops
   cmd->add_flag("--resume", o->resume,
                 "continue from OUT.ckpt (same options) if it is there");
   auto validate = std::make_shared<std::string>();
@@ -460,7 +470,18 @@ Action AddTrainCommand(CLI::App& app) {
   return [=]() {
     if (!cmd->parsed()) return -1;
     declared->Apply();
+    network->Apply();
     o->progress = !*quiet;
+    // A model read (--init, --validate) brings its own network: a network
+    // flag beside it would be ignored, so it is refused.
+    for (const std::string& flag : network->Given()) {
+      if (!o->init.empty() || !validate->empty())
+        throw aia::InputError(
+            "command line", 0, flag,
+            "the network is the one of the " +
+                std::string(!validate->empty() ? "--validate" : "--init") +
+                " model; drop the flag (or --init, for a new network)");
+    }
     if (!validate->empty()) {
       const aia::ValidationResult v =
           aia::Validate(*validate, o->data, o->val_share, o->seed);

@@ -398,6 +398,15 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
       {{"train", "--data", dir, "--init", dir + "/none.pt", "--out",
         dir + "/m.pt"},
        "--init: '" + dir + "/none.pt': no such model file"},
+      // The model read brings its network: its flags are not ignored but
+      // refused.
+      {{"train", "--data", dir, "--init", dir + "/none.pt", "--out",
+        dir + "/m.pt", "--width", "64"},
+       "error: command line: --width: the network is the one of the --init "
+       "model"},
+      {{"train", "--data", dir, "--validate", dir + "/none.pt", "--frame",
+        "global"},
+       "--frame: the network is the one of the --validate model"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = testing::RunAia(args);
