@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <vector>
 
@@ -18,6 +17,7 @@
 #include "aia/render/frame_renderer.h"
 #include "aia/render/video.h"
 #include "aia/scenario/loader.h"
+#include "aia/world/media.h"
 
 namespace aia {
 namespace {
@@ -178,11 +178,12 @@ class VideoObserver : public StepObserver {
       // Encoded in memory and written by aia's atomic writer: a failed write
       // (a full disk) is "cannot write 'PATH': <errno text>", where
       // cv::imwrite prints libpng's own message and returns false.
-      std::vector<unsigned char> png;
-      if (!cv::imencode(".png", image, png))
+      const std::string png =
+          EncodePng(image.data, image.cols, image.rows, image.step);
+      if (png.empty())
         throw std::runtime_error("cannot write '" + path +
                                  "': the PNG encoder failed");
-      WriteFileAtomic(path, std::string(png.begin(), png.end()));
+      WriteFileAtomic(path, png);
       ++png_frames_;
     }
     video_->Write(image);
@@ -251,8 +252,15 @@ RenderResult RenderMission(const RenderOptions& options) {
   const int fps = scenario.render.fps;
   const int width = scenario.render.width, height = scenario.render.height;
 
+  // The video first: opening it loads the codecs (world/media.h), which
+  // is done before the mission's files appear.
   std::unique_ptr<Mp4Writer> video;
   const auto started = std::chrono::steady_clock::now();
+  try {
+    video = std::make_unique<Mp4Writer>(options.out_file, width, height, fps);
+  } catch (const std::runtime_error& e) {
+    throw InputError("command line", 0, "--out", e.what());
+  }
   MissionRunner runner(mission, prefix, "aia render", options.progress, [&] {
     char buf[64];
     std::snprintf(buf, sizeof(buf), "frame %d  %.1f fps",
@@ -266,11 +274,6 @@ RenderResult RenderMission(const RenderOptions& options) {
   settings.edges = options.edges;
   FrameRenderer renderer(runner.episode().sim(), mission.instance->world.map,
                          settings);
-  try {
-    video = std::make_unique<Mp4Writer>(options.out_file, width, height, fps);
-  } catch (const std::runtime_error& e) {
-    throw InputError("command line", 0, "--out", e.what());
-  }
   VideoObserver filming(runner.episode(), options, &renderer, video.get());
   runner.AddObserver(&filming);
   const MissionSummary summary = runner.Run();

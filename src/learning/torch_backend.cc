@@ -3,12 +3,7 @@
 // it.
 #include "torch_backend.h"
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <atomic>
-#include <climits>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,49 +18,13 @@ namespace {
 
 std::atomic<const TorchBackend*> loaded{nullptr};
 
-// Where the plugin may be: where this build wrote it, then beside the
-// running program (a build folder moved as a whole).
-std::vector<std::string> PluginCandidates() {
-  std::vector<std::string> paths = {AIA_TORCH_PLUGIN};
-  char exe[PATH_MAX];
-  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (n > 0) {
-    std::string dir(exe, static_cast<std::size_t>(n));
-    dir.resize(dir.rfind('/') + 1);
-    paths.push_back(dir + "libaia_torch.so");
-  }
-  return paths;
-}
-
 const TorchBackend* LoadBackend() {
-  std::string tried;
-  for (const std::string& path : PluginCandidates()) {
-    // RTLD_LOCAL: libtorch's and the plugin's symbols stay out of the
-    // process's global scope.
-    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (!handle) {
-      const char* why = dlerror();
-      tried += "\n  " + path + ": " + (why ? why : "cannot be loaded");
-      continue;
-    }
-    using Entry = const TorchBackend* (*)();
-    const auto entry =
-        reinterpret_cast<Entry>(dlsym(handle, kTorchBackendSymbol));
-    const TorchBackend* table = entry ? entry() : nullptr;
-    if (!table || table->version != kTorchBackendVersion ||
-        table->size != sizeof(TorchBackend)) {
-      tried += "\n  " + path +
-               ": not this build's plugin (rebuild: cmake "
-               "--build build)";
-      continue;
-    }
-    loaded = table;
-    return table;
-  }
-  throw std::runtime_error(
-      "cannot load libtorch's plugin libaia_torch.so (the learned policy and "
-      "training need it; build it with `cmake --build build`):" +
-      tried);
+  const TorchBackend* table = static_cast<const TorchBackend*>(LoadPluginTable(
+      AIA_TORCH_PLUGIN, kTorchBackendSymbol,
+      PluginHeader{kTorchBackendVersion, sizeof(TorchBackend)},
+      "libtorch's plugin: the learned policy and training need it"));
+  loaded = table;
+  return table;
 }
 
 }  // namespace

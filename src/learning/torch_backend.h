@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/plugin.h"
 #include "aia/learning/network.h"
 #include "aia/learning/trainer.h"
 
@@ -22,12 +23,12 @@ namespace aia {
 
 // Bumped whenever the table below changes.
 inline constexpr int kTorchBackendVersion = 1;
-// The plugin's one exported symbol: extern "C" const TorchBackend* NAME().
+// The plugin's one exported symbol: extern "C" const void* NAME(), its table
+// (core/plugin.h).
 inline constexpr const char* kTorchBackendSymbol = "aia_torch_backend";
 
 struct TorchBackend {
-  int version = kTorchBackendVersion;
-  std::size_t size = sizeof(TorchBackend);
+  PluginHeader header{kTorchBackendVersion, sizeof(TorchBackend)};
   TorchNet* (*create)(const NetworkConfig& config, std::uint64_t seed);
   TorchNet* (*load)(const std::string& path, const std::string& error_file,
                     int error_line, const std::string& key);
@@ -53,9 +54,8 @@ struct TorchBackend {
   int (*threads)();
 };
 
-// The plugin's table, loading it at the first call (thread-safe). A plugin
-// that is missing, from another build or without the symbol is a
-// std::runtime_error naming the file.
+// The plugin's table, loading it at the first call (thread-safe; errors as
+// LoadPluginTable's).
 const TorchBackend& Torch();
 // The table if the plugin is loaded already, else null (nothing is loaded).
 const TorchBackend* TorchIfLoaded();

@@ -7,7 +7,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <opencv2/videoio.hpp>
 #include <stdexcept>
 
 #include "aia/core/check.h"
@@ -20,10 +19,9 @@ namespace {
 // Why the finished video at `file` is not whole (FFmpeg's writer reports no
 // errors: a full disk leaves a cut file without its index), or "".
 std::string VideoDamage(const std::string& file, int frames) {
-  cv::VideoCapture probe(file, cv::CAP_FFMPEG);
-  if (!probe.isOpened()) return "the encoder left an unreadable file";
-  const double n = probe.get(cv::CAP_PROP_FRAME_COUNT);
-  if (static_cast<int>(n) != frames)
+  const int n = CountVideoFrames(file);
+  if (n < 0) return "the encoder left an unreadable file";
+  if (n != frames)
     return "the encoder wrote " + std::to_string(static_cast<long>(n)) +
            " of " + std::to_string(frames) + " frames";
   return "";
@@ -50,25 +48,15 @@ Mp4Writer::Mp4Writer(const std::string& path, int width, int height, double fps)
   // OpenCV picks the container from the extension: keep .mp4 last
   // (.STEM.tmp.PID.mp4, which a later job removes once PID is gone).
   tmp_ = TemporaryPath(path, /*keep_extension=*/true);
-  const cv::Size size(width, height);
-  for (const char* fourcc : {"avc1", "mp4v"}) {
-    writer_ = std::make_unique<cv::VideoWriter>();
-    const int code =
-        cv::VideoWriter::fourcc(fourcc[0], fourcc[1], fourcc[2], fourcc[3]);
-    if (writer_->open(tmp_, cv::CAP_FFMPEG, code, fps, size, true) &&
-        writer_->isOpened()) {
-      codec_ = fourcc;
-      return;
-    }
-  }
-  writer_.reset();
+  writer_ = VideoFile::Open(tmp_, width, height, fps, &codec_);
+  if (writer_) return;
   std::remove(tmp_.c_str());
   throw std::runtime_error("cannot open an MP4 video for writing at " + path);
 }
 
 Mp4Writer::~Mp4Writer() {
   if (writer_) {
-    writer_->release();
+    writer_->Close();
     std::remove(tmp_.c_str());
   }
 }
@@ -76,13 +64,13 @@ Mp4Writer::~Mp4Writer() {
 void Mp4Writer::Write(const cv::Mat& bgr) {
   AIA_CHECK(writer_ != nullptr);
   AIA_CHECK(bgr.type() == CV_8UC3 && bgr.cols == width_ && bgr.rows == height_);
-  writer_->write(bgr);
+  writer_->Write(bgr.data, bgr.step);
   ++frames_;
 }
 
 void Mp4Writer::Commit() {
   AIA_CHECK(writer_ != nullptr);
-  writer_->release();
+  writer_->Close();
   writer_.reset();
   if (std::string damage = VideoDamage(tmp_, frames_); !damage.empty()) {
     const std::string dir = std::filesystem::path(tmp_).parent_path().string();

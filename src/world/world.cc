@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -19,6 +18,7 @@
 #include "aia/core/rng.h"
 #include "aia/world/generator.h"
 #include "aia/world/map.h"
+#include "aia/world/media.h"
 
 namespace aia {
 namespace {
@@ -191,24 +191,16 @@ GrayImage DecodeMapImage(const std::string& bytes) {
         "the header declares " + std::to_string(cols) + " x " +
         std::to_string(rows) + " pixels; at most " +
         std::to_string(kMaxMapPixels) + " pixels (e.g. 4096 x 4096)");
-  cv::Mat img;
-  try {
-    const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8U,
-                      const_cast<char*>(bytes.data()));
+  GrayImage out;
+  bool decoded = false;
+  {
     // libpng prints its own complaint about a corrupt file to stderr; the
     // reason reaches the user as one error line instead.
     const QuietStderr quiet;
-    img = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception&) {
-    img.release();
+    decoded = DecodeGray(bytes, &out.cols, &out.rows, &out.pixels);
   }
-  if (img.empty() || img.cols != cols || img.rows != rows)
+  if (!decoded || out.cols != cols || out.rows != rows)
     throw std::invalid_argument("the image data is corrupt or truncated");
-  if (img.depth() != CV_8U) img.convertTo(img, CV_8U, 1.0 / 256.0);
-  GrayImage out;
-  out.cols = img.cols;
-  out.rows = img.rows;
-  out.pixels.assign(img.begin<std::uint8_t>(), img.end<std::uint8_t>());
   return out;
 }
 

@@ -83,11 +83,13 @@ TEST(HardeningTest, SecondJobOnAFolderIsRefusedAndCtrlCWritesWhatIsDone) {
   const std::string script =
       Quoted(eval) + " >" + dir + "/first.out 2>" + dir +
       "/first.err & pid=$!\n"
-      // Wait for a few rows (the lock is taken before any row).
+      // Wait for a few rows, six and the header (the lock is taken before
+      // any row; the second job now starts and ends in a tenth of a second,
+      // so the rows counted below are the ones waited for).
       "for i in $(seq 600); do\n"
       "  [ $(wc -l < " +
       dir +
-      "/runs.csv 2>/dev/null || echo 0) -gt 5 ] "
+      "/runs.csv 2>/dev/null || echo 0) -gt 6 ] "
       "&& break; sleep 0.05; done\n" +
       Quoted(eval) + " >" + dir + "/second.out 2>" + dir +
       "/second.err; echo second=$?\n"
@@ -350,8 +352,9 @@ TEST(HardeningTest, OutputThatIsAnInputIsRefused) {
   ASSERT_EQ(train({"--data", dir + "/data", "--out", dir + "/m.pt"}).exit_code,
             0);
   const std::string model = ReadFile(dir + "/m.pt");
-  r = train({"--data", dir + "/data", "--init", dir + "/m.pt", "--out",
-             dir + "/m.pt"});
+  // The --init model brings its network: no network flags beside it.
+  r = RunAia({"train", "--data", dir + "/data", "--init", dir + "/m.pt",
+              "--out", dir + "/m.pt", "--epochs", "1", "--quiet"});
   ExpectOneErrorLine(r, "'" + dir +
                             "/m.pt' is the model to start from (--init); "
                             "choose another path");

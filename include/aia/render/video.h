@@ -1,4 +1,4 @@
-// An H.264 MP4 written through OpenCV's FFMPEG backend, to a
+// An H.264 MP4 written through OpenCV's FFMPEG backend (world/media.h), to a
 // temporary name in the same directory and renamed into place by Commit(),
 // so an interrupted render never leaves a truncated video under the final name.
 #ifndef AIA_RENDER_VIDEO_H_
@@ -8,9 +8,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-namespace cv {
-class VideoWriter;
-}
+#include "aia/world/media.h"
 
 namespace aia {
 
@@ -36,7 +34,7 @@ class Mp4Writer {
   std::string path_, tmp_, codec_;
   int width_, height_;
   int frames_ = 0;
-  std::unique_ptr<cv::VideoWriter> writer_;
+  std::unique_ptr<VideoFile> writer_;
 };
 
 }  // namespace aia

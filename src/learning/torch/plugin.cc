@@ -43,7 +43,7 @@ aia::TorchBackend MakeTable() {
 
 }  // namespace
 
-extern "C" __attribute__((visibility("default"))) const aia::TorchBackend*
+extern "C" __attribute__((visibility("default"))) const void*
 aia_torch_backend() {
   static const aia::TorchBackend table = MakeTable();
   return &table;

@@ -1,0 +1,33 @@
+// Plugins of this build: shared objects loaded at their first use, so that a
+// process which never needs what they link (libtorch, OpenCV's codecs) does
+// not pay for loading it (half a second of every short run). A plugin
+// exports one symbol, a function returning its table of plain functions; the
+// table starts with a PluginHeader, checked against the caller's. Only the
+// table and the plain values it passes cross: each side keeps its own copy
+// of what it links statically, and no virtual call or RTTI is shared.
+#ifndef AIA_CORE_PLUGIN_H_
+#define AIA_CORE_PLUGIN_H_
+
+#include <cstddef>
+#include <string>
+
+namespace aia {
+
+struct PluginHeader {
+  int version = 0;       // the table's version (bumped when it changes)
+  std::size_t size = 0;  // sizeof the table
+};
+
+// Loads the plugin (`built_path`, where the build wrote it, else the file of
+// that name beside the running program) and returns its table, the result
+// of its `symbol`. A missing plugin, or one of another version or table
+// size, is a std::runtime_error that says `what` the plugin is for and names
+// each place tried. Not cached: callers keep the table (a function-local
+// static).
+const void* LoadPluginTable(const std::string& built_path, const char* symbol,
+                            const PluginHeader& expected,
+                            const std::string& what);
+
+}  // namespace aia
+
+#endif  // AIA_CORE_PLUGIN_H_

@@ -1,0 +1,63 @@
+#include "aia/core/plugin.h"
+
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <climits>
+#include <stdexcept>
+#include <vector>
+
+namespace aia {
+namespace {
+
+std::vector<std::string> Candidates(const std::string& built_path) {
+  std::vector<std::string> paths = {built_path};
+  char exe[PATH_MAX];
+  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  const std::size_t slash = built_path.rfind('/');
+  if (n > 0) {
+    std::string dir(exe, static_cast<std::size_t>(n));
+    dir.resize(dir.rfind('/') + 1);
+    const std::string beside =
+        dir + (slash == std::string::npos ? built_path
+                                          : built_path.substr(slash + 1));
+    if (beside != built_path) paths.push_back(beside);
+  }
+  return paths;
+}
+
+}  // namespace
+
+const void* LoadPluginTable(const std::string& built_path, const char* symbol,
+                            const PluginHeader& expected,
+                            const std::string& what) {
+  std::string tried;
+  for (const std::string& path : Candidates(built_path)) {
+    // RTLD_LOCAL: the plugin's symbols and its libraries' stay out of the
+    // process's global scope.
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      const char* why = dlerror();
+      tried += "\n  " + path + ": " + (why ? why : "cannot be loaded");
+      continue;
+    }
+    using Entry = const void* (*)();
+    const auto entry = reinterpret_cast<Entry>(dlsym(handle, symbol));
+    const void* table = entry ? entry() : nullptr;
+    const auto* header = static_cast<const PluginHeader*>(table);
+    if (!header || header->version != expected.version ||
+        header->size != expected.size) {
+      tried += "\n  " + path +
+               ": not this build's plugin (rebuild: cmake --build build)";
+      continue;
+    }
+    return table;
+  }
+  const std::size_t slash = built_path.rfind('/');
+  throw std::runtime_error(
+      "cannot load " +
+      (slash == std::string::npos ? built_path : built_path.substr(slash + 1)) +
+      " (" + what + "; build it with `cmake --build build`):" + tried);
+}
+
+}  // namespace aia
