@@ -38,7 +38,7 @@ const void* LoadPluginTable(const std::string& built_path, const char* symbol,
     void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle) {
       const char* why = dlerror();
-      tried += "\n  " + path + ": " + (why ? why : "cannot be loaded");
+      tried += "; " + path + ": " + (why ? why : "cannot be loaded");
       continue;
     }
     using Entry = const void* (*)();
@@ -47,7 +47,7 @@ const void* LoadPluginTable(const std::string& built_path, const char* symbol,
     const auto* header = static_cast<const PluginHeader*>(table);
     if (!header || header->version != expected.version ||
         header->size != expected.size) {
-      tried += "\n  " + path +
+      tried += "; " + path +
                ": not this build's plugin (rebuild: cmake --build build)";
       continue;
     }
@@ -57,7 +57,7 @@ const void* LoadPluginTable(const std::string& built_path, const char* symbol,
   throw std::runtime_error(
       "cannot load " +
       (slash == std::string::npos ? built_path : built_path.substr(slash + 1)) +
-      " (" + what + "; build it with `cmake --build build`):" + tried);
+      " (" + what + "; build it with `cmake --build build`)" + tried);
 }
 
 }  // namespace aia

@@ -21,9 +21,9 @@ struct PluginHeader {
 // Loads the plugin (`built_path`, where the build wrote it, else the file of
 // that name beside the running program) and returns its table, the result
 // of its `symbol`. A missing plugin, or one of another version or table
-// size, is a std::runtime_error that says `what` the plugin is for and names
-// each place tried. Not cached: callers keep the table (a function-local
-// static).
+// size, is a std::runtime_error on one line that says `what` the plugin is
+// for and names each place tried. Not cached: callers keep the table (a
+// function-local static).
 const void* LoadPluginTable(const std::string& built_path, const char* symbol,
                             const PluginHeader& expected,
                             const std::string& what);
