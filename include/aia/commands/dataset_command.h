@@ -1,6 +1,6 @@
 // `aia dataset` (docs/learning.md, Dataset): the paper's recipe for
 // imitation data. Episode e runs on the generated world of seed
-// first_seed + e (runtime/eval.h, GeneratedScenario) with the acting policy
+// first_seed + e (runtime/generated.h, GeneratedScenario) with the acting policy
 // (the expert; the learned policy for DAgger rounds), its beliefs fused by
 // the DKF as in any mission; a shadow expert labels every robot's state
 // with the expert's move from it (for the expert itself, its own moves);

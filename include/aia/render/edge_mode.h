@@ -1,5 +1,5 @@
 // Which communication edges a frame draws (`aia render --edges`): its own
-// header, without OpenCV, so that runtime/render_mission.h can declare the
+// header, without OpenCV, so that commands/render_mission.h can declare the
 // flag.
 #ifndef AIA_RENDER_EDGE_MODE_H_
 #define AIA_RENDER_EDGE_MODE_H_
