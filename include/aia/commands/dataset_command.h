@@ -1,13 +1,13 @@
 // `aia dataset` (docs/learning.md, Dataset): the paper's recipe for
 // imitation data. Episode e runs on the generated world of seed
-// first_seed + e (runtime/generated.h, GeneratedScenario) with the acting policy
-// (the expert; the learned policy for DAgger rounds), its beliefs fused by
-// the DKF as in any mission; a shadow expert labels every robot's state
-// with the expert's move from it (for the expert itself, its own moves);
-// `keep` random decision steps of each episode are kept. Episodes are split
-// over shards (e % shards == shard), each shard one SQLite file in the
-// folder, one transaction per episode: a killed run resumes where it
-// stopped and loses at most the episode in flight.
+// first_seed + e (runtime/generated.h, GeneratedScenario) with the acting
+// policy (the expert; the learned policy for DAgger rounds), its beliefs fused
+// by the DKF as in any mission; a shadow expert labels every robot's state with
+// the expert's move from it (for the expert itself, its own moves); `keep`
+// random decision steps of each episode are kept. Episodes are split over
+// shards (e % shards == shard), each shard one SQLite file in the folder, one
+// transaction per episode: a killed run resumes where it stopped and loses at
+// most the episode in flight.
 #ifndef AIA_COMMANDS_DATASET_COMMAND_H_
 #define AIA_COMMANDS_DATASET_COMMAND_H_
 
