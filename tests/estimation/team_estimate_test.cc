@@ -13,8 +13,7 @@ using Measurements = std::vector<std::vector<Measurement>>;
 
 // Two robots, one static target at the prior N((1, 1), 4 I): Omega_0 = 0.25 I.
 TeamEstimate TwoRobots() {
-  return TeamEstimate({TargetModel::Static(2)}, 2,
-                      {Eigen::Vector2d(1.0, 1.0)},
+  return TeamEstimate({TargetModel::Static(2)}, 2, {Eigen::Vector2d(1.0, 1.0)},
                       {Eigen::MatrixXd::Identity(2, 2) * 4.0});
 }
 

@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "aia/core/grid.h"
-#include "aia/render/edge_mode.h"
 #include "aia/core/types.h"
+#include "aia/render/edge_mode.h"
 #include "aia/render/scene.h"
 #include "aia/render/view.h"
 #include "aia/sim/simulation.h"
