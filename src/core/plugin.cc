@@ -10,17 +10,19 @@
 namespace aia {
 namespace {
 
+std::string FileName(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
 std::vector<std::string> Candidates(const std::string& built_path) {
   std::vector<std::string> paths = {built_path};
   char exe[PATH_MAX];
   const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-  const std::size_t slash = built_path.rfind('/');
   if (n > 0) {
     std::string dir(exe, static_cast<std::size_t>(n));
     dir.resize(dir.rfind('/') + 1);
-    const std::string beside =
-        dir + (slash == std::string::npos ? built_path
-                                          : built_path.substr(slash + 1));
+    const std::string beside = dir + FileName(built_path);
     if (beside != built_path) paths.push_back(beside);
   }
   return paths;
@@ -53,11 +55,8 @@ const void* LoadPluginTable(const std::string& built_path, const char* symbol,
     }
     return table;
   }
-  const std::size_t slash = built_path.rfind('/');
-  throw std::runtime_error(
-      "cannot load " +
-      (slash == std::string::npos ? built_path : built_path.substr(slash + 1)) +
-      " (" + what + "; build it with `cmake --build build`)" + tried);
+  throw std::runtime_error("cannot load " + FileName(built_path) + " (" + what +
+                           "; build it with `cmake --build build`)" + tried);
 }
 
 }  // namespace aia

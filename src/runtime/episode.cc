@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <utility>
 
 #include "aia/core/check.h"
 #include "aia/core/interrupt.h"
@@ -19,28 +20,20 @@ double Since(Clock::time_point t0) {
 // Targets move during the first part of a step's physics, so video is smooth.
 constexpr double kTargetMotionSeconds = 0.25;
 
-std::vector<TargetModel> TargetModels(const World& world) {
-  std::vector<TargetModel> models;
-  for (const TargetPrior& p : world.priors) models.push_back(p.model);
-  return models;
-}
-
 // Every robot starts at the prior the scenario tells it.
 TeamEstimate PriorEstimate(const World& world) {
+  std::vector<TargetModel> models;
   std::vector<Eigen::VectorXd> means;
   std::vector<Eigen::MatrixXd> covs;
   for (const TargetPrior& p : world.priors) {
+    models.push_back(p.model);
     means.push_back(p.mean);
     covs.push_back(p.cov);
   }
-  return TeamEstimate(TargetModels(world), world.NumRobots(), means, covs);
+  return TeamEstimate(std::move(models), world.NumRobots(), means, covs);
 }
 
 }  // namespace
-
-BeliefLayout MakeBeliefLayout(const World& world) {
-  return BeliefLayout(TargetModels(world));
-}
 
 Episode::Episode(std::shared_ptr<const Instance> instance,
                  std::unique_ptr<Policy> policy)
@@ -238,11 +231,8 @@ void Episode::Observe() {
   }
 
   // Judge the mission on the active robots' best estimates.
-  bool all = true;
-  for (int k = 0; k < num_targets_; ++k)
-    if (!(estimate_.MinDet(k) <= mission_.eps)) all = false;
-  all_localized_ = all;
-  if (all) {
+  all_localized_ = NumLocalized() == num_targets_;
+  if (all_localized_) {
     ++localized_steps_;
     if (flowtime_ < 0) flowtime_ = step_;
   }

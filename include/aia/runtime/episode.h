@@ -46,9 +46,6 @@ struct EpisodeStats {
   double sim_seconds = 0.0;   // simulated time
 };
 
-// The target models of the filter, from the world's priors.
-BeliefLayout MakeBeliefLayout(const World& world);
-
 class Episode;
 
 // One decision: what the policy wanted, what the world applied (an invalid
