@@ -121,17 +121,27 @@ class DeclaredFlags {
     flags_.push_back(flag);
     if constexpr (std::is_same_v<T, bool>) {
       cmd_->add_flag(flag, *f.value, help);
-    } else if constexpr (std::is_enum_v<T>) {
+    } else if constexpr (std::is_enum_v<T> ||
+                         aia::internal::HasTextForm<T>::value) {
+      // Read by name or form after parsing.
       auto text = std::make_shared<std::string>(
           aia::FieldWriter::Write(*f.value, f)->scalar);
       cmd_->add_option(flag, *text, help)->capture_default_str();
-      T* out = f.value;
-      after_.push_back([text, out, flag] {
-        EnumFlag<T> e;
-        aia::ConfigNode node = aia::ConfigNode::Map();
-        node.Set("value", aia::ConfigNode::Scalar(*text)).SetOrigin(flag);
-        aia::ReadFields(node, aia::ReadOptions{"command line", "", ""}, "", &e);
-        *out = e.value;
+      ReadAfter(f, flag, [text] { return aia::ConfigNode::Scalar(*text); });
+    } else if constexpr (aia::internal::IsVector<T>::value) {
+      // A comma-separated list, each item read as the field's items are.
+      auto items = std::make_shared<std::vector<std::string>>();
+      for (const aia::ConfigNode& item :
+           aia::FieldWriter::Write(*f.value, f)->items)
+        items->push_back(item.scalar);
+      cmd_->add_option(flag, *items, help)
+          ->delimiter(',')
+          ->capture_default_str();
+      ReadAfter(f, flag, [items] {
+        aia::ConfigNode list = aia::ConfigNode::List();
+        for (const std::string& item : *items)
+          list.items.push_back(aia::ConfigNode::Scalar(item));
+        return list;
       });
     } else if constexpr (std::is_same_v<T, std::uint64_t>) {
       cmd_->add_option(flag, *f.value, help)
@@ -143,14 +153,30 @@ class DeclaredFlags {
   }
 
  private:
-  template <typename E>
-  struct EnumFlag {
-    E value{};
+  // One field read alone, with its declaration's options.
+  template <typename T>
+  struct OneField {
+    aia::Field<T> field;
+    T value{};
     template <typename A>
     void Serialize(A* a) {
-      a->Visit(aia::Field<E>("value", &value));
+      a->Visit(field.For(&value));
     }
   };
+
+  // After parsing, the flag's text (made by `node`) is read into the field
+  // by the scenario keys' reader: `command line: --flag: what`.
+  template <typename T, typename MakeNode>
+  void ReadAfter(const aia::Field<T>& f, const std::string& flag,
+                 MakeNode node) {
+    after_.push_back([f, flag, node] {
+      OneField<T> one{f};
+      aia::ConfigNode map = aia::ConfigNode::Map();
+      map.Set(std::string(f.name), node()).SetOrigin(flag);
+      aia::ReadFields(map, aia::ReadOptions{"command line", "", ""}, "", &one);
+      *f.value = std::move(one.value);
+    });
+  }
 
   CLI::App* cmd_;
   std::vector<std::string> flags_;
@@ -334,15 +360,10 @@ Action AddEvalCommand(CLI::App& app) {
       "eval",
       "success rate and flowtime increase against the expert on generated "
       "worlds");
-  cmd->add_option("--sizes", eval->sizes, "robots x targets, e.g. 10x10,20x20")
-      ->delimiter(',')
-      ->capture_default_str();
+  // --sizes, --seeds, --seed-base, --policies and --threads, as EvalOptions
+  // declares them.
   auto declared = std::make_shared<DeclaredFlags>(cmd);
   declared->Add(eval.get());
-  cmd->add_option(
-         "--policies", eval->policies,
-         "policies to score (default: every registered one but the expert)")
-      ->delimiter(',');
   cmd->add_option("--set", eval->sets,
                   "override a key of every instance's scenario, e.g. --set "
                   "sensor.range=3; policy.<param> goes to each policy that "
@@ -366,9 +387,6 @@ Action AddBenchCommand(CLI::App& app) {
   auto bench = std::make_shared<aia::BenchOptions>();
   CLI::App* cmd = app.add_subcommand(
       "bench", "decision steps per second and where a step's time goes");
-  cmd->add_option("--sizes", bench->sizes, "robots x targets, e.g. 10x10,80x80")
-      ->delimiter(',')
-      ->capture_default_str();
   auto declared = std::make_shared<DeclaredFlags>(cmd);
   declared->Add(bench.get());
   cmd->add_option("--policy", bench->policy, "policy to time")
@@ -393,7 +411,6 @@ Action AddBenchCommand(CLI::App& app) {
 
 Action AddDatasetCommand(CLI::App& app) {
   auto o = std::make_shared<aia::DatasetOptions>();
-  auto shard = std::make_shared<std::string>("0/1");
   auto quiet = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "dataset",
@@ -404,12 +421,6 @@ Action AddDatasetCommand(CLI::App& app) {
       ->check(kPath);
   auto declared = std::make_shared<DeclaredFlags>(cmd);
   declared->Add(o.get());
-  cmd->add_option("--shard", *shard,
-                  "K/N: this process writes episodes e with e % N == K "
-                  "(under mpirun: the rank and the number of ranks)")
-      ->capture_default_str();
-  cmd->add_option("--size", o->size, "robots x targets of the worlds")
-      ->capture_default_str();
   cmd->add_option("--policy", o->policy,
                   "acting policy (igbnet for DAgger; labels always come "
                   "from the expert)")
@@ -421,14 +432,12 @@ Action AddDatasetCommand(CLI::App& app) {
   return [=]() {
     if (!cmd->parsed()) return -1;
     declared->Apply();
-    aia::ParseShard(*shard, &o->shard, &o->shards);
     const aia::Ranks& ranks = aia::Ranks::Get();
     if (ranks.distributed()) {  // under mpirun: one shard per rank
       if (cmd->count("--shard"))
         throw aia::InputError("command line", 0, "--shard",
                               "is given by the MPI ranks under mpirun");
-      o->shard = ranks.rank();
-      o->shards = ranks.size();
+      o->shard = {ranks.rank(), ranks.size()};
     }
     o->progress = !*quiet && ranks.rank() == 0;
     aia::RunDataset(*o);

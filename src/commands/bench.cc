@@ -67,12 +67,7 @@ namespace {
 
 // One instance per size at the first seed: what the setup checks.
 std::vector<EvalInstance> Instances(const BenchOptions& o) {
-  std::vector<EvalInstance> out;
-  for (const std::string& size : o.sizes) {
-    const auto [n, m] = ParseSize(size, "--sizes");
-    out.push_back({size, n, m, o.seed});
-  }
-  return out;
+  return EnumerateInstances(o.sizes, 1, o.seed);
 }
 
 int RunExpertBench(const BenchOptions& o) {
@@ -88,12 +83,13 @@ int RunExpertBench(const BenchOptions& o) {
   const EvalSetup setup =
       MakeEvalSetup({}, o.sets, AllPolicies(), Instances(o));
   const ExpertParams& expert = *ParamsOf<ExpertParams>(*setup.expert);
-  for (const std::string& size_text : o.sizes) {
-    const auto [n, m] = ParseSize(size_text, "--sizes");
+  for (const TeamSize& size : o.sizes) {
+    const std::string size_text = size.ToText();
     std::vector<double> secs, fstar, nodes, arena;
     int found = 0;
     for (int k = 0; k < o.seeds; ++k) {
-      const EvalInstance instance{size_text, n, m, o.seed + k};
+      const EvalInstance instance{size_text, size.robots, size.targets,
+                                  o.seed + k};
       std::shared_ptr<const Instance> built;
       try {
         built = BuildInstance(InstanceScenario(instance, setup));
@@ -147,19 +143,17 @@ int RunNetworkBench(const BenchOptions& o) {
   return 0;
 }
 
+void BenchOptions::Validate(const FieldChecker& c) const {
+  if (sizes.empty()) c.Fail(sizes, "give at least one size");
+  const std::string why =
+      expert ? SeedRangeProblem(seed, seeds, "--seeds", "--seed") : "";
+  if (!why.empty()) c.Fail(seed, why);
+}
+
 int RunBench(const BenchOptions& o) {
   {
-    BenchOptions counts = o;
-    CheckFlags(&counts);  // their declarations: `--flag: what`
-  }
-  if (o.expert && static_cast<std::uint64_t>(o.seeds - 1) >
-                      std::numeric_limits<std::uint64_t>::max() - o.seed) {
-    throw InputError("command line", 0, "--seed",
-                     "seeds " + std::to_string(o.seed) + " .. " +
-                         std::to_string(o.seed) + " + " +
-                         std::to_string(o.seeds - 1) +
-                         " do not fit in 64 bits (the largest seed is "
-                         "18446744073709551615); give a smaller --seed");
+    BenchOptions flags = o;
+    CheckFlags(&flags);  // their declarations: `--flag: what`
   }
   SetPolicyThreads(o.policy_threads);
   if (o.network) return RunNetworkBench(o);
@@ -179,9 +173,8 @@ int RunBench(const BenchOptions& o) {
               "size", "steps/s", "ms/step", "physics", "sensing", "fusion",
               "policy", "rest", "mj_step%", "mj_step/s", "testspeed/s",
               "contacts", "ts_contacts");
-  for (const std::string& size_text : o.sizes) {
-    const auto [n, m] = ParseSize(size_text, "--sizes");
-    const EvalInstance generated{size_text, n, m, o.seed};
+  for (const EvalInstance& generated : Instances(o)) {
+    const std::string& size_text = generated.size;
     Scenario s = InstanceScenario(generated, setup);
     s.mission.max_steps = o.steps;
     s.mission.stop_at_success = false;

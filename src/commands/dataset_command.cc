@@ -161,14 +161,13 @@ void CheckOneShardSet(const std::string& out, int shards) {
 
 // The generated scenario of the episodes (seed: the first one) with the
 // flags' overrides: --policy, --set (not of what the episodes set), --model,
-// --max-steps; seeds first_seed + e must fit in 64 bits.
+// --max-steps.
 GeneratedSpec DatasetSpec(const DatasetOptions& o) {
-  const auto [robots, targets] = ParseSize(o.size, "--size");
   GeneratedSpec spec;
-  spec.size = o.size;
+  spec.size = o.size.ToText();
   spec.size_flag = "--size";
-  spec.robots = robots;
-  spec.targets = targets;
+  spec.robots = o.size.robots;
+  spec.targets = o.size.targets;
   spec.seed = o.first_seed;
   spec.overrides = {{"--policy", "policy.name", o.policy}};
   for (const std::string& s : o.sets) {
@@ -184,52 +183,37 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
   if (o.max_steps > 0)
     spec.overrides.push_back(
         {"--max-steps", "mission.max_steps", std::to_string(o.max_steps)});
-  const std::uint64_t last = static_cast<std::uint64_t>(o.episodes - 1);
-  if (last > std::numeric_limits<std::uint64_t>::max() - o.first_seed) {
-    throw InputError(
-        "command line", 0, "--first-seed",
-        "seeds " + std::to_string(o.first_seed) + " .. " +
-            std::to_string(o.first_seed) + " + " + std::to_string(last) +
-            " do not fit in 64 bits (the largest seed is "
-            "18446744073709551615); with --episodes " +
-            std::to_string(o.episodes) + ", --first-seed must be at most " +
-            std::to_string(std::numeric_limits<std::uint64_t>::max() - last));
-  }
   return spec;
 }
 
 std::string Recipe(const DatasetOptions& o) {
   std::string r =
-      "size=" + o.size + " first_seed=" + std::to_string(o.first_seed) +
+      "size=" + o.size.ToText() +
+      " first_seed=" + std::to_string(o.first_seed) +
       " keep=" + std::to_string(o.keep) + " policy=" + o.policy +
       " model=" + o.model + " max_steps=" + std::to_string(o.max_steps) +
       (o.max_seconds > 0.0 ? " max_seconds=" + FormatNumber(o.max_seconds)
                            : std::string()) +
-      " shards=" + std::to_string(o.shards);
+      " shards=" + std::to_string(o.shard.count);
   for (const std::string& s : o.sets) r += " set=" + s;
   return r;
 }
 
 }  // namespace
 
-void ParseShard(const std::string& text, int* shard, int* shards) {
-  if (!field_text::ParseCountPair(text, '/', 4, shard, shards))
-    throw InputError("command line", 0, "--shard",
-                     "'" + text + "' is not K/N such as 0/4");
-  if (*shards < 1 || *shard >= *shards)
-    throw InputError("command line", 0, "--shard",
-                     "'" + text + "': need 0 <= K < N");
+void DatasetOptions::Validate(const FieldChecker& c) const {
+  const std::string why =
+      SeedRangeProblem(first_seed, episodes, "--episodes", "--first-seed");
+  if (!why.empty()) c.Fail(first_seed, why);
 }
 
 int RunDataset(const DatasetOptions& o) {
   if (o.out.empty())
     throw InputError("command line", 0, "--out", "is required");
   {
-    DatasetOptions counts = o;
-    CheckFlags(&counts);  // their declarations: `--flag: what`
+    DatasetOptions flags = o;
+    CheckFlags(&flags);  // their declarations: `--flag: what`
   }
-  if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards)
-    throw InputError("command line", 0, "--shard", "need 0 <= K < N");
   const PolicyRegistry registry = AllPolicies();
   if (!registry.Has(o.policy))
     throw InputError("command line", 0, "--policy",
@@ -252,11 +236,11 @@ int RunDataset(const DatasetOptions& o) {
   }
 
   MakeOutputDir(o.out, "--out");
-  const std::string file = o.out + "/shard-" + std::to_string(o.shard) +
-                           "-of-" + std::to_string(o.shards) + ".sqlite";
+  const std::string file = o.out + "/shard-" + std::to_string(o.shard.index) +
+                           "-of-" + std::to_string(o.shard.count) + ".sqlite";
   CheckNotAnInput(file, "--out", MissionInputs(base, acting.get()),
                   "the shard written");
-  CheckOneShardSet(o.out, o.shards);
+  CheckOneShardSet(o.out, o.shard.count);
   // One writer per shard (the ranks of an mpirun share the folder): an
   // flock on the shard file itself, which SQLite's own (fcntl) locks leave
   // alone; an empty new file is an empty database to SQLite.
@@ -264,9 +248,10 @@ int RunDataset(const DatasetOptions& o) {
   DatasetWriter writer(file, Recipe(o), "--out");
 
   std::vector<int> todo;
-  for (int e = o.shard; e < o.episodes; e += o.shards)
+  for (int e = o.shard.index; e < o.episodes; e += o.shard.count)
     if (!writer.done().count(e)) todo.push_back(e);
-  const int mine = (o.episodes - o.shard + o.shards - 1) / o.shards;
+  const int mine =
+      (o.episodes - o.shard.index + o.shard.count - 1) / o.shard.count;
   ProgressLine line(o.progress);
   const auto t0 = Clock::now();
   int written = 0, skipped = 0;
@@ -312,8 +297,8 @@ int RunDataset(const DatasetOptions& o) {
     std::snprintf(buf, sizeof buf,
                   "[aia dataset] shard %d/%d  episode %zu/%d  %ld samples  "
                   "%.2f episodes/s",
-                  o.shard, o.shards, writer.done().size(), mine, samples,
-                  written / std::max(secs, 1e-9));
+                  o.shard.index, o.shard.count, writer.done().size(), mine,
+                  samples, written / std::max(secs, 1e-9));
     line.Update(buf);
   }
   line.Finish();

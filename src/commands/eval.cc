@@ -167,26 +167,17 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
 
 }  // namespace
 
-std::vector<EvalInstance> EnumerateInstances(
-    const std::vector<std::string>& sizes, int seeds, std::uint64_t seed_base) {
-  if (seeds > 0 && static_cast<std::uint64_t>(seeds - 1) >
-                       std::numeric_limits<std::uint64_t>::max() - seed_base) {
-    throw InputError(
-        "command line", 0, "--seed-base",
-        "seeds " + std::to_string(seed_base) + " .. " +
-            std::to_string(seed_base) + " + " + std::to_string(seeds - 1) +
-            " do not fit in 64 bits (the largest seed is "
-            "18446744073709551615); with --seeds " +
-            std::to_string(seeds) + ", --seed-base must be at most " +
-            std::to_string(std::numeric_limits<std::uint64_t>::max() -
-                           static_cast<std::uint64_t>(seeds - 1)));
-  }
+std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
+                                             int seeds,
+                                             std::uint64_t seed_base) {
+  const std::string why =
+      SeedRangeProblem(seed_base, seeds, "--seeds", "--seed-base");
+  if (!why.empty()) throw InputError("command line", 0, "--seed-base", why);
   std::vector<EvalInstance> out;
-  for (const std::string& size : sizes) {
-    const auto [n, m] = ParseSize(size, "--sizes");
+  for (const TeamSize& size : sizes)
     for (int s = 0; s < seeds; ++s)
-      out.push_back({size, n, m, seed_base + static_cast<std::uint64_t>(s)});
-  }
+      out.push_back({size.ToText(), size.robots, size.targets,
+                     seed_base + static_cast<std::uint64_t>(s)});
   return out;
 }
 
@@ -332,9 +323,8 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
 
 // Why a parsed row cannot be a run's result, or "".
 std::string Impossible(const EvalRow& r) {
-  int robots = 0, targets = 0;
-  if (!field_text::ParseCountPair(r.size, 'x', 5, &robots, &targets))
-    return "size '" + r.size + "'";
+  std::string why;
+  if (!TeamSize::FromText(r.size, &why)) return "size '" + r.size + "'";
   const bool name_ok =
       !r.policy.empty() && r.policy.size() <= 64 &&
       std::all_of(r.policy.begin(), r.policy.end(), [](char c) {
@@ -402,6 +392,21 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
   return kept;
 }
 
+void EvalOptions::Validate(const FieldChecker& c) const {
+  if (sizes.empty()) c.Fail(sizes, "give at least one size");
+  for (std::size_t i = 0; i < sizes.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (sizes[i] == sizes[j])
+        c.Fail(sizes, "'" + sizes[i].ToText() + "' is listed twice");
+  for (std::size_t i = 0; i < policies.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (policies[i] == policies[j])
+        c.Fail(policies, "'" + policies[i] + "' is listed twice");
+  const std::string why =
+      SeedRangeProblem(seed_base, seeds, "--seeds", "--seed-base");
+  if (!why.empty()) c.Fail(seed_base, why);
+}
+
 std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& sizes,
                        const std::vector<std::string>& policies) {
@@ -449,32 +454,20 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
 
 namespace {
 
-// The flags that need no scenario: counts, the output folder, and sizes and
-// policies listed once (one listed twice would write every row twice, and
-// each resume would drop both copies and run them again).
+std::vector<std::string> SizeLabels(const std::vector<TeamSize>& sizes) {
+  std::vector<std::string> labels;
+  for (const TeamSize& s : sizes) labels.push_back(s.ToText());
+  return labels;
+}
+
+// The flags that need no scenario (their declarations: `--flag: what`) and
+// the output folder.
 void CheckEvalFlags(const EvalOptions& o) {
-  {
-    EvalOptions counts = o;
-    CheckFlags(&counts);  // their declarations: `--flag: what`
-  }
+  EvalOptions flags = o;
+  CheckFlags(&flags);
   if (o.out_dir.empty())
     throw InputError("command line", 0, "--out",
                      "an output folder is required");
-  for (std::size_t i = 0; i < o.sizes.size(); ++i) {
-    const auto size = ParseSize(o.sizes[i], "--sizes");
-    for (std::size_t j = 0; j < i; ++j)
-      if (ParseSize(o.sizes[j], "--sizes") == size)
-        throw InputError("command line", 0, "--sizes",
-                         o.sizes[i] == o.sizes[j]
-                             ? "'" + o.sizes[i] + "' is listed twice"
-                             : "'" + o.sizes[j] + "' and '" + o.sizes[i] +
-                                   "' are the same size");
-  }
-  for (std::size_t i = 0; i < o.policies.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (o.policies[i] == o.policies[j])
-        throw InputError("command line", 0, "--policies",
-                         "'" + o.policies[i] + "' is listed twice");
 }
 
 // --policies, or every registered policy but the expert.
@@ -631,8 +624,8 @@ class RowSink {
   // summary.
   std::string WriteResults() {
     std::map<std::string, size_t> size_rank, policy_rank;
-    for (size_t i = 0; i < options_.sizes.size(); ++i)
-      size_rank.emplace(options_.sizes[i], i);
+    const std::vector<std::string> sizes = SizeLabels(options_.sizes);
+    for (size_t i = 0; i < sizes.size(); ++i) size_rank.emplace(sizes[i], i);
     for (size_t i = 0; i < policies_.size(); ++i)
       policy_rank.emplace(policies_[i], i);
     const auto rank = [](const std::map<std::string, size_t>& m,
@@ -655,7 +648,7 @@ class RowSink {
     std::vector<EvalRow> in_range;
     for (const auto& r : rows_)
       if (r.seed >= lo && r.seed < hi) in_range.push_back(r);
-    const std::string summary = SummaryCsv(in_range, options_.sizes, policies_);
+    const std::string summary = SummaryCsv(in_range, sizes, policies_);
     WriteFileAtomic(options_.out_dir + "/summary.csv", summary);
     return summary;
   }
@@ -779,8 +772,6 @@ int RunEval(const EvalOptions& o) {
   const std::vector<std::string> policies = PoliciesToRun(o, registry);
   const std::vector<EvalInstance> instances =
       EnumerateInstances(o.sizes, o.seeds, o.seed_base);
-  if (instances.empty())
-    throw InputError("command line", 0, "--sizes", "give at least one size");
   const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry, instances);
   CheckOutputsAreNotInputs(o, setup, instances.front());
 

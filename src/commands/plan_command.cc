@@ -35,7 +35,9 @@ SamplingPlan PlanFromStart(std::shared_ptr<const Instance> instance,
 
 int RunPlanCommand(const PlanOptions& o) {
   if (o.budget && *o.budget < 0)
-    throw InputError("command line", 0, "--budget", "must be >= 0");
+    throw InputError(
+        "command line", 0, "--budget",
+        "must be an integer >= 0, got " + std::to_string(*o.budget));
   if (!o.out.empty()) CheckOutputFile(o.out, "--out");
   const PolicyRegistry registry = AllPolicies();
   CommandOverrides overrides = o.overrides;

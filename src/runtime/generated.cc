@@ -30,19 +30,6 @@ Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed) {
   return s;
 }
 
-std::pair<int, int> ParseSize(const std::string& text,
-                              const std::string& flag) {
-  int n = 0, k = 0;
-  if (!field_text::ParseCountPair(text, 'x', 5, &n, &k))
-    throw InputError(
-        "command line", 0, flag,
-        "'" + text + "' is not a size ROBOTSxTARGETS such as 10x10");
-  if (n < 1 || k < 1)
-    throw InputError("command line", 0, flag,
-                     "'" + text + "': robots and targets must be >= 1");
-  return {n, k};
-}
-
 namespace {
 
 std::string FlagKey(const Override& o) {

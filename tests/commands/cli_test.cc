@@ -602,7 +602,8 @@ TEST(CliTest, SeedsThatDoNotFitIn64BitsAreRefused) {
       {{"bench", "--expert", "--seeds", "2", "--seed", "18446744073709551615"},
        "error: command line: --seed: seeds 18446744073709551615 .. "
        "18446744073709551615 + 1 do not fit in 64 bits (the largest seed is "
-       "18446744073709551615); give a smaller --seed\n"},
+       "18446744073709551615); with --seeds 2, --seed must be at most "
+       "18446744073709551614\n"},
   };
   for (const auto& [args, err] : cases) {
     const auto r = RunAia(args);

@@ -236,7 +236,8 @@ TEST(EvalTest, BadFlagsExitWith2) {
   const std::string dir = testing::MakeTempDir("aia_eval_");
   auto r = RunAia({"eval", "--sizes", "10x", "--out", dir});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: command line: --sizes: '10x' is not a size"),
+  EXPECT_NE(r.err.find("error: command line: --sizes: must be a size "
+                       "ROBOTSxTARGETS such as 10x10, got 10x"),
             std::string::npos)
       << r.err;
   r = RunAia({"eval", "--policies", "greedy,nope", "--out", dir});
@@ -247,7 +248,7 @@ TEST(EvalTest, BadFlagsExitWith2) {
 
 TEST(EvalPiecesTest, EnumerateRunOneInstanceAndMerge) {
   const std::vector<EvalInstance> all =
-      EnumerateInstances({"2x2", "3x1"}, 2, 7);
+      EnumerateInstances({{2, 2}, {3, 1}}, 2, 7);
   ASSERT_EQ(all.size(), 4u);
   EXPECT_EQ(all[3].size, "3x1");
   EXPECT_EQ(all[3].robots, 3);
@@ -445,12 +446,12 @@ TEST(EvalPiecesTest, ErrorsOfGeneratedScenariosNameTheFlagBehindThem) {
   const PolicyRegistry registry = AllPolicies();
   const EvalSetup setup =
       MakeEvalSetup({"greedy"}, {"render.follow_robot=2"}, registry,
-                    EnumerateInstances({"3x1"}, 1, 0));
+                    EnumerateInstances({{3, 1}}, 1, 0));
   EXPECT_EQ(InstanceScenario({"3x1", 3, 1, 0}, setup).render.follow_robot, 2);
   // The seeds of an eval fit in 64 bits.
-  EXPECT_EQ(EnumerateInstances({"1x1"}, 1, 18446744073709551615u).size(), 1u);
+  EXPECT_EQ(EnumerateInstances({{1, 1}}, 1, 18446744073709551615u).size(), 1u);
   try {
-    EnumerateInstances({"1x1"}, 2, 18446744073709551615u);
+    EnumerateInstances({{1, 1}}, 2, 18446744073709551615u);
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "--seed-base");

@@ -416,8 +416,9 @@ TEST(HardeningTest, EvalRefusesAPolicyOrASizeListedTwice) {
                      "twice");
   ExpectOneErrorLine(eval("2x2,3x3,2x2", "random"),
                      "error: command line: --sizes: '2x2' is listed twice");
+  // Sizes are read as counts: 02x2 is 2x2.
   ExpectOneErrorLine(eval("2x2,02x2", "random"),
-                     "--sizes: '2x2' and '02x2' are the same size");
+                     "error: command line: --sizes: '2x2' is listed twice");
   EXPECT_FALSE(fs::exists(dir + "/e/runs.csv"));
   fs::remove_all(dir);
 }

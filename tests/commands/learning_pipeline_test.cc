@@ -24,7 +24,7 @@ DatasetOptions Tiny(const std::string& out) {
   DatasetOptions o;
   o.out = out;
   o.episodes = 4;
-  o.size = "3x3";
+  o.size = {3, 3};
   o.keep = 3;
   o.first_seed = 500;
   o.progress = false;
@@ -83,8 +83,7 @@ TEST(DatasetTest, KilledMidEpisodeAndResumedReadsBackIdentical) {
   // Two shards hold the same episodes between them.
   for (int k = 0; k < 2; ++k) {
     DatasetOptions s = Tiny(dir + "/sharded");
-    s.shard = k;
-    s.shards = 2;
+    s.shard = {k, 2};
     RunDataset(s);
   }
   const Dataset sharded = ReadDataset({dir + "/sharded"}, "--data");
@@ -375,8 +374,10 @@ TEST(TrainTest, AMessagePassingModelTrainsResumesAndExtends) {
 TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
   const std::string dir = testing::MakeTempDir("aia_cli_");
   const std::pair<std::vector<std::string>, std::string> cases[] = {
-      {{"dataset", "--out", dir, "--shard", "3/2"}, "--shard: '3/2'"},
-      {{"dataset", "--out", dir, "--size", "ten"}, "--size: 'ten'"},
+      {{"dataset", "--out", dir, "--shard", "3/2"},
+       "--shard: need 0 <= K < N, got 3/2"},
+      {{"dataset", "--out", dir, "--size", "ten"},
+       "--size: must be a size ROBOTSxTARGETS such as 10x10, got ten"},
       {{"dataset", "--out", dir, "--policy", "nope"}, "--policy: unknown"},
       {{"dataset", "--out", dir, "--set", "seed=3"}, "--set: seed"},
       {{"train", "--data", dir + "/none", "--out", dir + "/m.pt"},

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "aia/core/field_io.h"
+#include "aia/core/field_values.h"
 
 namespace aia {
 namespace {
@@ -425,6 +426,81 @@ TEST(FieldTextTest, ParseCountPairTakesTwoBoundedCounts) {
     EXPECT_FALSE(field_text::ParseCountPair(bad, 'x', 5, &a, &b)) << bad;
   EXPECT_FALSE(field_text::ParseCountPair(std::string(100000, '1') + "x1", 'x',
                                           5, &a, &b));
+}
+
+// Values written as one token: read, written back, documented, refused
+// with the reader's error form.
+struct Job {
+  std::vector<TeamSize> sizes{{10, 10}, {20, 20}};
+  Shard shard;
+  template <typename A>
+  void Serialize(A* a) {
+    a->Visit(AIA_FIELD(sizes).Doc("sizes"));
+    a->Visit(AIA_FIELD(shard).Doc("share"));
+  }
+};
+
+TEST(FieldValuesTest, SizesAndShardsReadWriteAndDocument) {
+  ConfigNode sizes = ConfigNode::List();
+  for (const char* s : {"2x3", "040x1"}) sizes.items.push_back(Scalar(s, 2));
+  Job job;
+  ReadFields(Doc({{"sizes", sizes}, {"shard", Scalar("3/4", 0)}}),
+             ReadOptions{"f.yaml", "", ""}, "", &job);
+  ASSERT_EQ(job.sizes.size(), 2u);
+  EXPECT_EQ(job.sizes[0], (TeamSize{2, 3}));
+  EXPECT_EQ(job.sizes[1], (TeamSize{40, 1}));
+  EXPECT_EQ(job.shard, (Shard{3, 4}));
+  // Written in the canonical form, which reads back as the same values.
+  const ConfigNode written = FieldWriter::WriteStruct(job);
+  EXPECT_EQ(ShowNode(written), "{sizes: [2x3, 40x1], shard: 3/4}");
+  Job back;
+  ReadFields(written, ReadOptions{"f.yaml", "", ""}, "", &back);
+  EXPECT_EQ(back.sizes, job.sizes);
+  EXPECT_EQ(back.shard, job.shard);
+  const std::vector<FieldDoc> rows = FieldDocs::Of(Job{});
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].type, "list of ROBOTSxTARGETS");
+  EXPECT_EQ(rows[0].default_value, "[10x10, 20x20]");
+  EXPECT_EQ(rows[1].type, "K/N");
+  EXPECT_EQ(rows[1].default_value, "0/1");
+
+  const auto error = [](const std::string& key, const std::string& text) {
+    ConfigNode value = Scalar(text, 3);
+    if (key == "sizes") {
+      value = ConfigNode::List();
+      value.items.push_back(Scalar(text, 3));
+    }
+    Job j;
+    try {
+      ReadFields(Doc({{key, value}}), ReadOptions{"f.yaml", "", ""}, "", &j);
+    } catch (const InputError& e) {
+      return e.Format();
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error("sizes", "10"),
+            "f.yaml:3: sizes[0]: must be a size ROBOTSxTARGETS such as 10x10, "
+            "got 10");
+  EXPECT_EQ(error("sizes", "0x4"),
+            "f.yaml:3: sizes[0]: robots and targets must be >= 1, got 0x4");
+  EXPECT_EQ(error("sizes", "123456x1"),
+            "f.yaml:3: sizes[0]: must be a size ROBOTSxTARGETS such as 10x10, "
+            "got 123456x1");
+  EXPECT_EQ(error("shard", "4/4"), "f.yaml:3: shard: need 0 <= K < N, got 4/4");
+  EXPECT_EQ(error("shard", "0/0"), "f.yaml:3: shard: need 0 <= K < N, got 0/0");
+  EXPECT_EQ(error("shard", "1 of 4"),
+            "f.yaml:3: shard: must be K/N such as 0/4, got 1 of 4");
+  EXPECT_EQ(error("shard", "-1/4"),
+            "f.yaml:3: shard: must be K/N such as 0/4, got -1/4");
+}
+
+TEST(FieldValuesTest, SeedRangesThatPass64BitsAreNamed) {
+  EXPECT_EQ(SeedRangeProblem(18446744073709551615u, 1, "--n", "--first"), "");
+  EXPECT_EQ(SeedRangeProblem(5, 0, "--n", "--first"), "");
+  EXPECT_EQ(SeedRangeProblem(18446744073709551614u, 3, "--n", "--first"),
+            "seeds 18446744073709551614 .. 18446744073709551614 + 2 do not fit "
+            "in 64 bits (the largest seed is 18446744073709551615); with --n "
+            "3, --first must be at most 18446744073709551613");
 }
 
 TEST(FieldTextTest, ShortestRealReadsBackExactly) {

@@ -8,12 +8,13 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/field_values.h"
 #include "aia/scenario/config.h"
 
 namespace aia {
 
 struct BenchOptions {
-  std::vector<std::string> sizes{"10x10", "80x80"};
+  std::vector<TeamSize> sizes{{10, 10}, {80, 80}};
   int steps = 60;
   int repeats = 5;
   std::uint64_t seed = 1;
@@ -33,9 +34,10 @@ struct BenchOptions {
   // `aia run` uses every core, `aia eval` one per worker).
   int policy_threads = 1;
 
-  // The counts, declared once for `aia bench`'s flags and their checks.
+  // The flags, declared once for `aia bench`'s flags and their checks.
   template <typename Archive>
   void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(sizes).Doc("robots x targets, e.g. 10x10,80x80"));
     a->Visit(AIA_FIELD(steps)
                  .In(Between(1, limits::kMaxSteps))
                  .Doc("decision steps per run (mission.max_steps' range)"));
@@ -51,6 +53,8 @@ struct BenchOptions {
                  .Doc("threads of a learned policy's rendering and inference "
                       "(aia run uses every core)"));
   }
+  // At least one size; with --expert, the last seed fits in 64 bits.
+  void Validate(const FieldChecker& c) const;
 };
 
 int RunBench(const BenchOptions& options);

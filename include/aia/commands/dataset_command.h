@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/field_values.h"
 #include "aia/core/fields.h"
 
 namespace aia {
@@ -22,8 +23,8 @@ namespace aia {
 struct DatasetOptions {
   std::string out;  // folder
   int episodes = 1500;
-  int shard = 0, shards = 1;
-  std::string size = "10x10";          // robots x targets
+  Shard shard;                         // this process's episodes
+  TeamSize size{10, 10};               // robots x targets
   std::uint64_t first_seed = 1000000;  // far from aia eval's seeds
   int keep = 10;                       // decision steps kept per episode
   std::string policy = "expert";       // the acting policy
@@ -40,10 +41,14 @@ struct DatasetOptions {
   // (-1: never).
   int stop_after_episodes = -1;
 
-  // The counts, declared once for `aia dataset`'s flags and their checks
-  // (core/fields.h; the size, shard, policy and paths are parsed apart).
+  // The flags, declared once for `aia dataset`'s flags and their checks
+  // (core/fields.h; the policy and paths are checked apart).
   template <typename Archive>
   void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(shard).Doc(
+        "K/N: this process writes episodes e with e % N == K (under mpirun: "
+        "the rank and the number of ranks)"));
+    a->Visit(AIA_FIELD(size).Doc("robots x targets of the worlds"));
     a->Visit(AIA_FIELD(episodes)
                  .In(Between(1, 10000000))
                  .Doc("episodes in all shards"));
@@ -62,13 +67,12 @@ struct DatasetOptions {
                       "(recorded as done with no samples and counted; 0: no "
                       "cap)"));
   }
+  // The seeds first_seed + e fit in 64 bits.
+  void Validate(const FieldChecker& c) const;
 };
 
 // Returns the number of episodes written by this run.
 int RunDataset(const DatasetOptions& options);
-
-// "K/N" -> (K, N); InputError naming --shard otherwise.
-void ParseShard(const std::string& text, int* shard, int* shards);
 
 }  // namespace aia
 

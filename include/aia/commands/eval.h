@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "aia/core/csv.h"
+#include "aia/core/field_values.h"
 #include "aia/planning/expert.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/generated.h"
@@ -29,7 +30,7 @@ namespace aia {
 
 // One world of the experiment.
 struct EvalInstance {
-  std::string size;  // as given, e.g. "10x10"
+  std::string size;  // its label, e.g. "10x10" (TeamSize::ToText)
   int robots = 0;
   int targets = 0;
   std::uint64_t seed = 0;
@@ -37,8 +38,9 @@ struct EvalInstance {
 
 // Sizes in the given order, seeds seed_base .. seed_base + seeds - 1;
 // InputError naming --seed-base when the last seed would pass 2^64 - 1.
-std::vector<EvalInstance> EnumerateInstances(
-    const std::vector<std::string>& sizes, int seeds, std::uint64_t seed_base);
+std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
+                                             int seeds,
+                                             std::uint64_t seed_base);
 
 // What every instance shares: the scenario overrides, the evaluated policies
 // (resolved once: parameters checked, resources loaded) and the expert that
@@ -153,7 +155,7 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
                        const std::vector<std::string>& policies);
 
 struct EvalOptions {
-  std::vector<std::string> sizes{"10x10", "20x20"};
+  std::vector<TeamSize> sizes{{10, 10}, {20, 20}};
   int seeds = 100;
   std::uint64_t seed_base = 0;
   std::vector<std::string>
@@ -163,17 +165,24 @@ struct EvalOptions {
   int threads = 0;  // 0: all cores
   bool progress = true;
 
-  // The counts, declared once for `aia eval`'s flags and their checks.
+  // The flags that need no scenario, declared once for `aia eval`'s flags
+  // and their checks.
   template <typename Archive>
   void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(sizes).Doc("robots x targets, e.g. 10x10,20x20"));
     a->Visit(AIA_FIELD(seeds).In(AtLeast(1)).Doc("worlds per size"));
     a->Visit(AIA_FIELD(seed_base).Doc("first seed (seeds B .. B+n-1)"));
+    a->Visit(AIA_FIELD(policies).Doc(
+        "policies to score (default: every registered one but the expert)"));
     a->Visit(AIA_FIELD(threads)
                  .In(AtLeast(0))
                  .Doc("worker threads per process (0: all cores, shared among "
-                      "the MPI "
-                      "ranks on a machine)"));
+                      "the MPI ranks on a machine)"));
   }
+  // At least one size; sizes and policies listed once (one listed twice
+  // would write every row twice, and each resume would drop both copies and
+  // run them again); the last seed fits in 64 bits.
+  void Validate(const FieldChecker& c) const;
 };
 
 int RunEval(const EvalOptions& options);

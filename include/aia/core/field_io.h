@@ -442,6 +442,15 @@ void FieldReader::ReadValue(const ConfigNode& node, const std::string& key,
       if (item.IsNull()) Fail(item, item_key, "list entries must not be empty");
       ReadValue(item, item_key, f.template For<U>(&(*out)[i]), &(*out)[i]);
     }
+  } else if constexpr (internal::HasTextForm<T>::value) {
+    std::string why;
+    std::optional<T> v;
+    if (node.IsScalar()) v = T::FromText(node.scalar, &why);
+    if (!v) {
+      if (why.empty()) FailExpected(node, key, std::string(T::kExpect));
+      Fail(node, key, why + ", got " + ShowNode(node));
+    }
+    *out = *v;
   } else if constexpr (internal::HasSerialize<T>::value) {
     ReadStruct(node, key, out);
   } else if constexpr (std::is_same_v<T, ConfigNode>) {
@@ -527,6 +536,8 @@ class FieldWriter {
         if (n) list.items.push_back(std::move(*n));
       }
       return list;
+    } else if constexpr (internal::HasTextForm<T>::value) {
+      return ConfigNode::Scalar(v.ToText());
     } else if constexpr (internal::HasSerialize<T>::value) {
       return WriteStruct(v);
     } else if constexpr (std::is_same_v<T, ConfigNode>) {
@@ -597,6 +608,8 @@ class FieldDocs {
       } else {
         return "list of " + TypeText<U>(f.template For<U>(nullptr));
       }
+    } else if constexpr (internal::HasTextForm<T>::value) {
+      return std::string(T::kForm);
     } else if constexpr (internal::HasSerialize<T>::value) {
       return "mapping";
     } else {

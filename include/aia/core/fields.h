@@ -241,6 +241,15 @@ struct HasValidate<T, std::void_t<decltype(std::declval<T&>().Validate(
                           std::declval<const FieldChecker&>()))>>
     : std::true_type {};
 
+// Detects a value written as one token (core/field_values.h).
+template <typename T, typename = void>
+struct HasTextForm : std::false_type {};
+template <typename T>
+struct HasTextForm<
+    T, std::void_t<decltype(T::FromText(std::declval<std::string_view>(),
+                                        std::declval<std::string*>()))>>
+    : std::true_type {};
+
 template <typename T>
 struct IsOptional : std::false_type {};
 template <typename U>

@@ -20,13 +20,10 @@ namespace aia {
 // `seed`.
 Scenario GeneratedScenario(int robots, int targets, std::uint64_t seed);
 
-// "10x10" -> (10, 10); throws InputError naming `flag` on anything else.
-std::pair<int, int> ParseSize(const std::string& text, const std::string& flag);
-
 // A generated scenario as a command makes it from its flags: a size (given
 // to `size_flag` as `size`), a seed and the overrides (--set).
 struct GeneratedSpec {
-  std::string size;  // as given, e.g. "10x10"
+  std::string size;  // its label, e.g. "10x10" (TeamSize::ToText)
   std::string size_flag = "--sizes";
   int robots = 0;
   int targets = 0;
