@@ -30,32 +30,23 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
     for (int k = 0; k < num_targets; ++k)
       PredictBlock(*ctx.beliefs, i, k, &blocks_[k]);
 
-    double best = 0.0;
-    Move candidates[kNumMoves];
-    int num_candidates = 0, num_valid = 0;
-    for (Move m : kMoves) {
-      const int q = lattice.Next(p, m);
-      if (q < 0) continue;
-      ++num_valid;
+    const auto gain = [&](int q) {
       const Vec2 there = lattice.Point(q);
-      double gain = 0.0;
+      double g = 0.0;
       for (int k = 0; k < num_targets; ++k) {
         const PredictedBlock& b = blocks_[k];
         if (b.logdet_sigma <= log_eps) continue;
         if ((b.mu - here).squaredNorm() > reach * reach) continue;
         const double r = PredictedPrecision(*ctx.map, sensor, there, b.mu);
         if (r <= 0.0) continue;
-        gain += b.logdet_sigma - std::max(LogDetSigmaAfter(b, r), log_eps);
+        g += LogDetDrop(b.logdet_sigma, LogDetSigmaAfter(b, r), log_eps);
       }
-      const double tol = 1e-12 * std::max(1.0, best);
-      if (gain > best + tol) {
-        best = gain;
-        num_candidates = 0;
-        candidates[num_candidates++] = m;
-      } else if (gain > 0.0 && gain >= best - tol) {
-        candidates[num_candidates++] = m;
-      }
-    }
+      return g;
+    };
+    Move candidates[kNumMoves];
+    int num_valid = 0;
+    const int num_candidates =
+        GreedyMoves(lattice, p, gain, candidates, &num_valid);
     if (num_valid == 0) {
       status = PolicyStatus::kNoValidMove;
       continue;

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "aia/core/check.h"
+#include "aia/planning/greedy.h"
 #include "aia/planning/information.h"
 #include "aia/planning/sampling_tree.h"
 #include "aia/planning/search.h"
@@ -184,6 +185,37 @@ void SamplingTree::PlanTours() {
       tour_planner_.Plan(starts, targets, weight, settings, legs).order;
 }
 
+double SamplingTree::GreedyGain(const double* info, int depth, int v) {
+  const SamplingProblem& p = *problem_;
+  const double log_eps = std::log(p.eps);
+  double gain = 0.0;
+  if (!any_moving_) {
+    // The static targets seen from v, in ascending order as below.
+    for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o) {
+      const auto& [k, r] = obs_[o];
+      if (!open_[k] || r <= 0.0) continue;
+      gain += LogDetDrop(std::log(BlockDet(info, k)),
+                         std::log(BlockDetAfter(info, k, r)), log_eps);
+    }
+    return gain;
+  }
+  const Vec2 there = p.map->lattice().Point(v);
+  for (int k = 0; k < m_; ++k) {
+    if (!open_[k]) continue;
+    double r = 0.0;
+    if (targets_[k].is_static) {
+      for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o)
+        if (obs_[o].first == k) r = obs_[o].second;
+    } else {
+      r = PredictedPrecision(*p.map, *p.sensor, there, MeasurePoint(depth, k));
+    }
+    if (r <= 0.0) continue;
+    gain += LogDetDrop(std::log(BlockDet(info, k)),
+                       std::log(BlockDetAfter(info, k, r)), log_eps);
+  }
+  return gain;
+}
+
 void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
   const SamplingProblem& p = *problem_;
   const Lattice& lattice = p.map->lattice();
@@ -204,47 +236,13 @@ void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
     if (kind == RolloutKind::kNearest) {
       k = assigned_[i];
     } else if (kind == RolloutKind::kGreedy) {
-      // The neighbour that lowers the unlocalized targets' log det most, as
-      // the greedy policy; else toward the nearest one.
-      double best_gain = 0.0;
-      int best_q = -1;
-      for (Move m : kMoves) {
-        const int v = lattice.Next(q, m);
-        if (v < 0) continue;
-        double gain = 0.0;
-        const Vec2 there = lattice.Point(v);
-        if (!any_moving_) {
-          // The static targets seen from v, in ascending order as below.
-          for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o) {
-            const auto& [k2, r] = obs_[o];
-            if (!open_[k2] || r <= 0.0) continue;
-            const double after = BlockDetAfter(info, k2, r);
-            gain +=
-                std::log(BlockDet(info, k2)) - std::log(std::max(after, p.eps));
-          }
-        }
-        for (int k2 = 0; k2 < m_ && any_moving_; ++k2) {
-          if (!open_[k2]) continue;
-          double r = 0.0;
-          if (targets_[k2].is_static) {
-            for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o)
-              if (obs_[o].first == k2) r = obs_[o].second;
-          } else {
-            r = PredictedPrecision(*p.map, *p.sensor, there,
-                                   MeasurePoint(depth, k2));
-          }
-          if (r <= 0.0) continue;
-          const double after = BlockDetAfter(info, k2, r);
-          gain +=
-              std::log(BlockDet(info, k2)) - std::log(std::max(after, p.eps));
-        }
-        if (gain > best_gain) {
-          best_gain = gain;
-          best_q = v;
-        }
-      }
-      if (best_q >= 0) {
-        child_pos_[i] = best_q;
+      // The greedy policy's rule (its first choice) on the team's
+      // information; where no move gains, toward the nearest open target.
+      Move best[kNumMoves];
+      int num_valid = 0;
+      const auto gain = [&](int v) { return GreedyGain(info, depth, v); };
+      if (GreedyMoves(lattice, q, gain, best, &num_valid) > 0) {
+        child_pos_[i] = lattice.Next(q, best[0]);
         continue;
       }
       k = NearestOpen(q, depth);

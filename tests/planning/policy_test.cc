@@ -63,6 +63,39 @@ TEST(RandomPolicyTest, ReturnsValidMovesAndIsReproducible) {
   }
 }
 
+// The rule that greedy and the expert's greedy rollout share, on gains set
+// by hand: moves in order left, right, up, down; a wall on the left.
+TEST(GreedyMovesTest, LargestPositiveGainsWithinToleranceInMoveOrder) {
+  const Lattice lattice({2.0, 2.0}, 0.5, 0.1, {});
+  const int p = lattice.Index(0, 1);  // no move left
+  const int right = lattice.Index(1, 1), up = lattice.Index(0, 2),
+            down = lattice.Index(0, 0);
+  std::vector<int> asked;
+  const auto gains = [&](double g_right, double g_up, double g_down) {
+    return [&asked, right, up, down, g_right, g_up, g_down](int q) {
+      asked.push_back(q);
+      return q == right ? g_right : q == up ? g_up : q == down ? g_down : -1.0;
+    };
+  };
+  Move best[kNumMoves];
+  int valid = -1;
+  EXPECT_EQ(GreedyMoves(lattice, p, gains(1.0, 3.0, 2.0), best, &valid), 1);
+  EXPECT_EQ(valid, 3);
+  EXPECT_EQ(best[0], Move::kUp);
+  EXPECT_EQ(asked, (std::vector<int>{right, up, down}));
+  // Equal within a relative 1e-12: both, in move order.
+  EXPECT_EQ(GreedyMoves(lattice, p, gains(5.0, 5.0 + 1e-12, 4.0), best, &valid),
+            2);
+  EXPECT_EQ(best[0], Move::kRight);
+  EXPECT_EQ(best[1], Move::kUp);
+  // Nothing positive: no move.
+  EXPECT_EQ(GreedyMoves(lattice, p, gains(0.0, 0.0, 0.0), best, &valid), 0);
+  EXPECT_EQ(valid, 3);
+  // Only the part above log eps counts: log det -1 to -5 with log eps -3.
+  EXPECT_DOUBLE_EQ(LogDetDrop(-1.0, -5.0, -3.0), 2.0);
+  EXPECT_DOUBLE_EQ(LogDetDrop(-1.0, -2.0, -3.0), 1.0);
+}
+
 TEST(GreedyPolicyTest, MovesTowardANearbyTarget) {
   // Target 2.25 m to the right of the robot, prior mean on it: only the move
   // right brings it into range.

@@ -8,6 +8,7 @@
 #ifndef AIA_PLANNING_GREEDY_H_
 #define AIA_PLANNING_GREEDY_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -15,8 +16,46 @@
 #include "aia/planning/information.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/search.h"
+#include "aia/world/lattice.h"
 
 namespace aia {
+
+// One target's part of a greedy gain: its log det before a measurement less
+// after, counting only the part above log eps.
+inline double LogDetDrop(double log_det_before, double log_det_after,
+                         double log_eps) {
+  return log_det_before - std::max(log_det_after, log_eps);
+}
+
+// The greedy rule, which GreedyPolicy applies to each robot's own belief and
+// the expert's greedy rollout to the team's information: the moves from
+// lattice point p whose gain(q) (q the neighbour it reaches: the drop of the
+// open targets' summed log det from measuring at q) is the largest and
+// positive, equal within a relative 1e-12, in move order. Writes them to
+// `best` (room for kNumMoves) and returns how many (0: no move gains);
+// *num_valid counts the moves that stay on the lattice.
+template <typename Gain>
+int GreedyMoves(const Lattice& lattice, int p, Gain&& gain, Move* best,
+                int* num_valid) {
+  double top = 0.0;
+  int n = 0;
+  *num_valid = 0;
+  for (Move m : kMoves) {
+    const int q = lattice.Next(p, m);
+    if (q < 0) continue;
+    ++*num_valid;
+    const double g = gain(q);
+    const double tol = 1e-12 * std::max(1.0, top);
+    if (g > top + tol) {
+      top = g;
+      n = 0;
+      best[n++] = m;
+    } else if (g > 0.0 && g >= top - tol) {
+      best[n++] = m;
+    }
+  }
+  return n;
+}
 
 class GreedyPolicy : public NamedPolicy<GreedyPolicy> {
  public:

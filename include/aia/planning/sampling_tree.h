@@ -247,6 +247,9 @@ class SamplingTree {
   void PlanTours();
   int Rollout(RolloutKind kind, const SamplingParams& params);
   void RolloutMoves(int node, RolloutKind kind);
+  // The greedy gain of measuring at lattice point v at `depth` with the
+  // team's information `info` (GreedyMoves).
+  double GreedyGain(const double* info, int depth, int v);
   void Register(int child, const SamplingParams& params);
   bool Expandable(int v, const SamplingParams& params) const;
   void Select();
