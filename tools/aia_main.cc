@@ -51,32 +51,6 @@ constexpr char kSetHelp[] =
     "override a scenario key, e.g. --set mission.eps=0.05 or --set "
     "policy.p_v=0.8 (repeatable; see aia schema and aia policies)";
 
-// At most `n` characters of a flag's value, for messages.
-std::string Shown(const std::string& v, std::size_t n = 40) {
-  return v.size() <= n ? v
-                       : v.substr(0, n) + "... (" + std::to_string(v.size()) +
-                             " characters)";
-}
-
-// Seeds and other unsigned flags: decimal digits that fit in 64 bits. CLI11
-// 2.1 reads them with strtoull, which turns -1 into 18446744073709551615,
-// saturates 18446744073709551616 (and anything longer) to the same, and
-// reads 010 as octal 8; so the value is checked here and handed on without
-// leading zeros.
-const CLI::Validator kUnsigned(
-    [](std::string& v) -> std::string {
-      if (v.empty() || v.find_first_not_of("0123456789") != std::string::npos)
-        return "must be a non-negative whole number, got '" + Shown(v) + "'";
-      std::uint64_t x = 0;
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
-      if (ec != std::errc() || end != v.data() + v.size())
-        return "'" + Shown(v) +
-               "' does not fit in 64 bits (at most 18446744073709551615)";
-      v = std::to_string(x);
-      return "";
-    },
-    "", "UNSIGNED");
-
 // Paths given to a flag: an empty one is a mistake (an unset variable in a
 // script), not the flag's default.
 const CLI::Validator kPath(
@@ -87,9 +61,10 @@ const CLI::Validator kPath(
 
 // Flags declared by a struct's fields (core/fields.h): each field's flag is
 // aia::FlagName of its key, its help the field's documentation, its default
-// the member's value; enumerations are read by name after parsing (Apply),
-// with the scenario keys' error form. Ranges are checked where the struct
-// is used (aia::CheckFlags).
+// the member's value. A given flag's text is read after parsing (Apply) by
+// the scenario keys' reader, with their error form (`command line: --flag:
+// must be an integer >= 1, got x`); relations between fields are checked
+// where the struct is used (aia::CheckFlags).
 class DeclaredFlags {
  public:
   explicit DeclaredFlags(CLI::App* cmd) : cmd_(cmd) {}
@@ -121,13 +96,6 @@ class DeclaredFlags {
     flags_.push_back(flag);
     if constexpr (std::is_same_v<T, bool>) {
       cmd_->add_flag(flag, *f.value, help);
-    } else if constexpr (std::is_enum_v<T> ||
-                         aia::internal::HasTextForm<T>::value) {
-      // Read by name or form after parsing.
-      auto text = std::make_shared<std::string>(
-          aia::FieldWriter::Write(*f.value, f)->scalar);
-      cmd_->add_option(flag, *text, help)->capture_default_str();
-      ReadAfter(f, flag, [text] { return aia::ConfigNode::Scalar(*text); });
     } else if constexpr (aia::internal::IsVector<T>::value) {
       // A comma-separated list, each item read as the field's items are.
       auto items = std::make_shared<std::vector<std::string>>();
@@ -143,12 +111,15 @@ class DeclaredFlags {
           list.items.push_back(aia::ConfigNode::Scalar(item));
         return list;
       });
-    } else if constexpr (std::is_same_v<T, std::uint64_t>) {
-      cmd_->add_option(flag, *f.value, help)
-          ->transform(kUnsigned)
-          ->capture_default_str();
     } else {
-      cmd_->add_option(flag, *f.value, help)->capture_default_str();
+      // A number, a name or a one-token value.
+      const std::optional<aia::ConfigNode> shown =
+          aia::FieldWriter::Write(*f.value, f);
+      auto text = std::make_shared<std::string>(shown ? shown->scalar : "");
+      cmd_->add_option(flag, *text, help)
+          ->capture_default_str()
+          ->type_name(TypeName<T>());
+      ReadAfter(f, flag, [text] { return aia::ConfigNode::Scalar(*text); });
     }
   }
 
@@ -164,12 +135,24 @@ class DeclaredFlags {
     }
   };
 
-  // After parsing, the flag's text (made by `node`) is read into the field
-  // by the scenario keys' reader: `command line: --flag: what`.
+  // "INT", "UINT", "FLOAT" or "TEXT" in --help.
+  template <typename T>
+  static const char* TypeName() {
+    if constexpr (aia::internal::IsOptional<T>::value)
+      return TypeName<typename T::value_type>();
+    if constexpr (std::is_same_v<T, std::uint64_t>) return "UINT";
+    if constexpr (aia::internal::kIsInteger<T>) return "INT";
+    if constexpr (std::is_floating_point_v<T>) return "FLOAT";
+    return "TEXT";
+  }
+
+  // After parsing, a given flag's text (made by `node`) is read into the
+  // field by the scenario keys' reader: `command line: --flag: what`.
   template <typename T, typename MakeNode>
   void ReadAfter(const aia::Field<T>& f, const std::string& flag,
                  MakeNode node) {
-    after_.push_back([f, flag, node] {
+    after_.push_back([this, f, flag, node] {
+      if (cmd_->count(flag) == 0) return;
       OneField<T> one{f};
       aia::ConfigNode map = aia::ConfigNode::Map();
       map.Set(std::string(f.name), node()).SetOrigin(flag);
@@ -184,13 +167,11 @@ class DeclaredFlags {
   std::vector<std::function<void()>> after_;
 };
 
-// The scenario flags of the mission commands; their values are read after
-// parsing (only the flags given override the scenario).
+// The scenario flags of the mission commands; only the flags given
+// override the scenario, read as its keys (`command line: --seed: what`).
 struct MissionFlags {
   CLI::App* cmd = nullptr;
-  std::string policy;
-  std::uint64_t seed = 0;
-  int max_steps = 0;
+  std::string policy, seed, max_steps;
   std::vector<std::string> sets;
 
   void Add(CLI::App* c, bool with_policy = true, bool with_max_steps = true) {
@@ -199,10 +180,11 @@ struct MissionFlags {
       c->add_option("--policy", policy,
                     "policy name (overrides the scenario's policy.name)");
     c->add_option("--seed", seed, "random seed (overrides the scenario's seed)")
-        ->transform(kUnsigned);
+        ->type_name("UINT");
     if (with_max_steps)
       c->add_option("--max-steps", max_steps,
-                    "decision steps at most (overrides mission.max_steps)");
+                    "decision steps at most (overrides mission.max_steps)")
+          ->type_name("INT");
     c->add_option("--set", sets, kSetHelp)->take_all()->expected(1);
   }
   aia::CommandOverrides Get() const {
@@ -212,8 +194,9 @@ struct MissionFlags {
       return opt != nullptr && opt->count() > 0;
     };
     if (given("--policy")) o.policy = policy;
-    if (given("--seed")) o.seed = seed;
-    if (given("--max-steps")) o.max_steps = max_steps;
+    if (given("--seed")) o.flags.push_back({"--seed", "seed", seed});
+    if (given("--max-steps"))
+      o.flags.push_back({"--max-steps", "mission.max_steps", max_steps});
     o.sets = sets;
     return o;
   }
@@ -255,7 +238,20 @@ Action AddRunCommand(CLI::App& app) {
 Action AddRenderCommand(CLI::App& app) {
   auto render = std::make_shared<aia::RenderOptions>();
   auto flags = std::make_shared<MissionFlags>();
-  auto ints = std::make_shared<std::array<int, 4>>();  // width height fps heat
+  // --width, --height, --fps and --heatmap: keys of the render section.
+  struct SectionFlag {
+    const char* flag;
+    const char* key;
+    const char* help;
+  };
+  static constexpr SectionFlag kSection[] = {
+      {"--width", "render.width", "image width in pixels, even"},
+      {"--height", "render.height", "image height in pixels, even"},
+      {"--fps", "render.fps",
+       "frames per second of simulated time and of the video"},
+      {"--heatmap", "render.follow_robot",
+       "robot whose uncertainty heatmap is drawn, -1 for none"}};
+  auto texts = std::make_shared<std::array<std::string, 4>>();
   auto quiet = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "render",
@@ -268,16 +264,11 @@ Action AddRenderCommand(CLI::App& app) {
       ->required()
       ->check(kPath);
   flags->Add(cmd);
-  cmd->add_option("--width", (*ints)[0],
-                  "image width in pixels, even (default render.width)");
-  cmd->add_option("--height", (*ints)[1],
-                  "image height in pixels, even (default render.height)");
-  cmd->add_option("--fps", (*ints)[2],
-                  "frames per second of simulated time and of the video "
-                  "(default render.fps)");
-  cmd->add_option("--heatmap", (*ints)[3],
-                  "robot whose uncertainty heatmap is drawn, -1 for none "
-                  "(default render.follow_robot)");
+  for (int i = 0; i < 4; ++i)
+    cmd->add_option(
+           kSection[i].flag, (*texts)[i],
+           std::string(kSection[i].help) + " (default " + kSection[i].key + ")")
+        ->type_name("INT");
   cmd->add_option("--frames", render->frames_dir,
                   "also write frames as PNG into this folder")
       ->check(kPath);
@@ -289,11 +280,11 @@ Action AddRenderCommand(CLI::App& app) {
     if (!cmd->parsed()) return -1;
     declared->Apply();
     render->overrides = flags->Get();
-    const char* names[] = {"--width", "--height", "--fps", "--heatmap"};
-    std::optional<int>* targets[] = {&render->width, &render->height,
-                                     &render->fps, &render->heatmap_robot};
+    // Read as the scenario's keys (`command line: --width: what`).
     for (int i = 0; i < 4; ++i)
-      if (cmd->count(names[i])) *targets[i] = (*ints)[i];
+      if (cmd->count(kSection[i].flag))
+        render->overrides.flags.push_back(
+            {kSection[i].flag, kSection[i].key, (*texts)[i]});
     render->progress = !*quiet;
     // Ctrl-C: the mission ends after the current step; the video so far and
     // the result files are written; exit 130.
@@ -312,23 +303,22 @@ Action AddRenderCommand(CLI::App& app) {
 Action AddPlanCommand(CLI::App& app) {
   auto plan = std::make_shared<aia::PlanOptions>();
   auto flags = std::make_shared<MissionFlags>();
-  auto budget = std::make_shared<long>(0);
   CLI::App* cmd = app.add_subcommand(
       "plan", "the expert (C-SB) alone: its plan, F*, solve time, nodes");
   cmd->add_option("scenario", plan->scenario_path, "scenario YAML file")
       ->required();
   flags->Add(cmd, /*with_policy=*/false, /*with_max_steps=*/false);
-  cmd->add_option("--budget", *budget,
-                  "anytime budget: sampling iterations after the first goal "
-                  "(default: the expert's policy.anytime)");
+  // --budget, as PlanOptions declares it.
+  auto declared = std::make_shared<DeclaredFlags>(cmd);
+  declared->Add(plan.get());
   cmd->add_option("--out", plan->out,
                   "write the plan as JSON to this file (and the scenario "
                   "next to it as FILE.effective.yaml)")
       ->check(kPath);
   return [=]() {
     if (!cmd->parsed()) return -1;
+    declared->Apply();
     plan->overrides = flags->Get();
-    if (cmd->count("--budget")) plan->budget = *budget;
     return aia::RunPlanCommand(*plan);
   };
 }

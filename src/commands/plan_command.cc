@@ -8,6 +8,7 @@
 
 #include "aia/core/check.h"
 #include "aia/core/error.h"
+#include "aia/core/field_io.h"
 #include "aia/core/io.h"
 #include "aia/runtime/episode.h"
 #include "aia/scenario/loader.h"
@@ -34,10 +35,10 @@ SamplingPlan PlanFromStart(std::shared_ptr<const Instance> instance,
 }
 
 int RunPlanCommand(const PlanOptions& o) {
-  if (o.budget && *o.budget < 0)
-    throw InputError(
-        "command line", 0, "--budget",
-        "must be an integer >= 0, got " + std::to_string(*o.budget));
+  {
+    PlanOptions flags = o;
+    CheckFlags(&flags);  // their declarations: `--flag: what`
+  }
   if (!o.out.empty()) CheckOutputFile(o.out, "--out");
   const PolicyRegistry registry = AllPolicies();
   CommandOverrides overrides = o.overrides;

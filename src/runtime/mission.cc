@@ -41,6 +41,7 @@ std::vector<Override> CommandOverrides::ToOverrides(
   if (max_steps)
     out.push_back(
         {"--max-steps", "mission.max_steps", std::to_string(*max_steps)});
+  out.insert(out.end(), flags.begin(), flags.end());
   for (const std::string& s : sets) out.push_back(ParseSetFlag(s));
   return out;
 }

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "aia/core/fields.h"
 #include "aia/planning/expert.h"
 #include "aia/planning/sampling_tree.h"
 #include "aia/runtime/instance.h"
@@ -20,6 +21,15 @@ struct PlanOptions {
   CommandOverrides overrides;
   std::optional<long> budget;  // anytime iterations after the first goal
   std::string out;             // plan.json path; empty: none
+
+  // --budget, declared once.
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(budget)
+                 .In(AtLeast(0))
+                 .Doc("anytime budget: sampling iterations after the first "
+                      "goal (default: the expert's policy.anytime)"));
+  }
 };
 
 // The expert's plan from the initial state of an instance (step 0: the prior

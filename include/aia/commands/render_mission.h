@@ -20,7 +20,8 @@ struct RenderOptions {
   CommandOverrides overrides;
   std::string out_file;  // FILE.mp4; its directory is created
   // Overrides of the scenario's render section (applied like --set, after
-  // the mission flags).
+  // the mission flags; `aia render` passes its --width, ... as text in
+  // overrides.flags instead, read as the keys).
   std::optional<int> width, height, fps;
   std::optional<int> heatmap_robot;  // render.follow_robot; -1: none
   std::string frames_dir;            // non-empty: PNG frames written here

@@ -37,7 +37,11 @@ struct CommandOverrides {
   std::optional<std::string> policy;
   std::optional<std::uint64_t> seed;
   std::optional<int> max_steps;
-  std::vector<std::string> sets;  // "key.path=value"
+  // Flags that set a scenario key, as given on the command line (e.g.
+  // {"--seed", "seed", "12"}): read by the scenario's reader, so an error is
+  // the key's, naming the flag. Applied after the three above.
+  std::vector<Override> flags;
+  std::vector<std::string> sets;  // "key.path=value", applied last
 
   // As scenario overrides; InputError (naming the flag) for an unknown
   // policy or a malformed --set.
