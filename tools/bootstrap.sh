@@ -13,6 +13,7 @@ PACKAGES=(
   libtorch-dev libjemalloc-dev libsqlite3-dev zlib1g-dev
   libopenmpi-dev openmpi-bin
   python3-matplotlib python3-numpy python3-torch
+  python3-dev pybind11-dev python3-pytest
 )
 
 missing=()

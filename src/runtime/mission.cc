@@ -144,6 +144,57 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
+std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
+                            const EstimateObserver& estimate, double wall_s) {
+  nlohmann::ordered_json d;
+  nlohmann::ordered_json statuses;
+  for (int s = 0; s < kNumPolicyStatuses; ++s)
+    statuses[std::string(PolicyStatusName(static_cast<PolicyStatus>(s)))] =
+        e.stats().statuses[s];
+  d["policy_status"] = statuses;
+  nlohmann::ordered_json counters = nlohmann::ordered_json::object();
+  for (const auto& [name, count] : e.policy().Counters())
+    counters[name] = count;
+  d["policy_counters"] = counters;
+  const EpisodeStats& st = e.stats();
+  d["physics"] = {{"steps", e.step()},
+                  {"timeouts", st.physics_timeouts},
+                  {"stalled_steps", st.stalled_steps},
+                  {"substeps", st.substeps},
+                  {"sim_seconds", st.sim_seconds}};
+  // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
+  // handled contact overflow means the physics went wrong somewhere.
+  const PhysicsMemoryStats mem = e.sim().memory();
+  d["physics"]["memory"] = {{"nconmax", mem.nconmax},
+                            {"njmax", mem.njmax},
+                            {"grows", mem.grows},
+                            {"max_contacts", mem.max_contacts},
+                            {"max_constraints", mem.max_constraints},
+                            {"max_stack", mem.max_stack},
+                            {"nstack", mem.nstack},
+                            {"data_mib", mem.data_bytes / (1 << 20)}};
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::object();
+  for (int w = 0; w < mjNWARNING; ++w)
+    if (e.sim().warnings()[w] > 0)
+      warnings[MujocoWarningName(w)] = e.sim().warnings()[w];
+  d["physics"]["mujoco_warnings"] = warnings;
+  d["moves"] = {{"total", moves.moves()},
+                {"reversals", moves.reversals()},
+                {"longest_reversal_run", moves.longest_reversal_run()}};
+  nlohmann::ordered_json per_target = nlohmann::ordered_json::array();
+  for (int k = 0; k < estimate.num_targets(); ++k)
+    per_target.push_back(
+        {{"rmse_m", estimate.rmse(k)}, {"mean_nees", estimate.mean_nees(k)}});
+  d["estimate"] = {{"rmse_m", estimate.rmse()},
+                   {"mean_nees", estimate.mean_nees()},
+                   {"targets", per_target}};
+  const PhaseTimes& t = e.times();
+  d["wall_seconds"] = {{"physics", t.physics}, {"sensing", t.sensing},
+                       {"fusion", t.fusion},   {"policy", t.policy},
+                       {"steps", t.total},     {"total", wall_s}};
+  return d.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
 bool TraceHasRobotColumns(TraceMode mode, int num_robots) {
   return mode == TraceMode::kFull ||
          (mode == TraceMode::kAuto && num_robots <= kTraceFullRobots);
@@ -179,55 +230,8 @@ MissionSummary MissionRunner::Run() {
   WriteFileAtomic(prefix_ + "effective.yaml",
                   EffectiveYaml(EffectiveScenario(mission_), kEffectiveHeader));
 
-  nlohmann::ordered_json d;
-  nlohmann::ordered_json statuses;
-  for (int s = 0; s < kNumPolicyStatuses; ++s)
-    statuses[std::string(PolicyStatusName(static_cast<PolicyStatus>(s)))] =
-        e.stats().statuses[s];
-  d["policy_status"] = statuses;
-  nlohmann::ordered_json counters = nlohmann::ordered_json::object();
-  for (const auto& [name, count] : e.policy().Counters())
-    counters[name] = count;
-  d["policy_counters"] = counters;
-  const EpisodeStats& st = e.stats();
-  d["physics"] = {{"steps", e.step()},
-                  {"timeouts", st.physics_timeouts},
-                  {"stalled_steps", st.stalled_steps},
-                  {"substeps", st.substeps},
-                  {"sim_seconds", st.sim_seconds}};
-  // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
-  // handled contact overflow means the physics went wrong somewhere.
-  const PhysicsMemoryStats mem = e.sim().memory();
-  d["physics"]["memory"] = {{"nconmax", mem.nconmax},
-                            {"njmax", mem.njmax},
-                            {"grows", mem.grows},
-                            {"max_contacts", mem.max_contacts},
-                            {"max_constraints", mem.max_constraints},
-                            {"max_stack", mem.max_stack},
-                            {"nstack", mem.nstack},
-                            {"data_mib", mem.data_bytes / (1 << 20)}};
-  nlohmann::ordered_json warnings = nlohmann::ordered_json::object();
-  for (int w = 0; w < mjNWARNING; ++w)
-    if (e.sim().warnings()[w] > 0)
-      warnings[MujocoWarningName(w)] = e.sim().warnings()[w];
-  d["physics"]["mujoco_warnings"] = warnings;
-  d["moves"] = {{"total", moves_->moves()},
-                {"reversals", moves_->reversals()},
-                {"longest_reversal_run", moves_->longest_reversal_run()}};
-  nlohmann::ordered_json per_target = nlohmann::ordered_json::array();
-  for (int k = 0; k < estimate_->num_targets(); ++k)
-    per_target.push_back({{"rmse_m", estimate_->rmse(k)},
-                          {"mean_nees", estimate_->mean_nees(k)}});
-  d["estimate"] = {{"rmse_m", estimate_->rmse()},
-                   {"mean_nees", estimate_->mean_nees()},
-                   {"targets", per_target}};
-  const PhaseTimes& t = e.times();
-  d["wall_seconds"] = {{"physics", t.physics}, {"sensing", t.sensing},
-                       {"fusion", t.fusion},   {"policy", t.policy},
-                       {"steps", t.total},     {"total", summary.wall_s}};
-  WriteFileAtomic(
-      prefix_ + "diagnostics.json",
-      d.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  WriteFileAtomic(prefix_ + "diagnostics.json",
+                  DiagnosticsJson(e, *moves_, *estimate_, summary.wall_s));
   return summary;
 }
 

@@ -96,6 +96,11 @@ struct MissionSummary {
 MissionSummary Summarize(const Episode& episode, double wall_s);
 // summary.json's text.
 std::string SummaryJson(const MissionSummary& summary, const Episode& episode);
+// diagnostics.json's text: policy statuses and counters, physics, moves
+// (`moves` watched the episode), the estimate's errors (`estimate` did) and
+// wall times (`wall_s` the whole mission's).
+std::string DiagnosticsJson(const Episode& episode, const MoveObserver& moves,
+                            const EstimateObserver& estimate, double wall_s);
 
 // What trace.csv holds per step and target: the team's min_det, and with
 // kFull every robot's det Sigma (N x M numbers a step); kAuto is kFull up to

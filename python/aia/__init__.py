@@ -1,0 +1,170 @@
+"""aia from Python: missions of the C++ testbed, stepped by your code.
+
+    import aia
+    m = aia.Mission("scenarios/default.yaml", seed=3)
+    greedy = aia.builtin_policy("greedy")
+    while not m.done:
+        m.step(greedy.decide(m))
+    print(m.success, m.flowtime, m.summary()["steps"])
+
+Moves are ints: 0 left, 1 right, 2 up, 3 down (4 stays). A mission is the
+same loop as `aia run` (world, physics, sensing, DKF, world rule); what the
+robots know is in `state()`, the ground truth under its "truth" key, for
+scoring only. docs/python.md is the reference.
+"""
+
+import json as _json
+import math as _math
+
+from . import _aia
+
+__all__ = ["InputError", "Mission", "builtin_policy", "policy_names"]
+
+InputError = _aia.InputError
+
+
+def _yaml_text(key, value):
+    """A Python value as the YAML text of a scenario key's override."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if _math.isnan(value):
+            return ".nan"
+        if _math.isinf(value):
+            return ".inf" if value > 0 else "-.inf"
+        return repr(value)
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (list, tuple, dict)):
+        return _json.dumps(value)
+    raise TypeError(f"{key}: a value of type {type(value).__name__} is not a "
+                    "scenario value (give a bool, number, string, list or dict)")
+
+
+def _pairs(mapping, what):
+    if mapping is None:
+        return []
+    if not isinstance(mapping, dict):
+        raise TypeError(f"{what}: must be a dict of keys to values, got "
+                        f"{type(mapping).__name__}")
+    return [(str(k), _yaml_text(k, v)) for k, v in mapping.items()]
+
+
+class Mission:
+    """One mission: `scenario` a YAML file, `seed` its seed (default: the
+    file's), `overrides` a dict of `--set` keys to values, e.g.
+    {"sensor.range": 3, "robots.count": 5}."""
+
+    def __init__(self, scenario, seed=None, overrides=None):
+        self._m = _aia.Mission(str(scenario), seed,
+                               _pairs(overrides, "overrides"))
+
+    def state(self):
+        """What the robots know now, as numpy arrays (N robots, M targets):
+        step; positions (N, 2) metres; lattice (N,) lattice indices and
+        cells (N, 2) their (ix, iy); active (N,); neighbors (N, N) this
+        step's communication graph; mean (N, M, 2), cov (N, M, 2, 2) and
+        det (N, M) of each robot's fused belief (position part); the
+        targets' log_det_prior (M,); eps. The ground truth, for scoring
+        only, under "truth": target_positions (M, 2)."""
+        return self._m.state()
+
+    def step(self, moves):
+        """Applies one move per robot (the world rule replaces an invalid
+        one), runs the physics, senses and fuses. Returns what changed:
+        step, invalid_moves (replaced this step), localized (targets below
+        eps in the team's best estimate), done, success."""
+        import numpy as np
+        return self._m.step(np.asarray(moves, dtype=np.int64).reshape(-1))
+
+    @property
+    def done(self):
+        return self._m.done
+
+    @property
+    def success(self):
+        return self._m.success
+
+    @property
+    def flowtime(self):
+        """Steps to success; None until then."""
+        f = self._m.flowtime
+        return None if f < 0 else f
+
+    @property
+    def num_robots(self):
+        return self._m.num_robots
+
+    @property
+    def num_targets(self):
+        return self._m.num_targets
+
+    @property
+    def steps(self):
+        """Decision steps taken."""
+        return self._m.step_count
+
+    @property
+    def max_steps(self):
+        return self._m.max_steps
+
+    @property
+    def seed(self):
+        return self._m.seed
+
+    @property
+    def diagnostics(self):
+        """diagnostics.json's content (as `aia run` writes it; the policy
+        statuses and counters are those of the moves given, policy
+        "python")."""
+        return _json.loads(self._m.diagnostics_json())
+
+    def summary(self):
+        """summary.json's content (policy "python", wall_s 0)."""
+        return _json.loads(self._m.summary_json())
+
+
+class _BuiltinPolicy:
+    """A registered policy: decide(mission) -> one move per robot."""
+
+    def __init__(self, name, params):
+        self._p = _aia.BuiltinPolicy(str(name), _pairs(params, "params"))
+
+    @property
+    def name(self):
+        return self._p.name
+
+    @property
+    def centralized(self):
+        """Whether it decides from the team's belief (the expert)."""
+        return self._p.centralized
+
+    @property
+    def last_status(self):
+        """The status of the last decision: ok, no_valid_move, ..."""
+        return self._p.last_status
+
+    def decide(self, mission):
+        """Moves for this step from what the robots know (the team's belief
+        only for a centralized policy). Deciding at every step of a mission
+        repeats `aia run` with this policy."""
+        return self._p.decide(mission._m)
+
+    def __call__(self, mission):
+        return self.decide(mission)
+
+    def __repr__(self):
+        return f"aia.builtin_policy({self.name!r})"
+
+
+def builtin_policy(name, **params):
+    """Any registered policy (random, greedy, expert, decsb, igbnet) with
+    its parameters, e.g. builtin_policy("igbnet", max_reversals=0)."""
+    return _BuiltinPolicy(name, params)
+
+
+def policy_names():
+    """The registered policies' names."""
+    return list(_aia.policy_names())

@@ -1,0 +1,189 @@
+"""aia.Mission and aia.builtin_policy against the C++ loop (docs/python.md).
+
+Run by ctest (tests/CMakeLists.txt) with PYTHONPATH=build/python, AIA_BINARY
+the CLI and AIA_SOURCE_DIR the checkout.
+"""
+
+import csv
+import json
+import os
+import re
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import aia
+
+SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
+BINARY = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
+DEFAULT = str(SOURCE / "scenarios" / "default.yaml")
+
+
+def run_cli(*args):
+    return subprocess.run([BINARY, *args], capture_output=True, text=True)
+
+
+def test_state_holds_what_the_robots_know_and_the_truth_apart():
+    m = aia.Mission(DEFAULT, seed=5, overrides={"robots.count": 4,
+                                                "targets.count": 3})
+    s = m.state()
+    n, k = 4, 3
+    assert (m.num_robots, m.num_targets) == (n, k)
+    assert s["step"] == 0 and m.steps == 0 and not m.done
+    assert s["positions"].shape == (n, 2) and s["positions"].dtype == np.float64
+    assert s["lattice"].shape == (n,) and s["cells"].shape == (n, 2)
+    assert s["active"].dtype == np.bool_ and s["active"].all()
+    assert s["neighbors"].shape == (n, n)
+    assert not s["neighbors"].diagonal().any()
+    assert (s["neighbors"] == s["neighbors"].T).all()
+    assert s["mean"].shape == (n, k, 2) and s["cov"].shape == (n, k, 2, 2)
+    assert s["det"].shape == (n, k)
+    # det Sigma of the position block from the covariance given.
+    np.testing.assert_allclose(np.linalg.det(s["cov"]), s["det"], rtol=1e-9)
+    assert s["log_det_prior"].shape == (k,)
+    # The ground truth is only under "truth".
+    assert set(s["truth"]) == {"target_positions"}
+    assert s["truth"]["target_positions"].shape == (k, 2)
+    # The lattice cell holds the robot's position (0.5 m cells at default).
+    step = 0.5
+    np.testing.assert_allclose((s["cells"] + 0.5) * step, s["positions"],
+                               atol=step / 2)
+
+
+def trace_rows(path):
+    """trace.csv as {(step, target): [det_r0, ...]} in its printed form."""
+    rows = {}
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            dets = [v for c, v in r.items() if c.startswith("det_r")]
+            rows[(int(r["step"]), int(r["target"]))] = dets
+    return rows
+
+
+@pytest.mark.parametrize("scenario,seed,policy", [
+    ("default.yaml", 3, "greedy"),
+    ("robustness.yaml", 2, "greedy"),  # robot failures, packet loss
+    ("tracking.yaml", 1, "random"),    # a moving target
+])
+def test_delegating_every_step_repeats_aia_run(scenario, seed, policy):
+    path = str(SOURCE / "scenarios" / scenario)
+    with tempfile.TemporaryDirectory() as out:
+        r = run_cli("run", path, "--seed", str(seed), "--policy", policy,
+                    "--out", out, "--quiet", "--trace", "full")
+        assert r.returncode == 0, r.stderr
+        trace = trace_rows(os.path.join(out, "trace.csv"))
+        with open(os.path.join(out, "summary.json")) as f:
+            summary = json.load(f)
+    m = aia.Mission(path, seed=seed)
+    p = aia.builtin_policy(policy)
+    seen = 0
+    while True:
+        s = m.state()
+        for k in range(m.num_targets):
+            assert ["%.6e" % d for d in s["det"][:, k]] == \
+                trace[(s["step"], k)], (s["step"], k)
+            seen += 1
+        if m.done:
+            break
+        m.step(p.decide(m))
+    assert seen == len(trace)
+    mine = m.summary()
+    for key in ("success", "flowtime", "steps", "invalid_moves",
+                "localized_share", "final_min_det", "failed_robots"):
+        assert mine[key] == summary[key], key
+    assert mine["policy"] == "python"
+
+
+def test_same_seed_same_states():
+    def states():
+        m = aia.Mission(DEFAULT, seed=11, overrides={"mission.max_steps": 5})
+        r = aia.builtin_policy("random")
+        out = []
+        while not m.done:
+            out.append(m.state()["det"].copy())
+            m.step(r.decide(m))
+        return out
+    a, b = states(), states()
+    assert len(a) == 5
+    for x, y in zip(a, b):
+        assert (x == y).all()
+
+
+def test_moves_are_checked():
+    m = aia.Mission(DEFAULT, seed=1, overrides={"robots.count": 2,
+                                                "targets.count": 1})
+    with pytest.raises(ValueError, match=r"one move per robot \(2\)"):
+        m.step([0])
+    with pytest.raises(ValueError, match=r"moves\[1\]: must be 0 \(left\)"):
+        m.step([0, 7])
+    # 4 (stay) is no move of the lattice: the world rule replaces it, as it
+    # does a builtin policy's.
+    changed = m.step([4, 0])
+    assert changed["step"] == 1 and changed["invalid_moves"] == 1
+    m2 = aia.Mission(DEFAULT, seed=1, overrides={"mission.max_steps": 1})
+    m2.step(np.zeros(m2.num_robots, dtype=int))
+    assert m2.done
+    with pytest.raises(ValueError, match="the mission is done"):
+        m2.step(np.zeros(m2.num_robots, dtype=int))
+
+
+def expectation(path):
+    first = Path(path).read_text(errors="replace").split("\n", 1)[0]
+    m = re.match(r"^# expect: ([0-9]+): ([^:]+): (.*)$", first)
+    assert m, f"{path} lacks its '# expect:' line"
+    return int(m[1]), m[2], m[3]
+
+
+def test_a_bad_scenario_is_the_clis_one_line_error():
+    files = sorted((SOURCE / "tests" / "data" / "bad").glob("*.yaml"))
+    assert len(files) > 100
+    for f in files:
+        line, key, substring = expectation(f)
+        with pytest.raises(aia.InputError) as e:
+            aia.Mission(str(f))
+        text = str(e.value)
+        prefix = f"{f}" + (f":{line}" if line > 0 else "") + f": {key}: "
+        assert text.startswith(prefix), (text, prefix)
+        assert substring in text and "\n" not in text, text
+    # The same line as the CLI's, for one of them.
+    f = str(SOURCE / "tests" / "data" / "bad" / "duplicate_key.yaml")
+    with pytest.raises(aia.InputError) as e:
+        aia.Mission(f)
+    assert run_cli("run", f, "--quiet").stderr == f"error: {e.value}\n"
+    assert isinstance(e.value, ValueError)
+
+
+def test_overrides_and_params_are_checked_as_keys():
+    with pytest.raises(aia.InputError, match="overrides: sensor.range: must "
+                       r"be a number in \[0.001, 10000\], got -1"):
+        aia.Mission(DEFAULT, overrides={"sensor.range": -1})
+    with pytest.raises(aia.InputError, match="unknown policy 'nope'"):
+        aia.builtin_policy("nope")
+    with pytest.raises(aia.InputError, match=r"p_v: must be a number in "
+                       r"\[0, 1\], got 2"):
+        aia.builtin_policy("decsb", p_v=2)
+    with pytest.raises(TypeError, match="not a scenario value"):
+        aia.Mission(DEFAULT, overrides={"seed": object()})
+    # Lists go as YAML flow sequences, booleans as true/false.
+    m = aia.Mission(DEFAULT, overrides={
+        "robots.count": 2, "robots.start": [[1.25, 1.25], [3.25, 1.25]],
+        "mission.stop_at_success": False})
+    np.testing.assert_allclose(m.state()["positions"],
+                               [[1.25, 1.25], [3.25, 1.25]], atol=1e-6)
+
+
+def test_builtin_policies_decide_for_the_team():
+    assert set(aia.policy_names()) >= {"random", "greedy", "expert", "decsb",
+                                       "igbnet"}
+    m = aia.Mission(DEFAULT, seed=4, overrides={"robots.count": 3,
+                                                "targets.count": 2})
+    for name in aia.policy_names():
+        p = aia.builtin_policy(name)
+        moves = p.decide(m)
+        assert moves.shape == (3,) and moves.dtype == np.int64, name
+        assert ((moves >= 0) & (moves <= 4)).all(), name
+        assert p.centralized == (name == "expert")
+        assert p.last_status in ("ok", "no_valid_move", "budget_exhausted")
