@@ -99,8 +99,9 @@ class DeclaredFlags {
     } else if constexpr (aia::internal::IsVector<T>::value) {
       // A comma-separated list, each item read as the field's items are.
       auto items = std::make_shared<std::vector<std::string>>();
-      for (const aia::ConfigNode& item :
-           aia::FieldWriter::Write(*f.value, f)->items)
+      const std::optional<aia::ConfigNode> list =
+          aia::FieldWriter::Write(*f.value, f);  // kept: its items are read
+      for (const aia::ConfigNode& item : list->items)
         items->push_back(item.scalar);
       cmd_->add_option(flag, *items, help)
           ->delimiter(',')
