@@ -165,6 +165,34 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
   return "";
 }
 
+// `new_text` with the policy lines of `old_text` whose policies it does not
+// list, after its own: the rows of those policies stay in the folder.
+std::string WithOldPolicyLines(const std::string& old_text,
+                               const std::string& new_text) {
+  const auto policy_lines = [](const std::string& text) {
+    std::vector<std::pair<std::string, std::string>> lines;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+      const std::size_t colon = line.find(':', 4);
+      if (line.rfind("#   ", 0) == 0 && colon != std::string::npos && colon > 4)
+        lines.emplace_back(line.substr(4, colon - 4), line);
+    }
+    return lines;
+  };
+  const auto mine = policy_lines(new_text);
+  std::string extra;
+  for (const auto& [name, line] : policy_lines(old_text)) {
+    bool listed = false;
+    for (const auto& m : mine) listed = listed || m.first == name;
+    if (!listed) extra += line + "\n";
+  }
+  if (extra.empty() || mine.empty()) return new_text;
+  const std::string& last = mine.back().second;
+  const std::size_t at = new_text.find(last + "\n") + last.size() + 1;
+  return new_text.substr(0, at) + extra + new_text.substr(at);
+}
+
 }  // namespace
 
 std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
@@ -307,6 +335,7 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
       MoveObserver moves;
       episode.AddObserver(&moves);
       episode.Run();
+      if (episode.interrupted()) throw RunInterrupted();
       row.success = episode.success();
       row.flowtime = episode.flowtime();
       row.reversal_share =
@@ -474,7 +503,7 @@ void CheckEvalFlags(const EvalOptions& o) {
 std::vector<std::string> PoliciesToRun(const EvalOptions& o,
                                        const PolicyRegistry& registry) {
   std::vector<std::string> policies = o.policies;
-  if (policies.empty()) {
+  if (policies.empty() && o.extra_policies.empty()) {
     for (const auto& name : registry.Names())
       if (name != "expert") policies.push_back(name);
   }
@@ -503,6 +532,7 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
   const std::string effective_path = out_dir + "/effective.yaml";
   const std::string runs_path = out_dir + "/runs.csv";
   MakeOutputDir(out_dir, "--out", /*lock=*/true);
+  std::string merged = effective;
   if (std::ifstream old(effective_path); old) {
     std::stringstream text;
     text << old.rdbuf();
@@ -511,6 +541,7 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
       throw InputError("command line", 0, "--out",
                        out_dir + " holds results of another configuration (" +
                            why + "; see its effective.yaml): use a new folder");
+    merged = WithOldPolicyLines(text.str(), effective);
   }
   std::vector<std::string> problems;
   std::vector<EvalRow> rows = ReadRuns(runs_path, &problems);
@@ -527,7 +558,7 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
   std::string text = RunsHeader() + "\n";
   for (const auto& r : rows) text += CsvLine(r);
   WriteFileAtomic(runs_path, text);
-  WriteFileAtomic(effective_path, effective);
+  WriteFileAtomic(effective_path, merged);
   return rows;
 }
 
@@ -648,7 +679,14 @@ class RowSink {
     std::vector<EvalRow> in_range;
     for (const auto& r : rows_)
       if (r.seed >= lo && r.seed < hi) in_range.push_back(r);
-    const std::string summary = SummaryCsv(in_range, sizes, policies_);
+    // This eval's policies, then those of other rows in the folder (an
+    // earlier eval's, a Python policy's), so that they share one table.
+    std::vector<std::string> policies = policies_;
+    for (const auto& r : in_range)
+      if (std::find(policies.begin(), policies.end(), r.policy) ==
+          policies.end())
+        policies.push_back(r.policy);
+    const std::string summary = SummaryCsv(in_range, sizes, policies);
     WriteFileAtomic(options_.out_dir + "/summary.csv", summary);
     return summary;
   }
@@ -720,6 +758,8 @@ class WorkQueue {
             RunInstance(*work_[w].instance, setup_, work_[w].todo);
         std::lock_guard<std::mutex> lock(sink_->mutex());
         for (const EvalRow& row : result) sink_->Record(row);
+      } catch (const RunInterrupted&) {
+        return;  // no row of a run cut short
       } catch (...) {
         std::lock_guard<std::mutex> lock(sink_->mutex());
         if (!failure_) failure_ = std::current_exception();
@@ -769,10 +809,21 @@ int RunEval(const EvalOptions& o) {
   // launcher owns the signals.
   Ranks& ranks = Ranks::Get();
   if (!ranks.distributed()) InstallInterruptHandler();
-  const std::vector<std::string> policies = PoliciesToRun(o, registry);
+  std::vector<std::string> policies = PoliciesToRun(o, registry);
   const std::vector<EvalInstance> instances =
       EnumerateInstances(o.sizes, o.seeds, o.seed_base);
-  const EvalSetup setup = MakeEvalSetup(policies, o.sets, registry, instances);
+  EvalSetup setup = MakeEvalSetup(policies, o.sets, registry, instances);
+  for (const auto& extra : o.extra_policies) {
+    if (registry.Has(extra->name()) ||
+        std::find(policies.begin(), policies.end(), extra->name()) !=
+            policies.end())
+      throw InputError("command line", 0, "name",
+                       "'" + extra->name() +
+                           "' is a registered policy's name or listed twice; "
+                           "give the policy another name");
+    setup.policies.push_back(extra);
+    policies.push_back(extra->name());
+  }
   CheckOutputsAreNotInputs(o, setup, instances.front());
 
   // Rank 0 alone checks and rewrites the folder; then every rank reads the
@@ -813,7 +864,8 @@ int RunEval(const EvalOptions& o) {
   queue.Start(WorkerThreads(o.threads, work.size()));
   // Ctrl-C (one process): the rows finished so far are written, with the
   // summary of what is done, and the runs in flight are abandoned.
-  if (!queue.WaitUnlessInterrupted(root && !ranks.distributed())) {
+  if (!queue.WaitUnlessInterrupted(root && !ranks.distributed()) &&
+      o.exit_on_interrupt) {
     std::lock_guard<std::mutex> lock(sink.mutex());  // no row is appended
     sink.Flush();
     sink.WriteResults();

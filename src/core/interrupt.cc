@@ -29,4 +29,23 @@ void InstallInterruptHandler() {
 
 bool Interrupted() { return g_interrupted != 0; }
 
+struct InterruptScope::Saved {
+  struct sigaction int_action {};
+  struct sigaction term_action {};
+};
+
+InterruptScope::InterruptScope() : saved_(new Saved) {
+  sigaction(SIGINT, nullptr, &saved_->int_action);
+  sigaction(SIGTERM, nullptr, &saved_->term_action);
+  g_interrupted = 0;
+  InstallInterruptHandler();
+}
+
+InterruptScope::~InterruptScope() {
+  sigaction(SIGINT, &saved_->int_action, nullptr);
+  sigaction(SIGTERM, &saved_->term_action, nullptr);
+  g_interrupted = 0;
+  delete saved_;
+}
+
 }  // namespace aia

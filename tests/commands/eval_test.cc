@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -9,6 +10,7 @@
 #include <tuple>
 
 #include "aia/commands/ranks.h"
+#include "aia/core/interrupt.h"
 #include "aia/core/io.h"
 #include "aia/planning/decsb.h"
 #include "aia/runtime/mission.h"
@@ -244,6 +246,26 @@ TEST(EvalTest, BadFlagsExitWith2) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("unknown policy 'nope'"), std::string::npos) << r.err;
   std::filesystem::remove_all(dir);
+}
+
+// Ctrl-C while an instance runs: a run cut short gives no row (it would
+// read as a failure, and a resume would never run it again). Each test runs
+// in its own process (gtest_discover_tests), so the flag set here stays
+// here.
+TEST(EvalPiecesTest, ARunCutShortByCtrlCGivesNoRow) {
+  const PolicyRegistry registry = AllPolicies();
+  const EvalSetup setup = MakeEvalSetup({"random"}, {}, registry);
+  const EvalInstance instance{"2x2", 2, 2, 0};
+  ASSERT_EQ(RunInstance(instance, setup).size(), 1u);
+  {
+    InterruptScope scope;
+    std::raise(SIGINT);
+    ASSERT_TRUE(Interrupted());
+    EXPECT_THROW(RunInstance(instance, setup), RunInterrupted);
+  }
+  // The scope gave the previous handler back and cleared the flag.
+  EXPECT_FALSE(Interrupted());
+  EXPECT_EQ(RunInstance(instance, setup).size(), 1u);
 }
 
 TEST(EvalPiecesTest, EnumerateRunOneInstanceAndMerge) {

@@ -13,6 +13,7 @@
 #define AIA_COMMANDS_EVAL_H_
 
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <string>
@@ -101,9 +102,15 @@ GeneratedSpec InstanceSpec(const EvalInstance& instance,
 // (ReadGenerated).
 Scenario InstanceScenario(const EvalInstance& instance, const EvalSetup& setup);
 
+// Thrown by RunInstance when Ctrl-C cut a run short (core/interrupt.h): its
+// row would read as a failure, so there is none.
+struct RunInterrupted : std::exception {
+  const char* what() const noexcept override { return "interrupted"; }
+};
+
 // Runs `policies` (a subset of setup.policies, by name; empty: all) on one
 // instance, in that order. Rows do not depend on anything else (wall_s
-// aside).
+// aside). RunInterrupted when Ctrl-C ends a run early.
 std::vector<EvalRow> RunInstance(const EvalInstance& instance,
                                  const EvalSetup& setup,
                                  const std::vector<std::string>& policies = {});
@@ -164,6 +171,13 @@ struct EvalOptions {
   std::string out_dir;
   int threads = 0;  // 0: all cores
   bool progress = true;
+  // Policies not in the registry, scored after `policies` (the Python
+  // package's evaluate); their names must not be registered ones.
+  std::vector<std::shared_ptr<const PolicySpec>> extra_policies;
+  // Ctrl-C: true (the CLI) ends the process once the finished rows are
+  // written, abandoning the runs in flight; false waits for them to stop at
+  // their next step, then returns kInterruptedExitCode.
+  bool exit_on_interrupt = true;
 
   // The flags that need no scenario, declared once for `aia eval`'s flags
   // and their checks.

@@ -17,6 +17,21 @@ void InstallInterruptHandler();
 // Whether SIGINT or SIGTERM arrived since InstallInterruptHandler().
 bool Interrupted();
 
+// The handler for one job inside a longer-lived process (the Python
+// package's evaluate): installed on construction; on destruction the
+// previous handlers are back and the flag is cleared.
+class InterruptScope {
+ public:
+  InterruptScope();
+  ~InterruptScope();
+  InterruptScope(const InterruptScope&) = delete;
+  InterruptScope& operator=(const InterruptScope&) = delete;
+
+ private:
+  struct Saved;
+  Saved* saved_;
+};
+
 }  // namespace aia
 
 #endif  // AIA_CORE_INTERRUPT_H_
