@@ -9,13 +9,17 @@
 
 #include <atomic>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "aia/commands/eval.h"
 #include "aia/core/error.h"
+#include "aia/core/field_values.h"
+#include "aia/core/interrupt.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
@@ -86,6 +90,8 @@ py::array_t<T> Array(std::vector<py::ssize_t> shape) {
 
 std::atomic<std::uint64_t> g_next_mission_id{1};
 
+// One mission, owned (its own episode, stepped from Python) or a view of a
+// decision inside aia's own loop (evaluate), valid during that call only.
 class Mission {
  public:
   Mission(const std::string& scenario, std::optional<std::uint64_t> seed,
@@ -103,17 +109,49 @@ class Mission {
     episode_->AddObserver(&estimate_);
     moves_.OnStart(*episode_);
     estimate_.OnStart(*episode_);
+    seed_ = episode_->scenario().seed;
+    max_steps_ = episode_->mission().max_steps;
   }
+  Mission(const DecisionContext* view, std::uint64_t seed, std::uint64_t id,
+          int max_steps)
+      : id_(id), view_(view), seed_(seed), max_steps_(max_steps) {}
 
+  bool owned() const { return episode_ != nullptr; }
+  void Invalidate() { view_ = nullptr; }
   std::uint64_t id() const { return id_; }
-  const Episode& episode() const { return *episode_; }
-  int num_robots() const { return episode_->world().NumRobots(); }
-  int num_targets() const { return episode_->world().NumTargets(); }
+  std::uint64_t seed() const { return seed_; }
+  int max_steps() const { return max_steps_; }
+  // What a policy is given now (the team's belief included).
+  DecisionContext Context() const {
+    if (owned()) return episode_->Context();
+    if (view_ == nullptr)
+      throw py::value_error(
+          "this mission is a view of one decision of aia.evaluate: it is "
+          "valid only inside the policy's call");
+    return *view_;
+  }
+  const Episode& episode() const {
+    if (!owned())
+      throw py::value_error(
+          "a mission seen by a policy inside aia.evaluate can only be read "
+          "(state(), num_robots, ...); aia steps it");
+    return *episode_;
+  }
+  int num_robots() const {
+    return static_cast<int>(Context().robot_lattice->size());
+  }
+  int num_targets() const { return Context().beliefs->layout().num_targets(); }
+  int step() const { return Context().step; }
+  bool done() const { return owned() && episode_->done(); }
+  bool success() const { return owned() && episode_->success(); }
+  int flowtime() const { return owned() ? episode_->flowtime() : -1; }
 
+  // What the robots know (the context's arrays), and for an owned mission
+  // the ground truth apart.
   py::dict State() const {
-    const Episode& e = *episode_;
+    const DecisionContext ctx = Context();
     const int n = num_robots(), m = num_targets();
-    const Lattice& lattice = e.world().map.lattice();
+    const Lattice& lattice = ctx.map->lattice();
     auto positions = Array<double>({n, 2});
     auto lattice_index = Array<long long>({n});
     auto cells = Array<long long>({n, 2});
@@ -122,6 +160,7 @@ class Mission {
     auto mean = Array<double>({n, m, 2});
     auto cov = Array<double>({n, m, 2, 2});
     auto det = Array<double>({n, m});
+    auto log_det_prior = Array<double>({m});
     auto p = positions.mutable_unchecked<2>();
     auto li = lattice_index.mutable_unchecked<1>();
     auto c = cells.mutable_unchecked<2>();
@@ -130,37 +169,34 @@ class Mission {
     auto mu = mean.mutable_unchecked<3>();
     auto sigma = cov.mutable_unchecked<4>();
     auto d = det.mutable_unchecked<2>();
-    const BeliefSet& beliefs = e.beliefs();
+    auto prior = log_det_prior.mutable_unchecked<1>();
+    const BeliefSet& beliefs = *ctx.beliefs;
     for (int i = 0; i < n; ++i) {
-      p(i, 0) = e.robot_positions()[i].x();
-      p(i, 1) = e.robot_positions()[i].y();
-      const int q = e.robot_lattice()[i];
+      const int q = (*ctx.robot_lattice)[i];
+      const Vec2 x =
+          ctx.robot_positions ? (*ctx.robot_positions)[i] : lattice.Point(q);
+      p(i, 0) = x.x();
+      p(i, 1) = x.y();
       li(i) = q;
       c(i, 0) = lattice.Ix(q);
       c(i, 1) = lattice.Iy(q);
-      a(i) = e.comm().Active(i);
+      a(i) = ctx.comm->Active(i);
       for (int j = 0; j < n; ++j) g(i, j) = false;
-      for (int j : e.comm().Neighbors(i)) g(i, j) = true;
+      for (int j : ctx.comm->Neighbors(i)) g(i, j) = true;
       for (int k = 0; k < m; ++k) {
-        const Vec2 x = beliefs.PositionMean(i, k);
+        const Vec2 xk = beliefs.PositionMean(i, k);
         const Mat2 s = beliefs.PositionCovariance(i, k);
-        mu(i, k, 0) = x.x();
-        mu(i, k, 1) = x.y();
+        mu(i, k, 0) = xk.x();
+        mu(i, k, 1) = xk.y();
         for (int r = 0; r < 2; ++r)
           for (int col = 0; col < 2; ++col) sigma(i, k, r, col) = s(r, col);
-        d(i, k) = e.Det(i, k);
+        d(i, k) = beliefs.DetCovariance(i, k);
       }
     }
-    auto truth_positions = Array<double>({m, 2});
-    auto t = truth_positions.mutable_unchecked<2>();
-    for (int k = 0; k < m; ++k) {
-      t(k, 0) = e.target_positions()[k].x();
-      t(k, 1) = e.target_positions()[k].y();
-    }
-    py::dict truth;
-    truth["target_positions"] = truth_positions;
+    for (int k = 0; k < m; ++k)
+      prior(k) = ctx.log_det_prior ? (*ctx.log_det_prior)[k] : 0.0;
     py::dict state;
-    state["step"] = e.step();
+    state["step"] = ctx.step;
     state["positions"] = positions;
     state["lattice"] = lattice_index;
     state["cells"] = cells;
@@ -169,44 +205,57 @@ class Mission {
     state["mean"] = mean;
     state["cov"] = cov;
     state["det"] = det;
-    state["log_det_prior"] = py::array_t<double>(static_cast<py::ssize_t>(m),
-                                                 e.log_det_prior().data());
-    state["eps"] = e.mission().eps;
-    state["truth"] = truth;
+    state["log_det_prior"] = log_det_prior;
+    state["eps"] = ctx.eps;
+    if (owned()) {
+      auto truth_positions = Array<double>({m, 2});
+      auto t = truth_positions.mutable_unchecked<2>();
+      for (int k = 0; k < m; ++k) {
+        t(k, 0) = episode_->target_positions()[k].x();
+        t(k, 1) = episode_->target_positions()[k].y();
+      }
+      py::dict truth;
+      truth["target_positions"] = truth_positions;
+      state["truth"] = truth;
+    }
     return state;
   }
 
   py::dict Step(const py::array_t<long long>& moves) {
-    if (episode_->done())
+    const Episode& e = episode();  // owned only
+    if (e.done())
       throw py::value_error("step: the mission is done (done is True)");
     external_->next = MovesFrom(moves, num_robots());
-    const long invalid_before = episode_->invalid_moves();
+    const long invalid_before = e.invalid_moves();
     {
       py::gil_scoped_release release;
       episode_->Step();
     }
-    if (episode_->done()) {
-      moves_.OnEnd(*episode_);
-      estimate_.OnEnd(*episode_);
+    if (e.done()) {
+      moves_.OnEnd(e);
+      estimate_.OnEnd(e);
     }
     py::dict changed;
-    changed["step"] = episode_->step();
-    changed["invalid_moves"] = episode_->invalid_moves() - invalid_before;
-    changed["localized"] = episode_->NumLocalized();
-    changed["done"] = episode_->done();
-    changed["success"] = episode_->success();
+    changed["step"] = e.step();
+    changed["invalid_moves"] = e.invalid_moves() - invalid_before;
+    changed["localized"] = e.NumLocalized();
+    changed["done"] = e.done();
+    changed["success"] = e.success();
     return changed;
   }
 
   std::string SummaryText() const {
-    return SummaryJson(Summarize(*episode_, 0.0), *episode_);
+    return SummaryJson(Summarize(episode(), 0.0), episode());
   }
   std::string DiagnosticsText() const {
-    return DiagnosticsJson(*episode_, moves_, estimate_, 0.0);
+    return DiagnosticsJson(episode(), moves_, estimate_, 0.0);
   }
 
  private:
   std::uint64_t id_;
+  const DecisionContext* view_ = nullptr;
+  std::uint64_t seed_ = 0;
+  int max_steps_ = 0;
   std::shared_ptr<const Instance> instance_;
   ExternalPolicy* external_ = nullptr;  // owned by the episode
   std::unique_ptr<Episode> episode_;
@@ -236,26 +285,44 @@ class BuiltinPolicy {
   // belief only for a centralized policy). The policy starts afresh (Reset
   // with the mission's seed) on a new mission or a step that is not the
   // next one, so that deciding at every step repeats `aia run`.
+  // One move per robot from what the robots know at this step (the team's
+  // belief only for a centralized policy). Each mission has its own policy
+  // state, started afresh (Reset with the mission's seed) at its first
+  // decision or at a step that is not the next one, so that deciding at
+  // every step repeats `aia run`, also with missions on several threads
+  // (evaluate). Called with the GIL held; the decision runs without it.
   py::array_t<long long> Decide(const Mission& mission) {
-    const Episode& e = mission.episode();
-    if (!policy_ || mission.id() != mission_id_ || e.step() != next_step_) {
-      policy_ = spec_->Create();
-      policy_->Reset(e.world().map, mission.num_robots(), mission.num_targets(),
-                     e.scenario().seed);
-      mission_id_ = mission.id();
+    DecisionContext ctx = mission.Context();
+    std::shared_ptr<State>& slot = states_[mission.id()];
+    if (!slot || ctx.step != slot->next_step) {
+      slot = std::make_shared<State>();
+      slot->policy = spec_->Create();
+      slot->policy->Reset(*ctx.map, mission.num_robots(), mission.num_targets(),
+                          mission.seed());
     }
-    DecisionContext ctx = e.Context();
-    if (!policy_->centralized()) ctx.central = nullptr;
-    moves_.assign(mission.num_robots(), Move::kStay);
+    const std::shared_ptr<State> state = slot;  // kept while deciding
+    state->last_use = ++uses_;
+    Forget();
+    if (!state->policy->centralized()) {
+      ctx.central = nullptr;
+    } else if (ctx.central == nullptr) {
+      throw py::value_error(
+          name() +
+          " decides from the team's belief, which this policy is "
+          "not given: aia.evaluate(..., centralized=True)");
+    }
+    std::vector<Move> moves(mission.num_robots(), Move::kStay);
+    PolicyStatus status;
     {
       py::gil_scoped_release release;
-      status_ = policy_->Decide(ctx, &moves_);
+      status = state->policy->Decide(ctx, &moves);
     }
-    next_step_ = e.step() + 1;
-    py::array_t<long long> out(static_cast<py::ssize_t>(moves_.size()));
+    status_ = status;
+    state->next_step = ctx.step + 1;
+    py::array_t<long long> out(static_cast<py::ssize_t>(moves.size()));
     auto v = out.mutable_unchecked<1>();
-    for (std::size_t i = 0; i < moves_.size(); ++i)
-      v(static_cast<py::ssize_t>(i)) = static_cast<long long>(moves_[i]);
+    for (std::size_t i = 0; i < moves.size(); ++i)
+      v(static_cast<py::ssize_t>(i)) = static_cast<long long>(moves[i]);
     return out;
   }
   std::string LastStatus() const {
@@ -263,13 +330,128 @@ class BuiltinPolicy {
   }
 
  private:
+  struct State {
+    std::unique_ptr<Policy> policy;
+    int next_step = 0;
+    std::uint64_t last_use = 0;
+  };
+  // The states of the kMissions missions decided for most recently.
+  static constexpr std::size_t kMissions = 256;
+  void Forget() {
+    while (states_.size() > kMissions) {
+      auto oldest = states_.begin();
+      for (auto it = states_.begin(); it != states_.end(); ++it)
+        if (it->second->last_use < oldest->second->last_use) oldest = it;
+      states_.erase(oldest);
+    }
+  }
+
   std::shared_ptr<const PolicySpec> spec_;
-  std::unique_ptr<Policy> policy_;
-  std::uint64_t mission_id_ = 0;
-  int next_step_ = -1;
-  std::vector<Move> moves_;
+  std::map<std::uint64_t, std::shared_ptr<State>> states_;  // by mission id
+  std::uint64_t uses_ = 0;
   PolicyStatus status_ = PolicyStatus::kOk;
 };
+
+// A Python callable as a policy of aia's own loop (evaluate): each decision
+// takes the GIL, hands the callable a view of the decision and reads its
+// moves. A Python exception ends the evaluation and reaches the caller.
+class CallbackPolicy : public Policy {
+ public:
+  CallbackPolicy(std::string name, bool centralized, py::object decide)
+      : name_(std::move(name)),
+        centralized_(centralized),
+        decide_(std::move(decide)) {}
+  ~CallbackPolicy() override {
+    py::gil_scoped_acquire gil;
+    decide_ = py::object();
+  }
+  std::string_view name() const override { return name_; }
+  bool centralized() const override { return centralized_; }
+  void Reset(const Map&, int, int, std::uint64_t seed) override {
+    seed_ = seed;
+    id_ = g_next_mission_id++;
+  }
+  PolicyStatus Decide(const DecisionContext& ctx,
+                      std::vector<Move>* moves) override {
+    py::gil_scoped_acquire gil;
+    const int n = static_cast<int>(moves->size());
+    py::object view = py::cast(new Mission(&ctx, seed_, id_, 0),
+                               py::return_value_policy::take_ownership);
+    struct Invalidate {
+      py::object& view;
+      ~Invalidate() { view.cast<Mission&>().Invalidate(); }
+    } invalidate{view};
+    const py::object result = decide_(view);
+    *moves = MovesFrom(
+        py::array_t<long long, py::array::c_style | py::array::forcecast>(
+            result),
+        n);
+    return PolicyStatus::kOk;
+  }
+
+ private:
+  std::string name_;
+  bool centralized_;
+  py::object decide_;
+  std::uint64_t seed_ = 0, id_ = 0;
+};
+
+class CallbackSpec : public PolicySpec {
+ public:
+  CallbackSpec(const std::string& name, bool centralized, py::object decide)
+      : PolicySpec(name, centralized), decide_(std::move(decide)) {}
+  ~CallbackSpec() override {
+    py::gil_scoped_acquire gil;
+    decide_ = py::object();
+  }
+  std::unique_ptr<Policy> Create() const override {
+    py::gil_scoped_acquire gil;
+    return std::make_unique<CallbackPolicy>(name(), centralized(), decide_);
+  }
+  // effective.yaml's line: rows under this name are resumed whatever the
+  // code does, so a changed policy needs another name.
+  ConfigNode Params() const override {
+    ConfigNode node = ConfigNode::Map();
+    node.Set("kind", ConfigNode::Scalar("python"));
+    node.Set("centralized",
+             ConfigNode::Scalar(centralized() ? "true" : "false"));
+    return node;
+  }
+
+ private:
+  py::object decide_;
+};
+
+// aia.evaluate's core: `aia eval` with one more policy, the callable.
+int Evaluate(py::object decide, const std::string& name, bool centralized,
+             const std::vector<std::string>& sizes, int seeds,
+             std::uint64_t seed_base, const std::string& out, int threads,
+             const std::vector<std::string>& sets, bool progress) {
+  EvalOptions o;
+  o.sizes.clear();
+  for (std::size_t i = 0; i < sizes.size(); ++i) {
+    std::string why;
+    const std::optional<TeamSize> size = TeamSize::FromText(sizes[i], &why);
+    if (!size)
+      throw InputError(
+          "evaluate", 0, "sizes[" + std::to_string(i) + "]",
+          (why.empty() ? "must be " + std::string(TeamSize::kExpect) : why) +
+              ", got '" + sizes[i] + "'");
+    o.sizes.push_back(*size);
+  }
+  o.seeds = seeds;
+  o.seed_base = seed_base;
+  o.out_dir = out;
+  o.threads = threads;
+  o.sets = sets;
+  o.progress = progress;
+  o.exit_on_interrupt = false;
+  o.extra_policies = {
+      std::make_shared<CallbackSpec>(name, centralized, std::move(decide))};
+  py::gil_scoped_release release;
+  InterruptScope scope;  // Ctrl-C: the rows done are written; back to Python
+  return RunEval(o);
+}
 
 }  // namespace
 }  // namespace python
@@ -279,6 +461,11 @@ PYBIND11_MODULE(_aia, m) {
   using aia::python::BuiltinPolicy;
   using aia::python::Mission;
   m.doc() = "aia's C++ core (use the aia package)";
+  // numpy's C API is set up once, here: done first on a worker thread it
+  // would import numpy under a static's guard while another thread holds
+  // the GIL and waits on that guard.
+  py::module_::import("numpy");
+  (void)py::array_t<long long>(1);
   static py::exception<aia::InputError> input_error(m, "InputError",
                                                     PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
@@ -306,19 +493,13 @@ PYBIND11_MODULE(_aia, m) {
       .def("diagnostics_json", &Mission::DiagnosticsText)
       .def_property_readonly("num_robots", &Mission::num_robots)
       .def_property_readonly("num_targets", &Mission::num_targets)
-      .def_property_readonly(
-          "step_count", [](const Mission& s) { return s.episode().step(); })
-      .def_property_readonly(
-          "done", [](const Mission& s) { return s.episode().done(); })
-      .def_property_readonly(
-          "success", [](const Mission& s) { return s.episode().success(); })
-      .def_property_readonly(
-          "flowtime", [](const Mission& s) { return s.episode().flowtime(); })
-      .def_property_readonly(
-          "max_steps",
-          [](const Mission& s) { return s.episode().mission().max_steps; })
-      .def_property_readonly(
-          "seed", [](const Mission& s) { return s.episode().scenario().seed; });
+      .def_property_readonly("step_count", &Mission::step)
+      .def_property_readonly("done", &Mission::done)
+      .def_property_readonly("success", &Mission::success)
+      .def_property_readonly("flowtime", &Mission::flowtime)
+      .def_property_readonly("max_steps", &Mission::max_steps)
+      .def_property_readonly("seed", &Mission::seed)
+      .def_property_readonly("owned", &Mission::owned);
 
   py::class_<BuiltinPolicy>(m, "BuiltinPolicy")
       .def(py::init<const std::string&, const aia::python::KeyValues&>(),
@@ -329,4 +510,8 @@ PYBIND11_MODULE(_aia, m) {
       .def_property_readonly("last_status", &BuiltinPolicy::LastStatus);
 
   m.def("policy_names", [] { return aia::AllPolicies().Names(); });
+  m.def("evaluate", &aia::python::Evaluate, py::arg("decide"), py::arg("name"),
+        py::arg("centralized"), py::arg("sizes"), py::arg("seeds"),
+        py::arg("seed_base"), py::arg("out"), py::arg("threads"),
+        py::arg("sets"), py::arg("progress"));
 }

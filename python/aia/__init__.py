@@ -15,10 +15,13 @@ scoring only. docs/python.md is the reference.
 
 import json as _json
 import math as _math
+import os
+import re
 
 from . import _aia
 
-__all__ = ["InputError", "Mission", "builtin_policy", "policy_names"]
+__all__ = ["InputError", "Mission", "builtin_policy", "evaluate",
+           "policy_names"]
 
 InputError = _aia.InputError
 
@@ -60,6 +63,14 @@ class Mission:
     def __init__(self, scenario, seed=None, overrides=None):
         self._m = _aia.Mission(str(scenario), seed,
                                _pairs(overrides, "overrides"))
+
+    @classmethod
+    def _view(cls, core):
+        """A decision inside aia.evaluate: read-only, valid during the call,
+        no "truth" in its state."""
+        m = cls.__new__(cls)
+        m._m = core
+        return m
 
     def state(self):
         """What the robots know now, as numpy arrays (N robots, M targets):
@@ -163,6 +174,73 @@ def builtin_policy(name, **params):
     """Any registered policy (random, greedy, expert, decsb, igbnet) with
     its parameters, e.g. builtin_policy("igbnet", max_reversals=0)."""
     return _BuiltinPolicy(name, params)
+
+
+_NAME = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
+
+
+def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
+             threads=0, overrides=None, centralized=False, progress=True):
+    """Scores `policy` exactly as `aia eval` scores the built-ins: the same
+    generated worlds (`sizes` like ["10x10"], seeds seed_base ..
+    seed_base + seeds - 1), the same F* from the expert and horizon 3 F*,
+    the same out/runs.csv and out/summary.csv rows (under `name`),
+    resumable, and kill-safe: Ctrl-C writes the finished rows and raises
+    KeyboardInterrupt; calling again goes on. Rows already in `out` (of
+    `aia eval`, say) stay, and summary.csv covers every policy there.
+
+    `policy` is a callable policy(mission) -> moves or an object with
+    decide(mission). The mission it is given is a view of one decision:
+    state() without "truth", valid during the call. `centralized=True`
+    gives it the team's belief too (for builtin_policy("expert")).
+    `overrides` are `--set` keys for every instance. `threads` 0: all
+    cores (the expert's F* runs in parallel; Python calls take turns).
+    Returns summary.csv's rows as dicts."""
+    decide = getattr(policy, "decide", policy)
+    if not callable(decide):
+        raise TypeError("policy: must be callable, or have decide(mission)")
+    if name is None:
+        name = getattr(policy, "name", None) or getattr(policy, "__name__", "")
+        if not isinstance(name, str) or not _NAME.match(name):
+            name = "python"
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"name: must be 1 to 64 letters, digits, '_', '.' "
+                         f"or '-', got {name!r}")
+    if isinstance(sizes, str):
+        sizes = [sizes]
+    if out is None:
+        import tempfile
+        out = tempfile.mkdtemp(prefix="aia_evaluate_")
+    sets = [f"{k}={v}" for k, v in _pairs(overrides, "overrides")]
+    rc = _aia.evaluate(lambda view: decide(Mission._view(view)), name,
+                       bool(centralized), [str(s) for s in sizes], int(seeds),
+                       int(seed_base), str(out), int(threads), sets,
+                       bool(progress))
+    if rc == 130:
+        raise KeyboardInterrupt(f"aia.evaluate: interrupted; the finished "
+                                f"rows are in {out}/runs.csv: call again "
+                                "with the same arguments to go on")
+    return _read_summary(os.path.join(str(out), "summary.csv"))
+
+
+def _read_summary(path):
+    import csv
+    rows = []
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            row = {}
+            for k, v in r.items():
+                if k in ("size", "policy"):
+                    row[k] = v
+                elif v == "":
+                    row[k] = None
+                elif k in ("instances", "no_expert_plan",
+                           "longest_reversal_run"):
+                    row[k] = int(v)
+                else:
+                    row[k] = float(v)
+            rows.append(row)
+    return rows
 
 
 def policy_names():

@@ -135,6 +135,7 @@ DecisionContext Episode::Context() const {
   ctx.sensor = &instance_->scenario.sensor;
   ctx.eps = mission_.eps;
   ctx.robot_lattice = &robot_idx_;
+  ctx.robot_positions = &robot_pos_;
   ctx.comm = &comm_;
   ctx.beliefs = &estimate_.fused();
   ctx.central = &estimate_.central();

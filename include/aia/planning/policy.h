@@ -41,7 +41,10 @@ struct DecisionContext {
   const SensorModel* sensor = nullptr;
   double eps = 0.1;
   const std::vector<int>* robot_lattice =
-      nullptr;                        // lattice index of each robot
+      nullptr;  // lattice index of each robot
+  // Each robot's position in metres, as the physics left it (it knows its
+  // own pose); may be null for hand-made contexts.
+  const std::vector<Vec2>* robot_positions = nullptr;
   const CommNetwork* comm = nullptr;  // this step's graph and the active robots
   const BeliefSet* beliefs = nullptr;  // robot i's fused belief in row i
   const BeliefSet* central = nullptr;  // the centralized filter; null unless

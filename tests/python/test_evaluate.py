@@ -1,0 +1,154 @@
+"""aia.evaluate scores a Python policy as `aia eval` scores the built-ins."""
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pytest
+
+import aia
+
+SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
+BINARY = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
+
+
+def rows_of(path, policy):
+    """runs.csv's rows of one policy, wall time left out, by (size, seed)."""
+    with open(path, newline="") as f:
+        return {(r["size"], r["seed"]): {k: v for k, v in r.items()
+                                         if k not in ("wall_s", "policy")}
+                for r in csv.DictReader(f) if r["policy"] == policy}
+
+
+def test_delegating_to_greedy_gives_the_builtin_greedys_rows(tmp_path):
+    sizes, seeds, base = ["3x3", "5x2"], 3, 40
+    r = subprocess.run([BINARY, "eval", "--sizes", ",".join(sizes), "--seeds",
+                        str(seeds), "--seed-base", str(base), "--policies",
+                        "greedy", "--out", str(tmp_path / "cli"), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    greedy = aia.builtin_policy("greedy")
+    summary = aia.evaluate(lambda m: greedy.decide(m), sizes, seeds,
+                           seed_base=base, out=tmp_path / "py",
+                           name="greedy_py", threads=2, progress=False)
+    cli = rows_of(tmp_path / "cli" / "runs.csv", "greedy")
+    mine = rows_of(tmp_path / "py" / "runs.csv", "greedy_py")
+    assert len(cli) == len(sizes) * seeds
+    assert mine == cli
+    assert [(s["size"], s["policy"]) for s in summary] == [
+        ("3x3", "greedy_py"), ("5x2", "greedy_py")]
+    assert all(s["instances"] == seeds for s in summary)
+    # Beside the built-in's rows in one folder and one summary.
+    summary = aia.evaluate(greedy, sizes, seeds, seed_base=base,
+                           out=tmp_path / "cli", name="greedy_py",
+                           progress=False)
+    assert [s["policy"] for s in summary] == ["greedy_py", "greedy",
+                                              "greedy_py", "greedy"]
+    assert rows_of(tmp_path / "cli" / "runs.csv", "greedy_py") == cli
+
+
+def test_the_policy_sees_a_read_only_view_without_the_truth(tmp_path):
+    seen = []
+
+    def policy(m):
+        s = m.state()
+        assert "truth" not in s
+        assert s["positions"].shape == (m.num_robots, 2)
+        with pytest.raises(ValueError, match="can only be read"):
+            m.step([0] * m.num_robots)
+        seen.append(m)
+        return [0] * m.num_robots
+
+    aia.evaluate(policy, ["2x1"], 1, out=tmp_path, name="left",
+                 progress=False)
+    assert seen
+    with pytest.raises(ValueError, match="valid only inside"):
+        seen[0].state()
+
+
+def test_bad_names_sizes_and_exceptions(tmp_path):
+    with pytest.raises(aia.InputError, match="registered policy's name"):
+        aia.evaluate(lambda m: [0] * m.num_robots, ["2x1"], 1,
+                     out=tmp_path / "a", name="greedy", progress=False)
+    with pytest.raises(ValueError, match="name: must be"):
+        aia.evaluate(lambda m: [0], ["2x1"], 1, out=tmp_path / "b",
+                     name="a b", progress=False)
+    with pytest.raises(aia.InputError, match=r"sizes\[1\]: robots and "
+                       "targets must be >= 1, got '0x2'"):
+        aia.evaluate(lambda m: [0], ["2x1", "0x2"], 1, out=tmp_path / "c",
+                     progress=False)
+
+    class Boom(Exception):
+        pass
+
+    def boom(m):
+        raise Boom("from the policy")
+
+    with pytest.raises(Boom, match="from the policy"):
+        aia.evaluate(boom, ["2x1"], 2, out=tmp_path / "d", name="boom",
+                     threads=1, progress=False)
+    with pytest.raises(ValueError, match=r"moves\[0\]: must be 0"):
+        aia.evaluate(lambda m: [9] * m.num_robots, ["2x1"], 1,
+                     out=tmp_path / "e", name="nine", progress=False)
+    expert = aia.builtin_policy("expert")
+    with pytest.raises(ValueError, match="centralized=True"):
+        aia.evaluate(expert, ["2x1"], 1, out=tmp_path / "f", name="ex",
+                     progress=False)
+    rows = aia.evaluate(expert, ["2x1"], 1, out=tmp_path / "g", name="ex",
+                        centralized=True, progress=False)
+    assert rows[0]["success_rate"] == 1.0
+
+
+CHILD = """
+import sys, time, aia
+greedy = aia.builtin_policy("greedy")
+def slow(m):
+    time.sleep(0.002)
+    return greedy.decide(m)
+try:
+    aia.evaluate(slow, ["4x4"], int(sys.argv[2]), seed_base=7,
+                 out=sys.argv[1], name="slow", threads=1, progress=False)
+except KeyboardInterrupt as e:
+    print("interrupted:", e)
+    sys.exit(3)
+print("finished")
+"""
+
+
+def test_ctrl_c_keeps_every_finished_row_and_the_rerun_goes_on(tmp_path):
+    out, seeds = tmp_path / "e", 12
+    env = dict(os.environ)
+    p = subprocess.Popen([sys.executable, "-c", CHILD, str(out), str(seeds)],
+                         env=env, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    runs = out / "runs.csv"
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if runs.exists() and len(runs.read_text().splitlines()) >= 3:
+            break
+        time.sleep(0.05)
+    p.send_signal(signal.SIGINT)
+    stdout, stderr = p.communicate(timeout=120)
+    assert p.returncode == 3, (stdout, stderr)
+    assert "interrupted" in stdout
+    done = rows_of(runs, "slow")
+    assert 2 <= len(done) < seeds
+    # Every row written is a finished run's: the same as the CLI's.
+    r = subprocess.run([BINARY, "eval", "--sizes", "4x4", "--seeds",
+                        str(seeds), "--seed-base", "7", "--policies",
+                        "greedy", "--out", str(tmp_path / "cli"), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    cli = rows_of(tmp_path / "cli" / "runs.csv", "greedy")
+    for key, row in done.items():
+        assert row == cli[key], key
+    p = subprocess.run([sys.executable, "-c", CHILD, str(out), str(seeds)],
+                       env=env, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert "finished" in p.stdout
+    assert rows_of(runs, "slow") == cli
