@@ -7,19 +7,26 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <exception>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
 #include "aia/commands/eval.h"
 #include "aia/core/error.h"
+#include "aia/core/field_io.h"
 #include "aia/core/field_values.h"
 #include "aia/core/interrupt.h"
+#include "aia/estimation/heatmap.h"
+#include "aia/learning/channels.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
@@ -29,6 +36,7 @@
 #include "aia/runtime/observers.h"
 #include "aia/runtime/policies.h"
 #include "aia/scenario/loader.h"
+#include "aia/scenario/yaml.h"
 
 namespace py = pybind11;
 
@@ -60,8 +68,18 @@ class ExternalPolicy : public NamedPolicy<ExternalPolicy> {
   std::vector<Move> next;
 };
 
-// Moves from Python: one per robot, each 0 (left), 1 (right), 2 (up),
-// 3 (down) or 4 (stay).
+// A move from Python: 0 (left), 1 (right), 2 (up), 3 (down) or 4 (stay);
+// `where` names it in the error ("3" for moves[3]).
+Move ToMove(long long m, const std::string& where) {
+  if (m < 0 || m > 4)
+    throw py::value_error("moves[" + where +
+                          "]: must be 0 (left), 1 (right), 2 (up), 3 (down) "
+                          "or 4 (stay), got " +
+                          std::to_string(m));
+  return static_cast<Move>(m);
+}
+
+// Moves from Python: one per robot.
 std::vector<Move> MovesFrom(const py::array_t<long long>& moves, int n) {
   const py::buffer_info b = moves.request();
   if (b.ndim != 1 || b.shape[0] != n)
@@ -71,15 +89,7 @@ std::vector<Move> MovesFrom(const py::array_t<long long>& moves, int n) {
         py::str(py::tuple(py::cast(b.shape))).cast<std::string>());
   std::vector<Move> out(n);
   const auto view = moves.unchecked<1>();
-  for (int i = 0; i < n; ++i) {
-    const long long m = view(i);
-    if (m < 0 || m > 4)
-      throw py::value_error("moves[" + std::to_string(i) +
-                            "]: must be 0 (left), 1 (right), 2 (up), 3 (down) "
-                            "or 4 (stay), got " +
-                            std::to_string(m));
-    out[i] = static_cast<Move>(m);
-  }
+  for (int i = 0; i < n; ++i) out[i] = ToMove(view(i), std::to_string(i));
   return out;
 }
 
@@ -221,20 +231,52 @@ class Mission {
     return state;
   }
 
+  // I-GBNet's input of every robot, (N, C, H, W) float32, from the C++
+  // renderer (learning/channels.h) with these channel settings; the heat of
+  // each robot's own fused belief, its neighbours from this step's graph.
+  py::array_t<float> Channels(const KeyValues& params) const {
+    ChannelParams settings;
+    ConfigNode node = ConfigNode::Map();
+    for (const auto& [key, value] : params) {
+      node.Set(key, ParseYamlValue(value, "channels: " + key));
+    }
+    ReadFields(node, ReadOptions{"channels", "", ""}, "", &settings);
+    const DecisionContext ctx = Context();
+    const Map& map = *ctx.map;
+    const Lattice& lattice = map.lattice();
+    ChannelRenderer renderer(map.occupancy(), map.size(), settings, &lattice);
+    const int n = num_robots();
+    py::array_t<float> out({static_cast<py::ssize_t>(n),
+                            static_cast<py::ssize_t>(renderer.channels()),
+                            static_cast<py::ssize_t>(renderer.height()),
+                            static_cast<py::ssize_t>(renderer.width())});
+    float* data = out.mutable_data();
+    std::vector<Vec2> neighbours;
+    std::vector<HeatSource> targets;
+    const std::vector<double> no_prior(num_targets(), 0.0);
+    const std::vector<double>& prior =
+        ctx.log_det_prior ? *ctx.log_det_prior : no_prior;
+    py::gil_scoped_release release;
+    for (int i = 0; i < n; ++i) {
+      neighbours.clear();
+      for (int j : ctx.comm->Neighbors(i))
+        if (j != i)
+          neighbours.push_back(lattice.Point((*ctx.robot_lattice)[j]));
+      HeatSources(*ctx.beliefs, i, &targets);
+      renderer.Render(lattice.Point((*ctx.robot_lattice)[i]), neighbours,
+                      targets, prior, ctx.eps, data + i * renderer.ImageSize());
+    }
+    return out;
+  }
+
   py::dict Step(const py::array_t<long long>& moves) {
-    const Episode& e = episode();  // owned only
-    if (e.done())
-      throw py::value_error("step: the mission is done (done is True)");
-    external_->next = MovesFrom(moves, num_robots());
-    const long invalid_before = e.invalid_moves();
+    std::vector<Move> next = MovesFrom(moves, num_robots());
+    const long invalid_before = episode().invalid_moves();
     {
       py::gil_scoped_release release;
-      episode_->Step();
+      StepWith(std::move(next));
     }
-    if (e.done()) {
-      moves_.OnEnd(e);
-      estimate_.OnEnd(e);
-    }
+    const Episode& e = *episode_;
     py::dict changed;
     changed["step"] = e.step();
     changed["invalid_moves"] = e.invalid_moves() - invalid_before;
@@ -242,6 +284,17 @@ class Mission {
     changed["done"] = e.done();
     changed["success"] = e.success();
     return changed;
+  }
+  // One step with these moves (owned missions; no Python object touched).
+  void StepWith(std::vector<Move> moves) {
+    if (episode_->done())
+      throw py::value_error("step: the mission is done (done is True)");
+    external_->next = std::move(moves);
+    episode_->Step();
+    if (episode_->done()) {
+      moves_.OnEnd(*episode_);
+      estimate_.OnEnd(*episode_);
+    }
   }
 
   std::string SummaryText() const {
@@ -350,6 +403,91 @@ class BuiltinPolicy {
   std::map<std::uint64_t, std::shared_ptr<State>> states_;  // by mission id
   std::uint64_t uses_ = 0;
   PolicyStatus status_ = PolicyStatus::kOk;
+};
+
+// n missions of one scenario (seeds given), stepped together on C++
+// threads without the GIL.
+class VectorMissions {
+ public:
+  VectorMissions(const std::string& scenario,
+                 const std::vector<std::uint64_t>& seeds,
+                 const KeyValues& overrides, int threads)
+      : threads_(threads > 0 ? threads
+                             : static_cast<int>(std::max(
+                                   1u, std::thread::hardware_concurrency()))) {
+    if (seeds.empty()) throw py::value_error("n: must be at least 1");
+    for (std::uint64_t seed : seeds)
+      missions_.push_back(std::make_unique<Mission>(scenario, seed, overrides));
+  }
+  int size() const { return static_cast<int>(missions_.size()); }
+  int num_robots() const { return missions_[0]->num_robots(); }
+  Mission& at(int i) { return *missions_.at(i); }
+
+  // moves: (n, robots); missions already done ignore theirs.
+  py::dict Step(const py::array_t<long long>& moves) {
+    const int n = size(), robots = num_robots();
+    const py::buffer_info b = moves.request();
+    if (b.ndim != 2 || b.shape[0] != n || b.shape[1] != robots)
+      throw py::value_error("moves: must be (missions, robots) = (" +
+                            std::to_string(n) + ", " + std::to_string(robots) +
+                            ")");
+    std::vector<std::vector<Move>> next(n, std::vector<Move>(robots));
+    const auto view = moves.unchecked<2>();
+    for (int i = 0; i < n; ++i)
+      for (int r = 0; r < robots; ++r)
+        next[i][r] =
+            ToMove(view(i, r), std::to_string(i) + "][" + std::to_string(r));
+    std::vector<long> before(n);
+    for (int i = 0; i < n; ++i)
+      before[i] = missions_[i]->episode().invalid_moves();
+    {
+      py::gil_scoped_release release;
+      std::atomic<int> cursor{0};
+      std::exception_ptr failure;
+      std::mutex failure_mutex;
+      const auto work = [&] {
+        for (int i = cursor++; i < n; i = cursor++) {
+          try {
+            if (!missions_[i]->episode().done())
+              missions_[i]->StepWith(std::move(next[i]));
+          } catch (...) {
+            std::lock_guard<std::mutex> lock(failure_mutex);
+            if (!failure) failure = std::current_exception();
+          }
+        }
+      };
+      std::vector<std::thread> pool;
+      for (int t = 1; t < std::min(threads_, n); ++t) pool.emplace_back(work);
+      work();
+      for (std::thread& t : pool) t.join();
+      if (failure) std::rethrow_exception(failure);
+    }
+    auto step = Array<long long>({n});
+    auto done = Array<bool>({n});
+    auto success = Array<bool>({n});
+    auto invalid = Array<long long>({n});
+    auto st = step.mutable_unchecked<1>();
+    auto dn = done.mutable_unchecked<1>();
+    auto sc = success.mutable_unchecked<1>();
+    auto iv = invalid.mutable_unchecked<1>();
+    for (int i = 0; i < n; ++i) {
+      const Episode& e = missions_[i]->episode();
+      st(i) = e.step();
+      dn(i) = e.done();
+      sc(i) = e.success();
+      iv(i) = e.invalid_moves() - before[i];
+    }
+    py::dict changed;
+    changed["step"] = step;
+    changed["done"] = done;
+    changed["success"] = success;
+    changed["invalid_moves"] = invalid;
+    return changed;
+  }
+
+ private:
+  int threads_;
+  std::vector<std::unique_ptr<Mission>> missions_;
 };
 
 // A Python callable as a policy of aia's own loop (evaluate): each decision
@@ -489,6 +627,8 @@ PYBIND11_MODULE(_aia, m) {
            py::arg("overrides") = aia::python::KeyValues{})
       .def("state", &Mission::State)
       .def("step", &Mission::Step, py::arg("moves"))
+      .def("channels", &Mission::Channels,
+           py::arg("params") = aia::python::KeyValues{})
       .def("summary_json", &Mission::SummaryText)
       .def("diagnostics_json", &Mission::DiagnosticsText)
       .def_property_readonly("num_robots", &Mission::num_robots)
@@ -500,6 +640,19 @@ PYBIND11_MODULE(_aia, m) {
       .def_property_readonly("max_steps", &Mission::max_steps)
       .def_property_readonly("seed", &Mission::seed)
       .def_property_readonly("owned", &Mission::owned);
+
+  py::class_<aia::python::VectorMissions>(m, "VectorMissions")
+      .def(py::init<const std::string&, const std::vector<std::uint64_t>&,
+                    const aia::python::KeyValues&, int>(),
+           py::arg("scenario"), py::arg("seeds"),
+           py::arg("overrides") = aia::python::KeyValues{},
+           py::arg("threads") = 0)
+      .def("__len__", &aia::python::VectorMissions::size)
+      .def("mission", &aia::python::VectorMissions::at,
+           py::return_value_policy::reference_internal)
+      .def("step", &aia::python::VectorMissions::Step, py::arg("moves"))
+      .def_property_readonly("num_robots",
+                             &aia::python::VectorMissions::num_robots);
 
   py::class_<BuiltinPolicy>(m, "BuiltinPolicy")
       .def(py::init<const std::string&, const aia::python::KeyValues&>(),

@@ -20,8 +20,8 @@ import re
 
 from . import _aia
 
-__all__ = ["InputError", "Mission", "builtin_policy", "evaluate",
-           "policy_names"]
+__all__ = ["InputError", "Mission", "VectorMissions", "builtin_policy",
+           "evaluate", "policy_names"]
 
 InputError = _aia.InputError
 
@@ -66,8 +66,9 @@ class Mission:
 
     @classmethod
     def _view(cls, core):
-        """A decision inside aia.evaluate: read-only, valid during the call,
-        no "truth" in its state."""
+        """A Python Mission around a core one: a decision inside
+        aia.evaluate (read-only, valid during the call, no "truth"), or a
+        mission of VectorMissions."""
         m = cls.__new__(cls)
         m._m = core
         return m
@@ -81,6 +82,18 @@ class Mission:
         targets' log_det_prior (M,); eps. The ground truth, for scoring
         only, under "truth": target_positions (M, 2)."""
         return self._m.state()
+
+    def channels(self, frame=None, **params):
+        """I-GBNet's input of every robot, an (N, C, H, W) float32 array
+        from the C++ renderer: obstacles, neighbours, the heat of the
+        robot's own fused belief, the robot itself (and with geodesic=True
+        the reach channel, from its belief's means). `frame` is "centred"
+        (a window around each robot, the default) or "global"; `params` are
+        the other channel settings (window, cell, blur, cutoff, geodesic,
+        ...; docs/learning.md, Channels), checked as a model's are."""
+        if frame is not None:
+            params["frame"] = frame
+        return self._m.channels(_pairs(params, "channels"))
 
     def step(self, moves):
         """Applies one move per robot (the world rule replaces an invalid
@@ -135,6 +148,54 @@ class Mission:
     def summary(self):
         """summary.json's content (policy "python", wall_s 0)."""
         return _json.loads(self._m.summary_json())
+
+
+class VectorMissions:
+    """n missions of one scenario, seeds seed .. seed + n - 1 (default: the
+    file's seed + i), stepped together on C++ threads (threads 0: all
+    cores) with the GIL released. missions[i] is each one's Mission."""
+
+    def __init__(self, n, scenario, seed=None, overrides=None, threads=0):
+        n = int(n)
+        if n < 1:
+            raise ValueError(f"n: must be at least 1, got {n}")
+        if seed is None:
+            seed = Mission(scenario, overrides=overrides).seed
+        seeds = [int(seed) + i for i in range(n)]
+        self._v = _aia.VectorMissions(str(scenario), seeds,
+                                      _pairs(overrides, "overrides"),
+                                      int(threads))
+        self.missions = [Mission._view(self._v.mission(i)) for i in range(n)]
+
+    def __len__(self):
+        return len(self.missions)
+
+    @property
+    def num_robots(self):
+        return self._v.num_robots
+
+    @property
+    def done(self):
+        """(n,) bool: each mission's done."""
+        import numpy as np
+        return np.array([m.done for m in self.missions])
+
+    def step(self, moves):
+        """moves: (n, robots) ints; a mission already done ignores its
+        row. Returns stacked arrays: step, done, success, invalid_moves."""
+        import numpy as np
+        return self._v.step(np.ascontiguousarray(moves, dtype=np.int64))
+
+    def states(self):
+        """Every mission's state(), stacked: each array gains a first axis
+        of n (the ground truth under "truth" likewise)."""
+        import numpy as np
+        states = [m.state() for m in self.missions]
+        out = {k: np.stack([s[k] for s in states])
+               for k in states[0] if k != "truth"}
+        out["truth"] = {k: np.stack([s["truth"][k] for s in states])
+                        for k in states[0]["truth"]}
+        return out
 
 
 class _BuiltinPolicy:
