@@ -217,6 +217,8 @@ class Mission {
     state["det"] = det;
     state["log_det_prior"] = log_det_prior;
     state["eps"] = ctx.eps;
+    state["workspace"] =
+        py::make_tuple(ctx.map->size().x(), ctx.map->size().y());
     if (owned()) {
       auto truth_positions = Array<double>({m, 2});
       auto t = truth_positions.mutable_unchecked<2>();

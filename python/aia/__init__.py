@@ -21,7 +21,7 @@ import re
 from . import _aia
 
 __all__ = ["InputError", "Mission", "VectorMissions", "builtin_policy",
-           "evaluate", "policy_names"]
+           "evaluate", "parallel_env", "policy_names"]
 
 InputError = _aia.InputError
 
@@ -79,7 +79,8 @@ class Mission:
         cells (N, 2) their (ix, iy); active (N,); neighbors (N, N) this
         step's communication graph; mean (N, M, 2), cov (N, M, 2, 2) and
         det (N, M) of each robot's fused belief (position part); the
-        targets' log_det_prior (M,); eps. The ground truth, for scoring
+        targets' log_det_prior (M,); eps; workspace (width, height) in
+        metres. The ground truth, for scoring
         only, under "truth": target_positions (M, 2)."""
         return self._m.state()
 
@@ -302,6 +303,15 @@ def _read_summary(path):
                     row[k] = float(v)
             rows.append(row)
     return rows
+
+
+def parallel_env(scenario, seed=None, overrides=None, render_mode=None,
+                 **kwargs):
+    """The PettingZoo ParallelEnv API over a mission (aia.env.ParallelEnv:
+    observations, rewards and spaces are documented there)."""
+    from .env import ParallelEnv
+    return ParallelEnv(scenario, seed=seed, overrides=overrides,
+                       render_mode=render_mode, **kwargs)
 
 
 def policy_names():

@@ -1,0 +1,144 @@
+"""aia.parallel_env against the PettingZoo ParallelEnv API (what
+pettingzoo.test.parallel_api_test checks, pettingzoo not being packaged in
+Debian) and against its documented rewards."""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import aia
+
+SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
+DEFAULT = str(SOURCE / "scenarios" / "default.yaml")
+ROBUSTNESS = str(SOURCE / "scenarios" / "robustness.yaml")
+
+
+def check_api(env, steps):
+    observations, infos = env.reset(seed=42)
+    assert isinstance(observations, dict) and isinstance(infos, dict)
+    assert set(observations) == set(env.agents) == set(infos)
+    assert set(env.agents) <= set(env.possible_agents)
+    assert env.possible_agents == [f"robot_{i}"
+                                   for i in range(env.max_num_agents)]
+    for a in env.agents:
+        assert env.observation_space(a).contains(observations[a]), a
+        assert env.action_space(a).n == 4
+        assert env.observation_space(a) is env.observation_space(
+            env.possible_agents[0])
+    for _ in range(steps):
+        if not env.agents:
+            break
+        live = list(env.agents)
+        actions = {a: env.action_space(a).sample() for a in live}
+        for a in live:
+            assert env.action_space(a).contains(actions[a])
+        out = env.step(actions)
+        assert len(out) == 5
+        for d in out:
+            assert isinstance(d, dict) and set(d) == set(live)
+        observations, rewards, terminations, truncations, _ = out
+        for a in live:
+            assert env.observation_space(a).contains(observations[a])
+            assert isinstance(rewards[a], float)
+            assert isinstance(terminations[a], bool)
+            assert isinstance(truncations[a], bool)
+            gone = terminations[a] or truncations[a]
+            assert (a not in env.agents) == gone
+    with pytest.raises(KeyError):
+        env.action_space("robot_x")
+
+
+def test_the_parallel_api():
+    env = aia.parallel_env(DEFAULT, seed=1,
+                           overrides={"robots.count": 4, "targets.count": 3})
+    check_api(env, 400)  # random moves: success or the step limit
+    assert env.agents == [] and env.mission.done
+    # Success: every remaining agent terminates and agents is empty.
+    env.reset(seed=3)
+    greedy = aia.builtin_policy("greedy")
+    while env.agents:
+        moves = greedy.decide(env.mission)
+        _, _, term, trunc, _ = env.step(
+            {a: int(moves[env.possible_agents.index(a)]) for a in env.agents})
+    assert env.mission.success and all(term.values())
+    assert not any(trunc.values())
+    env.close()
+
+
+def test_truncation_past_max_steps():
+    env = aia.parallel_env(DEFAULT, overrides={"mission.max_steps": 3})
+    env.reset(seed=2)
+    for k in range(3):
+        assert env.agents
+        _, _, term, trunc, _ = env.step({a: 0 for a in env.agents})
+    assert all(trunc.values()) and not any(term.values())
+    assert env.agents == []
+
+
+def test_a_failed_robot_leaves_the_agents():
+    env = aia.parallel_env(ROBUSTNESS, seed=0)
+    env.reset()
+    greedy = aia.builtin_policy("greedy")
+    left = set()
+    while env.agents:
+        moves = greedy.decide(env.mission)
+        live = list(env.agents)
+        _, _, term, _, _ = env.step(
+            {a: int(moves[env.possible_agents.index(a)]) for a in live})
+        active = env.state()["active"]
+        for a in live:
+            i = env.possible_agents.index(a)
+            if not active[i]:
+                assert term[a] and a not in env.agents
+                left.add(a)
+    assert left, "the robustness scenario fails some robot"
+
+
+def test_rewards_are_the_drop_of_the_own_summed_log_det():
+    penalty = 0.25
+    env = aia.parallel_env(DEFAULT, overrides={"robots.count": 3,
+                                               "targets.count": 2},
+                           step_penalty=penalty)
+    env.reset(seed=9)
+
+    def own(state):
+        with np.errstate(divide="ignore"):
+            return np.maximum(np.log(state["det"]),
+                              np.log(state["eps"])).sum(axis=1)
+
+    before = own(env.state())
+    _, rewards, _, _, _ = env.step({a: 1 for a in env.agents})
+    after = own(env.state())
+    for i, a in enumerate(env.possible_agents):
+        assert rewards[a] == pytest.approx(before[i] - after[i] - penalty)
+
+
+def test_same_seed_same_observations_and_rewards():
+    def run():
+        env = aia.parallel_env(DEFAULT, overrides={"robots.count": 3,
+                                                   "targets.count": 2})
+        obs, _ = env.reset(seed=5)
+        trace = [obs["robot_1"]["channels"].copy()]
+        for k in range(5):
+            obs, r, _, _, _ = env.step({a: k % 4 for a in env.agents})
+            trace.append(obs["robot_1"]["channels"].copy())
+            trace.append(np.array([r[a] for a in sorted(r)]))
+        return trace
+    for x, y in zip(run(), run()):
+        assert (x == y).all()
+
+
+def test_bad_actions():
+    env = aia.parallel_env(DEFAULT, overrides={"robots.count": 2,
+                                               "targets.count": 1})
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step({})
+    env.reset(seed=1)
+    with pytest.raises(ValueError, match="no move for robot_1"):
+        env.step({"robot_0": 0})
+    with pytest.raises(ValueError, match=r"actions\['robot_0'\]: must be 0"):
+        env.step({"robot_0": 7, "robot_1": 0})
+    with pytest.raises(ValueError, match="render_mode"):
+        aia.parallel_env(DEFAULT, render_mode="human")
