@@ -1,0 +1,36 @@
+"""The examples of examples/python run and print what docs/python.md says."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
+
+
+def run(name, *args):
+    r = subprocess.run([sys.executable, str(SOURCE / "examples" / "python" /
+                                            name), *args],
+                       cwd=SOURCE, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+def test_random_policy():
+    out = run("random_policy.py")
+    assert "random moves: success" in out and "greedy: success True" in out
+
+
+def test_parallel_env_loop():
+    assert "success True" in run("parallel_env_loop.py")
+
+
+def test_heuristic_scored_beside_the_builtins(tmp_path):
+    binary = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
+    r = subprocess.run([binary, "eval", "--sizes", "3x3", "--seeds", "3",
+                        "--policies", "greedy", "--out", str(tmp_path),
+                        "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    out = run("heuristic_eval.py", str(tmp_path), "3x3", "3")
+    lines = [l.split()[0] for l in out.splitlines()[-2:]]
+    assert lines == ["nearest_target", "greedy"], out
