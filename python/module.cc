@@ -25,8 +25,10 @@
 #include "aia/core/field_io.h"
 #include "aia/core/field_values.h"
 #include "aia/core/interrupt.h"
+#include "aia/core/rng.h"
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/channels.h"
+#include "aia/learning/dataset.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
@@ -271,6 +273,19 @@ class Mission {
     return out;
   }
 
+  // (N, 4): which of each robot's moves stay on the lattice.
+  py::array_t<bool> ValidMoves() const {
+    const DecisionContext ctx = Context();
+    const Lattice& lattice = ctx.map->lattice();
+    const int n = num_robots();
+    auto out = Array<bool>({n, kNumMoves});
+    auto v = out.mutable_unchecked<2>();
+    for (int i = 0; i < n; ++i)
+      for (int a = 0; a < kNumMoves; ++a)
+        v(i, a) = lattice.Valid((*ctx.robot_lattice)[i], static_cast<Move>(a));
+    return out;
+  }
+
   py::dict Step(const py::array_t<long long>& moves) {
     std::vector<Move> next = MovesFrom(moves, num_robots());
     const long invalid_before = episode().invalid_moves();
@@ -492,6 +507,111 @@ class VectorMissions {
   std::vector<std::unique_ptr<Mission>> missions_;
 };
 
+// The samples of `aia dataset` shards, rendered as the trainer renders them
+// (learning/dataset.h, the trainer's batches).
+class PyDataset {
+ public:
+  PyDataset(const std::vector<std::string>& paths, const KeyValues& params) {
+    ConfigNode node = ConfigNode::Map();
+    for (const auto& [key, value] : params)
+      node.Set(key, ParseYamlValue(value, "channels: " + key));
+    ReadFields(node, ReadOptions{"channels", "", ""}, "", &channels_);
+    data_ = ReadDataset(paths, "paths");
+    if (data_.samples.empty())
+      throw InputError("Dataset", 0, "paths", "holds no samples");
+    for (const DatasetWorld& w : data_.worlds) {
+      const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
+                    w.robot_radius);
+      renderers_.emplace_back(map.occupancy(), w.size, channels_,
+                              &map.lattice());
+    }
+  }
+
+  int size() const { return static_cast<int>(data_.samples.size()); }
+  int num_worlds() const { return static_cast<int>(data_.worlds.size()); }
+
+  // Per sample: label, useful, acted, world index, episode, step, robot.
+  py::dict Samples() const {
+    const py::ssize_t n = size();
+    py::array_t<long long> label(n), acted(n), world(n), episode(n), step(n),
+        robot(n);
+    py::array_t<bool> useful(n);
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const DatasetSample& s = data_.samples[i];
+      label.mutable_at(i) = static_cast<long long>(s.label);
+      acted.mutable_at(i) = static_cast<long long>(s.acted);
+      world.mutable_at(i) = s.world;
+      episode.mutable_at(i) = s.episode;
+      step.mutable_at(i) = s.step;
+      robot.mutable_at(i) = s.robot;
+      useful.mutable_at(i) = s.useful;
+    }
+    py::dict d;
+    d["label"] = label;
+    d["useful"] = useful;
+    d["acted"] = acted;
+    d["world"] = world;
+    d["episode"] = episode;
+    d["step"] = step;
+    d["robot"] = robot;
+    return d;
+  }
+
+  // Whether each world is held out for validation, as `aia train` splits
+  // (--val-share, --seed).
+  py::array_t<bool> ValidationWorlds(double share, std::uint64_t seed) const {
+    py::array_t<bool> out(num_worlds());
+    for (int w = 0; w < num_worlds(); ++w) {
+      Rng rng(seed, "train/split",
+              static_cast<std::uint64_t>(data_.worlds[w].seed));
+      out.mutable_at(w) = rng.Uniform() < share;
+    }
+    return out;
+  }
+
+  // (B, C, H, W) float32 images of these samples and their labels.
+  py::tuple Batch(const std::vector<long long>& indices) {
+    if (indices.empty()) throw py::value_error("batch: no sample indices");
+    for (long long i : indices)
+      if (i < 0 || i >= size())
+        throw py::index_error("batch: sample " + std::to_string(i) + " of " +
+                              std::to_string(size()));
+    const ChannelRenderer& first = renderers_[data_.samples[indices[0]].world];
+    for (long long i : indices) {
+      const ChannelRenderer& r = renderers_[data_.samples[i].world];
+      if (r.height() != first.height() || r.width() != first.width())
+        throw py::value_error(
+            "batch: worlds of different sizes in the global frame; use the "
+            "centred frame or one workspace size");
+    }
+    const py::ssize_t b = static_cast<py::ssize_t>(indices.size());
+    py::array_t<float> images({b, static_cast<py::ssize_t>(first.channels()),
+                               static_cast<py::ssize_t>(first.height()),
+                               static_cast<py::ssize_t>(first.width())});
+    py::array_t<long long> labels(b);
+    float* data = images.mutable_data();
+    const std::size_t size = first.ImageSize();
+    for (py::ssize_t k = 0; k < b; ++k)
+      labels.mutable_at(k) =
+          static_cast<long long>(data_.samples[indices[k]].label);
+    {
+      py::gil_scoped_release release;
+      for (py::ssize_t k = 0; k < b; ++k) {
+        const DatasetSample& s = data_.samples[indices[k]];
+        const DatasetWorld& w = data_.worlds[s.world];
+        renderers_[s.world].Render(s.position, s.neighbours, s.targets,
+                                   w.log_det_prior, w.eps, data + k * size);
+      }
+    }
+    return py::make_tuple(images, labels);
+  }
+
+ private:
+  ChannelParams channels_;
+  Dataset data_;
+  std::vector<ChannelRenderer> renderers_;
+};
+
 // A Python callable as a policy of aia's own loop (evaluate): each decision
 // takes the GIL, hands the callable a view of the decision and reads its
 // moves. A Python exception ends the evaluation and reaches the caller.
@@ -629,6 +749,7 @@ PYBIND11_MODULE(_aia, m) {
            py::arg("overrides") = aia::python::KeyValues{})
       .def("state", &Mission::State)
       .def("step", &Mission::Step, py::arg("moves"))
+      .def("valid_moves", &Mission::ValidMoves)
       .def("channels", &Mission::Channels,
            py::arg("params") = aia::python::KeyValues{})
       .def("summary_json", &Mission::SummaryText)
@@ -655,6 +776,17 @@ PYBIND11_MODULE(_aia, m) {
       .def("step", &aia::python::VectorMissions::Step, py::arg("moves"))
       .def_property_readonly("num_robots",
                              &aia::python::VectorMissions::num_robots);
+
+  py::class_<aia::python::PyDataset>(m, "Dataset")
+      .def(py::init<const std::vector<std::string>&,
+                    const aia::python::KeyValues&>(),
+           py::arg("paths"), py::arg("params") = aia::python::KeyValues{})
+      .def("__len__", &aia::python::PyDataset::size)
+      .def_property_readonly("num_worlds", &aia::python::PyDataset::num_worlds)
+      .def("samples", &aia::python::PyDataset::Samples)
+      .def("validation_worlds", &aia::python::PyDataset::ValidationWorlds,
+           py::arg("share"), py::arg("seed"))
+      .def("batch", &aia::python::PyDataset::Batch, py::arg("indices"));
 
   py::class_<BuiltinPolicy>(m, "BuiltinPolicy")
       .def(py::init<const std::string&, const aia::python::KeyValues&>(),

@@ -76,62 +76,16 @@ def info(paths):
 
 def load_model(path):
     """The saved model as a torch.nn.Module in evaluation mode, and its
-    metadata (the channels' frame, cell, window, ...)."""
-    import torch
-    from torch import nn
+    metadata (the channels' frame, cell, window, ...): the Python package's
+    network (python/aia/network.py), loaded from the source tree."""
+    import importlib.util
 
-    state = torch.jit.load(path, map_location="cpu").state_dict()
-    meta = json.loads(bytes(state.pop("aia_meta").tolist()).decode())
-    w, p = meta["width"], meta["pool"]
-    meta["channels"] = 5 if meta.get("geodesic") else 4  # docs/learning.md
-
-    class Block(nn.Module):
-        def __init__(self):
-            super().__init__()
-            self.conv1 = nn.Conv2d(w, w, 3, padding=1, bias=False)
-            self.bn1 = nn.BatchNorm2d(w)
-            self.conv2 = nn.Conv2d(w, w, 3, padding=1, bias=False)
-            self.bn2 = nn.BatchNorm2d(w)
-
-        def forward(self, x):
-            y = torch.relu(self.bn1(self.conv1(x)))
-            return torch.relu(self.bn2(self.conv2(y)) + x)
-
-    class IgbNet(nn.Module):
-        def __init__(self):
-            super().__init__()
-            self.stem = nn.Conv2d(meta["channels"], w, 3, stride=meta["stem_stride"], padding=1,
-                                  bias=False)
-            self.stem_bn = nn.BatchNorm2d(w)
-            self.blocks = nn.ModuleList([Block() for _ in range(3)])
-            self.pool = nn.AdaptiveAvgPool2d(p)
-            self.fc1 = nn.Linear(w * p * p, meta["hidden"])
-            self.fc2 = nn.Linear(meta["hidden"], 4)
-            self.hops = meta.get("message_hops", 0)
-            for k in range(1, self.hops + 1):  # message passing: M_1..M_K
-                setattr(self, "message%d" % k,
-                        nn.Linear(meta["hidden"], meta["hidden"], bias=False))
-
-        def forward(self, x, neighbours=None):
-            """Logits of a batch of robots; `neighbours[b]` lists the rows
-            robot b hears (message passing; None: each robot alone)."""
-            x = torch.relu(self.stem_bn(self.stem(x)))
-            for b in self.blocks:
-                x = b(x)
-            z = torch.relu(self.fc1(self.pool(x).flatten(1)))
-            if self.hops == 0 or neighbours is None:
-                return self.fc2(z)
-            h, hop = z, z
-            for k in range(1, self.hops + 1):
-                hop = torch.stack([hop[n].mean(0) if n else torch.zeros_like(hop[0])
-                                   for n in neighbours])
-                h = h + getattr(self, "message%d" % k)(hop)
-            return self.fc2(torch.relu(h))
-
-    net = IgbNet()
-    net.load_state_dict(state)
-    net.eval()
-    return net, meta
+    here = os.path.dirname(os.path.abspath(__file__))
+    spec = importlib.util.spec_from_file_location(
+        "aia_network", os.path.join(here, "..", "python", "aia", "network.py"))
+    network = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(network)
+    return network.load_model(path)
 
 
 def check(model, images, n, h, w, logits):

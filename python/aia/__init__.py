@@ -20,8 +20,8 @@ import re
 
 from . import _aia
 
-__all__ = ["InputError", "Mission", "VectorMissions", "builtin_policy",
-           "evaluate", "parallel_env", "policy_names"]
+__all__ = ["Dataset", "InputError", "Mission", "VectorMissions",
+           "builtin_policy", "evaluate", "parallel_env", "policy_names"]
 
 InputError = _aia.InputError
 
@@ -95,6 +95,11 @@ class Mission:
         if frame is not None:
             params["frame"] = frame
         return self._m.channels(_pairs(params, "channels"))
+
+    def valid_moves(self):
+        """(N, 4) bool: which of each robot's moves (left, right, up, down)
+        stay on the lattice (the world rule replaces the others)."""
+        return self._m.valid_moves()
 
     def step(self, moves):
         """Applies one move per robot (the world rule replaces an invalid
@@ -197,6 +202,52 @@ class VectorMissions:
         out["truth"] = {k: np.stack([s["truth"][k] for s in states])
                         for k in states[0]["truth"]}
         return out
+
+
+class Dataset:
+    """The samples of `aia dataset` folders or shard files, their channels
+    rendered by the C++ renderer as `aia train` renders them. `channels`
+    are the channel settings (frame, window, cell, geodesic, ...; a model's
+    are aia.network.channel_params(meta)).
+
+    labels, useful, acted, world, episode, step, robot: (n,) arrays per
+    sample (label: the expert's move; useful: the robot still had useful
+    work in the expert's plan)."""
+
+    def __init__(self, paths, **channels):
+        if isinstance(paths, (str, os.PathLike)):
+            paths = [paths]
+        self._d = _aia.Dataset([str(p) for p in paths],
+                               _pairs(channels, "channels"))
+        samples = self._d.samples()
+        self.labels = samples["label"]
+        self.useful = samples["useful"]
+        self.acted = samples["acted"]
+        self.world = samples["world"]
+        self.episode = samples["episode"]
+        self.step = samples["step"]
+        self.robot = samples["robot"]
+
+    def __len__(self):
+        return len(self._d)
+
+    @property
+    def num_worlds(self):
+        return self._d.num_worlds
+
+    def split(self, val_share=0.1, seed=1):
+        """(train, validation) sample indices, split by world as `aia train
+        --val-share --seed` splits (its defaults)."""
+        import numpy as np
+        held = self._d.validation_worlds(float(val_share), int(seed))
+        val = held[self.world]
+        return np.flatnonzero(~val), np.flatnonzero(val)
+
+    def batch(self, indices):
+        """(images (B, C, H, W) float32, labels (B,) int64) of these
+        samples."""
+        import numpy as np
+        return self._d.batch(np.asarray(indices, dtype=np.int64).tolist())
 
 
 class _BuiltinPolicy:

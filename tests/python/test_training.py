@@ -1,0 +1,107 @@
+"""aia.Dataset and a training round trip between PyTorch and the C++
+igbnet policy, both ways."""
+
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import aia
+
+torch = pytest.importorskip("torch")
+from aia import network  # noqa: E402  (needs torch)
+
+SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
+BINARY = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
+DEFAULT = str(SOURCE / "scenarios" / "default.yaml")
+# The network's moves alone: no deadlock rule, no undo rule, no search aims.
+ARGMAX = {"max_reversals": 0, "no_undo": False, "search": False}
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    out = tmp_path_factory.mktemp("data")
+    r = subprocess.run([BINARY, "dataset", "--episodes", "12", "--size",
+                        "3x3", "--keep", "5", "--out", str(out), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def test_the_dataset_reads_and_renders_the_shards(data):
+    d = aia.Dataset(data)
+    assert len(d) == 12 * 5 * 3 and d.num_worlds == 12
+    assert set(np.unique(d.labels)) <= {0, 1, 2, 3}
+    train, val = d.split(val_share=0.5, seed=3)
+    assert len(train) + len(val) == len(d) and len(val) > 0
+    # Split by world, as aia train splits.
+    assert not set(d.world[train]) & set(d.world[val])
+    images, labels = d.batch([0, 5, 7])
+    assert images.shape == (3, 4, 40, 40) and images.dtype == np.float32
+    assert (labels == d.labels[[0, 5, 7]]).all()
+    assert aia.Dataset(data, geodesic=True).batch([0])[0].shape[1] == 5
+    with pytest.raises(IndexError):
+        d.batch([len(d)])
+    with pytest.raises(aia.InputError, match="channels: window"):
+        aia.Dataset(data, window=1)
+
+
+def python_moves(net, meta, mission):
+    """The most probable valid move of each robot by the Python network."""
+    x = torch.from_numpy(mission.channels(**network.channel_params(meta)))
+    with torch.no_grad():
+        logits = net(x).numpy()
+    logits[~mission.valid_moves()] = -np.inf
+    return logits
+
+
+def check_same_moves(net, meta, model_path, seed):
+    m = aia.Mission(DEFAULT, seed=seed)
+    cpp = aia.builtin_policy("igbnet", model=str(model_path), **ARGMAX)
+    checked = 0
+    for _ in range(4):
+        logits = python_moves(net, meta, m)
+        moves = cpp.decide(m)
+        for i in range(m.num_robots):
+            # The C++ move is the Python network's best (to float rounding).
+            assert logits[i, moves[i]] >= logits[i].max() - 1e-4, (i, logits[i])
+            checked += 1
+        m.step(moves)
+    return checked
+
+
+def test_a_model_trained_in_python_runs_in_the_cpp_policy(data, tmp_path):
+    torch.manual_seed(0)
+    meta = network.default_meta(width=8, hidden=16)
+    d = aia.Dataset(data, **network.channel_params(meta))
+    net = network.IgbNet(meta)
+    opt = torch.optim.Adam(net.parameters(), lr=1e-2)
+    for b in range(0, len(d), 30):
+        images, labels = d.batch(np.arange(b, min(b + 30, len(d))))
+        loss = torch.nn.functional.cross_entropy(
+            net(torch.from_numpy(images)), torch.from_numpy(labels))
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    net.eval()
+    path = tmp_path / "py.pt"
+    network.save_model(net, path)
+    # aia's own reader takes it (policies list it, eval scores it).
+    assert check_same_moves(net, meta, path, seed=4) == 40
+    back, meta_back = network.load_model(path)
+    x = torch.rand(2, 4, 40, 40)
+    assert torch.equal(back(x), net(x))
+    r = subprocess.run([BINARY, "run", DEFAULT, "--set",
+                        f"policy.model={path}", "--max-steps", "3", "--out",
+                        str(tmp_path / "run"), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
+def test_the_cpp_model_runs_in_python():
+    path = SOURCE / "models" / "igbnet.pt"
+    net, meta = network.load_model(path)
+    assert meta["channels"] == 5
+    assert check_same_moves(net, meta, path, seed=6) == 40
