@@ -34,3 +34,14 @@ def test_heuristic_scored_beside_the_builtins(tmp_path):
     out = run("heuristic_eval.py", str(tmp_path), "3x3", "3")
     lines = [l.split()[0] for l in out.splitlines()[-2:]]
     assert lines == ["nearest_target", "greedy"], out
+
+
+def test_train_igbnet(tmp_path):
+    binary = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
+    r = subprocess.run([binary, "dataset", "--episodes", "6", "--size", "3x3",
+                        "--keep", "4", "--out", str(tmp_path / "d"),
+                        "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    out = run("train_igbnet.py", str(tmp_path / "d"), str(tmp_path / "m.pt"),
+              "--epochs", "1", "--width", "4", "--hidden", "8")
+    assert "epoch 1: train loss" in out and (tmp_path / "m.pt").exists()
