@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "aia/commands/episode_picture.h"
 #include "aia/commands/eval.h"
 #include "aia/core/error.h"
 #include "aia/core/field_io.h"
@@ -275,6 +276,44 @@ class Mission {
     return out;
   }
 
+  // An RGB frame (H, W, 3) of the physics now with aia render's overlays.
+  // The renderer is made at the first call (and again for another size);
+  // the trails start there.
+  py::array_t<std::uint8_t> Render(int width, int height) {
+    const Episode& e = episode();  // owned only
+    if (width < 16 || height < 16 || width > 8192 || height > 8192)
+      throw py::value_error(
+          "render: width and height must be in [16, 8192], "
+          "got " +
+          std::to_string(width) + " x " + std::to_string(height));
+    if (!picture_ || width != picture_width_ || height != picture_height_) {
+      picture_.reset();
+      FrameSettings settings;
+      settings.scene.width = width;
+      settings.scene.height = height;
+      renderer_ =
+          std::make_unique<FrameRenderer>(e.sim(), e.world().map, settings);
+      picture_ = std::make_unique<PictureObserver>(e, renderer_.get());
+      if (!picture_added_) {
+        episode_->AddObserver(&picture_forward_);
+        picture_added_ = true;
+      }
+      picture_width_ = width;
+      picture_height_ = height;
+    }
+    const cv::Mat& bgr = picture_->picture.Render(e);
+    py::array_t<std::uint8_t> out({static_cast<py::ssize_t>(bgr.rows),
+                                   static_cast<py::ssize_t>(bgr.cols),
+                                   static_cast<py::ssize_t>(3)});
+    auto v = out.mutable_unchecked<3>();
+    for (int y = 0; y < bgr.rows; ++y) {
+      const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
+      for (int x = 0; x < bgr.cols; ++x)
+        for (int c = 0; c < 3; ++c) v(y, x, c) = row[3 * x + 2 - c];
+    }
+    return out;
+  }
+
   // (N, 4): which of each robot's moves stay on the lattice.
   py::array_t<bool> ValidMoves() const {
     const DecisionContext ctx = Context();
@@ -333,6 +372,27 @@ class Mission {
   std::unique_ptr<Episode> episode_;
   MoveObserver moves_;
   EstimateObserver estimate_;
+  // render(): the picture kept in step with the episode once made.
+  struct PictureObserver {
+    PictureObserver(const Episode& e, FrameRenderer* renderer)
+        : picture(e, renderer) {
+      picture.AfterStep(e);
+    }
+    EpisodePicture picture;
+  };
+  struct PictureForward : StepObserver {
+    explicit PictureForward(Mission* m) : mission(m) {}
+    ObserverStatus OnStep(const Episode& e) override {
+      if (mission->picture_) mission->picture_->picture.AfterStep(e);
+      return ObserverStatus::kContinue;
+    }
+    Mission* mission;
+  };
+  std::unique_ptr<FrameRenderer> renderer_;
+  std::unique_ptr<PictureObserver> picture_;
+  PictureForward picture_forward_{this};
+  bool picture_added_ = false;
+  int picture_width_ = 0, picture_height_ = 0;
 };
 
 // A registered policy deciding on a mission's current state.
@@ -814,6 +874,8 @@ PYBIND11_MODULE(_aia, m) {
       .def("state", &Mission::State)
       .def("step", &Mission::Step, py::arg("moves"))
       .def("valid_moves", &Mission::ValidMoves)
+      .def("render", &Mission::Render, py::arg("width") = 640,
+           py::arg("height") = 480)
       .def("channels", &Mission::Channels,
            py::arg("params") = aia::python::KeyValues{})
       .def("summary_json", &Mission::SummaryText)

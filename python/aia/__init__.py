@@ -96,6 +96,12 @@ class Mission:
             params["frame"] = frame
         return self._m.channels(_pairs(params, "channels"))
 
+    def render(self, width=640, height=480):
+        """An RGB frame, an (H, W, 3) uint8 array, of the physics now with
+        `aia render`'s overlays (estimates, sensing, messages, trails from
+        the first render() on). Made offscreen (OSMesa), on this thread."""
+        return self._m.render(int(width), int(height))
+
     def valid_moves(self):
         """(N, 4) bool: which of each robot's moves (left, right, up, down)
         stay on the lattice (the world rule replaces the others)."""

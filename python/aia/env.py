@@ -121,15 +121,15 @@ VECTOR_FEATURES = ("x_share", "y_share", "step_share", "localized_share")
 class ParallelEnv:
     """aia as a PettingZoo ParallelEnv; see the module's doc."""
 
-    metadata = {"render_modes": [], "name": "aia_v0",
+    metadata = {"render_modes": ["rgb_array"], "name": "aia_v0",
                 "is_parallelizable": True}
 
     def __init__(self, scenario, seed=None, overrides=None, render_mode=None,
                  channels=None, step_penalty=0.01):
-        if render_mode is not None:
-            raise ValueError(f"render_mode: {render_mode!r} is not supported "
-                             "yet (aia render writes videos)")
-        self.render_mode = None
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode: must be None or 'rgb_array', got "
+                             f"{render_mode!r}")
+        self.render_mode = render_mode
         self._scenario = str(scenario)
         self._overrides = dict(overrides or {})
         self._channels = dict(channels or {})
@@ -259,9 +259,13 @@ class ParallelEnv:
     def mission(self):
         return self._mission
 
-    def render(self):
-        raise NotImplementedError("render: not supported yet; `aia render` "
-                                  "writes a mission's video")
+    def render(self, width=640, height=480):
+        """With render_mode "rgb_array": the mission's frame (H, W, 3)."""
+        if self.render_mode is None:
+            return None
+        if self._mission is None:
+            raise RuntimeError("call reset() before render()")
+        return self._mission.render(width, height)
 
     def close(self):
         self._mission = None

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "aia/commands/episode_picture.h"
 #include "aia/core/error.h"
 #include "aia/core/io.h"
 #include "aia/estimation/heatmap.h"
@@ -20,6 +21,61 @@
 #include "aia/world/media.h"
 
 namespace aia {
+
+EpisodePicture::EpisodePicture(const Episode& e, FrameRenderer* renderer)
+    : renderer_(renderer) {
+  const Scenario& s = e.scenario();
+  heat_robot_ = s.render.follow_robot;
+  heat_params_.eps = e.mission().eps;
+  heat_params_.blur = 0.5 * s.sensor.range;
+  if (heat_robot_ >= 0)
+    heat_ =
+        MakeHeatmapGrid(e.world().map.size(), e.world().map.occupancy().cell());
+  overlay_.max_steps = e.mission().max_steps;
+  overlay_.policy = std::string(e.policy().name());
+  overlay_.seed = s.seed;
+  overlay_.eps = e.mission().eps;
+  overlay_.sensor_range = s.sensor.range;
+  overlay_.neighbors = &e.comm().AllNeighbors();
+  overlay_.lost = &e.comm().Lost();
+  overlay_.heatmap_robot = heat_robot_;
+}
+
+void EpisodePicture::AfterStep(const Episode& e) {
+  const int m = e.world().NumTargets();
+  const double eps = e.mission().eps;
+  overlay_.targets.resize(m);
+  for (int k = 0; k < m; ++k) {
+    // The team's best estimate; every robot failed: robot 0's belief.
+    const int best = std::max(0, e.BestRobot(k));
+    TargetOverlay& t = overlay_.targets[k];
+    t.mean = e.beliefs().PositionMean(best, k);
+    t.cov = e.beliefs().PositionCovariance(best, k);
+    t.det = e.Det(best, k);
+    t.weight = HeatWeight(e.beliefs().LogDetCovariance(best, k),
+                          e.log_det_prior()[k], eps);
+  }
+  overlay_.step = e.step();
+  overlay_.localized = e.NumLocalized();
+  renderer_->AddTrailPoints(e.robot_positions());
+  if (heat_robot_ >= 0) {
+    ProjectHeatmap(e.beliefs(), heat_robot_, e.log_det_prior(), heat_params_,
+                   &heat_);
+    renderer_->SetHeatmap(&heat_);
+  }
+}
+
+const cv::Mat& EpisodePicture::Render(const Episode& e) {
+  const Simulation& sim = e.sim();
+  overlay_.robots.resize(sim.num_robots());
+  for (int i = 0; i < sim.num_robots(); ++i)
+    overlay_.robots[i] = sim.RobotPosition(i);
+  for (int k = 0; k < sim.num_targets(); ++k)
+    overlay_.targets[k].truth = sim.TargetPosition(k);
+  overlay_.active = e.comm().active();
+  return renderer_->Render(overlay_);
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -80,29 +136,14 @@ class VideoObserver : public StepObserver {
  public:
   VideoObserver(const Episode& e, const RenderOptions& options,
                 FrameRenderer* renderer, Mp4Writer* video)
-      : options_(options), renderer_(renderer), video_(video) {
-    const Scenario& s = e.scenario();
-    fps_ = s.render.fps;
+      : options_(options), picture_(e, renderer), video_(video) {
+    fps_ = e.scenario().render.fps;
     frame_dt_ = 1.0 / fps_;
     next_frame_ = frame_dt_;
-    heat_robot_ = s.render.follow_robot;
-    heat_params_.eps = e.mission().eps;
-    heat_params_.blur = 0.5 * s.sensor.range;
-    if (heat_robot_ >= 0)
-      heat_ = MakeHeatmapGrid(e.world().map.size(),
-                              e.world().map.occupancy().cell());
-    overlay_.max_steps = e.mission().max_steps;
-    overlay_.policy = std::string(e.policy().name());
-    overlay_.seed = s.seed;
-    overlay_.eps = e.mission().eps;
-    overlay_.sensor_range = s.sensor.range;
-    overlay_.neighbors = &e.comm().AllNeighbors();
-    overlay_.lost = &e.comm().Lost();
-    overlay_.heatmap_robot = heat_robot_;
   }
 
   void OnStart(const Episode& e) override {
-    AfterStep(e);
+    picture_.AfterStep(e);
     Emit(e);
   }
   ObserverStatus OnDecision(const Episode&, const DecisionContext&,
@@ -118,7 +159,7 @@ class VideoObserver : public StepObserver {
     }
   }
   ObserverStatus OnStep(const Episode& e) override {
-    AfterStep(e);
+    picture_.AfterStep(e);
     return ObserverStatus::kContinue;
   }
   // The state after the last step's fusion, held `hold` seconds.
@@ -134,41 +175,8 @@ class VideoObserver : public StepObserver {
   double write_seconds() const { return write_seconds_; }
 
  private:
-  // The overlay's per-step part (beliefs change only when a step ends).
-  void AfterStep(const Episode& e) {
-    const int m = e.world().NumTargets();
-    const double eps = e.mission().eps;
-    overlay_.targets.resize(m);
-    for (int k = 0; k < m; ++k) {
-      // The team's best estimate; every robot failed: robot 0's belief.
-      const int best = std::max(0, e.BestRobot(k));
-      TargetOverlay& t = overlay_.targets[k];
-      t.mean = e.beliefs().PositionMean(best, k);
-      t.cov = e.beliefs().PositionCovariance(best, k);
-      t.det = e.Det(best, k);
-      t.weight = HeatWeight(e.beliefs().LogDetCovariance(best, k),
-                            e.log_det_prior()[k], eps);
-    }
-    overlay_.step = e.step();
-    overlay_.localized = e.NumLocalized();
-    renderer_->AddTrailPoints(e.robot_positions());
-    if (heat_robot_ >= 0) {
-      ProjectHeatmap(e.beliefs(), heat_robot_, e.log_det_prior(), heat_params_,
-                     &heat_);
-      renderer_->SetHeatmap(&heat_);
-    }
-  }
-
-  // The overlay's per-frame part: where things are in the physics now.
   const cv::Mat& Emit(const Episode& e) {
-    const Simulation& sim = e.sim();
-    overlay_.robots.resize(sim.num_robots());
-    for (int i = 0; i < sim.num_robots(); ++i)
-      overlay_.robots[i] = sim.RobotPosition(i);
-    for (int k = 0; k < sim.num_targets(); ++k)
-      overlay_.targets[k].truth = sim.TargetPosition(k);
-    overlay_.active = e.comm().active();
-    const cv::Mat& image = renderer_->Render(overlay_);
+    const cv::Mat& image = picture_.Render(e);
     const auto t_write = std::chrono::steady_clock::now();
     if (!options_.frames_dir.empty() &&
         video_->frames() % options_.frames_every == 0) {
@@ -192,15 +200,11 @@ class VideoObserver : public StepObserver {
   }
 
   const RenderOptions& options_;
-  FrameRenderer* renderer_;
+  EpisodePicture picture_;
   Mp4Writer* video_;
   int fps_ = 30;
   double frame_dt_ = 1.0 / 30, next_frame_ = 1.0 / 30;
   double sim_time_ = 0.0, step_start_ = 0.0;
-  int heat_robot_ = -1;
-  Grid<float> heat_;
-  HeatmapParams heat_params_;
-  FrameOverlay overlay_;
   int png_frames_ = 0, held_ = 0;
   double write_seconds_ = 0.0;  // H.264 encoding and PNG files
 };

@@ -142,3 +142,8 @@ def test_bad_actions():
         env.step({"robot_0": 7, "robot_1": 0})
     with pytest.raises(ValueError, match="render_mode"):
         aia.parallel_env(DEFAULT, render_mode="human")
+    assert env.render() is None  # no render_mode
+    shown = aia.parallel_env(DEFAULT, render_mode="rgb_array",
+                             overrides={"robots.count": 2, "targets.count": 1})
+    shown.reset(seed=1)
+    assert shown.render(160, 120).shape == (120, 160, 3)
