@@ -15,20 +15,29 @@ std::string FileName(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
+// The build's file, then beside the program, then where `cmake --install`
+// puts it relative to the program (PREFIX/bin/aia, PREFIX/lib/aia/).
 std::vector<std::string> Candidates(const std::string& built_path) {
   std::vector<std::string> paths = {built_path};
-  char exe[PATH_MAX];
-  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (n > 0) {
-    std::string dir(exe, static_cast<std::size_t>(n));
-    dir.resize(dir.rfind('/') + 1);
-    const std::string beside = dir + FileName(built_path);
-    if (beside != built_path) paths.push_back(beside);
+  const std::string dir = ExecutableDir();
+  if (!dir.empty()) {
+    for (const std::string& p : {dir + FileName(built_path),
+                                 dir + "../lib/aia/" + FileName(built_path)})
+      if (p != built_path) paths.push_back(p);
   }
   return paths;
 }
 
 }  // namespace
+
+std::string ExecutableDir() {
+  char exe[PATH_MAX];
+  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n <= 0) return "";
+  std::string dir(exe, static_cast<std::size_t>(n));
+  dir.resize(dir.rfind('/') + 1);
+  return dir;
+}
 
 const void* LoadPluginTable(const std::string& built_path, const char* symbol,
                             const PluginHeader& expected,

@@ -7,6 +7,7 @@
 
 #include "aia/core/check.h"
 #include "aia/core/error.h"
+#include "aia/core/plugin.h"
 #include "aia/planning/information.h"
 
 #ifndef AIA_SOURCE_DIR
@@ -19,7 +20,16 @@ std::string DefaultModelPath() {
   std::error_code ec;
   const std::filesystem::path here = "models/igbnet.pt";
   if (std::filesystem::is_regular_file(here, ec)) return here.string();
-  return (std::filesystem::path(AIA_SOURCE_DIR) / here).string();
+  const std::filesystem::path source =
+      std::filesystem::path(AIA_SOURCE_DIR) / here;
+  if (std::filesystem::is_regular_file(source, ec)) return source.string();
+  // An installed aia (cmake --install): PREFIX/share/aia/models/.
+  const std::string dir = ExecutableDir();
+  const std::filesystem::path installed =
+      std::filesystem::path(dir) / "../share/aia" / here;
+  if (!dir.empty() && std::filesystem::is_regular_file(installed, ec))
+    return installed.lexically_normal().string();
+  return source.string();
 }
 
 std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,

@@ -28,6 +28,10 @@ const void* LoadPluginTable(const std::string& built_path, const char* symbol,
                             const PluginHeader& expected,
                             const std::string& what);
 
+// The running program's folder with a trailing '/', or "" (for files
+// installed beside it: PREFIX/bin/../lib/aia, PREFIX/bin/../share/aia).
+std::string ExecutableDir();
+
 }  // namespace aia
 
 #endif  // AIA_CORE_PLUGIN_H_
