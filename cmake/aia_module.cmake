@@ -38,7 +38,12 @@ function(aia_module name)
   file(GLOB sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/${name}/*.cc)
   add_library(aia_${name} STATIC ${sources})
   add_library(aia::${name} ALIAS aia_${name})
-  target_include_directories(aia_${name} PUBLIC ${PROJECT_SOURCE_DIR}/include)
+  target_include_directories(aia_${name} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  # Installed and exported as aia::NAME (find_package(aia), docs/extending.md).
+  set_target_properties(aia_${name} PROPERTIES EXPORT_NAME ${name})
+  set_property(GLOBAL APPEND PROPERTY AIA_MODULE_TARGETS aia_${name})
   target_link_libraries(aia_${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_options(aia_${name} PRIVATE -Wall -Wextra)
 endfunction()

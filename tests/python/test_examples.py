@@ -45,3 +45,14 @@ def test_train_igbnet(tmp_path):
     out = run("train_igbnet.py", str(tmp_path / "d"), str(tmp_path / "m.pt"),
               "--epochs", "1", "--width", "4", "--hidden", "8")
     assert "epoch 1: train loss" in out and (tmp_path / "m.pt").exists()
+
+
+def test_video(tmp_path):
+    out = run("video.py", str(tmp_path / "v.mp4"))
+    assert "success True" in out
+    probe = subprocess.run(["ffprobe", "-v", "error", "-count_frames",
+                            "-show_entries", "stream=nb_read_frames,codec_name",
+                            "-of", "csv=p=0", str(tmp_path / "v.mp4")],
+                           capture_output=True, text=True)
+    codec, frames = probe.stdout.strip().split(",")
+    assert codec == "h264" and int(frames) == int(out.split()[2])

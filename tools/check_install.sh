@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# The installed aia as a library (docs/extending.md): `cmake --install` into
+# a temporary prefix, examples/cpp_policy built out of tree against it with
+# find_package(aia), and its program scoring its policy with `eval`.
+# Usage: tools/check_install.sh BUILD_DIR
+set -euo pipefail
+build=${1:?usage: tools/check_install.sh BUILD_DIR}
+src="$(cd "$(dirname "$0")/.." && pwd)"
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/aia_install.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+cmake --install "$build" --prefix "$tmp/prefix" > "$tmp/install.log"
+cmake -S "$src/examples/cpp_policy" -B "$tmp/example" -G Ninja \
+  -DCMAKE_PREFIX_PATH="$tmp/prefix" > "$tmp/configure.log" ||
+  { cat "$tmp/configure.log"; exit 1; }
+cmake --build "$tmp/example" > "$tmp/build.log" || { cat "$tmp/build.log"; exit 1; }
+"$tmp/example/my_aia" policies | grep -q '^nearest_mean (distributed)'
+"$tmp/example/my_aia" eval --sizes 3x3 --seeds 2 --policies nearest_mean,greedy \
+  --out "$tmp/eval" --quiet > "$tmp/eval.log"
+grep -q '^3x3,nearest_mean,2,' "$tmp/eval/summary.csv"
+grep -q '^3x3,greedy,2,' "$tmp/eval/summary.csv"
+# What was installed: the program, the plugins, the models, the package.
+for f in bin/aia lib/aia/libaia_torch.so lib/aia/libaia_media.so \
+  share/aia/models/igbnet.pt lib/cmake/aia/aiaConfig.cmake \
+  include/aia/commands/cli.h; do
+  [ -e "$tmp/prefix/$f" ] || { echo "not installed: $f"; exit 1; }
+done
+echo "installed aia: an out-of-tree policy built and scored"
