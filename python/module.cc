@@ -103,6 +103,17 @@ py::array_t<T> Array(std::vector<py::ssize_t> shape) {
   return py::array_t<T>(shape);
 }
 
+// Channel settings from Python (key, YAML text) pairs, read as a model's
+// metadata is: `channels: window: must be an integer in [4, 512], got 2`.
+ChannelParams ChannelSettings(const KeyValues& params) {
+  ChannelParams settings;
+  ConfigNode node = ConfigNode::Map();
+  for (const auto& [key, value] : params)
+    node.Set(key, ParseYamlValue(value, "channels: " + key));
+  ReadFields(node, ReadOptions{"channels", "", ""}, "", &settings);
+  return settings;
+}
+
 std::atomic<std::uint64_t> g_next_mission_id{1};
 
 // One mission, owned (its own episode, stepped from Python) or a view of a
@@ -242,12 +253,7 @@ class Mission {
   // renderer (learning/channels.h) with these channel settings; the heat of
   // each robot's own fused belief, its neighbours from this step's graph.
   py::array_t<float> Channels(const KeyValues& params) const {
-    ChannelParams settings;
-    ConfigNode node = ConfigNode::Map();
-    for (const auto& [key, value] : params) {
-      node.Set(key, ParseYamlValue(value, "channels: " + key));
-    }
-    ReadFields(node, ReadOptions{"channels", "", ""}, "", &settings);
+    const ChannelParams settings = ChannelSettings(params);
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
@@ -636,10 +642,7 @@ class VectorMissions {
 class PyDataset {
  public:
   PyDataset(const std::vector<std::string>& paths, const KeyValues& params) {
-    ConfigNode node = ConfigNode::Map();
-    for (const auto& [key, value] : params)
-      node.Set(key, ParseYamlValue(value, "channels: " + key));
-    ReadFields(node, ReadOptions{"channels", "", ""}, "", &channels_);
+    channels_ = ChannelSettings(params);
     data_ = ReadDataset(paths, "paths");
     if (data_.samples.empty())
       throw InputError("Dataset", 0, "paths", "holds no samples");
