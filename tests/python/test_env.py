@@ -147,3 +147,42 @@ def test_bad_actions():
                              overrides={"robots.count": 2, "targets.count": 1})
     shown.reset(seed=1)
     assert shown.render(160, 120).shape == (120, 160, 3)
+
+
+def test_rewards_follow_aia_runs_trace(tmp_path):
+    """The env driven by the built-in greedy policy earns, at every step,
+    the rewards that aia run's trace.csv (every robot's det Sigma) gives."""
+    import csv
+    import subprocess
+    binary = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
+    r = subprocess.run([binary, "run", DEFAULT, "--seed", "8", "--policy",
+                        "greedy", "--trace", "full", "--out", str(tmp_path),
+                        "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    det = {}
+    with open(tmp_path / "trace.csv") as f:
+        for row in csv.DictReader(f):
+            det[(int(row["step"]), int(row["target"]))] = [
+                float(v) for c, v in row.items() if c.startswith("det_r")]
+    env = aia.parallel_env(DEFAULT, step_penalty=0.0)
+    env.reset(seed=8)
+    eps = env.state()["eps"]
+    targets = env.mission.num_targets
+
+    def own(step):
+        d = np.array([det[(step, k)] for k in range(targets)]).T
+        return np.maximum(np.log(d), np.log(eps)).sum(axis=1)
+
+    greedy = aia.builtin_policy("greedy")
+    step = 0
+    while env.agents:
+        moves = greedy.decide(env.mission)
+        _, rewards, _, _, _ = env.step(
+            {a: int(moves[env.possible_agents.index(a)]) for a in env.agents})
+        step += 1
+        want = own(step - 1) - own(step)
+        for a, got in rewards.items():
+            # trace.csv prints 7 significant digits
+            assert got == pytest.approx(want[env.possible_agents.index(a)],
+                                        abs=1e-5), (step, a)
+    assert (step, 0) in det and (step + 1, 0) not in det
