@@ -14,6 +14,9 @@ cmake -S "$src/examples/cpp_policy" -B "$tmp/example" -G Ninja \
   { cat "$tmp/configure.log"; exit 1; }
 cmake --build "$tmp/example" > "$tmp/build.log" || { cat "$tmp/build.log"; exit 1; }
 "$tmp/example/my_aia" policies | grep -q '^nearest_mean (distributed)'
+# The plugins are found along the program's RUNPATH (aiaConfig.cmake).
+readelf -d "$tmp/example/my_aia" | grep -q "RUNPATH.*$tmp/prefix/lib/aia" ||
+  { echo "my_aia's RUNPATH lacks $tmp/prefix/lib/aia"; exit 1; }
 "$tmp/example/my_aia" eval --sizes 3x3 --seeds 2 --policies nearest_mean,greedy \
   --out "$tmp/eval" --quiet > "$tmp/eval.log"
 grep -q '^3x3,nearest_mean,2,' "$tmp/eval/summary.csv"

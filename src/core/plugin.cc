@@ -16,7 +16,10 @@ std::string FileName(const std::string& path) {
 }
 
 // The build's file, then beside the program, then where `cmake --install`
-// puts it relative to the program (PREFIX/bin/aia, PREFIX/lib/aia/).
+// puts it relative to the program (PREFIX/bin/aia, PREFIX/lib/aia/), then
+// the bare name, which the dynamic loader looks up along the program's
+// RUNPATH (find_package(aia) adds PREFIX/lib/aia to it) and
+// LD_LIBRARY_PATH.
 std::vector<std::string> Candidates(const std::string& built_path) {
   std::vector<std::string> paths = {built_path};
   const std::string dir = ExecutableDir();
@@ -25,6 +28,7 @@ std::vector<std::string> Candidates(const std::string& built_path) {
                                  dir + "../lib/aia/" + FileName(built_path)})
       if (p != built_path) paths.push_back(p);
   }
+  paths.push_back(FileName(built_path));
   return paths;
 }
 
