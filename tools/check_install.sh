@@ -21,6 +21,16 @@ readelf -d "$tmp/example/my_aia" | grep -q "RUNPATH.*$tmp/prefix/lib/aia" ||
   --out "$tmp/eval" --quiet > "$tmp/eval.log"
 grep -q '^3x3,nearest_mean,2,' "$tmp/eval/summary.csv"
 grep -q '^3x3,greedy,2,' "$tmp/eval/summary.csv"
+# The installed Python package imports and steps a mission.
+site=$(ls -d "$tmp"/prefix/lib/python3*/dist-packages 2>/dev/null | head -1)
+if [ -n "$site" ]; then
+  PYTHONPATH="$site" /usr/bin/python3 -c "
+import aia, sys
+assert aia.__file__.startswith('$site'), aia.__file__
+m = aia.Mission('$src/scenarios/default.yaml', overrides={'robots.count': 2, 'targets.count': 1})
+m.step(aia.builtin_policy('greedy').decide(m))
+assert m.steps == 1"
+fi
 # What was installed: the program, the plugins, the models, the package.
 for f in bin/aia lib/aia/libaia_torch.so lib/aia/libaia_media.so \
   share/aia/models/igbnet.pt lib/cmake/aia/aiaConfig.cmake \
