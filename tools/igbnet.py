@@ -20,7 +20,6 @@ cov yy, log det Sigma of the whole block). Labels: 0 left, 1 right, 2 up,
 3 down.
 """
 import glob
-import json
 import os
 import sqlite3
 import struct
