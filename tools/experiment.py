@@ -60,6 +60,16 @@ POLICIES = ["expert", "igbnet", "decsb", "greedy", "random"]  # expert: C-SB in 
 POLICY_COLOR = {"igbnet": "C0", "decsb": "C1", "greedy": "C2", "random": "C3", "expert": "C4"}
 
 
+def policy_color(policy, _others={}):
+    """The built-ins' fixed colours; another policy (one scored from Python,
+    say) the next colour none of them uses."""
+    if policy in POLICY_COLOR:
+        return POLICY_COLOR[policy]
+    if policy not in _others:
+        _others[policy] = "C%d" % (len(POLICY_COLOR) + len(_others) % 5)
+    return _others[policy]
+
+
 class Failure(Exception):
     pass
 
@@ -159,7 +169,7 @@ def plot_scalability(table, sizes, path, title):
     for policy in dict.fromkeys(r["policy"] for r in table):
         rs = [r for r in table if r["policy"] == policy]
         x = [sizes.index(r["size"]) for r in rs]
-        kw = dict(label=policy, color=POLICY_COLOR.get(policy), marker="o", capsize=3)
+        kw = dict(label=policy, color=policy_color(policy), marker="o", capsize=3)
         ax_s.errorbar(x, [100 * r["success_rate"] for r in rs],
                       yerr=[100 * r["success_se"] for r in rs], **kw)
         ax_f.errorbar(x, [100 * r["flowtime_increase"] for r in rs],
@@ -573,7 +583,7 @@ def plot_generalization(table, path, title):
                 ys.append(i + (j - (len(policies) - 1) / 2) * width)
                 vals.append(r[key])
                 errs.append(r[key + "_se"] or 0.0)
-            ax.barh(ys, vals, height=width, xerr=errs, color=POLICY_COLOR.get(policy),
+            ax.barh(ys, vals, height=width, xerr=errs, color=policy_color(policy),
                     label=policy, capsize=2)
     for ax, label in zip(axes, ("success rate", "flowtime increase (F - F*) / F*",
                                 "reversal share of moves")):
