@@ -33,14 +33,16 @@ class NearestMeanPolicy : public aia::NamedPolicy<NearestMeanPolicy> {
       for (int k = 0; k < targets; ++k) {
         if (ctx.beliefs->DetCovariance(static_cast<int>(i), k) < ctx.eps)
           continue;
-        const aia::Vec2 mean = ctx.beliefs->PositionMean(static_cast<int>(i), k);
+        const aia::Vec2 mean =
+            ctx.beliefs->PositionMean(static_cast<int>(i), k);
         if ((mean - p).norm() < best) {
           best = (mean - p).norm();
           goal = mean;
         }
       }
       const aia::Vec2 d = goal - p;
-      const aia::Move along_x = d.x() > 0 ? aia::Move::kRight : aia::Move::kLeft;
+      const aia::Move along_x =
+          d.x() > 0 ? aia::Move::kRight : aia::Move::kLeft;
       const aia::Move along_y = d.y() > 0 ? aia::Move::kUp : aia::Move::kDown;
       aia::Move m = std::abs(d.x()) >= std::abs(d.y()) ? along_x : along_y;
       if (!lattice.Valid(here, m)) m = m == along_x ? along_y : along_x;
@@ -54,7 +56,9 @@ void AddMine(aia::PolicyRegistry* registry) {
   registry->Add<NearestMeanPolicy, aia::NoParams>(
       "toward the nearest target mean above eps in the robot's own belief "
       "(an example from examples/cpp_policy)",
-      [](const aia::NoParams&) { return std::make_unique<NearestMeanPolicy>(); });
+      [](const aia::NoParams&) {
+        return std::make_unique<NearestMeanPolicy>();
+      });
 }
 
 }  // namespace

@@ -138,6 +138,7 @@ class ParallelEnv:
         self._seed = first.seed
         self._next_seed = first.seed
         self.possible_agents = [f"robot_{i}" for i in range(first.num_robots)]
+        self._robot = {a: i for i, a in enumerate(self.possible_agents)}
         self.agents = []
         shape = first.channels(**self._channels).shape[1:]
         self._observation_space, self._action_space = _make_spaces(
@@ -162,8 +163,8 @@ class ParallelEnv:
 
     def _index(self, agent):
         try:
-            return self.possible_agents.index(agent)
-        except ValueError:
+            return self._robot[agent]
+        except KeyError:
             raise KeyError(f"unknown agent {agent!r}; agents are robot_0 .. "
                            f"robot_{len(self.possible_agents) - 1}") from None
 
@@ -195,7 +196,7 @@ class ParallelEnv:
         step_share = state["step"] / max(m.max_steps, 1)
         out = {}
         for a in self.agents:
-            i = self.possible_agents.index(a)
+            i = self._robot[a]
             x, y = state["positions"][i] / state["workspace"]
             out[a] = {"channels": channels[i],
                       "vector": np.array([x, y, step_share, localized[i]],
@@ -228,7 +229,7 @@ class ParallelEnv:
         alive = self.agents
         rewards, terminations, truncations, infos = {}, {}, {}, {}
         for a in alive:
-            i = self.possible_agents.index(a)
+            i = self._robot[a]
             rewards[a] = float(drop[i]) - self._step_penalty
             failed = not state["active"][i]
             terminations[a] = bool(success or failed)
@@ -240,7 +241,7 @@ class ParallelEnv:
         # The agents that left see their last observation too.
         for a in alive:
             if a not in observations:
-                i = self.possible_agents.index(a)
+                i = self._robot[a]
                 observations[a] = self._last_observation(state, i)
         return observations, rewards, terminations, truncations, infos
 

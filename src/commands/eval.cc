@@ -110,6 +110,20 @@ std::string Message(std::exception_ptr failure) {
   }
 }
 
+// A policy line of effective.yaml, "#   NAME: PARAMS" (NAME without ':'),
+// split; false for any other line.
+bool PolicyLine(const std::string& line, std::string* name,
+                std::string* params) {
+  const std::size_t colon = line.find(':', 4);
+  if (line.rfind("#   ", 0) != 0 || colon == std::string::npos || colon <= 4 ||
+      colon + 1 >= line.size() || line[colon + 1] != ' ' ||
+      line.find('\r', colon) != std::string::npos)
+    return false;
+  *name = line.substr(4, colon - 4);
+  *params = line.substr(colon + 2);
+  return true;
+}
+
 // Why an existing DIR/effective.yaml does not fit this run, or "".
 std::string Mismatch(const std::string& old_text, const std::string& new_text) {
   const auto split = [](const std::string& text) {
@@ -118,12 +132,9 @@ std::string Mismatch(const std::string& old_text, const std::string& new_text) {
     std::istringstream in(text);
     std::string line;
     while (std::getline(in, line)) {
-      // "#   NAME: PARAMS", NAME without ':'.
-      const std::size_t colon = line.find(':', 4);
-      if (line.rfind("#   ", 0) == 0 && colon != std::string::npos &&
-          colon > 4 && colon + 1 < line.size() && line[colon + 1] == ' ' &&
-          line.find('\r', colon) == std::string::npos) {
-        policies[line.substr(4, colon - 4)] = line.substr(colon + 2);
+      std::string name, params;
+      if (PolicyLine(line, &name, &params)) {
+        policies[name] = params;
       } else if (line.rfind("#", 0) != 0) {
         body += line + "\n";
       }
@@ -172,12 +183,9 @@ std::string WithOldPolicyLines(const std::string& old_text,
   const auto policy_lines = [](const std::string& text) {
     std::vector<std::pair<std::string, std::string>> lines;
     std::istringstream in(text);
-    std::string line;
-    while (std::getline(in, line)) {
-      const std::size_t colon = line.find(':', 4);
-      if (line.rfind("#   ", 0) == 0 && colon != std::string::npos && colon > 4)
-        lines.emplace_back(line.substr(4, colon - 4), line);
-    }
+    std::string line, name, params;
+    while (std::getline(in, line))
+      if (PolicyLine(line, &name, &params)) lines.emplace_back(name, line);
     return lines;
   };
   const auto mine = policy_lines(new_text);
