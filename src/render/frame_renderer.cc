@@ -17,7 +17,6 @@ namespace {
 // OpenCV draws in fixed point with kShift fractional bits: sub-pixel overlays.
 constexpr int kShift = 4;
 constexpr double kOne = 1 << kShift;
-constexpr double kPi = 3.14159265358979323846;
 
 // Continuous pixel coordinates (TopDownView) -> OpenCV fixed point, whose
 // integer points are pixel centres.

@@ -33,7 +33,6 @@ TopDownView::TopDownView(const Vec2& size, int width, int height,
   AIA_CHECK(side_px >= 0 && side_px < width);
   AIA_CHECK(fovy_deg > 0.0 && fovy_deg < 180.0);
   AIA_CHECK(top_z >= 0.0);
-  constexpr double kPi = 3.14159265358979323846;
   focal_ = 0.5 * height / std::tan(0.5 * fovy_deg * kPi / 180.0);
   const double half_x = 0.5 * size.x() + margin,
                half_y = 0.5 * size.y() + margin;

@@ -160,7 +160,38 @@ void WorkspaceConfig::Validate(const FieldChecker& check) {
   }
 }
 
+void DiffDriveConfig::Validate(const FieldChecker& check) {
+  // The chassis stands on its wheels: it must reach above their axle.
+  if (!(height > wheel_radius)) {
+    check.Fail(height, "must be more than wheel_radius (" +
+                           FormatNumber(wheel_radius) +
+                           "): the chassis sits on the wheels' axle, got " +
+                           FormatNumber(height));
+  }
+}
+
 void RobotsConfig::Validate(const FieldChecker& check) {
+  if (model == RobotModel::kDiffDrive) {
+    // Wheels and casters inside the disc: only the chassis meets obstacles.
+    const double wheels = 0.5 * diff_drive.track + kDiffDriveWheelHalfWidth;
+    if (!(wheels < radius)) {
+      check.Fail(diff_drive.track,
+                 "puts the wheels outside the robot's disc: track / 2 + "
+                 "the wheel's half width (" +
+                     FormatNumber(kDiffDriveWheelHalfWidth) + ") is " +
+                     FormatNumber(wheels) + ", robots.radius " +
+                     FormatNumber(radius) +
+                     " (a narrower track or a larger radius)");
+    }
+    if (!(diff_drive.wheel_radius < 0.5 * radius)) {
+      check.Fail(diff_drive.wheel_radius,
+                 "must be less than half of robots.radius (" +
+                     FormatNumber(0.5 * radius) +
+                     ") so that the casters fit in front of and behind the "
+                     "axle, got " +
+                     FormatNumber(diff_drive.wheel_radius));
+    }
+  }
   if (!(radius < step / 2)) {
     check.Fail(radius, "must be less than half of robots.step (" +
                            FormatNumber(step / 2) +
@@ -256,14 +287,17 @@ void Scenario::Validate(const FieldChecker& check) {
   }
   const int random_boxes =
       workspace.obstacles.random ? workspace.obstacles.random->count : 0;
-  const long bodies = static_cast<long>(robots.count) + NumTargets() +
-                      random_boxes +
+  // A diff_drive robot is three bodies (chassis and two wheels).
+  const bool wheeled = robots.model == RobotModel::kDiffDrive;
+  const long robot_bodies = (wheeled ? 3L : 1L) * robots.count;
+  const long bodies = robot_bodies + NumTargets() + random_boxes +
                       static_cast<long>(workspace.obstacles.boxes.size());
   if (bodies > limits::kMaxBodies) {
     const std::string what =
-        std::to_string(robots.count) + " robots, " +
+        std::to_string(robots.count) +
+        (wheeled ? " diff_drive robots (3 bodies each), " : " robots, ") +
         std::to_string(NumTargets()) + " targets and " +
-        std::to_string(bodies - robots.count - NumTargets()) +
+        std::to_string(bodies - robot_bodies - NumTargets()) +
         " obstacle boxes make " + std::to_string(bodies) +
         " bodies; aia simulates at most " + std::to_string(limits::kMaxBodies);
     if (random_boxes >= robots.count && random_boxes >= NumTargets())
@@ -289,6 +323,21 @@ void Scenario::Validate(const FieldChecker& check) {
                    FormatPair(random->max_size.x(), random->max_size.y()));
   }
   if (workspace.obstacles.generator) CheckGenerator(*this, check);
+  if (wheeled) {
+    // A wheeled robot turns and accelerates: its steps take longer than a
+    // point robot's.
+    if (!check.Given(physics.step_timeout))
+      physics.step_timeout = kDiffDriveStepTimeout;
+    const double steps = physics.step_timeout / physics.timestep;
+    if (steps > limits::kMaxPhysicsStepsPerDecision) {
+      check.Fail(physics.timestep,
+                 "makes " + FormatNumber(steps) +
+                     " physics steps in one decision step (step_timeout " +
+                     FormatNumber(physics.step_timeout) +
+                     " / timestep); at most " +
+                     FormatNumber(limits::kMaxPhysicsStepsPerDecision));
+    }
+  }
   // Obstacles are checked against positions when the world is built; here
   // only the workspace bounds [0, size] are.
   for (const Vec2& p : robots.start) {

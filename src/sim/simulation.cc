@@ -71,21 +71,39 @@ MjModelPtr CompileMjcf(const std::string& xml) {
 
 PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario,
                            long contacts)
-    : mjcf_(MakeMjcf(world, scenario, contacts)), physics_(scenario.physics) {
+    : mjcf_(MakeMjcf(world, scenario, contacts)),
+      physics_(scenario.physics),
+      robot_model_(scenario.robots.model) {
   model_ = CompileMjcf(mjcf_);
+  const mjModel* m = model_.get();
+  const bool wheeled = robot_model_ == RobotModel::kDiffDrive;
   const int n = world.NumRobots();
+  auto joint = [m](const std::string& name) {
+    const int j = mj_name2id(m, mjOBJ_JOINT, name.c_str());
+    AIA_CHECK(j >= 0);
+    return j;
+  };
   for (int i = 0; i < n; ++i) {
     const std::string robot = "robot" + std::to_string(i);
-    const int jx =
-        mj_name2id(model_.get(), mjOBJ_JOINT, (robot + "_x").c_str());
-    AIA_CHECK(jx >= 0);
+    const int j = joint(robot + (wheeled ? "_root" : "_x"));
     starts_.push_back(world.map.lattice().Point(world.robot_starts[i]));
-    qpos_adr_.push_back(model_->jnt_qposadr[jx]);
-    qvel_adr_.push_back(model_->jnt_dofadr[jx]);
+    qpos_adr_.push_back(m->jnt_qposadr[j]);
+    qvel_adr_.push_back(m->jnt_dofadr[j]);
+    if (wheeled) {
+      wheel_dof_.push_back({m->jnt_dofadr[joint(robot + "_left")],
+                            m->jnt_dofadr[joint(robot + "_right")]});
+    }
   }
-  const int kp = mj_name2id(model_.get(), mjOBJ_NUMERIC, kKpNumeric);
-  AIA_CHECK(kp >= 0 && model_->numeric_size[kp] == 1);
-  kp_ = model_->numeric_data[model_->numeric_adr[kp]];
+  if (wheeled) {
+    const DiffDriveConfig& d = scenario.robots.diff_drive;
+    wheel_kv_ = n > 0 ? m->dof_damping[wheel_dof_[0][0]] : 0.0;
+    max_torque_ = d.max_torque;
+    law_ = DiffDriveLaw(d, scenario.physics.tolerance);
+  } else {
+    const int kp = mj_name2id(m, mjOBJ_NUMERIC, kKpNumeric);
+    AIA_CHECK(kp >= 0 && m->numeric_size[kp] == 1);
+    kp_ = m->numeric_data[m->numeric_adr[kp]];
+  }
   for (int k = 0; k < world.NumTargets(); ++k) {
     const int body = mj_name2id(model_.get(), mjOBJ_BODY,
                                 ("target" + std::to_string(k)).c_str());
@@ -104,10 +122,12 @@ Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
     throw PhysicsError("MuJoCo cannot allocate the simulation's data");
   waypoints_ = model_->starts_;
   targets_.assign(waypoints_.size(), Vec2::Zero());
+  robot_stalls_.assign(waypoints_.size(), 0);
+  robot_timeouts_.assign(waypoints_.size(), 0);
   mj_forward(m_, data_.get());
 }
 
-void Simulation::StepPhysics() {
+void Simulation::PullPointRobots() {
   mjData* d = data_.get();
   // The waypoint controller: a spring toward each robot's waypoint, evaluated
   // as MuJoCo evaluates a position actuator (gain * target + bias * q, with
@@ -124,6 +144,33 @@ void Simulation::StepPhysics() {
       d->qfrc_applied[v + c] = kp * targets_[i][c] + bias;
     }
   }
+}
+
+void Simulation::DriveWheels() {
+  // Each robot's controller (sim/diff_drive.h) sets its wheels' speeds; the
+  // motors' velocity loops (the wheels' damping, implicit in MuJoCo, plus
+  // this drive torque) follow them within their torque limit.
+  mjData* d = data_.get();
+  const PhysicsModel& pm = *model_;
+  const int n = num_robots();
+  for (int i = 0; i < n; ++i) {
+    const WheelSpeeds w =
+        pm.law_.Control(RobotPosition(i), RobotHeading(i), waypoints_[i]);
+    const int left = pm.wheel_dof_[i][0], right = pm.wheel_dof_[i][1];
+    d->qfrc_applied[left] =
+        MotorTorque(pm.wheel_kv_, w.left, d->qvel[left], pm.max_torque_);
+    d->qfrc_applied[right] =
+        MotorTorque(pm.wheel_kv_, w.right, d->qvel[right], pm.max_torque_);
+  }
+}
+
+void Simulation::StepPhysics() {
+  if (robot_model() == RobotModel::kDiffDrive) {
+    DriveWheels();
+  } else {
+    PullPointRobots();
+  }
+  mjData* d = data_.get();
   const int nq = m_->nq, nv = m_->nv, na = m_->na;
   saved_.resize(1 + nq + 2 * nv + na);
   mjtNum* s = saved_.data();
@@ -221,12 +268,35 @@ Simulation::Simulation(const World& world, const Scenario& scenario)
 
 Vec2 Simulation::RobotPosition(int i) const {
   const mjtNum* q = data_->qpos + model_->qpos_adr_[i];
+  // A free joint holds the body's position in the world frame.
+  if (robot_model() == RobotModel::kDiffDrive) return {q[0], q[1]};
   return model_->starts_[i] + Vec2(q[0], q[1]);
 }
 
 Vec2 Simulation::RobotVelocity(int i) const {
   const mjtNum* v = data_->qvel + model_->qvel_adr_[i];
   return {v[0], v[1]};
+}
+
+double Simulation::RobotHeading(int i) const {
+  if (robot_model() != RobotModel::kDiffDrive) return 0.0;
+  return YawOf(data_->qpos + model_->qpos_adr_[i] + 3);
+}
+
+double Simulation::ToGo(int i) const {
+  if (robot_model() != RobotModel::kDiffDrive)
+    return (RobotPosition(i) - waypoints_[i]).norm();
+  return model_->law_.ToGo(RobotPosition(i), RobotHeading(i), waypoints_[i]);
+}
+
+bool Simulation::Slow(int i, double speed) const {
+  const Vec2 v = RobotVelocity(i);
+  if (robot_model() != RobotModel::kDiffDrive)
+    return v.squaredNorm() <= speed * speed;
+  // The free joint's angular velocity is in the body's frame: z is the turn
+  // rate while the robot stands upright.
+  const double turn = data_->qvel[model_->qvel_adr_[i] + 5];
+  return v.norm() + std::fabs(turn) * model_->law_.half_track() <= speed;
 }
 
 void Simulation::SetWaypoint(int i, const Vec2& p) {
@@ -250,44 +320,59 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
     const std::function<void(double)>& on_substep) {
   PhysicsStepStats stats;
   const PhysicsConfig& physics = model_->physics();
+  const bool wheeled = robot_model() == RobotModel::kDiffDrive;
   const double dt = m_->opt.timestep;
   const int max_steps =
       std::max(1, static_cast<int>(std::ceil(physics.step_timeout / dt)));
-  const double tol2 = physics.tolerance * physics.tolerance;
+  const double tol = physics.tolerance;
+  const double tol2 = tol * tol;
   const double stall_speed =
       0.01;  // m/s: a robot this slow and not there is blocked
   const double settle_time =
       0.05;  // s: a robot is never called stalled before this
   // A robot in a sliding contact can creep on for seconds faster than
   // stall_speed: it is stuck too when its distance to the waypoint has not
-  // shrunk by the tolerance over the last progress window.
-  const double progress_window = 0.1;  // s
+  // shrunk by the tolerance over the last progress window (a diff_drive
+  // robot's wheel travel left, by the tolerance or, on its last
+  // centimetres, where its speed fades with the distance, by a quarter of
+  // what is left beyond the tolerance). A wheeled robot starts from rest
+  // and may first turn in place: its window is longer.
+  const double progress_window = wheeled ? 0.25 : 0.1;  // s
   const int check_every =
       std::max(1, static_cast<int>(std::lround(progress_window / dt)));
   const int n = num_robots();
   progress_.resize(n);
   stuck_.assign(n, 0);
-  for (int i = 0; i < n; ++i)
-    progress_[i] = (RobotPosition(i) - waypoints_[i]).norm();
+  for (int i = 0; i < n; ++i) progress_[i] = ToGo(i);
+  auto arrived = [&](int i) {
+    return (RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2;
+  };
+  auto settled = [&](int i, double elapsed) {
+    return elapsed >= settle_time && (stuck_[i] || Slow(i, stall_speed));
+  };
+  double elapsed = 0.0;
+  bool all_settled = false;
   for (int s = 0; s < max_steps; ++s) {
     StepPhysics();
     ++stats.substeps;
-    const double elapsed = (s + 1) * dt;
+    elapsed = (s + 1) * dt;
     if (on_substep) on_substep(elapsed);
     if ((s + 1) % check_every == 0) {
       for (int i = 0; i < n; ++i) {
-        const double d = (RobotPosition(i) - waypoints_[i]).norm();
-        stuck_[i] = progress_[i] - d < physics.tolerance ? 1 : 0;
+        const double d = ToGo(i);
+        const double enough =
+            wheeled ? std::min(tol, 0.25 * std::max(0.0, progress_[i] - tol))
+                    : tol;
+        stuck_[i] = progress_[i] - d < enough ? 1 : 0;
         progress_[i] = d;
       }
     }
-    bool all_arrived = true, all_settled = true;
+    bool all_arrived = true;
+    all_settled = true;
     for (int i = 0; i < n; ++i) {
-      if ((RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2) continue;
+      if (arrived(i)) continue;
       all_arrived = false;
-      if (elapsed < settle_time ||
-          (!stuck_[i] &&
-           RobotVelocity(i).squaredNorm() > stall_speed * stall_speed)) {
+      if (!settled(i, elapsed)) {
         all_settled = false;
         break;
       }
@@ -296,9 +381,20 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
       stats.all_arrived = true;
       return stats;
     }
-    if (all_settled) return stats;
+    if (all_settled) break;
   }
-  stats.timed_out = true;
+  stats.timed_out = !all_settled;
+  // Who ended short: blocked, or (at the timeout) still on the way.
+  for (int i = 0; i < n; ++i) {
+    if (arrived(i)) continue;
+    if (settled(i, elapsed)) {
+      ++stats.stalled;
+      ++robot_stalls_[i];
+    } else {
+      ++stats.late;
+      ++robot_timeouts_[i];
+    }
+  }
   return stats;
 }
 

@@ -14,6 +14,100 @@ std::string Num(double v) {
   return buf;
 }
 
+// A disc on two damped slide joints; the simulation's spring pulls it.
+void WritePointRobot(const World& world, const Scenario& s, int i,
+                     std::ostringstream* out) {
+  std::ostringstream& x = *out;
+  const double mass = s.physics.robot_mass;
+  const double damping = 2.0 * std::sqrt(s.physics.kp * mass);  // critical
+  const Vec2 p = world.map.lattice().Point(world.robot_starts[i]);
+  const auto c = RobotColor(i);
+  // qpos (and the controller's target) are displacements from the start,
+  // so that the file at rest holds every robot at its start in MuJoCo's
+  // own tools.
+  x << "    <body name=\"robot" << i << "\" pos=\"" << Num(p.x()) << " "
+    << Num(p.y()) << " " << Num(kRobotHalfHeight + 0.001) << "\">\n"
+    << "      <joint name=\"robot" << i
+    << "_x\" type=\"slide\" axis=\"1 0 0\" damping=\"" << Num(damping)
+    << "\"/>\n"
+    << "      <joint name=\"robot" << i
+    << "_y\" type=\"slide\" axis=\"0 1 0\" damping=\"" << Num(damping)
+    << "\"/>\n"
+    << "      <geom type=\"cylinder\" size=\"" << Num(world.map.robot_radius())
+    << " " << Num(kRobotHalfHeight) << "\" mass=\"" << Num(mass)
+    << "\" rgba=\"" << c[0] << " " << c[1] << " " << c[2] << " 1\" group=\""
+    << kGroupAgent << "\"/>\n"
+    << "    </body>\n";
+}
+
+// A wheeled body on a free joint (docs/design.md, Physics): the chassis disc
+// (the only part that meets obstacles and other robots), a ball caster in
+// front and one behind (frictionless: they take their own condim through
+// their priority), and two wheels on hinge joints about the body's y axis,
+// whose damping is the motors' velocity loop (the simulation adds the
+// drive torque). The body frame sits on the wheels' axle, x forward, y to
+// the left wheel. Wheels and casters touch only the floor (contype 2); the
+// chassis touches obstacles and chassis (contype 1).
+void WriteDiffDriveRobot(const World& world, const Scenario& s, int i,
+                         std::ostringstream* out) {
+  std::ostringstream& x = *out;
+  const DiffDriveConfig& d = s.robots.diff_drive;
+  const double radius = world.map.robot_radius();
+  const DiffDriveBody b = DiffDriveBodyOf(d, radius);
+  const Vec2 p = world.map.lattice().Point(world.robot_starts[i]);
+  const double heading = world.robot_headings[i];
+  const auto c = RobotColor(i);
+  const std::string rgba = Num(c[0]) + " " + Num(c[1]) + " " + Num(c[2]);
+  const double r = d.wheel_radius;
+  const double chassis_half = 0.5 * (d.height - b.chassis_bottom);
+  const double chassis_z = b.chassis_bottom + chassis_half - r;
+  const std::string name = "robot" + std::to_string(i);
+  x << "    <body name=\"" << name << "\" pos=\"" << Num(p.x()) << " "
+    << Num(p.y()) << " " << Num(r) << "\" euler=\"0 0 " << Num(heading)
+    << "\">\n"
+    << "      <freejoint name=\"" << name << "_root\"/>\n"
+    << "      <geom name=\"" << name << "_chassis\" type=\"cylinder\" size=\""
+    << Num(radius) << " " << Num(chassis_half) << "\" pos=\"0 0 "
+    << Num(chassis_z) << "\" mass=\"" << Num(b.chassis_mass) << "\" rgba=\""
+    << rgba << " 1\" group=\"" << kGroupAgent << "\"/>\n";
+  // A dark bar from the centre to the front rim: the heading, seen from
+  // above (no mass, no contacts).
+  x << "      <geom type=\"box\" size=\"" << Num(0.45 * radius) << " "
+    << Num(0.12 * radius) << " 0.002\" pos=\"" << Num(0.5 * radius) << " 0 "
+    << Num(d.height - r + 0.002) << "\" mass=\"0\" contype=\"0\" "
+    << "conaffinity=\"0\" rgba=\"0.1 0.1 0.1 1\" group=\"" << kGroupAgent
+    << "\"/>\n";
+  for (const double side : {1.0, -1.0}) {
+    x << "      <geom type=\"sphere\" size=\"" << Num(b.caster_radius)
+      << "\" pos=\"" << Num(side * b.caster_offset) << " 0 "
+      << Num(b.caster_radius - r) << "\" mass=\"0\" condim=\"1\" "
+      << "priority=\"1\" contype=\"2\" conaffinity=\"0\" rgba=\"0.2 0.2 "
+         "0.2 1\" group=\""
+      << kGroupAgent << "\"/>\n";
+  }
+  for (const char* wheel : {"left", "right"}) {
+    const double y = (wheel[0] == 'l' ? 0.5 : -0.5) * d.track;
+    // Contact through a sphere of the wheel's radius (one contact point);
+    // drawn as a cylinder.
+    x << "      <body name=\"" << name << "_" << wheel << "\" pos=\"0 "
+      << Num(y) << " 0\">\n"
+      << "        <joint name=\"" << name << "_" << wheel
+      << "\" type=\"hinge\" axis=\"0 1 0\" damping=\"" << Num(b.wheel_damping)
+      << "\"/>\n"
+      << "        <geom type=\"sphere\" size=\"" << Num(r) << "\" mass=\""
+      << Num(b.wheel_mass) << "\" friction=\"" << Num(d.friction)
+      << " 0.005 0.0001\" contype=\"2\" conaffinity=\"0\" group=\""
+      << kGroupWheel << "\"/>\n"
+      << "        <geom type=\"cylinder\" size=\"" << Num(r) << " "
+      << Num(kDiffDriveWheelHalfWidth) << "\" euler=\"1.5707963 0 0\" mass=\"0\" "
+      << "contype=\"0\" conaffinity=\"0\" rgba=\"0.15 0.15 0.15 1\" "
+         "group=\""
+      << kGroupAgent << "\"/>\n"
+      << "      </body>\n";
+  }
+  x << "    </body>\n";
+}
+
 }  // namespace
 
 MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts) {
@@ -27,7 +121,27 @@ MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts) {
   return s;
 }
 
-long InitialContacts(int num_robots) { return 64 + num_robots / 8; }
+long InitialContacts(int num_robots, RobotModel model) {
+  // A diff_drive robot always rests on four points: its wheels and casters.
+  const long resting = model == RobotModel::kDiffDrive ? 4L * num_robots : 0;
+  return 64 + num_robots / 8 + resting;
+}
+
+DiffDriveBody DiffDriveBodyOf(const DiffDriveConfig& c, double radius) {
+  DiffDriveBody b;
+  b.wheel_mass = 0.05 * c.mass;
+  b.chassis_mass = c.mass - 2.0 * b.wheel_mass;
+  b.caster_radius = 0.5 * c.wheel_radius;
+  b.caster_offset = radius - 1.5 * b.caster_radius;
+  b.chassis_bottom = 0.3 * c.wheel_radius;
+  // The velocity loop's damping: the inertia a wheel drives when the robot
+  // rolls straight (half the robot's mass at the rim, the wheel's own
+  // spin), over the loop's time constant.
+  const double inertia = 0.5 * c.mass * c.wheel_radius * c.wheel_radius +
+                         0.4 * b.wheel_mass * c.wheel_radius * c.wheel_radius;
+  b.wheel_damping = inertia / kWheelLoopSeconds;
+  return b;
+}
 
 double MujocoDataBytes(const MujocoSizes& s, long nv, long nu) {
   const double j = s.njmax, v = static_cast<double>(nv);
@@ -78,20 +192,22 @@ std::array<float, 3> RobotColor(int robot) {
 
 std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   const int n = world.NumRobots();
+  const bool wheeled = s.robots.model == RobotModel::kDiffDrive;
   const double W = world.map.size().x(), H = world.map.size().y();
-  const double mass = s.physics.robot_mass;
-  const double damping = 2.0 * std::sqrt(s.physics.kp * mass);  // critical
   const double h = kObstacleHeight / 2;
   std::ostringstream x;
   x << "<mujoco model=\"" << (s.name.empty() ? "aia" : s.name) << "\">\n";
   x << "  <compiler angle=\"radian\"/>\n";
   x << "  <option timestep=\"" << Num(s.physics.timestep)
-    << "\" gravity=\"0 0 0\"/>\n";
-  // The world body, four walls, the obstacles, robots and targets.
-  const long bodies = 5L + n + world.NumTargets() +
+    << (wheeled ? "\" gravity=\"0 0 -9.81\"/>\n" : "\" gravity=\"0 0 0\"/>\n");
+  // The world body, four walls, the obstacles, robots (a diff_drive robot
+  // is three bodies: chassis and wheels) and targets.
+  const long bodies = 5L + (wheeled ? 3L : 1L) * n + world.NumTargets() +
                       static_cast<long>(world.map.obstacles().size());
+  const long dofs = (wheeled ? 8L : 2L) * n;
   const MujocoSizes sizes = MujocoSizesFor(
-      bodies, 2L * n, contacts > 0 ? contacts : InitialContacts(n));
+      bodies, dofs,
+      contacts > 0 ? contacts : InitialContacts(n, s.robots.model));
   x << "  <size njmax=\"" << sizes.njmax << "\" nconmax=\"" << sizes.nconmax
     << "\" nstack=\"" << sizes.nstack << "\"/>\n";
   x << "  <visual>\n    <global offwidth=\"" << s.render.width
@@ -117,7 +233,10 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   x << "    <geom name=\"floor\" type=\"plane\" pos=\"" << Num(W / 2) << " "
     << Num(H / 2) << " 0\" size=\"" << Num(W / 2) << " " << Num(H / 2)
     << " 0.1\" material=\"floor\" "
-    << "contype=\"0\" conaffinity=\"0\" group=\"" << kGroupFloor << "\"/>\n";
+    // Wheels and casters stand on it; point robots glide above it.
+    << (wheeled ? "contype=\"0\" conaffinity=\"2\" group=\""
+                : "contype=\"0\" conaffinity=\"0\" group=\"")
+    << kGroupFloor << "\"/>\n";
   // Border walls, outside the workspace.
   const double t = 0.1;
   struct Wall {
@@ -143,25 +262,10 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
       << "\" material=\"obstacle\" group=\"" << kGroupObstacle
       << "\"/></body>\n";
   }
-  for (int i = 0; i < n; ++i) {
-    const Vec2 p = world.map.lattice().Point(world.robot_starts[i]);
-    const auto c = RobotColor(i);
-    // qpos (and the controller's target) are displacements from the start,
-    // so that the file at rest holds every robot at its start in MuJoCo's
-    // own tools.
-    x << "    <body name=\"robot" << i << "\" pos=\"" << Num(p.x()) << " "
-      << Num(p.y()) << " " << Num(kRobotHalfHeight + 0.001) << "\">\n"
-      << "      <joint name=\"robot" << i
-      << "_x\" type=\"slide\" axis=\"1 0 0\" damping=\"" << Num(damping)
-      << "\"/>\n"
-      << "      <joint name=\"robot" << i
-      << "_y\" type=\"slide\" axis=\"0 1 0\" damping=\"" << Num(damping)
-      << "\"/>\n"
-      << "      <geom type=\"cylinder\" size=\""
-      << Num(world.map.robot_radius()) << " " << Num(kRobotHalfHeight)
-      << "\" mass=\"" << Num(mass) << "\" rgba=\"" << c[0] << " " << c[1] << " "
-      << c[2] << " 1\" group=\"" << kGroupAgent << "\"/>\n"
-      << "    </body>\n";
+  if (s.robots.model == RobotModel::kDiffDrive) {
+    for (int i = 0; i < n; ++i) WriteDiffDriveRobot(world, s, i, &x);
+  } else {
+    for (int i = 0; i < n; ++i) WritePointRobot(world, s, i, &x);
   }
   for (int k = 0; k < world.NumTargets(); ++k) {
     const Vec2 p = world.TargetStart(k);
@@ -178,8 +282,10 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   // kp (waypoint - q) as a force on each slide joint before every mj_step.
   // Position actuators would do the same but cost MuJoCo 2.2 O(N^2) per step
   // (its actuator moments are a dense nu x nv matrix).
-  x << "  <custom>\n    <numeric name=\"" << kKpNumeric << "\" data=\""
-    << Num(s.physics.kp) << "\"/>\n  </custom>\n";
+  if (!wheeled) {
+    x << "  <custom>\n    <numeric name=\"" << kKpNumeric << "\" data=\""
+      << Num(s.physics.kp) << "\"/>\n  </custom>\n";
+  }
   x << "</mujoco>\n";
   return x.str();
 }

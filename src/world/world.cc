@@ -298,6 +298,19 @@ std::vector<Box> AllObstacles(const Scenario& s,
 // lattice point of its own), or random distinct free points of the largest
 // connected component, so that every robot can reach every other robot's
 // region.
+// Headings at the start (radians from +x): a point robot has none (0); a
+// diff_drive robot robots.diff_drive.start_heading, or one drawn per robot
+// from its own stream.
+std::vector<double> StartHeadings(const Scenario& s) {
+  std::vector<double> headings(s.robots.count, 0.0);
+  if (s.robots.model != RobotModel::kDiffDrive) return headings;
+  const std::optional<double>& fixed = s.robots.diff_drive.start_heading;
+  Rng rng(s.seed, "robots.heading");
+  for (double& h : headings)
+    h = fixed ? *fixed * kPi / 180.0 : rng.Uniform(-kPi, kPi);
+  return headings;
+}
+
 std::vector<int> RobotStarts(const Scenario& s, const Map& map) {
   const Lattice& lat = map.lattice();
   const int n = s.robots.count;
@@ -477,16 +490,21 @@ World World::Build(const Scenario& s) {
               s.robots.step, s.robots.radius);
   if (generated) CheckGeneratedLattice(s, *generated, w.map.lattice());
   w.robot_starts = RobotStarts(s, w.map);
+  w.robot_headings = StartHeadings(s);
   TargetPlacer(s, w.map, w.robot_starts).PlaceAll(&w);
 
   // MuJoCo's broad phase needs stack memory quadratic in the number of
   // geoms (the MJCF sizes it so): keep models to a size that fits.
   const int n = s.robots.count;
-  const int bodies =
-      n + w.NumTargets() + static_cast<int>(w.map.obstacles().size());
+  // A diff_drive robot is three bodies (chassis and two wheels).
+  const bool wheeled = s.robots.model == RobotModel::kDiffDrive;
+  const int bodies = (wheeled ? 3 : 1) * n + w.NumTargets() +
+                     static_cast<int>(w.map.obstacles().size());
   if (bodies > kMaxBodies)
     Fail(s, s.targets.list.empty() ? "targets.count" : "targets.list",
-         std::to_string(n) + " robots, " + std::to_string(w.NumTargets()) +
+         std::to_string(n) + (wheeled ? " diff_drive robots (3 bodies each), "
+                                      : " robots, ") +
+             std::to_string(w.NumTargets()) +
              " targets and " + std::to_string(w.map.obstacles().size()) +
              " obstacle boxes make " + std::to_string(bodies) +
              " bodies; aia simulates at most " + std::to_string(kMaxBodies));

@@ -12,6 +12,8 @@ namespace aia {
 using Vec2 = Eigen::Vector2d;
 using Mat2 = Eigen::Matrix2d;
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 // A robot's decision. The paper's admissible set U = {left, right, up, down};
 // kStay is only what the world applies when no move is valid (or the robot has
 // failed), never a policy's choice.

@@ -231,11 +231,109 @@ struct WorkspaceConfig {
   void Validate(const FieldChecker& check);
 };
 
+// How a robot's body moves (docs/design.md, Physics).
+enum class RobotModel {
+  // A disc on two slide joints pulled to its waypoint by a critically damped
+  // spring: MuJoCo decides only whether it bumps.
+  kPoint,
+  // A wheeled body under gravity: two driven wheels on hinge joints, two
+  // ball casters, friction with the floor; a low-level controller turns it
+  // toward its waypoint and drives (sim/diff_drive.h).
+  kDiffDrive,
+};
+constexpr std::array<EnumName<RobotModel>, 2> EnumNames(RobotModel) {
+  return {{{RobotModel::kPoint, "point"},
+           {RobotModel::kDiffDrive, "diff_drive"}}};
+}
+
+// A differential-drive robot's body, motors and waypoint controller
+// (robots.model: diff_drive). The body's defaults are those of Kobuki, the
+// base of TurtleBot 2 (wheel radius 35 mm, wheel base 230 mm, 2.35 kg, top
+// speed 0.7 m/s, 180 deg/s, a caster in front and one behind), but for its
+// footprint, which is the disc robots.radius so that the lattice stays the
+// same; the motor torque and the controller's gains are ours. Read only when
+// robots.model is diff_drive (effective.yaml writes them always, so that it
+// reads back and --set can switch the model).
+// A diff_drive wheel's half width, metres.
+inline constexpr double kDiffDriveWheelHalfWidth = 0.01;
+
+struct DiffDriveConfig {
+  double wheel_radius = 0.035;
+  double track = 0.23;
+  double mass = 2.35;
+  double height = 0.1;
+  double max_speed = 0.7;
+  double max_turn_rate = 180.0;
+  double max_torque = 0.12;
+  double friction = 0.8;
+  double speed_gain = 8.0;
+  double heading_gain = 4.0;
+  double drive_angle = 30.0;
+  bool reverse = true;
+  std::optional<double> start_heading;
+
+  template <typename Archive>
+  void Serialize(Archive* a) {
+    a->Visit(AIA_FIELD(wheel_radius)
+                 .In(Between(0.005, 1.0))
+                 .Doc("driven wheels' radius, metres; at most the chassis' "
+                      "height"));
+    a->Visit(AIA_FIELD(track)
+                 .In(Between(0.01, 10.0))
+                 .Doc("distance between the two driven wheels, metres; the "
+                      "wheels (2 cm wide) sit inside the disc: track / 2 + "
+                      "0.01 below robots.radius"));
+    a->Visit(AIA_FIELD(mass)
+                 .In(Between(0.01, 1e3))
+                 .Doc("the whole robot, kg (each wheel 5 % of it)"));
+    a->Visit(AIA_FIELD(height)
+                 .In(Between(0.01, 10.0))
+                 .Doc("chassis top above the floor, metres"));
+    a->Visit(AIA_FIELD(max_speed)
+                 .In(Between(1e-3, 100.0))
+                 .Doc("top speed of a wheel's rim, m/s (the wheel speed "
+                      "limit times wheel_radius)"));
+    a->Visit(AIA_FIELD(max_turn_rate)
+                 .In(Between(1.0, 1e4))
+                 .Doc("fastest turn the controller asks for, degrees/s"));
+    a->Visit(AIA_FIELD(max_torque)
+                 .In(Between(1e-4, 1e3))
+                 .Doc("a wheel motor's torque limit, N m"));
+    a->Visit(AIA_FIELD(friction)
+                 .In(Between(0.01, 10.0))
+                 .Doc("sliding friction of the wheels on the floor (the "
+                      "casters roll freely)"));
+    a->Visit(AIA_FIELD(speed_gain)
+                 .In(Between(0.01, 1e3))
+                 .Doc("controller: forward speed per metre to the waypoint, "
+                      "1/s (also capped by braking at max_torque)"));
+    a->Visit(AIA_FIELD(heading_gain)
+                 .In(Between(0.01, 1e3))
+                 .Doc("controller: turn rate per radian of heading error, "
+                      "1/s"));
+    a->Visit(AIA_FIELD(drive_angle)
+                 .In(Between(1.0, 90.0))
+                 .Doc("controller: it drives only while its heading is within "
+                      "this of the waypoint's bearing (degrees), else it turns "
+                      "in place"));
+    a->Visit(AIA_FIELD(reverse).Doc(
+        "controller: a waypoint behind the robot is reached backward"));
+    a->Visit(AIA_FIELD(start_heading)
+                 .In(Between(-360.0, 360.0))
+                 .Doc("every robot's heading at the start, degrees from +x "
+                      "counter-clockwise; none: a random heading per robot "
+                      "(stream robots.heading)"));
+  }
+  void Validate(const FieldChecker& check);
+};
+
 struct RobotsConfig {
   int count = 0;  // required
   double radius = 0.15;
   double step = 0.5;
   std::vector<Vec2> start;  // empty: random free lattice points
+  RobotModel model = RobotModel::kPoint;
+  DiffDriveConfig diff_drive;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -252,6 +350,11 @@ struct RobotsConfig {
         "one [x, y] per robot, each snapped to its nearest lattice point "
         "(free, not shared); none: distinct random free points of the "
         "largest connected region"));
+    a->Visit(AIA_FIELD(model).Doc(
+        "point: a disc on slide joints pulled to its waypoint; diff_drive: a "
+        "wheeled body driven by its motors (robots.diff_drive)"));
+    a->Visit(AIA_FIELD(diff_drive).Doc(
+        "the diff_drive model's body, motors and controller"));
   }
   void Validate(const FieldChecker& check);
 };
@@ -368,6 +471,10 @@ struct PolicyConfig {
   void Validate(const FieldChecker& check);
 };
 
+// A diff_drive robot's physics.step_timeout when the scenario gives none
+// (point robots: the field's own default).
+inline constexpr double kDiffDriveStepTimeout = 4.0;
+
 struct PhysicsConfig {
   double timestep = 0.005;
   double kp = 200.0;
@@ -382,9 +489,12 @@ struct PhysicsConfig {
                  .Doc("MuJoCo timestep, seconds"));
     a->Visit(AIA_FIELD(kp)
                  .In(Between(1e-3, 1e6))
-                 .Doc("waypoint spring stiffness, N/m (critically damped); "
-                      "timestep * sqrt(kp / robot_mass) at most 0.5"));
-    a->Visit(AIA_FIELD(robot_mass).In(Between(1e-3, 1e3)).Doc("kg"));
+                 .Doc("point robots: waypoint spring stiffness, N/m "
+                      "(critically damped); timestep * sqrt(kp / robot_mass) "
+                      "at most 0.5"));
+    a->Visit(AIA_FIELD(robot_mass)
+                 .In(Between(1e-3, 1e3))
+                 .Doc("point robots: kg (diff_drive: robots.diff_drive.mass)"));
     a->Visit(AIA_FIELD(tolerance)
                  .In(Between(1e-6, 1.0))
                  .Doc("a robot has arrived within this distance of its "
@@ -392,7 +502,7 @@ struct PhysicsConfig {
     a->Visit(AIA_FIELD(step_timeout)
                  .In(Between(1e-3, 1e3))
                  .Doc("simulated seconds a decision step may last; at most "
-                      "1e6 timesteps"));
+                      "1e6 timesteps; diff_drive robots: 4 unless given"));
   }
   // The actuator is stable at this timestep; a decision step is at most
   // 1e6 timesteps.

@@ -20,6 +20,7 @@
 #include "aia/core/types.h"
 #include "aia/estimation/sensor_model.h"
 #include "aia/scenario/config.h"
+#include "aia/sim/diff_drive.h"
 #include "aia/world/world.h"
 
 namespace aia {
@@ -61,6 +62,8 @@ struct PhysicsStepStats {
   int substeps = 0;  // mj_step calls
   bool all_arrived = false;
   bool timed_out = false;  // the step timeout passed first
+  int stalled = 0;         // robots that ended short of their waypoint, blocked
+  int late = 0;            // robots still on their way at the timeout
 };
 
 // How a simulation's MuJoCo memory went (diagnostics.json).
@@ -89,6 +92,7 @@ class PhysicsModel {
   const mjModel* model() const { return model_.get(); }
   const std::string& mjcf() const { return mjcf_; }
   const PhysicsConfig& physics() const { return physics_; }
+  RobotModel robot_model() const { return robot_model_; }
   int num_robots() const { return static_cast<int>(starts_.size()); }
   int num_targets() const { return static_cast<int>(mocap_id_.size()); }
 
@@ -97,10 +101,19 @@ class PhysicsModel {
   std::string mjcf_;
   MjModelPtr model_;
   PhysicsConfig physics_;
+  RobotModel robot_model_ = RobotModel::kPoint;
   std::vector<Vec2> starts_;
-  std::vector<int> qpos_adr_;  // per robot: qpos index of its x joint (y next)
+  // Per robot. Point: qpos/qvel index of its x joint (y next). diff_drive:
+  // of its free joint (x, y, z, quaternion; linear then angular velocity).
+  std::vector<int> qpos_adr_;
   std::vector<int> qvel_adr_;
-  double kp_ = 0.0;  // the waypoint spring, as the MJCF states it
+  double kp_ = 0.0;  // point: the waypoint spring, as the MJCF states it
+  // diff_drive: each robot's left and right wheel dof, the motors' velocity
+  // loop gain (the wheels' damping, as the MJCF states it) and torque limit.
+  std::vector<std::array<int, 2>> wheel_dof_;
+  double wheel_kv_ = 0.0;
+  double max_torque_ = 0.0;
+  DiffDriveLaw law_;
   std::vector<int> mocap_id_;
 };
 
@@ -120,16 +133,21 @@ class Simulation {
   const mjData* data() const { return data_.get(); }
   const std::string& mjcf() const { return model_->mjcf(); }
 
+  RobotModel robot_model() const { return model_->robot_model(); }
   Vec2 RobotPosition(int i) const;
   Vec2 RobotVelocity(int i) const;
+  // Radians from +x (a point robot's is always 0).
+  double RobotHeading(int i) const;
   void SetWaypoint(int i, const Vec2& p);
   Vec2 TargetPosition(int k) const;
   void SetTargetPosition(int k, const Vec2& p);
 
-  // Runs mj_step until every robot is within the tolerance of its waypoint and
-  // nearly still, or every robot that has not arrived has stalled (blocked by
-  // a contact: slower than 1 cm/s, or closer to its waypoint by less than the
-  // tolerance than 0.1 s before), or the step timeout passes.
+  // Runs mj_step until every robot is within the tolerance of its waypoint,
+  // or every robot that has not arrived has stalled (blocked by a contact:
+  // slower than 1 cm/s, or closer to its waypoint by less than the tolerance
+  // than 0.1 s before; a diff_drive robot's speed is its wheels' rim speed
+  // and its closeness the wheel travel left, turning included), or the step
+  // timeout passes.
   // `on_substep(elapsed_seconds)` runs after each mj_step (targets' mocap
   // interpolation, video frames).
   PhysicsStepStats AdvanceToWaypoints(
@@ -147,6 +165,11 @@ class Simulation {
   // kMaxPhysicsBytes.
   void StepPhysics();
 
+  // Per robot: decision steps that ended with it stalled short of its
+  // waypoint, and those whose timeout found it still on its way.
+  const std::vector<long>& robot_stalls() const { return robot_stalls_; }
+  const std::vector<long>& robot_timeouts() const { return robot_timeouts_; }
+
   // Seconds of wall time spent inside mj_step, its call count, and the
   // contacts MuJoCo held after those calls, summed.
   double physics_seconds() const { return physics_seconds_; }
@@ -159,6 +182,14 @@ class Simulation {
 
  private:
   void Grow();
+  // The controllers' forces for the next mj_step.
+  void PullPointRobots();
+  void DriveWheels();
+  // How far robot i still has to go, and whether it moves no faster than
+  // `speed` (point: distance and speed; diff_drive: wheel travel and rim
+  // speed, turning included).
+  double ToGo(int i) const;
+  bool Slow(int i, double speed) const;
 
   std::shared_ptr<const PhysicsModel> model_;
   MjModelPtr own_model_;  // set once the contact budget has grown
@@ -169,6 +200,7 @@ class Simulation {
   std::vector<mjtNum> saved_;     // time, qpos, qvel, qacc_warmstart, act
   std::vector<double> progress_;  // distance to the waypoint at a checkpoint
   std::vector<std::uint8_t> stuck_;
+  std::vector<long> robot_stalls_, robot_timeouts_;
   std::array<long, mjNWARNING> warnings_{};
   int grows_ = 0, max_contacts_ = 0, max_constraints_ = 0;
   long max_stack_ = 0;

@@ -18,6 +18,9 @@ namespace aia {
 inline constexpr int kGroupFloor = 0;
 inline constexpr int kGroupObstacle = 1;
 inline constexpr int kGroupAgent = 2;  // robots and targets
+// A diff_drive wheel's contact sphere (hidden in MuJoCo's default view, which
+// draws the wheel's cylinder instead).
+inline constexpr int kGroupWheel = 3;
 
 // The targets' spheres, red (the video's legend draws the same colour).
 inline constexpr double kTargetRgb[3] = {0.85, 0.1, 0.1};
@@ -45,8 +48,23 @@ inline constexpr int kRowsPerContact = 4;
 // engine_solver.c), with room to spare.
 MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts);
 // The first contact budget of a model with this many robots: room for a
-// quarter of them touching something, enough for most missions.
-long InitialContacts(int num_robots);
+// quarter of them touching something, enough for most missions, plus the
+// four floor contacts of each diff_drive robot.
+long InitialContacts(int num_robots, RobotModel model = RobotModel::kPoint);
+
+// Time constant of a wheel motor's velocity loop, seconds.
+inline constexpr double kWheelLoopSeconds = 0.02;
+// What the MJCF of a diff_drive robot is made of, derived from its
+// parameters (robots.diff_drive) and the disc's radius.
+struct DiffDriveBody {
+  double chassis_mass = 0.0;    // kg; each wheel wheel_mass
+  double wheel_mass = 0.0;      // kg
+  double caster_radius = 0.0;   // m
+  double caster_offset = 0.0;   // m ahead of and behind the axle
+  double chassis_bottom = 0.0;  // m above the floor
+  double wheel_damping = 0.0;   // N m s: the motor's velocity-loop gain
+};
+DiffDriveBody DiffDriveBodyOf(const DiffDriveConfig& config, double radius);
 // Bytes one mjData takes with these sizes (its arrays, the stack not
 // counted: the stack is mostly never touched).
 double MujocoDataBytes(const MujocoSizes& sizes, long nv, long nu);
@@ -55,8 +73,11 @@ double MujocoDataBytes(const MujocoSizes& sizes, long nv, long nu);
 std::array<float, 3> RobotColor(int robot);
 
 // Body names used by the simulator: "robot<i>", "target<k>", "obstacle<b>";
-// joints "robot<i>_x" / "robot<i>_y"; the custom numeric kKpNumeric holds
-// the waypoint spring's stiffness physics.kp (as written in the file).
+// point robots: joints "robot<i>_x" / "robot<i>_y", and the custom numeric
+// kKpNumeric holds the waypoint spring's stiffness physics.kp (as written in
+// the file); diff_drive robots: the free joint "robot<i>_root", wheel bodies
+// and hinge joints "robot<i>_left" / "robot<i>_right", the chassis geom
+// "robot<i>_chassis".
 // `contacts`: the model's first contact budget (0: InitialContacts).
 std::string MakeMjcf(const World& world, const Scenario& scenario,
                      long contacts = 0);

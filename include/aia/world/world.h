@@ -48,6 +48,8 @@ struct World {
 
   Map map;
   std::vector<int> robot_starts;  // lattice indices
+  // Radians from +x, counter-clockwise (0 for point robots).
+  std::vector<double> robot_headings;
   std::vector<TargetPrior> priors;
   GroundTruth truth;
 
