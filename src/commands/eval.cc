@@ -39,9 +39,19 @@ const std::string& RunsHeader() {
   static const std::string header = CsvHeader<EvalRow>();
   return header;
 }
-// The header of runs.csv before the reversal columns: such rows run again.
-constexpr const char* kOlderHeader =
-    "size,seed,policy,success,flowtime,fstar,bound,wall_s";
+// Headers of runs.csv written by older aia versions, and what they lack:
+// such rows run again.
+struct OlderHeader {
+  const char* header;
+  const char* lacks;
+};
+constexpr OlderHeader kOlderHeaders[] = {
+    {"size,seed,policy,success,flowtime,fstar,bound,wall_s",
+     "no reversal columns"},
+    {"size,seed,policy,success,flowtime,fstar,bound,reversal_share,"
+     "longest_reversal_run,wall_s",
+     "no mission_seconds, stalls, timeouts"},
+};
 
 // Horizon and denominator of an instance: 3 F* steps, with F* = 0 (targets
 // all localized at the start) counted as 1 so that the ratio is defined.
@@ -351,6 +361,9 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
               ? static_cast<double>(moves.reversals()) / moves.moves()
               : 0.0;
       row.longest_reversal_run = moves.longest_reversal_run();
+      row.mission_seconds = episode.mission_seconds();
+      for (const long c : episode.sim().robot_stalls()) row.stalls += c;
+      for (const long c : episode.sim().robot_timeouts()) row.timeouts += c;
       row.wall_s = SecondsSince(t0);
     }
     rows.push_back(row);
@@ -375,6 +388,10 @@ std::string Impossible(const EvalRow& r) {
   if (!(r.reversal_share >= 0.0 && r.reversal_share <= 1.0))
     return "reversal_share";
   if (r.longest_reversal_run < 0) return "longest_reversal_run";
+  if (!std::isfinite(r.mission_seconds) || r.mission_seconds < 0)
+    return "mission_seconds";
+  if (r.stalls < 0) return "stalls";
+  if (r.timeouts < 0) return "timeouts";
   if (r.flowtime < -1) return "flowtime " + std::to_string(r.flowtime);
   if (r.success && r.flowtime < 0) return "a success without a flowtime";
   if (r.success && r.fstar >= 0 && r.flowtime > Horizon(r.fstar))
@@ -398,9 +415,15 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
     ++number;
     EvalRow r;
     if (line == RunsHeader() || line.empty()) continue;
-    if (number == 1 && line == kOlderHeader) {
-      report(number, "the header of an older aia (no reversal columns)");
-      continue;
+    if (number == 1) {
+      const OlderHeader* older = nullptr;
+      for (const OlderHeader& h : kOlderHeaders)
+        if (line == h.header) older = &h;
+      if (older) {
+        report(number, std::string("the header of an older aia (") +
+                           older->lacks + ")");
+        continue;
+      }
     }
     if (!ParseCsvLine(line, &r)) {
       report(number, "not a row");
@@ -452,6 +475,7 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
     for (const auto& policy : policies) {
       int n = 0, ok = 0, no_plan = 0, longest = 0;
       double inc = 0.0, flow = 0.0, fstar = 0.0, gap = 0.0, reversals = 0.0;
+      double seconds = 0.0, stalls = 0.0, timeouts = 0.0;
       for (const EvalRow& r : rows) {
         if (r.size != size || r.policy != policy) continue;
         if (r.fstar < 0) {
@@ -468,6 +492,9 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
         gap += static_cast<double>(r.fstar) / std::max(r.bound, 1);
         reversals += r.reversal_share;
         longest = std::max(longest, r.longest_reversal_run);
+        seconds += r.mission_seconds;
+        stalls += static_cast<double>(r.stalls);
+        timeouts += static_cast<double>(r.timeouts);
       }
       SummaryRow row;
       row.size = size;
@@ -482,6 +509,9 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
         row.mean_fstar_over_bound = gap / n;
         row.reversal_share = reversals / n;
         row.longest_reversal_run = longest;
+        row.mission_seconds = seconds / n;
+        row.stalls = stalls / n;
+        row.timeouts = timeouts / n;
       }
       out += CsvLine(row);
     }

@@ -70,6 +70,11 @@ const cv::Mat& EpisodePicture::Render(const Episode& e) {
   overlay_.robots.resize(sim.num_robots());
   for (int i = 0; i < sim.num_robots(); ++i)
     overlay_.robots[i] = sim.RobotPosition(i);
+  overlay_.headings.clear();
+  if (sim.robot_model() == RobotModel::kDiffDrive) {
+    for (int i = 0; i < sim.num_robots(); ++i)
+      overlay_.headings.push_back(sim.RobotHeading(i));
+  }
   for (int k = 0; k < sim.num_targets(); ++k)
     overlay_.targets[k].truth = sim.TargetPosition(k);
   overlay_.active = e.comm().active();

@@ -635,16 +635,27 @@ void FrameRenderer::DrawRobots(const FrameOverlay& o, cv::Mat* image) {
       std::max(1.5, std::min(std::max(robot_px, 2.5 * unit), 0.3 * spacing_r));
   // A dot's ring stays thin, so that its colour shows.
   const int dot_ring = std::max(1, static_cast<int>(std::lround(0.6 * unit)));
+  const bool headings = o.headings.size() == o.robots.size();
   for (int i = 0; i < n; ++i) {
-    const cv::Point p = Fixed(view_.ToPixel(o.robots[i], 2 * kRobotHalfHeight));
-    const int ring =
-        FixedLength(compact_ ? dot : std::max(robot_px + unit, 3.0 * unit));
+    const Vec2 centre = view_.ToPixel(o.robots[i], 2 * kRobotHalfHeight);
+    const cv::Point p = Fixed(centre);
+    const double ring_px =
+        compact_ ? dot : std::max(robot_px + unit, 3.0 * unit);
+    const int ring = FixedLength(ring_px);
     if (o.active[i]) {
       if (compact_)
         cv::circle(*image, p, ring, RobotBgr(i), cv::FILLED, cv::LINE_AA,
                    kShift);
       cv::circle(*image, p, ring, kBlack, compact_ ? dot_ring : thin,
                  cv::LINE_AA, kShift);
+      if (headings) {
+        // A hand from the centre out past the ring: where the robot faces
+        // (image y grows downward).
+        const Vec2 dir(std::cos(o.headings[i]), -std::sin(o.headings[i]));
+        const double reach = ring_px + std::max(2.0 * unit, 0.5 * ring_px);
+        cv::line(*image, p, Fixed(centre + reach * dir), kBlack,
+                 std::max(thick, dot_ring), cv::LINE_AA, kShift);
+      }
       continue;
     }
     DrawFailedRobot(image, p, ring,

@@ -235,7 +235,10 @@ void Episode::Observe() {
   all_localized_ = NumLocalized() == num_targets_;
   if (all_localized_) {
     ++localized_steps_;
-    if (flowtime_ < 0) flowtime_ = step_;
+    if (flowtime_ < 0) {
+      flowtime_ = step_;
+      stats_.success_seconds = stats_.sim_seconds;
+    }
   }
   times_.fusion += Since(t0);
 }

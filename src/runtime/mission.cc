@@ -16,6 +16,12 @@
 namespace aia {
 namespace {
 
+long Sum(const std::vector<long>& counts) {
+  long sum = 0;
+  for (const long c : counts) sum += c;
+  return sum;
+}
+
 double SecondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
       .count();
@@ -125,6 +131,10 @@ std::string SummaryJson(const MissionSummary& s, const Episode& e) {
   j["flowtime"] = s.flowtime >= 0 ? nlohmann::ordered_json(s.flowtime)
                                   : nlohmann::ordered_json();
   j["steps"] = s.steps;
+  j["robot_model"] = EnumNameOf(e.scenario().robots.model);
+  j["mission_seconds"] = e.mission_seconds();
+  j["robot_stalls"] = Sum(e.sim().robot_stalls());
+  j["robot_timeouts"] = Sum(e.sim().robot_timeouts());
   j["max_steps"] = e.mission().max_steps;
   j["eps"] = e.mission().eps;
   j["invalid_moves"] = s.invalid_moves;
@@ -161,7 +171,12 @@ std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
                   {"timeouts", st.physics_timeouts},
                   {"stalled_steps", st.stalled_steps},
                   {"substeps", st.substeps},
-                  {"sim_seconds", st.sim_seconds}};
+                  {"sim_seconds", st.sim_seconds},
+                  {"mission_seconds", e.mission_seconds()},
+                  // Per robot: steps it ended stalled short of its
+                  // waypoint, and steps whose timeout found it on its way.
+                  {"robot_stalls", e.sim().robot_stalls()},
+                  {"robot_timeouts", e.sim().robot_timeouts()}};
   // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
   // handled contact overflow means the physics went wrong somewhere.
   const PhysicsMemoryStats mem = e.sim().memory();

@@ -252,13 +252,6 @@ void PhysicsConfig::Validate(const FieldChecker& check) {
                        ", at most 0.5 keeps the simulation stable (lower kp "
                        "or the timestep)");
   }
-  const double steps = step_timeout / timestep;
-  if (steps > limits::kMaxPhysicsStepsPerDecision) {
-    check.Fail(timestep, "makes " + FormatNumber(steps) +
-                             " physics steps in one decision step "
-                             "(step_timeout / timestep); at most " +
-                             FormatNumber(limits::kMaxPhysicsStepsPerDecision));
-  }
 }
 
 void Scenario::Validate(const FieldChecker& check) {
@@ -323,20 +316,14 @@ void Scenario::Validate(const FieldChecker& check) {
                    FormatPair(random->max_size.x(), random->max_size.y()));
   }
   if (workspace.obstacles.generator) CheckGenerator(*this, check);
-  if (wheeled) {
-    // A wheeled robot turns and accelerates: its steps take longer than a
-    // point robot's.
-    if (!check.Given(physics.step_timeout))
-      physics.step_timeout = kDiffDriveStepTimeout;
-    const double steps = physics.step_timeout / physics.timestep;
-    if (steps > limits::kMaxPhysicsStepsPerDecision) {
-      check.Fail(physics.timestep,
-                 "makes " + FormatNumber(steps) +
-                     " physics steps in one decision step (step_timeout " +
-                     FormatNumber(physics.step_timeout) +
-                     " / timestep); at most " +
-                     FormatNumber(limits::kMaxPhysicsStepsPerDecision));
-    }
+  const double timeout = physics.StepTimeout(robots.model);
+  const double steps = timeout / physics.timestep;
+  if (steps > limits::kMaxPhysicsStepsPerDecision) {
+    check.Fail(physics.timestep,
+               "makes " + FormatNumber(steps) +
+                   " physics steps in one decision step (step_timeout " +
+                   FormatNumber(timeout) + " / timestep); at most " +
+                   FormatNumber(limits::kMaxPhysicsStepsPerDecision));
   }
   // Obstacles are checked against positions when the world is built; here
   // only the workspace bounds [0, size] are.

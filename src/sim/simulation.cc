@@ -76,6 +76,7 @@ PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario,
       robot_model_(scenario.robots.model) {
   model_ = CompileMjcf(mjcf_);
   const mjModel* m = model_.get();
+  hessians_ = ChooseSolver(scenario, m->nv).hessians;
   const bool wheeled = robot_model_ == RobotModel::kDiffDrive;
   const int n = world.NumRobots();
   auto joint = [m](const std::string& name) {
@@ -210,7 +211,8 @@ void Simulation::StepPhysics() {
 }
 
 void Simulation::Grow() {
-  const MujocoSizes sizes = MujocoSizesFor(m_->nbody, m_->nv, 2L * m_->nconmax);
+  const MujocoSizes sizes = MujocoSizesFor(m_->nbody, m_->nv,
+                                           2L * m_->nconmax, model_->hessians_);
   const double bytes = MujocoDataBytes(sizes, m_->nv, m_->nu);
   if (bytes > kMaxPhysicsBytes) {
     char what[400];
@@ -323,7 +325,7 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
   const bool wheeled = robot_model() == RobotModel::kDiffDrive;
   const double dt = m_->opt.timestep;
   const int max_steps =
-      std::max(1, static_cast<int>(std::ceil(physics.step_timeout / dt)));
+      std::max(1, static_cast<int>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
   const double tol = physics.tolerance;
   const double tol2 = tol * tol;
   const double stall_speed =

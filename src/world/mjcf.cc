@@ -110,12 +110,36 @@ void WriteDiffDriveRobot(const World& world, const Scenario& s, int i,
 
 }  // namespace
 
-MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts) {
+SolverChoice ChooseSolver(const Scenario& s, long nv) {
+  SolverChoice c;
+  if (s.robots.model != RobotModel::kDiffDrive) {
+    c.newton = s.physics.solver != PhysicsSolver::kCg;
+    c.hessians = c.newton ? kPointHessians : 0;
+    return c;
+  }
+  const double newton_bytes =
+      static_cast<double>(kWheeledHessians) * nv * nv * sizeof(double);
+  switch (s.physics.solver) {
+    case PhysicsSolver::kNewton:
+      c.newton = true;
+      break;
+    case PhysicsSolver::kCg:
+      c.newton = false;
+      break;
+    case PhysicsSolver::kAuto:
+      c.newton = newton_bytes <= kAutoNewtonBytes;
+      break;
+  }
+  c.hessians = c.newton ? kWheeledHessians : 0;
+  return c;
+}
+
+MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts, int hessians) {
   MujocoSizes s;
   s.nconmax = static_cast<int>(std::max(1L, contacts));
   s.njmax = static_cast<int>(kRowsPerContact * s.nconmax);
   const long broad_phase = nbody * (nbody - 1) / 2 + 12 * nbody;
-  const long newton = 3 * nv * nv + 40 * nv;
+  const long newton = hessians * nv * nv + 40 * nv;
   const long constraints = 24L * s.njmax;
   s.nstack = broad_phase + newton + constraints + 20 * (nbody + nv) + 100000;
   return s;
@@ -198,16 +222,18 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   std::ostringstream x;
   x << "<mujoco model=\"" << (s.name.empty() ? "aia" : s.name) << "\">\n";
   x << "  <compiler angle=\"radian\"/>\n";
-  x << "  <option timestep=\"" << Num(s.physics.timestep)
-    << (wheeled ? "\" gravity=\"0 0 -9.81\"/>\n" : "\" gravity=\"0 0 0\"/>\n");
   // The world body, four walls, the obstacles, robots (a diff_drive robot
   // is three bodies: chassis and wheels) and targets.
   const long bodies = 5L + (wheeled ? 3L : 1L) * n + world.NumTargets() +
                       static_cast<long>(world.map.obstacles().size());
   const long dofs = (wheeled ? 8L : 2L) * n;
+  const SolverChoice solver = ChooseSolver(s, dofs);
+  x << "  <option timestep=\"" << Num(s.physics.timestep)
+    << (wheeled ? "\" gravity=\"0 0 -9.81\"" : "\" gravity=\"0 0 0\"")
+    << (solver.newton ? "" : " solver=\"CG\"") << "/>\n";
   const MujocoSizes sizes = MujocoSizesFor(
-      bodies, dofs,
-      contacts > 0 ? contacts : InitialContacts(n, s.robots.model));
+      bodies, dofs, contacts > 0 ? contacts : InitialContacts(n, s.robots.model),
+      solver.hessians);
   x << "  <size njmax=\"" << sizes.njmax << "\" nconmax=\"" << sizes.nconmax
     << "\" nstack=\"" << sizes.nstack << "\"/>\n";
   x << "  <visual>\n    <global offwidth=\"" << s.render.width

@@ -31,7 +31,7 @@ std::string WithoutWall(const std::string& csv) {
 TEST(EvalTest, TheRunsRowRoundTripsThroughItsDeclaration) {
   EXPECT_EQ(CsvHeader<EvalRow>(),
             "size,seed,policy,success,flowtime,fstar,bound,reversal_share,"
-            "longest_reversal_run,wall_s");
+            "longest_reversal_run,mission_seconds,stalls,timeouts,wall_s");
   EvalRow r;
   r.size = "10x10";
   r.seed = 931000;
@@ -42,28 +42,34 @@ TEST(EvalTest, TheRunsRowRoundTripsThroughItsDeclaration) {
   r.bound = 9;
   r.reversal_share = 0.04166;
   r.longest_reversal_run = 2;
+  r.mission_seconds = 21.2875;
+  r.stalls = 3;
+  r.timeouts = 1;
   r.wall_s = 1.5;
   const std::string line = CsvLine(r);
-  EXPECT_EQ(line, "10x10,931000,igbnet,1,17,15,9,0.0417,2,1.5000\n");
+  EXPECT_EQ(line,
+            "10x10,931000,igbnet,1,17,15,9,0.0417,2,21.288,3,1,1.5000\n");
   EvalRow back;
   ASSERT_TRUE(ParseCsvLine(line.substr(0, line.size() - 1), &back));
   EXPECT_EQ(CsvLine(back), line);
   r.success = false;
   r.flowtime = -1;  // not reached: an empty cell
-  EXPECT_EQ(CsvLine(r), "10x10,931000,igbnet,0,,15,9,0.0417,2,1.5000\n");
+  EXPECT_EQ(CsvLine(r),
+            "10x10,931000,igbnet,0,,15,9,0.0417,2,21.288,3,1,1.5000\n");
   // summary.csv likewise; a size and policy without any expert plan has
   // empty figures.
   EXPECT_EQ(CsvHeader<SummaryRow>(),
             "size,policy,instances,success_rate,flowtime_increase,mean_"
             "flowtime,mean_fstar,mean_fstar_over_bound,no_expert_plan,"
-            "reversal_share,longest_reversal_run");
+            "reversal_share,longest_reversal_run,mission_seconds,stalls,"
+            "timeouts");
   SummaryRow none;
   none.size = "2x2";
   none.policy = "greedy";
   none.no_expert_plan = 3;
-  EXPECT_EQ(CsvLine(none), "2x2,greedy,0,,,,,,3,,\n");
+  EXPECT_EQ(CsvLine(none), "2x2,greedy,0,,,,,,3,,,,,\n");
   SummaryRow back_none;
-  ASSERT_TRUE(ParseCsvLine("2x2,greedy,0,,,,,,3,,", &back_none));
+  ASSERT_TRUE(ParseCsvLine("2x2,greedy,0,,,,,,3,,,,,", &back_none));
   EXPECT_EQ(CsvLine(back_none), CsvLine(none));
 }
 
@@ -71,15 +77,16 @@ TEST(EvalTest, SummaryCountsFailuresAsThreeFStar) {
   // Two instances with F* = 4 (lower bounds 4 and 2): one success in 6
   // steps, one failure.
   std::vector<EvalRow> rows = {
-      {"2x2", 0, "greedy", true, 6, 4, 4, 0.25, 2, 0.1},
-      {"2x2", 1, "greedy", false, -1, 4, 2, 0.5, 7, 0.1},
-      {"2x2", 2, "greedy", false, -1, -1, 0, 0.0, 0, 0.0}};
+      {"2x2", 0, "greedy", true, 6, 4, 4, 0.25, 2, 9.0, 1, 0, 0.1},
+      {"2x2", 1, "greedy", false, -1, 4, 2, 0.5, 7, 14.5, 4, 2, 0.1},
+      {"2x2", 2, "greedy", false, -1, -1, 0, 0.0, 0, 0.0, 0, 0, 0.0}};
   const std::string csv = SummaryCsv(rows, {"2x2"}, {"greedy"});
   // success 1/2; increase mean((6-4)/4, (12-4)/4) = 1.25; F* / bound
   // mean(1, 2) = 1.5; one instance without a plan; reversal share
-  // mean(0.25, 0.5) = 0.375, the longest run 7.
+  // mean(0.25, 0.5) = 0.375, the longest run 7; mission seconds
+  // mean(9, 14.5) = 11.75, stalls mean(1, 4) = 2.5, timeouts 1.
   EXPECT_NE(csv.find("2x2,greedy,2,0.5000,1.2500,9.000,4.000,1.5000,1,0.3750,"
-                     "7\n"),
+                     "7,11.750,2.500,1.000\n"),
             std::string::npos)
       << csv;
 }
@@ -145,24 +152,35 @@ TEST(EvalTest, ReversalColumnsAndRowsOfAnOlderLayout) {
   EXPECT_GT(share, 0.15);
   EXPECT_LT(share, 0.35);
   const std::string now = ReadFile(dir + "/runs.csv");
-  // The same rows as the older aia wrote them: no reversal columns.
-  const std::string older =
-      std::regex_replace(now, std::regex(",[0-9.]+,[0-9]+(,[0-9.]+\n)"), "$1");
-  ASSERT_EQ(older.rfind("size,seed,policy,success,flowtime,fstar,bound,"
-                        "reversal_share,longest_reversal_run,wall_s\n",
-                        0),
+  // The same rows as the previous aia wrote them: no mission seconds,
+  // stalls and timeouts.
+  const std::string previous = std::regex_replace(
+      std::regex_replace(now, std::regex(",[0-9.]+,[0-9]+,[0-9]+(,[0-9.]+\n)"),
+                         "$1"),
+      std::regex("mission_seconds,stalls,timeouts,"), "");
+  ASSERT_EQ(previous.rfind("size,seed,policy,success,flowtime,fstar,bound,"
+                           "reversal_share,longest_reversal_run,wall_s\n",
+                           0),
             0u);
-  {
-    std::ofstream(dir + "/runs.csv") << std::regex_replace(
-        older, std::regex("reversal_share,longest_reversal_run,"), "");
+  // And as the older one did: no reversal columns either.
+  const std::string older = std::regex_replace(
+      std::regex_replace(previous,
+                         std::regex(",[0-9.]+,[0-9]+(,[0-9.]+\n)"), "$1"),
+      std::regex("reversal_share,longest_reversal_run,"), "");
+  for (const auto& [layout, lacks] :
+       {std::pair{previous, "no mission_seconds, stalls, timeouts"},
+        std::pair{older, "no reversal columns"}}) {
+    { std::ofstream(dir + "/runs.csv") << layout; }
+    const auto resumed = eval();
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    EXPECT_NE(resumed.err.find(std::string("dropped 5 rows that will run "
+                                           "again: line 1: the header of an "
+                                           "older aia (") +
+                               lacks + ")"),
+              std::string::npos)
+        << resumed.err;
+    EXPECT_EQ(WithoutWall(ReadFile(dir + "/runs.csv")), WithoutWall(now));
   }
-  const auto resumed = eval();
-  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
-  EXPECT_NE(resumed.err.find("dropped 5 rows that will run again: line 1: the "
-                             "header of an older aia (no reversal columns)"),
-            std::string::npos)
-      << resumed.err;
-  EXPECT_EQ(WithoutWall(ReadFile(dir + "/runs.csv")), WithoutWall(now));
   std::filesystem::remove_all(dir);
 }
 

@@ -605,7 +605,8 @@ TEST(OverrideTest, SetChangesKeysAtAnyDepth) {
 TEST(OverrideTest, BadOverridesNameTheirFlag) {
   EXPECT_EQ(OverrideError({ParseSetFlag("robots.cuont=3")}).Format(),
             "command line: --set robots.cuont: unknown key (did you mean "
-            "`count`?); valid keys under robots: count, radius, step, start");
+            "`count`?); valid keys under robots: count, radius, step, start, "
+            "model, diff_drive");
   EXPECT_EQ(OverrideError({ParseSetFlag("mission.eps=-1")}).Format(),
             "command line: --set mission.eps: must be a number in [1e-30, "
             "1e+30], got -1");

@@ -76,6 +76,11 @@ struct EvalRow {
   // move, and the most consecutive such moves of one robot (MoveObserver).
   double reversal_share = 0.0;
   int longest_reversal_run = 0;
+  // Simulated seconds until success (or until the run stopped), and the
+  // robot-steps that ended stalled short of the waypoint or at the timeout.
+  double mission_seconds = 0.0;
+  long stalls = 0;
+  long timeouts = 0;
   double wall_s = 0.0;
 
   // runs.csv's columns, declared once (core/csv.h): header, writer and
@@ -91,6 +96,9 @@ struct EvalRow {
     c->Column("bound", &bound);
     c->Column("reversal_share", &reversal_share, CsvFormat::Fixed(4));
     c->Column("longest_reversal_run", &longest_reversal_run);
+    c->Column("mission_seconds", &mission_seconds, CsvFormat::Fixed(3));
+    c->Column("stalls", &stalls);
+    c->Column("timeouts", &timeouts);
     c->Column("wall_s", &wall_s, CsvFormat::Fixed(4));
   }
 };
@@ -135,6 +143,9 @@ struct SummaryRow {
   int no_expert_plan = 0;
   double reversal_share = kNaN;
   int longest_reversal_run = -1;
+  // Means over the runs: simulated seconds (a failure's until it stopped),
+  // stalled and timed-out robot-steps.
+  double mission_seconds = kNaN, stalls = kNaN, timeouts = kNaN;
 
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   // summary.csv's columns, declared once (core/csv.h).
@@ -154,6 +165,9 @@ struct SummaryRow {
     c->Column("reversal_share", &reversal_share, CsvFormat::Fixed(4, true));
     c->Column("longest_reversal_run", &longest_reversal_run,
               CsvFormat::EmptyIs(-1));
+    c->Column("mission_seconds", &mission_seconds, CsvFormat::Fixed(3, true));
+    c->Column("stalls", &stalls, CsvFormat::Fixed(3, true));
+    c->Column("timeouts", &timeouts, CsvFormat::Fixed(3, true));
   }
 };
 

@@ -53,6 +53,9 @@ struct FrameOverlay {
   double eps = 0.1;
   double sensor_range = 2.0;
   std::vector<Vec2> robots;  // positions now, from the physics
+  // Headings (radians from +x) of wheeled robots, drawn as a tick from the
+  // centre through the rim; empty for point robots, which have none.
+  std::vector<double> headings;
   std::vector<std::uint8_t> active;
   // This step's graph: neighbors[i] = robots whose message i received; lost =
   // directed edges (receiver, sender) that were in range but lost.

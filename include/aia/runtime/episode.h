@@ -44,6 +44,8 @@ struct EpisodeStats {
                               // its waypoint (a contact), before the timeout
   long substeps = 0;          // mj_step calls
   double sim_seconds = 0.0;   // simulated time
+  // Simulated seconds when the mission succeeded (-1 until then).
+  double success_seconds = -1.0;
 };
 
 class Episode;
@@ -127,6 +129,10 @@ class Episode {
   int step() const { return step_; }
   bool success() const { return flowtime_ >= 0; }
   int flowtime() const { return flowtime_; }  // -1 until success
+  // Simulated seconds of the mission: until success, else so far.
+  double mission_seconds() const {
+    return success() ? stats_.success_seconds : stats_.sim_seconds;
+  }
   bool all_localized() const { return all_localized_; }
   int localized_steps() const { return localized_steps_; }
   long invalid_moves() const { return invalid_moves_; }

@@ -268,7 +268,7 @@ struct DiffDriveConfig {
   double friction = 0.8;
   double speed_gain = 8.0;
   double heading_gain = 4.0;
-  double drive_angle = 30.0;
+  double drive_angle = 20.0;
   bool reverse = true;
   std::optional<double> start_heading;
 
@@ -471,8 +471,21 @@ struct PolicyConfig {
   void Validate(const FieldChecker& check);
 };
 
-// A diff_drive robot's physics.step_timeout when the scenario gives none
-// (point robots: the field's own default).
+// MuJoCo's constraint solver (physics.solver). Newton converges in a few
+// iterations but MuJoCo 2.2 gives it dense nv x nv work arrays; CG needs
+// none but takes about three times as long per step for wheeled robots.
+enum class PhysicsSolver { kAuto, kNewton, kCg };
+constexpr std::array<EnumName<PhysicsSolver>, 3> EnumNames(PhysicsSolver) {
+  return {{{PhysicsSolver::kAuto, "auto"},
+           {PhysicsSolver::kNewton, "newton"},
+           {PhysicsSolver::kCg, "cg"}}};
+}
+// auto takes Newton while its work arrays fit in this many bytes.
+inline constexpr double kAutoNewtonBytes = 256.0 * (1 << 20);
+
+// physics.step_timeout when the scenario gives none: a wheeled robot turns
+// and accelerates, so its steps take longer than a point robot's.
+inline constexpr double kPointStepTimeout = 1.0;
 inline constexpr double kDiffDriveStepTimeout = 4.0;
 
 struct PhysicsConfig {
@@ -480,7 +493,8 @@ struct PhysicsConfig {
   double kp = 200.0;
   double robot_mass = 0.25;
   double tolerance = 0.01;
-  double step_timeout = 1.0;
+  std::optional<double> step_timeout;  // none: the robot model's
+  PhysicsSolver solver = PhysicsSolver::kAuto;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -502,7 +516,18 @@ struct PhysicsConfig {
     a->Visit(AIA_FIELD(step_timeout)
                  .In(Between(1e-3, 1e3))
                  .Doc("simulated seconds a decision step may last; at most "
-                      "1e6 timesteps; diff_drive robots: 4 unless given"));
+                      "1e6 timesteps; none: 1 for point robots, 4 for "
+                      "diff_drive"));
+    a->Visit(AIA_FIELD(solver).Doc(
+        "MuJoCo's constraint solver: newton, cg, or auto (Newton while its "
+        "dense nv x nv work arrays fit in 256 MiB, about 400 diff_drive "
+        "robots; else CG, about 3x slower per step)"));
+  }
+  // step_timeout, or the robot model's default.
+  double StepTimeout(RobotModel model) const {
+    if (step_timeout) return *step_timeout;
+    return model == RobotModel::kDiffDrive ? kDiffDriveStepTimeout
+                                           : kPointStepTimeout;
   }
   // The actuator is stable at this timestep; a decision step is at most
   // 1e6 timesteps.

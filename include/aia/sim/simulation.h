@@ -21,6 +21,7 @@
 #include "aia/estimation/sensor_model.h"
 #include "aia/scenario/config.h"
 #include "aia/sim/diff_drive.h"
+#include "aia/world/mjcf.h"
 #include "aia/world/world.h"
 
 namespace aia {
@@ -102,6 +103,7 @@ class PhysicsModel {
   MjModelPtr model_;
   PhysicsConfig physics_;
   RobotModel robot_model_ = RobotModel::kPoint;
+  int hessians_ = kPointHessians;  // the stack's Newton blocks (MujocoSizesFor)
   std::vector<Vec2> starts_;
   // Per robot. Point: qpos/qvel index of its x joint (y next). diff_drive:
   // of its free joint (x, y, z, quaternion; linear then angular velocity).

@@ -45,8 +45,22 @@ inline constexpr int kRowsPerContact = 4;
 // The sizes for a contact budget, from the model's counts (nbody includes the
 // world body). The stack is the sum of what MuJoCo 2.2's collision,
 // constraint and Newton-solver phases take at most (engine_collision_driver.c,
-// engine_solver.c), with room to spare.
-MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts);
+// engine_solver.c), with room to spare: the Newton solver's dense arrays
+// take `hessians` nv x nv blocks (kPointHessians where point robots glide
+// free of contacts; wheeled robots, always in contact with the floor, use
+// kWheeledHessians: measured 5.0 nv^2 at 10 to 160 robots; the CG solver
+// none).
+inline constexpr int kPointHessians = 3;
+inline constexpr int kWheeledHessians = 6;
+MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts,
+                           int hessians = kPointHessians);
+// Whether a model steps with Newton's method (else CG), and how many nv x nv
+// blocks its stack holds for it, from the scenario's physics.solver.
+struct SolverChoice {
+  bool newton = true;
+  int hessians = kPointHessians;
+};
+SolverChoice ChooseSolver(const Scenario& scenario, long nv);
 // The first contact budget of a model with this many robots: room for a
 // quarter of them touching something, enough for most missions, plus the
 // four floor contacts of each diff_drive robot.
