@@ -220,6 +220,7 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
   compact_ = robot_px < kMinBodyPixels ||
              sim.num_robots() + sim.num_targets() > kMaxSceneBodies;
   if (compact_) scene_.SetGeomGroupVisible(kGroupAgent, false);
+  wheeled_ = sim.robot_model() == RobotModel::kDiffDrive;
   legend_key_.messages =
       settings_.edges == EdgeMode::kAll || settings_.edges == EdgeMode::kAuto;
   legend_key_.lost = settings_.edges != EdgeMode::kNone;
@@ -229,7 +230,7 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
 std::vector<std::pair<FrameRenderer::LegendIcon, const char*>>
 FrameRenderer::LegendRowsFor(const LegendKey& key) const {
   std::vector<std::pair<LegendIcon, const char*>> rows = {
-      {LegendIcon::kRobot, "robot"},
+      {LegendIcon::kRobot, wheeled_ ? "robot, heading" : "robot"},
       {LegendIcon::kSensing, key.tint ? "sensed area" : "sensing range"},
       {LegendIcon::kMessage, key.messages ? "message" : "message: off"},
       {LegendIcon::kLost, key.lost ? "lost message" : "lost: off"}};
@@ -262,6 +263,10 @@ void FrameRenderer::DrawLegendIcon(LegendIcon icon, double cy,
                  cv::LINE_AA, kShift);
       cv::circle(legend_, p, FixedLength(0.22 * row), kBlack, thin, cv::LINE_AA,
                  kShift);
+      // The overlay's heading hand, facing up.
+      if (wheeled_)
+        cv::line(legend_, p, Fixed(c - Vec2(0.0, 0.36 * row)), kBlack, thick,
+                 cv::LINE_AA, kShift);
       break;
     case LegendIcon::kSensing:
       if (key.tint) {

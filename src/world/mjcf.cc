@@ -14,6 +14,14 @@ std::string Num(double v) {
   return buf;
 }
 
+// An angle to the full precision of a double, so that the heading MuJoCo
+// reads is the one drawn.
+std::string Angle(double radians) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.17g", radians);
+  return buf;
+}
+
 // A disc on two damped slide joints; the simulation's spring pulls it.
 void WritePointRobot(const World& world, const Scenario& s, int i,
                      std::ostringstream* out) {
@@ -63,7 +71,7 @@ void WriteDiffDriveRobot(const World& world, const Scenario& s, int i,
   const double chassis_z = b.chassis_bottom + chassis_half - r;
   const std::string name = "robot" + std::to_string(i);
   x << "    <body name=\"" << name << "\" pos=\"" << Num(p.x()) << " "
-    << Num(p.y()) << " " << Num(r) << "\" euler=\"0 0 " << Num(heading)
+    << Num(p.y()) << " " << Num(r) << "\" euler=\"0 0 " << Angle(heading)
     << "\">\n"
     << "      <freejoint name=\"" << name << "_root\"/>\n"
     << "      <geom name=\"" << name << "_chassis\" type=\"cylinder\" size=\""

@@ -295,6 +295,52 @@ TEST(CliTest, SameScenarioAndSeedGiveByteIdenticalResults) {
   fs::remove_all(b);
 }
 
+// Wheeled robots: the same mission twice gives the same files, which report
+// robot_model, the simulated seconds it took (each decision step at least a
+// 0.5 m drive at 0.7 m/s) and each robot's stalls and timeouts; eval takes the
+// model with --set and times its rows in seconds too.
+TEST(CliTest, DiffDriveRunsRepeatAndCountSeconds) {
+  const std::string a = testing::MakeTempDir("aia_dd_"),
+                    b = testing::MakeTempDir("aia_dd_");
+  for (const auto& dir : {a, b}) {
+    const auto r = RunAia({"run", SourcePath("scenarios/robustness.yaml"),
+                           "--set", "robots.model=diff_drive", "--max-steps",
+                           "12", "--out", dir, "--quiet"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  EXPECT_EQ(ReadFile(a + "/trace.csv"), ReadFile(b + "/trace.csv"));
+  const std::string summary = ReadFile(a + "/summary.json");
+  EXPECT_EQ(WithoutWallTime(summary),
+            WithoutWallTime(ReadFile(b + "/summary.json")));
+  EXPECT_NE(summary.find("\"robot_model\": \"diff_drive\""), std::string::npos)
+      << summary;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      summary, m, std::regex("\"steps\": ([0-9]+)[^}]*\"mission_seconds\": "
+                             "([0-9.e+-]+)")))
+      << summary;
+  EXPECT_GT(std::stod(m[2]), std::stoi(m[1]) * 0.5 / 0.7);
+  const std::string diagnostics = ReadFile(a + "/diagnostics.json");
+  EXPECT_TRUE(std::regex_search(
+      diagnostics,
+      std::regex("\"robot_stalls\": \\[(\\s*[0-9]+,){4}\\s*[0-9]+\\s*\\]")))
+      << diagnostics;
+  const auto e = RunAia({"eval", "--sizes", "2x2", "--seeds", "2",
+                         "--policies", "greedy", "--set",
+                         "robots.model=diff_drive", "--out", b + "/eval",
+                         "--quiet"});
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const std::string runs = ReadFile(b + "/eval/runs.csv");
+  std::smatch row;
+  ASSERT_TRUE(std::regex_search(
+      runs, row, std::regex("\n2x2,0,greedy,1,([0-9]+),[^,]*,[^,]*,[^,]*,[^,]*,"
+                            "([0-9.]+),")))
+      << runs;
+  EXPECT_GT(std::stod(row[2]), std::stoi(row[1]) * 0.5 / 0.7);
+  fs::remove_all(a);
+  fs::remove_all(b);
+}
+
 // The text between `<!-- BEGIN name -->` and `<!-- END name -->`.
 std::string Section(const std::string& doc, const std::string& name) {
   const std::string begin = "<!-- BEGIN " + name + " -->\n";

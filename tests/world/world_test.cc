@@ -289,19 +289,41 @@ TEST(WorldTest, MapImageBecomesObstacles) {
 }
 
 TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
-  const Scenario s = ScenarioFromYaml(
-      "seed: 3\nrobots: {count: 4}\ntargets: {count: 3}\n"
-      "workspace: {obstacles: {random: {count: 10}}}\n");
-  const World w = World::Build(s);
-  const std::string dir = testing::MakeTempDir("aia_mjcf_");
-  const std::string path = dir + "/model.xml";
-  std::ofstream(path) << MakeMjcf(w, s);
-  // mujoco-testxml loads the file, saves it and compares both compiled models.
-  const auto r =
-      testing::RunCommand("cd " + dir + " && mujoco-testxml model.xml");
-  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-  EXPECT_NE(r.out.find("Max difference : 0"), std::string::npos) << r.out;
-  std::filesystem::remove_all(dir);
+  // Point and wheeled robots (the latter with CG forced, and with Newton).
+  for (const char* robots :
+       {"{count: 4}", "{count: 4, model: diff_drive}",
+        "{count: 3, model: diff_drive}\nphysics: {solver: cg}"}) {
+    SCOPED_TRACE(robots);
+    const Scenario s = ScenarioFromYaml(
+        std::string("seed: 3\ntargets: {count: 3}\n"
+                    "workspace: {obstacles: {random: {count: 10}}}\n"
+                    "robots: ") +
+        robots + "\n");
+    const World w = World::Build(s);
+    const std::string dir = testing::MakeTempDir("aia_mjcf_");
+    const std::string path = dir + "/model.xml";
+    const std::string xml = MakeMjcf(w, s);
+    std::ofstream(path) << xml;
+    EXPECT_EQ(xml.find("freejoint") != std::string::npos,
+              s.robots.model == RobotModel::kDiffDrive);
+    EXPECT_EQ(xml.find("solver=\"CG\"") != std::string::npos,
+              s.physics.solver == PhysicsSolver::kCg);
+    // mujoco-testxml loads the file, saves it and compares both compiled
+    // models.
+    const auto r =
+        testing::RunCommand("cd " + dir + " && mujoco-testxml model.xml");
+    EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+    // The saved file is the same model: exactly, or (wheeled robots, whose
+    // random headings MuJoCo saves as quaternions of 7 significant digits)
+    // to that precision.
+    const std::size_t at = r.out.find("Max difference : ");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    const double difference = std::stod(r.out.substr(at + 17));
+    EXPECT_LE(difference,
+              s.robots.model == RobotModel::kDiffDrive ? 1e-6 : 0.0)
+        << r.out;
+    std::filesystem::remove_all(dir);
+  }
 }
 
 }  // namespace

@@ -179,6 +179,7 @@ class FrameRenderer {
   double robot_radius_;
   double world_area_m2_;  // the workspace's floor, square metres
   bool compact_ = false;
+  bool wheeled_ = false;  // robots have a heading to draw
   int trail_steps_ = 0;
   std::vector<std::deque<Vec2>> trails_;
   cv::Mat frame_, layer_;
