@@ -82,27 +82,36 @@ void BM_DecisionStep(benchmark::State& state) {
 }
 BENCHMARK(BM_DecisionStep)->Arg(10)->Arg(80)->Unit(benchmark::kMillisecond);
 
-// One physics step (Simulation::StepPhysics, i.e. mj_step and its contact
-// budget) of a generated world that grows with the team as those of
-// tools/bench_scale.py: robots at rest, which is what mujoco-testspeed times
-// on the same model (passive dynamics from the start, no contact), and robots
-// driven by the waypoint spring to a random lattice neighbour, a new one
-// every 50 steps (0.5 s), as decisions drive them (they touch).
-void BM_PhysicsStep(benchmark::State& state) {
-  const int n = static_cast<int>(state.range(0));
-  const bool driven = state.range(1) != 0;
+// One physics step (StepPhysics: the robots' controllers, then mj_step with
+// its contact budget) of a generated world that grows with the team as those
+// of tools/bench_scale.py: robots at rest, which is what mujoco-testspeed
+// times on the same model (passive dynamics from the start), and robots
+// driven to a random lattice neighbour, a new one every decision step's
+// worth of physics (50 steps, 0.25 s, for point robots; 300, 1.5 s, for
+// diff_drive robots), as decisions drive them (they touch). Arguments:
+// robots, driven, model (0 point, 1 diff_drive).
+std::shared_ptr<const Instance> PhysicsWorld(int n, bool wheeled) {
   Scenario s = GeneratedScenario(n, n, 1);
   const double side = 20.0 * std::sqrt(std::max(n, 40) / 40.0);
   s.workspace.size = Vec2(side, side);
   s.workspace.obstacles.random->count =
       static_cast<int>(std::lround(0.075 * side * side));
-  const std::shared_ptr<const Instance> instance = BuildInstance(s);
+  if (wheeled) s.robots.model = RobotModel::kDiffDrive;
+  return BuildInstance(s);
+}
+
+void BM_PhysicsStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const bool driven = state.range(1) != 0;
+  const bool wheeled = state.range(2) != 0;
+  const std::shared_ptr<const Instance> instance = PhysicsWorld(n, wheeled);
   const Lattice& lattice = instance->world.map.lattice();
   Simulation sim(instance->physics);
   Rng rng(1, "bench.physics");
+  const long period = wheeled ? 300 : 50;
   long steps = 0;
   for (auto _ : state) {
-    if (driven && steps % 50 == 0) {
+    if (driven && steps % period == 0) {
       for (int i = 0; i < n; ++i) {
         const int p = lattice.NearestFree(sim.RobotPosition(i));
         if (p < 0) continue;
@@ -117,7 +126,24 @@ void BM_PhysicsStep(benchmark::State& state) {
       static_cast<double>(sim.contacts_summed()) / std::max(1L, sim.mj_steps());
 }
 BENCHMARK(BM_PhysicsStep)
-    ->ArgsProduct({{80, 1000}, {0, 1}})
+    ->ArgsProduct({{80, 1000}, {0, 1}, {0}})
+    ->ArgsProduct({{10, 80}, {0, 1}, {1}})
+    ->Unit(benchmark::kMillisecond);
+
+// mj_step alone on the same models, robots at rest: mujoco-testspeed's loop,
+// against which BM_PhysicsStep's at-rest figure shows what the controllers
+// and the contact budget's bookkeeping add. Arguments: robots, model.
+void BM_MjStepAlone(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const std::shared_ptr<const Instance> instance =
+      PhysicsWorld(n, state.range(1) != 0);
+  const mjModel* m = instance->physics->model();
+  MjDataPtr d(mj_makeData(m));
+  for (auto _ : state) mj_step(m, d.get());
+}
+BENCHMARK(BM_MjStepAlone)
+    ->ArgsProduct({{80, 1000}, {0}})
+    ->ArgsProduct({{10, 80}, {1}})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
