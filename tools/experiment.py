@@ -137,6 +137,23 @@ def outcome(r):
     return (1.0 if success else 0.0), (f - fstar) / denom
 
 
+def mission_seconds(r):
+    """A runs.csv row's simulated seconds (until success, else until the run
+    stopped at 3 F*); None for rows of an aia without the column."""
+    value = r.get("mission_seconds")
+    return float(value) if value not in (None, "") else None
+
+
+def mean_se(xs):
+    xs = [x for x in xs if x is not None]
+    n = len(xs)
+    if n == 0:
+        return None, None
+    m = sum(xs) / n
+    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1)) if n > 1 else 0.0
+    return m, sd / math.sqrt(n)
+
+
 def scalability_table(runs, sizes, policies):
     """Per size and policy: n, success rate and flowtime increase, each with
     its standard error over the seeds (a failure counts F = 3 F*, as in
@@ -155,10 +172,12 @@ def scalability_table(runs, sizes, policies):
             mean_inc = sum(inc) / n
             sd_inc = math.sqrt(sum((x - mean_inc) ** 2 for x in inc) / (n - 1)) if n > 1 else 0.0
             wall = sum(float(r["wall_s"]) for r in rs)
+            secs, secs_se = mean_se([mission_seconds(r) for r in rs])
             table.append({
                 "size": size, "policy": policy, "instances": n,
                 "success_rate": p, "success_se": math.sqrt(p * (1 - p) / n),
                 "flowtime_increase": mean_inc, "flowtime_increase_se": sd_inc / math.sqrt(n),
+                "mission_seconds": secs, "mission_seconds_se": secs_se,
                 "policy_wall_s": wall,
             })
     return table
@@ -208,7 +227,8 @@ def scalability(args):
     runs = [r for r in runs if args.seed_base <= int(r["seed"]) < args.seed_base + seeds]
     table = scalability_table(runs, sizes, policies)
     header = ["size", "policy", "instances", "success_rate", "success_se",
-              "flowtime_increase", "flowtime_increase_se", "policy_wall_s"]
+              "flowtime_increase", "flowtime_increase_se", "mission_seconds",
+              "mission_seconds_se", "policy_wall_s"]
     write_csv(os.path.join(args.out, "scalability.csv"), header,
               [[r[h] for h in header] for r in table])
     no_plan = {s: sum(1 for r in runs if r["size"] == s and int(r["fstar"]) < 0) // max(1, len(policies))
@@ -354,6 +374,7 @@ def robustness_run(args, variant, seed):
     s = json.load(open(path))
     return {"variant": variant, "seed": seed, "success": bool(s["success"]),
             "flowtime": s["flowtime"], "steps": s["steps"], "max_steps": s["max_steps"],
+            "mission_seconds": s.get("mission_seconds"),
             "failed_robots": s.get("failed_robots", [])}
 
 
@@ -386,15 +407,19 @@ def robustness(args):
     for v, rs in by.items():
         times = [mission_time(r) for r in rs]
         stats[v] = {"runs": len(rs), "success_rate": sum(r["success"] for r in rs) / len(rs),
-                    "mean_mission_time": sum(times) / len(times)}
+                    "mean_mission_time": sum(times) / len(times),
+                    # simulated seconds (a failure: its whole horizon)
+                    "mean_mission_seconds": mean_se([r["mission_seconds"] for r in rs])[0]}
     both = [(mission_time(a), mission_time(b)) for a, b in zip(by["nominal"], by["faults"])
             if a["success"] and b["success"]]
     penalty = stats["faults"]["mean_mission_time"] / stats["nominal"]["mean_mission_time"] - 1
     penalty_both = (sum(b for _, b in both) / sum(a for a, _ in both) - 1) if both else None
     write_csv(os.path.join(args.out, "robustness.csv"),
-              ["seed", "variant", "success", "flowtime", "steps", "mission_time", "failed_robots"],
+              ["seed", "variant", "success", "flowtime", "steps", "mission_time",
+               "mission_seconds", "failed_robots"],
               [[r["seed"], r["variant"], int(r["success"]), r["flowtime"], r["steps"],
-                mission_time(r), " ".join(map(str, r["failed_robots"]))] for r in results])
+                mission_time(r), r["mission_seconds"], " ".join(map(str, r["failed_robots"]))]
+               for r in results])
     write_json(os.path.join(args.out, "summary.json"), {
         "experiment": "robustness", "scenario": os.path.relpath(args.scenario, ROOT),
         "policy": args.policy, "seeds": seeds, "variants": {
@@ -495,15 +520,6 @@ def slug(text):
     return "".join(ch if ch.isalnum() else "_" for ch in text).strip("_")
 
 
-def mean_se(xs):
-    n = len(xs)
-    if n == 0:
-        return None, None
-    m = sum(xs) / n
-    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1)) if n > 1 else 0.0
-    return m, sd / math.sqrt(n)
-
-
 def gen_eval(args, name, size, sets, seeds, policies):
     """One eval condition: rows per policy (success, flowtime increase,
     reversal share), resumable through aia eval's own resume."""
@@ -524,7 +540,8 @@ def gen_eval(args, name, size, sets, seeds, policies):
         # Mean steps: the flowtime, a failure counting 3 F* (as the increase).
         steps = [int(r["fstar"]) + x * max(int(r["fstar"]), 1) for r, x in zip(rs, inc)]
         out[policy] = {"n": len(rs), "success": succ, "flowtime_increase": inc,
-                       "steps": steps, "reversal_share": [float(r["reversal_share"]) for r in rs],
+                       "steps": steps, "seconds": [mission_seconds(r) for r in rs],
+                       "reversal_share": [float(r["reversal_share"]) for r in rs],
                        "longest_reversal_run": max([int(r["longest_reversal_run"]) for r in rs],
                                                    default=0)}
     return out
@@ -546,6 +563,7 @@ def gen_files_run(args, name, scenario, seed, policy):
     total = moves.get("total", 0)
     return {"success": bool(s["success"]),
             "steps": s["flowtime"] if s["success"] else s["max_steps"],
+            "seconds": s.get("mission_seconds"),
             "reversal_share": moves.get("reversals", 0) / total if total else 0.0,
             "longest_reversal_run": moves.get("longest_reversal_run", 0)}
 
@@ -562,6 +580,7 @@ def gen_files(args, name, files, seeds, policies):
         rs = [r for p, r in results if p == policy]
         out[policy] = {"n": len(rs), "success": [1.0 if r["success"] else 0.0 for r in rs],
                        "flowtime_increase": [], "steps": [float(r["steps"]) for r in rs],
+                       "seconds": [r["seconds"] for r in rs],
                        "reversal_share": [r["reversal_share"] for r in rs],
                        "longest_reversal_run": max([r["longest_reversal_run"] for r in rs],
                                                    default=0)}
@@ -626,6 +645,7 @@ def generalization(args):
             succ, succ_se = mean_se(r["success"])
             inc, inc_se = mean_se(r["flowtime_increase"])
             steps, steps_se = mean_se(r["steps"])
+            secs, secs_se = mean_se(r["seconds"])
             rev, rev_se = mean_se(r["reversal_share"])
             if succ is not None and len(r["success"]) > 0:
                 succ_se = math.sqrt(succ * (1 - succ) / len(r["success"]))
@@ -633,10 +653,12 @@ def generalization(args):
                           "success": succ, "success_se": succ_se,
                           "flowtime_increase": inc, "flowtime_increase_se": inc_se,
                           "mean_steps": steps, "mean_steps_se": steps_se,
+                          "mission_seconds": secs, "mission_seconds_se": secs_se,
                           "reversal_share": rev, "reversal_share_se": rev_se,
                           "longest_reversal_run": r["longest_reversal_run"]})
     header = ["condition", "group", "policy", "n", "success", "success_se",
               "flowtime_increase", "flowtime_increase_se", "mean_steps", "mean_steps_se",
+              "mission_seconds", "mission_seconds_se",
               "reversal_share", "reversal_share_se", "longest_reversal_run"]
     write_csv(os.path.join(args.out, "generalization.csv"), header,
               [[r[h] for h in header] for r in table])
@@ -646,10 +668,12 @@ def generalization(args):
             return "-"
         return f"{r[key]:.{digits}f} ± {r[key + '_se']:.{digits}f}"
     lines = ["| condition | policy | n | success | flowtime increase | mean steps "
-             "| reversal share | longest reversal run |", "|---|---|---|---|---|---|---|---|"]
+             "| mission seconds | reversal share | longest reversal run |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in table:
         lines.append(f"| {r['condition']} | {r['policy']} | {r['n']} | {cell(r, 'success')} "
                      f"| {cell(r, 'flowtime_increase')} | {cell(r, 'mean_steps', 1)} "
+                     f"| {cell(r, 'mission_seconds', 1)} "
                      f"| {cell(r, 'reversal_share', 3)} | {r['longest_reversal_run']} |")
     write_atomic(os.path.join(args.out, "generalization.md"), "\n".join(lines) + "\n")
     write_json(os.path.join(args.out, "summary.json"), {
