@@ -179,6 +179,7 @@ class Mission {
     const int n = num_robots(), m = num_targets();
     const Lattice& lattice = ctx.map->lattice();
     auto positions = Array<double>({n, 2});
+    auto headings = Array<double>({n});
     auto lattice_index = Array<long long>({n});
     auto cells = Array<long long>({n, 2});
     auto active = Array<bool>({n});
@@ -188,6 +189,7 @@ class Mission {
     auto det = Array<double>({n, m});
     auto log_det_prior = Array<double>({m});
     auto p = positions.mutable_unchecked<2>();
+    auto h = headings.mutable_unchecked<1>();
     auto li = lattice_index.mutable_unchecked<1>();
     auto c = cells.mutable_unchecked<2>();
     auto a = active.mutable_unchecked<1>();
@@ -203,6 +205,7 @@ class Mission {
           ctx.robot_positions ? (*ctx.robot_positions)[i] : lattice.Point(q);
       p(i, 0) = x.x();
       p(i, 1) = x.y();
+      h(i) = ctx.robot_headings ? (*ctx.robot_headings)[i] : 0.0;
       li(i) = q;
       c(i, 0) = lattice.Ix(q);
       c(i, 1) = lattice.Iy(q);
@@ -224,6 +227,7 @@ class Mission {
     py::dict state;
     state["step"] = ctx.step;
     state["positions"] = positions;
+    state["headings"] = headings;
     state["lattice"] = lattice_index;
     state["cells"] = cells;
     state["active"] = active;

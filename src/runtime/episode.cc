@@ -70,6 +70,7 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
     sensor_rngs_.emplace_back(scenario.seed, "sensor", i);
     rule_rngs_.emplace_back(scenario.seed, "world_rule", i);
     robot_pos_.push_back(sim_.RobotPosition(i));
+    robot_heading_.push_back(sim_.RobotHeading(i));
     robot_idx_.push_back(world.robot_starts[i]);
   }
   moves_.assign(n, Move::kStay);
@@ -136,6 +137,7 @@ DecisionContext Episode::Context() const {
   ctx.eps = mission_.eps;
   ctx.robot_lattice = &robot_idx_;
   ctx.robot_positions = &robot_pos_;
+  ctx.robot_headings = &robot_heading_;
   ctx.comm = &comm_;
   ctx.beliefs = &estimate_.fused();
   ctx.central = &estimate_.central();
@@ -196,6 +198,7 @@ void Episode::Step() {
   ++step_;
   for (int i = 0; i < n; ++i) {
     robot_pos_[i] = sim_.RobotPosition(i);
+    robot_heading_[i] = sim_.RobotHeading(i);
     const int idx = lattice.NearestFree(robot_pos_[i]);
     if (idx >= 0) robot_idx_[i] = idx;
   }

@@ -45,6 +45,9 @@ struct DecisionContext {
   // Each robot's position in metres, as the physics left it (it knows its
   // own pose); may be null for hand-made contexts.
   const std::vector<Vec2>* robot_positions = nullptr;
+  // Each robot's heading, radians from +x (robots.model diff_drive; 0 for
+  // point robots, which have none); may be null.
+  const std::vector<double>* robot_headings = nullptr;
   const CommNetwork* comm = nullptr;  // this step's graph and the active robots
   const BeliefSet* beliefs = nullptr;  // robot i's fused belief in row i
   const BeliefSet* central = nullptr;  // the centralized filter; null unless

@@ -152,6 +152,8 @@ class Episode {
   const BeliefSet& central() const { return estimate_.central(); }
   const SensorModel& sensor() const { return scenario().sensor; }
   const std::vector<Vec2>& robot_positions() const { return robot_pos_; }
+  // Radians from +x (0 for point robots).
+  const std::vector<double>& robot_headings() const { return robot_heading_; }
   const std::vector<int>& robot_lattice() const { return robot_idx_; }
   // Ground truth, for scoring and video: the targets' positions and states.
   const std::vector<Vec2>& target_positions() const { return target_pos_; }
@@ -195,6 +197,7 @@ class Episode {
   std::vector<Rng> sensor_rngs_, rule_rngs_;
   Rng target_rng_;
   std::vector<Vec2> robot_pos_, target_pos_, target_prev_;
+  std::vector<double> robot_heading_;
   std::vector<Eigen::VectorXd> target_state_;
   std::vector<int> robot_idx_;
   std::vector<Move> moves_, applied_;

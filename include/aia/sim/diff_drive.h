@@ -37,7 +37,14 @@ class DiffDriveLaw {
   double HeadingError(const Vec2& p, double heading, const Vec2& goal,
                       bool* backward) const;
 
-  // Wheel speeds toward `goal` from pose (p, heading):
+  // Within near_radius (5 tolerances, at least 5 cm) of the goal, with the
+  // goal within half a tolerance of the robot's axis: the signed distance
+  // along the axis to the goal's foot (negative behind); else NaN.
+  double AlongTrack(const Vec2& p, double heading, const Vec2& goal) const;
+
+  // Wheel speeds toward `goal` from pose (p, heading). Near the goal and on
+  // its axis (AlongTrack) the robot rolls straight, v as below with the
+  // distance along the axis, no turn; else
   //   omega = clamp(k_h alpha, +-omega_max),
   //   v = min(v_max, k_d d, sqrt(2 a d)) * max(0, (cos alpha - cos alpha_d)
   //       / (1 - cos alpha_d)), backward when the goal is behind,
@@ -48,11 +55,14 @@ class DiffDriveLaw {
   WheelSpeeds Control(const Vec2& p, double heading, const Vec2& goal) const;
 
   // Wheel travel left to the goal, metres: the distance plus the arc each
-  // wheel rolls to turn through the heading error. A robot that has not
+  // wheel rolls to turn through the heading error (the distance alone where
+  // it rolls straight, AlongTrack). A robot that has not
   // reduced it is making no progress (stalled), whether it drives or turns.
   double ToGo(const Vec2& p, double heading, const Vec2& goal) const;
 
   double half_track() const { return half_track_; }
+  // min(v_max, k_d d, sqrt(2 a d)): the speed for a distance d.
+  double Speed(double distance) const;
   double wheel_radius() const { return wheel_radius_; }
 
  private:
@@ -65,6 +75,8 @@ class DiffDriveLaw {
   double heading_gain_ = 4.0;   // 1/s
   double cos_drive_ = 0.866;    // cos(drive_angle)
   double stop_radius_ = 0.0;    // m
+  double near_radius_ = 0.05;   // m
+  double lateral_slack_ = 0.0;  // m
   bool reverse_ = true;
 };
 
