@@ -177,6 +177,12 @@ std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
                   // waypoint, and steps whose timeout found it on its way.
                   {"robot_stalls", e.sim().robot_stalls()},
                   {"robot_timeouts", e.sim().robot_timeouts()}};
+  // Where the robots' time went (robot-seconds): what real motion costs.
+  const Simulation::TimeUse& use = e.sim().time_use();
+  d["physics"]["robot_seconds"] = {{"driving", use.driving},
+                                   {"turning", use.turning},
+                                   {"blocked", use.blocked},
+                                   {"arrived", use.arrived}};
   // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
   // handled contact overflow means the physics went wrong somewhere.
   const PhysicsMemoryStats mem = e.sim().memory();

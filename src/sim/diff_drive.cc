@@ -87,7 +87,7 @@ WheelSpeeds DiffDriveLaw::Control(const Vec2& p, double heading,
   if (backward) v = -v;
   const double w = std::copysign(turn / half_track_, omega);
   return {(v - w * half_track_) / wheel_radius_,
-          (v + w * half_track_) / wheel_radius_};
+          (v + w * half_track_) / wheel_radius_, fade == 0.0};
 }
 
 double DiffDriveLaw::ToGo(const Vec2& p, double heading,

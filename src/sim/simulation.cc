@@ -125,6 +125,7 @@ Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
   targets_.assign(waypoints_.size(), Vec2::Zero());
   robot_stalls_.assign(waypoints_.size(), 0);
   robot_timeouts_.assign(waypoints_.size(), 0);
+  turning_.assign(waypoints_.size(), 0);
   mj_forward(m_, data_.get());
 }
 
@@ -157,6 +158,7 @@ void Simulation::DriveWheels() {
   for (int i = 0; i < n; ++i) {
     const WheelSpeeds w =
         pm.law_.Control(RobotPosition(i), RobotHeading(i), waypoints_[i]);
+    turning_[i] = w.turning ? 1 : 0;
     const int left = pm.wheel_dof_[i][0], right = pm.wheel_dof_[i][1];
     d->qfrc_applied[left] =
         MotorTorque(pm.wheel_kv_, w.left, d->qvel[left], pm.max_torque_);
@@ -372,11 +374,16 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
     bool all_arrived = true;
     all_settled = true;
     for (int i = 0; i < n; ++i) {
-      if (arrived(i)) continue;
+      if (arrived(i)) {
+        time_use_.arrived += dt;
+        continue;
+      }
       all_arrived = false;
-      if (!settled(i, elapsed)) {
+      if (settled(i, elapsed)) {
+        time_use_.blocked += dt;
+      } else {
         all_settled = false;
-        break;
+        (turning_[i] ? time_use_.turning : time_use_.driving) += dt;
       }
     }
     if (all_arrived) {

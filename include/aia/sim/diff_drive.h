@@ -22,6 +22,7 @@ double YawOf(const double quat[4]);
 struct WheelSpeeds {
   double left = 0.0;
   double right = 0.0;
+  bool turning = false;  // turning in place: the heading is beyond drive_angle
 };
 
 // The law with its constants derived once from the scenario.

@@ -171,6 +171,14 @@ class Simulation {
   // waypoint, and those whose timeout found it still on its way.
   const std::vector<long>& robot_stalls() const { return robot_stalls_; }
   const std::vector<long>& robot_timeouts() const { return robot_timeouts_; }
+  // Where the robots' simulated time went, robot-seconds summed over the
+  // robots and the decision steps: on their way (driving; turning in place,
+  // wheeled robots only), blocked (stalled short of the waypoint: no
+  // progress, or slower than 1 cm/s) or arrived (waiting for the others).
+  struct TimeUse {
+    double driving = 0.0, turning = 0.0, blocked = 0.0, arrived = 0.0;
+  };
+  const TimeUse& time_use() const { return time_use_; }
 
   // Seconds of wall time spent inside mj_step, its call count, and the
   // contacts MuJoCo held after those calls, summed.
@@ -203,6 +211,8 @@ class Simulation {
   std::vector<double> progress_;  // distance to the waypoint at a checkpoint
   std::vector<std::uint8_t> stuck_;
   std::vector<long> robot_stalls_, robot_timeouts_;
+  std::vector<std::uint8_t> turning_;  // per robot, its controller's last call
+  TimeUse time_use_;
   std::array<long, mjNWARNING> warnings_{};
   int grows_ = 0, max_contacts_ = 0, max_constraints_ = 0;
   long max_stack_ = 0;
