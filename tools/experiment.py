@@ -23,6 +23,11 @@ command each, built on `build/aia`:
                hand-made worlds of scenarios/long, the robustness scenario
                and a moving target (aia run): success, flowtime increase (or
                mean steps), reversal share, with standard errors.
+  motion       every policy with point and with wheeled (robots.model
+               diff_drive) robots on the same worlds (open clutter, rooms and
+               doors, an 80-robot crowd): decision steps, simulated seconds,
+               and where the robots' time went (driving, turning in place,
+               blocked, waiting for the step's slowest robot).
 
 Each writes, under --out: CSV, summary.json and PNG plots (and MP4 videos);
 --quick shrinks it to about a minute. Every piece already written is kept:
@@ -33,6 +38,7 @@ Usage:
   tools/experiment.py tracking --out results/tracking [--quick]
   tools/experiment.py robustness --out results/robustness [--quick]
   tools/experiment.py generalization --out results/generalization [--quick]
+  tools/experiment.py motion --out results/motion [--quick]
 """
 
 import argparse
@@ -684,6 +690,99 @@ def generalization(args):
                         f"generalization: seeds from {args.seed_base}, error bars: 1 s.e.")
 
 
+# --------------------------------------------------------------------- motion
+
+MOTION_MODELS = ["point", "diff_drive"]
+
+
+def motion_conditions(quick):
+    """(name, scenario text): generated worlds where real motion costs in
+    different ways: open clutter, doors, a crowd."""
+    conds = [("open 20 m, 10 robots",
+              "workspace: {obstacles: {random: {count: 30}}}\n"
+              "robots: {count: 10}\ntargets: {count: 10}\n"),
+             ("rooms 20 m, 5 robots",
+              "workspace: {obstacles: {generator: {type: rooms}}}\n"
+              "robots: {count: 5}\ntargets: {count: 5}\n")]
+    if not quick:
+        conds.append(("crowd 20 m, 80 robots",
+                      "workspace: {obstacles: {random: {count: 30}}}\n"
+                      "robots: {count: 80}\ntargets: {count: 80}\n"))
+    return conds
+
+
+def motion_run(args, name, scenario, model, policy, seed):
+    folder = os.path.join(args.out, "runs", slug(name), f"{model}.{policy}.{seed}")
+    path = os.path.join(folder, "summary.json")
+    if not os.path.isfile(path):
+        cmd = [args.aia, "run", scenario, "--policy", policy, "--seed", str(seed),
+               "--set", f"robots.model={model}", "--out", folder, "--quiet"]
+        for kv in args.set:
+            cmd += ["--set", kv]
+        run(cmd, quiet=True)
+    s = json.load(open(path))
+    physics = json.load(open(os.path.join(folder, "diagnostics.json")))["physics"]
+    use = physics.get("robot_seconds", {})
+    robot_steps = max(1, s["steps"] * s["robots"])
+    total = sum(use.values()) or 1.0
+    return {"success": 1.0 if s["success"] else 0.0,
+            "steps": float(s["flowtime"] if s["success"] else s["steps"]),
+            "seconds": s["mission_seconds"],
+            "seconds_per_step": physics["sim_seconds"] / max(1, s["steps"]),
+            "stalls": s["robot_stalls"] / robot_steps,
+            "timeouts": s["robot_timeouts"] / robot_steps,
+            **{f"share_{k}": use.get(k, 0.0) / total
+               for k in ("driving", "turning", "blocked", "arrived")}}
+
+
+def motion(args):
+    """Every policy with point and with wheeled (diff_drive) robots on the
+    same worlds and seeds: decision steps, simulated seconds, and where the
+    robots' time went (driving, turning in place, blocked, waiting for the
+    step's slowest robot)."""
+    policies = args.policies or (["igbnet", "greedy"] if args.quick else GEN_POLICIES)
+    seeds = args.seeds or (2 if args.quick else 10)
+    t0 = time.time()
+    os.makedirs(os.path.join(args.out, "scenarios"), exist_ok=True)
+    table = []
+    keys = ["success", "steps", "seconds", "seconds_per_step", "stalls", "timeouts",
+            "share_driving", "share_turning", "share_blocked", "share_arrived"]
+    for name, text in motion_conditions(args.quick):
+        scenario = os.path.join(args.out, "scenarios", slug(name) + ".yaml")
+        write_atomic(scenario, f"name: {slug(name)}\n{text}"
+                               f"mission: {{max_steps: {args.max_steps}}}\n")
+        print(f"[motion] {name} ...", flush=True)
+        jobs = [(m, p, args.seed_base + i) for m in MOTION_MODELS for p in policies
+                for i in range(seeds)]
+        with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+            results = list(pool.map(
+                lambda j: (j, motion_run(args, name, scenario, *j)), jobs))
+        for model in MOTION_MODELS:
+            for policy in policies:
+                rs = [r for (m, p, _), r in results if m == model and p == policy]
+                row = {"condition": name, "model": model, "policy": policy, "n": len(rs)}
+                for k in keys:
+                    row[k], row[k + "_se"] = mean_se([r[k] for r in rs])
+                table.append(row)
+    header = ["condition", "model", "policy", "n"] + [x for k in keys for x in (k, k + "_se")]
+    write_csv(os.path.join(args.out, "motion.csv"), header,
+              [[r[h] for h in header] for r in table])
+    lines = ["| condition | policy | model | success | steps | mission seconds | s / step "
+             "| stalls / robot-step | time: driving / turning / blocked / waiting |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in sorted(table, key=lambda r: (r["condition"], r["policy"])):
+        lines.append(
+            f"| {r['condition']} | {r['policy']} | {r['model']} | {r['success']:.2f} "
+            f"| {r['steps']:.1f} ± {r['steps_se']:.1f} | {r['seconds']:.1f} ± "
+            f"{r['seconds_se']:.1f} | {r['seconds_per_step']:.2f} | {r['stalls']:.3f} "
+            f"| {r['share_driving']:.2f} / {r['share_turning']:.2f} / "
+            f"{r['share_blocked']:.2f} / {r['share_arrived']:.2f} |")
+    write_atomic(os.path.join(args.out, "motion.md"), "\n".join(lines) + "\n")
+    write_json(os.path.join(args.out, "summary.json"), {
+        "experiment": "motion", "policies": policies, "seeds": seeds,
+        "seed_base": args.seed_base, "max_steps": args.max_steps, "sets": args.set,
+        "wall_s_this_call": time.time() - t0, "rows": table})
+
 
 def main(argv=None):
     parser = argparse.ArgumentParser(
@@ -730,6 +829,15 @@ def main(argv=None):
                    help="aia run processes at once for scenario files")
     g.add_argument("--only", help="conditions whose name or group contains one of these "
                                   "comma-separated words, e.g. 'team,structured'")
+    mo = sub.add_parser("motion", parents=[common],
+                        help="point against wheeled robots: steps, seconds, where time goes")
+    mo.add_argument("--policies", type=lambda t: t.split(","),
+                    help="default: " + ",".join(GEN_POLICIES) + " (quick: igbnet,greedy)")
+    mo.add_argument("--seeds", type=int, help="worlds per condition (default 10; quick 2)")
+    mo.add_argument("--seed-base", type=int, default=GEN_SEED_BASE,
+                    help=f"first seed (default {GEN_SEED_BASE})")
+    mo.add_argument("--max-steps", type=int, default=200, help="mission.max_steps (200)")
+    mo.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="runs at once")
     args = parser.parse_args(argv)
     if not os.access(args.aia, os.X_OK):
         print(f"error: {args.aia}: not built (run tools/bootstrap.sh)", file=sys.stderr)
@@ -745,7 +853,7 @@ def main(argv=None):
     os.makedirs(args.out, exist_ok=True)
     try:
         {"scalability": scalability, "tracking": tracking, "robustness": robustness,
-         "generalization": generalization}[args.experiment](args)
+         "generalization": generalization, "motion": motion}[args.experiment](args)
     except Usage as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
