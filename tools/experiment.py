@@ -698,14 +698,14 @@ MOTION_MODELS = ["point", "diff_drive"]
 def motion_conditions(quick):
     """(name, scenario text): generated worlds where real motion costs in
     different ways: open clutter, doors, a crowd."""
-    conds = [("open 20 m, 10 robots",
+    conds = [("open 20 m: 10 robots",
               "workspace: {obstacles: {random: {count: 30}}}\n"
               "robots: {count: 10}\ntargets: {count: 10}\n"),
-             ("rooms 20 m, 5 robots",
+             ("rooms 20 m: 5 robots",
               "workspace: {obstacles: {generator: {type: rooms}}}\n"
               "robots: {count: 5}\ntargets: {count: 5}\n")]
     if not quick:
-        conds.append(("crowd 20 m, 80 robots",
+        conds.append(("crowd 20 m: 80 robots",
                       "workspace: {obstacles: {random: {count: 30}}}\n"
                       "robots: {count: 80}\ntargets: {count: 80}\n"))
     return conds
@@ -842,7 +842,7 @@ def main(argv=None):
     if not os.access(args.aia, os.X_OK):
         print(f"error: {args.aia}: not built (run tools/bootstrap.sh)", file=sys.stderr)
         return 2
-    for name in ("seeds", "file_seeds"):
+    for name in ("seeds", "file_seeds", "max_steps"):
         v = getattr(args, name, None)
         if v is not None and v < 1:
             print(f"error: --{name}: must be at least 1", file=sys.stderr)

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "support/test_support.h"
 
@@ -104,12 +106,59 @@ TEST(ExperimentTest, GeneralizationSuiteWritesItsTable) {
   fs::remove_all(dir);
 }
 
+// Point against wheeled robots on the same worlds: a row per condition,
+// policy and model; a wheeled robot's decision step takes several times a
+// point robot's simulated time, only wheeled robots turn in place, and the
+// shares of the robots' time add up to one.
+TEST(ExperimentTest, MotionComparesPointAndWheeledRobots) {
+  if (!HaveMatplotlib()) GTEST_SKIP() << "no python3-matplotlib";
+  const std::string dir = testing::MakeTempDir("aia_experiment_");
+  const auto m = RunCommand(Experiment(
+      "motion --quick --policies greedy --seeds 1 --max-steps 12 --jobs 2 "
+      "--out " + dir + "/m"));
+  ASSERT_EQ(m.exit_code, 0) << m.out << m.err;
+  for (const char* f : {"motion.csv", "motion.md", "summary.json"})
+    EXPECT_TRUE(fs::exists(dir + "/m/" + f)) << f;
+  std::istringstream table(ReadFile(dir + "/m/motion.csv"));
+  std::string line;
+  std::getline(table, line);
+  ASSERT_EQ(line.rfind("condition,model,policy,n,success,success_se,steps,", 0),
+            0u)
+      << line;
+  std::vector<std::string> header;
+  for (std::istringstream h(line); std::getline(h, line, ',');)
+    header.push_back(line);
+  auto column = [&](const std::vector<std::string>& row, const char* name) {
+    const auto at = std::find(header.begin(), header.end(), name);
+    return std::stod(row.at(at - header.begin()));
+  };
+  int rows = 0;
+  while (std::getline(table, line)) {
+    std::vector<std::string> row;
+    for (std::istringstream r(line); std::getline(r, line, ',');)
+      row.push_back(line);
+    ++rows;
+    const bool wheeled = row.at(1) == "diff_drive";
+    const double per_step = column(row, "seconds_per_step");
+    EXPECT_GT(per_step, wheeled ? 0.7 : 0.0) << line;
+    if (!wheeled) EXPECT_LT(per_step, 0.5) << line;
+    EXPECT_EQ(column(row, "share_turning") > 0.0, wheeled) << line;
+    EXPECT_NEAR(column(row, "share_driving") + column(row, "share_turning") +
+                    column(row, "share_blocked") + column(row, "share_arrived"),
+                1.0, 1e-5);  // the CSV's six digits
+  }
+  EXPECT_EQ(rows, 2 * 2);
+  fs::remove_all(dir);
+}
+
 TEST(ExperimentTest, BadArgumentsExitWith2) {
   if (!HaveMatplotlib()) GTEST_SKIP() << "no python3-matplotlib";
   const std::string dir = testing::MakeTempDir("aia_experiment_");
   EXPECT_EQ(
       RunCommand(Experiment("robustness --seeds 0 --out " + dir)).exit_code, 2);
   EXPECT_EQ(RunCommand(Experiment("bogus --out " + dir)).exit_code, 2);
+  EXPECT_EQ(
+      RunCommand(Experiment("motion --max-steps 0 --out " + dir)).exit_code, 2);
   const auto bad = RunCommand(Experiment(
       "robustness --quick --no-video --set robots.count=-1 --out " + dir));
   EXPECT_EQ(bad.exit_code, 2) << bad.out << bad.err;
