@@ -239,11 +239,12 @@ void TargetsConfig::Validate(const FieldChecker& check) {
   if (has_list) count = static_cast<int>(list.size());
 }
 
-void PhysicsConfig::Validate(const FieldChecker& check) {
-  // The waypoint actuator is a critically damped spring: explicit
-  // integration is stable while timestep * omega stays well below 1.
+void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model) {
+  // A point robot's waypoint actuator is a critically damped spring:
+  // explicit integration is stable while timestep * omega stays well below
+  // 1. (A wheeled robot's motors are damped implicitly.)
   const double omega_dt = timestep * std::sqrt(kp / robot_mass);
-  if (omega_dt > 0.5) {
+  if (model == RobotModel::kPoint && omega_dt > 0.5) {
     check.Fail(kp, "is too stiff for physics.timestep " +
                        FormatNumber(timestep) + " and robot_mass " +
                        FormatNumber(robot_mass) +
@@ -251,6 +252,15 @@ void PhysicsConfig::Validate(const FieldChecker& check) {
                        FormatNumber(omega_dt) +
                        ", at most 0.5 keeps the simulation stable (lower kp "
                        "or the timestep)");
+  }
+  const double timeout = StepTimeout(model);
+  const double steps = timeout / timestep;
+  if (steps > limits::kMaxPhysicsStepsPerDecision) {
+    check.Fail(timestep, "makes " + FormatNumber(steps) +
+                             " physics steps in one decision step "
+                             "(step_timeout " +
+                             FormatNumber(timeout) + " / timestep); at most " +
+                             FormatNumber(limits::kMaxPhysicsStepsPerDecision));
   }
 }
 
@@ -316,15 +326,7 @@ void Scenario::Validate(const FieldChecker& check) {
                    FormatPair(random->max_size.x(), random->max_size.y()));
   }
   if (workspace.obstacles.generator) CheckGenerator(*this, check);
-  const double timeout = physics.StepTimeout(robots.model);
-  const double steps = timeout / physics.timestep;
-  if (steps > limits::kMaxPhysicsStepsPerDecision) {
-    check.Fail(physics.timestep,
-               "makes " + FormatNumber(steps) +
-                   " physics steps in one decision step (step_timeout " +
-                   FormatNumber(timeout) + " / timestep); at most " +
-                   FormatNumber(limits::kMaxPhysicsStepsPerDecision));
-  }
+  physics.Validate(check, robots.model);
   // Obstacles are checked against positions when the world is built; here
   // only the workspace bounds [0, size] are.
   for (const Vec2& p : robots.start) {

@@ -529,9 +529,10 @@ struct PhysicsConfig {
     return model == RobotModel::kDiffDrive ? kDiffDriveStepTimeout
                                            : kPointStepTimeout;
   }
-  // The actuator is stable at this timestep; a decision step is at most
-  // 1e6 timesteps.
-  void Validate(const FieldChecker& check);
+  // A point robot's spring is stable at this timestep; a decision step is
+  // at most 1e6 timesteps. Called by Scenario::Validate, which knows the
+  // robot model.
+  void Validate(const FieldChecker& check, RobotModel model);
 };
 
 struct RenderConfig {
