@@ -74,8 +74,8 @@ WheelSpeeds DiffDriveLaw::Control(const Vec2& p, double heading,
   }
   bool backward = false;
   const double alpha = HeadingError(p, heading, goal, &backward);
-  const double omega = std::clamp(heading_gain_ * alpha, -max_turn_rate_,
-                                  max_turn_rate_);
+  const double omega =
+      std::clamp(heading_gain_ * alpha, -max_turn_rate_, max_turn_rate_);
   // Forward speed: the distance's, braking in time, faded out as the
   // heading error grows to drive_angle (turn in place beyond it).
   const double fade =

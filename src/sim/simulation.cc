@@ -213,8 +213,8 @@ void Simulation::StepPhysics() {
 }
 
 void Simulation::Grow() {
-  const MujocoSizes sizes = MujocoSizesFor(m_->nbody, m_->nv,
-                                           2L * m_->nconmax, model_->hessians_);
+  const MujocoSizes sizes =
+      MujocoSizesFor(m_->nbody, m_->nv, 2L * m_->nconmax, model_->hessians_);
   const double bytes = MujocoDataBytes(sizes, m_->nv, m_->nu);
   if (bytes > kMaxPhysicsBytes) {
     char what[400];
@@ -326,8 +326,8 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
   const PhysicsConfig& physics = model_->physics();
   const bool wheeled = robot_model() == RobotModel::kDiffDrive;
   const double dt = m_->opt.timestep;
-  const int max_steps =
-      std::max(1, static_cast<int>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
+  const int max_steps = std::max(
+      1, static_cast<int>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
   const double tol = physics.tolerance;
   const double tol2 = tol * tol;
   const double stall_speed =

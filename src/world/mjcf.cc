@@ -42,9 +42,9 @@ void WritePointRobot(const World& world, const Scenario& s, int i,
     << "_y\" type=\"slide\" axis=\"0 1 0\" damping=\"" << Num(damping)
     << "\"/>\n"
     << "      <geom type=\"cylinder\" size=\"" << Num(world.map.robot_radius())
-    << " " << Num(kRobotHalfHeight) << "\" mass=\"" << Num(mass)
-    << "\" rgba=\"" << c[0] << " " << c[1] << " " << c[2] << " 1\" group=\""
-    << kGroupAgent << "\"/>\n"
+    << " " << Num(kRobotHalfHeight) << "\" mass=\"" << Num(mass) << "\" rgba=\""
+    << c[0] << " " << c[1] << " " << c[2] << " 1\" group=\"" << kGroupAgent
+    << "\"/>\n"
     << "    </body>\n";
 }
 
@@ -107,7 +107,8 @@ void WriteDiffDriveRobot(const World& world, const Scenario& s, int i,
       << " 0.005 0.0001\" contype=\"2\" conaffinity=\"0\" group=\""
       << kGroupWheel << "\"/>\n"
       << "        <geom type=\"cylinder\" size=\"" << Num(r) << " "
-      << Num(kDiffDriveWheelHalfWidth) << "\" euler=\"1.5707963 0 0\" mass=\"0\" "
+      << Num(kDiffDriveWheelHalfWidth)
+      << "\" euler=\"1.5707963 0 0\" mass=\"0\" "
       << "contype=\"0\" conaffinity=\"0\" rgba=\"0.15 0.15 0.15 1\" "
          "group=\""
       << kGroupAgent << "\"/>\n"
@@ -240,7 +241,8 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
     << (wheeled ? "\" gravity=\"0 0 -9.81\"" : "\" gravity=\"0 0 0\"")
     << (solver.newton ? "" : " solver=\"CG\"") << "/>\n";
   const MujocoSizes sizes = MujocoSizesFor(
-      bodies, dofs, contacts > 0 ? contacts : InitialContacts(n, s.robots.model),
+      bodies, dofs,
+      contacts > 0 ? contacts : InitialContacts(n, s.robots.model),
       solver.hessians);
   x << "  <size njmax=\"" << sizes.njmax << "\" nconmax=\"" << sizes.nconmax
     << "\" nstack=\"" << sizes.nstack << "\"/>\n";

@@ -502,10 +502,10 @@ World World::Build(const Scenario& s) {
                      static_cast<int>(w.map.obstacles().size());
   if (bodies > kMaxBodies)
     Fail(s, s.targets.list.empty() ? "targets.count" : "targets.list",
-         std::to_string(n) + (wheeled ? " diff_drive robots (3 bodies each), "
-                                      : " robots, ") +
-             std::to_string(w.NumTargets()) +
-             " targets and " + std::to_string(w.map.obstacles().size()) +
+         std::to_string(n) +
+             (wheeled ? " diff_drive robots (3 bodies each), " : " robots, ") +
+             std::to_string(w.NumTargets()) + " targets and " +
+             std::to_string(w.map.obstacles().size()) +
              " obstacle boxes make " + std::to_string(bodies) +
              " bodies; aia simulates at most " + std::to_string(kMaxBodies));
 

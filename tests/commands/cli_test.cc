@@ -316,8 +316,9 @@ TEST(CliTest, DiffDriveRunsRepeatAndCountSeconds) {
       << summary;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(
-      summary, m, std::regex("\"steps\": ([0-9]+)[^}]*\"mission_seconds\": "
-                             "([0-9.e+-]+)")))
+      summary, m,
+      std::regex("\"steps\": ([0-9]+)[^}]*\"mission_seconds\": "
+                 "([0-9.e+-]+)")))
       << summary;
   EXPECT_GT(std::stod(m[2]), std::stoi(m[1]) * 0.5 / 0.7);
   const std::string diagnostics = ReadFile(a + "/diagnostics.json");
@@ -325,16 +326,16 @@ TEST(CliTest, DiffDriveRunsRepeatAndCountSeconds) {
       diagnostics,
       std::regex("\"robot_stalls\": \\[(\\s*[0-9]+,){4}\\s*[0-9]+\\s*\\]")))
       << diagnostics;
-  const auto e = RunAia({"eval", "--sizes", "2x2", "--seeds", "2",
-                         "--policies", "greedy", "--set",
-                         "robots.model=diff_drive", "--out", b + "/eval",
-                         "--quiet"});
+  const auto e = RunAia({"eval", "--sizes", "2x2", "--seeds", "2", "--policies",
+                         "greedy", "--set", "robots.model=diff_drive", "--out",
+                         b + "/eval", "--quiet"});
   ASSERT_EQ(e.exit_code, 0) << e.err;
   const std::string runs = ReadFile(b + "/eval/runs.csv");
   std::smatch row;
   ASSERT_TRUE(std::regex_search(
-      runs, row, std::regex("\n2x2,0,greedy,1,([0-9]+),[^,]*,[^,]*,[^,]*,[^,]*,"
-                            "([0-9.]+),")))
+      runs, row,
+      std::regex("\n2x2,0,greedy,1,([0-9]+),[^,]*,[^,]*,[^,]*,[^,]*,"
+                 "([0-9.]+),")))
       << runs;
   EXPECT_GT(std::stod(row[2]), std::stoi(row[1]) * 0.5 / 0.7);
   fs::remove_all(a);

@@ -47,8 +47,7 @@ TEST(EvalTest, TheRunsRowRoundTripsThroughItsDeclaration) {
   r.timeouts = 1;
   r.wall_s = 1.5;
   const std::string line = CsvLine(r);
-  EXPECT_EQ(line,
-            "10x10,931000,igbnet,1,17,15,9,0.0417,2,21.288,3,1,1.5000\n");
+  EXPECT_EQ(line, "10x10,931000,igbnet,1,17,15,9,0.0417,2,21.288,3,1,1.5000\n");
   EvalRow back;
   ASSERT_TRUE(ParseCsvLine(line.substr(0, line.size() - 1), &back));
   EXPECT_EQ(CsvLine(back), line);
@@ -164,8 +163,8 @@ TEST(EvalTest, ReversalColumnsAndRowsOfAnOlderLayout) {
             0u);
   // And as the older one did: no reversal columns either.
   const std::string older = std::regex_replace(
-      std::regex_replace(previous,
-                         std::regex(",[0-9.]+,[0-9]+(,[0-9.]+\n)"), "$1"),
+      std::regex_replace(previous, std::regex(",[0-9.]+,[0-9]+(,[0-9.]+\n)"),
+                         "$1"),
       std::regex("reversal_share,longest_reversal_run,"), "");
   for (const auto& [layout, lacks] :
        {std::pair{previous, "no mission_seconds, stalls, timeouts"},

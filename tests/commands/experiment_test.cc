@@ -115,7 +115,8 @@ TEST(ExperimentTest, MotionComparesPointAndWheeledRobots) {
   const std::string dir = testing::MakeTempDir("aia_experiment_");
   const auto m = RunCommand(Experiment(
       "motion --quick --policies greedy --seeds 1 --max-steps 12 --jobs 2 "
-      "--out " + dir + "/m"));
+      "--out " +
+      dir + "/m"));
   ASSERT_EQ(m.exit_code, 0) << m.out << m.err;
   for (const char* f : {"motion.csv", "motion.md", "summary.json"})
     EXPECT_TRUE(fs::exists(dir + "/m/" + f)) << f;

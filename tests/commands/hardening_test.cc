@@ -135,7 +135,8 @@ TEST(HardeningTest, ResumedEvalReportsAndRerunsBadRows) {
   std::string edited =
       std::regex_replace(lines, std::regex("\n2x2,2,greedy,[^\n]*\n"),
                          "\n2x2,2,greedy,1,-500,10,5,0.0000,0,1.000,0,0,0.1\n");
-  edited += first_row + "hello,world\n2x2,3,greedy,1,4,4,4,0.0000,0,1.000,0,0,0.1abc\n";
+  edited += first_row +
+            "hello,world\n2x2,3,greedy,1,4,4,4,0.0000,0,1.000,0,0,0.1abc\n";
   { std::ofstream(a + "/runs.csv") << edited; }
   const auto r = eval(a);
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -48,7 +48,8 @@ TEST(DiffDriveLawTest, WheelSpeedsWorkedOutByHand) {
   // 60 degrees to the left: beyond the drive angle, so it turns in place at
   // the capped rate pi rad/s (4 * 1.047 > pi): rims at pi * 0.115 m/s, the
   // right wheel forward.
-  w = law.Control(o, 0.0, o + 2.0 * Vec2(std::cos(60 * kDeg), std::sin(60 * kDeg)));
+  w = law.Control(o, 0.0,
+                  o + 2.0 * Vec2(std::cos(60 * kDeg), std::sin(60 * kDeg)));
   EXPECT_NEAR(w.right, kPi * 0.115 / 0.035, 1e-9);
   EXPECT_NEAR(w.left, -kPi * 0.115 / 0.035, 1e-9);
   // Straight behind: it reverses, no turn.
@@ -110,13 +111,13 @@ Scenario WheeledScenario(const std::string& starts, double heading_deg,
                          const std::string& extra = "",
                          const std::string& diff_drive = "") {
   char yaml[800];
-  std::snprintf(yaml, sizeof(yaml),
-                "robots: {count: %d, start: %s, model: diff_drive, "
-                "diff_drive: {%sstart_heading: %g}}\n"
-                "targets: {list: [{position: [19, 19]}]}\n%s",
-                static_cast<int>(std::count(starts.begin(), starts.end(), '[')) -
-                    1,
-                starts.c_str(), diff_drive.c_str(), heading_deg, extra.c_str());
+  std::snprintf(
+      yaml, sizeof(yaml),
+      "robots: {count: %d, start: %s, model: diff_drive, "
+      "diff_drive: {%sstart_heading: %g}}\n"
+      "targets: {list: [{position: [19, 19]}]}\n%s",
+      static_cast<int>(std::count(starts.begin(), starts.end(), '[')) - 1,
+      starts.c_str(), diff_drive.c_str(), heading_deg, extra.c_str());
   return ScenarioFromYaml(yaml);
 }
 
@@ -154,16 +155,17 @@ TEST(DiffDriveTest, ModelHasWheelsOnHingesAndNoActuators) {
 TEST(DiffDriveTest, ReachesEachNeighbourFromAnyHeading) {
   const Vec2 start(5.25, 5.25);
   for (int heading = -180; heading < 180; heading += 30) {
-    for (const Vec2& offset : {Vec2(0.5, 0), Vec2(-0.5, 0), Vec2(0, 0.5),
-                               Vec2(0, -0.5)}) {
+    for (const Vec2& offset :
+         {Vec2(0.5, 0), Vec2(-0.5, 0), Vec2(0, 0.5), Vec2(0, -0.5)}) {
       const Scenario s = WheeledScenario("[[5.25, 5.25]]", heading);
       const World w = World::Build(s);
       Simulation sim(w, s);
       EXPECT_NEAR(WrapAngle(sim.RobotHeading(0) - heading * kDeg), 0.0, 1e-6);
       sim.SetWaypoint(0, start + offset);
       double min_upright = 1.0;
-      const PhysicsStepStats st = sim.AdvanceToWaypoints(
-          [&](double) { min_upright = std::min(min_upright, Upright(sim, 0)); });
+      const PhysicsStepStats st = sim.AdvanceToWaypoints([&](double) {
+        min_upright = std::min(min_upright, Upright(sim, 0));
+      });
       SCOPED_TRACE("heading " + std::to_string(heading) + ", to " +
                    std::to_string(offset.x()) + ", " +
                    std::to_string(offset.y()));
@@ -209,9 +211,8 @@ TEST(DiffDriveTest, NeverPassesThroughAWall) {
     Simulation sim(w, s);
     sim.SetWaypoint(0, {6.75, 5.25});
     double max_x = 0.0;
-    const PhysicsStepStats st = sim.AdvanceToWaypoints([&](double) {
-      max_x = std::max(max_x, sim.RobotPosition(0).x());
-    });
+    const PhysicsStepStats st = sim.AdvanceToWaypoints(
+        [&](double) { max_x = std::max(max_x, sim.RobotPosition(0).x()); });
     EXPECT_FALSE(st.all_arrived);
     EXPECT_FALSE(st.timed_out);
     EXPECT_EQ(st.stalled, 1);
@@ -225,8 +226,8 @@ TEST(DiffDriveTest, NeverPassesThroughAWall) {
 TEST(DiffDriveTest, HeadOnCollisionKeepsBothUprightAndApart) {
   // Two robots facing each other 1.5 m apart (robot 1 first turns around:
   // no reversing), then each sent 1.5 m through the other.
-  const Scenario s = WheeledScenario("[[5.25, 5.25], [7.25, 5.25]]", 0.0,
-                                     "", "reverse: false, ");
+  const Scenario s = WheeledScenario("[[5.25, 5.25], [7.25, 5.25]]", 0.0, "",
+                                     "reverse: false, ");
   const World w = World::Build(s);
   Simulation sim(w, s);
   sim.SetWaypoint(1, {6.75, 5.25});
@@ -236,12 +237,12 @@ TEST(DiffDriveTest, HeadOnCollisionKeepsBothUprightAndApart) {
   sim.SetWaypoint(1, {5.25, 5.25});
   double min_gap = 1e9, min_upright = 1.0, max_z = 0.0, closing = 0.0;
   const PhysicsStepStats st = sim.AdvanceToWaypoints([&](double) {
-    min_gap = std::min(min_gap,
-                       (sim.RobotPosition(0) - sim.RobotPosition(1)).norm());
+    min_gap =
+        std::min(min_gap, (sim.RobotPosition(0) - sim.RobotPosition(1)).norm());
     min_upright = std::min({min_upright, Upright(sim, 0), Upright(sim, 1)});
     max_z = std::max(max_z, sim.data()->qpos[2]);
-    closing = std::max(closing,
-                       sim.RobotVelocity(0).x() - sim.RobotVelocity(1).x());
+    closing =
+        std::max(closing, sim.RobotVelocity(0).x() - sim.RobotVelocity(1).x());
   });
   EXPECT_FALSE(st.all_arrived);
   EXPECT_EQ(st.stalled, 2);             // blocked by each other
@@ -264,7 +265,8 @@ TEST(DiffDriveTest, StepsAreTheSameEveryTime) {
     for (const auto& step : plan) {
       for (int i = 0; i < 3; ++i) sim.SetWaypoint(i, step[i]);
       out.push_back(sim.AdvanceToWaypoints().substeps);
-      for (int q = 0; q < sim.model()->nq; ++q) out.push_back(sim.data()->qpos[q]);
+      for (int q = 0; q < sim.model()->nq; ++q)
+        out.push_back(sim.data()->qpos[q]);
     }
     return out;
   };

@@ -319,8 +319,7 @@ TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
     const std::size_t at = r.out.find("Max difference : ");
     ASSERT_NE(at, std::string::npos) << r.out;
     const double difference = std::stod(r.out.substr(at + 17));
-    EXPECT_LE(difference,
-              s.robots.model == RobotModel::kDiffDrive ? 1e-6 : 0.0)
+    EXPECT_LE(difference, s.robots.model == RobotModel::kDiffDrive ? 1e-6 : 0.0)
         << r.out;
     std::filesystem::remove_all(dir);
   }

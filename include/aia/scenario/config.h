@@ -242,8 +242,8 @@ enum class RobotModel {
   kDiffDrive,
 };
 constexpr std::array<EnumName<RobotModel>, 2> EnumNames(RobotModel) {
-  return {{{RobotModel::kPoint, "point"},
-           {RobotModel::kDiffDrive, "diff_drive"}}};
+  return {
+      {{RobotModel::kPoint, "point"}, {RobotModel::kDiffDrive, "diff_drive"}}};
 }
 
 // A differential-drive robot's body, motors and waypoint controller
@@ -353,8 +353,8 @@ struct RobotsConfig {
     a->Visit(AIA_FIELD(model).Doc(
         "point: a disc on slide joints pulled to its waypoint; diff_drive: a "
         "wheeled body driven by its motors (robots.diff_drive)"));
-    a->Visit(AIA_FIELD(diff_drive).Doc(
-        "the diff_drive model's body, motors and controller"));
+    a->Visit(AIA_FIELD(diff_drive)
+                 .Doc("the diff_drive model's body, motors and controller"));
   }
   void Validate(const FieldChecker& check);
 };
