@@ -76,7 +76,9 @@ PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario,
       robot_model_(scenario.robots.model) {
   model_ = CompileMjcf(mjcf_);
   const mjModel* m = model_.get();
-  hessians_ = ChooseSolver(scenario, m->nv).hessians;
+  const MujocoModelSizes sizes = ModelSizesOf(world, scenario, contacts);
+  hessians_ = sizes.solver.hessians;
+  one_row_contacts_ = sizes.one_row_contacts;
   const bool wheeled = robot_model_ == RobotModel::kDiffDrive;
   const int n = world.NumRobots();
   auto joint = [m](const std::string& name) {
@@ -214,7 +216,8 @@ void Simulation::StepPhysics() {
 
 void Simulation::Grow() {
   const MujocoSizes sizes =
-      MujocoSizesFor(m_->nbody, m_->nv, 2L * m_->nconmax, model_->hessians_);
+      MujocoSizesFor(m_->nbody, m_->nv, 2L * m_->nconmax, model_->hessians_,
+                     model_->one_row_contacts_);
   const double bytes = MujocoDataBytes(sizes, m_->nv, m_->nu);
   if (bytes > kMaxPhysicsBytes) {
     char what[400];

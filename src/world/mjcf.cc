@@ -143,10 +143,13 @@ SolverChoice ChooseSolver(const Scenario& s, long nv) {
   return c;
 }
 
-MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts, int hessians) {
+MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts, int hessians,
+                           long one_row_contacts) {
   MujocoSizes s;
   s.nconmax = static_cast<int>(std::max(1L, contacts));
-  s.njmax = static_cast<int>(kRowsPerContact * s.nconmax);
+  one_row_contacts = std::min<long>(one_row_contacts, s.nconmax);
+  s.njmax = static_cast<int>(kRowsPerContact * s.nconmax -
+                             (kRowsPerContact - 1) * one_row_contacts);
   const long broad_phase = nbody * (nbody - 1) / 2 + 12 * nbody;
   const long newton = hessians * nv * nv + 40 * nv;
   const long constraints = 24L * s.njmax;
@@ -158,6 +161,26 @@ long InitialContacts(int num_robots, RobotModel model) {
   // A diff_drive robot always rests on four points: its wheels and casters.
   const long resting = model == RobotModel::kDiffDrive ? 4L * num_robots : 0;
   return 64 + num_robots / 8 + resting;
+}
+
+MujocoModelSizes ModelSizesOf(const World& world, const Scenario& s,
+                              long contacts) {
+  const int n = world.NumRobots();
+  const bool wheeled = s.robots.model == RobotModel::kDiffDrive;
+  MujocoModelSizes m;
+  // The world body, four walls, the obstacles, robots (a diff_drive robot
+  // is three bodies: chassis and wheels) and targets.
+  m.nbody = 5L + (wheeled ? 3L : 1L) * n + world.NumTargets() +
+            static_cast<long>(world.map.obstacles().size());
+  m.nv = (wheeled ? 8L : 2L) * n;
+  m.solver = ChooseSolver(s, m.nv);
+  // A diff_drive robot's two casters always touch the floor, one row each.
+  m.one_row_contacts = wheeled ? 2L * n : 0L;
+  m.sizes = MujocoSizesFor(
+      m.nbody, m.nv,
+      contacts > 0 ? contacts : InitialContacts(n, s.robots.model),
+      m.solver.hessians, m.one_row_contacts);
+  return m;
 }
 
 DiffDriveBody DiffDriveBodyOf(const DiffDriveConfig& c, double radius) {
@@ -231,19 +254,11 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   std::ostringstream x;
   x << "<mujoco model=\"" << (s.name.empty() ? "aia" : s.name) << "\">\n";
   x << "  <compiler angle=\"radian\"/>\n";
-  // The world body, four walls, the obstacles, robots (a diff_drive robot
-  // is three bodies: chassis and wheels) and targets.
-  const long bodies = 5L + (wheeled ? 3L : 1L) * n + world.NumTargets() +
-                      static_cast<long>(world.map.obstacles().size());
-  const long dofs = (wheeled ? 8L : 2L) * n;
-  const SolverChoice solver = ChooseSolver(s, dofs);
+  const MujocoModelSizes model = ModelSizesOf(world, s, contacts);
+  const MujocoSizes& sizes = model.sizes;
   x << "  <option timestep=\"" << Num(s.physics.timestep)
     << (wheeled ? "\" gravity=\"0 0 -9.81\"" : "\" gravity=\"0 0 0\"")
-    << (solver.newton ? "" : " solver=\"CG\"") << "/>\n";
-  const MujocoSizes sizes = MujocoSizesFor(
-      bodies, dofs,
-      contacts > 0 ? contacts : InitialContacts(n, s.robots.model),
-      solver.hessians);
+    << (model.solver.newton ? "" : " solver=\"CG\"") << "/>\n";
   x << "  <size njmax=\"" << sizes.njmax << "\" nconmax=\"" << sizes.nconmax
     << "\" nstack=\"" << sizes.nstack << "\"/>\n";
   x << "  <visual>\n    <global offwidth=\"" << s.render.width

@@ -19,6 +19,7 @@
 #include "aia/world/generator.h"
 #include "aia/world/map.h"
 #include "aia/world/media.h"
+#include "aia/world/mjcf.h"
 
 namespace aia {
 namespace {
@@ -508,6 +509,21 @@ World World::Build(const Scenario& s) {
              std::to_string(w.map.obstacles().size()) +
              " obstacle boxes make " + std::to_string(bodies) +
              " bodies; aia simulates at most " + std::to_string(kMaxBodies));
+  // MuJoCo 2.2 keeps its constraint arrays dense (njmax^2 and njmax nv
+  // numbers): a wheeled team's resting contacts make them grow as N^2.
+  const MujocoModelSizes mujoco = ModelSizesOf(w, s);
+  const double bytes = MujocoDataBytes(mujoco.sizes, mujoco.nv, 0);
+  if (bytes > kMaxPhysicsBytes) {
+    char what[400];
+    std::snprintf(what, sizeof(what),
+                  "%d %s robots need %.1f GiB of MuJoCo 2.2's constraint "
+                  "arrays (dense in the contacts: %d resting and possible), "
+                  "more than the %.0f GiB aia allows; fewer robots%s",
+                  n, EnumNameOf(s.robots.model), bytes / (1L << 30),
+                  mujoco.sizes.nconmax, kMaxPhysicsBytes / (1L << 30),
+                  wheeled ? ", or robots.model: point" : "");
+    Fail(s, "robots.count", what);
+  }
 
   // Failures: "random" picks a robot from the seed's own stream.
   Rng fail_rng(s.seed, "failures");

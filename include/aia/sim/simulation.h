@@ -103,7 +103,10 @@ class PhysicsModel {
   MjModelPtr model_;
   PhysicsConfig physics_;
   RobotModel robot_model_ = RobotModel::kPoint;
-  int hessians_ = kPointHessians;  // the stack's Newton blocks (MujocoSizesFor)
+  // What MujocoSizesFor sizes a grown budget with: the stack's Newton
+  // blocks and the resting one-row contacts.
+  int hessians_ = kPointHessians;
+  long one_row_contacts_ = 0;
   std::vector<Vec2> starts_;
   // Per robot. Point: qpos/qvel index of its x joint (y next). diff_drive:
   // of its free joint (x, y, z, quaternion; linear then angular velocity).
@@ -220,8 +223,6 @@ class Simulation {
   long mj_steps_ = 0, contacts_summed_ = 0;
 };
 
-// The most memory a simulation's MuJoCo arrays may take as contacts grow.
-inline constexpr double kMaxPhysicsBytes = 3.0 * (1L << 30);
 
 // One round of sensing (docs/design.md, Sensing): robot i (if active) measures
 // target k when it is within range and, with line of sight on, a ray between

@@ -52,8 +52,11 @@ inline constexpr int kRowsPerContact = 4;
 // none).
 inline constexpr int kPointHessians = 3;
 inline constexpr int kWheeledHessians = 6;
+// `one_row_contacts` of the contacts are frictionless (condim 1: one
+// constraint row instead of kRowsPerContact).
 MujocoSizes MujocoSizesFor(long nbody, long nv, long contacts,
-                           int hessians = kPointHessians);
+                           int hessians = kPointHessians,
+                           long one_row_contacts = 0);
 // Whether a model steps with Newton's method (else CG), and how many nv x nv
 // blocks its stack holds for it, from the scenario's physics.solver.
 struct SolverChoice {
@@ -61,6 +64,16 @@ struct SolverChoice {
   int hessians = kPointHessians;
 };
 SolverChoice ChooseSolver(const Scenario& scenario, long nv);
+// What a world's MJCF sizes its memory from: its counts, solver and first
+// contact budget (`contacts`; 0: InitialContacts).
+struct MujocoModelSizes {
+  long nbody = 0, nv = 0;
+  SolverChoice solver;
+  long one_row_contacts = 0;  // the casters' resting contacts
+  MujocoSizes sizes;
+};
+MujocoModelSizes ModelSizesOf(const World& world, const Scenario& scenario,
+                              long contacts = 0);
 // The first contact budget of a model with this many robots: room for a
 // quarter of them touching something, enough for most missions, plus the
 // four floor contacts of each diff_drive robot.
@@ -79,6 +92,9 @@ struct DiffDriveBody {
   double wheel_damping = 0.0;   // N m s: the motor's velocity-loop gain
 };
 DiffDriveBody DiffDriveBodyOf(const DiffDriveConfig& config, double radius);
+// The most memory a simulation's MuJoCo arrays may take, as its contacts
+// grow and (World::Build refuses a world beyond it) at the start.
+inline constexpr double kMaxPhysicsBytes = 3.0 * (1L << 30);
 // Bytes one mjData takes with these sizes (its arrays, the stack not
 // counted: the stack is mostly never touched).
 double MujocoDataBytes(const MujocoSizes& sizes, long nv, long nu);
