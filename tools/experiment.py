@@ -735,6 +735,47 @@ def motion_run(args, name, scenario, model, policy, seed):
                for k in ("driving", "turning", "blocked", "arrived")}}
 
 
+def plot_motion(table, path, title):
+    """Left: mission seconds per condition, policy and model (error bars 1
+    s.e.); right: where the wheeled robots' time went."""
+    conds = list(dict.fromkeys(r["condition"] for r in table))
+    policies = list(dict.fromkeys(r["policy"] for r in table))
+    fig, (ax_s, ax_u) = plt.subplots(1, 2, figsize=(13, 0.9 * len(conds) * len(policies) / 2 + 2))
+    labels, y = [], 0
+    parts = [("share_driving", "driving", "C0"), ("share_turning", "turning in place", "C1"),
+             ("share_blocked", "blocked", "C3"), ("share_arrived", "arrived, waiting", "0.7")]
+    for c in conds:
+        for p in policies:
+            rows = {r["model"]: r for r in table if r["condition"] == c and r["policy"] == p}
+            for k, (model, hatch) in enumerate((("point", ""), ("diff_drive", "//"))):
+                r = rows.get(model)
+                if r is None or r["seconds"] is None:
+                    continue
+                ax_s.barh(y + 0.4 * k, r["seconds"], height=0.4, xerr=r["seconds_se"] or 0,
+                          color=policy_color(p), hatch=hatch, edgecolor="0.2", capsize=2)
+            wheeled = rows.get("diff_drive")
+            if wheeled is not None:
+                left = 0.0
+                for key, name, colour in parts:
+                    ax_u.barh(y + 0.2, wheeled[key], left=left, height=0.6, color=colour,
+                              label=name if y == 0 else None)
+                    left += wheeled[key]
+            labels.append((y + 0.2, f"{c}\n{p}"))
+            y += 1
+    for ax in (ax_s, ax_u):
+        ax.set_yticks([t for t, _ in labels])
+        ax.set_yticklabels([n for _, n in labels], fontsize=7)
+        ax.invert_yaxis()
+        ax.grid(axis="x", alpha=0.3)
+    ax_s.set_xlabel("mission seconds (simulated); plain: point, hatched: diff_drive")
+    ax_u.set_xlabel("share of the wheeled robots' time")
+    ax_u.set_xlim(0, 1)
+    ax_u.legend(fontsize=7, loc="lower right")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    save(fig, path)
+
+
 def motion(args):
     """Every policy with point and with wheeled (diff_drive) robots on the
     same worlds and seeds: decision steps, simulated seconds, and where the
@@ -778,6 +819,9 @@ def motion(args):
             f"| {r['share_driving']:.2f} / {r['share_turning']:.2f} / "
             f"{r['share_blocked']:.2f} / {r['share_arrived']:.2f} |")
     write_atomic(os.path.join(args.out, "motion.md"), "\n".join(lines) + "\n")
+    plot_motion(table, os.path.join(args.out, "motion.png"),
+                f"point against wheeled robots, {seeds} worlds per condition, "
+                f"seeds from {args.seed_base}")
     write_json(os.path.join(args.out, "summary.json"), {
         "experiment": "motion", "policies": policies, "seeds": seeds,
         "seed_base": args.seed_base, "max_steps": args.max_steps, "sets": args.set,
