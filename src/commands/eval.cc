@@ -22,6 +22,7 @@
 
 #include "aia/commands/plan_command.h"
 #include "aia/commands/ranks.h"
+#include "aia/core/check.h"
 #include "aia/core/error.h"
 #include "aia/core/interrupt.h"
 #include "aia/core/io.h"
@@ -672,7 +673,11 @@ class RowSink {
         static_cast<ssize_t>(line.size()))
       throw std::runtime_error("cannot write '" + runs_path_ + "': " +
                                std::strerror(errno != 0 ? errno : ENOSPC));
-    rows_.push_back(row);
+    // Kept as the file holds it (its columns rounded), so that summary.csv
+    // is the same whether the rows were run now or read by a resume.
+    EvalRow written;
+    AIA_CHECK(ParseCsvLine(line.substr(0, line.size() - 1), &written));
+    rows_.push_back(written);
     ++finished_;
     char buf[200];
     std::snprintf(buf, sizeof(buf),
