@@ -350,4 +350,23 @@ const Grid<float>& TeamHeatmap::Robot(int b, Grid<float>* scratch) const {
   return *out;
 }
 
+const Grid<float>& TeamHeatmap::Robot(int b,
+                                      const std::vector<std::uint8_t>& keep,
+                                      Grid<float>* scratch) const {
+  AIA_CHECK(b >= 0 && b < static_cast<int>(robot_used_.size()));
+  const int m = static_cast<int>(common_.size());
+  AIA_CHECK(static_cast<int>(keep.size()) == m);
+  Grid<float>* out = scratch;
+  AIA_CHECK(out->nx() == base_.nx() && out->ny() == base_.ny());
+  std::fill(out->data().begin(), out->data().end(), 0.0f);
+  for (int k = 0; k < m; ++k)
+    if (keep[k] && member_[static_cast<std::size_t>(b) * m + k])
+      AddHeatStamp(common_[k], false, out);
+  for (int o = 0; o < robot_used_[b]; ++o) {
+    const Own& own = robot_own_[b][o];
+    if (keep[own.target]) AddHeatStamp(own.stamp, false, out);
+  }
+  return *out;
+}
+
 }  // namespace aia

@@ -121,9 +121,17 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
           if (searching)
             for (std::size_t k = 0; k < targets->size(); ++k)
               (*targets)[k].mean = search_.Aim(i, static_cast<int>(k));
+          if (!keep_[b].empty())
+            for (std::size_t k = 0; k < targets->size(); ++k)
+              if (!keep_[b][k])
+                (*targets)[k].log_det = -std::numeric_limits<double>::infinity();
         }
         renderer_->RenderWithHeat(lattice.Point((*ctx.robot_lattice)[i]),
-                                  neighbours, heat_.Robot(b, &heat), targets,
+                                  neighbours,
+                                  keep_[b].empty()
+                                      ? heat_.Robot(b, &heat)
+                                      : heat_.Robot(b, keep_[b], &heat),
+                                  targets,
                                   prior, ctx.eps, images_.data() + b * size);
       }
       if (passing)
@@ -167,6 +175,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     for (int i : rows_) search_.Update(ctx, i);
     if (params_.share_search) search_.Share(ctx, rows_);
   }
+  ClaimTargets(ctx);
   RenderAndForward(ctx);
   logits_.assign(static_cast<std::size_t>(n) * kNumMoves, 0.0f);
   PolicyStatus status = PolicyStatus::kOk;
@@ -248,6 +257,32 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
     (*moves)[i] = static_cast<Move>(best);
   }
   return status;
+}
+
+void IgbNetPolicy::ClaimTargets(const DecisionContext& ctx) {
+  if (keep_.size() < rows_.size()) keep_.resize(rows_.size());
+  for (auto& k : keep_) k.clear();
+  if (!params_.claims || !ctx.sensor) return;
+  claims_.Begin(*ctx.map, *ctx.sensor);
+  const int m = ctx.beliefs->layout().num_targets();
+  const double log_eps = std::log(ctx.eps);
+  for (std::size_t b = 0; b < rows_.size(); ++b) {
+    const int i = rows_[b];
+    others_.clear();
+    for (int j : ctx.comm->Neighbors(i))
+      if (j != i && ctx.comm->Active(j))
+        others_.push_back((*ctx.robot_lattice)[j]);
+    aims_.resize(m);
+    open_.assign(m, 0);
+    for (int k = 0; k < m; ++k) {
+      if (ctx.beliefs->LogDetCovariance(i, k) <= log_eps) continue;
+      aims_[k] = searching_ ? search_.Aim(i, k) : ctx.beliefs->PositionMean(i, k);
+      open_[k] = 1;
+    }
+    claims_.Claim((*ctx.robot_lattice)[i], others_, aims_, open_, &claimed_);
+    if (std::find(claimed_.begin(), claimed_.end(), 1) != claimed_.end())
+      keep_[b] = claimed_;
+  }
 }
 
 Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {

@@ -1,6 +1,8 @@
 #include "aia/planning/search.h"
 
+#include <algorithm>
 #include <cstdlib>
+#include <cstring>
 
 #include "aia/core/check.h"
 
@@ -194,6 +196,96 @@ Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
   for (size_t i = 0; i < tail; ++i) dist_[queue_[i]] = -1;
   if (target) *target = move == Move::kStay ? -1 : best_k;
   return move;
+}
+
+void TargetClaims::Begin(const Map& map, const SensorModel& sensor) {
+  map_ = &map;
+  sensor_ = &sensor;
+  index_.clear();
+}
+
+const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
+  AIA_CHECK_MSG(map_ && sensor_, "Begin() before Field()");
+  std::pair<std::uint64_t, std::uint64_t> key;
+  std::memcpy(&key.first, &aim.x(), sizeof(double));
+  std::memcpy(&key.second, &aim.y(), sizeof(double));
+  const auto [it, fresh] =
+      index_.emplace(key, static_cast<int>(index_.size()));
+  const int index = it->second;
+  if (!fresh) return fields_[index];
+  const Lattice& lattice = map_->lattice();
+  const int span =
+      static_cast<int>(std::ceil(sensor_->range / lattice.step())) + 1;
+  const int c = lattice.NearestPoint(aim);
+  const int cx = lattice.Ix(c), cy = lattice.Iy(c);
+  sources_.clear();
+  for (int iy = std::max(0, cy - span); iy <= std::min(lattice.ny() - 1, cy + span);
+       ++iy)
+    for (int ix = std::max(0, cx - span);
+         ix <= std::min(lattice.nx() - 1, cx + span); ++ix) {
+      const int q = lattice.Index(ix, iy);
+      if (lattice.Free(q) &&
+          PredictedPrecision(*map_, *sensor_, lattice.Point(q), aim) > 0.0)
+        sources_.push_back(q);
+    }
+  if (static_cast<int>(fields_.size()) <= index) fields_.emplace_back();
+  BfsDistances(lattice, sources_.data(), static_cast<int>(sources_.size()),
+               &fields_[index], &queue_);
+  return fields_[index];
+}
+
+int TargetClaims::Distance(const Vec2& aim, int p) { return Field(aim)[p]; }
+
+bool TargetClaims::Before(int a, int da, int b, int db) const {
+  if (da != db) return da < db;
+  const Vec2 pa = map_->lattice().Point(a), pb = map_->lattice().Point(b);
+  return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
+}
+
+void TargetClaims::Claim(int self, const std::vector<int>& others,
+                         const std::vector<Vec2>& aims,
+                         const std::vector<std::uint8_t>& open,
+                         std::vector<std::uint8_t>* mine) {
+  AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim()");
+  AIA_CHECK(aims.size() == open.size());
+  const int m = static_cast<int>(aims.size());
+  const int n = static_cast<int>(others.size()) + 1;
+  const auto point = [&](int r) { return r == 0 ? self : others[r - 1]; };
+  mine->assign(m, 0);
+  // Each open target's owner: the robot (0: self, r: others[r - 1]) nearest
+  // to where it can be measured.
+  owner_.assign(m, -1);
+  held_.assign(n, 0);
+  bool any = false;
+  for (int k = 0; k < m; ++k) {
+    if (!open[k]) continue;
+    const std::vector<int>& f = Field(aims[k]);
+    int best = -1;
+    for (int r = 0; r < n; ++r) {
+      const int d = f[point(r)];
+      if (d >= 0 && (best < 0 || Before(point(r), d, point(best), f[point(best)])))
+        best = r;
+    }
+    owner_[k] = best;
+    if (best < 0) continue;
+    ++held_[best];
+    if (best == 0) (*mine)[k] = 1;
+    any = any || best == 0;
+  }
+  if (any) return;
+  // Idle: help where an owner holds two or more, as the nearest idle robot.
+  for (int k = 0; k < m; ++k) {
+    if (owner_[k] < 0 || held_[owner_[k]] < 2) continue;
+    const std::vector<int>& f = Field(aims[k]);
+    const int d = f[self];
+    if (d < 0) continue;
+    bool won = true;
+    for (int r = 1; r < n && won; ++r) {
+      const int e = f[point(r)];
+      if (held_[r] == 0 && e >= 0 && Before(point(r), e, self, d)) won = false;
+    }
+    (*mine)[k] = won;
+  }
 }
 
 }  // namespace aia

@@ -118,6 +118,10 @@ class TeamHeatmap {
   // majority's belief of every target, else built in `scratch` (shaped like
   // the grid). Thread-safe for distinct scratches once prepared.
   const Grid<float>& Robot(int b, Grid<float>* scratch) const;
+  // The heatmap of rows[b] over the targets k with keep[k] set only, built
+  // in `scratch` (the same stamps as Robot's, added to zero).
+  const Grid<float>& Robot(int b, const std::vector<std::uint8_t>& keep,
+                           Grid<float>* scratch) const;
   // Robot-target pairs whose heat was not the common one (a measure of the
   // work saved).
   long own_stamps() const { return static_cast<long>(own_used_); }

@@ -56,6 +56,12 @@ struct IgbNetParams {
   // robot starts the deadlock rule's walk instead, or stays where it can
   // measure an open target or has nowhere to walk (a stay is no reversal).
   bool no_undo = true;
+  // Each robot shows the network the heat (and reach) of only the open
+  // targets it claims among itself and its neighbours in this step's graph
+  // (planning/search.h, TargetClaims: those it is nearest to in lattice
+  // moves, or, owning none, those it can help with); all of them where it
+  // claims none.
+  bool claims = true;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -84,6 +90,13 @@ struct IgbNetParams {
         "by the deadlock rule's walk, or a stay where the robot can measure "
         "an open target or has nowhere to walk (false: the network's "
         "move)"));
+    a->Visit(AIA_FIELD(claims).Doc(
+        "each robot's heat and reach channels show only the open targets it "
+        "claims among itself and its neighbours in this step's graph: those "
+        "it is nearest to (in lattice moves, walls counted), or, owning "
+        "none, those of a neighbour that owns two or more where it is the "
+        "nearest idle robot; all of them where it claims none (false: all "
+        "open targets, the network's training input)"));
   }
 };
 
@@ -155,6 +168,11 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   std::vector<std::vector<Vec2>> worker_neighbours_;
   std::vector<std::vector<HeatSource>> worker_targets_;  // channel 4
   std::vector<double> no_prior_;
+  // With `claims`: per row, the targets whose heat it is shown (empty: all).
+  void ClaimTargets(const DecisionContext& ctx);
+  TargetClaims claims_;
+  std::vector<std::vector<std::uint8_t>> keep_;
+  std::vector<int> others_;
 };
 
 // Adds `igbnet` to a registry.

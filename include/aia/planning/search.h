@@ -17,6 +17,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "aia/core/point_grid.h"
@@ -109,6 +111,49 @@ class TowardNearestAim {
   std::vector<int> near_;
   std::vector<int> dist_, queue_;  // dist_ is -1 outside a BFS
   std::vector<Move> first_;
+};
+
+// Which open targets a robot claims among itself and its neighbours: each
+// is owned by the robot with the fewest lattice moves to a point predicted
+// to measure the target's aim (the aims' BFS fields over free space, so
+// walls and doors count; ties to the robot of the lower x, then y, so that
+// the robots' order does not matter). A robot that owns none helps: it
+// claims the targets of owners that hold two or more where it is the
+// nearest robot that owns none. A robot works this out from its own belief
+// (the aims) and its neighbours' positions, as the DKF's graph gives them.
+// The fields are kept per aim until the next Begin: a team that holds the
+// same aims shares them (one BFS per target a step). Scratch reused.
+class TargetClaims {
+ public:
+  // A new step on this map (the fields of the last one are dropped).
+  void Begin(const Map& map, const SensorModel& sensor);
+  // Moves from lattice point p to the nearest point predicted to measure a
+  // target at `aim`; -1 where none can be reached.
+  int Distance(const Vec2& aim, int p);
+  // mine[k] (resized to aims.size()): `self` claims open target k, as
+  // above, against `others` (lattice points). A target `self` cannot reach
+  // is not its; none is where every open target is out of reach.
+  void Claim(int self, const std::vector<int>& others,
+             const std::vector<Vec2>& aims, const std::vector<std::uint8_t>& open,
+             std::vector<std::uint8_t>* mine);
+
+ private:
+  const std::vector<int>& Field(const Vec2& aim);
+  // Robot at point a, da moves away, comes before robot at b, db away.
+  bool Before(int a, int da, int b, int db) const;
+  const Map* map_ = nullptr;
+  std::vector<int> owner_, held_;
+  const SensorModel* sensor_ = nullptr;
+  // aim (its coordinates' bits) -> index into fields_; the first
+  // index_.size() fields are this step's.
+  struct AimHash {
+    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& a) const {
+      return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^ a.second);
+    }
+  };
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, int, AimHash> index_;
+  std::vector<std::vector<int>> fields_;
+  std::vector<int> sources_, queue_;
 };
 
 // ---------------------------------------------------------------------------
