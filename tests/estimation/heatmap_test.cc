@@ -225,6 +225,43 @@ TEST(TeamHeatmapTest, EachRobotsHeatmapIsItsOwnToFloatRounding) {
   }
 }
 
+TEST(TeamHeatmapTest, ASubsetOfTargetsIsTheHeatOfThoseTargetsAlone) {
+  Team t;
+  HeatmapParams params;
+  params.eps = 0.01;
+  const Grid<float> shape(60, 60, 0.5);
+  TeamHeatmap team;
+  team.Prepare(t.beliefs, {0, 1, 2, 3, 4, 5, 6, 7}, t.prior, params, shape);
+  // Targets 1 and 3 (robots 2, 5 and 6 hold their own beliefs of them),
+  // target 4 (every robot its own), none.
+  for (const std::vector<std::uint8_t>& keep :
+       {std::vector<std::uint8_t>{0, 1, 0, 1, 0, 0},
+        std::vector<std::uint8_t>{0, 0, 0, 0, 1, 0},
+        std::vector<std::uint8_t>{0, 0, 0, 0, 0, 0}}) {
+    for (int b = 0; b < 8; ++b) {
+      std::vector<HeatSource> sources, kept;
+      std::vector<double> prior;
+      HeatSources(t.beliefs, b, &sources);
+      for (int k = 0; k < 6; ++k)
+        if (keep[k]) {
+          kept.push_back(sources[k]);
+          prior.push_back(t.prior[k]);
+        }
+      Grid<float> scratch = shape, want = shape;
+      const Grid<float>& got = team.Robot(b, keep, &scratch);
+      ProjectHeatmap(kept, prior, params, &want);
+      for (std::size_t c = 0; c < got.size(); ++c)
+        ASSERT_NEAR(got.data()[c], want.data()[c], 1e-6) << "robot " << b;
+    }
+  }
+  // Every target kept: the robot's whole heatmap.
+  Grid<float> scratch = shape, whole = shape;
+  const Grid<float>& all = team.Robot(2, std::vector<std::uint8_t>(6, 1), &scratch);
+  const Grid<float>& base = team.Robot(2, &whole);
+  for (std::size_t c = 0; c < all.size(); ++c)
+    ASSERT_NEAR(all.data()[c], base.data()[c], 1e-6);
+}
+
 TEST(TeamHeatmapTest, RelabellingTheRobotsPermutesTheHeatmaps) {
   Team t;
   HeatmapParams params;

@@ -121,5 +121,119 @@ TEST(SearchMemoryTest,
   EXPECT_TRUE(mab.Missed(1, 0).empty());
 }
 
+// TargetClaims: lattice points of 0.5 m (centres at 0.25 + 0.5 k), sensor
+// range 2 m (a point 2 m away measures) with line of sight.
+int PointAt(const Team& team, double x, double y) {
+  return team.world.map.lattice().NearestPoint(Vec2(x, y));
+}
+
+TEST(TargetClaimsTest, TheRobotFewestMovesFromMeasuringClaims) {
+  Team team("workspace: {size: [10.0, 10.0]}\n"
+            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  TargetClaims claims;
+  claims.Begin(team.world.map, team.sensor);
+  const Vec2 aim(5.1, 5.25);
+  // From (1.25, 5.25) the nearest point within 2 m of the aim is
+  // (3.25, 5.25), 1.85 m away: 4 moves. From (5.25, 9.25): (5.25, 6.75),
+  // 1.51 m away (7.25 is 2.005 m away): 5 moves.
+  const int a = PointAt(team, 1.25, 5.25), b = PointAt(team, 5.25, 9.25);
+  EXPECT_EQ(claims.Distance(aim, a), 4);
+  EXPECT_EQ(claims.Distance(aim, b), 5);
+  EXPECT_EQ(claims.Distance(aim, PointAt(team, 5.25, 5.25)), 0);
+  std::vector<std::uint8_t> mine;
+  claims.Claim(a, {b}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1}));
+  claims.Claim(b, {a}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+  // A target that is not open is nobody's.
+  claims.Claim(a, {b}, {aim}, {0}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+  // Equal distances (4 moves each side): the robot of the lower x, whichever
+  // robot asks and in whatever order the others come.
+  const Vec2 mid(5.25, 5.25);
+  const int west = PointAt(team, 1.25, 5.25), east = PointAt(team, 9.25, 5.25);
+  EXPECT_EQ(claims.Distance(mid, west), claims.Distance(mid, east));
+  claims.Claim(west, {east, b}, {mid}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1}));
+  claims.Claim(east, {b, west}, {mid}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+}
+
+TEST(TargetClaimsTest, WallsCountWhereAStraightLineWouldNot) {
+  // A wall from y = 1 to y = 10 at x = 3..3.5: the robot west of it is
+  // nearer to the aim in a straight line (3.9 m against 4.4 m) but must go
+  // around the wall's south end.
+  Team team(
+      "workspace: {size: [10.0, 10.0], obstacles: {boxes: [{center: [3.25, "
+      "5.5], size: [0.5, 9.0]}]}}\n"
+      "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+      "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  TargetClaims claims;
+  claims.Begin(team.world.map, team.sensor);
+  const Vec2 aim(5.1, 7.25);
+  const int west = PointAt(team, 1.25, 7.25), south = PointAt(team, 5.25, 2.75);
+  const Lattice& lattice = team.world.map.lattice();
+  ASSERT_LT((lattice.Point(west) - aim).norm(),
+            (lattice.Point(south) - aim).norm());
+  EXPECT_GT(claims.Distance(aim, west), claims.Distance(aim, south));
+  std::vector<std::uint8_t> mine;
+  claims.Claim(west, {south}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+  claims.Claim(south, {west}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1}));
+}
+
+TEST(TargetClaimsTest, AnIdleRobotHelpsTheOwnerOfTwoWhereItIsTheNearestIdle) {
+  Team team("workspace: {size: [10.0, 10.0]}\n"
+            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  TargetClaims claims;
+  claims.Begin(team.world.map, team.sensor);
+  // A at (5.25, 5.25) sees t1 (5.25, 6.25) and is 2 moves from t2
+  // (8.25, 5.25), which (6.25, 5.25) sees: it owns both. B (9.25, 9.25) is 5
+  // moves from t2 and 9 from t1; C (1.25, 5.25) 5 from t1 (to (3.75, 5.25))
+  // and 10 from t2.
+  const std::vector<Vec2> aims = {Vec2(5.25, 6.25), Vec2(8.25, 5.25)};
+  const std::vector<std::uint8_t> open = {1, 1};
+  const int a = PointAt(team, 5.25, 5.25), b = PointAt(team, 9.25, 9.25),
+            c = PointAt(team, 1.25, 5.25);
+  EXPECT_EQ(claims.Distance(aims[0], a), 0);
+  EXPECT_EQ(claims.Distance(aims[1], a), 2);
+  EXPECT_EQ(claims.Distance(aims[1], b), 5);
+  EXPECT_EQ(claims.Distance(aims[0], b), 9);
+  EXPECT_EQ(claims.Distance(aims[0], c), 5);
+  EXPECT_EQ(claims.Distance(aims[1], c), 10);
+  std::vector<std::uint8_t> mine;
+  claims.Claim(a, {b, c}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1, 1}));
+  claims.Claim(b, {c, a}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0, 1}));
+  claims.Claim(c, {a, b}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1, 0}));
+  // Without C, B is the only idle robot and helps with both.
+  claims.Claim(b, {a}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1, 1}));
+  // An owner of one is not helped.
+  claims.Claim(b, {a}, {aims[1]}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+}
+
+TEST(TargetClaimsTest, ATargetNoPointMeasuresIsNobodys) {
+  // The aim inside a closed box: no free point sees it.
+  Team team(
+      "workspace: {size: [10.0, 10.0], obstacles: {boxes: [{center: [5.0, "
+      "5.0], size: [6.0, 6.0]}]}}\n"
+      "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+      "targets: {list: [{position: [9.0, 9.0]}]}\n");
+  TargetClaims claims;
+  claims.Begin(team.world.map, team.sensor);
+  const int a = PointAt(team, 1.25, 1.25);
+  EXPECT_EQ(claims.Distance(Vec2(5.0, 5.0), a), -1);
+  std::vector<std::uint8_t> mine;
+  claims.Claim(a, {}, {Vec2(5.0, 5.0)}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+}
+
 }  // namespace
 }  // namespace aia
