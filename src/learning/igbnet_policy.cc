@@ -262,7 +262,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
 void IgbNetPolicy::ClaimTargets(const DecisionContext& ctx) {
   if (keep_.size() < rows_.size()) keep_.resize(rows_.size());
   for (auto& k : keep_) k.clear();
-  if (!params_.claims || !ctx.sensor) return;
+  if (params_.claims == TargetClaimsMode::kNone || !ctx.sensor) return;
   claims_.Begin(*ctx.map, *ctx.sensor);
   const int m = ctx.beliefs->layout().num_targets();
   const double log_eps = std::log(ctx.eps);
@@ -279,7 +279,10 @@ void IgbNetPolicy::ClaimTargets(const DecisionContext& ctx) {
       aims_[k] = searching_ ? search_.Aim(i, k) : ctx.beliefs->PositionMean(i, k);
       open_[k] = 1;
     }
-    claims_.Claim((*ctx.robot_lattice)[i], others_, aims_, open_, &claimed_);
+    if (params_.claims == TargetClaimsMode::kRoute)
+      claims_.Route((*ctx.robot_lattice)[i], others_, aims_, open_, &claimed_);
+    else
+      claims_.Claim((*ctx.robot_lattice)[i], others_, aims_, open_, &claimed_);
     if (std::find(claimed_.begin(), claimed_.end(), 1) != claimed_.end())
       keep_[b] = claimed_;
   }

@@ -202,6 +202,7 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor) {
   map_ = &map;
   sensor_ = &sensor;
   index_.clear();
+  plans_.clear();
 }
 
 const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
@@ -286,6 +287,75 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
     }
     (*mine)[k] = won;
   }
+}
+
+class TargetClaims::Legs : public LegOracle {
+ public:
+  Legs(TargetClaims* claims, const std::vector<Vec2>* aims)
+      : claims_(claims), aims_(aims) {}
+  Leg Compute(int from, int, int k) override {
+    const std::vector<int>& f = claims_->Field((*aims_)[k]);
+    Leg leg;
+    leg.steps = f[from];
+    if (leg.steps < 0) return leg;
+    const Lattice& lattice = claims_->map_->lattice();
+    int q = from;
+    while (f[q] > 0) q = lattice.Next(q, StepDownField(lattice, f, q));
+    leg.end = q;
+    return leg;
+  }
+  int Distance(int from, int k) override {
+    return claims_->Field((*aims_)[k])[from];
+  }
+  bool TimeVarying(int) const override { return false; }
+
+ private:
+  TargetClaims* claims_;
+  const std::vector<Vec2>* aims_;
+};
+
+void TargetClaims::Route(int self, const std::vector<int>& others,
+                         const std::vector<Vec2>& aims,
+                         const std::vector<std::uint8_t>& open,
+                         std::vector<std::uint8_t>* mine) {
+  AIA_CHECK_MSG(map_ && sensor_, "Begin() before Route()");
+  AIA_CHECK(aims.size() == open.size());
+  const Lattice& lattice = map_->lattice();
+  const int m = static_cast<int>(aims.size());
+  mine->assign(m, 0);
+  std::vector<int> points = others;
+  points.push_back(self);
+  std::sort(points.begin(), points.end(), [&](int a, int b) {
+    const Vec2 pa = lattice.Point(a), pb = lattice.Point(b);
+    return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
+  });
+  const auto same_aims = [&](const Plan& plan) {
+    for (int k = 0; k < m; ++k)
+      if (open[k] && (plan.aims[k].x() != aims[k].x() ||
+                      plan.aims[k].y() != aims[k].y()))
+        return false;
+    return true;
+  };
+  const Plan* plan = nullptr;
+  for (const Plan& p : plans_)
+    if (p.points == points && p.open == open && same_aims(p)) plan = &p;
+  if (!plan) {
+    std::vector<int> targets;
+    for (int k = 0; k < m; ++k)
+      if (open[k]) targets.push_back(k);
+    Legs legs(this, &aims);
+    TourSettings settings;
+    settings.objective = TourObjective::kMakespan;
+    settings.budget = kRouteBudget;
+    const std::vector<double> weight(m, 1.0);
+    Tours tours = planner_.Plan(points, targets, weight, settings, legs);
+    plans_.push_back({points, open, aims, std::move(tours.order)});
+    plan = &plans_.back();
+  }
+  const int at = static_cast<int>(
+      std::find(points.begin(), points.end(), self) - points.begin());
+  const std::vector<int>& route = plan->order[at];
+  if (!route.empty()) (*mine)[route.front()] = 1;
 }
 
 }  // namespace aia

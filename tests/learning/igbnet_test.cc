@@ -365,46 +365,52 @@ TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
   }
 }
 
-// policy.claims (on by default, so the relabelling test above holds with
+// policy.claims (route by default, so the relabelling test above holds with
 // it): two targets at their priors, robot 0 beside the first, robot 1 beside
 // the second, robot 2 far from both. With neighbours, robots 0 and 1 are
-// shown one target each, which changes their input; robot 2, idle, helps
-// nobody (each owner holds one) and sees both, as without claims. A robot
-// without neighbours claims every target it can reach: its input is the
-// one without claims (to the heat's rounding).
-TEST(IgbNetPolicyTest, ClaimsNarrowTheHeatOnlyWhereANeighbourIsNearer) {
+// shown one target each, which changes their input; robot 2 owns none,
+// helps nobody (each owner holds one) and has an empty route: it sees both,
+// as without claims. A robot without neighbours owns every target it can
+// reach (nearest: its input is the one without claims, to the heat's
+// rounding) but routes to one at a time (route: it sees one of the two).
+TEST(IgbNetPolicyTest, ClaimsNarrowTheHeatToTheTargetsARobotTakes) {
   const char* yaml = R"(
 workspace: {size: [8, 8]}
 robots: {count: 3, step: 0.5, start: [[1.25, 1.25], [6.75, 6.75], [1.25, 6.75]]}
 targets: {list: [{position: [2, 2], prior_mean: [2.25, 1.75]}, {position: [6, 6], prior_mean: [6.25, 6.25]}]}
 sensor: {range: 2.0}
 )";
-  for (const bool alone : {false, true}) {
-    CommParams cp;
-    if (alone) {
-      cp.mode = CommMode::kRange;
-      cp.range = 0.5;
-    }
-    testing::TeamFixture f(yaml, cp);
-    const std::vector<double> prior(2, 0.0);
-    IgbNetParams on, off;
-    off.claims = false;
-    ASSERT_TRUE(on.claims);
-    IgbNetPolicy with(TestNet(ChannelFrame::kCentred, true), on);
-    IgbNetPolicy without(TestNet(ChannelFrame::kCentred, true), off);
-    Decide(&with, f, 0, prior);
-    Decide(&without, f, 0, prior);
-    for (int i = 0; i < 3; ++i) {
-      const auto row = [i](const std::vector<float>& l) {
-        return std::vector<float>(l.begin() + i * kNumMoves,
-                                  l.begin() + (i + 1) * kNumMoves);
-      };
-      if (alone || i == 2) {
-        for (int a = 0; a < kNumMoves; ++a)
-          EXPECT_NEAR(row(with.logits())[a], row(without.logits())[a], 1e-5)
-              << "robot " << i;
-      } else {
-        EXPECT_NE(row(with.logits()), row(without.logits())) << "robot " << i;
+  ASSERT_EQ(IgbNetParams().claims, TargetClaimsMode::kRoute);
+  for (const TargetClaimsMode mode :
+       {TargetClaimsMode::kNearest, TargetClaimsMode::kRoute}) {
+    for (const bool alone : {false, true}) {
+      CommParams cp;
+      if (alone) {
+        cp.mode = CommMode::kRange;
+        cp.range = 0.5;
+      }
+      testing::TeamFixture f(yaml, cp);
+      const std::vector<double> prior(2, 0.0);
+      IgbNetParams on, off;
+      on.claims = mode;
+      off.claims = TargetClaimsMode::kNone;
+      IgbNetPolicy with(TestNet(ChannelFrame::kCentred, true), on);
+      IgbNetPolicy without(TestNet(ChannelFrame::kCentred, true), off);
+      Decide(&with, f, 0, prior);
+      Decide(&without, f, 0, prior);
+      for (int i = 0; i < 3; ++i) {
+        const auto row = [i](const std::vector<float>& l) {
+          return std::vector<float>(l.begin() + i * kNumMoves,
+                                    l.begin() + (i + 1) * kNumMoves);
+        };
+        const bool same = alone ? mode == TargetClaimsMode::kNearest : i == 2;
+        if (same) {
+          for (int a = 0; a < kNumMoves; ++a)
+            EXPECT_NEAR(row(with.logits())[a], row(without.logits())[a], 1e-5)
+                << "robot " << i;
+        } else {
+          EXPECT_NE(row(with.logits()), row(without.logits())) << "robot " << i;
+        }
       }
     }
   }

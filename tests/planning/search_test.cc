@@ -219,6 +219,45 @@ TEST(TargetClaimsTest, AnIdleRobotHelpsTheOwnerOfTwoWhereItIsTheNearestIdle) {
   EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
 }
 
+TEST(TargetClaimsTest, RoutesGiveEachRobotTheFirstTargetOfMakespanTours) {
+  Team team("workspace: {size: [20.0, 10.0]}\n"
+            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  TargetClaims claims;
+  claims.Begin(team.world.map, team.sensor);
+  // On the row y = 5.25: A at x = 10.25 is 8 moves from t1 (16.25: seen
+  // from 14.25) and 2 from t2 (7.25: seen from 9.25); B at 0.25 is 10 from
+  // t2 (seen from 5.25) and 28 from t1. A owns both (nearest); its nearer
+  // target first would end the mission at 2 + 10 = 12 moves, t1 first with
+  // B on t2 at 10: A's route starts with t1, B's with t2. C, in the corner
+  // above B (18 moves from t2), has no route and claims nothing; the
+  // others' order and C's presence do not change A's and B's routes.
+  const std::vector<Vec2> aims = {Vec2(16.25, 5.25), Vec2(7.25, 5.25)};
+  const std::vector<std::uint8_t> open = {1, 1};
+  const int a = PointAt(team, 10.25, 5.25), b = PointAt(team, 0.25, 5.25),
+            c = PointAt(team, 0.25, 9.75);
+  EXPECT_EQ(claims.Distance(aims[0], a), 8);
+  EXPECT_EQ(claims.Distance(aims[1], a), 2);
+  EXPECT_EQ(claims.Distance(aims[1], b), 10);
+  EXPECT_EQ(claims.Distance(aims[0], b), 28);
+  EXPECT_EQ(claims.Distance(aims[1], c), 18);
+  std::vector<std::uint8_t> mine;
+  claims.Claim(a, {b}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1, 1}));
+  for (const std::vector<int>& others :
+       {std::vector<int>{b}, std::vector<int>{b, c}, std::vector<int>{c, b}}) {
+    claims.Route(a, others, aims, open, &mine);
+    EXPECT_EQ(mine, std::vector<std::uint8_t>({1, 0}));
+  }
+  claims.Route(b, {c, a}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0, 1}));
+  claims.Route(c, {a, b}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0, 0}));
+  // Alone, A takes its nearer target first.
+  claims.Route(a, {}, aims, open, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0, 1}));
+}
+
 TEST(TargetClaimsTest, ATargetNoPointMeasuresIsNobodys) {
   // The aim inside a closed box: no free point sees it.
   Team team(

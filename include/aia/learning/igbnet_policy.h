@@ -7,6 +7,7 @@
 #ifndef AIA_LEARNING_IGBNET_POLICY_H_
 #define AIA_LEARNING_IGBNET_POLICY_H_
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -30,6 +31,20 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
                                             const std::string& error_file,
                                             int error_line,
                                             const std::string& key);
+
+// Which open targets a robot's heat and reach channels show (policy.claims;
+// planning/search.h, TargetClaims): all of them (the network's training
+// input); those the robot owns among itself and its neighbours (nearest in
+// lattice moves, or helping an owner of two or more); or the first target
+// of its route in makespan tours of itself and its neighbours. Where it
+// claims none: all of them.
+enum class TargetClaimsMode { kNone, kNearest, kRoute };
+constexpr std::array<EnumName<TargetClaimsMode>, 3> EnumNames(
+    TargetClaimsMode) {
+  return {{{TargetClaimsMode::kNone, "none"},
+           {TargetClaimsMode::kNearest, "nearest"},
+           {TargetClaimsMode::kRoute, "route"}}};
+}
 
 // The policy's parameters (policy.* keys; the model is policy.model).
 struct IgbNetParams {
@@ -56,12 +71,8 @@ struct IgbNetParams {
   // robot starts the deadlock rule's walk instead, or stays where it can
   // measure an open target or has nowhere to walk (a stay is no reversal).
   bool no_undo = true;
-  // Each robot shows the network the heat (and reach) of only the open
-  // targets it claims among itself and its neighbours in this step's graph
-  // (planning/search.h, TargetClaims: those it is nearest to in lattice
-  // moves, or, owning none, those it can help with); all of them where it
-  // claims none.
-  bool claims = true;
+  // Which open targets each robot shows the network (above).
+  TargetClaimsMode claims = TargetClaimsMode::kRoute;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -91,12 +102,14 @@ struct IgbNetParams {
         "an open target or has nowhere to walk (false: the network's "
         "move)"));
     a->Visit(AIA_FIELD(claims).Doc(
-        "each robot's heat and reach channels show only the open targets it "
-        "claims among itself and its neighbours in this step's graph: those "
-        "it is nearest to (in lattice moves, walls counted), or, owning "
-        "none, those of a neighbour that owns two or more where it is the "
-        "nearest idle robot; all of them where it claims none (false: all "
-        "open targets, the network's training input)"));
+        "which open targets each robot's heat and reach channels show, "
+        "worked out by the robot with its neighbours in this step's graph "
+        "(distances in lattice moves, walls counted): route, the first "
+        "target of its route in makespan tours of the robot and its "
+        "neighbours; nearest, those it is nearest to (owning none: those of "
+        "an owner of two or more it is the nearest idle robot to); none, all "
+        "of them (the network's training input). All of them where it "
+        "claims none"));
   }
 };
 

@@ -24,6 +24,7 @@
 #include "aia/core/point_grid.h"
 #include "aia/core/types.h"
 #include "aia/planning/information.h"
+#include "aia/planning/tours.h"
 #include "aia/planning/policy.h"
 #include "aia/world/map.h"
 
@@ -125,6 +126,7 @@ class TowardNearestAim {
 // same aims shares them (one BFS per target a step). Scratch reused.
 class TargetClaims {
  public:
+  static constexpr long kRouteBudget = 2000;
   // A new step on this map (the fields of the last one are dropped).
   void Begin(const Map& map, const SensorModel& sensor);
   // Moves from lattice point p to the nearest point predicted to measure a
@@ -136,6 +138,15 @@ class TargetClaims {
   void Claim(int self, const std::vector<int>& others,
              const std::vector<Vec2>& aims, const std::vector<std::uint8_t>& open,
              std::vector<std::uint8_t>* mine);
+  // mine[k]: open target k is the first of `self`'s route in makespan
+  // tours (planning/tours.h, the expert's routing) of `self` and `others`
+  // over the open targets, legs from the same fields, kRouteBudget route
+  // evaluations of local search; the robots ordered by position, so that
+  // their labels do not matter. Robots given the same points and aims share
+  // one plan per step. None where the route is empty.
+  void Route(int self, const std::vector<int>& others,
+             const std::vector<Vec2>& aims, const std::vector<std::uint8_t>& open,
+             std::vector<std::uint8_t>* mine);
 
  private:
   const std::vector<int>& Field(const Vec2& aim);
@@ -143,6 +154,15 @@ class TargetClaims {
   bool Before(int a, int da, int b, int db) const;
   const Map* map_ = nullptr;
   std::vector<int> owner_, held_;
+  class Legs;
+  struct Plan {
+    std::vector<int> points;  // the robots' points, ordered
+    std::vector<std::uint8_t> open;
+    std::vector<Vec2> aims;
+    std::vector<std::vector<int>> order;
+  };
+  std::vector<Plan> plans_;  // this step's
+  TourPlanner planner_;
   const SensorModel* sensor_ = nullptr;
   // aim (its coordinates' bits) -> index into fields_; the first
   // index_.size() fields are this step's.
