@@ -587,7 +587,7 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
   ASSERT_EQ(sha.exit_code, 0);
   EXPECT_NE(effective.find("#   igbnet: {max_reversals: 1, max_walk: 0, "
                            "search: true, share_search: true, no_undo: "
-                           "true, claims: true}; model " +
+                           "true, claims: route}; model " +
                            model + " sha256 " + sha.out.substr(0, 64) + "\n"),
             std::string::npos)
       << effective;

@@ -16,8 +16,10 @@ from aia import network  # noqa: E402  (needs torch)
 SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
 BINARY = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
 DEFAULT = str(SOURCE / "scenarios" / "default.yaml")
-# The network's moves alone: no deadlock rule, no undo rule, no search aims.
-ARGMAX = {"max_reversals": 0, "no_undo": False, "search": False}
+# The network's moves alone: no deadlock rule, no undo rule, no search aims,
+# every open target shown.
+ARGMAX = {"max_reversals": 0, "no_undo": False, "search": False,
+          "claims": "none"}
 
 
 @pytest.fixture(scope="module")
