@@ -202,7 +202,7 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor) {
   map_ = &map;
   sensor_ = &sensor;
   index_.clear();
-  plans_.clear();
+  used_ = 0;
 }
 
 const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
@@ -237,56 +237,92 @@ const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
 
 int TargetClaims::Distance(const Vec2& aim, int p) { return Field(aim)[p]; }
 
-bool TargetClaims::Before(int a, int da, int b, int db) const {
-  if (da != db) return da < db;
-  const Vec2 pa = map_->lattice().Point(a), pb = map_->lattice().Point(b);
-  return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
+TargetClaims::Plan& TargetClaims::PlanFor(int self,
+                                          const std::vector<int>& others,
+                                          const std::vector<Vec2>& aims,
+                                          const std::vector<std::uint8_t>& open,
+                                          int* at) {
+  AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim() or Route()");
+  AIA_CHECK(aims.size() == open.size());
+  const Lattice& lattice = map_->lattice();
+  const int m = static_cast<int>(aims.size());
+  points_.assign(others.begin(), others.end());
+  points_.push_back(self);
+  const auto before = [&](int a, int b) {
+    const Vec2 pa = lattice.Point(a), pb = lattice.Point(b);
+    return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
+  };
+  std::sort(points_.begin(), points_.end(), before);
+  *at = static_cast<int>(
+      std::lower_bound(points_.begin(), points_.end(), self, before) -
+      points_.begin());
+  const auto same = [&](const Plan& plan) {
+    if (plan.points != points_ || plan.open != open) return false;
+    for (int k = 0; k < m; ++k)
+      if (open[k] && (plan.aims[k].x() != aims[k].x() ||
+                      plan.aims[k].y() != aims[k].y()))
+        return false;
+    return true;
+  };
+  for (int p = 0; p < used_; ++p)
+    if (same(plans_[p])) return plans_[p];
+  if (used_ == static_cast<int>(plans_.size())) plans_.emplace_back();
+  Plan& plan = plans_[used_++];
+  plan.points = points_;
+  plan.open = open;
+  plan.aims = aims;
+  plan.routed = false;
+  plan.order.clear();
+  // Each open target's owner: the robot nearest to where it can be
+  // measured (ties to the first in the points' order: lower x, then y).
+  const int n = static_cast<int>(points_.size());
+  plan.owner.assign(m, -1);
+  plan.helper.assign(m, -1);
+  held_.assign(n, 0);
+  for (int k = 0; k < m; ++k) {
+    if (!open[k]) continue;
+    const std::vector<int>& f = Field(aims[k]);
+    int best = -1;
+    for (int r = 0; r < n; ++r) {
+      const int d = f[points_[r]];
+      if (d >= 0 && (best < 0 || d < f[points_[best]])) best = r;
+    }
+    plan.owner[k] = best;
+    if (best >= 0) ++held_[best];
+  }
+  // Owners of two or more: each such target's helper is the nearest robot
+  // that owns none.
+  for (int k = 0; k < m; ++k) {
+    if (plan.owner[k] < 0 || held_[plan.owner[k]] < 2) continue;
+    const std::vector<int>& f = Field(aims[k]);
+    int best = -1;
+    for (int r = 0; r < n; ++r) {
+      const int d = f[points_[r]];
+      if (held_[r] == 0 && d >= 0 && (best < 0 || d < f[points_[best]]))
+        best = r;
+    }
+    plan.helper[k] = best;
+  }
+  return plan;
 }
 
 void TargetClaims::Claim(int self, const std::vector<int>& others,
                          const std::vector<Vec2>& aims,
                          const std::vector<std::uint8_t>& open,
                          std::vector<std::uint8_t>* mine) {
-  AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim()");
-  AIA_CHECK(aims.size() == open.size());
+  int at = 0;
+  const Plan& plan = PlanFor(self, others, aims, open, &at);
   const int m = static_cast<int>(aims.size());
-  const int n = static_cast<int>(others.size()) + 1;
-  const auto point = [&](int r) { return r == 0 ? self : others[r - 1]; };
   mine->assign(m, 0);
-  // Each open target's owner: the robot (0: self, r: others[r - 1]) nearest
-  // to where it can be measured.
-  owner_.assign(m, -1);
-  held_.assign(n, 0);
   bool any = false;
-  for (int k = 0; k < m; ++k) {
-    if (!open[k]) continue;
-    const std::vector<int>& f = Field(aims[k]);
-    int best = -1;
-    for (int r = 0; r < n; ++r) {
-      const int d = f[point(r)];
-      if (d >= 0 && (best < 0 || Before(point(r), d, point(best), f[point(best)])))
-        best = r;
+  for (int k = 0; k < m; ++k)
+    if (plan.owner[k] >= 0 && plan.points[plan.owner[k]] == self) {
+      (*mine)[k] = 1;
+      any = true;
     }
-    owner_[k] = best;
-    if (best < 0) continue;
-    ++held_[best];
-    if (best == 0) (*mine)[k] = 1;
-    any = any || best == 0;
-  }
   if (any) return;
-  // Idle: help where an owner holds two or more, as the nearest idle robot.
-  for (int k = 0; k < m; ++k) {
-    if (owner_[k] < 0 || held_[owner_[k]] < 2) continue;
-    const std::vector<int>& f = Field(aims[k]);
-    const int d = f[self];
-    if (d < 0) continue;
-    bool won = true;
-    for (int r = 1; r < n && won; ++r) {
-      const int e = f[point(r)];
-      if (held_[r] == 0 && e >= 0 && Before(point(r), e, self, d)) won = false;
-    }
-    (*mine)[k] = won;
-  }
+  for (int k = 0; k < m; ++k)
+    (*mine)[k] = plan.helper[k] >= 0 && plan.points[plan.helper[k]] == self;
 }
 
 class TargetClaims::Legs : public LegOracle {
@@ -318,43 +354,29 @@ void TargetClaims::Route(int self, const std::vector<int>& others,
                          const std::vector<Vec2>& aims,
                          const std::vector<std::uint8_t>& open,
                          std::vector<std::uint8_t>* mine) {
-  AIA_CHECK_MSG(map_ && sensor_, "Begin() before Route()");
-  AIA_CHECK(aims.size() == open.size());
-  const Lattice& lattice = map_->lattice();
+  const long num_open = std::count(open.begin(), open.end(), 1);
+  if (num_open * (static_cast<long>(others.size()) + 1) > kRouteMaxPairs) {
+    Claim(self, others, aims, open, mine);
+    return;
+  }
+  int at = 0;
+  Plan& plan = PlanFor(self, others, aims, open, &at);
   const int m = static_cast<int>(aims.size());
-  mine->assign(m, 0);
-  std::vector<int> points = others;
-  points.push_back(self);
-  std::sort(points.begin(), points.end(), [&](int a, int b) {
-    const Vec2 pa = lattice.Point(a), pb = lattice.Point(b);
-    return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
-  });
-  const auto same_aims = [&](const Plan& plan) {
-    for (int k = 0; k < m; ++k)
-      if (open[k] && (plan.aims[k].x() != aims[k].x() ||
-                      plan.aims[k].y() != aims[k].y()))
-        return false;
-    return true;
-  };
-  const Plan* plan = nullptr;
-  for (const Plan& p : plans_)
-    if (p.points == points && p.open == open && same_aims(p)) plan = &p;
-  if (!plan) {
+  if (!plan.routed) {
     std::vector<int> targets;
     for (int k = 0; k < m; ++k)
       if (open[k]) targets.push_back(k);
-    Legs legs(this, &aims);
+    Legs legs(this, &plan.aims);
     TourSettings settings;
     settings.objective = TourObjective::kMakespan;
     settings.budget = kRouteBudget;
-    const std::vector<double> weight(m, 1.0);
-    Tours tours = planner_.Plan(points, targets, weight, settings, legs);
-    plans_.push_back({points, open, aims, std::move(tours.order)});
-    plan = &plans_.back();
+    weight_.assign(m, 1.0);
+    plan.order =
+        planner_.Plan(plan.points, targets, weight_, settings, legs).order;
+    plan.routed = true;
   }
-  const int at = static_cast<int>(
-      std::find(points.begin(), points.end(), self) - points.begin());
-  const std::vector<int>& route = plan->order[at];
+  mine->assign(m, 0);
+  const std::vector<int>& route = plan.order[at];
   if (!route.empty()) (*mine)[route.front()] = 1;
 }
 

@@ -127,6 +127,10 @@ class TowardNearestAim {
 class TargetClaims {
  public:
   static constexpr long kRouteBudget = 2000;
+  // Route plans only where robots x open targets is at most this (the
+  // tours' regret insertion grows as robots x targets^2): 40 x 40; beyond
+  // it, Claim's answer.
+  static constexpr long kRouteMaxPairs = 1600;
   // A new step on this map (the fields of the last one are dropped).
   void Begin(const Map& map, const SensorModel& sensor);
   // Moves from lattice point p to the nearest point predicted to measure a
@@ -143,27 +147,39 @@ class TargetClaims {
   // over the open targets, legs from the same fields, kRouteBudget route
   // evaluations of local search; the robots ordered by position, so that
   // their labels do not matter. Robots given the same points and aims share
-  // one plan per step. None where the route is empty.
+  // one plan per step. None where the route is empty. Claim's answer where
+  // the robots times the open targets exceed kRouteMaxPairs.
   void Route(int self, const std::vector<int>& others,
              const std::vector<Vec2>& aims, const std::vector<std::uint8_t>& open,
              std::vector<std::uint8_t>* mine);
 
  private:
   const std::vector<int>& Field(const Vec2& aim);
-  // Robot at point a, da moves away, comes before robot at b, db away.
-  bool Before(int a, int da, int b, int db) const;
-  const Map* map_ = nullptr;
-  std::vector<int> owner_, held_;
-  class Legs;
+  // What a robot and its neighbours work out, the same for every robot that
+  // holds the same points and aims: the robots' points ordered by x, then
+  // y; each open target's owner and (for owners of two or more) helper, as
+  // indices into the points (-1: none); the tours, once planned.
   struct Plan {
-    std::vector<int> points;  // the robots' points, ordered
+    std::vector<int> points;
     std::vector<std::uint8_t> open;
     std::vector<Vec2> aims;
+    std::vector<int> owner, helper;
+    bool routed = false;
     std::vector<std::vector<int>> order;
   };
-  std::vector<Plan> plans_;  // this step's
-  TourPlanner planner_;
+  // This step's plan for `self` and `others` (made if new); *at is self's
+  // index in its points.
+  Plan& PlanFor(int self, const std::vector<int>& others,
+                const std::vector<Vec2>& aims,
+                const std::vector<std::uint8_t>& open, int* at);
+  class Legs;
+  const Map* map_ = nullptr;
   const SensorModel* sensor_ = nullptr;
+  std::vector<Plan> plans_;  // the first used_ are this step's
+  int used_ = 0;
+  std::vector<int> points_, held_;
+  std::vector<double> weight_;
+  TourPlanner planner_;
   // aim (its coordinates' bits) -> index into fields_; the first
   // index_.size() fields are this step's.
   struct AimHash {
