@@ -70,6 +70,7 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int num_targets,
   rule_moves_ = 0;
   rule_stays_ = 0;
   search_.Reset(num_robots, num_targets);
+  claims_.Reset();
 }
 
 void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {

@@ -198,10 +198,35 @@ Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
   return move;
 }
 
+void TargetClaims::Reset() {
+  index_.clear();
+  free_.clear();
+  fields_.clear();
+  used_ = 0;
+  map_ = nullptr;
+  sensor_ = nullptr;
+}
+
 void TargetClaims::Begin(const Map& map, const SensorModel& sensor) {
+  if (map_ != &map || sensor_ != &sensor ||
+      (sensor_ && sensor_->range != range_)) {
+    Reset();
+  } else {
+    // Keep the fields the last step used (most aims do not move between
+    // steps); free the others.
+    for (auto it = index_.begin(); it != index_.end();) {
+      if (it->second.step != step_) {
+        free_.push_back(it->second.slot);
+        it = index_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
   map_ = &map;
   sensor_ = &sensor;
-  index_.clear();
+  range_ = sensor.range;
+  ++step_;
   used_ = 0;
 }
 
@@ -210,10 +235,16 @@ const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
   std::pair<std::uint64_t, std::uint64_t> key;
   std::memcpy(&key.first, &aim.x(), sizeof(double));
   std::memcpy(&key.second, &aim.y(), sizeof(double));
-  const auto [it, fresh] =
-      index_.emplace(key, static_cast<int>(index_.size()));
-  const int index = it->second;
-  if (!fresh) return fields_[index];
+  auto [it, fresh] = index_.emplace(key, Slot{});
+  it->second.step = step_;
+  if (!fresh) return fields_[it->second.slot];
+  if (free_.empty()) {
+    free_.push_back(static_cast<int>(fields_.size()));
+    fields_.emplace_back();
+  }
+  const int index = free_.back();
+  free_.pop_back();
+  it->second.slot = index;
   const Lattice& lattice = map_->lattice();
   const int span =
       static_cast<int>(std::ceil(sensor_->range / lattice.step())) + 1;
@@ -229,7 +260,6 @@ const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
           PredictedPrecision(*map_, *sensor_, lattice.Point(q), aim) > 0.0)
         sources_.push_back(q);
     }
-  if (static_cast<int>(fields_.size()) <= index) fields_.emplace_back();
   BfsDistances(lattice, sources_.data(), static_cast<int>(sources_.size()),
                &fields_[index], &queue_);
   return fields_[index];

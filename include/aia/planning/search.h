@@ -131,8 +131,12 @@ class TargetClaims {
   // tours' regret insertion grows as robots x targets^2): 40 x 40; beyond
   // it, Claim's answer.
   static constexpr long kRouteMaxPairs = 1600;
-  // A new step on this map (the fields of the last one are dropped).
+  // A new step on this map. The fields of aims the last step used are
+  // kept (a field is a function of the map, the sensor and the aim only),
+  // the others dropped; all of them when the map or sensor is another.
   void Begin(const Map& map, const SensorModel& sensor);
+  // Forgets every field (a new episode).
+  void Reset();
   // Moves from lattice point p to the nearest point predicted to measure a
   // target at `aim`; -1 where none can be reached.
   int Distance(const Vec2& aim, int p);
@@ -180,15 +184,23 @@ class TargetClaims {
   std::vector<int> points_, held_;
   std::vector<double> weight_;
   TourPlanner planner_;
-  // aim (its coordinates' bits) -> index into fields_; the first
-  // index_.size() fields are this step's.
+  // aim (its coordinates' bits) -> its field's slot in fields_ and the
+  // step that last used it; free_ lists the unused slots.
   struct AimHash {
     std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& a) const {
       return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^ a.second);
     }
   };
-  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, int, AimHash> index_;
+  struct Slot {
+    int slot = -1;
+    long step = 0;
+  };
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, Slot, AimHash>
+      index_;
   std::vector<std::vector<int>> fields_;
+  std::vector<int> free_;
+  long step_ = 0;
+  double range_ = 0.0;
   std::vector<int> sources_, queue_;
 };
 
