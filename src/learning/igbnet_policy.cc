@@ -260,26 +260,30 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   return status;
 }
 
+void IgbNetPolicy::OpenAims(const DecisionContext& ctx, int i) {
+  const int m = ctx.beliefs->layout().num_targets();
+  const double log_eps = std::log(ctx.eps);
+  aims_.resize(m);
+  open_.assign(m, 0);
+  for (int k = 0; k < m; ++k) {
+    if (ctx.beliefs->LogDetCovariance(i, k) <= log_eps) continue;
+    aims_[k] = searching_ ? search_.Aim(i, k) : ctx.beliefs->PositionMean(i, k);
+    open_[k] = 1;
+  }
+}
+
 void IgbNetPolicy::ClaimTargets(const DecisionContext& ctx) {
   if (keep_.size() < rows_.size()) keep_.resize(rows_.size());
   for (auto& k : keep_) k.clear();
   if (params_.claims == TargetClaimsMode::kNone || !ctx.sensor) return;
   claims_.Begin(*ctx.map, *ctx.sensor);
-  const int m = ctx.beliefs->layout().num_targets();
-  const double log_eps = std::log(ctx.eps);
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
     others_.clear();
     for (int j : ctx.comm->Neighbors(i))
       if (j != i && ctx.comm->Active(j))
         others_.push_back((*ctx.robot_lattice)[j]);
-    aims_.resize(m);
-    open_.assign(m, 0);
-    for (int k = 0; k < m; ++k) {
-      if (ctx.beliefs->LogDetCovariance(i, k) <= log_eps) continue;
-      aims_[k] = searching_ ? search_.Aim(i, k) : ctx.beliefs->PositionMean(i, k);
-      open_[k] = 1;
-    }
+    OpenAims(ctx, i);
     if (params_.claims == TargetClaimsMode::kRoute)
       claims_.Route((*ctx.robot_lattice)[i], others_, aims_, open_, &claimed_);
     else
@@ -294,17 +298,11 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
   const Lattice& lattice = ctx.map->lattice();
   const int here = (*ctx.robot_lattice)[i];
   const int m = ctx.beliefs->layout().num_targets();
-  const double log_eps = std::log(ctx.eps);
-  aims_.resize(m);
-  open_.assign(m, 0);
-  for (int k = 0; k < m; ++k) {
-    if (ctx.beliefs->LogDetCovariance(i, k) <= log_eps) continue;
-    aims_[k] = searching_ ? search_.Aim(i, k) : ctx.beliefs->PositionMean(i, k);
-    open_[k] = 1;
-    if (PredictedPrecision(*ctx.map, *ctx.sensor, lattice.Point(here),
-                           aims_[k]) > 0.0)
+  OpenAims(ctx, i);
+  for (int k = 0; k < m; ++k)
+    if (open_[k] && PredictedPrecision(*ctx.map, *ctx.sensor,
+                                       lattice.Point(here), aims_[k]) > 0.0)
       return Move::kStay;  // it is where it can measure
-  }
   // The walk's target while it is open and reachable.
   int& goal = goal_[i];
   if (goal >= 0 && goal < m && open_[goal]) {

@@ -340,19 +340,41 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
                          const std::vector<Vec2>& aims,
                          const std::vector<std::uint8_t>& open,
                          std::vector<std::uint8_t>* mine) {
-  int at = 0;
-  const Plan& plan = PlanFor(self, others, aims, open, &at);
+  AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim()");
+  AIA_CHECK(aims.size() == open.size());
+  const Lattice& lattice = map_->lattice();
   const int m = static_cast<int>(aims.size());
+  // Robot at point a, da moves away, comes before robot at b, db away.
+  const auto before = [&](int a, int da, int b, int db) {
+    if (da != db) return da < db;
+    const Vec2 pa = lattice.Point(a), pb = lattice.Point(b);
+    return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
+  };
   mine->assign(m, 0);
   bool any = false;
-  for (int k = 0; k < m; ++k)
-    if (plan.owner[k] >= 0 && plan.points[plan.owner[k]] == self) {
-      (*mine)[k] = 1;
-      any = true;
-    }
+  for (int k = 0; k < m; ++k) {
+    if (!open[k]) continue;
+    const std::vector<int>& f = Field(aims[k]);
+    const int d = f[self];
+    if (d < 0) continue;
+    bool won = true;
+    for (int q : others)
+      if (f[q] >= 0 && before(q, f[q], self, d)) {
+        won = false;
+        break;
+      }
+    (*mine)[k] = won;
+    any = any || won;
+  }
   if (any) return;
-  for (int k = 0; k < m; ++k)
-    (*mine)[k] = plan.helper[k] >= 0 && plan.points[plan.helper[k]] == self;
+  const long num_open = std::count(open.begin(), open.end(), 1);
+  if (num_open * (static_cast<long>(others.size()) + 1) > kHelpMaxPairs)
+    return;
+  // Idle: the targets of owners of two or more where self is the nearest
+  // robot that owns none (the team's owners, as every robot works them out).
+  int at = 0;
+  const Plan& plan = PlanFor(self, others, aims, open, &at);
+  for (int k = 0; k < m; ++k) (*mine)[k] = plan.helper[k] == at;
 }
 
 class TargetClaims::Legs : public LegOracle {

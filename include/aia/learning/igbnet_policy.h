@@ -181,6 +181,9 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   std::vector<std::vector<Vec2>> worker_neighbours_;
   std::vector<std::vector<HeatSource>> worker_targets_;  // channel 4
   std::vector<double> no_prior_;
+  // Robot i's open targets (above eps in its own belief) into open_ and
+  // their aims (the search memory's, else the means) into aims_.
+  void OpenAims(const DecisionContext& ctx, int i);
   // With `claims`: per row, the targets whose heat it is shown (empty: all).
   void ClaimTargets(const DecisionContext& ctx);
   TargetClaims claims_;

@@ -131,6 +131,9 @@ class TargetClaims {
   // tours' regret insertion grows as robots x targets^2): 40 x 40; beyond
   // it, Claim's answer.
   static constexpr long kRouteMaxPairs = 1600;
+  // Idle robots help only where robots x open targets is at most this
+  // (80 x 80: the owners cost robots x targets per robot that owns none).
+  static constexpr long kHelpMaxPairs = 6400;
   // A new step on this map. The fields of aims the last step used are
   // kept (a field is a function of the map, the sensor and the aim only),
   // the others dropped; all of them when the map or sensor is another.
@@ -142,7 +145,8 @@ class TargetClaims {
   int Distance(const Vec2& aim, int p);
   // mine[k] (resized to aims.size()): `self` claims open target k, as
   // above, against `others` (lattice points). A target `self` cannot reach
-  // is not its; none is where every open target is out of reach.
+  // is not its; none is where every open target is out of reach. An idle
+  // robot helps only up to kHelpMaxPairs robots x open targets.
   void Claim(int self, const std::vector<int>& others,
              const std::vector<Vec2>& aims, const std::vector<std::uint8_t>& open,
              std::vector<std::uint8_t>* mine);
