@@ -258,6 +258,42 @@ TEST(TargetClaimsTest, RoutesGiveEachRobotTheFirstTargetOfMakespanTours) {
   EXPECT_EQ(mine, std::vector<std::uint8_t>({0, 1}));
 }
 
+TEST(TargetClaimsTest, LargeTeamsGetNearestClaimsInsteadOfRoutes) {
+  Team team("workspace: {size: [30.0, 30.0]}\n"
+            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  TargetClaims claims;
+  claims.Begin(team.world.map, team.sensor);
+  // Robots on a grid, aims scattered: 40 robots x 40 targets = 1600 pairs
+  // (routes: one target each at most), then 41 x 40 (nearest claims).
+  std::vector<int> robots;
+  for (int r = 0; r < 41; ++r)
+    robots.push_back(PointAt(team, 1.25 + 3.5 * (r % 8), 1.25 + 5.5 * (r / 8)));
+  std::vector<Vec2> aims;
+  for (int k = 0; k < 40; ++k)
+    aims.push_back(Vec2(2.1 + 0.7 * ((k * 17) % 40), 2.3 + 0.65 * ((k * 29) % 40)));
+  const std::vector<std::uint8_t> open(40, 1);
+  for (const int n : {40, 41}) {
+    int routed = 0;
+    for (int r = 0; r < n; ++r) {
+      std::vector<int> others;
+      for (int q = 0; q < n; ++q)
+        if (q != r) others.push_back(robots[q]);
+      std::vector<std::uint8_t> route, nearest;
+      claims.Route(robots[r], others, aims, open, &route);
+      claims.Claim(robots[r], others, aims, open, &nearest);
+      const int count = std::count(route.begin(), route.end(), 1);
+      if (n == 40) {
+        EXPECT_LE(count, 1) << "robot " << r;
+        routed += count;
+      } else {
+        EXPECT_EQ(route, nearest) << "robot " << r;
+      }
+    }
+    if (n == 40) EXPECT_GT(routed, 20);  // most robots have a route
+  }
+}
+
 TEST(TargetClaimsTest, ATargetNoPointMeasuresIsNobodys) {
   // The aim inside a closed box: no free point sees it.
   Team team(
