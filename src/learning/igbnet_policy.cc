@@ -275,8 +275,14 @@ void IgbNetPolicy::OpenAims(const DecisionContext& ctx, int i) {
 void IgbNetPolicy::ClaimTargets(const DecisionContext& ctx) {
   if (keep_.size() < rows_.size()) keep_.resize(rows_.size());
   for (auto& k : keep_) k.clear();
+  for (auto& k : owned_) k.clear();
+  row_of_robot_.clear();
   if (params_.claims == TargetClaimsMode::kNone || !ctx.sensor) return;
   claims_.Begin(*ctx.map, *ctx.sensor);
+  if (owned_.size() < rows_.size()) owned_.resize(rows_.size());
+  row_of_robot_.assign(ctx.robot_lattice->size(), -1);
+  for (std::size_t b = 0; b < rows_.size(); ++b)
+    row_of_robot_[rows_[b]] = static_cast<int>(b);
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
     others_.clear();
@@ -290,6 +296,11 @@ void IgbNetPolicy::ClaimTargets(const DecisionContext& ctx) {
       claims_.Claim((*ctx.robot_lattice)[i], others_, aims_, open_, &claimed_);
     if (std::find(claimed_.begin(), claimed_.end(), 1) != claimed_.end())
       keep_[b] = claimed_;
+    // What the deadlock rule's walk heads for: the targets the robot owns.
+    if (params_.claims == TargetClaimsMode::kRoute)
+      claims_.Claim((*ctx.robot_lattice)[i], others_, aims_, open_, &owned_[b]);
+    else
+      owned_[b] = claimed_;
   }
 }
 
@@ -313,6 +324,25 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
     if (move != Move::kStay) return move;
   }
   goal = -1;
+  // With claims: the nearest of the open targets the robot owns (in
+  // lattice moves among it and its neighbours), where it owns one.
+  const int row = i < static_cast<int>(row_of_robot_.size())
+                      ? row_of_robot_[i]
+                      : -1;
+  if (params_.claims != TargetClaimsMode::kNone && row >= 0 &&
+      static_cast<int>(owned_[row].size()) == m) {
+    claimed_.assign(m, 0);
+    bool any = false;
+    for (int k = 0; k < m; ++k) {
+      claimed_[k] = owned_[row][k] && open_[k];
+      any = any || claimed_[k];
+    }
+    if (any) {
+      const Move move = toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims_,
+                                          claimed_, &goal);
+      if (move != Move::kStay) return move;
+    }
+  }
   // Leave to a neighbour the open targets it is nearer to (straight line;
   // ties to the lower index); all of them when each is nearer to one.
   const Vec2 p = lattice.Point(here);

@@ -540,6 +540,38 @@ sensor: {range: 2.0}
   }
 }
 
+// With claims the walk heads for a target the robot owns in lattice moves.
+// A wall (y 2..2.5, x from 6.5 east) parts robot 1 (9.75, 3.25) from the
+// east target's aim (10, 1.25): 2.02 m away in a straight line, against
+// robot 0's 3.75 m, but about 14 moves around the wall's west end against
+// robot 0's 4. With claims robot 0 owns both targets and walks east, to the
+// nearer; without (`none`: the straight-line rule) it leaves the east target
+// to robot 1 and walks west.
+TEST(IgbNetPolicyTest, DeadlockRuleWalksToTheTargetsTheRobotOwns) {
+  const char* yaml = R"(
+workspace: {size: [12, 4], obstacles: {boxes: [{center: [9.25, 2.25], size: [5.5, 0.5]}]}}
+robots: {count: 2, step: 0.5, start: [[6.25, 1.25], [9.75, 3.25]]}
+targets: {list: [{position: [10.5, 1.25], prior_mean: [10.0, 1.25]},
+                 {position: [1.0, 1.25], prior_mean: [1.5, 1.25]}]}
+sensor: {range: 2.0}
+)";
+  const std::vector<double> prior(2, std::log(1.0));
+  for (const TargetClaimsMode mode :
+       {TargetClaimsMode::kRoute, TargetClaimsMode::kNearest,
+        TargetClaimsMode::kNone}) {
+    testing::TeamFixture f(yaml);
+    const auto net = TestNet(ChannelFrame::kCentred, true);
+    IgbNetParams params;
+    params.claims = mode;
+    IgbNetPolicy rule(net, params);
+    const std::vector<Move> last =
+        Deadlocked(&rule, net, yaml, f.positions, prior);
+    EXPECT_EQ(last[0], mode == TargetClaimsMode::kNone ? Move::kLeft
+                                                       : Move::kRight)
+        << "claims " << static_cast<int>(mode);
+  }
+}
+
 // The walk keeps its target: robot 0, deadlocked, leaves the east target to
 // robot 1 beside it and walks west; robot 1 then runs west past it, so that
 // robot 1 is nearer the west target and the east one is nobody's. Robot 0

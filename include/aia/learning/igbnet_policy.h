@@ -188,6 +188,11 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   void ClaimTargets(const DecisionContext& ctx);
   TargetClaims claims_;
   std::vector<std::vector<std::uint8_t>> keep_;
+  // Per row, the open targets the robot owns (TargetClaims::Claim; empty:
+  // none worked out), which the deadlock rule's walk heads for; per robot,
+  // its row (-1: inactive).
+  std::vector<std::vector<std::uint8_t>> owned_;
+  std::vector<int> row_of_robot_;
   std::vector<int> others_;
 };
 
