@@ -51,9 +51,10 @@ struct IgbNetParams {
   // The deadlock rule (docs/learning.md, Action selection): a robot whose
   // last `max_reversals` moves each undid the one before is deadlocked. It
   // then walks a shortest lattice path toward the nearest point that sees
-  // an open target (where its search memory aims; targets a neighbour is
-  // nearer to are left to it) and hands back to the network once it stands
-  // on one. 0: the most probable valid move, always (the paper's).
+  // an open target (where its search memory aims; with claims, one the
+  // robot owns where it owns one; else targets a neighbour is nearer to
+  // in a straight line are left to it) and hands back to the network once
+  // it stands on one. 0: the most probable valid move, always (the paper's).
   int max_reversals = 1;
   // Moves a deadlocked robot walks at most before it hands back to the
   // network; 0: until it stands where it can measure.
