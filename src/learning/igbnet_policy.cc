@@ -69,6 +69,7 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int num_targets,
   decisions_ = 0;
   rule_moves_ = 0;
   rule_stays_ = 0;
+  idle_moves_ = 0;
   search_.Reset(num_robots, num_targets);
   claims_.Reset();
 }
@@ -246,6 +247,22 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
         static_cast<Move>(best) == Opposite(last_move_[i])) {
       goal_[i] = -1;
       const Move out = Escape(ctx, i);
+      if (out == Move::kStay && ctx.sensor &&
+          std::find(open_.begin(), open_.end(), 1) == open_.end()) {
+        // Nothing open in the robot's own belief (a tracking mission after
+        // success): a stay would be replaced by a random move by the world
+        // rule, so the network's best move that does not undo the last.
+        int next = -1;
+        for (int a = 0; a < kNumMoves; ++a) {
+          if (a == best || !lattice.Valid(here, static_cast<Move>(a))) continue;
+          if (next < 0 || l[a] > l[next]) next = a;
+        }
+        if (next >= 0) {
+          ++idle_moves_;
+          (*moves)[i] = static_cast<Move>(next);
+          continue;
+        }
+      }
       if (out == Move::kStay) {
         ++rule_stays_;
         continue;
@@ -370,6 +387,7 @@ std::vector<std::pair<std::string, long>> IgbNetPolicy::Counters() const {
   return {{"decisions", decisions_},
           {"rule_moves", rule_moves_},
           {"rule_stays", rule_stays_},
+          {"idle_moves", idle_moves_},
           {"misses", search_.misses()}};
 }
 

@@ -649,6 +649,61 @@ TEST(IgbNetPolicyTest, NoUndoNeverTakesTheNetworksUndoMove) {
   EXPECT_GT(undos, 0);
 }
 
+// A robot whose own belief holds every target localized (a tracking
+// mission after success) has nothing to measure: a stay would be replaced by
+// a random move by the world rule, so where the network would undo the last
+// move it takes the network's best other valid move and counts it.
+TEST(IgbNetPolicyTest, NoUndoMovesOnWhereNothingIsOpen) {
+  const std::vector<double> prior(1, std::log(1.0));
+  int checked = 0;
+  for (const Vec2& at : {Vec2(3.25, 1.25), Vec2(4.75, 0.75), Vec2(2.25, 0.25),
+                         Vec2(5.25, 1.75)}) {
+    const auto net = TestNet(ChannelFrame::kCentred, true);
+    IgbNetParams argmax;
+    argmax.max_reversals = 0;
+    argmax.no_undo = false;
+    const auto localized = [](testing::TeamFixture* f) {
+      for (int i = 0; i < f->beliefs.rows(); ++i) {
+        f->beliefs.Omega(i, 0) *= 1e6;
+        f->beliefs.Xi(i, 0) *= 1e6;
+      }
+    };
+    testing::TeamFixture f(kCorridor);
+    localized(&f);
+    const Lattice& lattice = f.world.map.lattice();
+    f.positions[0] = lattice.NearestPoint(at);
+    IgbNetPolicy plain(net, argmax);
+    Decide(&plain, f, 0, prior);
+    const std::vector<float> l(plain.logits().begin(),
+                               plain.logits().begin() + kNumMoves);
+    int q = -1, next = -1;  // the network's best valid move, and the next
+    for (int a = 0; a < kNumMoves; ++a) {
+      if (!lattice.Valid(f.positions[0], static_cast<Move>(a))) continue;
+      if (q < 0 || l[a] > l[q]) {
+        next = q;
+        q = a;
+      } else if (next < 0 || l[a] > l[next]) {
+        next = a;
+      }
+    }
+    ASSERT_GE(next, 0);
+    const int from = lattice.Next(f.positions[0], static_cast<Move>(q));
+    // Robot 0 came from `from`; q undoes that.
+    IgbNetPolicy policy(net);
+    testing::TeamFixture g(kCorridor);
+    localized(&g);
+    g.positions = f.positions;
+    g.positions[0] = from;
+    Decide(&policy, g, 0, prior);
+    const Move m = Decide(&policy, f, 1, prior, false)[0];
+    EXPECT_EQ(m, static_cast<Move>(next)) << at.transpose();
+    EXPECT_EQ(policy.Counters()[3],
+              (std::pair<std::string, long>{"idle_moves", 1}));
+    ++checked;
+  }
+  EXPECT_EQ(checked, 4);
+}
+
 TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
   // Robot 0 reverses once (a, b, a), walks one move east (the rule's), and
   // with max_walk 1 takes its network's move at the next point; the
@@ -681,10 +736,11 @@ TEST(IgbNetPolicyTest, DeadlockRuleWalksAtMostMaxWalkMovesAndCountsThem) {
   }
   EXPECT_EQ(last, last_plain);
   const auto counters = rule.Counters();
-  ASSERT_EQ(counters.size(), 4u);
+  ASSERT_EQ(counters.size(), 5u);
   EXPECT_EQ(counters[0], (std::pair<std::string, long>{"decisions", 8}));
   EXPECT_EQ(counters[1], (std::pair<std::string, long>{"rule_moves", 1}));
   EXPECT_EQ(counters[2], (std::pair<std::string, long>{"rule_stays", 0}));
+  EXPECT_EQ(counters[3], (std::pair<std::string, long>{"idle_moves", 0}));
 }
 
 TEST(IgbNetPolicyTest, DeadlockRuleHandsBackWhereTheRobotCanMeasure) {

@@ -70,7 +70,9 @@ struct IgbNetParams {
   bool share_search = true;
   // A network move that would undo the robot's last move is not taken: the
   // robot starts the deadlock rule's walk instead, or stays where it can
-  // measure an open target or has nowhere to walk (a stay is no reversal).
+  // measure an open target or has nowhere to walk (a stay is no reversal);
+  // a robot with no open target in its own belief (a tracking mission after
+  // success) takes the network's best move that does not undo the last.
   bool no_undo = true;
   // Which open targets each robot shows the network (above).
   TargetClaimsMode claims = TargetClaimsMode::kRoute;
@@ -100,8 +102,9 @@ struct IgbNetParams {
     a->Visit(AIA_FIELD(no_undo).Doc(
         "a network move that would undo the robot's last move is replaced "
         "by the deadlock rule's walk, or a stay where the robot can measure "
-        "an open target or has nowhere to walk (false: the network's "
-        "move)"));
+        "an open target or has nowhere to walk, or, where no target is open "
+        "in its own belief, the network's best move that does not undo it "
+        "(false: the network's move)"));
     a->Visit(AIA_FIELD(claims).Doc(
         "which open targets each robot's heat and reach channels show, "
         "worked out by the robot with its neighbours in this step's graph "
@@ -127,7 +130,9 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   // first decision; unused with `search` false).
   const SearchMemory& search() const { return search_; }
   // decisions (robot moves decided), rule_moves (made by the deadlock
-  // rule), misses (points added to the search memory), since Reset.
+  // rule), rule_stays (no_undo's stays), idle_moves (no_undo's moves of a
+  // robot with nothing open), misses (points added to the search memory),
+  // since Reset.
   std::vector<std::pair<std::string, long>> Counters() const override;
   // The last step's logits, robot-major (4 per robot; zero for inactive
   // robots), for tools and tests.
@@ -157,7 +162,7 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   // (-1: none yet), so that claims that change as the robots move do not
   // turn the walk around.
   std::vector<int> goal_;
-  long decisions_ = 0, rule_moves_ = 0, rule_stays_ = 0;
+  long decisions_ = 0, rule_moves_ = 0, rule_stays_ = 0, idle_moves_ = 0;
   SearchMemory search_;
   bool searching_ = false;  // this step's aims are search_'s
   // The deadlock rule's move for robot i: toward the nearest point that sees
