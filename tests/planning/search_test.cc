@@ -123,14 +123,17 @@ TEST(SearchMemoryTest,
 
 // TargetClaims: lattice points of 0.5 m (centres at 0.25 + 0.5 k), sensor
 // range 2 m (a point 2 m away measures) with line of sight.
+const char* kEmptyWorld =
+    "workspace: {size: [10.0, 10.0]}\n"
+    "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+    "targets: {list: [{position: [8.0, 8.0]}]}\n";
+
 int PointAt(const Team& team, double x, double y) {
   return team.world.map.lattice().NearestPoint(Vec2(x, y));
 }
 
 TEST(TargetClaimsTest, TheRobotFewestMovesFromMeasuringClaims) {
-  Team team("workspace: {size: [10.0, 10.0]}\n"
-            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
-            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  Team team(kEmptyWorld);
   TargetClaims claims;
   claims.Begin(team.world.map, team.sensor);
   const Vec2 aim(5.1, 5.25);
@@ -185,9 +188,7 @@ TEST(TargetClaimsTest, WallsCountWhereAStraightLineWouldNot) {
 }
 
 TEST(TargetClaimsTest, AnIdleRobotHelpsTheOwnerOfTwoWhereItIsTheNearestIdle) {
-  Team team("workspace: {size: [10.0, 10.0]}\n"
-            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
-            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  Team team(kEmptyWorld);
   TargetClaims claims;
   claims.Begin(team.world.map, team.sensor);
   // A at (5.25, 5.25) sees t1 (5.25, 6.25) and is 2 moves from t2
