@@ -656,9 +656,9 @@ TEST(IgbNetPolicyTest, NoUndoNeverTakesTheNetworksUndoMove) {
 TEST(IgbNetPolicyTest, NoUndoMovesOnWhereNothingIsOpen) {
   const std::vector<double> prior(1, std::log(1.0));
   int checked = 0;
+  const auto net = TestNet(ChannelFrame::kCentred, true);
   for (const Vec2& at : {Vec2(3.25, 1.25), Vec2(4.75, 0.75), Vec2(2.25, 0.25),
                          Vec2(5.25, 1.75)}) {
-    const auto net = TestNet(ChannelFrame::kCentred, true);
     IgbNetParams argmax;
     argmax.max_reversals = 0;
     argmax.no_undo = false;
