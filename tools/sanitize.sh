@@ -38,5 +38,16 @@ labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|l
 # run of it, 200 s here; the filter's memory is checked by every other
 # estimation test).
 exclude='^golden\.|TwoMpiRanksGiveTheFilesOfOneProcess|^ExperimentTest\.|HundredThousandStepsKeepEveryBlockSpd'
+# Run with leak detection off (AddressSanitizer and UBSan still on): at this
+# test's exit LeakSanitizer's tracer crashes reading a dynamic TLS block of
+# the dlopen'd libtorch plugin (`Tracer caught signal 11`, a bogus DTLS range;
+# clang 14's compiler-rt on glibc 2.36) after the test has passed; valgrind
+# finds nothing in the same test.
+no_leak_check='IgbNetPolicyTest\.NoUndoMovesOnWhereNothingIsOpen'
 cd "$dir"
-exec ctest --output-on-failure -j "$jobs" --timeout 900 -L "$labels" -E "$exclude"
+status=0
+ctest --output-on-failure -j "$jobs" --timeout 900 -L "$labels" \
+  -E "$exclude|$no_leak_check" || status=$?
+ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} \
+  ctest --output-on-failure --timeout 900 -R "$no_leak_check" || status=$?
+exit "$status"
