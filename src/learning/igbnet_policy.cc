@@ -126,15 +126,14 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
           if (!keep_[b].empty())
             for (std::size_t k = 0; k < targets->size(); ++k)
               if (!keep_[b][k])
-                (*targets)[k].log_det = -std::numeric_limits<double>::infinity();
+                (*targets)[k].log_det =
+                    -std::numeric_limits<double>::infinity();
         }
-        renderer_->RenderWithHeat(lattice.Point((*ctx.robot_lattice)[i]),
-                                  neighbours,
-                                  keep_[b].empty()
-                                      ? heat_.Robot(b, &heat)
-                                      : heat_.Robot(b, keep_[b], &heat),
-                                  targets,
-                                  prior, ctx.eps, images_.data() + b * size);
+        renderer_->RenderWithHeat(
+            lattice.Point((*ctx.robot_lattice)[i]), neighbours,
+            keep_[b].empty() ? heat_.Robot(b, &heat)
+                             : heat_.Robot(b, keep_[b], &heat),
+            targets, prior, ctx.eps, images_.data() + b * size);
       }
       if (passing)
         net_->Embed(images_.data() + begin * size, end - begin,
@@ -148,8 +147,6 @@ void IgbNetPolicy::RenderAndForward(const DecisionContext& ctx) {
   });
   if (!passing) return;
   // The team's features over this step's graph among the active robots.
-  row_of_.assign(ctx.robot_lattice->size(), -1);
-  for (int b = 0; b < count; ++b) row_of_[rows_[b]] = b;
   graph_.offsets.assign(1, 0);
   graph_.neighbours.clear();
   for (int b = 0; b < count; ++b) {
@@ -169,6 +166,9 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   rows_.clear();
   for (int i = 0; i < n; ++i)
     if (ctx.comm->Active(i)) rows_.push_back(i);
+  row_of_.assign(n, -1);
+  for (std::size_t b = 0; b < rows_.size(); ++b)
+    row_of_[rows_[b]] = static_cast<int>(b);
   // What each robot missed so far (a hand-made context may lack the sensor
   // or differ from Reset's team: then no memory).
   searching_ = params_.search && ctx.sensor && search_.num_robots() == n &&
@@ -293,13 +293,9 @@ void IgbNetPolicy::ClaimTargets(const DecisionContext& ctx) {
   if (keep_.size() < rows_.size()) keep_.resize(rows_.size());
   for (auto& k : keep_) k.clear();
   for (auto& k : owned_) k.clear();
-  row_of_robot_.clear();
   if (params_.claims == TargetClaimsMode::kNone || !ctx.sensor) return;
   claims_.Begin(*ctx.map, *ctx.sensor);
   if (owned_.size() < rows_.size()) owned_.resize(rows_.size());
-  row_of_robot_.assign(ctx.robot_lattice->size(), -1);
-  for (std::size_t b = 0; b < rows_.size(); ++b)
-    row_of_robot_[rows_[b]] = static_cast<int>(b);
   for (std::size_t b = 0; b < rows_.size(); ++b) {
     const int i = rows_[b];
     others_.clear();
@@ -343,9 +339,7 @@ Move IgbNetPolicy::Escape(const DecisionContext& ctx, int i) {
   goal = -1;
   // With claims: the nearest of the open targets the robot owns (in
   // lattice moves among it and its neighbours), where it owns one.
-  const int row = i < static_cast<int>(row_of_robot_.size())
-                      ? row_of_robot_[i]
-                      : -1;
+  const int row = i < static_cast<int>(row_of_.size()) ? row_of_[i] : -1;
   if (params_.claims != TargetClaimsMode::kNone && row >= 0 &&
       static_cast<int>(owned_[row].size()) == m) {
     claimed_.assign(m, 0);

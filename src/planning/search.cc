@@ -251,8 +251,8 @@ const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
   const int c = lattice.NearestPoint(aim);
   const int cx = lattice.Ix(c), cy = lattice.Iy(c);
   sources_.clear();
-  for (int iy = std::max(0, cy - span); iy <= std::min(lattice.ny() - 1, cy + span);
-       ++iy)
+  for (int iy = std::max(0, cy - span);
+       iy <= std::min(lattice.ny() - 1, cy + span); ++iy)
     for (int ix = std::max(0, cx - span);
          ix <= std::min(lattice.nx() - 1, cx + span); ++ix) {
       const int q = lattice.Index(ix, iy);
@@ -267,6 +267,12 @@ const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
 
 int TargetClaims::Distance(const Vec2& aim, int p) { return Field(aim)[p]; }
 
+bool TargetClaims::ByPosition(int a, int b) const {
+  const Lattice& lattice = map_->lattice();
+  const Vec2 pa = lattice.Point(a), pb = lattice.Point(b);
+  return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
+}
+
 TargetClaims::Plan& TargetClaims::PlanFor(int self,
                                           const std::vector<int>& others,
                                           const std::vector<Vec2>& aims,
@@ -274,14 +280,10 @@ TargetClaims::Plan& TargetClaims::PlanFor(int self,
                                           int* at) {
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim() or Route()");
   AIA_CHECK(aims.size() == open.size());
-  const Lattice& lattice = map_->lattice();
   const int m = static_cast<int>(aims.size());
   points_.assign(others.begin(), others.end());
   points_.push_back(self);
-  const auto before = [&](int a, int b) {
-    const Vec2 pa = lattice.Point(a), pb = lattice.Point(b);
-    return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
-  };
+  const auto before = [this](int a, int b) { return ByPosition(a, b); };
   std::sort(points_.begin(), points_.end(), before);
   *at = static_cast<int>(
       std::lower_bound(points_.begin(), points_.end(), self, before) -
@@ -289,8 +291,8 @@ TargetClaims::Plan& TargetClaims::PlanFor(int self,
   const auto same = [&](const Plan& plan) {
     if (plan.points != points_ || plan.open != open) return false;
     for (int k = 0; k < m; ++k)
-      if (open[k] && (plan.aims[k].x() != aims[k].x() ||
-                      plan.aims[k].y() != aims[k].y()))
+      if (open[k] &&
+          (plan.aims[k].x() != aims[k].x() || plan.aims[k].y() != aims[k].y()))
         return false;
     return true;
   };
@@ -342,13 +344,10 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
                          std::vector<std::uint8_t>* mine) {
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim()");
   AIA_CHECK(aims.size() == open.size());
-  const Lattice& lattice = map_->lattice();
   const int m = static_cast<int>(aims.size());
   // Robot at point a, da moves away, comes before robot at b, db away.
-  const auto before = [&](int a, int da, int b, int db) {
-    if (da != db) return da < db;
-    const Vec2 pa = lattice.Point(a), pb = lattice.Point(b);
-    return pa.x() < pb.x() || (pa.x() == pb.x() && pa.y() < pb.y());
+  const auto before = [this](int a, int da, int b, int db) {
+    return da != db ? da < db : ByPosition(a, b);
   };
   mine->assign(m, 0);
   bool any = false;
@@ -368,8 +367,7 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
   }
   if (any) return;
   const long num_open = std::count(open.begin(), open.end(), 1);
-  if (num_open * (static_cast<long>(others.size()) + 1) > kHelpMaxPairs)
-    return;
+  if (num_open * (static_cast<long>(others.size()) + 1) > kHelpMaxPairs) return;
   // Idle: the targets of owners of two or more where self is the nearest
   // robot that owns none (the team's owners, as every robot works them out).
   int at = 0;
@@ -415,16 +413,16 @@ void TargetClaims::Route(int self, const std::vector<int>& others,
   Plan& plan = PlanFor(self, others, aims, open, &at);
   const int m = static_cast<int>(aims.size());
   if (!plan.routed) {
-    std::vector<int> targets;
+    targets_.clear();
     for (int k = 0; k < m; ++k)
-      if (open[k]) targets.push_back(k);
+      if (open[k]) targets_.push_back(k);
     Legs legs(this, &plan.aims);
     TourSettings settings;
     settings.objective = TourObjective::kMakespan;
     settings.budget = kRouteBudget;
     weight_.assign(m, 1.0);
     plan.order =
-        planner_.Plan(plan.points, targets, weight_, settings, legs).order;
+        planner_.Plan(plan.points, targets_, weight_, settings, legs).order;
     plan.routed = true;
   }
   mine->assign(m, 0);

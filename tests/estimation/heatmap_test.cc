@@ -256,7 +256,8 @@ TEST(TeamHeatmapTest, ASubsetOfTargetsIsTheHeatOfThoseTargetsAlone) {
   }
   // Every target kept: the robot's whole heatmap.
   Grid<float> scratch = shape, whole = shape;
-  const Grid<float>& all = team.Robot(2, std::vector<std::uint8_t>(6, 1), &scratch);
+  const Grid<float>& all =
+      team.Robot(2, std::vector<std::uint8_t>(6, 1), &scratch);
   const Grid<float>& base = team.Robot(2, &whole);
   for (std::size_t c = 0; c < all.size(); ++c)
     ASSERT_NEAR(all.data()[c], base.data()[c], 1e-6);

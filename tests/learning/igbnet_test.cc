@@ -566,8 +566,8 @@ sensor: {range: 2.0}
     IgbNetPolicy rule(net, params);
     const std::vector<Move> last =
         Deadlocked(&rule, net, yaml, f.positions, prior);
-    EXPECT_EQ(last[0], mode == TargetClaimsMode::kNone ? Move::kLeft
-                                                       : Move::kRight)
+    EXPECT_EQ(last[0],
+              mode == TargetClaimsMode::kNone ? Move::kLeft : Move::kRight)
         << "claims " << static_cast<int>(mode);
   }
 }

@@ -221,9 +221,10 @@ TEST(TargetClaimsTest, AnIdleRobotHelpsTheOwnerOfTwoWhereItIsTheNearestIdle) {
 }
 
 TEST(TargetClaimsTest, RoutesGiveEachRobotTheFirstTargetOfMakespanTours) {
-  Team team("workspace: {size: [20.0, 10.0]}\n"
-            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
-            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  Team team(
+      "workspace: {size: [20.0, 10.0]}\n"
+      "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+      "targets: {list: [{position: [8.0, 8.0]}]}\n");
   TargetClaims claims;
   claims.Begin(team.world.map, team.sensor);
   // On the row y = 5.25: A at x = 10.25 is 8 moves from t1 (16.25: seen
@@ -260,9 +261,10 @@ TEST(TargetClaimsTest, RoutesGiveEachRobotTheFirstTargetOfMakespanTours) {
 }
 
 TEST(TargetClaimsTest, LargeTeamsGetNearestClaimsInsteadOfRoutes) {
-  Team team("workspace: {size: [30.0, 30.0]}\n"
-            "robots: {count: 1, start: [[1.25, 1.25]]}\n"
-            "targets: {list: [{position: [8.0, 8.0]}]}\n");
+  Team team(
+      "workspace: {size: [30.0, 30.0]}\n"
+      "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+      "targets: {list: [{position: [8.0, 8.0]}]}\n");
   TargetClaims claims;
   claims.Begin(team.world.map, team.sensor);
   // Robots on a grid, aims scattered: 40 robots x 40 targets = 1600 pairs
@@ -272,7 +274,8 @@ TEST(TargetClaimsTest, LargeTeamsGetNearestClaimsInsteadOfRoutes) {
     robots.push_back(PointAt(team, 1.25 + 3.5 * (r % 8), 1.25 + 5.5 * (r / 8)));
   std::vector<Vec2> aims;
   for (int k = 0; k < 40; ++k)
-    aims.push_back(Vec2(2.1 + 0.7 * ((k * 17) % 40), 2.3 + 0.65 * ((k * 29) % 40)));
+    aims.push_back(
+        Vec2(2.1 + 0.7 * ((k * 17) % 40), 2.3 + 0.65 * ((k * 29) % 40)));
   const std::vector<std::uint8_t> open(40, 1);
   for (const int n : {40, 41}) {
     int routed = 0;

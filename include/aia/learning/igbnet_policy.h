@@ -176,11 +176,12 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   std::vector<std::uint8_t> open_, claimed_;
   std::vector<float> images_, batch_logits_, logits_;
   std::vector<int> rows_;
+  // Each robot's row in rows_ (-1: inactive).
+  std::vector<int> row_of_;
   // Message passing (a model with message_hops > 0): the rows' hidden
-  // features, their graph in row indices, each robot's row (-1: inactive).
+  // features and their graph in row indices.
   std::vector<float> features_;
   TeamGraph graph_;
-  std::vector<int> row_of_;
   TeamHeatmap heat_;
   // Per worker thread (ParallelFor): a heatmap and the neighbours' points.
   std::vector<Grid<float>> worker_heat_;
@@ -195,10 +196,8 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   TargetClaims claims_;
   std::vector<std::vector<std::uint8_t>> keep_;
   // Per row, the open targets the robot owns (TargetClaims::Claim; empty:
-  // none worked out), which the deadlock rule's walk heads for; per robot,
-  // its row (-1: inactive).
+  // none worked out), which the deadlock rule's walk heads for.
   std::vector<std::vector<std::uint8_t>> owned_;
-  std::vector<int> row_of_robot_;
   std::vector<int> others_;
 };
 

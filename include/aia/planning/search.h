@@ -24,8 +24,8 @@
 #include "aia/core/point_grid.h"
 #include "aia/core/types.h"
 #include "aia/planning/information.h"
-#include "aia/planning/tours.h"
 #include "aia/planning/policy.h"
+#include "aia/planning/tours.h"
 #include "aia/world/map.h"
 
 namespace aia {
@@ -148,7 +148,8 @@ class TargetClaims {
   // is not its; none is where every open target is out of reach. An idle
   // robot helps only up to kHelpMaxPairs robots x open targets.
   void Claim(int self, const std::vector<int>& others,
-             const std::vector<Vec2>& aims, const std::vector<std::uint8_t>& open,
+             const std::vector<Vec2>& aims,
+             const std::vector<std::uint8_t>& open,
              std::vector<std::uint8_t>* mine);
   // mine[k]: open target k is the first of `self`'s route in makespan
   // tours (planning/tours.h, the expert's routing) of `self` and `others`
@@ -158,11 +159,15 @@ class TargetClaims {
   // one plan per step. None where the route is empty. Claim's answer where
   // the robots times the open targets exceed kRouteMaxPairs.
   void Route(int self, const std::vector<int>& others,
-             const std::vector<Vec2>& aims, const std::vector<std::uint8_t>& open,
+             const std::vector<Vec2>& aims,
+             const std::vector<std::uint8_t>& open,
              std::vector<std::uint8_t>* mine);
 
  private:
   const std::vector<int>& Field(const Vec2& aim);
+  // The robots' order wherever they tie: lattice point a's x, then y, below
+  // b's.
+  bool ByPosition(int a, int b) const;
   // What a robot and its neighbours work out, the same for every robot that
   // holds the same points and aims: the robots' points ordered by x, then
   // y; each open target's owner and (for owners of two or more) helper, as
@@ -185,14 +190,16 @@ class TargetClaims {
   const SensorModel* sensor_ = nullptr;
   std::vector<Plan> plans_;  // the first used_ are this step's
   int used_ = 0;
-  std::vector<int> points_, held_;
+  std::vector<int> points_, held_, targets_;
   std::vector<double> weight_;
   TourPlanner planner_;
   // aim (its coordinates' bits) -> its field's slot in fields_ and the
   // step that last used it; free_ lists the unused slots.
   struct AimHash {
-    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& a) const {
-      return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^ a.second);
+    std::size_t operator()(
+        const std::pair<std::uint64_t, std::uint64_t>& a) const {
+      return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^
+                                        a.second);
     }
   };
   struct Slot {
