@@ -49,12 +49,6 @@ inline void AddPositionPrecision(double* block, int dim, double r) {
 
 }  // namespace
 
-Move MoveBetween(const Lattice& lattice, int a, int b) {
-  for (Move m : kMoves)
-    if (lattice.Next(a, m) == b) return m;
-  return Move::kStay;
-}
-
 namespace {
 
 // det Sigma of one packed information block.

@@ -75,6 +75,8 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   }
   moves_.assign(n, Move::kStay);
   applied_.assign(n, Move::kStay);
+  history_.Reset(n);
+  made_.assign(n, Move::kStay);
   if (policy_) policy_->Reset(world.map, n, num_targets_, scenario.seed);
   Observe();  // step 0: measurements at the starts, fused with the prior
   times_ = PhaseTimes{};  // phase times are those of the decision steps
@@ -142,6 +144,7 @@ DecisionContext Episode::Context() const {
   ctx.beliefs = &estimate_.fused();
   ctx.central = &estimate_.central();
   ctx.log_det_prior = &estimate_.log_det_prior();
+  ctx.history = &history_;
   return ctx;
 }
 
@@ -199,8 +202,13 @@ void Episode::Step() {
   for (int i = 0; i < n; ++i) {
     robot_pos_[i] = sim_.RobotPosition(i);
     robot_heading_[i] = sim_.RobotHeading(i);
+    const int before = robot_idx_[i];
     const int idx = lattice.NearestFree(robot_pos_[i]);
     if (idx >= 0) robot_idx_[i] = idx;
+    // The lattice move the robot made (none where it stayed, or stalled
+    // short of the next point).
+    made_[i] = MoveBetween(lattice, before, robot_idx_[i]);
+    history_.Record(i, made_[i]);
   }
   Observe();
   times_.total += Since(t_step);

@@ -182,27 +182,21 @@ ObserverStatus ProgressObserver::OnStep(const Episode& e) {
 
 void ProgressObserver::OnEnd(const Episode&) { line_.Finish(); }
 
-void MoveObserver::OnStart(const Episode& e) {
-  last_.assign(e.world().NumRobots(), Move::kStay);
-  run_.assign(e.world().NumRobots(), 0);
+void MoveObserver::OnStart(const Episode&) {
   moves_ = reversals_ = 0;
   longest_run_ = 0;
 }
 
-ObserverStatus MoveObserver::OnDecision(const Episode&, const DecisionContext&,
-                                        const Decision& decision) {
-  for (size_t i = 0; i < decision.applied.size(); ++i) {
-    const Move m = decision.applied[i];
-    if (m == Move::kStay) continue;  // failed robots
+ObserverStatus MoveObserver::OnStep(const Episode& e) {
+  const std::vector<Move>& made = e.moves_made();
+  for (std::size_t i = 0; i < made.size(); ++i) {
+    if (made[i] == Move::kStay) continue;  // no lattice move this step
     ++moves_;
-    const bool reversal = last_[i] != Move::kStay && m == Opposite(last_[i]);
-    if (reversal) {
-      ++reversals_;
-      longest_run_ = std::max(longest_run_, ++run_[i]);
-    } else {
-      run_[i] = 0;
-    }
-    last_[i] = m;
+    // The episode's history has recorded this move: a run of r > 0 means
+    // it undid the one before (planning/policy.h, IsReversal).
+    const int run = e.history().reversals(static_cast<int>(i));
+    if (run > 0) ++reversals_;
+    longest_run_ = std::max(longest_run_, run);
   }
   return ObserverStatus::kContinue;
 }

@@ -200,6 +200,12 @@ Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng,
   return RandomValidMove(lattice, from, rng);
 }
 
+Move MoveBetween(const Lattice& lattice, int a, int b) {
+  for (Move m : kMoves)
+    if (lattice.Next(a, m) == b) return m;
+  return Move::kStay;
+}
+
 Move RandomValidMove(const Lattice& lattice, int from, Rng& rng) {
   Move valid[kNumMoves];
   int count = 0;

@@ -28,6 +28,40 @@ enum class PolicyStatus {
 inline constexpr int kNumPolicyStatuses = 3;
 std::string_view PolicyStatusName(PolicyStatus status);
 
+// A reversal: a lattice move that undoes the robot's last one. A stay is no
+// lattice move: it is never a reversal and leaves the last move as it was
+// (right, stay, left is a reversal). One definition for every policy and for
+// the move observer (runtime/observers.h).
+inline constexpr bool IsReversal(Move last, Move next) {
+  return last != Move::kStay && next != Move::kStay && next == Opposite(last);
+}
+
+// Each robot's last applied lattice move (kStay: none yet) and how many
+// moves in a row, ending with it, undid the one before (IsReversal). The
+// episode records the moves the world applied; a policy reads them from its
+// DecisionContext. Nothing in it depends on the step number.
+class MoveHistory {
+ public:
+  void Reset(int num_robots) {
+    last_.assign(num_robots, Move::kStay);
+    reversals_.assign(num_robots, 0);
+  }
+  // Robot i moved by `applied` (a stay changes nothing).
+  void Record(int robot, Move applied) {
+    if (applied == Move::kStay) return;
+    reversals_[robot] =
+        IsReversal(last_[robot], applied) ? reversals_[robot] + 1 : 0;
+    last_[robot] = applied;
+  }
+  int num_robots() const { return static_cast<int>(last_.size()); }
+  Move last(int robot) const { return last_[robot]; }
+  int reversals(int robot) const { return reversals_[robot]; }
+
+ private:
+  std::vector<Move> last_;
+  std::vector<int> reversals_;
+};
+
 // What is known at one decision step, and nothing more: the map (no target
 // truth, no failure schedule: those are not in it), the sensor model, the
 // robots' lattice points, this step's graph and the fused beliefs.
@@ -55,6 +89,10 @@ struct DecisionContext {
   // log det Sigma_0^k of each target's prior, what every robot was told
   // (the heatmap's weights); may be null for hand-made contexts.
   const std::vector<double>* log_det_prior = nullptr;
+  // The moves the world applied to each robot so far (its last lattice
+  // move and its reversals in a row); may be null for hand-made contexts
+  // (then no robot has moved yet).
+  const MoveHistory* history = nullptr;
 };
 
 class Policy {

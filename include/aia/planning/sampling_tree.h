@@ -342,9 +342,6 @@ class SamplingTree {
   std::vector<int> bfs_queue_;
 };
 
-// The move that takes a robot from lattice point a to its neighbour b.
-Move MoveBetween(const Lattice& lattice, int a, int b);
-
 }  // namespace aia
 
 #endif  // AIA_PLANNING_SAMPLING_TREE_H_

@@ -155,6 +155,12 @@ class Episode {
   // Radians from +x (0 for point robots).
   const std::vector<double>& robot_headings() const { return robot_heading_; }
   const std::vector<int>& robot_lattice() const { return robot_idx_; }
+  // The lattice move each robot made in the last step (kStay: it stayed, or
+  // stalled short of its next point), and every robot's last move and
+  // reversals in a row so far: what DecisionContext::history gives the
+  // policy.
+  const std::vector<Move>& moves_made() const { return made_; }
+  const MoveHistory& history() const { return history_; }
   // Ground truth, for scoring and video: the targets' positions and states.
   const std::vector<Vec2>& target_positions() const { return target_pos_; }
   const std::vector<Eigen::VectorXd>& target_states() const {
@@ -201,6 +207,10 @@ class Episode {
   std::vector<Eigen::VectorXd> target_state_;
   std::vector<int> robot_idx_;
   std::vector<Move> moves_, applied_;
+  // The lattice moves the robots made in the last step, and all of them so
+  // far (the policies' contexts, the move observer).
+  std::vector<Move> made_;
+  MoveHistory history_;
   std::vector<std::vector<Measurement>> z_;
   std::vector<StepObserver*> observers_;
   int num_targets_ = 0;

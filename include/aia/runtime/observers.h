@@ -69,23 +69,21 @@ class EstimateObserver : public StepObserver {
   std::unique_ptr<Impl> impl_;
 };
 
-// Counts the robots' applied moves and reversals (a move that undoes the same
-// robot's previous move), and the longest run of back-to-back reversals of
-// one robot (a robot shuttling between two points for r steps makes a run of
-// r - 1).
+// Counts the lattice moves the robots made (Episode::moves_made: a stalled
+// robot made none) and the reversals among them (a move that undoes the same
+// robot's previous one; planning/policy.h, IsReversal, as the policies see
+// it), and the longest run of back-to-back reversals of one robot (a robot
+// shuttling between two points for r steps makes a run of r - 1).
 class MoveObserver : public StepObserver {
  public:
   void OnStart(const Episode& e) override;
-  ObserverStatus OnDecision(const Episode& e, const DecisionContext& ctx,
-                            const Decision& decision) override;
+  ObserverStatus OnStep(const Episode& e) override;
 
   long moves() const { return moves_; }
   long reversals() const { return reversals_; }
   int longest_reversal_run() const { return longest_run_; }
 
  private:
-  std::vector<Move> last_;
-  std::vector<int> run_;
   long moves_ = 0, reversals_ = 0;
   int longest_run_ = 0;
 };

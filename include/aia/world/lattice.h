@@ -77,6 +77,10 @@ void BfsDistances(const Lattice& lattice, const int* sources, int num_sources,
 Move StepDownField(const Lattice& lattice, const std::vector<int>& dist,
                    int from);
 
+// The move that takes a robot from lattice point a to its neighbour b; kStay
+// when b is a itself or no neighbour of a.
+Move MoveBetween(const Lattice& lattice, int a, int b);
+
 // A uniformly random valid move from `from`, or kStay when there is none.
 Move RandomValidMove(const Lattice& lattice, int from, Rng& rng);
 

@@ -1,0 +1,85 @@
+// The igbnet policy's scorer (docs/learning.md, The igbnet policy): the
+// network and its input, nothing else. For every active robot it renders the
+// channels from what the robot knows (its own fused belief, its neighbours'
+// points in this step's graph, the map) and writes the four moves' logits; it
+// chooses no move. What the coordination layer's observation shapers change
+// about that input (learning/coordination.h) comes in a ScorerView.
+#ifndef AIA_LEARNING_SCORER_H_
+#define AIA_LEARNING_SCORER_H_
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "aia/learning/channels.h"
+#include "aia/learning/network.h"
+#include "aia/planning/policy.h"
+#include "aia/planning/search.h"
+
+namespace aia {
+
+// This step's active robots: row b is robot rows[b]; row_of[i] is robot i's
+// row (-1: inactive).
+struct ScoringRows {
+  std::vector<int> rows;
+  std::vector<int> row_of;
+  int size() const { return static_cast<int>(rows.size()); }
+};
+
+// What the observation shapers leave for the scorer.
+struct ScorerView {
+  // Per row: the targets whose heat and reach the robot is shown (an empty
+  // entry: every target); null: every target for every row.
+  const std::vector<std::vector<std::uint8_t>>* shown = nullptr;
+  // Where each robot aims for each target in the reach channel; null: its
+  // belief's means.
+  const SearchMemory* aims = nullptr;
+};
+
+class MoveScorer {
+ public:
+  virtual ~MoveScorer() = default;
+  // A new episode on `map`.
+  virtual void Reset(const Map& map, int num_robots, int num_targets) = 0;
+  // The logits of every row's four moves (core/types.h order), row-major,
+  // into logits[0, rows.size() * kNumMoves).
+  virtual void Score(const DecisionContext& ctx, const ScoringRows& rows,
+                     const ScorerView& view, float* logits) = 0;
+  // Whether the input shows ScorerView::aims (a reach channel).
+  virtual bool ShowsAims() const = 0;
+};
+
+// I-GBNet: the channels of learning/channels.h, one batched forward per
+// chunk of robots (learning/network.h), message passing over this step's
+// graph where the model has it.
+class NetworkScorer : public MoveScorer {
+ public:
+  explicit NetworkScorer(std::shared_ptr<const IgbNet> net);
+  void Reset(const Map& map, int num_robots, int num_targets) override;
+  void Score(const DecisionContext& ctx, const ScoringRows& rows,
+             const ScorerView& view, float* logits) override;
+  bool ShowsAims() const override { return net_->config().channels.geodesic; }
+
+ private:
+  // Robots in one forward of the network.
+  static constexpr int kForwardBatch = 32;
+  std::shared_ptr<const IgbNet> net_;
+  std::optional<ChannelRenderer> renderer_;
+  std::vector<float> images_;
+  // Message passing (a model with message_hops > 0): the rows' hidden
+  // features and their graph in row indices.
+  std::vector<float> features_;
+  TeamGraph graph_;
+  TeamHeatmap heat_;
+  // Per worker thread (ParallelFor): a heatmap, the neighbours' points and
+  // the targets of channel 4.
+  std::vector<Grid<float>> worker_heat_;
+  std::vector<std::vector<Vec2>> worker_neighbours_;
+  std::vector<std::vector<HeatSource>> worker_targets_;
+  std::vector<double> no_prior_;
+};
+
+}  // namespace aia
+
+#endif  // AIA_LEARNING_SCORER_H_

@@ -1,0 +1,311 @@
+#include "aia/learning/coordination.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "aia/planning/information.h"
+
+namespace aia {
+
+std::string FirstRuleKeySet(const IgbNetParams& params) {
+  const IgbNetParams d;
+  if (params.max_reversals != d.max_reversals) return "policy.max_reversals";
+  if (params.max_walk != d.max_walk) return "policy.max_walk";
+  if (params.search != d.search) return "policy.search";
+  if (params.share_search != d.share_search) return "policy.share_search";
+  if (params.no_undo != d.no_undo) return "policy.no_undo";
+  if (params.claims != d.claims) return "policy.claims";
+  return "";
+}
+
+// --- OpenAims ----------------------------------------------------------------
+
+void OpenAims::Of(const DecisionContext& ctx, int robot,
+                  const SearchMemory* memory) {
+  const int m = ctx.beliefs->layout().num_targets();
+  const double log_eps = std::log(ctx.eps);
+  aims_.resize(m);
+  open_.assign(m, 0);
+  for (int k = 0; k < m; ++k) {
+    if (ctx.beliefs->LogDetCovariance(robot, k) <= log_eps) continue;
+    aims_[k] =
+        memory ? memory->Aim(robot, k) : ctx.beliefs->PositionMean(robot, k);
+    open_[k] = 1;
+  }
+}
+
+bool OpenAims::any() const {
+  return std::find(open_.begin(), open_.end(), 1) != open_.end();
+}
+
+// --- MissMemory --------------------------------------------------------------
+
+void MissMemory::Reset(int num_robots, int num_targets) {
+  memory_.Reset(num_robots, num_targets);
+  active_ = false;
+}
+
+void MissMemory::Update(const DecisionContext& ctx,
+                        const std::vector<int>& rows) {
+  const int n = static_cast<int>(ctx.robot_lattice->size());
+  active_ = search_ && ctx.sensor && memory_.num_robots() == n &&
+            memory_.num_targets() == ctx.beliefs->layout().num_targets();
+  if (!active_) return;
+  for (int i : rows) memory_.Update(ctx, i);
+  if (share_) memory_.Share(ctx, rows);
+}
+
+bool MissMemory::Moved(const DecisionContext& ctx, int robot) const {
+  if (!active_) return false;
+  const int m = ctx.beliefs->layout().num_targets();
+  const double log_eps = std::log(ctx.eps);
+  for (int k = 0; k < m; ++k)
+    if (ctx.beliefs->LogDetCovariance(robot, k) > log_eps &&
+        memory_.Aim(robot, k) != ctx.beliefs->PositionMean(robot, k))
+      return true;
+  return false;
+}
+
+// --- ClaimsShaper ------------------------------------------------------------
+
+void ClaimsShaper::Shape(const DecisionContext& ctx,
+                         const std::vector<int>& rows,
+                         const SearchMemory* memory) {
+  const std::size_t count = rows.size();
+  if (shown_.size() < count) shown_.resize(count);
+  if (owned_.size() < count) owned_.resize(count);
+  for (auto& s : shown_) s.clear();
+  for (auto& o : owned_) o.clear();
+  narrowed_.assign(count, 0);
+  if (mode_ == TargetClaimsMode::kNone || !ctx.sensor) return;
+  claims_.Begin(*ctx.map, *ctx.sensor);
+  for (std::size_t b = 0; b < count; ++b) {
+    const int i = rows[b];
+    others_.clear();
+    for (int j : ctx.comm->Neighbors(i))
+      if (j != i && ctx.comm->Active(j))
+        others_.push_back((*ctx.robot_lattice)[j]);
+    open_.Of(ctx, i, memory);
+    const int here = (*ctx.robot_lattice)[i];
+    if (mode_ == TargetClaimsMode::kRoute)
+      claims_.Route(here, others_, open_.aims(), open_.open(), &claimed_);
+    else
+      claims_.Claim(here, others_, open_.aims(), open_.open(), &claimed_);
+    if (std::find(claimed_.begin(), claimed_.end(), 1) != claimed_.end()) {
+      shown_[b] = claimed_;
+      narrowed_[b] = claimed_ != open_.open();
+    }
+    // What the walk heads for: the targets the robot owns.
+    if (mode_ == TargetClaimsMode::kRoute)
+      claims_.Claim(here, others_, open_.aims(), open_.open(), &owned_[b]);
+    else
+      owned_[b] = claimed_;
+  }
+}
+
+const std::vector<std::uint8_t>* ClaimsShaper::Owned(int b) const {
+  if (mode_ == TargetClaimsMode::kNone || b < 0 ||
+      b >= static_cast<int>(owned_.size()) || owned_[b].empty())
+    return nullptr;
+  return &owned_[b];
+}
+
+// --- DeadlockWalk ------------------------------------------------------------
+
+void DeadlockWalk::Reset(int num_robots) {
+  walked_.assign(num_robots, 0);
+  goal_.assign(num_robots, -1);
+  moves_ = 0;
+}
+
+void DeadlockWalk::Grow(int num_robots) {
+  if (static_cast<int>(walked_.size()) >= num_robots) return;
+  walked_.resize(num_robots, 0);  // a hand-made context's larger team
+  goal_.resize(num_robots, -1);
+}
+
+bool DeadlockWalk::Walk(const DecisionContext& ctx, int robot, int reversals,
+                        const std::vector<std::uint8_t>* owned,
+                        const SearchMemory* memory, Move* move) {
+  Grow(robot + 1);
+  int& walked = walked_[robot];
+  if (max_reversals_ > 0 && reversals >= max_reversals_ && walked == 0) {
+    walked = 1;
+    goal_[robot] = -1;
+  }
+  if (walked == 0) return false;
+  const Move out = (max_walk_ == 0 || walked <= max_walk_)
+                       ? Escape(ctx, robot, owned, memory)
+                       : Move::kStay;
+  if (out == Move::kStay) {
+    walked = 0;  // it can measure, has nowhere to go, or walked enough
+    return false;
+  }
+  ++walked;
+  ++moves_;
+  *move = out;
+  return true;
+}
+
+Move DeadlockWalk::Start(const DecisionContext& ctx, int robot,
+                         const std::vector<std::uint8_t>* owned,
+                         const SearchMemory* memory) {
+  Grow(robot + 1);
+  goal_[robot] = -1;
+  const Move out = Escape(ctx, robot, owned, memory);
+  if (out != Move::kStay) {
+    walked_[robot] = 2;  // its first move is this one
+    ++moves_;
+  }
+  return out;
+}
+
+Move DeadlockWalk::Escape(const DecisionContext& ctx, int robot,
+                          const std::vector<std::uint8_t>* owned,
+                          const SearchMemory* memory) {
+  if (!ctx.sensor) return Move::kStay;
+  const Lattice& lattice = ctx.map->lattice();
+  const int here = (*ctx.robot_lattice)[robot];
+  const int m = ctx.beliefs->layout().num_targets();
+  open_.Of(ctx, robot, memory);
+  const std::vector<std::uint8_t>& open = open_.open();
+  const std::vector<Vec2>& aims = open_.aims();
+  for (int k = 0; k < m; ++k)
+    if (open[k] && PredictedPrecision(*ctx.map, *ctx.sensor,
+                                      lattice.Point(here), aims[k]) > 0.0)
+      return Move::kStay;  // it is where it can measure
+  // The walk's target while it is open and reachable.
+  int& goal = goal_[robot];
+  if (goal >= 0 && goal < m && open[goal]) {
+    claimed_.assign(m, 0);
+    claimed_[goal] = 1;
+    const Move move =
+        toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims, claimed_);
+    if (move != Move::kStay) return move;
+  }
+  goal = -1;
+  // With claims: the nearest of the open targets the robot owns (in
+  // lattice moves among it and its neighbours), where it owns one.
+  if (owned && static_cast<int>(owned->size()) == m) {
+    claimed_.assign(m, 0);
+    bool any = false;
+    for (int k = 0; k < m; ++k) {
+      claimed_[k] = (*owned)[k] && open[k];
+      any = any || claimed_[k];
+    }
+    if (any) {
+      const Move move =
+          toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims, claimed_, &goal);
+      if (move != Move::kStay) return move;
+    }
+  }
+  // Leave to a neighbour the open targets it is nearer to (straight line;
+  // ties to the lower index); all of them when each is nearer to one.
+  const Vec2 p = lattice.Point(here);
+  claimed_.assign(open.begin(), open.end());
+  bool any = false;
+  for (int k = 0; k < m; ++k) {
+    if (!open[k]) continue;
+    const double mine = (aims[k] - p).squaredNorm();
+    for (int j : ctx.comm->Neighbors(robot)) {
+      if (j == robot) continue;
+      const double theirs =
+          (aims[k] - lattice.Point((*ctx.robot_lattice)[j])).squaredNorm();
+      if (theirs < mine || (theirs == mine && j < robot)) {
+        claimed_[k] = 0;
+        break;
+      }
+    }
+    any = any || claimed_[k];
+  }
+  return toward_.FirstMove(*ctx.map, *ctx.sensor, here, aims,
+                           any ? claimed_ : open, &goal);
+}
+
+// --- NoUndo
+// --------------------------------------------------------------------
+
+Move NoUndo::Replace(const DecisionContext& ctx, int robot, Move best,
+                     const float* logits,
+                     const std::vector<std::uint8_t>* owned,
+                     const SearchMemory* memory, DeadlockWalk* walk) {
+  const Move out = walk->Start(ctx, robot, owned, memory);
+  if (out != Move::kStay) return out;
+  if (ctx.sensor && !walk->open().any()) {
+    // Nothing open in the robot's own belief (a tracking mission after
+    // success): the network's best valid move that does not undo the last.
+    const Lattice& lattice = ctx.map->lattice();
+    const int here = (*ctx.robot_lattice)[robot];
+    int next = -1;
+    for (int a = 0; a < kNumMoves; ++a) {
+      if (a == static_cast<int>(best) ||
+          !lattice.Valid(here, static_cast<Move>(a)))
+        continue;
+      if (next < 0 || logits[a] > logits[next]) next = a;
+    }
+    if (next >= 0) {
+      ++idle_moves_;
+      return static_cast<Move>(next);
+    }
+  }
+  ++stays_;
+  return Move::kStay;
+}
+
+// --- RulesLayer
+// ----------------------------------------------------------------
+
+RulesLayer::RulesLayer(const IgbNetParams& params)
+    : params_(params),
+      memory_(params.search, params.share_search),
+      claims_(params.claims),
+      walk_(params.max_reversals, params.max_walk) {}
+
+void RulesLayer::Reset(int num_robots, int num_targets) {
+  memory_.Reset(num_robots, num_targets);
+  claims_.Reset();
+  walk_.Reset(num_robots);
+  no_undo_.Reset();
+}
+
+void RulesLayer::Shape(const DecisionContext& ctx,
+                       const std::vector<int>& rows) {
+  memory_.Update(ctx, rows);
+  claims_.Shape(ctx, rows, memory_.aims());
+}
+
+const std::vector<std::vector<std::uint8_t>>* RulesLayer::shown() const {
+  return claims_.mode() == TargetClaimsMode::kNone ? nullptr : &claims_.shown();
+}
+
+bool RulesLayer::Shaped(const DecisionContext& ctx, int b, int robot,
+                        bool shows_aims) const {
+  return claims_.Narrowed(b) || (shows_aims && memory_.Moved(ctx, robot));
+}
+
+bool RulesLayer::Walk(const DecisionContext& ctx, int b, int robot,
+                      Move* move) {
+  const int reversals = ctx.history ? ctx.history->reversals(robot) : 0;
+  return walk_.Walk(ctx, robot, reversals, claims_.Owned(b), memory_.aims(),
+                    move);
+}
+
+Move RulesLayer::Arbitrate(const DecisionContext& ctx, int b, int robot,
+                           Move best, const float* logits, bool* replaced) {
+  *replaced = false;
+  const Move last = ctx.history ? ctx.history->last(robot) : Move::kStay;
+  if (!params_.no_undo || !IsReversal(last, best)) return best;
+  *replaced = true;
+  return no_undo_.Replace(ctx, robot, best, logits, claims_.Owned(b),
+                          memory_.aims(), &walk_);
+}
+
+std::vector<std::pair<std::string, long>> RulesLayer::Counters() const {
+  std::vector<std::pair<std::string, long>> c = walk_.Counters();
+  for (auto& p : no_undo_.Counters()) c.push_back(p);
+  for (auto& p : memory_.Counters()) c.push_back(p);
+  return c;
+}
+
+}  // namespace aia

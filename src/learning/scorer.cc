@@ -1,0 +1,113 @@
+#include "aia/learning/scorer.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "aia/core/check.h"
+
+namespace aia {
+
+NetworkScorer::NetworkScorer(std::shared_ptr<const IgbNet> net)
+    : net_(std::move(net)) {
+  AIA_CHECK(net_ != nullptr);
+}
+
+void NetworkScorer::Reset(const Map& map, int /*num_robots*/,
+                          int /*num_targets*/) {
+  renderer_.emplace(map.occupancy(), map.size(), net_->config().channels,
+                    &map.lattice());
+}
+
+void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
+                          const ScorerView& view, float* logits) {
+  AIA_CHECK_MSG(renderer_.has_value(), "Reset() before Score()");
+  const Lattice& lattice = ctx.map->lattice();
+  const std::vector<int>& rows = team.rows;
+  const std::size_t size = renderer_->ImageSize();
+  images_.resize(rows.size() * size);
+  const std::vector<double>* prior = ctx.log_det_prior;
+  if (!prior) {  // a hand-made context: every prior counts as det 1
+    no_prior_.assign(ctx.beliefs->layout().num_targets(), 0.0);
+    prior = &no_prior_;
+  }
+  const int workers = std::max(1, PolicyThreads());
+  heat_.Prepare(
+      *ctx.beliefs, rows, *prior, renderer_->Heatmap(ctx.eps),
+      renderer_->occupancy(),
+      [](int n, const HeatTask& f) { ParallelFor(n, 16, f); }, workers);
+  if (static_cast<int>(worker_heat_.size()) < workers) {
+    worker_heat_.resize(workers, renderer_->occupancy());
+    worker_neighbours_.resize(workers);
+    worker_targets_.resize(workers);
+  }
+  const bool geodesic = renderer_->params().geodesic;
+  const SearchMemory* aims = geodesic ? view.aims : nullptr;
+  static const std::vector<std::uint8_t> kAll;
+  auto shown = [&](int b) -> const std::vector<std::uint8_t>& {
+    return view.shown && b < static_cast<int>(view.shown->size())
+               ? (*view.shown)[b]
+               : kAll;
+  };
+  // Chunks of kForwardBatch robots: each rendered and run through the
+  // network by one thread (libtorch runs single-threaded inside), so that a
+  // robot's logits depend on its chunk, never on the number of threads.
+  const int count = static_cast<int>(rows.size());
+  const int chunks = (count + kForwardBatch - 1) / kForwardBatch;
+  const bool passing = net_->config().message_hops > 0;
+  const int hidden = net_->config().hidden;
+  if (passing) features_.resize(rows.size() * hidden);
+  ParallelFor(chunks, 1, [&](int c0, int c1, int worker) {
+    Grid<float>& heat = worker_heat_[worker];
+    std::vector<Vec2>& neighbours = worker_neighbours_[worker];
+    for (int c = c0; c < c1; ++c) {
+      const int begin = c * kForwardBatch;
+      const int end = std::min(count, begin + kForwardBatch);
+      for (int b = begin; b < end; ++b) {
+        const int i = rows[b];
+        const std::vector<std::uint8_t>& keep = shown(b);
+        neighbours.clear();
+        for (int j : ctx.comm->Neighbors(i))
+          if (j != i)
+            neighbours.push_back(lattice.Point((*ctx.robot_lattice)[j]));
+        std::vector<HeatSource>* targets = nullptr;
+        if (geodesic) {
+          targets = &worker_targets_[worker];
+          HeatSources(*ctx.beliefs, i, targets);
+          if (aims)
+            for (std::size_t k = 0; k < targets->size(); ++k)
+              (*targets)[k].mean = aims->Aim(i, static_cast<int>(k));
+          if (!keep.empty())
+            for (std::size_t k = 0; k < targets->size(); ++k)
+              if (!keep[k])
+                (*targets)[k].log_det =
+                    -std::numeric_limits<double>::infinity();
+        }
+        renderer_->RenderWithHeat(
+            lattice.Point((*ctx.robot_lattice)[i]), neighbours,
+            keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
+            targets, prior, ctx.eps, images_.data() + b * size);
+      }
+      if (passing)
+        net_->Embed(images_.data() + begin * size, end - begin,
+                    renderer_->height(), renderer_->width(),
+                    features_.data() + begin * hidden);
+      else
+        net_->Forward(images_.data() + begin * size, end - begin,
+                      renderer_->height(), renderer_->width(),
+                      logits + begin * kNumMoves);
+    }
+  });
+  if (!passing) return;
+  // The team's features over this step's graph among the active robots.
+  graph_.offsets.assign(1, 0);
+  graph_.neighbours.clear();
+  for (int b = 0; b < count; ++b) {
+    for (int j : ctx.comm->Neighbors(rows[b]))
+      if (j != rows[b] && team.row_of[j] >= 0)
+        graph_.neighbours.push_back(team.row_of[j]);
+    graph_.offsets.push_back(static_cast<int>(graph_.neighbours.size()));
+  }
+  net_->Head(features_.data(), graph_, logits);
+}
+
+}  // namespace aia
