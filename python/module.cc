@@ -731,7 +731,8 @@ class PyDataset {
         const DatasetSample& s = data_.samples[indices[k]];
         const DatasetWorld& w = data_.worlds[s.world];
         renderers_[s.world].Render(s.position, s.neighbours, s.targets,
-                                   w.log_det_prior, w.eps, data + k * size);
+                                   w.log_det_prior, w.eps, data + k * size,
+                                   s.search.empty() ? nullptr : &s.search);
       }
     }
     return py::make_tuple(images, labels);

@@ -14,6 +14,7 @@
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/dataset.h"
 #include "aia/planning/expert.h"
+#include "aia/planning/search.h"
 #include "aia/runtime/generated.h"
 #include "aia/runtime/mission.h"
 
@@ -57,6 +58,16 @@ class DatasetObserver : public StepObserver {
     }
     const int n = e.world().NumRobots();
     const Lattice& lattice = ctx.map->lattice();
+    // Every robot's search points, as a network that learns to search keeps
+    // them (learning/channels.h, ChannelParams::search).
+    if (search_.num_robots() != n ||
+        search_.num_targets() != e.world().NumTargets())
+      search_.Reset(n, e.world().NumTargets());
+    active_.clear();
+    for (int i = 0; i < n; ++i)
+      if (ctx.comm->Active(i)) active_.push_back(i);
+    for (int i : active_) search_.Update(ctx, i);
+    search_.Share(ctx, active_);
     const std::vector<Move>* labels = &d.wanted;
     if (shadow_) {
       labels_.assign(n, Move::kStay);
@@ -75,6 +86,11 @@ class DatasetObserver : public StepObserver {
         if (j != i)
           s.neighbours.push_back(lattice.Point((*ctx.robot_lattice)[j]));
       HeatSources(*ctx.beliefs, i, &s.targets);
+      for (int k = 0; k < search_.num_targets(); ++k) {
+        if (search_.Points(i, k).empty()) continue;
+        if (s.search.empty()) s.search.resize(search_.num_targets());
+        s.search[k] = search_.Points(i, k);
+      }
       s.label = (*labels)[i];
       s.useful = expert_ && expert_->LastMoveUseful(i);
       s.acted = d.wanted[i];
@@ -102,6 +118,8 @@ class DatasetObserver : public StepObserver {
   bool killed_ = false;
   std::vector<Move> labels_;
   std::vector<std::vector<DatasetSample>> steps_;
+  SearchPoints search_;
+  std::vector<int> active_;
 };
 
 // `keep` random decision steps of an episode (all when fewer), in step

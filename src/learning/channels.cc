@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 #include <utility>
 
@@ -105,9 +106,11 @@ void ChannelRenderer::Render(const Vec2& self,
                              const std::vector<Vec2>& neighbours,
                              const std::vector<HeatSource>& targets,
                              const std::vector<double>& log_det_prior,
-                             double eps, float* out) {
+                             double eps, float* out,
+                             const SearchPointSets* search) {
   ProjectHeatmap(targets, log_det_prior, Heatmap(eps), &heat_);
-  RenderWithHeat(self, neighbours, heat_, &targets, &log_det_prior, eps, out);
+  RenderWithHeat(self, neighbours, heat_, &targets, &log_det_prior, eps, out,
+                 search);
 }
 
 void ChannelRenderer::RenderWithHeat(const Vec2& self,
@@ -115,7 +118,8 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
                                      const Grid<float>& field,
                                      const std::vector<HeatSource>* targets,
                                      const std::vector<double>* log_det_prior,
-                                     double eps, float* out) const {
+                                     double eps, float* out,
+                                     const SearchPointSets* search) const {
   AIA_CHECK(field.nx() == occupancy_.nx() && field.ny() == occupancy_.ny());
   AIA_CHECK_MSG(!params_.geodesic || (targets && log_det_prior),
                 "channel 4 needs the robot's belief");
@@ -138,7 +142,7 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
       nbr[occupancy_.Index(ix, iy)] += 1.0f;
     }
     if (params_.geodesic)
-      Reach(0, 0, *targets, *log_det_prior, eps, out + 4 * plane);
+      Reach(0, 0, *targets, *log_det_prior, eps, out + 4 * plane, search);
     return;
   }
 
@@ -177,7 +181,7 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
       h[gx - x0] = std::max(h[gx - x0], row[gx]);
   }
   if (params_.geodesic)
-    Reach(x0, y0, *targets, *log_det_prior, eps, out + 4 * plane);
+    Reach(x0, y0, *targets, *log_det_prior, eps, out + 4 * plane, search);
 }
 
 bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
@@ -202,7 +206,13 @@ bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
 void ChannelRenderer::Reach(int x0, int y0,
                             const std::vector<HeatSource>& targets,
                             const std::vector<double>& log_det_prior,
-                            double eps, float* out) const {
+                            double eps, float* out,
+                            const SearchPointSets* search) const {
+  if (params_.reach_world) {
+    ReachWorld(x0, y0, width_, height_, targets, log_det_prior, eps, out,
+               params_.search ? search : nullptr);
+    return;
+  }
   const int margin =
       params_.frame == ChannelFrame::kCentred ? params_.reach_margin : 0;
   if (margin == 0) {
@@ -225,6 +235,93 @@ void ChannelRenderer::Reach(int x0, int y0,
     }
   if (top > 0.0f)
     for (int i = 0; i < width_ * height_; ++i) out[i] /= top;
+}
+
+void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h,
+                                 const std::vector<HeatSource>& targets,
+                                 const std::vector<double>& log_det_prior,
+                                 double eps, float* out,
+                                 const SearchPointSets* search) const {
+  // cost(p) = min over observation pixels q of d(p, q) - (L / cell) ln w(q),
+  // d in valid moves: the log of G(p) = max_q w(q) exp(-d(p, q) cell / L) up
+  // to the factor -cell / L. Dijkstra with the least cost first; each pixel
+  // settles once. Scratch per thread: nothing is allocated once warm.
+  const int nx = occupancy_.nx(), ny = occupancy_.ny();
+  const std::size_t total = static_cast<std::size_t>(nx) * ny;
+  const double moves_per_e = params_.geodesic_length / params_.cell;
+  thread_local std::vector<double> cost;
+  thread_local std::vector<std::pair<double, int>> heap;
+  cost.assign(total, std::numeric_limits<double>::infinity());
+  heap.clear();
+  const auto greater = [](const std::pair<double, int>& a,
+                          const std::pair<double, int>& b) {
+    return a.first > b.first || (a.first == b.first && a.second > b.second);
+  };
+  const int reach =
+      static_cast<int>(std::ceil(params_.observe_range / params_.cell));
+  const double r2 = params_.observe_range * params_.observe_range;
+  for (std::size_t k = 0; k < targets.size(); ++k) {
+    const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
+    if (wk <= 0.0) continue;
+    const double c0 = -moves_per_e * std::log(wk);
+    const bool searched = search && k < search->size() && !(*search)[k].empty();
+    const std::size_t points = searched ? (*search)[k].size() : 1;
+    for (std::size_t a = 0; a < points; ++a) {
+      const Vec2& x = searched ? (*search)[k][a] : targets[k].mean;
+      int mx = 0, my = 0;
+      occupancy_.CellOf(x, &mx, &my);
+      for (int gy = std::max(0, my - reach); gy <= std::min(ny - 1, my + reach);
+           ++gy) {
+        for (int gx = std::max(0, mx - reach);
+             gx <= std::min(nx - 1, mx + reach); ++gx) {
+          const int idx = occupancy_.Index(gx, gy);
+          if (!moves_[idx] || c0 >= cost[idx]) continue;
+          const Vec2 c = occupancy_.CellCenter(gx, gy);
+          if ((c - x).squaredNorm() > r2 || !Sees(c, x)) continue;
+          cost[idx] = c0;
+          heap.emplace_back(c0, idx);
+        }
+      }
+    }
+  }
+  std::make_heap(heap.begin(), heap.end(), greater);
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end(), greater);
+    const auto [c, idx] = heap.back();
+    heap.pop_back();
+    if (c > cost[idx]) continue;  // stale
+    const unsigned m = moves_[idx];
+    const int gx = idx % nx, gy = idx / nx;
+    for (Move move : kMoves) {
+      if (!(m & (1u << static_cast<int>(move)))) continue;
+      const auto d = MoveDelta(move);
+      const int j = occupancy_.Index(gx + d[0], gy + d[1]);
+      if (!moves_[j] || c + 1.0 >= cost[j]) continue;
+      cost[j] = c + 1.0;
+      heap.emplace_back(c + 1.0, j);
+      std::push_heap(heap.begin(), heap.end(), greater);
+    }
+  }
+  // The window: exp(-(cost - least cost in it) / (L / cell)), 0 where no
+  // way leads or a robot cannot stand.
+  double least = std::numeric_limits<double>::infinity();
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const int gx = x0 + u, gy = y0 + v;
+      if (gx < 0 || gy < 0 || gx >= nx || gy >= ny) continue;
+      least = std::min(least, cost[occupancy_.Index(gx, gy)]);
+    }
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const int gx = x0 + u, gy = y0 + v;
+      float value = 0.0f;
+      if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(least)) {
+        const double c = cost[occupancy_.Index(gx, gy)];
+        if (std::isfinite(c))
+          value = static_cast<float>(std::exp(-(c - least) / moves_per_e));
+      }
+      out[v * w + u] = value;
+    }
 }
 
 void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,

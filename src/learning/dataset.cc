@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -29,7 +30,7 @@ CREATE TABLE IF NOT EXISTS samples(
   episode INTEGER NOT NULL, step INTEGER NOT NULL, robot INTEGER NOT NULL,
   x REAL NOT NULL, y REAL NOT NULL, label INTEGER NOT NULL,
   useful INTEGER NOT NULL, acted INTEGER NOT NULL,
-  neighbours BLOB, targets BLOB,
+  neighbours BLOB, targets BLOB, search BLOB,
   PRIMARY KEY(episode, step, robot));
 )";
 
@@ -163,10 +164,11 @@ std::string ReadFile(const std::string& file, Dataset* out) {
     throw std::runtime_error("not an aia dataset (meta.format is '" + format +
                              "')");
   const std::string version = MetaValue(db, "version");
-  if (version != std::to_string(kDatasetFormatVersion))
+  if (version != "1" && version != std::to_string(kDatasetFormatVersion))
     throw std::runtime_error("dataset format version " + version +
-                             ", this build reads " +
+                             ", this build reads 1 to " +
                              std::to_string(kDatasetFormatVersion));
+  const bool has_search = version != "1";
   const std::size_t first_world = out->worlds.size();
   std::vector<std::int64_t> episodes;
   {
@@ -205,10 +207,13 @@ std::string ReadFile(const std::string& file, Dataset* out) {
       out->worlds.push_back(std::move(w));
     }
   }
-  Statement st(db,
-               "SELECT episode, step, robot, x, y, label, useful, acted, "
-               "neighbours, targets FROM samples ORDER BY episode, step, "
-               "robot");
+  Statement st(db, has_search
+                       ? "SELECT episode, step, robot, x, y, label, useful, "
+                         "acted, neighbours, targets, search FROM samples "
+                         "ORDER BY episode, step, robot"
+                       : "SELECT episode, step, robot, x, y, label, useful, "
+                         "acted, neighbours, targets FROM samples ORDER BY "
+                         "episode, step, robot");
   while (st.Step()) {
     sqlite3_stmt* s = st.get();
     DatasetSample d;
@@ -246,6 +251,24 @@ std::string ReadFile(const std::string& file, Dataset* out) {
       h.mean = {t[0], t[1]};
       h.cov << t[2], t[3], t[3], t[4];
       h.log_det = t[5];
+    }
+    if (has_search) {
+      // (target, count, count x (x, y)) per target with search points.
+      const std::vector<double> sp = Doubles(s, 10);
+      for (std::size_t i = 0; i < sp.size();) {
+        if (i + 2 > sp.size())
+          throw std::runtime_error(where + ": search blob size");
+        const double k = sp[i], count = sp[i + 1];
+        if (!(k >= 0 && k < w.targets && k == std::floor(k)) ||
+            !(count >= 1 && count == std::floor(count) &&
+              i + 2 + 2 * count <= sp.size()))
+          throw std::runtime_error(where + ": search blob is inconsistent");
+        if (d.search.empty()) d.search.resize(w.targets);
+        std::vector<Vec2>& points = d.search[static_cast<int>(k)];
+        for (int a = 0; a < static_cast<int>(count); ++a)
+          points.emplace_back(sp[i + 2 + 2 * a], sp[i + 3 + 2 * a]);
+        i += 2 + 2 * static_cast<std::size_t>(count);
+      }
     }
     out->samples.push_back(std::move(d));
   }
@@ -341,11 +364,19 @@ void DatasetWriter::WriteEpisode(const DatasetWorld& w,
       st.Run();
     }
     Statement st(db,
-                 "INSERT INTO samples VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
-    std::vector<double> nb, tg;
+                 "INSERT INTO samples VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
+                 "?)");
+    std::vector<double> nb, tg, sp;
     for (const DatasetSample& d : samples) {
       nb.clear();
       tg.clear();
+      sp.clear();
+      for (std::size_t k = 0; k < d.search.size(); ++k) {
+        if (d.search[k].empty()) continue;
+        sp.insert(sp.end(), {static_cast<double>(k),
+                             static_cast<double>(d.search[k].size())});
+        for (const Vec2& p : d.search[k]) sp.insert(sp.end(), {p.x(), p.y()});
+      }
       for (const Vec2& p : d.neighbours) nb.insert(nb.end(), {p.x(), p.y()});
       for (const HeatSource& h : d.targets)
         tg.insert(tg.end(), {h.mean.x(), h.mean.y(), h.cov(0, 0), h.cov(0, 1),
@@ -360,6 +391,7 @@ void DatasetWriter::WriteEpisode(const DatasetWorld& w,
       st.Bind(8, static_cast<std::int64_t>(d.acted));
       st.Bind(9, Blob(nb));
       st.Bind(10, Blob(tg));
+      st.Bind(11, Blob(sp));
       st.Run();
     }
     Exec(db, "COMMIT");

@@ -17,7 +17,7 @@ constexpr const char* kFormat = "aia-igbnet";
 // Version 2: the optional geodesic channel; version 3: message passing
 // (each written only when it is on, so that a model without it stays
 // readable by older builds).
-constexpr int kVersion = 3;
+constexpr int kVersion = 4;
 
 // Writes declared fields into a JSON object with their own types (an
 // integer stays an integer, an enumeration is its name).
@@ -69,7 +69,8 @@ ConfigNode ConfigFromJson(const nlohmann::json& j) {
 std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
-  j["version"] = message_hops > 0 ? 3 : channels.geodesic ? 2 : 1;
+  const bool world = channels.geodesic && channels.reach_world;
+  j["version"] = world ? 4 : message_hops > 0 ? 3 : channels.geodesic ? 2 : 1;
   JsonFieldWriter writer(&j);
   const_cast<NetworkConfig*>(this)->Serialize(&writer);
   // A feature that is off is not written, so that a model without it keeps
@@ -79,6 +80,8 @@ std::string NetworkConfig::ToJson() const {
       j.erase(key);
   }
   if (!channels.geodesic || channels.reach_margin == 0) j.erase("reach_margin");
+  if (!world) j.erase("reach_world");
+  if (!world || !channels.search) j.erase("search");
   if (message_hops == 0) j.erase("message_hops");
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
@@ -112,6 +115,10 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
   } catch (const InputError& e) {
     throw std::runtime_error("metadata: " + e.key() + ": " + e.message());
   }
+  if (c.channels.reach_world && !c.channels.geodesic)
+    throw std::runtime_error("metadata: reach_world: needs geodesic");
+  if (c.channels.search && !c.channels.reach_world)
+    throw std::runtime_error("metadata: search: needs reach_world");
   return c;
 }
 

@@ -12,10 +12,10 @@ NetworkScorer::NetworkScorer(std::shared_ptr<const IgbNet> net)
   AIA_CHECK(net_ != nullptr);
 }
 
-void NetworkScorer::Reset(const Map& map, int /*num_robots*/,
-                          int /*num_targets*/) {
+void NetworkScorer::Reset(const Map& map, int num_robots, int num_targets) {
   renderer_.emplace(map.occupancy(), map.size(), net_->config().channels,
                     &map.lattice());
+  search_.Reset(num_robots, num_targets);
 }
 
 void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
@@ -39,9 +39,21 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
     worker_heat_.resize(workers, renderer_->occupancy());
     worker_neighbours_.resize(workers);
     worker_targets_.resize(workers);
+    worker_search_.resize(workers);
   }
   const bool geodesic = renderer_->params().geodesic;
-  const SearchMemory* aims = geodesic ? view.aims : nullptr;
+  const SearchMemory* aims =
+      geodesic && !renderer_->params().search ? view.aims : nullptr;
+  // The model's own search points (a hand-made context without a sensor, or
+  // a team other than Reset's, has none this step: the means).
+  searching_ =
+      renderer_->params().search && ctx.sensor &&
+      search_.num_robots() == static_cast<int>(ctx.robot_lattice->size()) &&
+      search_.num_targets() == ctx.beliefs->layout().num_targets();
+  if (searching_) {
+    for (int i : rows) search_.Update(ctx, i);
+    search_.Share(ctx, rows);
+  }
   static const std::vector<std::uint8_t> kAll;
   auto shown = [&](int b) -> const std::vector<std::uint8_t>& {
     return view.shown && b < static_cast<int>(view.shown->size())
@@ -82,10 +94,18 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
                 (*targets)[k].log_det =
                     -std::numeric_limits<double>::infinity();
         }
+        const SearchPointSets* points = nullptr;
+        if (searching_) {
+          SearchPointSets& own = worker_search_[worker];
+          own.resize(search_.num_targets());
+          for (int k = 0; k < search_.num_targets(); ++k)
+            own[k] = search_.Points(i, k);
+          points = &own;
+        }
         renderer_->RenderWithHeat(
             lattice.Point((*ctx.robot_lattice)[i]), neighbours,
             keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
-            targets, prior, ctx.eps, images_.data() + b * size);
+            targets, prior, ctx.eps, images_.data() + b * size, points);
       }
       if (passing)
         net_->Embed(images_.data() + begin * size, end - begin,

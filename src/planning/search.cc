@@ -120,6 +120,135 @@ void SearchMemory::Share(const DecisionContext& ctx,
   }
 }
 
+void SearchPoints::Reset(int num_robots, int num_targets) {
+  AIA_CHECK(num_robots >= 0 && num_targets >= 0);
+  num_robots_ = num_robots;
+  num_targets_ = num_targets;
+  slots_.assign(static_cast<std::size_t>(num_robots) * num_targets, Slot{});
+  misses_ = 0;
+}
+
+void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
+  const Map& map = *ctx.map;
+  const SensorModel& sensor = *ctx.sensor;
+  const Lattice& lattice = map.lattice();
+  const int component = lattice.components()[(*ctx.robot_lattice)[robot]];
+  const int span =
+      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  // Some free point of the robot's component would measure a target at x.
+  const auto observable = [&](const Vec2& x) {
+    const int c = lattice.NearestPoint(x);
+    for (int iy = std::max(0, lattice.Iy(c) - span);
+         iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy)
+      for (int ix = std::max(0, lattice.Ix(c) - span);
+           ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
+        const int q = lattice.Index(ix, iy);
+        if (lattice.Free(q) && lattice.components()[q] == component &&
+            PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
+          return true;
+      }
+    return false;
+  };
+  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
+  s.points.clear();
+  bool mean_viable = false;
+  int index = 0;
+  const int ring = WalkPriorRings(
+      s.mean, cov, lattice.step(),
+      [&](const Vec2& x) {
+        const bool first = index++ == 0;
+        if (!map.PointFree(x) || RuledOut(map, sensor, &s.missed, x) ||
+            !observable(x))
+          return;
+        if (first) mean_viable = true;
+        s.points.push_back(x);
+      },
+      [&] { return !s.points.empty(); });
+  if (ring < 0) {  // searched to 4 sigma: forget, and search it again
+    s.missed.clear();
+    s.points.clear();
+  } else if (mean_viable) {
+    s.points.clear();  // the mean itself
+  }
+}
+
+void SearchPoints::Update(const DecisionContext& ctx, int robot) {
+  AIA_CHECK(robot >= 0 && robot < num_robots_);
+  const BeliefSet& beliefs = *ctx.beliefs;
+  AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
+  const Map& map = *ctx.map;
+  const SensorModel& sensor = *ctx.sensor;
+  const int here = (*ctx.robot_lattice)[robot];
+  const Vec2 p = map.lattice().Point(here);
+  const double log_eps = std::log(ctx.eps);
+  for (int k = 0; k < num_targets_; ++k) {
+    Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+    const double now = beliefs.LogDetCovariance(robot, k);
+    const bool first = std::isnan(s.log_det);
+    const bool shrank = !first && now < s.log_det + std::log1p(-1e-9);
+    s.log_det = now;
+    s.mean = beliefs.PositionMean(robot, k);
+    const bool searching =
+        !first && !shrank && now > log_eps && beliefs.layout().is_static(k);
+    if (!searching) {
+      s.missed.clear();
+      s.points.clear();
+      continue;
+    }
+    // Nothing measured, though this point sees a search point: the target
+    // is not anywhere the point would have measured.
+    bool seen = false;
+    if (s.points.empty()) {
+      seen = PredictedPrecision(map, sensor, p, s.mean) > 0.0;
+    } else {
+      for (const Vec2& x : s.points)
+        if (PredictedPrecision(map, sensor, p, x) > 0.0) {
+          seen = true;
+          break;
+        }
+    }
+    if (!seen ||
+        std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
+      continue;
+    s.missed.push_back(here);
+    ++misses_;
+    Recompute(ctx, robot, k);
+  }
+}
+
+void SearchPoints::Share(const DecisionContext& ctx,
+                         const std::vector<int>& robots) {
+  const double log_eps = std::log(ctx.eps);
+  incoming_.clear();
+  for (int i : robots) {
+    for (int k = 0; k < num_targets_; ++k) {
+      const Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
+      if (std::isnan(s.log_det) || s.log_det <= log_eps ||
+          !ctx.beliefs->layout().is_static(k))
+        continue;
+      for (int j : ctx.comm->Neighbors(i)) {
+        if (j == i) continue;
+        for (int q :
+             slots_[static_cast<std::size_t>(j) * num_targets_ + k].missed)
+          if (std::find(s.missed.begin(), s.missed.end(), q) == s.missed.end())
+            incoming_.push_back({i, k, q});
+      }
+    }
+  }
+  std::sort(incoming_.begin(), incoming_.end());
+  incoming_.erase(std::unique(incoming_.begin(), incoming_.end()),
+                  incoming_.end());
+  for (std::size_t a = 0; a < incoming_.size();) {
+    const int i = incoming_[a][0], k = incoming_[a][1];
+    Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
+    for (; a < incoming_.size() && incoming_[a][0] == i && incoming_[a][1] == k;
+         ++a)
+      s.missed.push_back(incoming_[a][2]);
+    Recompute(ctx, i, k);
+  }
+}
+
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
                                  int p, const std::vector<Vec2>& aims,
                                  const std::vector<std::uint8_t>& open,

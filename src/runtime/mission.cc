@@ -201,7 +201,8 @@ std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
   d["physics"]["mujoco_warnings"] = warnings;
   d["moves"] = {{"total", moves.moves()},
                 {"reversals", moves.reversals()},
-                {"longest_reversal_run", moves.longest_reversal_run()}};
+                {"longest_reversal_run", moves.longest_reversal_run()},
+                {"stays", moves.stays()}};
   nlohmann::ordered_json per_target = nlohmann::ordered_json::array();
   for (int k = 0; k < estimate.num_targets(); ++k)
     per_target.push_back(

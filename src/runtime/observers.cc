@@ -183,8 +183,17 @@ ObserverStatus ProgressObserver::OnStep(const Episode& e) {
 void ProgressObserver::OnEnd(const Episode&) { line_.Finish(); }
 
 void MoveObserver::OnStart(const Episode&) {
-  moves_ = reversals_ = 0;
+  moves_ = reversals_ = stays_ = 0;
   longest_run_ = 0;
+}
+
+ObserverStatus MoveObserver::OnDecision(const Episode&,
+                                        const DecisionContext& ctx,
+                                        const Decision& decision) {
+  for (std::size_t i = 0; i < decision.wanted.size(); ++i)
+    if (decision.wanted[i] == Move::kStay && ctx.comm->Active(static_cast<int>(i)))
+      ++stays_;
+  return ObserverStatus::kContinue;
 }
 
 ObserverStatus MoveObserver::OnStep(const Episode& e) {

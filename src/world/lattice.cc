@@ -195,7 +195,7 @@ Move StepDownField(const Lattice& lattice, const std::vector<int>& dist,
 Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng,
                     bool* replaced) {
   *replaced = false;
-  if (wanted != Move::kStay && lattice.Valid(from, wanted)) return wanted;
+  if (wanted == Move::kStay || lattice.Valid(from, wanted)) return wanted;
   *replaced = true;
   return RandomValidMove(lattice, from, rng);
 }

@@ -245,6 +245,70 @@ TEST(ChannelsTest, ReachOverAMarginSeesTheWayRoundBeyondTheWindow) {
     }
 }
 
+// The same corridor with the reach channel over the whole workspace: the
+// window's values are gamma^(moves to the observation pixels, through the
+// door) scaled to its highest pixel, (2, 2), as with the margin; and in log
+// space nothing fades: a target 200 moves away still orders the window.
+TEST(ChannelsTest, ReachOverTheWorldSeesTheWayRoundHoweverFar) {
+  WalledWorld t;
+  t.params.frame = ChannelFrame::kCentred;
+  t.params.window = 3;
+  t.params.reach_world = true;
+  t.log_det_prior.resize(1);
+  const double g = std::exp(-0.2);
+  for (const double length : {8.0, 208.0}) {
+    t.map = Map({length, 3.0}, {Box{{2.95, 0.0}, {3.05, 2.0}}}, 0.1, 1.0, 0.1);
+    t.heat = Grid<float>(static_cast<int>(length), 3, 1.0, 0.0f);
+    const std::vector<HeatSource> targets = {
+        WalledWorld::Target({length - 1.5, 0.5}, 1.0)};
+    ChannelRenderer r(t.map.occupancy(), t.map.size(), t.params,
+                      &t.map.lattice());
+    std::vector<float> img(r.ImageSize());
+    r.RenderWithHeat({1.5, 1.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                     img.data());
+    for (int v = 0; v < 3; ++v)
+      for (int u = 0; u < 3; ++u)
+        EXPECT_NEAR(img[4 * 9 + v * 3 + u], std::pow(g, (2 - u) + (2 - v)),
+                    1e-6)
+            << length << ": " << u << ", " << v;
+  }
+}
+
+// With search points, channel 4 leads to the observation pixels of each
+// point instead of the mean's: a target believed at (3.5, 0.5), right of
+// the closed wall, whose search points are (0.5, 2.5) and (0.5, 0.5) on the
+// left. Without them the left side holds nothing (no way round); with them
+// each left pixel is gamma^(moves to the nearer point's pixels, within 1 m).
+TEST(ChannelsTest, ReachLeadsToTheSearchPoints) {
+  WalledWorld t;
+  t.map = Map({4.0, 3.0}, {Box{{1.95, 0.0}, {2.05, 3.0}}}, 0.1, 1.0, 0.1);
+  t.params.reach_world = true;
+  t.params.search = true;
+  t.log_det_prior.resize(1);
+  const std::vector<HeatSource> targets = {
+      WalledWorld::Target({3.5, 0.5}, 1.0)};
+  ChannelRenderer r(t.map.occupancy(), t.map.size(), t.params,
+                    &t.map.lattice());
+  std::vector<float> img(r.ImageSize());
+  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                   img.data());
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 2; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
+  const SearchPointSets search = {{Vec2(0.5, 2.5), Vec2(0.5, 0.5)}};
+  r.RenderWithHeat({0.5, 0.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                   img.data(), &search);
+  const double g = std::exp(-0.2);
+  // Observation pixels: those within 1 m of a point, (0, *) and (1, 0),
+  // (1, 2); (1, 1) is one move from them.
+  const int moves[3][2] = {{0, 0}, {0, 1}, {0, 0}};
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 2; ++x)
+      EXPECT_NEAR(At(img, 3, 4, 4, x, y), std::pow(g, moves[y][x]), 1e-6)
+          << x << ", " << y;
+  for (int y = 0; y < 3; ++y)
+    for (int x = 2; x < 4; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
+}
+
 // Declared names (core/fields.h): "centered" reads as "centred", which is
 // the name written.
 TEST(ChannelsTest, FrameNamesParse) {

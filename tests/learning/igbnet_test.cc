@@ -127,13 +127,32 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   std::string hops = mp.ToJson();
   hops.replace(hops.find("\"message_hops\":3"), 16, "\"message_hops\":9");
   EXPECT_THROW(NetworkConfig::FromJson(hops), std::runtime_error);
+  // The reach channel over the world, and from search points: version 4;
+  // each needs the one before it.
+  NetworkConfig world = g;
+  world.channels.reach_world = true;
+  world.channels.search = true;
+  EXPECT_NE(world.ToJson().find("\"version\":4"), std::string::npos);
+  const NetworkConfig wb = NetworkConfig::FromJson(world.ToJson());
+  EXPECT_TRUE(wb.channels.reach_world);
+  EXPECT_TRUE(wb.channels.search);
+  EXPECT_EQ(g.ToJson().find("reach_world"), std::string::npos);
+  std::string no_world = world.ToJson();
+  no_world.replace(no_world.find("\"reach_world\":true"), 18,
+                   "\"reach_world\":false");
+  try {
+    NetworkConfig::FromJson(no_world);
+    ADD_FAILURE() << "search without reach_world read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "metadata: search: needs reach_world");
+  }
   std::string future = mp.ToJson();
-  future.replace(future.find("\"version\":3"), 11, "\"version\":4");
+  future.replace(future.find("\"version\":3"), 11, "\"version\":5");
   try {
     NetworkConfig::FromJson(future);
-    ADD_FAILURE() << "version 4 read";
+    ADD_FAILURE() << "version 5 read";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model format version 4, this build reads 1 to 3");
+    EXPECT_STREQ(e.what(), "model format version 5, this build reads 1 to 4");
   }
 }
 
@@ -161,8 +180,8 @@ TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
   EXPECT_EQ(error(j, "\"width\":8", "\"width\":8,\"depth\":2"),
             "metadata: depth: unknown key; valid top-level keys: frame, "
             "cell, window, blur, cutoff, geodesic, geodesic_length, "
-            "observe_range, reach_margin, width, stem_stride, pool, hidden, "
-            "message_hops");
+            "observe_range, reach_margin, reach_world, search, width, "
+            "stem_stride, pool, hidden, message_hops");
 }
 
 // The shipped model written again is the same file, byte for byte: the

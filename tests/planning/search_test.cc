@@ -132,6 +132,62 @@ int PointAt(const Team& team, double x, double y) {
   return team.world.map.lattice().NearestPoint(Vec2(x, y));
 }
 
+// The set the network is shown (SearchPoints): after the same miss as
+// above, every point of the first ring (0.25 sigma, 8 points) that the
+// missed point (4.25, 5.25) does not measure: angles 0, 45 and 315 degrees
+// (2.1, 2.04 and 2.04 m away; the others within 2 m), in angle order; none
+// chosen for the robot. A second miss, one step east, rules out every point
+// within 2 m of either point; a belief that shrank clears it all.
+TEST(SearchPointsTest, AMissLeavesTheFirstRingNotRuledOut) {
+  Team team(kOneRobot);
+  SearchPoints points;
+  points.Reset(1, 1);
+  points.Update(team.Context(), 0);
+  EXPECT_TRUE(points.Points(0, 0).empty());  // the mean
+  points.Update(team.Context(), 0);
+  ASSERT_EQ(points.Missed(0, 0).size(), 1u);
+  const double r = 0.25 / std::sqrt(2.0);
+  const std::vector<Vec2> ring = {
+      {6.35, 5.25}, {6.1 + r, 5.25 + r}, {6.1 + r, 5.25 - r}};
+  ASSERT_EQ(points.Points(0, 0).size(), 3u);
+  for (int a = 0; a < 3; ++a)
+    EXPECT_NEAR((points.Points(0, 0)[a] - ring[a]).norm(), 0.0, 1e-12) << a;
+  EXPECT_EQ(points.misses(), 1);
+  // One step east sees (6.35, 5.25) from 1.6 m and measures nothing.
+  team.positions[0] =
+      team.world.map.lattice().Next(team.positions[0], Move::kRight);
+  points.Update(team.Context(), 0);
+  ASSERT_EQ(points.Missed(0, 0).size(), 2u);
+  ASSERT_FALSE(points.Points(0, 0).empty());
+  for (const Vec2& x : points.Points(0, 0)) {
+    EXPECT_GT((x - Vec2(4.25, 5.25)).norm(), 2.0);
+    EXPECT_GT((x - Vec2(4.75, 5.25)).norm(), 2.0);
+  }
+  SetCovariance(&team, 0.5);
+  points.Update(team.Context(), 0);
+  EXPECT_TRUE(points.Missed(0, 0).empty());
+  EXPECT_TRUE(points.Points(0, 0).empty());
+}
+
+// A neighbour's miss is a fact about the target: robot B, far away, takes
+// A's missed point in and has A's search points.
+TEST(SearchPointsTest, NeighboursShareTheirMisses) {
+  Team team(
+      "workspace: {size: [10.0, 10.0]}\n"
+      "robots: {count: 2, start: [[4.25, 5.25], [1.25, 1.25]]}\n"
+      "targets: {list: [{position: [8.0, 8.0], prior_mean: [6.1, 5.25]}]}\n");
+  SearchPoints points;
+  points.Reset(2, 1);
+  for (int step = 0; step < 2; ++step) {
+    for (int i = 0; i < 2; ++i) points.Update(team.Context(), i);
+    points.Share(team.Context(), {0, 1});
+  }
+  ASSERT_EQ(points.Missed(0, 0).size(), 1u);
+  EXPECT_EQ(points.Missed(1, 0), points.Missed(0, 0));
+  EXPECT_EQ(points.Points(1, 0), points.Points(0, 0));
+  EXPECT_EQ(points.Points(0, 0).size(), 3u);
+}
+
 TEST(TargetClaimsTest, TheRobotFewestMovesFromMeasuringClaims) {
   Team team(kEmptyWorld);
   TargetClaims claims;

@@ -14,9 +14,11 @@ using Mat2 = Eigen::Matrix2d;
 
 inline constexpr double kPi = 3.14159265358979323846;
 
-// A robot's decision. The paper's admissible set U = {left, right, up, down};
-// kStay is only what the world applies when no move is valid (or the robot has
-// failed), never a policy's choice.
+// A robot's decision. The paper's admissible set U = {left, right, up, down},
+// plus kStay: the robot holds its lattice point. The world applies a stay as
+// it is (world/lattice.h, ApplyWorldRule), and applies one where no move is
+// valid or the robot has failed. The built-in policies choose from U; only
+// the igbnet policy's no-undo rule (learning/coordination.h) chooses a stay.
 enum class Move : std::uint8_t {
   kLeft = 0,
   kRight = 1,

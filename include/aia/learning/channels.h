@@ -67,6 +67,15 @@ struct ChannelParams {
   // Centred frame: channel 4 is computed over the window and this many
   // pixels around it, then cropped (0: the window alone).
   int reach_margin = 0;
+  // Channel 4 over the whole workspace (distances along free space to every
+  // observation pixel, however far), then cropped to the window and scaled
+  // to 1 there; computed in log space, so that no way fades out.
+  bool reach_world = false;
+  // With reach_world: channel 4's sources are the observation pixels of each
+  // unlocalized target's search points (planning/search.h, SearchPoints:
+  // where the robot's and its neighbours' misses leave the target), not of
+  // its mean alone.
+  bool search = false;
 
   int num_channels() const { return geodesic ? kMaxChannels : kNumChannels; }
 
@@ -101,8 +110,22 @@ struct ChannelParams {
                  .In(Between(0, 512))
                  .Doc("centred frame: pixels around the window the reach "
                       "channel is computed over before the crop"));
+    a->Visit(
+        AIA_FIELD(reach_world)
+            .Doc("the reach channel over the whole workspace (the way to every "
+                 "observation pixel along free space, however far), cropped to "
+                 "the "
+                 "window; reach_margin is then unused"));
+    a->Visit(AIA_FIELD(search).Doc(
+        "with reach_world: the reach channel leads to each target's search "
+        "points (where the robot's and its neighbours' missed measurements "
+        "leave it), not to its mean alone"));
   }
 };
+
+// Channel 4's search points, per target (ChannelParams::search); an empty
+// entry: the target's mean.
+using SearchPointSets = std::vector<std::vector<Vec2>>;
 
 // Renders the channels of the robots of one map. Owns scratch memory: one
 // renderer per thread.
@@ -131,9 +154,11 @@ class ChannelRenderer {
   // `targets`: the robot's own fused belief (estimation/heatmap.h);
   // log_det_prior: per target; eps: the mission's threshold. Allocates
   // nothing once warm.
+  // `search`: channel 4's search points (null: the means).
   void Render(const Vec2& self, const std::vector<Vec2>& neighbours,
               const std::vector<HeatSource>& targets,
-              const std::vector<double>& log_det_prior, double eps, float* out);
+              const std::vector<double>& log_det_prior, double eps, float* out,
+              const SearchPointSets* search = nullptr);
   // The same with the robot's heatmap given, on a grid shaped like
   // occupancy() (a team's heatmaps: estimation/heatmap.h, TeamHeatmap);
   // channel 4 needs the belief too (`targets`, `log_det_prior`, `eps`;
@@ -143,7 +168,8 @@ class ChannelRenderer {
                       const Grid<float>& heat,
                       const std::vector<HeatSource>* targets,
                       const std::vector<double>* log_det_prior, double eps,
-                      float* out) const;
+                      float* out,
+                      const SearchPointSets* search = nullptr) const;
   // The pixel (u, v) of point p in the image of a robot at `self`; false
   // when p lies outside it.
   bool ImagePixel(const Vec2& self, const Vec2& p, int* u, int* v) const;
@@ -153,8 +179,14 @@ class ChannelRenderer {
  private:
   // Channel 4 of an image whose pixel (0, 0) is global pixel (x0, y0).
   void Reach(int x0, int y0, const std::vector<HeatSource>& targets,
-             const std::vector<double>& log_det_prior, double eps,
-             float* out) const;
+             const std::vector<double>& log_det_prior, double eps, float* out,
+             const SearchPointSets* search) const;
+  // Channel 4 over the whole workspace in log space, cropped to the w x h
+  // pixels from global pixel (x0, y0) and scaled to 1 there.
+  void ReachWorld(int x0, int y0, int w, int h,
+                  const std::vector<HeatSource>& targets,
+                  const std::vector<double>& log_det_prior, double eps,
+                  float* out, const SearchPointSets* search) const;
   // Channel 4 over the w x h pixels from global pixel (x0, y0), scaled to 1.
   void ReachRegion(int x0, int y0, int w, int h,
                    const std::vector<HeatSource>& targets,

@@ -18,7 +18,9 @@
 
 namespace aia {
 
-inline constexpr int kDatasetFormatVersion = 1;
+// Version 2 adds each sample's search points (version 1 files read with
+// none).
+inline constexpr int kDatasetFormatVersion = 2;
 
 // One episode's world: what the map is rebuilt from, and its outcome.
 struct DatasetWorld {
@@ -45,7 +47,10 @@ struct DatasetSample {
   Vec2 position{0.0, 0.0};
   std::vector<Vec2> neighbours;     // this step's neighbours' positions
   std::vector<HeatSource> targets;  // the robot's own fused belief
-  Move label = Move::kStay;         // the expert's move from this state
+  // Per target, the robot's search points (planning/search.h, SearchPoints;
+  // empty: the mean); empty: none anywhere.
+  std::vector<std::vector<Vec2>> search;
+  Move label = Move::kStay;  // the expert's move from this state
   bool useful = true;  // the robot still had useful work in the expert's plan
   Move acted = Move::kStay;  // what the acting policy did
   int world = -1;            // index into Dataset::worlds (set when read)

@@ -59,7 +59,13 @@ class NetworkScorer : public MoveScorer {
   void Reset(const Map& map, int num_robots, int num_targets) override;
   void Score(const DecisionContext& ctx, const ScoringRows& rows,
              const ScorerView& view, float* logits) override;
-  bool ShowsAims() const override { return net_->config().channels.geodesic; }
+  // A model that reads its own search points shows no aims of the view.
+  bool ShowsAims() const override {
+    return net_->config().channels.geodesic && !net_->config().channels.search;
+  }
+  // The search points of a model that reads them (empty before the first
+  // step and for other models).
+  const SearchPoints& search() const { return search_; }
 
  private:
   // Robots in one forward of the network.
@@ -78,6 +84,12 @@ class NetworkScorer : public MoveScorer {
   std::vector<std::vector<Vec2>> worker_neighbours_;
   std::vector<std::vector<HeatSource>> worker_targets_;
   std::vector<double> no_prior_;
+  // A model whose reach channel reads search points (ChannelParams::search)
+  // keeps each robot's, from its own and its neighbours' misses (part of its
+  // input, whatever the coordination); per worker, one robot's copy.
+  SearchPoints search_;
+  bool searching_ = false;  // this step's search_ is the team's
+  std::vector<SearchPointSets> worker_search_;
 };
 
 }  // namespace aia

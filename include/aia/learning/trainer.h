@@ -27,6 +27,12 @@ struct TrainOptions {
   // --init's. From an --init model with fewer hops, its weights are kept and
   // the new hops start at zero (the same function).
   int message_hops = -1;
+  // The reach channel over the whole workspace (ChannelParams::reach_world):
+  // -1 the network's, or --init's; 0 or 1 sets it (from an --init model the
+  // weights are kept: the same network reads the new channel 4).
+  int reach_world = -1;
+  // Channel 4 from the search points (ChannelParams::search), likewise.
+  int search = -1;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -76,6 +82,18 @@ struct TrainOptions {
                  .Doc("K: hops of learned message passing over the "
                       "communication graph (0: none; -1, the default: "
                       "--init's, else 0; docs/learning.md, Network)"));
+    a->Visit(AIA_FIELD(reach_world)
+                 .In(Between(-1, 1))
+                 .Doc("1: the reach channel over the whole workspace, "
+                      "cropped to the window (with --init the weights are "
+                      "kept); 0: over the window; -1, the default: --init's, "
+                      "else 0"));
+    a->Visit(AIA_FIELD(search)
+                 .In(Between(-1, 1))
+                 .Doc("1: the reach channel leads to each target's search "
+                      "points (the robot's and its neighbours' misses; needs "
+                      "--reach-world 1; with --init the weights are kept); "
+                      "-1, the default: --init's, else 0"));
   }
   // lr_min <= lr.
   void Validate(const FieldChecker& check) const {

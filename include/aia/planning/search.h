@@ -30,6 +30,14 @@
 
 namespace aia {
 
+// Calls visit(x) for the points of each ring of the prior N(mean, cov): the
+// mean alone, then Mahalanobis radius 0.25, 0.5, ..., 4 with 8 to 64 points
+// each (about one per `step` of arc), in angle order; after each ring, stops
+// where done() says so. Returns that ring (0: the mean), -1 where none did.
+template <typename Visit, typename Done>
+int WalkPriorRings(const Vec2& mean, const Mat2& cov, double step,
+                   Visit&& visit, Done&& done);
+
 // Where to look for a target believed at N(mean, cov) that the lattice points
 // `missed` (may be null) did not measure. x is ruled out when a point of
 // `missed` would have measured a target at x. Tried in order: the mean, then
@@ -88,6 +96,61 @@ class SearchMemory {
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
   std::vector<std::array<int, 3>> incoming_;  // Share's (robot, target, point)
+  std::vector<Slot> slots_;
+};
+
+// What each robot knows from its missed measurements of static targets, as
+// a set: the input of a network that learns to search (learning/channels.h,
+// ChannelParams::search), where SearchMemory above picks one aim for the
+// hand-written rules. Per robot and target: the lattice points from which
+// the robot (or, through Share, a neighbour) saw one of the target's search
+// points without its belief shrinking, and the search points that follow:
+// the mean while no missed point would have measured a target there, else
+// every point of the first ring of the prior (WalkPriorRings) that is free,
+// that no missed point would have measured, and that some free point of the
+// robot's component would (where the robot can look). Nothing in it is
+// chosen for the robot beyond that; nothing depends on the step number.
+// Moving targets are not searched.
+class SearchPoints {
+ public:
+  void Reset(int num_robots, int num_targets);
+  // Robot i after this step's fusion, at its lattice point: a belief that
+  // did not shrink while the point saw one of its search points adds the
+  // point to the misses (and moves the search points); one that shrank
+  // clears them. The first call only records the belief.
+  void Update(const DecisionContext& ctx, int robot);
+  // After every robot's Update: each robot among `robots` adds the points
+  // its neighbours in this step's graph missed (for the static targets
+  // still open in its own belief), from their lists as Update left them.
+  void Share(const DecisionContext& ctx, const std::vector<int>& robots);
+  // Robot i's search points for target k; empty: its belief's mean.
+  const std::vector<Vec2>& Points(int robot, int k) const {
+    return slot(robot, k).points;
+  }
+  const std::vector<int>& Missed(int robot, int k) const {
+    return slot(robot, k).missed;
+  }
+  int num_robots() const { return num_robots_; }
+  int num_targets() const { return num_targets_; }
+  // Points added to any robot's misses since Reset.
+  long misses() const { return misses_; }
+
+ private:
+  struct Slot {
+    double log_det = std::numeric_limits<double>::quiet_NaN();
+    Vec2 mean{0.0, 0.0};
+    std::vector<int> missed;
+    std::vector<Vec2> points;
+  };
+  const Slot& slot(int i, int k) const {
+    return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
+  }
+  // The search points of robot i's target k from its misses (all forgotten
+  // where the prior is searched to 4 sigma).
+  void Recompute(const DecisionContext& ctx, int robot, int k);
+  int num_robots_ = 0, num_targets_ = 0;
+  long misses_ = 0;
+  std::vector<std::array<int, 3>> incoming_;
   std::vector<Slot> slots_;
 };
 
@@ -217,19 +280,9 @@ class TargetClaims {
 
 // ---------------------------------------------------------------------------
 
-template <typename Cost>
-bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
-               const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
-               Vec2* aim) {
-  const Lattice& lattice = map.lattice();
-  // A point some missed lattice point would have measured is ruled out.
-  auto searched = [&](const Vec2& x) {
-    if (!missed) return false;
-    for (int q : *missed)
-      if (PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
-        return true;
-    return false;
-  };
+template <typename Visit, typename Done>
+int WalkPriorRings(const Vec2& mean, const Mat2& cov, double step,
+                   Visit&& visit, Done&& done) {
   Eigen::LLT<Mat2> llt(cov);
   const Mat2 l =
       llt.info() == Eigen::Success ? Mat2(llt.matrixL()) : Mat2::Identity();
@@ -239,23 +292,47 @@ bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
   for (int ring = 0; ring <= kRings; ++ring) {
     const double rho = ring * kRingStep;
     const int count =
-        ring == 0 ? 1
-                  : std::clamp(static_cast<int>(std::ceil(
-                                   2.0 * M_PI * rho * sigma / lattice.step())),
-                               8, 64);
-    int best = std::numeric_limits<int>::max();
+        ring == 0
+            ? 1
+            : std::clamp(
+                  static_cast<int>(std::ceil(2.0 * M_PI * rho * sigma / step)),
+                  8, 64);
     for (int a = 0; a < count; ++a) {
       const double theta = 2.0 * M_PI * a / count;
-      const Vec2 x =
-          mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta));
-      if (!map.PointFree(x) || searched(x)) continue;
-      const int c = cost(x);
-      if (c < 0 || c >= best) continue;
-      best = c;
-      *aim = x;
+      visit(
+          Vec2(mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta))));
     }
-    if (best != std::numeric_limits<int>::max()) return true;
+    if (done()) return ring;
   }
+  return -1;
+}
+
+// Whether a lattice point of `missed` would have measured a target at x.
+inline bool RuledOut(const Map& map, const SensorModel& sensor,
+                     const std::vector<int>* missed, const Vec2& x) {
+  if (!missed) return false;
+  const Lattice& lattice = map.lattice();
+  for (int q : *missed)
+    if (PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0) return true;
+  return false;
+}
+
+template <typename Cost>
+bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
+               const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
+               Vec2* aim) {
+  int best = std::numeric_limits<int>::max();
+  const int ring = WalkPriorRings(
+      mean, cov, map.lattice().step(),
+      [&](const Vec2& x) {
+        if (!map.PointFree(x) || RuledOut(map, sensor, missed, x)) return;
+        const int c = cost(x);
+        if (c < 0 || c >= best) return;
+        best = c;
+        *aim = x;
+      },
+      [&] { return best != std::numeric_limits<int>::max(); });
+  if (ring >= 0) return true;
   *aim = mean;
   return false;
 }

@@ -74,17 +74,21 @@ class EstimateObserver : public StepObserver {
 // robot's previous one; planning/policy.h, IsReversal, as the policies see
 // it), and the longest run of back-to-back reversals of one robot (a robot
 // shuttling between two points for r steps makes a run of r - 1).
+// It also counts the stays the policy chose for active robots.
 class MoveObserver : public StepObserver {
  public:
   void OnStart(const Episode& e) override;
+  ObserverStatus OnDecision(const Episode& e, const DecisionContext& ctx,
+                            const Decision& decision) override;
   ObserverStatus OnStep(const Episode& e) override;
 
   long moves() const { return moves_; }
   long reversals() const { return reversals_; }
+  long stays() const { return stays_; }
   int longest_reversal_run() const { return longest_run_; }
 
  private:
-  long moves_ = 0, reversals_ = 0;
+  long moves_ = 0, reversals_ = 0, stays_ = 0;
   int longest_run_ = 0;
 };
 

@@ -85,8 +85,10 @@ Move MoveBetween(const Lattice& lattice, int a, int b);
 Move RandomValidMove(const Lattice& lattice, int from, Rng& rng);
 
 // The world rule (docs/design.md, World), the same for every policy: an invalid
-// move is replaced by a uniformly random valid one; with none the robot stays.
-// Sets *replaced when the wanted move was not applied as is.
+// move (into an obstacle or out of the workspace) is replaced by a uniformly
+// random valid one; with none the robot stays. A stay is a valid decision:
+// the robot holds its lattice point. Sets *replaced when the wanted move was
+// not applied as is.
 Move ApplyWorldRule(const Lattice& lattice, int from, Move wanted, Rng& rng,
                     bool* replaced);
 

@@ -167,7 +167,7 @@ void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
                        "--frame centred or one workspace size");
     const DatasetWorld& w = c->data.worlds[s.world];
     r.Render(s.position, s.neighbours, s.targets, w.log_det_prior, w.eps,
-             images->data() + b * size);
+             images->data() + b * size, s.search.empty() ? nullptr : &s.search);
     (*labels)[b] = static_cast<int64_t>(s.label);
     (*weights)[b] = s.useful ? 1.0f : static_cast<float>(weak_weight);
     (*useful)[b] = s.useful;
@@ -331,13 +331,40 @@ namespace {
 // --message-hops asks for more hops), or a fresh one. o->network becomes
 // its configuration.
 std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
+  // --reach-world and --search redefine channel 4 (ChannelParams).
+  const auto redefine = [o](ChannelParams* c) {
+    if (o->reach_world >= 0) c->reach_world = o->reach_world == 1;
+    if (o->search >= 0) c->search = o->search == 1;
+    if (c->reach_world && !c->geodesic)
+      throw InputError("command line", 0, "--reach-world",
+                       "needs the reach channel (--geodesic, or an --init "
+                       "model with it)");
+    if (c->search && !c->reach_world)
+      throw InputError("command line", 0, "--search", "needs --reach-world 1");
+  };
   if (o->init.empty()) {
     if (o->message_hops >= 0) o->network.message_hops = o->message_hops;
+    redefine(&o->network.channels);
     return std::make_unique<TorchNet>(o->network, o->seed);
   }
   std::unique_ptr<TorchNet> net =
       TorchNet::Load(o->init, "command line", 0, "--init");
   o->network = net->config();
+  const ChannelParams before = o->network.channels;
+  redefine(&o->network.channels);
+  if (o->network.channels.reach_world != before.reach_world ||
+      o->network.channels.search != before.search) {
+    // The same weights, reading the new channel 4.
+    auto redefined = std::make_unique<TorchNet>(o->network, o->seed);
+    torch::NoGradGuard no_grad;
+    auto params = redefined->impl().module->named_parameters();
+    auto buffers = redefined->impl().module->named_buffers();
+    for (const auto& p : net->impl().module->named_parameters())
+      params[p.key()].copy_(p.value());
+    for (const auto& b : net->impl().module->named_buffers())
+      if (buffers.contains(b.key())) buffers[b.key()].copy_(b.value());
+    net = std::move(redefined);
+  }
   if (o->message_hops < 0 || o->message_hops == o->network.message_hops)
     return net;
   if (o->message_hops < o->network.message_hops)
