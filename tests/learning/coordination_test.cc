@@ -1,0 +1,255 @@
+// The igbnet policy's coordination layer (learning/coordination.h), part by
+// part, with a scorer of fixed logits in place of the network: each expected
+// move is worked out by hand. `none` takes the most probable valid move and
+// nothing else; each rule changes only what its comment says.
+#include "aia/learning/coordination.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "aia/learning/igbnet_policy.h"
+#include "aia/learning/scorer.h"
+#include "aia/world/lattice.h"
+#include "support/team_fixture.h"
+
+namespace aia {
+namespace {
+
+using Logits = std::array<float, kNumMoves>;  // left, right, up, down
+
+// Each robot's logits, whatever it is shown; remembers what the shapers
+// showed it at the last step.
+class FixedScorer : public MoveScorer {
+ public:
+  explicit FixedScorer(std::vector<Logits> logits, bool shows_aims = false)
+      : logits_(std::move(logits)), shows_aims_(shows_aims) {}
+  void Reset(const Map&, int, int) override {}
+  void Score(const DecisionContext&, const ScoringRows& rows,
+             const ScorerView& view, float* logits) override {
+    for (int b = 0; b < rows.size(); ++b)
+      std::copy(logits_[rows.rows[b]].begin(), logits_[rows.rows[b]].end(),
+                logits + b * kNumMoves);
+    shown_given = view.shown != nullptr;
+    shown = view.shown ? *view.shown : std::vector<std::vector<std::uint8_t>>();
+    aims_given = view.aims != nullptr;
+  }
+  bool ShowsAims() const override { return shows_aims_; }
+
+  bool shown_given = false, aims_given = false;
+  std::vector<std::vector<std::uint8_t>> shown;
+
+ private:
+  std::vector<Logits> logits_;
+  bool shows_aims_;
+};
+
+// A 12 x 2 m corridor, lattice points at x = 0.25 .. 11.75 and y = 0.25 ..
+// 1.75; one target believed at (10, 1.25) (sensor range 2 m): the only
+// nearest point that measures it from the west is (8.25, 1.25).
+const char* kCorridor = R"(
+workspace: {size: [12, 2]}
+robots: {count: 2, step: 0.5, start: [[3.25, 1.25], [1.25, 0.75]]}
+targets: {list: [{position: [10.5, 1.25], prior_mean: [10.0, 1.25]}]}
+sensor: {range: 2.0}
+)";
+
+// A team at `at` whose robots made `moves` (in order; kStay: none) to get
+// there, deciding with `policy`.
+struct Step {
+  testing::TeamFixture team;
+  MoveHistory history;
+  std::vector<double> prior;
+  Step(const char* yaml, const std::vector<Vec2>& at,
+       const std::vector<std::vector<Move>>& moves)
+      : team(yaml) {
+    const Lattice& lattice = team.world.map.lattice();
+    for (std::size_t i = 0; i < at.size(); ++i)
+      team.positions[i] = lattice.NearestPoint(at[i]);
+    history.Reset(team.world.NumRobots());
+    for (std::size_t i = 0; i < moves.size(); ++i)
+      for (Move m : moves[i]) history.Record(static_cast<int>(i), m);
+    prior.assign(team.world.NumTargets(), 0.0);
+  }
+  std::vector<Move> Decide(IgbNetPolicy* policy, bool reset = true) {
+    DecisionContext ctx = team.Context();
+    ctx.central = nullptr;
+    ctx.log_det_prior = &prior;
+    ctx.history = &history;
+    if (reset)
+      policy->Reset(team.world.map, team.world.NumRobots(),
+                    team.world.NumTargets(), 1);
+    std::vector<Move> moves(team.world.NumRobots());
+    policy->Decide(ctx, &moves);
+    return moves;
+  }
+  // Every robot's belief of every target localized.
+  void Localize() {
+    for (int i = 0; i < team.beliefs.rows(); ++i)
+      for (int k = 0; k < team.world.NumTargets(); ++k) {
+        team.beliefs.Omega(i, k) *= 1e6;
+        team.beliefs.Xi(i, k) *= 1e6;
+      }
+  }
+};
+
+long Counter(const Policy& policy, const std::string& name) {
+  for (const auto& [key, value] : policy.Counters())
+    if (key == name) return value;
+  ADD_FAILURE() << "no counter " << name;
+  return -1;
+}
+
+IgbNetParams Rules(int max_reversals, bool no_undo) {
+  IgbNetParams p;
+  p.max_reversals = max_reversals;
+  p.no_undo = no_undo;
+  p.claims = TargetClaimsMode::kNone;
+  p.search = false;
+  return p;
+}
+
+IgbNetParams None() {
+  IgbNetParams p;
+  p.coordination = Coordination::kNone;
+  return p;
+}
+
+// Robot 0 on the top row (up is invalid): logits up 3 > down 2 > right 1 >
+// left 0 give down. Robot 1: left and right tie at 2, the lower index wins:
+// left. Robot 0 came up, so down undoes it: `none` takes it anyway, and
+// nothing is counted as hand-written.
+TEST(CoordinationTest, NoneTakesTheNetworksMostProbableValidMove) {
+  Step s(kCorridor, {{3.25, 1.75}, {1.25, 0.75}}, {{Move::kUp}, {}});
+  IgbNetPolicy policy(std::make_unique<FixedScorer>(
+                          std::vector<Logits>{{0, 1, 3, 2}, {2, 2, 0, 0}}),
+                      None());
+  EXPECT_EQ(s.Decide(&policy), (std::vector<Move>{Move::kDown, Move::kLeft}));
+  EXPECT_EQ(Counter(policy, "decisions"), 2);
+  EXPECT_EQ(Counter(policy, "handwritten_moves"), 0);
+  EXPECT_EQ(Counter(policy, "walk_moves"), 0);
+}
+
+// No undo: robot 0 at (3.25, 1.25) came right; its network prefers left
+// (the undo). It walks instead: ten moves east along y = 1.25 to (8.25,
+// 1.25), first move right. Robot 1 (not undoing) takes its network's move.
+TEST(CoordinationTest, NoUndoWalksWhereTheNetworkWouldUndo) {
+  Step s(kCorridor, {{3.25, 1.25}, {1.25, 0.75}}, {{Move::kRight}, {}});
+  IgbNetPolicy policy(std::make_unique<FixedScorer>(
+                          std::vector<Logits>{{5, 0, 0, 0}, {0, 0, 5, 0}}),
+                      Rules(0, true));
+  EXPECT_EQ(s.Decide(&policy), (std::vector<Move>{Move::kRight, Move::kUp}));
+  EXPECT_EQ(Counter(policy, "walk_moves"), 1);
+  EXPECT_EQ(Counter(policy, "no_undo_stays"), 0);
+  EXPECT_EQ(Counter(policy, "handwritten_moves"), 1);
+}
+
+// At (8.75, 1.25) robot 0 can measure the target (1.25 m off): where its
+// network would undo its last move it stays, and the world applies the
+// stay as it is.
+TEST(CoordinationTest, NoUndoStaysWhereTheRobotCanMeasure) {
+  Step s(kCorridor, {{8.75, 1.25}, {1.25, 0.75}}, {{Move::kRight}, {}});
+  IgbNetPolicy policy(std::make_unique<FixedScorer>(
+                          std::vector<Logits>{{5, 0, 0, 0}, {0, 0, 5, 0}}),
+                      Rules(0, true));
+  const std::vector<Move> moves = s.Decide(&policy);
+  EXPECT_EQ(moves[0], Move::kStay);
+  EXPECT_EQ(Counter(policy, "no_undo_stays"), 1);
+  EXPECT_EQ(Counter(policy, "handwritten_moves"), 1);
+  Rng rng(1);
+  bool replaced = true;
+  EXPECT_EQ(ApplyWorldRule(s.team.world.map.lattice(), s.team.positions[0],
+                           moves[0], rng, &replaced),
+            Move::kStay);
+  EXPECT_FALSE(replaced);
+}
+
+// Nothing open in robot 0's belief: where its network would undo (left,
+// logit 5) it takes the best other valid move: up (3), not down (1) or
+// right (0).
+TEST(CoordinationTest, NoUndoMovesOnWhereNothingIsOpen) {
+  Step s(kCorridor, {{3.25, 1.25}, {1.25, 0.75}}, {{Move::kRight}, {}});
+  s.Localize();
+  IgbNetPolicy policy(std::make_unique<FixedScorer>(
+                          std::vector<Logits>{{5, 0, 3, 1}, {0, 0, 5, 0}}),
+                      Rules(0, true));
+  EXPECT_EQ(s.Decide(&policy)[0], Move::kUp);
+  EXPECT_EQ(Counter(policy, "idle_moves"), 1);
+  EXPECT_EQ(Counter(policy, "handwritten_moves"), 1);
+}
+
+// The deadlock walk: robot 0 went right, then left (one reversal): with
+// max_reversals 1 it walks east (right) before its network (left) is asked.
+// Having walked one move (to (3.75, 1.25), another reversal), with max_walk
+// 1 it hands back: the network's left; with max_walk 0 it walks on.
+TEST(CoordinationTest, DeadlockWalkAfterAReversalForAtMostMaxWalkMoves) {
+  for (const int max_walk : {0, 1}) {
+    IgbNetParams params = Rules(1, false);
+    params.max_walk = max_walk;
+    IgbNetPolicy policy(std::make_unique<FixedScorer>(
+                            std::vector<Logits>{{5, 0, 0, 0}, {0, 0, 5, 0}}),
+                        params);
+    Step first(kCorridor, {{3.25, 1.25}, {1.25, 0.75}},
+               {{Move::kRight, Move::kLeft}, {}});
+    EXPECT_EQ(first.Decide(&policy)[0], Move::kRight);
+    Step second(kCorridor, {{3.75, 1.25}, {1.25, 0.75}},
+                {{Move::kRight, Move::kLeft, Move::kRight}, {}});
+    EXPECT_EQ(second.Decide(&policy, false)[0],
+              max_walk == 1 ? Move::kLeft : Move::kRight)
+        << "max_walk " << max_walk;
+    EXPECT_EQ(Counter(policy, "walk_moves"), max_walk == 1 ? 1 : 2);
+  }
+}
+
+// Claims (route): robot 0 next to target 0, robot 1 next to target 1; each
+// is shown only its own. With claims none the scorer is shown every target
+// (no view). Both moves are the network's on a shaped input: counted.
+TEST(CoordinationTest, ClaimsShowEachRobotItsOwnTarget) {
+  const char* two = R"(
+workspace: {size: [12, 2]}
+robots: {count: 2, step: 0.5, start: [[1.25, 1.25], [10.75, 1.25]]}
+targets: {list: [{position: [2.0, 1.25], prior_mean: [2.0, 1.25]},
+                 {position: [10.0, 1.25], prior_mean: [10.0, 1.25]}]}
+sensor: {range: 2.0}
+)";
+  for (const TargetClaimsMode mode :
+       {TargetClaimsMode::kRoute, TargetClaimsMode::kNearest,
+        TargetClaimsMode::kNone}) {
+    Step s(two, {{1.25, 1.25}, {10.75, 1.25}}, {});
+    IgbNetParams params = Rules(0, false);
+    params.claims = mode;
+    auto scorer = std::make_unique<FixedScorer>(
+        std::vector<Logits>{{0, 0, 5, 0}, {0, 0, 5, 0}});
+    FixedScorer* seen = scorer.get();
+    IgbNetPolicy policy(std::move(scorer), params);
+    s.Decide(&policy);
+    if (mode == TargetClaimsMode::kNone) {
+      EXPECT_FALSE(seen->shown_given);
+      EXPECT_EQ(Counter(policy, "shaped_moves"), 0);
+      continue;
+    }
+    ASSERT_TRUE(seen->shown_given);
+    ASSERT_EQ(seen->shown.size(), 2u);
+    EXPECT_EQ(seen->shown[0], (std::vector<std::uint8_t>{1, 0}));
+    EXPECT_EQ(seen->shown[1], (std::vector<std::uint8_t>{0, 1}));
+    EXPECT_EQ(Counter(policy, "shaped_moves"), 2);
+    EXPECT_EQ(Counter(policy, "handwritten_moves"), 2);
+  }
+}
+
+// A rule's key away from its default with coordination none would do
+// nothing: FirstRuleKeySet names it (the policy's loader refuses it).
+TEST(CoordinationTest, NoneNamesARuleKeyThatWouldDoNothing) {
+  IgbNetParams p = None();
+  EXPECT_EQ(FirstRuleKeySet(p), "");
+  p.no_undo = false;
+  EXPECT_EQ(FirstRuleKeySet(p), "policy.no_undo");
+  p.max_reversals = 3;
+  EXPECT_EQ(FirstRuleKeySet(p), "policy.max_reversals");
+}
+
+}  // namespace
+}  // namespace aia
