@@ -14,7 +14,10 @@ cd "$(dirname "$0")/.."
 mode=${1:-check}
 aia=${2:-build/aia}
 golden=tests/golden
-policies=(random greedy expert decsb)
+# NAME or NAME:KEY=VALUE (a policy parameter set, recorded as NAME-VALUE):
+# igbnet with its default coordination (rules) and with none, the network
+# alone.
+policies=(random greedy expert decsb igbnet igbnet:policy.coordination=none)
 [ "$mode" = check ] || [ "$mode" = write ] || {
   echo "usage: tools/golden.sh check|write [AIA]" >&2
   exit 2
@@ -30,15 +33,22 @@ sums="$work/traces.sha256"
 : >"$sums"
 for scenario in scenarios/*.yaml; do
   name=$(basename "$scenario" .yaml)
-  for policy in "${policies[@]}"; do
-    out="$work/$name.$policy"
-    "$aia" run "$scenario" --policy "$policy" --out "$out" --quiet >/dev/null
-    normalize "$out/summary.json" >"$work/$name.$policy.summary.json"
-    (cd "$out" && sha256sum trace.csv | sed "s|trace.csv|$name.$policy.trace.csv|") >>"$sums"
+  for entry in "${policies[@]}"; do
+    policy=${entry%%:*}
+    label=$policy
+    sets=()
+    if [ "$entry" != "$policy" ]; then
+      sets=(--set "${entry#*:}")
+      label="$policy-${entry##*=}"
+    fi
+    out="$work/$name.$label"
+    "$aia" run "$scenario" --policy "$policy" "${sets[@]}" --out "$out" --quiet >/dev/null
+    normalize "$out/summary.json" >"$work/$name.$label.summary.json"
+    (cd "$out" && sha256sum trace.csv | sed "s|trace.csv|$name.$label.trace.csv|") >>"$sums"
     if [ "$mode" = check ]; then
-      if ! cmp -s "$work/$name.$policy.summary.json" "$golden/$name.$policy.summary.json"; then
-        echo "DIFFERS: $name with $policy: summary.json" >&2
-        diff "$golden/$name.$policy.summary.json" "$work/$name.$policy.summary.json" >&2 || true
+      if ! cmp -s "$work/$name.$label.summary.json" "$golden/$name.$label.summary.json"; then
+        echo "DIFFERS: $name with $label: summary.json" >&2
+        diff "$golden/$name.$label.summary.json" "$work/$name.$label.summary.json" >&2 || true
         failed=1
       fi
     fi
