@@ -56,6 +56,7 @@ void ExpectSameDataset(const Dataset& a, const Dataset& b) {
     EXPECT_EQ(x.neighbours, y.neighbours);
     EXPECT_EQ(x.label, y.label);
     EXPECT_EQ(x.useful, y.useful);
+    EXPECT_EQ(x.search, y.search);
     ASSERT_EQ(x.targets.size(), y.targets.size());
     for (std::size_t k = 0; k < x.targets.size(); ++k) {
       EXPECT_EQ(x.targets[k].mean, y.targets[k].mean);
@@ -368,6 +369,58 @@ TEST(TrainTest, AMessagePassingModelTrainsResumesAndExtends) {
   for (std::size_t i = 0; i < x.size(); i += 3) x[i] = 0.7f;
   net->Forward(x.data(), 2, 16, 16, logits.data());
   ExpectPythonReproduces(dir, dir + "/mp.pt", x, logits, 2);
+  fs::remove_all(dir);
+}
+
+// In mazes the robots miss targets (the prior's mean lies behind a wall):
+// samples carry their search points (SearchPoints), which read back as
+// written. A model with the reach channel is redefined to read them over
+// the whole workspace (--init, --reach-world 1, --search 1) and trains on;
+// --search without --reach-world is refused.
+TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
+  const std::string dir = testing::MakeTempDir("aia_train_");
+  DatasetOptions d = Tiny(dir + "/data");
+  d.episodes = 3;
+  d.keep = 30;
+  d.size = {5, 5};
+  d.sets = {"workspace.obstacles.generator.type=maze",
+            "workspace.size=[20,20]"};
+  RunDataset(d);
+  const Dataset data = ReadDataset({dir + "/data"}, "--data");
+  long searched = 0;
+  for (const DatasetSample& s : data.samples) {
+    if (s.search.empty()) continue;
+    ++searched;
+    ASSERT_EQ(s.search.size(), s.targets.size());
+    for (const auto& points : s.search)
+      for (const Vec2& p : points)
+        EXPECT_TRUE(p.allFinite() && p.x() >= 0.0 && p.x() <= 20.0);
+  }
+  EXPECT_GT(searched, 0);
+  TrainOptions plain = TinyTraining(dir + "/data", dir + "/plain.pt");
+  plain.network.channels.geodesic = true;
+  plain.epochs = 1;
+  Train(plain);
+  TrainOptions world = TinyTraining(dir + "/data", dir + "/world.pt");
+  world.init = dir + "/plain.pt";
+  world.reach_world = 1;
+  world.search = 1;
+  world.epochs = 1;
+  ASSERT_EQ(Train(world).size(), 1u);
+  const auto net = IgbNet::Load(dir + "/world.pt", "w", 0, "k");
+  EXPECT_TRUE(net->config().channels.reach_world);
+  EXPECT_TRUE(net->config().channels.search);
+  TrainOptions lone = TinyTraining(dir + "/data", dir + "/lone.pt");
+  lone.init = dir + "/plain.pt";
+  lone.search = 1;
+  try {
+    Train(lone);
+    ADD_FAILURE() << "--search without --reach-world";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.Format().find("--search: needs --reach-world 1"),
+              std::string::npos)
+        << e.Format();
+  }
   fs::remove_all(dir);
 }
 
