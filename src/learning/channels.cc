@@ -284,14 +284,25 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h,
       }
     }
   }
+  // The first window pixel settled holds the window's least cost; pixels
+  // more than `cap` above it would be below 1e-6 of the window's top and
+  // are left at 0, so the search stops there (its cost is then the area
+  // between the window and the nearest observation pixels, not the map's).
+  const double cap = moves_per_e * std::log(1e6);
+  double least_seen = std::numeric_limits<double>::infinity();
+  const auto in_window = [&](int gx, int gy) {
+    return gx >= x0 && gy >= y0 && gx < x0 + w && gy < y0 + h;
+  };
   std::make_heap(heap.begin(), heap.end(), greater);
   while (!heap.empty()) {
     std::pop_heap(heap.begin(), heap.end(), greater);
     const auto [c, idx] = heap.back();
     heap.pop_back();
     if (c > cost[idx]) continue;  // stale
+    if (c > least_seen + cap) break;
     const unsigned m = moves_[idx];
     const int gx = idx % nx, gy = idx / nx;
+    if (in_window(gx, gy)) least_seen = std::min(least_seen, c);
     for (Move move : kMoves) {
       if (!(m & (1u << static_cast<int>(move)))) continue;
       const auto d = MoveDelta(move);
@@ -317,7 +328,7 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h,
       float value = 0.0f;
       if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(least)) {
         const double c = cost[occupancy_.Index(gx, gy)];
-        if (std::isfinite(c))
+        if (c <= least + cap)  // settled (an unsettled pixel: at most 1e-6)
           value = static_cast<float>(std::exp(-(c - least) / moves_per_e));
       }
       out[v * w + u] = value;
