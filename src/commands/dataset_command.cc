@@ -26,9 +26,12 @@ using Clock = std::chrono::steady_clock;
 // Records every decision step's samples; labels them with the expert.
 class DatasetObserver : public StepObserver {
  public:
+  // `label_steps` (sorted; with a shadow only): the steps it labels; the
+  // others it only watches.
   DatasetObserver(ExpertPolicy* shadow, std::int64_t episode, int stop_after,
-                  double max_seconds)
+                  double max_seconds, std::vector<int> label_steps = {})
       : shadow_(shadow),
+        label_steps_(std::move(label_steps)),
         episode_(episode),
         stop_after_(stop_after),
         max_seconds_(max_seconds),
@@ -70,6 +73,11 @@ class DatasetObserver : public StepObserver {
     search_.Share(ctx, active_);
     const std::vector<Move>* labels = &d.wanted;
     if (shadow_) {
+      if (!std::binary_search(label_steps_.begin(), label_steps_.end(),
+                              ctx.step)) {
+        shadow_->Observe(ctx);  // a full plan only where a label is kept
+        return ObserverStatus::kContinue;
+      }
       labels_.assign(n, Move::kStay);
       shadow_->Decide(ctx, &labels_);
       labels = &labels_;
@@ -109,6 +117,7 @@ class DatasetObserver : public StepObserver {
 
  private:
   ExpertPolicy* shadow_;
+  std::vector<int> label_steps_;
   const ExpertPolicy* expert_ = nullptr;  // whose plan says what is useful
   std::int64_t episode_;
   int stop_after_;
@@ -121,6 +130,23 @@ class DatasetObserver : public StepObserver {
   SearchPoints search_;
   std::vector<int> active_;
 };
+
+// A shadow expert plans from scratch at every step it labels (the acting
+// policy is never where its plan says), so it labels only the steps that
+// are kept: `keep` distinct steps of [0, max_steps), drawn up front from the
+// episode's own stream (an episode that ends sooner keeps fewer).
+std::vector<int> StepsToLabel(int keep_at_most, int max_steps,
+                              std::uint64_t seed) {
+  Rng rng(seed, "dataset/label");
+  std::vector<int> order(std::max(max_steps, 0));
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  const int keep = std::min<int>(keep_at_most, static_cast<int>(order.size()));
+  for (int i = 0; i < keep; ++i)
+    std::swap(order[i], order[i + rng.UniformInt(order.size() - i)]);
+  order.resize(keep);
+  std::sort(order.begin(), order.end());
+  return order;
+}
 
 // `keep` random decision steps of an episode (all when fewer), in step
 // order, drawn from the episode's own stream.
@@ -294,7 +320,10 @@ int RunDataset(const DatasetOptions& o) {
     DatasetObserver observer(
         shadow, e,
         o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3 : -1,
-        o.max_seconds);
+        o.max_seconds,
+        shadow ? StepsToLabel(o.keep, instance->scenario.mission.max_steps,
+                              s.seed)
+               : std::vector<int>{});
     episode.AddObserver(&observer);
     episode.Run();
     if (observer.killed()) {

@@ -49,6 +49,10 @@ class ExpertPolicy : public NamedPolicy<ExpertPolicy> {
   }
   // Per target, the lattice points from which it was missed so far.
   const std::vector<std::vector<int>>& missed() const { return missed_; }
+  // A step it watches without deciding (a shadow that labels only some
+  // steps): it records what the team missed, as Decide would, and plans
+  // nothing.
+  void Observe(const DecisionContext& ctx) { RecordMisses(ctx); }
 
  private:
   bool NeedsReplan(const DecisionContext& ctx) const;
