@@ -23,15 +23,40 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// A shadow expert plans from scratch at every step it labels (the acting
+// policy is never where its plan says), so it labels only the steps that
+// are kept: step 0, and `count` distinct steps of [1, T) with T = 3 F0
+// (F0: the depth of its plan from step 0; the success horizon), at least
+// count + 1 and at most max_steps, drawn from the episode's own stream (an
+// episode that ends sooner keeps fewer).
+std::vector<int> StepsToLabel(int count, int max_steps, int depth,
+                              std::uint64_t seed) {
+  Rng rng(seed, "dataset/label");
+  const int horizon = std::min(max_steps, std::max(3 * depth, count + 1));
+  std::vector<int> order(std::max(horizon - 1, 0));
+  for (std::size_t i = 0; i < order.size(); ++i)
+    order[i] = static_cast<int>(i) + 1;
+  const int keep = std::clamp(count, 0, static_cast<int>(order.size()));
+  for (int i = 0; i < keep; ++i)
+    std::swap(order[i], order[i + rng.UniformInt(order.size() - i)]);
+  order.resize(keep);
+  std::sort(order.begin(), order.end());
+  return order;
+}
+
 // Records every decision step's samples; labels them with the expert.
 class DatasetObserver : public StepObserver {
  public:
-  // `label_steps` (sorted; with a shadow only): the steps it labels; the
-  // others it only watches.
+  // With a shadow: it labels `keep` steps, step 0 and keep - 1 drawn
+  // (named stream of `seed`) once its first plan says how long the mission
+  // should take; the others it only watches.
   DatasetObserver(ExpertPolicy* shadow, std::int64_t episode, int stop_after,
-                  double max_seconds, std::vector<int> label_steps = {})
+                  double max_seconds, int keep = 0, int max_steps = 0,
+                  std::uint64_t seed = 0)
       : shadow_(shadow),
-        label_steps_(std::move(label_steps)),
+        keep_(keep),
+        max_steps_(max_steps),
+        seed_(seed),
         episode_(episode),
         stop_after_(stop_after),
         max_seconds_(max_seconds),
@@ -73,14 +98,19 @@ class DatasetObserver : public StepObserver {
     search_.Share(ctx, active_);
     const std::vector<Move>* labels = &d.wanted;
     if (shadow_) {
-      if (!std::binary_search(label_steps_.begin(), label_steps_.end(),
-                              ctx.step)) {
+      if (ctx.step > 0 && !std::binary_search(label_steps_.begin(),
+                                              label_steps_.end(), ctx.step)) {
         shadow_->Observe(ctx);  // a full plan only where a label is kept
         return ObserverStatus::kContinue;
       }
       labels_.assign(n, Move::kStay);
       shadow_->Decide(ctx, &labels_);
       labels = &labels_;
+      if (ctx.step == 0) {
+        const int depth =
+            std::max(0, static_cast<int>(shadow_->plan().configs.size()) - 1);
+        label_steps_ = StepsToLabel(keep_ - 1, max_steps_, depth, seed_);
+      }
     }
     std::vector<DatasetSample> step;
     for (int i = 0; i < n; ++i) {
@@ -117,6 +147,8 @@ class DatasetObserver : public StepObserver {
 
  private:
   ExpertPolicy* shadow_;
+  int keep_, max_steps_;
+  std::uint64_t seed_;
   std::vector<int> label_steps_;
   const ExpertPolicy* expert_ = nullptr;  // whose plan says what is useful
   std::int64_t episode_;
@@ -130,23 +162,6 @@ class DatasetObserver : public StepObserver {
   SearchPoints search_;
   std::vector<int> active_;
 };
-
-// A shadow expert plans from scratch at every step it labels (the acting
-// policy is never where its plan says), so it labels only the steps that
-// are kept: `keep` distinct steps of [0, max_steps), drawn up front from the
-// episode's own stream (an episode that ends sooner keeps fewer).
-std::vector<int> StepsToLabel(int keep_at_most, int max_steps,
-                              std::uint64_t seed) {
-  Rng rng(seed, "dataset/label");
-  std::vector<int> order(std::max(max_steps, 0));
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  const int keep = std::min<int>(keep_at_most, static_cast<int>(order.size()));
-  for (int i = 0; i < keep; ++i)
-    std::swap(order[i], order[i + rng.UniformInt(order.size() - i)]);
-  order.resize(keep);
-  std::sort(order.begin(), order.end());
-  return order;
-}
 
 // `keep` random decision steps of an episode (all when fewer), in step
 // order, drawn from the episode's own stream.
@@ -320,10 +335,7 @@ int RunDataset(const DatasetOptions& o) {
     DatasetObserver observer(
         shadow, e,
         o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3 : -1,
-        o.max_seconds,
-        shadow ? StepsToLabel(o.keep, instance->scenario.mission.max_steps,
-                              s.seed)
-               : std::vector<int>{});
+        o.max_seconds, o.keep, instance->scenario.mission.max_steps, s.seed);
     episode.AddObserver(&observer);
     episode.Run();
     if (observer.killed()) {
