@@ -325,5 +325,26 @@ TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
   }
 }
 
+// Issue 37: a name with a quote ended the model's attribute, and MuJoCo
+// refused the model (exit 1, "XML parse error 7"). Every character XML
+// gives a meaning is escaped; the model loads, named as written.
+TEST(MjcfTest, NamesWithXmlCharactersAreEscaped) {
+  const Scenario s = ScenarioFromYaml(
+      "name: \"a\\\"b & <c> 'd'\"\nrobots: {count: 2}\ntargets: {count: "
+      "2}\n");
+  ASSERT_EQ(s.name, "a\"b & <c> 'd'");
+  const std::string xml = MakeMjcf(World::Build(s), s);
+  EXPECT_EQ(
+      xml.rfind("<mujoco model=\"a&quot;b &amp; &lt;c&gt; &apos;d&apos;\">", 0),
+      0u)
+      << xml.substr(0, 80);
+  const std::string dir = testing::MakeTempDir("aia_mjcf_");
+  std::ofstream(dir + "/model.xml") << xml;
+  const auto r =
+      testing::RunCommand("cd " + dir + " && mujoco-testxml model.xml");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace aia
