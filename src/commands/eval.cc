@@ -1,6 +1,7 @@
 #include "aia/commands/eval.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,10 +13,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
-#include <fstream>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -30,6 +32,7 @@
 #include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/observers.h"
+#include "aia/runtime/outputs.h"
 #include "aia/scenario/yaml.h"
 
 namespace aia {
@@ -372,6 +375,9 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
   return rows;
 }
 
+// A row of runs.csv is some 100 bytes; a longer line is not one.
+constexpr std::size_t kMaxRunsLine = 64 * 1024;
+
 // Why a parsed row cannot be a run's result, or "".
 std::string Impossible(const EvalRow& r) {
   std::string why;
@@ -405,14 +411,31 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
                               std::vector<std::string>* problems) {
   std::vector<EvalRow> rows;
   std::vector<int> lines;
-  std::ifstream in(path);
+  // Line by line, each at most kMaxRunsLine bytes: a runs.csv cut by a crash
+  // may end in gigabytes of NULs (a 3 GB tail took 12 GB of memory).
+  std::optional<LineReader> in;
   std::string line;
   int number = 0;
+  const auto fail = [&](const std::string& why) {
+    throw InputError("command line", 0, "--out",
+                     "cannot resume from '" + path + "': " + why +
+                         "; remove the damaged lines (or the file) or use "
+                         "another folder");
+  };
+  const auto next = [&]() {
+    try {
+      if (!in) in.emplace(path, kMaxRunsLine);
+      return in->Next(&line);
+    } catch (const std::runtime_error& e) {
+      fail(e.what());
+    }
+    return false;
+  };
   const auto report = [&](int at, const std::string& why) {
     if (problems)
       problems->push_back("line " + std::to_string(at) + ": " + why);
   };
-  while (std::getline(in, line)) {
+  while (next()) {
     ++number;
     EvalRow r;
     if (line == RunsHeader() || line.empty()) continue;
@@ -536,6 +559,10 @@ void CheckEvalFlags(const EvalOptions& o) {
   if (o.out_dir.empty())
     throw InputError("command line", 0, "--out",
                      "an output folder is required");
+  // Before any work: a FIFO at runs.csv blocked the resume's open for ever.
+  CheckOutputFiles({o.out_dir + "/runs.csv", o.out_dir + "/summary.csv",
+                    o.out_dir + "/effective.yaml"},
+                   "--out", "written into the output folder");
 }
 
 // --policies, or every registered policy but the expert.
@@ -562,6 +589,9 @@ void CheckOutputsAreNotInputs(const EvalOptions& o, const EvalSetup& setup,
                     "written into the output folder");
 }
 
+// The effective.yaml aia writes is a few KiB.
+constexpr std::uintmax_t kMaxEffectiveBytes = 16u << 20;
+
 // Rank 0's resume: locks the output folder, refuses one that holds results
 // of another configuration, keeps the rows already there (a row cut short
 // by an interruption, garbled, impossible or duplicated is reported, dropped
@@ -572,15 +602,24 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
   const std::string runs_path = out_dir + "/runs.csv";
   MakeOutputDir(out_dir, "--out", /*lock=*/true);
   std::string merged = effective;
-  if (std::ifstream old(effective_path); old) {
-    std::stringstream text;
-    text << old.rdbuf();
-    const std::string why = Mismatch(text.str(), effective);
+  std::error_code ec;
+  if (std::filesystem::exists(effective_path, ec)) {
+    // Read without blocking (a FIFO is refused) and within a bound: the
+    // file aia writes is a few KiB.
+    std::string text;
+    try {
+      text = ReadFile(effective_path, kMaxEffectiveBytes);
+    } catch (const std::runtime_error& e) {
+      throw InputError(
+          "command line", 0, "--out",
+          "cannot resume from '" + effective_path + "': " + e.what());
+    }
+    const std::string why = Mismatch(text, effective);
     if (!why.empty())
       throw InputError("command line", 0, "--out",
                        out_dir + " holds results of another configuration (" +
                            why + "; see its effective.yaml): use a new folder");
-    merged = WithOldPolicyLines(text.str(), effective);
+    merged = WithOldPolicyLines(text, effective);
   }
   std::vector<std::string> problems;
   std::vector<EvalRow> rows = ReadRuns(runs_path, &problems);
@@ -648,10 +687,19 @@ class RowSink {
         ranks_(ranks),
         progress_(o.progress && root) {
     if (!root_) return;
-    fd_ = ::open(runs_path_.c_str(), O_WRONLY | O_APPEND);
+    // runs.csv was just written as a regular file; O_NONBLOCK keeps even a
+    // FIFO swapped in since from blocking the open.
+    fd_ = ::open(runs_path_.c_str(), O_WRONLY | O_APPEND | O_NONBLOCK);
+    struct stat st;
+    if (fd_ >= 0 && (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode))) {
+      ::close(fd_);
+      fd_ = -1;
+      errno = EINVAL;
+    }
     if (fd_ < 0)
       throw std::runtime_error("cannot write '" + runs_path_ +
                                "': " + std::strerror(errno));
+    ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
   }
   ~RowSink() {
     if (fd_ >= 0) ::close(fd_);

@@ -17,6 +17,7 @@
 #include "aia/estimation/heatmap.h"
 #include "aia/render/frame_renderer.h"
 #include "aia/render/video.h"
+#include "aia/runtime/outputs.h"
 #include "aia/scenario/loader.h"
 #include "aia/world/media.h"
 
@@ -218,6 +219,22 @@ class VideoObserver : public StepObserver {
 
 namespace {
 
+// The PNG frames to be written into --frames: one that is there already as
+// a FIFO, device or folder is refused now, not after the rendering.
+void CheckFrameFiles(const std::string& dir) {
+  std::error_code ec;
+  if (dir.empty() || !fs::is_directory(dir, ec)) return;
+  std::vector<std::string> frames;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() == 16 && name.rfind("frame_", 0) == 0 &&
+        name.compare(12, 4, ".png") == 0)
+      frames.push_back(it->path().string());
+  }
+  CheckOutputFiles(frames, "--frames", "a frame");
+}
+
 // Neither the video nor the files next to it may replace an input (the
 // scenario may be FILE.effective.yaml of an earlier render); the folders
 // are made. The folder is not locked (renders of other scenarios may share
@@ -255,6 +272,13 @@ RenderResult RenderMission(const RenderOptions& options) {
   CheckOutputFile(options.out_file, "--out");
   const std::string prefix =
       (out.parent_path() / (out.stem().string() + ".")).string();
+  {
+    std::vector<std::string> next_to_it;
+    for (const std::string& name : MissionFileNames())
+      next_to_it.push_back(prefix + name);
+    CheckOutputFiles(next_to_it, "--out", "written next to the video");
+    CheckFrameFiles(options.frames_dir);
+  }
 
   const PreparedMission mission = PrepareMission(scenario, registry);
   PrepareOutputs(options, mission, prefix);

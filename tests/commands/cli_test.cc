@@ -206,8 +206,8 @@ TEST(CliTest, OutputFileThatIsNotARegularFileIsRefused) {
     const auto r = RunAia(args);
     EXPECT_EQ(r.exit_code, 2) << args[0];
     EXPECT_EQ(r.err, "error: command line: --out: cannot write '" + fifo +
-                         "': it exists and is not a regular file (a folder, "
-                         "device or pipe); give a file's path\n");
+                         "': it is a named pipe (FIFO), not a regular file; "
+                         "give a file's path\n");
     struct stat st;
     ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
     EXPECT_TRUE(S_ISFIFO(st.st_mode)) << args[0] << " replaced the pipe";
