@@ -50,8 +50,9 @@ bool ReadZip(const std::uint8_t* b, std::size_t n, std::vector<Entry>* out) {
   std::size_t at = U32(b + eocd + 16);
   for (std::uint32_t e = 0; e < count; ++e) {
     if (at + 46 > n || U32(b + at) != 0x02014b50) return false;
-    const std::uint32_t method = U16(b + at + 10), size = U32(b + at + 20),
-                        unpacked = U32(b + at + 24), name = U16(b + at + 28),
+    const std::uint32_t method = U16(b + at + 10), crc = U32(b + at + 16),
+                        size = U32(b + at + 20), unpacked = U32(b + at + 24),
+                        name = U16(b + at + 28),
                         skip = name + U16(b + at + 30) + U16(b + at + 32);
     const std::size_t local = U32(b + at + 42);
     if (at + 46 + skip > n || local + 30 > n) return false;
@@ -76,6 +77,11 @@ bool ReadZip(const std::uint8_t* b, std::size_t n, std::vector<Entry>* out) {
     } else {
       return false;
     }
+    // An entry damaged by a byte mutation is not rewritten with a fresh
+    // CRC-32: that would pass a damaged code entry off as intact.
+    if (crc32(0L, reinterpret_cast<const Bytef*>(entry.content.data()),
+              static_cast<uInt>(entry.content.size())) != crc)
+      return false;
     out->push_back(std::move(entry));
     at += 46 + skip;
   }

@@ -416,20 +416,20 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
   std::optional<LineReader> in;
   std::string line;
   int number = 0;
-  const auto fail = [&](const std::string& why) {
-    throw InputError("command line", 0, "--out",
-                     "cannot resume from '" + path + "': " + why +
-                         "; remove the damaged lines (or the file) or use "
-                         "another folder");
-  };
   const auto next = [&]() {
     try {
       if (!in) in.emplace(path, kMaxRunsLine);
       return in->Next(&line);
+    } catch (const LineTooLong& e) {
+      throw InputError("command line", 0, "--out",
+                       "cannot resume from '" + path + "': " + e.what() +
+                           ", which no row of aia eval is (a file cut by a "
+                           "crash may end in NULs); remove that line and "
+                           "what follows, or use another folder");
     } catch (const std::runtime_error& e) {
-      fail(e.what());
+      throw InputError("command line", 0, "--out",
+                       "cannot resume from '" + path + "': " + e.what());
     }
-    return false;
   };
   const auto report = [&](int at, const std::string& why) {
     if (problems)

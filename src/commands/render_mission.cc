@@ -89,6 +89,8 @@ namespace fs = std::filesystem;
 // Largest image side: far beyond any video, well within software GL's limits.
 constexpr int kMaxSide = 8192;
 
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+
 double SecondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
       .count();
@@ -133,6 +135,21 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
   {
     RenderOptions flags = o;
     CheckFlags(&flags);  // their declarations: `--flag: what`
+  }
+  // What the size needs, against the budget, before any work (an 8192 x
+  // 8192 video took 12 to 15 GB).
+  const double need = RenderMemoryNeed(s.render.width, s.render.height);
+  const double budget = o.memory_budget * kGiB;
+  if (need > budget) {
+    char what[320];
+    std::snprintf(what, sizeof what,
+                  "%d x %d pixels need about %.1f GiB (512 MiB + 256 bytes "
+                  "per pixel), more than the render's memory budget of %s "
+                  "GiB (--memory-budget); a smaller size, or a larger budget "
+                  "on a machine that has it",
+                  s.render.width, s.render.height, need / kGiB,
+                  FormatNumber(o.memory_budget).c_str());
+    throw s.ErrorAt("render.width", what);
   }
 }
 
@@ -257,6 +274,11 @@ void PrepareOutputs(const RenderOptions& options,
 }
 
 }  // namespace
+
+double RenderMemoryNeed(int width, int height) {
+  return 512.0 * 1024 * 1024 +
+         256.0 * static_cast<double>(width) * static_cast<double>(height);
+}
 
 RenderResult RenderMission(const RenderOptions& options) {
   const PolicyRegistry registry = AllPolicies();

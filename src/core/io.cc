@@ -149,9 +149,9 @@ bool LineReader::Next(std::string* line) {
       return true;
     }
     if (buffer_.size() - at_ > max_line_) {
-      throw std::runtime_error("line " + std::to_string(line_number_ + 1) +
-                               " is longer than " + std::to_string(max_line_) +
-                               " bytes (not a line of this file)");
+      throw LineTooLong("line " + std::to_string(line_number_ + 1) +
+                        " is longer than " + std::to_string(max_line_) +
+                        " bytes");
     }
     const std::size_t had = buffer_.size() - at_;
     if (!Fill()) {

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,12 @@ std::string OutputFileProblem(const std::string& path,
 // throws std::runtime_error when it is not a regular file.
 int OpenRegularFile(const std::string& path, std::string* why);
 
+// What LineReader::Next throws for a line longer than its cap.
+class LineTooLong : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // A text file read line by line, each line at most `max_line` bytes (a line
 // of 3 GB of NULs is an error, not 12 GB of memory). Opened with
 // OpenRegularFile.
@@ -53,8 +60,8 @@ class LineReader {
 
   bool exists() const { return fd_ >= 0; }
   // The next line without its '\n' (a last line may lack one). False at the
-  // end; throws std::runtime_error naming the line when it is longer than
-  // max_line, or when a read fails.
+  // end; throws LineTooLong ("line N is longer than M bytes") or
+  // std::runtime_error when a read fails.
   bool Next(std::string* line);
   long line_number() const { return line_number_; }
 
