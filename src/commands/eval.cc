@@ -765,22 +765,29 @@ class RowSink {
     std::string text = RunsHeader() + "\n";
     for (const auto& r : rows_) text += CsvLine(r);
     WriteFileAtomic(runs_path_, text);
-    const std::uint64_t lo = options_.seed_base;
-    const std::uint64_t hi = lo + static_cast<std::uint64_t>(options_.seeds);
-    std::vector<EvalRow> in_range;
-    for (const auto& r : rows_)
-      if (r.seed >= lo && r.seed < hi) in_range.push_back(r);
-    // This eval's policies, then those of other rows in the folder (an
-    // earlier eval's, a Python policy's), so that they share one table.
-    std::vector<std::string> policies = policies_;
-    for (const auto& r : in_range)
+    // summary.csv covers every row of runs.csv: this eval's sizes and
+    // policies first, then those of other rows in the folder (an earlier
+    // eval's, a Python policy's), so that they share one table and the
+    // summary never depends on which command wrote it last (issue 37: a
+    // resume of some sizes summarized another policy's rows of those sizes
+    // and dropped the other sizes).
+    std::vector<std::string> all_sizes = sizes, policies = policies_;
+    for (const auto& r : rows_) {
+      if (std::find(all_sizes.begin(), all_sizes.end(), r.size) ==
+          all_sizes.end())
+        all_sizes.push_back(r.size);
       if (std::find(policies.begin(), policies.end(), r.policy) ==
           policies.end())
         policies.push_back(r.policy);
-    const std::string summary = SummaryCsv(in_range, sizes, policies);
+    }
+    const std::string summary = SummaryCsv(rows_, all_sizes, policies);
     WriteFileAtomic(options_.out_dir + "/summary.csv", summary);
+    coverage_ = Coverage(all_sizes, policies);
     return summary;
   }
+
+  // What summary.csv covers, for the last line of the command.
+  const std::string& coverage() const { return coverage_; }
 
  private:
   const EvalOptions& options_;
@@ -794,6 +801,31 @@ class RowSink {
   ProgressLine progress_;
   int fd_ = -1;
   std::mutex mu_;
+  std::string coverage_;
+
+  // "all 24 rows of runs.csv: sizes 2x2, 3x3; seeds 0 to 5; policies
+  // greedy, random".
+  std::string Coverage(const std::vector<std::string>& sizes,
+                       const std::vector<std::string>& policies) const {
+    const auto join = [](const std::vector<std::string>& v) {
+      std::string out;
+      for (const std::string& x : v) {
+        if (out.size() > 200) return out + ", ...";
+        out += (out.empty() ? "" : ", ") + x;
+      }
+      return out;
+    };
+    std::set<std::uint64_t> seeds;
+    for (const EvalRow& r : rows_) seeds.insert(r.seed);
+    return "all " + std::to_string(rows_.size()) + " rows of runs.csv: sizes " +
+           join(sizes) +
+           (seeds.empty() ? std::string()
+                          : "; " + std::to_string(seeds.size()) +
+                                (seeds.size() == 1 ? " seed, " : " seeds, ") +
+                                std::to_string(*seeds.begin()) + " to " +
+                                std::to_string(*seeds.rbegin())) +
+           "; policies " + join(policies);
+  }
 };
 
 // The threads to run on: --threads, or all cores shared among the ranks on
@@ -962,8 +994,9 @@ int RunEval(const EvalOptions& o) {
     sink.WriteResults();
     std::fprintf(stderr,
                  "aia eval: interrupted; %zu rows written to %s (summary.csv "
-                 "covers them); run the same command to go on\n",
-                 sink.rows(), sink.runs_path().c_str());
+                 "covers %s); run the same command to go on\n",
+                 sink.rows(), sink.runs_path().c_str(),
+                 sink.coverage().c_str());
     std::fflush(stderr);
     std::_Exit(kInterruptedExitCode);
   }
@@ -987,8 +1020,9 @@ int RunEval(const EvalOptions& o) {
     return kInterruptedExitCode;
   }
   std::printf("%s", summary.c_str());
-  std::printf("wrote %s, %s/summary.csv and %s\n", sink.runs_path().c_str(),
-              o.out_dir.c_str(), effective_path.c_str());
+  std::printf("wrote %s, %s/summary.csv (of %s) and %s\n",
+              sink.runs_path().c_str(), o.out_dir.c_str(),
+              sink.coverage().c_str(), effective_path.c_str());
   return 0;
 }
 
