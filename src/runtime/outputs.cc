@@ -50,6 +50,11 @@ void CheckOutputFiles(const std::vector<std::string>& paths,
 
 void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
   if (dir.empty()) return;
+  // An output folder that is a FIFO, device or file: say what it is.
+  if (const std::string kind = NonRegularKind(dir);
+      !kind.empty() && kind != "a folder")
+    throw InputError("command line", 0, flag,
+                     "'" + dir + "' is " + kind + ", not a folder");
   try {
     MakeDirs(dir);
   } catch (const std::exception& e) {
