@@ -1,5 +1,7 @@
 #include "aia/commands/render_mission.h"
 
+#include <sys/resource.h>
+
 #include <Eigen/LU>
 #include <algorithm>
 #include <chrono>
@@ -149,6 +151,20 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
                   "on a machine that has it",
                   s.render.width, s.render.height, need / kGiB,
                   FormatNumber(o.memory_budget).c_str());
+    throw s.ErrorAt("render.width", what);
+  }
+  // A process limit below the need (ulimit -v) would end the encoder
+  // midway; it is a budget too.
+  struct rlimit limit;
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
+      need > static_cast<double>(limit.rlim_cur)) {
+    char what[320];
+    std::snprintf(what, sizeof what,
+                  "%d x %d pixels need about %.1f GiB (512 MiB + 256 bytes "
+                  "per pixel), more than this process may take (%.1f GiB, "
+                  "ulimit -v); a smaller size",
+                  s.render.width, s.render.height, need / kGiB,
+                  static_cast<double>(limit.rlim_cur) / kGiB);
     throw s.ErrorAt("render.width", what);
   }
 }
