@@ -55,7 +55,7 @@ struct RenderOptions {
 // 512 MiB (the process, the mission, the static scene) and 256 bytes per
 // pixel (the GL buffers and frame copies, about 40, and the H.264 encoder's
 // look-ahead of some 50 frames on its 3 threads, about 190; measured 230 in
-// all at 1024 to 4096 pixels square, docs/rendering.md). Frames are encoded
+// all at 1024 to 4096 pixels square, docs/hardening.md). Frames are encoded
 // as they are rendered, never held: the need does not grow with the
 // video's length.
 double RenderMemoryNeed(int width, int height);

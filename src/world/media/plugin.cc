@@ -24,7 +24,8 @@ cv::Mat Wrap(const std::uint8_t* bgr, int width, int height,
 // frames of look-ahead: the memory of a video of W x H pixels grew with the
 // machine's cores. The encoder is opened (and its threads start) on at most
 // kEncoderCpus of them, so that its memory is the same everywhere
-// (docs/rendering.md, Memory); the caller's own affinity is restored.
+// (docs/hardening.md, Memory of a render); the caller's own affinity is
+// restored.
 constexpr int kEncoderCpus = 2;
 
 class FewerCpus {
