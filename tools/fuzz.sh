@@ -29,7 +29,12 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$PWD/tools/
 echo "[fuzz] $name for $seconds s; crashes go to $out/crashes/"
 # Fork mode keeps fuzzing after a crash, so that SECONDS are spent in full;
 # every crash is saved and counted.
-"$build/fuzz/${name}_fuzzer" -max_total_time="$seconds" -rss_limit_mb=2048 \
+# A dictionary where the harness has one (the scenario's serves mjcf too).
+dict=fuzz/dict/$name.dict
+[ "$name" = mjcf ] && dict=fuzz/dict/scenario.dict
+dict_flag=()
+[ -f "$dict" ] && dict_flag=(-dict="$dict")
+"$build/fuzz/${name}_fuzzer" "${dict_flag[@]}" -max_total_time="$seconds" -rss_limit_mb=2048 \
   -timeout=30 -artifact_prefix="$out/crashes/" -print_final_stats=1 \
   -fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1 "$out/corpus"
 found=$(find "$out/crashes" -type f | wc -l)

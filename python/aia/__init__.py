@@ -306,7 +306,8 @@ def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
     the same out/runs.csv and out/summary.csv rows (under `name`),
     resumable, and kill-safe: Ctrl-C writes the finished rows and raises
     KeyboardInterrupt; calling again goes on. Rows already in `out` (of
-    `aia eval`, say) stay, and summary.csv covers every policy there.
+    `aia eval`, say) stay, and summary.csv covers every row there (every
+    size, seed and policy).
 
     `policy` is a callable policy(mission) -> moves or an object with
     decide(mission). The mission it is given is a view of one decision:

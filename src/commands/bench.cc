@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <string>
@@ -15,6 +14,7 @@
 #include "aia/commands/eval.h"
 #include "aia/commands/plan_command.h"
 #include "aia/core/error.h"
+#include "aia/core/io.h"
 #include "aia/learning/network.h"
 #include "aia/learning/trainer.h"
 #include "aia/runtime/mission.h"
@@ -214,7 +214,7 @@ int RunBench(const BenchOptions& o) {
       const auto path = std::filesystem::temp_directory_path() /
                         ("aia_bench_" + size_text + "_" +
                          std::to_string(::getpid()) + ".xml");
-      std::ofstream(path) << mjcf;
+      WriteFileAtomic(path.string(), mjcf);  // never blocks on a FIFO
       testspeed = TestSpeed(path.string(), 4000);
       std::filesystem::remove(path);
     }

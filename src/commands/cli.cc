@@ -94,18 +94,35 @@ class DeclaredFlags {
       cmd_->add_flag(flag, *f.value, help);
     } else if constexpr (aia::internal::IsVector<T>::value) {
       // A comma-separated list, each item read as the field's items are.
+      // Split here rather than by CLI11, which drops empty items: `--sizes
+      // 2x2,,3x3` is a mistake (a variable left empty), not two sizes.
       auto items = std::make_shared<std::vector<std::string>>();
       const std::optional<aia::ConfigNode> list =
           aia::FieldWriter::Write(*f.value, f);  // kept: its items are read
+      std::string shown;
       for (const aia::ConfigNode& item : list->items)
-        items->push_back(item.scalar);
-      cmd_->add_option(flag, *items, help)
-          ->delimiter(',')
-          ->capture_default_str();
-      ReadAfter(f, flag, [items] {
+        shown += (shown.empty() ? "" : ",") + item.scalar;
+      cmd_->add_option(flag, *items, help)->default_str(shown);
+      ReadAfter(f, flag, [items, flag] {
         aia::ConfigNode list = aia::ConfigNode::List();
-        for (const std::string& item : *items)
-          list.items.push_back(aia::ConfigNode::Scalar(item));
+        for (const std::string& text : *items) {
+          std::size_t start = 0;
+          while (true) {
+            const std::size_t comma = text.find(',', start);
+            const std::string item = text.substr(
+                start,
+                comma == std::string::npos ? std::string::npos : comma - start);
+            if (item.empty())
+              throw aia::InputError(
+                  "command line", 0, flag,
+                  "'" + text +
+                      "' has an empty item; separate the items by one "
+                      "comma");
+            list.items.push_back(aia::ConfigNode::Scalar(item));
+            if (comma == std::string::npos) break;
+            start = comma + 1;
+          }
+        }
         return list;
       });
     } else {

@@ -294,9 +294,12 @@ int RunDataset(const DatasetOptions& o) {
     NameTheFlag(e, spec);
   }
 
-  MakeOutputDir(o.out, "--out");
   const std::string file = o.out + "/shard-" + std::to_string(o.shard.index) +
                            "-of-" + std::to_string(o.shard.count) + ".sqlite";
+  // The shard and SQLite's files beside it: a FIFO there would block SQLite.
+  CheckOutputFiles({file, file + "-journal", file + "-wal", file + "-shm"},
+                   "--out", "the shard written");
+  MakeOutputDir(o.out, "--out");
   CheckNotAnInput(file, "--out", MissionInputs(base, acting.get()),
                   "the shard written");
   CheckOneShardSet(o.out, o.shard.count);

@@ -1,6 +1,7 @@
 #include "aia/commands/eval.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,10 +13,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
-#include <fstream>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -30,6 +32,7 @@
 #include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
 #include "aia/runtime/observers.h"
+#include "aia/runtime/outputs.h"
 #include "aia/scenario/yaml.h"
 
 namespace aia {
@@ -372,6 +375,9 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
   return rows;
 }
 
+// A row of runs.csv is some 100 bytes; a longer line is not one.
+constexpr std::size_t kMaxRunsLine = 64 * 1024;
+
 // Why a parsed row cannot be a run's result, or "".
 std::string Impossible(const EvalRow& r) {
   std::string why;
@@ -405,14 +411,31 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
                               std::vector<std::string>* problems) {
   std::vector<EvalRow> rows;
   std::vector<int> lines;
-  std::ifstream in(path);
+  // Line by line, each at most kMaxRunsLine bytes: a runs.csv cut by a crash
+  // may end in gigabytes of NULs (a 3 GB tail took 12 GB of memory).
+  std::optional<LineReader> in;
   std::string line;
   int number = 0;
+  const auto next = [&]() {
+    try {
+      if (!in) in.emplace(path, kMaxRunsLine);
+      return in->Next(&line);
+    } catch (const LineTooLong& e) {
+      throw InputError("command line", 0, "--out",
+                       "cannot resume from '" + path + "': " + e.what() +
+                           ", which no row of aia eval is (a file cut by a "
+                           "crash may end in NULs); remove that line and "
+                           "what follows, or use another folder");
+    } catch (const std::runtime_error& e) {
+      throw InputError("command line", 0, "--out",
+                       "cannot resume from '" + path + "': " + e.what());
+    }
+  };
   const auto report = [&](int at, const std::string& why) {
     if (problems)
       problems->push_back("line " + std::to_string(at) + ": " + why);
   };
-  while (std::getline(in, line)) {
+  while (next()) {
     ++number;
     EvalRow r;
     if (line == RunsHeader() || line.empty()) continue;
@@ -536,6 +559,10 @@ void CheckEvalFlags(const EvalOptions& o) {
   if (o.out_dir.empty())
     throw InputError("command line", 0, "--out",
                      "an output folder is required");
+  // Before any work: a FIFO at runs.csv blocked the resume's open for ever.
+  CheckOutputFiles({o.out_dir + "/runs.csv", o.out_dir + "/summary.csv",
+                    o.out_dir + "/effective.yaml"},
+                   "--out", "written into the output folder");
 }
 
 // --policies, or every registered policy but the expert.
@@ -562,6 +589,9 @@ void CheckOutputsAreNotInputs(const EvalOptions& o, const EvalSetup& setup,
                     "written into the output folder");
 }
 
+// The effective.yaml aia writes is a few KiB.
+constexpr std::uintmax_t kMaxEffectiveBytes = 16u << 20;
+
 // Rank 0's resume: locks the output folder, refuses one that holds results
 // of another configuration, keeps the rows already there (a row cut short
 // by an interruption, garbled, impossible or duplicated is reported, dropped
@@ -572,15 +602,24 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
   const std::string runs_path = out_dir + "/runs.csv";
   MakeOutputDir(out_dir, "--out", /*lock=*/true);
   std::string merged = effective;
-  if (std::ifstream old(effective_path); old) {
-    std::stringstream text;
-    text << old.rdbuf();
-    const std::string why = Mismatch(text.str(), effective);
+  std::error_code ec;
+  if (std::filesystem::exists(effective_path, ec)) {
+    // Read without blocking (a FIFO is refused) and within a bound: the
+    // file aia writes is a few KiB.
+    std::string text;
+    try {
+      text = ReadFile(effective_path, kMaxEffectiveBytes);
+    } catch (const std::runtime_error& e) {
+      throw InputError(
+          "command line", 0, "--out",
+          "cannot resume from '" + effective_path + "': " + e.what());
+    }
+    const std::string why = Mismatch(text, effective);
     if (!why.empty())
       throw InputError("command line", 0, "--out",
                        out_dir + " holds results of another configuration (" +
                            why + "; see its effective.yaml): use a new folder");
-    merged = WithOldPolicyLines(text.str(), effective);
+    merged = WithOldPolicyLines(text, effective);
   }
   std::vector<std::string> problems;
   std::vector<EvalRow> rows = ReadRuns(runs_path, &problems);
@@ -648,10 +687,19 @@ class RowSink {
         ranks_(ranks),
         progress_(o.progress && root) {
     if (!root_) return;
-    fd_ = ::open(runs_path_.c_str(), O_WRONLY | O_APPEND);
+    // runs.csv was just written as a regular file; O_NONBLOCK keeps even a
+    // FIFO swapped in since from blocking the open.
+    fd_ = ::open(runs_path_.c_str(), O_WRONLY | O_APPEND | O_NONBLOCK);
+    struct stat st;
+    if (fd_ >= 0 && (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode))) {
+      ::close(fd_);
+      fd_ = -1;
+      errno = EINVAL;
+    }
     if (fd_ < 0)
       throw std::runtime_error("cannot write '" + runs_path_ +
                                "': " + std::strerror(errno));
+    ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
   }
   ~RowSink() {
     if (fd_ >= 0) ::close(fd_);
@@ -717,22 +765,29 @@ class RowSink {
     std::string text = RunsHeader() + "\n";
     for (const auto& r : rows_) text += CsvLine(r);
     WriteFileAtomic(runs_path_, text);
-    const std::uint64_t lo = options_.seed_base;
-    const std::uint64_t hi = lo + static_cast<std::uint64_t>(options_.seeds);
-    std::vector<EvalRow> in_range;
-    for (const auto& r : rows_)
-      if (r.seed >= lo && r.seed < hi) in_range.push_back(r);
-    // This eval's policies, then those of other rows in the folder (an
-    // earlier eval's, a Python policy's), so that they share one table.
-    std::vector<std::string> policies = policies_;
-    for (const auto& r : in_range)
+    // summary.csv covers every row of runs.csv: this eval's sizes and
+    // policies first, then those of other rows in the folder (an earlier
+    // eval's, a Python policy's), so that they share one table and the
+    // summary never depends on which command wrote it last (issue 37: a
+    // resume of some sizes summarized another policy's rows of those sizes
+    // and dropped the other sizes).
+    std::vector<std::string> all_sizes = sizes, policies = policies_;
+    for (const auto& r : rows_) {
+      if (std::find(all_sizes.begin(), all_sizes.end(), r.size) ==
+          all_sizes.end())
+        all_sizes.push_back(r.size);
       if (std::find(policies.begin(), policies.end(), r.policy) ==
           policies.end())
         policies.push_back(r.policy);
-    const std::string summary = SummaryCsv(in_range, sizes, policies);
+    }
+    const std::string summary = SummaryCsv(rows_, all_sizes, policies);
     WriteFileAtomic(options_.out_dir + "/summary.csv", summary);
+    coverage_ = Coverage(all_sizes, policies);
     return summary;
   }
+
+  // What summary.csv covers, for the last line of the command.
+  const std::string& coverage() const { return coverage_; }
 
  private:
   const EvalOptions& options_;
@@ -746,6 +801,31 @@ class RowSink {
   ProgressLine progress_;
   int fd_ = -1;
   std::mutex mu_;
+  std::string coverage_;
+
+  // "all 24 rows of runs.csv: sizes 2x2, 3x3; seeds 0 to 5; policies
+  // greedy, random".
+  std::string Coverage(const std::vector<std::string>& sizes,
+                       const std::vector<std::string>& policies) const {
+    const auto join = [](const std::vector<std::string>& v) {
+      std::string out;
+      for (const std::string& x : v) {
+        if (out.size() > 200) return out + ", ...";
+        out += (out.empty() ? "" : ", ") + x;
+      }
+      return out;
+    };
+    std::set<std::uint64_t> seeds;
+    for (const EvalRow& r : rows_) seeds.insert(r.seed);
+    return "all " + std::to_string(rows_.size()) + " rows of runs.csv: sizes " +
+           join(sizes) +
+           (seeds.empty() ? std::string()
+                          : "; " + std::to_string(seeds.size()) +
+                                (seeds.size() == 1 ? " seed, " : " seeds, ") +
+                                std::to_string(*seeds.begin()) + " to " +
+                                std::to_string(*seeds.rbegin())) +
+           "; policies " + join(policies);
+  }
 };
 
 // The threads to run on: --threads, or all cores shared among the ranks on
@@ -914,8 +994,9 @@ int RunEval(const EvalOptions& o) {
     sink.WriteResults();
     std::fprintf(stderr,
                  "aia eval: interrupted; %zu rows written to %s (summary.csv "
-                 "covers them); run the same command to go on\n",
-                 sink.rows(), sink.runs_path().c_str());
+                 "covers %s); run the same command to go on\n",
+                 sink.rows(), sink.runs_path().c_str(),
+                 sink.coverage().c_str());
     std::fflush(stderr);
     std::_Exit(kInterruptedExitCode);
   }
@@ -939,8 +1020,9 @@ int RunEval(const EvalOptions& o) {
     return kInterruptedExitCode;
   }
   std::printf("%s", summary.c_str());
-  std::printf("wrote %s, %s/summary.csv and %s\n", sink.runs_path().c_str(),
-              o.out_dir.c_str(), effective_path.c_str());
+  std::printf("wrote %s, %s/summary.csv (of %s) and %s\n",
+              sink.runs_path().c_str(), o.out_dir.c_str(),
+              sink.coverage().c_str(), effective_path.c_str());
   return 0;
 }
 

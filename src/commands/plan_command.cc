@@ -11,6 +11,7 @@
 #include "aia/core/field_io.h"
 #include "aia/core/io.h"
 #include "aia/runtime/episode.h"
+#include "aia/runtime/outputs.h"
 #include "aia/scenario/loader.h"
 
 namespace aia {
@@ -58,6 +59,7 @@ int RunPlanCommand(const PlanOptions& o) {
         MissionInputs(mission.scenario, mission.policy.get());
     CheckNotAnInput(o.out, "--out", inputs);
     CheckNotAnInput(side, "--out", inputs, "written next to the plan");
+    CheckOutputFiles({side}, "--out", "written next to the plan");
   }
   // The expert's parameters as resolved (and range-checked) by the registry.
   const ExpertParams* params = ParamsOf<ExpertParams>(*mission.policy);

@@ -1,5 +1,7 @@
 #include "aia/commands/render_mission.h"
 
+#include <sys/resource.h>
+
 #include <Eigen/LU>
 #include <algorithm>
 #include <chrono>
@@ -17,6 +19,7 @@
 #include "aia/estimation/heatmap.h"
 #include "aia/render/frame_renderer.h"
 #include "aia/render/video.h"
+#include "aia/runtime/outputs.h"
 #include "aia/scenario/loader.h"
 #include "aia/world/media.h"
 
@@ -88,6 +91,8 @@ namespace fs = std::filesystem;
 // Largest image side: far beyond any video, well within software GL's limits.
 constexpr int kMaxSide = 8192;
 
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+
 double SecondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
       .count();
@@ -132,6 +137,35 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
   {
     RenderOptions flags = o;
     CheckFlags(&flags);  // their declarations: `--flag: what`
+  }
+  // What the size needs, against the budget, before any work (an 8192 x
+  // 8192 video took 12 to 15 GB).
+  const double need = RenderMemoryNeed(s.render.width, s.render.height);
+  const double budget = o.memory_budget * kGiB;
+  if (need > budget) {
+    char what[320];
+    std::snprintf(what, sizeof what,
+                  "%d x %d pixels need about %.1f GiB (512 MiB + 256 bytes "
+                  "per pixel), more than the render's memory budget of %s "
+                  "GiB (--memory-budget); a smaller size, or a larger budget "
+                  "on a machine that has it",
+                  s.render.width, s.render.height, need / kGiB,
+                  FormatNumber(o.memory_budget).c_str());
+    throw s.ErrorAt("render.width", what);
+  }
+  // A process limit below the need (ulimit -v) would end the encoder
+  // midway; it is a budget too.
+  struct rlimit limit;
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
+      need > static_cast<double>(limit.rlim_cur)) {
+    char what[320];
+    std::snprintf(what, sizeof what,
+                  "%d x %d pixels need about %.1f GiB (512 MiB + 256 bytes "
+                  "per pixel), more than this process may take (%.1f GiB, "
+                  "ulimit -v); a smaller size",
+                  s.render.width, s.render.height, need / kGiB,
+                  static_cast<double>(limit.rlim_cur) / kGiB);
+    throw s.ErrorAt("render.width", what);
   }
 }
 
@@ -218,6 +252,22 @@ class VideoObserver : public StepObserver {
 
 namespace {
 
+// The PNG frames to be written into --frames: one that is there already as
+// a FIFO, device or folder is refused now, not after the rendering.
+void CheckFrameFiles(const std::string& dir) {
+  std::error_code ec;
+  if (dir.empty() || !fs::is_directory(dir, ec)) return;
+  std::vector<std::string> frames;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() == 16 && name.rfind("frame_", 0) == 0 &&
+        name.compare(12, 4, ".png") == 0)
+      frames.push_back(it->path().string());
+  }
+  CheckOutputFiles(frames, "--frames", "a frame");
+}
+
 // Neither the video nor the files next to it may replace an input (the
 // scenario may be FILE.effective.yaml of an earlier render); the folders
 // are made. The folder is not locked (renders of other scenarios may share
@@ -241,6 +291,11 @@ void PrepareOutputs(const RenderOptions& options,
 
 }  // namespace
 
+double RenderMemoryNeed(int width, int height) {
+  return 512.0 * 1024 * 1024 +
+         256.0 * static_cast<double>(width) * static_cast<double>(height);
+}
+
 RenderResult RenderMission(const RenderOptions& options) {
   const PolicyRegistry registry = AllPolicies();
   Scenario scenario =
@@ -255,6 +310,13 @@ RenderResult RenderMission(const RenderOptions& options) {
   CheckOutputFile(options.out_file, "--out");
   const std::string prefix =
       (out.parent_path() / (out.stem().string() + ".")).string();
+  {
+    std::vector<std::string> next_to_it;
+    for (const std::string& name : MissionFileNames())
+      next_to_it.push_back(prefix + name);
+    CheckOutputFiles(next_to_it, "--out", "written next to the video");
+    CheckFrameFiles(options.frames_dir);
+  }
 
   const PreparedMission mission = PrepareMission(scenario, registry);
   PrepareOutputs(options, mission, prefix);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "aia/core/io.h"
+#include "aia/runtime/outputs.h"
 #include "aia/scenario/loader.h"
 
 namespace aia {
@@ -24,9 +25,13 @@ MissionSummary RunMission(const RunOptions& options) {
   // earlier run): none of the files written may be an input.
   const std::vector<InputFile> inputs =
       MissionInputs(mission.scenario, mission.policy.get());
-  for (const std::string& name : MissionFileNames())
-    CheckNotAnInput(out + "/" + name, "--out", inputs,
+  std::vector<std::string> files;
+  for (const std::string& name : MissionFileNames()) {
+    files.push_back(out + "/" + name);
+    CheckNotAnInput(files.back(), "--out", inputs,
                     "written into the output folder");
+  }
+  CheckOutputFiles(files, "--out", "written into the output folder");
   MakeOutputDir(out, "--out", /*lock=*/true);
 
   MissionRunner runner(mission, out + "/", "aia run", options.progress, {},

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <locale>
 #include <sstream>
 #include <system_error>
@@ -434,6 +435,32 @@ long long FieldReader::ReadInteger(
         expect.empty() ? range.DescribeInteger() : std::string(expect);
     if (expect.empty() && !keyword.empty())
       expected += " or " + std::string(keyword);
+    // An integer the declared range allows but the field's type cannot
+    // hold: its bound is said, not only the range's ("must be an integer
+    // >= 1, got 99999999999" read as if the value were fine).
+    if (expect.empty() && node.IsPlainScalar() &&
+        field_text::IsIntegerLiteral(node.scalar)) {
+      const bool negative = node.scalar[0] == '-';
+      const bool above = x ? *x > hi : !negative;
+      const bool below = x ? *x < lo : negative;
+      const auto bits = [](long long bound) -> std::string {
+        if (bound == std::numeric_limits<int>::max() ||
+            bound == std::numeric_limits<int>::min())
+          return " that fits in 32 bits";
+        if (bound == std::numeric_limits<long long>::max() ||
+            bound == std::numeric_limits<long long>::min())
+          return " that fits in 64 bits";
+        return "";
+      };
+      if (above && range.hi > static_cast<double>(hi))
+        FailExpected(
+            node, key,
+            expected + bits(hi) + " (at most " + std::to_string(hi) + ")");
+      if (below && range.lo < static_cast<double>(lo))
+        FailExpected(
+            node, key,
+            expected + bits(lo) + " (at least " + std::to_string(lo) + ")");
+    }
     FailExpected(node, key, expected);
   }
   return *x;

@@ -16,44 +16,163 @@
 
 namespace aia {
 
-std::string ReadFile(const std::string& path, std::uintmax_t max_bytes) {
+namespace {
+
+// What a stat says a path is, when not a regular file.
+std::string KindOf(mode_t mode) {
+  if (S_ISREG(mode)) return "";
+  if (S_ISDIR(mode)) return "a folder";
+  if (S_ISFIFO(mode)) return "a named pipe (FIFO)";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a file";
+}
+
+}  // namespace
+
+std::string NonRegularKind(const std::string& path) {
   struct stat st;
-  if (::stat(path.c_str(), &st) != 0)
-    throw std::runtime_error(std::string("cannot read file: ") +
-                             std::strerror(errno));
-  if (!S_ISREG(st.st_mode))
-    throw std::runtime_error(
-        "cannot read file: not a regular file (a directory, device or pipe)");
-  if (static_cast<std::uintmax_t>(st.st_size) > max_bytes)
+  if (::stat(path.c_str(), &st) != 0) return "";
+  return KindOf(st.st_mode);
+}
+
+std::string OutputFileProblem(const std::string& path,
+                              const std::string& written) {
+  const std::string kind = NonRegularKind(path);
+  if (kind.empty()) return "";
+  return "cannot write '" + path + "'" +
+         (written.empty() ? "" : " (" + written + ")") + ": it is " + kind +
+         ", not a regular file; remove it or give another path";
+}
+
+int OpenRegularFile(const std::string& path, std::string* why) {
+  // O_NONBLOCK: opening a FIFO without a writer returns at once instead of
+  // waiting for one (which no signal ended); it is cleared for the reads.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    *why = std::strerror(errno);
+    return -1;
+  }
+  struct stat st;
+  if (::fstat(fd, &st) != 0) {
+    *why = std::strerror(errno);
+    ::close(fd);
+    return -1;
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw std::runtime_error("cannot read file: it is " + KindOf(st.st_mode) +
+                             ", not a regular file");
+  }
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  return fd;
+}
+
+std::string ReadFile(const std::string& path, std::uintmax_t max_bytes) {
+  std::string why;
+  const int fd = OpenRegularFile(path, &why);
+  if (fd < 0) throw std::runtime_error("cannot read file: " + why);
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st;
+  if (::fstat(fd, &st) == 0 &&
+      static_cast<std::uintmax_t>(st.st_size) > max_bytes)
     throw std::runtime_error("file of " + std::to_string(st.st_size) +
                              " bytes; at most " + std::to_string(max_bytes) +
                              " bytes are read");
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(
-      std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f)
-    throw std::runtime_error(std::string("cannot read file: ") +
-                             std::strerror(errno));
   std::string text;
   char buffer[1 << 16];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f.get())) > 0) {
-    text.append(buffer, n);
+  while (true) {
+    const ssize_t n = ::read(fd, buffer, sizeof(buffer));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(std::string("cannot read file: ") +
+                               std::strerror(errno));
+    }
+    if (n == 0) break;
+    text.append(buffer, static_cast<std::size_t>(n));
     if (text.size() > max_bytes)  // it grew while being read
       throw std::runtime_error("file larger than " + std::to_string(max_bytes) +
                                " bytes");
   }
-  if (std::ferror(f.get()))
-    throw std::runtime_error(std::string("cannot read file: ") +
-                             std::strerror(errno));
   return text;
+}
+
+LineReader::LineReader(const std::string& path, std::size_t max_line)
+    : path_(path), max_line_(max_line) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 && errno == ENOENT) return;  // none
+  std::string why;
+  fd_ = OpenRegularFile(path, &why);
+  if (fd_ < 0) throw std::runtime_error("cannot read file: " + why);
+}
+
+LineReader::~LineReader() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool LineReader::Fill() {
+  if (eof_ || fd_ < 0) return false;
+  if (at_ > 0) {
+    buffer_.erase(0, at_);
+    at_ = 0;
+  }
+  char chunk[1 << 16];
+  while (true) {
+    const ssize_t n = ::read(fd_, chunk, sizeof(chunk));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error("cannot read file: " +
+                               std::string(std::strerror(errno)));
+    }
+    if (n == 0) {
+      eof_ = true;
+      return false;
+    }
+    buffer_.append(chunk, static_cast<std::size_t>(n));
+    return true;
+  }
+}
+
+bool LineReader::Next(std::string* line) {
+  if (fd_ < 0) return false;
+  std::size_t searched = at_;
+  while (true) {
+    const std::size_t nl = buffer_.find('\n', searched);
+    if (nl != std::string::npos && nl - at_ <= max_line_) {
+      line->assign(buffer_, at_, nl - at_);
+      at_ = nl + 1;
+      ++line_number_;
+      return true;
+    }
+    if (buffer_.size() - at_ > max_line_) {
+      throw LineTooLong("line " + std::to_string(line_number_ + 1) +
+                        " is longer than " + std::to_string(max_line_) +
+                        " bytes");
+    }
+    const std::size_t had = buffer_.size() - at_;
+    if (!Fill()) {
+      if (buffer_.size() == at_) return false;
+      line->assign(buffer_, at_, std::string::npos);  // a last line
+      at_ = buffer_.size();
+      ++line_number_;
+      return true;
+    }
+    searched = at_ + had;  // Fill() moved the unread bytes to the front
+  }
 }
 
 FileLock::FileLock(const std::string& path) {
   // A folder is locked through its own descriptor: no file is added to it.
   struct stat st;
   const bool dir = ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+  // O_NONBLOCK: nothing here may wait for a FIFO's other end.
   fd_ = dir ? ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC)
-            : ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+            : ::open(path.c_str(), O_RDWR | O_CREAT | O_NONBLOCK | O_CLOEXEC,
+                     0644);
   if (fd_ < 0)
     throw std::runtime_error("cannot open '" + path +
                              "' to lock it: " + std::strerror(errno));
@@ -117,11 +236,10 @@ void MakeDirs(const std::string& path) {
 }
 
 void CheckReplaceableFile(const std::string& path) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
-    throw std::runtime_error("cannot write '" + path +
-                             "': it exists and is not a regular file (a "
-                             "folder, device or pipe); give a file's path");
+  const std::string kind = NonRegularKind(path);
+  if (!kind.empty())
+    throw std::runtime_error("cannot write '" + path + "': it is " + kind +
+                             ", not a regular file; give a file's path");
 }
 
 bool SameFile(const std::string& a, const std::string& b) {
@@ -153,10 +271,29 @@ std::string TemporaryPath(const std::string& path, bool keep_extension) {
 AtomicFile::AtomicFile(const std::string& path)
     : path_(path), tmp_(TemporaryPath(path)) {
   CheckReplaceableFile(path);
-  file_ = std::fopen(tmp_.c_str(), "wb");
-  if (file_ == nullptr)
+  // Never blocks: a FIFO at the temporary name (not made by aia) is refused
+  // by the open itself (no reader: ENXIO) or by the check after it.
+  const int fd =
+      ::open(tmp_.c_str(),
+             O_WRONLY | O_CREAT | O_TRUNC | O_NONBLOCK | O_CLOEXEC, 0644);
+  if (fd < 0)
     throw std::runtime_error("cannot write '" + path +
                              "': " + std::strerror(errno));
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw std::runtime_error("cannot write '" + path + "': its temporary '" +
+                             tmp_ + "' is not a regular file");
+  }
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  file_ = ::fdopen(fd, "wb");
+  if (file_ == nullptr) {
+    const int err = errno;
+    ::close(fd);
+    std::remove(tmp_.c_str());
+    throw std::runtime_error("cannot write '" + path +
+                             "': " + std::strerror(err));
+  }
 }
 
 AtomicFile::~AtomicFile() {

@@ -471,6 +471,8 @@ std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
       }
     } else if (fs::is_regular_file(p, ec)) {
       files.push_back(p);
+    } else if (const std::string kind = NonRegularKind(p); !kind.empty()) {
+      throw InputError(p, 0, key, "is " + kind + ", not a dataset file");
     } else {
       throw InputError(p, 0, key, "no such file or folder");
     }

@@ -40,8 +40,21 @@ void CheckOutputFile(const std::string& path, const std::string& flag) {
   }
 }
 
+void CheckOutputFiles(const std::vector<std::string>& paths,
+                      const std::string& flag, const std::string& written) {
+  for (const std::string& path : paths) {
+    const std::string why = OutputFileProblem(path, written);
+    if (!why.empty()) throw InputError("command line", 0, flag, why);
+  }
+}
+
 void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
   if (dir.empty()) return;
+  // An output folder that is a FIFO, device or file: say what it is.
+  if (const std::string kind = NonRegularKind(dir);
+      !kind.empty() && kind != "a folder")
+    throw InputError("command line", 0, flag,
+                     "'" + dir + "' is " + kind + ", not a folder");
   try {
     MakeDirs(dir);
   } catch (const std::exception& e) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -265,6 +266,18 @@ void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model) {
 }
 
 void Scenario::Validate(const FieldChecker& check) {
+  // The name labels one-line messages and the MuJoCo model (escaped there):
+  // a line break or another control character has no place in it.
+  for (std::size_t i = 0; i < name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    if (c < 0x20 || c == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof code, "0x%02x", c);
+      check.Fail(name, "holds a control character (" + std::string(code) +
+                           " at character " + std::to_string(i + 1) +
+                           "); a name is one line of printable text");
+    }
+  }
   const Vec2& size = workspace.size;
   const std::string bounds = "[0, " + FormatNumber(size.x()) + "] x [0, " +
                              FormatNumber(size.y()) + "]";

@@ -14,6 +14,38 @@ std::string Num(double v) {
   return buf;
 }
 
+// Text as the value of an XML attribute in double quotes: the scenario's
+// name may hold any of & < > " ' (a quote ended the attribute, and MuJoCo
+// refused the model: issue 37). The loader refuses control characters;
+// one that reaches here (a scenario built in code) becomes a space, since
+// XML 1.0 has no way to write most of them.
+std::string XmlAttribute(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? ' ' : c;
+    }
+  }
+  return out;
+}
+
 // An angle to the full precision of a double, so that the heading MuJoCo
 // reads is the one drawn.
 std::string Angle(double radians) {
@@ -252,7 +284,8 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   const double W = world.map.size().x(), H = world.map.size().y();
   const double h = kObstacleHeight / 2;
   std::ostringstream x;
-  x << "<mujoco model=\"" << (s.name.empty() ? "aia" : s.name) << "\">\n";
+  x << "<mujoco model=\"" << (s.name.empty() ? "aia" : XmlAttribute(s.name))
+    << "\">\n";
   x << "  <compiler angle=\"radian\"/>\n";
   const MujocoModelSizes model = ModelSizesOf(world, s, contacts);
   const MujocoSizes& sizes = model.sizes;

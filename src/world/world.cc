@@ -382,17 +382,19 @@ class TargetPlacer {
     }
   }
 
-  // Whether some reachable lattice point sees `p`.
-  bool Observable(const Vec2& p) const {
+  // Whether some reachable lattice point sees `p` within `reach` (by
+  // default 0.9 sensor.range: random targets and prior means keep a margin).
+  bool Observable(const Vec2& p) const { return Observable(p, reach_); }
+  bool Observable(const Vec2& p, double reach) const {
     const int cx = lat_.Ix(lat_.NearestPoint(p)),
               cy = lat_.Iy(lat_.NearestPoint(p));
-    const int k = static_cast<int>(std::ceil(reach_ / lat_.step())) + 1;
+    const int k = static_cast<int>(std::ceil(reach / lat_.step())) + 1;
     for (int iy = std::max(0, cy - k); iy <= std::min(lat_.ny() - 1, cy + k);
          ++iy)
       for (int ix = std::max(0, cx - k); ix <= std::min(lat_.nx() - 1, cx + k);
            ++ix) {
         const int idx = lat_.Index(ix, iy);
-        if (!reachable_[idx] || (lat_.Point(idx) - p).norm() > reach_) continue;
+        if (!reachable_[idx] || (lat_.Point(idx) - p).norm() > reach) continue;
         if (!s_.sensor.line_of_sight || map_.LineOfSight(lat_.Point(idx), p))
           return true;
       }
@@ -447,6 +449,20 @@ class TargetPlacer {
                  "target " + Fmt(p) + " is outside the workspace " + Fmt(size));
           Fail(s_, key, "target " + Fmt(p) + " is inside an obstacle");
         }
+        // A static target that no point the robots can reach measures (in
+        // range, in sight) could never be localized: the mission would
+        // run its whole horizon, and the expert plan towards a prior mean
+        // elsewhere (issue 37). A moving one may come into view.
+        if (s_.targets.list[k].dynamics.IsStatic() &&
+            !Observable(p, s_.sensor.range))
+          Fail(s_, key,
+               "target " + Fmt(p) +
+                   " can never be measured: no lattice point the robots can "
+                   "reach is within sensor.range (" +
+                   FormatNumber(s_.sensor.range) + " m) of it" +
+                   (s_.sensor.line_of_sight ? " with a free line of sight"
+                                            : "") +
+                   " (walled in, or cut off from the robots' starts)");
         Add(p, &s_.targets.list[k], w);
       }
       return;

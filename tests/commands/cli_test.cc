@@ -142,9 +142,21 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
        "error: command line: The following argument was not expected: "
        "--bogus (aia run --help lists the options)\n"},
       // Declared flags are read as the scenario keys are.
+      // Beyond the field's type, its bound is said (issue 37).
       {{"eval", "--seeds", "1000000000000", "--out", "x"},
-       "error: command line: --seeds: must be an integer >= 1, got "
-       "1000000000000\n"},
+       "error: command line: --seeds: must be an integer >= 1 that fits in "
+       "32 bits (at most 2147483647), got 1000000000000\n"},
+      {{"render", scenario, "--out", "x.mp4", "--width",
+        "99999999999999999999"},
+       "error: command line: --width: must be an integer >= 1 that fits in "
+       "32 bits (at most 2147483647), got 99999999999999999999\n"},
+      // An empty item of a list flag is a mistake, not one item fewer.
+      {{"eval", "--sizes", "2x2,,3x3", "--out", "x"},
+       "error: command line: --sizes: '2x2,,3x3' has an empty item; separate "
+       "the items by one comma\n"},
+      {{"eval", "--sizes", "2x2", "--policies", "random,", "--out", "x"},
+       "error: command line: --policies: 'random,' has an empty item; "
+       "separate the items by one comma\n"},
       // strtoull alone would read -1 as 18446744073709551615.
       {{"run", scenario, "--seed", "-1"},
        "error: command line: --seed: must be an integer >= 0, got -1\n"},
@@ -206,8 +218,8 @@ TEST(CliTest, OutputFileThatIsNotARegularFileIsRefused) {
     const auto r = RunAia(args);
     EXPECT_EQ(r.exit_code, 2) << args[0];
     EXPECT_EQ(r.err, "error: command line: --out: cannot write '" + fifo +
-                         "': it exists and is not a regular file (a folder, "
-                         "device or pipe); give a file's path\n");
+                         "': it is a named pipe (FIFO), not a regular file; "
+                         "give a file's path\n");
     struct stat st;
     ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
     EXPECT_TRUE(S_ISFIFO(st.st_mode)) << args[0] << " replaced the pipe";

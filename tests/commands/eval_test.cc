@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -128,6 +129,46 @@ TEST(EvalTest, RunsResumeAndDoNotDependOnThreads) {
   }
   std::filesystem::remove_all(a);
   std::filesystem::remove_all(b);
+}
+
+// Issue 37: resuming `--policies greedy --sizes 3x3` into a folder of random
+// and greedy rows wrote a summary with 3x3 random and without 4x4 (this
+// eval's sizes and seeds, every policy). summary.csv now covers every row
+// of runs.csv, whichever command wrote it last, and the command says so.
+TEST(EvalTest, SummaryCoversEveryRowOfTheFolder) {
+  const std::string dir = testing::MakeTempDir("aia_cover_");
+  const auto eval = [&](const std::string& sizes, const std::string& policies,
+                        const std::string& seed_base) {
+    return RunAia({"eval", "--sizes", sizes, "--seeds", "2", "--seed-base",
+                   seed_base, "--policies", policies, "--out", dir, "--threads",
+                   "1", "--quiet"});
+  };
+  ASSERT_EQ(eval("3x3,4x4", "random,greedy", "0").exit_code, 0);
+  const std::string whole = ReadFile(dir + "/summary.csv");
+  // Every size and policy, resumed with some of them: the same summary.
+  const auto r = eval("3x3", "greedy", "0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("summary.csv (of all 8 rows of runs.csv: sizes 3x3, "
+                       "4x4; 2 seeds, 0 to 1; policies greedy, random)"),
+            std::string::npos)
+      << r.out;
+  const auto lines = [](const std::string& csv) {
+    std::multiset<std::string> set;
+    std::istringstream in(csv);
+    for (std::string line; std::getline(in, line);) set.insert(line);
+    return set;
+  };
+  EXPECT_EQ(lines(ReadFile(dir + "/summary.csv")), lines(whole));
+  // Rows of other seeds count too: 3 instances of 3x3 greedy now.
+  ASSERT_EQ(RunAia({"eval", "--sizes", "3x3", "--seeds", "1", "--seed-base",
+                    "9", "--policies", "greedy", "--out", dir, "--threads", "1",
+                    "--quiet"})
+                .exit_code,
+            0);
+  const std::string summary = ReadFile(dir + "/summary.csv");
+  EXPECT_NE(summary.find("\n3x3,greedy,3,"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\n4x4,random,2,"), std::string::npos) << summary;
+  std::filesystem::remove_all(dir);
 }
 
 // The reversal columns: a random walker in the open reverses about a quarter

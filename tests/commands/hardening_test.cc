@@ -2,6 +2,7 @@
 // validated rows on resume, Ctrl-C, files that are not files, unwritable
 // folders.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,15 @@
 #include <vector>
 
 #include "support/test_support.h"
+
+// The sanitizer tree (AddressSanitizer reserves terabytes of address space).
+#if defined(__SANITIZE_ADDRESS__)
+#define AIA_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define AIA_TEST_ASAN 1
+#endif
+#endif
 
 namespace aia {
 namespace {
@@ -455,6 +465,271 @@ TEST(HardeningTest, TrainingWithoutValidationSaysSo) {
   r = RunAia({"train", "--data", dir + "/data", "--validate", dir + "/m.pt",
               "--val-share", "0"});
   ExpectOneErrorLine(r, "--val-share: holds out none of the 6 worlds");
+  fs::remove_all(dir);
+}
+
+// --- Issue 37 ---------------------------------------------------------
+
+// A command under a hard time limit: what blocks is killed (exit 137), and
+// the test says so instead of hanging.
+testing::CommandResult RunWithin(const std::vector<std::string>& args,
+                                 int seconds = 60) {
+  return RunCommand("timeout -s KILL " + std::to_string(seconds) + " " +
+                    Quoted(args));
+}
+
+// The regular files under `dir` (what a command wrote).
+std::vector<std::string> RegularFiles(const std::string& dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end;
+       it.increment(ec))
+    if (it->is_regular_file()) files.push_back(it->path().string());
+  return files;
+}
+
+// Every file every command writes, made a FIFO in turn: `mkfifo F/runs.csv`
+// made `aia eval` block in open() for ever (SIGTERM did not end it), and
+// run, render, plan and train wrote their work and then failed with exit 1.
+// Each is now refused before any work, exit 2, one line naming the file.
+TEST(HardeningTest, EveryOutputThatIsAFifoIsRefusedBeforeAnyWork) {
+  const std::string root = testing::MakeTempDir("aia_fifos_");
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  ASSERT_EQ(
+      RunAia({"dataset", "--episodes", "4", "--size", "3x3", "--keep", "2",
+              "--first-seed", "500", "--out", root + "/data", "--quiet"})
+          .exit_code,
+      0);
+  struct Case {
+    std::string dir, file, flag;
+    std::vector<std::string> args;
+  };
+  std::vector<Case> cases;
+  int n = 0;
+  const auto add = [&](const std::string& file, const std::string& flag,
+                       const auto& args_of) {
+    const std::string dir = root + "/" + std::to_string(n++);
+    cases.push_back({dir, dir + "/" + file, flag, args_of(dir)});
+  };
+  for (const char* f : {"summary.json", "trace.csv", "estimate.csv",
+                        "effective.yaml", "diagnostics.json"})
+    add(f, "--out", [&](const std::string& d) {
+      return std::vector<std::string>{"run",   scenario, "--max-steps", "2",
+                                      "--out", d,        "--quiet"};
+    });
+  for (const std::string f :
+       {"v.mp4", "v.summary.json", "v.trace.csv", "v.estimate.csv",
+        "v.effective.yaml", "v.diagnostics.json", "frames/frame_000000.png"})
+    add(f, f.rfind("frames/", 0) == 0 ? "--frames" : "--out",
+        [&](const std::string& d) {
+          return std::vector<std::string>{
+              "render",   scenario,      "--max-steps", "1",     "--width",
+              "64",       "--height",    "48",          "--out", d + "/v.mp4",
+              "--frames", d + "/frames", "--quiet"};
+        });
+  for (const char* f : {"p.json", "p.effective.yaml"})
+    add(f, "--out", [&](const std::string& d) {
+      return std::vector<std::string>{"plan", scenario, "--out", d + "/p.json"};
+    });
+  add("w.xml", "--out", [&](const std::string& d) {
+    return std::vector<std::string>{"world", scenario, "--out", d + "/w.xml"};
+  });
+  for (const char* f : {"runs.csv", "summary.csv", "effective.yaml"})
+    add(f, "--out", [&](const std::string& d) {
+      return std::vector<std::string>{"eval", "--sizes", "2x2", "--seeds",
+                                      "1",    "--out",   d,     "--quiet"};
+    });
+  for (const char* f : {"shard-0-of-1.sqlite", "shard-0-of-1.sqlite-journal"})
+    add(f, "--out", [&](const std::string& d) {
+      return std::vector<std::string>{"dataset", "--episodes", "2", "--size",
+                                      "2x2",     "--out",      d,   "--quiet"};
+    });
+  for (const char* f : {"m.pt", "m.pt.ckpt", "m.train.csv"})
+    add(f, "--out", [&](const std::string& d) {
+      return std::vector<std::string>{"train",    "--data",    root + "/data",
+                                      "--out",    d + "/m.pt", "--epochs",
+                                      "1",        "--width",   "8",
+                                      "--window", "16",        "--threads",
+                                      "1",        "--resume",  "--quiet"};
+    });
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args[0] + " with a FIFO at " + c.file);
+    fs::create_directories(fs::path(c.file).parent_path());
+    ASSERT_EQ(::mkfifo(c.file.c_str(), 0644), 0);
+    const auto r = RunWithin(c.args);
+    ExpectOneErrorLine(r, "'" + c.file);
+    EXPECT_EQ(r.err.rfind("error: command line: " + c.flag + ": ", 0), 0u)
+        << r.err;
+    EXPECT_NE(r.err.find("a named pipe (FIFO), not a regular file"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(fs::is_fifo(c.file)) << "the FIFO was replaced";
+    EXPECT_EQ(RegularFiles(c.dir), std::vector<std::string>{})
+        << "work was written before the refusal";
+  }
+  fs::remove_all(root);
+}
+
+// Inputs that are FIFOs, devices or folders never block a reader either.
+TEST(HardeningTest, InputsThatAreFifosAreRefusedWithoutBlocking) {
+  const std::string dir = testing::MakeTempDir("aia_infifo_");
+  const std::string fifo = dir + "/pipe.pt";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", scenario, "--set", "policy.name=igbnet", "--set",
+        "policy.model=" + fifo, "--out", dir + "/r", "--quiet"},
+       "is a named pipe (FIFO), not a model file"},
+      {{"run", scenario, "--set", "policy.name=igbnet", "--set",
+        "policy.model=" + dir, "--out", dir + "/r", "--quiet"},
+       "is a folder, not a model file"},
+      {{"train", "--data", dir, "--init", fifo, "--out", dir + "/m.pt",
+        "--quiet"},
+       "is a named pipe (FIFO), not a model file"},
+      {{"train", "--data", fifo, "--validate", SourcePath("models/igbnet.pt")},
+       "is a named pipe (FIFO), not a dataset file"},
+      {{"dataset", "--episodes", "1", "--size", "2x2", "--policy", "igbnet",
+        "--model", fifo, "--out", dir + "/d", "--quiet"},
+       "is a named pipe (FIFO), not a model file"},
+  };
+  for (const auto& [args, message] : cases) {
+    SCOPED_TRACE(args[0]);
+    ExpectOneErrorLine(RunWithin(args), message);
+  }
+  fs::remove_all(dir);
+}
+
+// A runs.csv cut by a crash may end in gigabytes of NULs: a 3 GB tail took
+// 12 GB of memory to resume. Lines are read one at a time up to 64 KiB.
+TEST(HardeningTest, AResumeStopsAtALineLongerThanAnyRow) {
+  const std::string dir = testing::MakeTempDir("aia_nuls_");
+  const std::vector<std::string> eval = {
+      "eval",       "--sizes", "2x2",   "--seeds", "2",
+      "--policies", "random",  "--out", dir,       "--quiet"};
+  ASSERT_EQ(RunAia(eval).exit_code, 0);
+  {
+    std::ofstream out(dir + "/runs.csv", std::ios::app | std::ios::binary);
+    out << std::string(4 << 20, '\0');
+  }
+  ExpectOneErrorLine(RunWithin(eval),
+                     "--out: cannot resume from '" + dir +
+                         "/runs.csv': line 4 is longer than 65536 bytes, "
+                         "which no row of aia eval is (a file cut by a crash "
+                         "may end in NULs)");
+  fs::remove_all(dir);
+}
+
+// A model whose largest tensor entry was emptied (a valid zip, its CRC
+// fixed) crashed `aia run`, `aia train --init` and `--validate`; one 4
+// bytes short loaded and read past the entry. Every reader now names the
+// tensor and the entry.
+TEST(HardeningTest, ATensorEntryShorterThanItsShapeIsRefusedByEveryReader) {
+  const std::string dir = testing::MakeTempDir("aia_tensor_");
+  ASSERT_EQ(
+      RunAia({"dataset", "--episodes", "4", "--size", "3x3", "--keep", "2",
+              "--first-seed", "500", "--out", dir + "/data", "--quiet"})
+          .exit_code,
+      0);
+  for (const char* file : {"empty_tensor_model.pt", "short_tensor_model.pt"}) {
+    const std::string model =
+        SourcePath(std::string("tests/data/bad_world/") + file);
+    const std::string named =
+        "tensor 'fc1.weight' (float32, 128 x 16) needs 8192 bytes (2048 x "
+        "float32), but its entry 'tiny.pt.tmp/data/42' holds ";
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"run", SourcePath("scenarios/default.yaml"),
+                                   "--set", "policy.name=igbnet", "--set",
+                                   "policy.model=" + model, "--out", dir + "/r",
+                                   "--quiet"},
+          std::vector<std::string>{"train", "--data", dir + "/data", "--init",
+                                   model, "--out", dir + "/m.pt", "--epochs",
+                                   "1", "--quiet"},
+          std::vector<std::string>{"train", "--data", dir + "/data",
+                                   "--validate", model}}) {
+      SCOPED_TRACE(args[0] + " " + file);
+      ExpectOneErrorLine(RunWithin(args), named);
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir + "/m.pt"));
+  fs::remove_all(dir);
+}
+
+// A name that XML gives a meaning (a quote ended MuJoCo's attribute: exit 1,
+// "XML parse error 7") runs; one with a NUL is refused at its key, exit 2.
+TEST(HardeningTest, NamesWithQuotesRunAndNamesWithNulsAreRefused) {
+  const std::string dir = testing::MakeTempDir("aia_name_");
+  const std::string yaml = dir + "/s.yaml";
+  {
+    std::ofstream(yaml) << "name: \"a\\\"b & <c>\"\nrobots: {count: 2}\n"
+                           "targets: {count: 2}\nmission: {max_steps: 2}\n";
+  }
+  const auto r = RunAia({"run", yaml, "--out", dir + "/r", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(
+      ReadFile(dir + "/r/summary.json").find("\"scenario\": \"a\\\"b & <c>\""),
+      std::string::npos);
+  {
+    std::ofstream(yaml) << "name: \"a\\0b\"\nrobots: {count: 2}\n"
+                           "targets: {count: 2}\n";
+  }
+  ExpectOneErrorLine(RunAia({"run", yaml, "--out", dir + "/n", "--quiet"}),
+                     "s.yaml:1: name: holds a NUL character");
+  fs::remove_all(dir);
+}
+
+// An 8192 x 8192 render of a one-step mission, which the schema allows,
+// took 12 to 15 GB. What a size needs is stated and checked against the
+// budget before any work.
+TEST(HardeningTest, RenderSizesBeyondTheMemoryBudgetAreRefusedAtOnce) {
+  const std::string dir = testing::MakeTempDir("aia_budget_");
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  auto r = RunWithin({"render", scenario, "--width", "8192", "--height", "8192",
+                      "--out", dir + "/v.mp4", "--quiet"});
+  ExpectOneErrorLine(r,
+                     "--width: 8192 x 8192 pixels need about 16.5 GiB (512 "
+                     "MiB + 256 bytes per pixel), more than the render's "
+                     "memory budget of 8 GiB (--memory-budget)");
+  // The budget is the user's to give: 640 x 480 needs 0.6 GiB.
+  r = RunWithin({"render", scenario, "--memory-budget", "0.5", "--out",
+                 dir + "/v.mp4", "--quiet"});
+  ExpectOneErrorLine(r, "640 x 480 pixels need about 0.6 GiB");
+  // A process limit is a budget too (under ulimit -v the encoder failed
+  // midway with OpenCV's raw line). AddressSanitizer reserves terabytes of
+  // address space, so its tree cannot run under such a limit.
+#ifndef AIA_TEST_ASAN
+  const std::string limited =
+      "ulimit -v 3000000; " +
+      Quoted({"render", scenario, "--width", "4096", "--height", "4096",
+              "--out", dir + "/v.mp4", "--quiet"});
+  r = RunCommand("bash -c '" +
+                 std::regex_replace(limited, std::regex("'"), "'\\''") + "'");
+  ExpectOneErrorLine(r,
+                     "4096 x 4096 pixels need about 4.5 GiB (512 MiB + 256 "
+                     "bytes per pixel), more than this process may take "
+                     "(2.9 GiB, ulimit -v)");
+#endif
+  EXPECT_TRUE(RegularFiles(dir).empty());
+  fs::remove_all(dir);
+}
+
+// A target walled in where no robot can measure it: `aia plan` said found,
+// F* = 6 (planned from its prior mean outside the walls), and the mission
+// ran its horizon. Both refuse it now, naming it.
+TEST(HardeningTest, ATargetNoRobotCanMeasureIsRefusedByPlanAndRun) {
+  const std::string file =
+      SourcePath("tests/data/bad_world/target_walled_in.yaml");
+  const std::string dir = testing::MakeTempDir("aia_walled_");
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"plan", file, "--out", dir + "/p.json"},
+        std::vector<std::string>{"run", file, "--out", dir + "/r",
+                                 "--quiet"}}) {
+    const auto r = RunWithin(args);
+    ExpectOneErrorLine(r, file +
+                              ":8: targets.list[1].position: target [10, "
+                              "10] can never be measured");
+    EXPECT_EQ(r.out.find("found"), std::string::npos) << r.out;
+  }
+  EXPECT_TRUE(RegularFiles(dir).empty());
   fs::remove_all(dir);
 }
 

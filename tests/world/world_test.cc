@@ -221,6 +221,45 @@ TEST(WorldTest, TargetInsideAnObstacleIsAnError) {
   }
 }
 
+// Issue 37: a listed target walled in where no robot could ever measure it
+// ran its whole horizon, and the expert planned towards its prior mean
+// outside the walls (`aia plan`: found, F* = 6). Refused at its key; an
+// opening in the walls, or motion, makes it a mission again.
+TEST(WorldTest, ATargetNoRobotCanMeasureIsAnError) {
+  const auto walled = [](const std::string& last_wall,
+                         const std::string& dynamics) {
+    return ScenarioFromYaml(
+        "robots: {count: 2, start: [[1.25, 1.25], [2.25, 1.25]]}\n"
+        "targets:\n  list:\n    - {position: [3, 3]}\n"
+        "    - {position: [10, 10]" +
+        dynamics +
+        "}\n"
+        "workspace:\n  obstacles:\n    boxes:\n"
+        "      - {center: [10, 8], size: [4.4, 0.4]}\n"
+        "      - {center: [10, 12], size: [4.4, 0.4]}\n"
+        "      - {center: [8, 10], size: [0.4, 4.4]}\n"
+        "      - " +
+        last_wall + "\n");
+  };
+  try {
+    World::Build(walled("{center: [12, 10], size: [0.4, 4.4]}", ""));
+    FAIL() << "a walled-in target was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "targets.list[1].position");
+    EXPECT_EQ(e.line(), 5);
+    EXPECT_NE(e.message().find("target [10, 10] can never be measured"),
+              std::string::npos)
+        << e.message();
+  }
+  // A door in the right wall: measurable from inside the room.
+  EXPECT_NO_THROW(
+      World::Build(walled("{center: [12, 11], size: [0.4, 2.4]}", "")));
+  // A moving target may leave the room.
+  EXPECT_NO_THROW(World::Build(
+      walled("{center: [12, 10], size: [0.4, 4.4]}",
+             ", dynamics: {A: [[1, 0], [0, 1]], b: [0.05, 0.0], q: 0.001}")));
+}
+
 TEST(WorldTest, RandomObstaclesKeepClearOfPlacedStartsAndTargets) {
   // Dense clutter with hand-placed robots and targets: every seed builds
   // (before, some stopped with "inside an obstacle"), and every random box
@@ -323,6 +362,27 @@ TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
         << r.out;
     std::filesystem::remove_all(dir);
   }
+}
+
+// Issue 37: a name with a quote ended the model's attribute, and MuJoCo
+// refused the model (exit 1, "XML parse error 7"). Every character XML
+// gives a meaning is escaped; the model loads, named as written.
+TEST(MjcfTest, NamesWithXmlCharactersAreEscaped) {
+  const Scenario s = ScenarioFromYaml(
+      "name: \"a\\\"b & <c> 'd'\"\nrobots: {count: 2}\ntargets: {count: "
+      "2}\n");
+  ASSERT_EQ(s.name, "a\"b & <c> 'd'");
+  const std::string xml = MakeMjcf(World::Build(s), s);
+  EXPECT_EQ(
+      xml.rfind("<mujoco model=\"a&quot;b &amp; &lt;c&gt; &apos;d&apos;\">", 0),
+      0u)
+      << xml.substr(0, 80);
+  const std::string dir = testing::MakeTempDir("aia_mjcf_");
+  std::ofstream(dir + "/model.xml") << xml;
+  const auto r =
+      testing::RunCommand("cd " + dir + " && mujoco-testxml model.xml");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -128,7 +128,10 @@ std::string FormatRow(const EvalRow& row);
 // Parses runs.csv. Rows that do not parse (e.g. a line cut short by an
 // interruption), hold impossible values (a negative flowtime, a success
 // beyond the horizon) or repeat a run (every copy) are dropped, each with a
-// "line N: why" in `problems` when given.
+// "line N: why" in `problems` when given. The file is read line by line; a
+// line longer than 64 KiB (a file cut by a crash may end in gigabytes of
+// NULs), a FIFO or a device is InputError naming --out, the file and the
+// line.
 std::vector<EvalRow> ReadRuns(const std::string& path,
                               std::vector<std::string>* problems = nullptr);
 

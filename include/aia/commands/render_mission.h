@@ -28,6 +28,7 @@ struct RenderOptions {
   int frames_every = 1;              // write video frames 0, k, 2k, ... as PNG
   double hold = 1.0;                 // seconds the final frame is held
   EdgeMode edges = EdgeMode::kAuto;  // render/frame_renderer.h
+  double memory_budget = 8.0;        // GiB; RenderMemoryNeed must fit
   bool progress = true;
 
   // The video's own flags, declared once (their help and range checks).
@@ -42,8 +43,22 @@ struct RenderOptions {
     a->Visit(AIA_FIELD(edges).Doc(
         "communication edges drawn: auto (lost messages, and the delivered "
         "ones while they stay readable), all, lost or none"));
+    a->Visit(AIA_FIELD(memory_budget)
+                 .In(Between(0.25, 4096.0))
+                 .Doc("GiB the render may take: a size that needs more "
+                      "(512 MiB + 256 bytes per pixel) is refused before "
+                      "any work"));
   }
 };
+
+// The memory a render of `width` x `height` pixels takes at most, in bytes:
+// 512 MiB (the process, the mission, the static scene) and 256 bytes per
+// pixel (the GL buffers and frame copies, about 40, and the H.264 encoder's
+// look-ahead of some 50 frames on its 3 threads, about 190; measured 230 in
+// all at 1024 to 4096 pixels square, docs/hardening.md). Frames are encoded
+// as they are rendered, never held: the need does not grow with the
+// video's length.
+double RenderMemoryNeed(int width, int height);
 
 struct RenderResult {
   MissionSummary mission;

@@ -406,6 +406,13 @@ void FieldReader::ReadValue(const ConfigNode& node, const std::string& key,
     }
     if (!field_text::IsUtf8(node.scalar))
       FailExpected(node, key, "text in UTF-8");
+    // C's file and text functions end a string at a NUL: "a.pt\0x" would
+    // open a.pt, and MuJoCo's XML parser stops there.
+    if (node.scalar.find('\0') != std::string::npos)
+      Fail(node, key,
+           "holds a NUL character (\\0 at character " +
+               std::to_string(node.scalar.find('\0') + 1) +
+               "); no text may hold one");
     *out = f.path ? ResolvePath(node) : node.scalar;
   } else if constexpr (std::is_enum_v<T>) {
     if (node.IsPlainScalar()) {

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,62 @@ void WriteFileAtomic(const std::string& path, const std::string& content);
 // std::runtime_error with a one-line reason otherwise ("not a regular file"
 // for a FIFO, a device or a directory: nothing blocks or reads forever).
 std::string ReadFile(const std::string& path, std::uintmax_t max_bytes);
+
+// What `path` is when it exists (after links) and is not a regular file: "a
+// folder", "a named pipe (FIFO)", "a character device", "a block device", "a
+// socket"; "" for a regular file or a path that does not exist. A stat, so
+// nothing can block.
+std::string NonRegularKind(const std::string& path);
+
+// Why `path` cannot be an output file, or "" when it can (it does not exist
+// or is a regular file): "cannot write 'PATH' (WRITTEN): it is a named pipe
+// (FIFO), not a regular file; remove it or give another path". Commands
+// check every file they write with it before any work.
+std::string OutputFileProblem(const std::string& path,
+                              const std::string& written = "");
+
+// Opens an existing regular file for reading without ever blocking: the open
+// itself cannot wait (O_NONBLOCK, then cleared), and a FIFO, device or folder
+// is refused ("it is a named pipe (FIFO), not a regular file"). Returns the
+// descriptor, or -1 with *why set (errno's text) when it cannot be opened;
+// throws std::runtime_error when it is not a regular file.
+int OpenRegularFile(const std::string& path, std::string* why);
+
+// What LineReader::Next throws for a line longer than its cap.
+class LineTooLong : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A text file read line by line, each line at most `max_line` bytes (a line
+// of 3 GB of NULs is an error, not 12 GB of memory). Opened with
+// OpenRegularFile.
+class LineReader {
+ public:
+  // Throws std::runtime_error when the path is not a regular file or cannot
+  // be opened; `exists()` is false when it does not exist.
+  LineReader(const std::string& path, std::size_t max_line);
+  ~LineReader();
+  LineReader(const LineReader&) = delete;
+  LineReader& operator=(const LineReader&) = delete;
+
+  bool exists() const { return fd_ >= 0; }
+  // The next line without its '\n' (a last line may lack one). False at the
+  // end; throws LineTooLong ("line N is longer than M bytes") or
+  // std::runtime_error when a read fails.
+  bool Next(std::string* line);
+  long line_number() const { return line_number_; }
+
+ private:
+  bool Fill();
+  std::string path_;
+  std::size_t max_line_;
+  int fd_ = -1;
+  std::string buffer_;
+  std::size_t at_ = 0;
+  bool eof_ = false;
+  long line_number_ = 0;
+};
 
 // Creates a directory and its parents; throws std::runtime_error on failure.
 void MakeDirs(const std::string& path);
@@ -49,9 +106,10 @@ std::string TemporaryPath(const std::string& path, bool keep_extension = false);
 int RemoveStaleTemporaries(const std::string& dir,
                            const std::string& prefix = "");
 
-// Throws std::runtime_error("cannot write 'PATH': ...") when `path` exists
-// and is not a regular file (after links): renaming a finished file onto it
-// would replace a folder, a device such as /dev/null, or a pipe.
+// Throws std::runtime_error("cannot write 'PATH': it is a named pipe (FIFO),
+// not a regular file; ...") when `path` exists and is not a regular file
+// (after links): renaming a finished file onto it would replace a folder, a
+// device such as /dev/null, or a pipe.
 void CheckReplaceableFile(const std::string& path);
 
 // Whether `a` and `b` name one existing file (std::filesystem::equivalent:

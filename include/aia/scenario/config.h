@@ -545,7 +545,9 @@ struct RenderConfig {
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(width)
                  .In(AtLeast(1))
-                 .Doc("video width, pixels (even, 16 to 8192)"));
+                 .Doc("video width, pixels (even, 16 to 8192; width x "
+                      "height needs 512 MiB + 256 bytes per pixel, within "
+                      "aia render --memory-budget)"));
     a->Visit(AIA_FIELD(height)
                  .In(AtLeast(1))
                  .Doc("video height, pixels (even, 16 to 8192)"));

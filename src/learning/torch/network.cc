@@ -1,6 +1,4 @@
-#include <caffe2/serialize/versions.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +11,7 @@
 #include "aia/core/check.h"
 #include "aia/core/error.h"
 #include "aia/core/io.h"
+#include "archive.h"
 #include "torch_net.h"
 
 namespace aia {
@@ -192,123 +191,6 @@ std::int64_t TorchNet::NumParameters() const {
   return n;
 }
 
-namespace {
-
-// TorchScript code entries are a few KiB; the bound keeps a lying header
-// from making libtorch allocate gigabytes (found by fuzzing).
-constexpr std::uint32_t kMaxDeflatedEntry = 64u << 20;
-
-// Why the model file's zip container is not intact, or "". TorchScript's
-// reader does not check the entries' CRC-32s, and its parser crashes on some
-// corrupted code entries (found by fuzzing); a damaged file is refused
-// here instead. Torch stores tensors and pickles and deflates code: both are
-// unpacked and checked.
-std::string ZipDamage(const std::string& b) {
-  const auto u16 = [&](std::size_t at) -> std::uint32_t {
-    return static_cast<unsigned char>(b[at]) |
-           static_cast<unsigned char>(b[at + 1]) << 8;
-  };
-  const auto u32 = [&](std::size_t at) -> std::uint32_t {
-    return u16(at) | u16(at + 2) << 16;
-  };
-  // End of central directory: the last "PK\5\6" within 64 KiB of the end.
-  if (b.size() < 22) return "not a zip container";
-  std::size_t eocd = std::string::npos;
-  for (std::size_t i = b.size() - 22 + 1; i-- > 0 && b.size() - i <= 65557;)
-    if (u32(i) == 0x06054b50) {
-      eocd = i;
-      break;
-    }
-  if (eocd == std::string::npos) return "not a zip container (no directory)";
-  const std::uint32_t entries = u16(eocd + 10);
-  std::size_t at = u32(eocd + 16);
-  if (entries == 0xffff || at == 0xffffffffu)
-    return "a zip64 container (model files are far below 4 GiB)";
-  // libtorch's reader leaks its zip state when its constructor throws, so
-  // what it checks there (entries, one folder, a version record) is checked
-  // here first.
-  if (entries == 0) return "an empty zip container";
-  if (u16(eocd + 4) != 0 || u16(eocd + 6) != 0 || u16(eocd + 8) != entries)
-    return "a multi-disk zip container";
-  std::string folder;
-  bool has_version = false;
-  for (std::uint32_t e = 0; e < entries; ++e) {
-    if (at + 46 > b.size() || u32(at) != 0x02014b50 ||
-        at + 46 + u16(at + 28) + u16(at + 30) + u16(at + 32) > b.size())
-      return "damaged zip directory";
-    const std::string_view entry_name(b.data() + at + 46, u16(at + 28));
-    if (e == 0) {
-      const auto slash = entry_name.find('/');
-      if (slash == std::string_view::npos || slash == 0)
-        return "not a torch archive (no top folder)";
-      folder = entry_name.substr(0, slash + 1);
-    }
-    const bool is_version = entry_name.size() == folder.size() + 7 &&
-                            entry_name.substr(0, folder.size()) == folder &&
-                            entry_name.substr(folder.size()) == "version";
-    const std::uint32_t method = u16(at + 10), crc = u32(at + 16),
-                        size = u32(at + 20), unpacked = u32(at + 24),
-                        name = u16(at + 28), extra = u16(at + 30),
-                        comment = u16(at + 32), local = u32(at + 42);
-    const std::string entry = "zip entry " + std::to_string(e);
-    if (std::size_t{local} + 30 > b.size() || u32(local) != 0x04034b50)
-      return "damaged " + entry;
-    const std::size_t data =
-        std::size_t{local} + 30 + u16(local + 26) + u16(local + 28);
-    if (data + size > b.size()) return entry + " is cut short";
-    const auto* packed = reinterpret_cast<const Bytef*>(b.data() + data);
-    std::uint32_t got = 0;
-    if (method == 0) {  // stored: tensors and pickles
-      if (unpacked != size) return entry + " has two different sizes";
-      got = static_cast<std::uint32_t>(crc32(0L, packed, size));
-    } else if (method == 8) {  // deflated: TorchScript code, a few KiB
-      // libtorch allocates the declared size before inflating, so a lying
-      // header is checked here first.
-      if (unpacked > kMaxDeflatedEntry)
-        return entry + " declares " + std::to_string(unpacked) +
-               " bytes unpacked (at most " + std::to_string(kMaxDeflatedEntry) +
-               ")";
-      std::string out(unpacked, '\0');
-      z_stream z{};
-      if (inflateInit2(&z, -MAX_WBITS) != Z_OK) return "zlib failed";
-      z.next_in = const_cast<Bytef*>(packed);
-      z.avail_in = size;
-      z.next_out = reinterpret_cast<Bytef*>(out.data());
-      z.avail_out = unpacked;
-      const int rc = inflate(&z, Z_FINISH);
-      const bool whole = rc == Z_STREAM_END && z.total_out == unpacked;
-      inflateEnd(&z);
-      if (!whole) return entry + " does not unpack to its declared size";
-      got = static_cast<std::uint32_t>(
-          crc32(0L, reinterpret_cast<const Bytef*>(out.data()), unpacked));
-    } else {
-      return entry + " uses compression method " + std::to_string(method) +
-             " (model files store or deflate)";
-    }
-    if (got != crc)
-      return entry + " fails its CRC-32 check (the file is damaged)";
-    if (is_version) {  // a small number in the range this libtorch reads
-      char* end = nullptr;
-      const std::string text = method == 0 ? b.substr(data, size) : "";
-      const long version = std::strtol(text.c_str(), &end, 10);
-      if (text.empty() || text.size() > 4 ||
-          version < static_cast<long>(
-                        caffe2::serialize::kMinSupportedFileFormatVersion) ||
-          version > static_cast<long>(
-                        caffe2::serialize::kMaxSupportedFileFormatVersion) ||
-          (*end != '\0' && *end != '\n'))
-        return "not a torch archive (version record '" + text.substr(0, 8) +
-               "')";
-      has_version = true;
-    }
-    at += 46 + name + extra + comment;
-  }
-  if (!has_version) return "not a torch archive (no version record)";
-  return "";
-}
-
-}  // namespace
-
 std::unique_ptr<TorchNet> TorchNet::Load(const std::string& path,
                                          const std::string& error_file,
                                          int error_line,
@@ -317,6 +199,8 @@ std::unique_ptr<TorchNet> TorchNet::Load(const std::string& path,
     return InputError(error_file, error_line, key, "'" + path + "': " + what);
   };
   std::error_code ec;
+  if (const std::string kind = NonRegularKind(path); !kind.empty())
+    throw fail("is " + kind + ", not a model file");
   if (!std::filesystem::is_regular_file(path, ec))
     throw fail("no such model file (train one with `aia train`)");
   // Read once: the bytes checked, hashed and loaded are the same.
@@ -326,7 +210,8 @@ std::unique_ptr<TorchNet> TorchNet::Load(const std::string& path,
   } catch (const std::exception& e) {
     throw fail(std::string("not a readable model: ") + e.what());
   }
-  if (const std::string damage = ZipDamage(bytes); !damage.empty())
+  // The container and every tensor's bytes, before libtorch sees them.
+  if (const std::string damage = ArchiveDamage(bytes); !damage.empty())
     throw fail("not a readable model: " + damage);
   std::unique_ptr<TorchNet> net(new TorchNet());
   const std::filesystem::path absolute = std::filesystem::absolute(path, ec);

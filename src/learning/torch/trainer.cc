@@ -20,6 +20,7 @@
 #include "aia/core/rng.h"
 #include "aia/learning/dataset.h"
 #include "aia/world/map.h"
+#include "archive.h"
 #include "torch_net.h"
 
 namespace aia {
@@ -304,6 +305,10 @@ void CheckOutputsAreNotInputs(const TrainOptions& o) {
       {TrainLogPath(o.out), "the log written next to the model"}};
   for (const auto& [path, written] : outputs) {
     CheckNotAnInput(path, "--out", inputs, written);
+    // A FIFO, device or folder: found before any training, not when the
+    // first epoch is saved.
+    if (const std::string why = OutputFileProblem(path, written); !why.empty())
+      throw InputError("command line", 0, "--out", why);
     // A new *.sqlite file in a --data folder would be read as data next
     // time.
     const std::filesystem::path p(path);
@@ -415,8 +420,14 @@ int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
                          IgbNetModule& module, torch::optim::Adam* optimizer,
                          std::vector<EpochLog>* logs) {
   try {
+    // Read by aia's reader (never blocks; a bounded size) and checked as a
+    // model file is (its container, and every tensor's size against its
+    // entry) before libtorch reads it.
+    const std::string bytes = ReadFile(ckpt, std::uintmax_t{1} << 31);
+    if (const std::string damage = ArchiveDamage(bytes); !damage.empty())
+      throw std::runtime_error(damage);
     torch::serialize::InputArchive archive, model_archive, optim_archive;
-    archive.load_from(ckpt);
+    archive.load_from(bytes.data(), bytes.size());
     torch::Tensor t;
     archive.read("options", t, true);
     if (TensorString(t) != key)
@@ -623,7 +634,7 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
   int start = 0;
   std::vector<EpochLog> logs;
   std::error_code ec;
-  if (o.resume && std::filesystem::is_regular_file(ckpt, ec))
+  if (o.resume && std::filesystem::exists(ckpt, ec))
     start = ResumeFromCheckpoint(ckpt, key, module, &optimizer, &logs);
   if (start >= o.epochs) return logs;
 

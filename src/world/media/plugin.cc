@@ -1,9 +1,13 @@
 // The media plugin (src/world/media_table.h): OpenCV's image codecs and its
 // FFMPEG video backend. Nothing of aia is linked here but the table's
 // header; an OpenCV exception ends as the function's failure value.
+#include <sched.h>
+
+#include <new>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <stdexcept>
 
 #include "../media_table.h"
 
@@ -14,6 +18,41 @@ cv::Mat Wrap(const std::uint8_t* bgr, int width, int height,
   return cv::Mat(height, width, CV_8UC3, const_cast<std::uint8_t*>(bgr),
                  stride);
 }
+
+// x264 sizes its thread pool from the CPUs the thread that opens it may run
+// on (1.5 threads per CPU), and holds frames for each thread beside its 40
+// frames of look-ahead: the memory of a video of W x H pixels grew with the
+// machine's cores. The encoder is opened (and its threads start) on at most
+// kEncoderCpus of them, so that its memory is the same everywhere
+// (docs/hardening.md, Memory of a render); the caller's own affinity is
+// restored.
+constexpr int kEncoderCpus = 2;
+
+class FewerCpus {
+ public:
+  FewerCpus() {
+    if (::sched_getaffinity(0, sizeof(saved_), &saved_) != 0) return;
+    if (CPU_COUNT(&saved_) <= kEncoderCpus) return;
+    cpu_set_t few;
+    CPU_ZERO(&few);
+    int n = 0;
+    for (int c = 0; c < CPU_SETSIZE && n < kEncoderCpus; ++c)
+      if (CPU_ISSET(c, &saved_)) {
+        CPU_SET(c, &few);
+        ++n;
+      }
+    changed_ = ::sched_setaffinity(0, sizeof(few), &few) == 0;
+  }
+  ~FewerCpus() {
+    if (changed_) ::sched_setaffinity(0, sizeof(saved_), &saved_);
+  }
+  FewerCpus(const FewerCpus&) = delete;
+  FewerCpus& operator=(const FewerCpus&) = delete;
+
+ private:
+  cpu_set_t saved_;
+  bool changed_ = false;
+};
 
 aia::MediaTable MakeTable() {
   aia::MediaTable t;
@@ -52,9 +91,18 @@ aia::MediaTable MakeTable() {
       auto* writer = new cv::VideoWriter();
       const int code =
           cv::VideoWriter::fourcc(fourcc[0], fourcc[1], fourcc[2], fourcc[3]);
-      if (writer->open(path, cv::CAP_FFMPEG, code, fps, cv::Size(width, height),
-                       true) &&
-          writer->isOpened()) {
+      bool opened = false;
+      try {
+        const FewerCpus few;
+        opened = writer->open(path, cv::CAP_FFMPEG, code, fps,
+                              cv::Size(width, height), true) &&
+                 writer->isOpened();
+      } catch (const cv::Exception& e) {
+        delete writer;
+        if (e.code == cv::Error::StsNoMem) throw std::bad_alloc();
+        continue;
+      }
+      if (opened) {
         *codec = fourcc;
         return writer;
       }
@@ -64,8 +112,16 @@ aia::MediaTable MakeTable() {
   };
   t.write_video = [](void* video, const std::uint8_t* bgr, int width,
                      int height, std::size_t stride) {
-    static_cast<cv::VideoWriter*>(video)->write(
-        Wrap(bgr, width, height, stride));
+    // OpenCV's own exception text is several lines with its source path:
+    // running out of memory is std::bad_alloc (aia's "out of memory"
+    // line), anything else one line.
+    try {
+      static_cast<cv::VideoWriter*>(video)->write(
+          Wrap(bgr, width, height, stride));
+    } catch (const cv::Exception& e) {
+      if (e.code == cv::Error::StsNoMem) throw std::bad_alloc();
+      throw std::runtime_error("the video encoder failed: " + e.msg);
+    }
   };
   t.close_video = [](void* video) {
     auto* writer = static_cast<cv::VideoWriter*>(video);
