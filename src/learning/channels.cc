@@ -142,7 +142,8 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
       nbr[occupancy_.Index(ix, iy)] += 1.0f;
     }
     if (params_.geodesic)
-      Reach(0, 0, *targets, *log_det_prior, eps, out + 4 * plane, search);
+      Reach(0, 0, self, *targets, *log_det_prior, eps, out + 4 * plane,
+            search);
     return;
   }
 
@@ -181,7 +182,8 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
       h[gx - x0] = std::max(h[gx - x0], row[gx]);
   }
   if (params_.geodesic)
-    Reach(x0, y0, *targets, *log_det_prior, eps, out + 4 * plane, search);
+    Reach(x0, y0, self, *targets, *log_det_prior, eps, out + 4 * plane,
+          search);
 }
 
 bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
@@ -203,14 +205,16 @@ bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
   return true;
 }
 
-void ChannelRenderer::Reach(int x0, int y0,
+void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
                             const std::vector<HeatSource>& targets,
                             const std::vector<double>& log_det_prior,
                             double eps, float* out,
                             const SearchPointSets* search) const {
   if (params_.reach_world) {
-    ReachWorld(x0, y0, width_, height_, targets, log_det_prior, eps, out,
-               params_.search ? search : nullptr);
+    int sx = 0, sy = 0;
+    occupancy_.CellOf(self, &sx, &sy);
+    ReachWorld(x0, y0, width_, height_, sx, sy, targets, log_det_prior, eps,
+               out, params_.search ? search : nullptr);
     return;
   }
   const int margin =
@@ -237,7 +241,8 @@ void ChannelRenderer::Reach(int x0, int y0,
     for (int i = 0; i < width_ * height_; ++i) out[i] /= top;
 }
 
-void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h,
+void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx,
+                                 int sy,
                                  const std::vector<HeatSource>& targets,
                                  const std::vector<double>& log_det_prior,
                                  double eps, float* out,
@@ -264,14 +269,15 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h,
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
     if (wk <= 0.0) continue;
     const double c0 = -moves_per_e * std::log(wk);
-    const bool searched = search && k < search->size() && !(*search)[k].empty();
+    const bool searched =
+        search && k < search->size() && !(*search)[k].empty();
     const std::size_t points = searched ? (*search)[k].size() : 1;
     for (std::size_t a = 0; a < points; ++a) {
       const Vec2& x = searched ? (*search)[k][a] : targets[k].mean;
       int mx = 0, my = 0;
       occupancy_.CellOf(x, &mx, &my);
-      for (int gy = std::max(0, my - reach); gy <= std::min(ny - 1, my + reach);
-           ++gy) {
+      for (int gy = std::max(0, my - reach);
+           gy <= std::min(ny - 1, my + reach); ++gy) {
         for (int gx = std::max(0, mx - reach);
              gx <= std::min(nx - 1, mx + reach); ++gx) {
           const int idx = occupancy_.Index(gx, gy);
@@ -284,25 +290,28 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h,
       }
     }
   }
-  // The first window pixel settled holds the window's least cost; pixels
-  // more than `cap` above it would be below 1e-6 of the window's top and
-  // are left at 0, so the search stops there (its cost is then the area
-  // between the window and the nearest observation pixels, not the map's).
-  const double cap = moves_per_e * std::log(1e6);
-  double least_seen = std::numeric_limits<double>::infinity();
-  const auto in_window = [&](int gx, int gy) {
-    return gx >= x0 && gy >= y0 && gx < x0 + w && gy < y0 + h;
-  };
+  // The scale is the robot's own pixel: a pixel whose way is d moves
+  // shorter holds exp(d / (L / cell) - kReachSelf), capped at 1, so that
+  // the way on from where the robot stands reads the same however far the
+  // goal is. Pixels far above the robot's cost (below 1e-6) are left at 0:
+  // the search stops there, its cost the area between the robot and the
+  // nearest observation pixels, not the map's.
+  constexpr double kReachSelf = 2.0;
+  const double cap = moves_per_e * (std::log(1e6) - kReachSelf);
+  const bool self_free = sx >= 0 && sy >= 0 && sx < nx && sy < ny &&
+                         moves_[occupancy_.Index(sx, sy)] != 0;
+  const int self_idx = self_free ? occupancy_.Index(sx, sy) : -1;
+  double self_cost = std::numeric_limits<double>::infinity();
   std::make_heap(heap.begin(), heap.end(), greater);
   while (!heap.empty()) {
     std::pop_heap(heap.begin(), heap.end(), greater);
     const auto [c, idx] = heap.back();
     heap.pop_back();
     if (c > cost[idx]) continue;  // stale
-    if (c > least_seen + cap) break;
+    if (c > self_cost + cap) break;
+    if (idx == self_idx) self_cost = c;
     const unsigned m = moves_[idx];
     const int gx = idx % nx, gy = idx / nx;
-    if (in_window(gx, gy)) least_seen = std::min(least_seen, c);
     for (Move move : kMoves) {
       if (!(m & (1u << static_cast<int>(move)))) continue;
       const auto d = MoveDelta(move);
@@ -313,23 +322,26 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h,
       std::push_heap(heap.begin(), heap.end(), greater);
     }
   }
-  // The window: exp(-(cost - least cost in it) / (L / cell)), 0 where no
-  // way leads or a robot cannot stand.
-  double least = std::numeric_limits<double>::infinity();
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u) {
-      const int gx = x0 + u, gy = y0 + v;
-      if (gx < 0 || gy < 0 || gx >= nx || gy >= ny) continue;
-      least = std::min(least, cost[occupancy_.Index(gx, gy)]);
-    }
+  // Where no way leads to the robot: scaled to the window's least cost.
+  double ref = self_cost, offset = kReachSelf;
+  if (!std::isfinite(ref)) {
+    offset = 0.0;
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const int gx = x0 + u, gy = y0 + v;
+        if (gx < 0 || gy < 0 || gx >= nx || gy >= ny) continue;
+        ref = std::min(ref, cost[occupancy_.Index(gx, gy)]);
+      }
+  }
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u) {
       const int gx = x0 + u, gy = y0 + v;
       float value = 0.0f;
-      if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(least)) {
+      if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(ref)) {
         const double c = cost[occupancy_.Index(gx, gy)];
-        if (c <= least + cap)  // settled (an unsettled pixel: at most 1e-6)
-          value = static_cast<float>(std::exp(-(c - least) / moves_per_e));
+        if (c <= ref + cap)  // settled (an unsettled pixel: below 1e-6)
+          value = static_cast<float>(
+              std::min(1.0, std::exp((ref - c) / moves_per_e - offset)));
       }
       out[v * w + u] = value;
     }

@@ -247,8 +247,9 @@ TEST(ChannelsTest, ReachOverAMarginSeesTheWayRoundBeyondTheWindow) {
 
 // The same corridor with the reach channel over the whole workspace: the
 // window's values are gamma^(moves to the observation pixels, through the
-// door) scaled to its highest pixel, (2, 2), as with the margin; and in log
-// space nothing fades: a target 200 moves away still orders the window.
+// door) scaled at the robot's own pixel (1, 1), which holds exp(-2): pixel
+// (u, v) is u + v - 2 moves nearer, e^-2 gamma^(2 - u - v); and in log
+// space nothing fades: a target 200 moves away gives the same window.
 TEST(ChannelsTest, ReachOverTheWorldSeesTheWayRoundHoweverFar) {
   WalledWorld t;
   t.params.frame = ChannelFrame::kCentred;
@@ -268,8 +269,8 @@ TEST(ChannelsTest, ReachOverTheWorldSeesTheWayRoundHoweverFar) {
                      img.data());
     for (int v = 0; v < 3; ++v)
       for (int u = 0; u < 3; ++u)
-        EXPECT_NEAR(img[4 * 9 + v * 3 + u], std::pow(g, (2 - u) + (2 - v)),
-                    1e-6)
+        EXPECT_NEAR(img[4 * 9 + v * 3 + u],
+                    std::exp(-2.0) * std::pow(g, 2 - u - v), 1e-6)
             << length << ": " << u << ", " << v;
   }
 }
@@ -299,11 +300,12 @@ TEST(ChannelsTest, ReachLeadsToTheSearchPoints) {
                    img.data(), &search);
   const double g = std::exp(-0.2);
   // Observation pixels: those within 1 m of a point, (0, *) and (1, 0),
-  // (1, 2); (1, 1) is one move from them.
+  // (1, 2); (1, 1) is one move from them. The robot stands on one: exp(-2).
   const int moves[3][2] = {{0, 0}, {0, 1}, {0, 0}};
   for (int y = 0; y < 3; ++y)
     for (int x = 0; x < 2; ++x)
-      EXPECT_NEAR(At(img, 3, 4, 4, x, y), std::pow(g, moves[y][x]), 1e-6)
+      EXPECT_NEAR(At(img, 3, 4, 4, x, y),
+                  std::exp(-2.0) * std::pow(g, moves[y][x]), 1e-6)
           << x << ", " << y;
   for (int y = 0; y < 3; ++y)
     for (int x = 2; x < 4; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);

@@ -68,8 +68,11 @@ struct ChannelParams {
   // pixels around it, then cropped (0: the window alone).
   int reach_margin = 0;
   // Channel 4 over the whole workspace (distances along free space to every
-  // observation pixel, however far), then cropped to the window and scaled
-  // to 1 there; computed in log space, so that no way fades out.
+  // observation pixel, however far), in log space so that no way fades out,
+  // cropped to the window and scaled at the robot's own pixel: it holds
+  // exp(-2), a pixel whose way is d moves shorter exp(d cell / L - 2),
+  // capped at 1 (the way on from where the robot stands reads the same
+  // whatever the distance to the goal).
   bool reach_world = false;
   // With reach_world: channel 4's sources are the observation pixels of each
   // unlocalized target's search points (planning/search.h, SearchPoints:
@@ -178,12 +181,13 @@ class ChannelRenderer {
 
  private:
   // Channel 4 of an image whose pixel (0, 0) is global pixel (x0, y0).
-  void Reach(int x0, int y0, const std::vector<HeatSource>& targets,
+  void Reach(int x0, int y0, const Vec2& self,
+             const std::vector<HeatSource>& targets,
              const std::vector<double>& log_det_prior, double eps, float* out,
              const SearchPointSets* search) const;
   // Channel 4 over the whole workspace in log space, cropped to the w x h
-  // pixels from global pixel (x0, y0) and scaled to 1 there.
-  void ReachWorld(int x0, int y0, int w, int h,
+  // pixels from global pixel (x0, y0), scaled at the robot's pixel (sx, sy).
+  void ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                   const std::vector<HeatSource>& targets,
                   const std::vector<double>& log_det_prior, double eps,
                   float* out, const SearchPointSets* search) const;
