@@ -732,7 +732,7 @@ class PyDataset {
         const DatasetWorld& w = data_.worlds[s.world];
         renderers_[s.world].Render(s.position, s.neighbours, s.targets,
                                    w.log_det_prior, w.eps, data + k * size,
-                                   s.search.empty() ? nullptr : &s.search);
+                                   SampleMemory(s, w));
       }
     }
     return py::make_tuple(images, labels);

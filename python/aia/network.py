@@ -21,7 +21,8 @@ NETWORK_KEYS = ("width", "hidden", "pool", "stem_stride")
 CHANNEL_KEYS = ("frame", "cell", "window", "blur", "cutoff", "geodesic",
                 "geodesic_length", "observe_range")
 # Channel settings written only when they differ from the default.
-OPTIONAL_KEYS = {"reach_margin": 0}
+OPTIONAL_KEYS = {"reach_margin": 0, "reach_world": False, "search": False,
+                 "trail": False}
 
 
 def default_meta(**changes):
@@ -49,7 +50,7 @@ def channel_params(meta):
 
 
 def num_channels(meta):
-    return 5 if meta.get("geodesic") else 4
+    return 4 + (1 if meta.get("geodesic") else 0) + (1 if meta.get("trail") else 0)
 
 
 class Block(nn.Module):

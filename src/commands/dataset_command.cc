@@ -130,6 +130,7 @@ class DatasetObserver : public StepObserver {
         s.search[k] = search_.Points(i, k);
       }
       s.label = (*labels)[i];
+      s.came = ctx.history ? ctx.history->last(i) : Move::kStay;
       s.useful = expert_ && expert_->LastMoveUseful(i);
       s.acted = d.wanted[i];
       step.push_back(std::move(s));

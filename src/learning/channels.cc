@@ -107,10 +107,10 @@ void ChannelRenderer::Render(const Vec2& self,
                              const std::vector<HeatSource>& targets,
                              const std::vector<double>& log_det_prior,
                              double eps, float* out,
-                             const SearchPointSets* search) {
+                             const RobotMemory& memory) {
   ProjectHeatmap(targets, log_det_prior, Heatmap(eps), &heat_);
   RenderWithHeat(self, neighbours, heat_, &targets, &log_det_prior, eps, out,
-                 search);
+                 memory);
 }
 
 void ChannelRenderer::RenderWithHeat(const Vec2& self,
@@ -119,7 +119,7 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
                                      const std::vector<HeatSource>* targets,
                                      const std::vector<double>* log_det_prior,
                                      double eps, float* out,
-                                     const SearchPointSets* search) const {
+                                     const RobotMemory& memory) const {
   AIA_CHECK(field.nx() == occupancy_.nx() && field.ny() == occupancy_.ny());
   AIA_CHECK_MSG(!params_.geodesic || (targets && log_det_prior),
                 "channel 4 needs the robot's belief");
@@ -143,7 +143,8 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
     }
     if (params_.geodesic)
       Reach(0, 0, self, *targets, *log_det_prior, eps, out + 4 * plane,
-            search);
+            memory.search);
+    Trail(self, memory, out + (channels() - 1) * plane);
     return;
   }
 
@@ -183,7 +184,15 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
   }
   if (params_.geodesic)
     Reach(x0, y0, self, *targets, *log_det_prior, eps, out + 4 * plane,
-          search);
+          memory.search);
+  Trail(self, memory, out + (channels() - 1) * plane);
+}
+
+void ChannelRenderer::Trail(const Vec2& self, const RobotMemory& memory,
+                            float* out) const {
+  if (!params_.trail || !memory.moved) return;
+  int u = 0, v = 0;
+  if (ImagePixel(self, memory.came_from, &u, &v)) out[v * width_ + u] = 1.0f;
 }
 
 bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
@@ -241,8 +250,7 @@ void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
     for (int i = 0; i < width_ * height_; ++i) out[i] /= top;
 }
 
-void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx,
-                                 int sy,
+void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                                  const std::vector<HeatSource>& targets,
                                  const std::vector<double>& log_det_prior,
                                  double eps, float* out,
@@ -269,15 +277,14 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx,
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
     if (wk <= 0.0) continue;
     const double c0 = -moves_per_e * std::log(wk);
-    const bool searched =
-        search && k < search->size() && !(*search)[k].empty();
+    const bool searched = search && k < search->size() && !(*search)[k].empty();
     const std::size_t points = searched ? (*search)[k].size() : 1;
     for (std::size_t a = 0; a < points; ++a) {
       const Vec2& x = searched ? (*search)[k][a] : targets[k].mean;
       int mx = 0, my = 0;
       occupancy_.CellOf(x, &mx, &my);
-      for (int gy = std::max(0, my - reach);
-           gy <= std::min(ny - 1, my + reach); ++gy) {
+      for (int gy = std::max(0, my - reach); gy <= std::min(ny - 1, my + reach);
+           ++gy) {
         for (int gx = std::max(0, mx - reach);
              gx <= std::min(nx - 1, mx + reach); ++gx) {
           const int idx = occupancy_.Index(gx, gy);

@@ -30,7 +30,7 @@ CREATE TABLE IF NOT EXISTS samples(
   episode INTEGER NOT NULL, step INTEGER NOT NULL, robot INTEGER NOT NULL,
   x REAL NOT NULL, y REAL NOT NULL, label INTEGER NOT NULL,
   useful INTEGER NOT NULL, acted INTEGER NOT NULL,
-  neighbours BLOB, targets BLOB, search BLOB,
+  neighbours BLOB, targets BLOB, search BLOB, came INTEGER NOT NULL,
   PRIMARY KEY(episode, step, robot));
 )";
 
@@ -164,11 +164,13 @@ std::string ReadFile(const std::string& file, Dataset* out) {
     throw std::runtime_error("not an aia dataset (meta.format is '" + format +
                              "')");
   const std::string version = MetaValue(db, "version");
-  if (version != "1" && version != std::to_string(kDatasetFormatVersion))
+  if (version != "1" && version != "2" &&
+      version != std::to_string(kDatasetFormatVersion))
     throw std::runtime_error("dataset format version " + version +
                              ", this build reads 1 to " +
                              std::to_string(kDatasetFormatVersion));
   const bool has_search = version != "1";
+  const bool has_came = version != "1" && version != "2";
   const std::size_t first_world = out->worlds.size();
   std::vector<std::int64_t> episodes;
   {
@@ -207,7 +209,10 @@ std::string ReadFile(const std::string& file, Dataset* out) {
       out->worlds.push_back(std::move(w));
     }
   }
-  Statement st(db, has_search
+  Statement st(db, has_came ? "SELECT episode, step, robot, x, y, label, "
+                              "useful, acted, neighbours, targets, search, "
+                              "came FROM samples ORDER BY episode, step, robot"
+                   : has_search
                        ? "SELECT episode, step, robot, x, y, label, useful, "
                          "acted, neighbours, targets, search FROM samples "
                          "ORDER BY episode, step, robot"
@@ -270,12 +275,29 @@ std::string ReadFile(const std::string& file, Dataset* out) {
         i += 2 + 2 * static_cast<std::size_t>(count);
       }
     }
+    if (has_came) {
+      const int came = sqlite3_column_int(s, 11);
+      if (came < 0 || came > kNumMoves)
+        throw std::runtime_error(where + ": came out of range");
+      d.came = static_cast<Move>(came);
+    }
     out->samples.push_back(std::move(d));
   }
   return MetaValue(db, "recipe");
 }
 
 }  // namespace
+
+RobotMemory SampleMemory(const DatasetSample& s, const DatasetWorld& w) {
+  RobotMemory m;
+  if (!s.search.empty()) m.search = &s.search;
+  if (s.came != Move::kStay) {
+    const auto d = MoveDelta(s.came);
+    m.moved = true;
+    m.came_from = s.position - w.lattice_step * Vec2(d[0], d[1]);
+  }
+  return m;
+}
 
 struct DatasetWriter::Db {
   sqlite3* db = nullptr;
@@ -365,7 +387,7 @@ void DatasetWriter::WriteEpisode(const DatasetWorld& w,
     }
     Statement st(db,
                  "INSERT INTO samples VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
-                 "?)");
+                 "?, ?)");
     std::vector<double> nb, tg, sp;
     for (const DatasetSample& d : samples) {
       nb.clear();
@@ -392,6 +414,7 @@ void DatasetWriter::WriteEpisode(const DatasetWorld& w,
       st.Bind(9, Blob(nb));
       st.Bind(10, Blob(tg));
       st.Bind(11, Blob(sp));
+      st.Bind(12, static_cast<std::int64_t>(d.came));
       st.Run();
     }
     Exec(db, "COMMIT");

@@ -70,7 +70,10 @@ std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
   const bool world = channels.geodesic && channels.reach_world;
-  j["version"] = world ? 4 : message_hops > 0 ? 3 : channels.geodesic ? 2 : 1;
+  j["version"] = world || channels.trail ? 4
+                 : message_hops > 0      ? 3
+                 : channels.geodesic     ? 2
+                                         : 1;
   JsonFieldWriter writer(&j);
   const_cast<NetworkConfig*>(this)->Serialize(&writer);
   // A feature that is off is not written, so that a model without it keeps
@@ -82,6 +85,7 @@ std::string NetworkConfig::ToJson() const {
   if (!channels.geodesic || channels.reach_margin == 0) j.erase("reach_margin");
   if (!world) j.erase("reach_world");
   if (!world || !channels.search) j.erase("search");
+  if (!channels.trail) j.erase("trail");
   if (message_hops == 0) j.erase("message_hops");
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }

@@ -94,18 +94,24 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
                 (*targets)[k].log_det =
                     -std::numeric_limits<double>::infinity();
         }
-        const SearchPointSets* points = nullptr;
+        RobotMemory memory;
         if (searching_) {
           SearchPointSets& own = worker_search_[worker];
           own.resize(search_.num_targets());
           for (int k = 0; k < search_.num_targets(); ++k)
             own[k] = search_.Points(i, k);
-          points = &own;
+          memory.search = &own;
+        }
+        const int here = (*ctx.robot_lattice)[i];
+        if (ctx.history && ctx.history->last(i) != Move::kStay) {
+          const int from = lattice.Next(here, Opposite(ctx.history->last(i)));
+          memory.moved = from >= 0;
+          if (from >= 0) memory.came_from = lattice.Point(from);
         }
         renderer_->RenderWithHeat(
-            lattice.Point((*ctx.robot_lattice)[i]), neighbours,
+            lattice.Point(here), neighbours,
             keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
-            targets, prior, ctx.eps, images_.data() + b * size, points);
+            targets, prior, ctx.eps, images_.data() + b * size, memory);
       }
       if (passing)
         net_->Embed(images_.data() + begin * size, end - begin,

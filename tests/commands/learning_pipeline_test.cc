@@ -373,10 +373,11 @@ TEST(TrainTest, AMessagePassingModelTrainsResumesAndExtends) {
 }
 
 // In mazes the robots miss targets (the prior's mean lies behind a wall):
-// samples carry their search points (SearchPoints), which read back as
-// written. A model with the reach channel is redefined to read them over
-// the whole workspace (--init, --reach-world 1, --search 1) and trains on;
-// --search without --reach-world is refused.
+// samples carry their search points (SearchPoints) and last moves, which
+// read back as written. A model with the reach channel is redefined to read
+// them over the whole workspace with a trail channel (--init, --reach-world
+// 1, --search 1, --trail 1) and trains on; --search without --reach-world
+// is refused.
 TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   const std::string dir = testing::MakeTempDir("aia_train_");
   DatasetOptions d = Tiny(dir + "/data");
@@ -397,6 +398,13 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
         EXPECT_TRUE(p.allFinite() && p.x() >= 0.0 && p.x() <= 20.0);
   }
   EXPECT_GT(searched, 0);
+  // Every robot's last lattice move is recorded (none at step 0).
+  long moved = 0;
+  for (const DatasetSample& s : data.samples) {
+    if (s.step == 0) EXPECT_EQ(s.came, Move::kStay);
+    moved += s.came != Move::kStay;
+  }
+  EXPECT_GT(moved, 0);
   TrainOptions plain = TinyTraining(dir + "/data", dir + "/plain.pt");
   plain.network.channels.geodesic = true;
   plain.epochs = 1;
@@ -405,11 +413,13 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   world.init = dir + "/plain.pt";
   world.reach_world = 1;
   world.search = 1;
+  world.trail = 1;
   world.epochs = 1;
   ASSERT_EQ(Train(world).size(), 1u);
   const auto net = IgbNet::Load(dir + "/world.pt", "w", 0, "k");
   EXPECT_TRUE(net->config().channels.reach_world);
   EXPECT_TRUE(net->config().channels.search);
+  EXPECT_EQ(net->config().channels.num_channels(), 6);
   TrainOptions lone = TinyTraining(dir + "/data", dir + "/lone.pt");
   lone.init = dir + "/plain.pt";
   lone.search = 1;

@@ -297,7 +297,7 @@ TEST(ChannelsTest, ReachLeadsToTheSearchPoints) {
     for (int x = 0; x < 2; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
   const SearchPointSets search = {{Vec2(0.5, 2.5), Vec2(0.5, 0.5)}};
   r.RenderWithHeat({0.5, 0.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
-                   img.data(), &search);
+                   img.data(), RobotMemory{&search});
   const double g = std::exp(-0.2);
   // Observation pixels: those within 1 m of a point, (0, *) and (1, 0),
   // (1, 2); (1, 1) is one move from them. The robot stands on one: exp(-2).
@@ -309,6 +309,30 @@ TEST(ChannelsTest, ReachLeadsToTheSearchPoints) {
           << x << ", " << y;
   for (int y = 0; y < 3; ++y)
     for (int x = 2; x < 4; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
+}
+
+// The trail channel (the last): in a centred 3 x 3 window of 1 m pixels at
+// (0.25, 1.75), the robot came from 1 m south: pixel (1, 0) holds 1 and no
+// other; before its first move, none.
+TEST(ChannelsTest, TrailMarksWhereTheRobotCameFrom) {
+  TinyWorld t;
+  ChannelParams p = Params(ChannelFrame::kCentred);
+  p.trail = true;
+  ChannelRenderer r(t.occupancy, t.size, p);
+  ASSERT_EQ(r.channels(), 5);
+  std::vector<float> img(r.ImageSize());
+  const auto trail = [&](const RobotMemory& m) {
+    r.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
+             img.data(), m);
+    return std::vector<float>(img.begin() + 4 * 9, img.end());
+  };
+  RobotMemory came;
+  came.moved = true;
+  came.came_from = t.self - Vec2(0.0, 1.0);
+  std::vector<float> expected(9, 0.0f);
+  expected[0 * 3 + 1] = 1.0f;
+  EXPECT_EQ(trail(came), expected);
+  EXPECT_EQ(trail(RobotMemory{}), std::vector<float>(9, 0.0f));
 }
 
 // Declared names (core/fields.h): "centered" reads as "centred", which is

@@ -180,8 +180,8 @@ TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
   EXPECT_EQ(error(j, "\"width\":8", "\"width\":8,\"depth\":2"),
             "metadata: depth: unknown key; valid top-level keys: frame, "
             "cell, window, blur, cutoff, geodesic, geodesic_length, "
-            "observe_range, reach_margin, reach_world, search, width, "
-            "stem_stride, pool, hidden, message_hops");
+            "observe_range, reach_margin, reach_world, search, trail, "
+            "width, stem_stride, pool, hidden, message_hops");
 }
 
 // The shipped model written again is the same file, byte for byte: the

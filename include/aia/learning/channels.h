@@ -45,7 +45,7 @@ namespace aia {
 
 // Channels of the paper's network; the reach channel makes a fifth.
 inline constexpr int kNumChannels = 4;
-inline constexpr int kMaxChannels = 5;
+inline constexpr int kMaxChannels = 6;
 
 enum class ChannelFrame { kGlobal = 0, kCentred = 1 };
 // Read by name ("centered" too); written as the first name of the value.
@@ -79,8 +79,13 @@ struct ChannelParams {
   // where the robot's and its neighbours' misses leave the target), not of
   // its mean alone.
   bool search = false;
+  // A last channel, trail: the pixel of the lattice point the robot came
+  // from (its last lattice move; none before its first) holds 1.
+  bool trail = false;
 
-  int num_channels() const { return geodesic ? kMaxChannels : kNumChannels; }
+  int num_channels() const {
+    return kNumChannels + (geodesic ? 1 : 0) + (trail ? 1 : 0);
+  }
 
   // Declared once (core/fields.h) for the model file's metadata and for
   // `aia train`'s flags (each key is the flag with '-' for '_').
@@ -123,12 +128,24 @@ struct ChannelParams {
         "with reach_world: the reach channel leads to each target's search "
         "points (where the robot's and its neighbours' missed measurements "
         "leave it), not to its mean alone"));
+    a->Visit(AIA_FIELD(trail).Doc(
+        "a last channel, trail: the pixel the robot came from (its last "
+        "lattice move) at 1"));
   }
 };
 
 // Channel 4's search points, per target (ChannelParams::search); an empty
 // entry: the target's mean.
 using SearchPointSets = std::vector<std::vector<Vec2>>;
+
+// What a robot remembers, for the channels that show it: its search points
+// (null: the means) and the point it came from (the trail channel; none
+// before its first move).
+struct RobotMemory {
+  const SearchPointSets* search = nullptr;
+  bool moved = false;
+  Vec2 came_from{0.0, 0.0};
+};
 
 // Renders the channels of the robots of one map. Owns scratch memory: one
 // renderer per thread.
@@ -157,11 +174,12 @@ class ChannelRenderer {
   // `targets`: the robot's own fused belief (estimation/heatmap.h);
   // log_det_prior: per target; eps: the mission's threshold. Allocates
   // nothing once warm.
-  // `search`: channel 4's search points (null: the means).
+  // `memory`: the search points and the trail (learning/channels.h,
+  // RobotMemory).
   void Render(const Vec2& self, const std::vector<Vec2>& neighbours,
               const std::vector<HeatSource>& targets,
               const std::vector<double>& log_det_prior, double eps, float* out,
-              const SearchPointSets* search = nullptr);
+              const RobotMemory& memory = {});
   // The same with the robot's heatmap given, on a grid shaped like
   // occupancy() (a team's heatmaps: estimation/heatmap.h, TeamHeatmap);
   // channel 4 needs the belief too (`targets`, `log_det_prior`, `eps`;
@@ -171,8 +189,7 @@ class ChannelRenderer {
                       const Grid<float>& heat,
                       const std::vector<HeatSource>* targets,
                       const std::vector<double>* log_det_prior, double eps,
-                      float* out,
-                      const SearchPointSets* search = nullptr) const;
+                      float* out, const RobotMemory& memory = {}) const;
   // The pixel (u, v) of point p in the image of a robot at `self`; false
   // when p lies outside it.
   bool ImagePixel(const Vec2& self, const Vec2& p, int* u, int* v) const;
@@ -196,6 +213,8 @@ class ChannelRenderer {
                    const std::vector<HeatSource>& targets,
                    const std::vector<double>& log_det_prior, double eps,
                    float* out) const;
+  // The trail channel: the pixel `memory` came from.
+  void Trail(const Vec2& self, const RobotMemory& memory, float* out) const;
   // No occupied cell of the map on the segment from a to b.
   bool Sees(const Vec2& a, const Vec2& b) const;
 

@@ -15,12 +15,13 @@
 #include "aia/core/geometry.h"
 #include "aia/core/types.h"
 #include "aia/estimation/heatmap.h"
+#include "aia/learning/channels.h"
 
 namespace aia {
 
-// Version 2 adds each sample's search points (version 1 files read with
-// none).
-inline constexpr int kDatasetFormatVersion = 2;
+// Version 2 adds each sample's search points, version 3 the robot's last
+// lattice move (older files read with none).
+inline constexpr int kDatasetFormatVersion = 3;
 
 // One episode's world: what the map is rebuilt from, and its outcome.
 struct DatasetWorld {
@@ -53,8 +54,15 @@ struct DatasetSample {
   Move label = Move::kStay;  // the expert's move from this state
   bool useful = true;  // the robot still had useful work in the expert's plan
   Move acted = Move::kStay;  // what the acting policy did
-  int world = -1;            // index into Dataset::worlds (set when read)
+  // The robot's last lattice move before this step (kStay: none yet).
+  Move came = Move::kStay;
+  int world = -1;  // index into Dataset::worlds (set when read)
 };
+
+// What sample `s` of world `w` remembers, for the channels that show it
+// (learning/channels.h, RobotMemory; the trail from its last move and the
+// world's lattice step). Points into `s`.
+RobotMemory SampleMemory(const DatasetSample& s, const DatasetWorld& w);
 
 struct Dataset {
   std::vector<DatasetWorld> worlds;    // by (file, episode)

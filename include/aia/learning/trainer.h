@@ -33,6 +33,10 @@ struct TrainOptions {
   int reach_world = -1;
   // Channel 4 from the search points (ChannelParams::search), likewise.
   int search = -1;
+  // The trail channel (ChannelParams::trail), likewise; from an --init
+  // model without it, the stem's weights for it start at zero (the same
+  // function).
+  int trail = -1;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -93,6 +97,11 @@ struct TrainOptions {
                  .Doc("1: the reach channel leads to each target's search "
                       "points (the robot's and its neighbours' misses; needs "
                       "--reach-world 1; with --init the weights are kept); "
+                      "-1, the default: --init's, else 0"));
+    a->Visit(AIA_FIELD(trail)
+                 .In(Between(-1, 1))
+                 .Doc("1: a last channel, the pixel the robot came from "
+                      "(with --init the new input starts at zero weight); "
                       "-1, the default: --init's, else 0"));
   }
   // lr_min <= lr.

@@ -168,7 +168,7 @@ void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
                        "--frame centred or one workspace size");
     const DatasetWorld& w = c->data.worlds[s.world];
     r.Render(s.position, s.neighbours, s.targets, w.log_det_prior, w.eps,
-             images->data() + b * size, s.search.empty() ? nullptr : &s.search);
+             images->data() + b * size, SampleMemory(s, w));
     (*labels)[b] = static_cast<int64_t>(s.label);
     (*weights)[b] = s.useful ? 1.0f : static_cast<float>(weak_weight);
     (*useful)[b] = s.useful;
@@ -340,6 +340,7 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
   const auto redefine = [o](ChannelParams* c) {
     if (o->reach_world >= 0) c->reach_world = o->reach_world == 1;
     if (o->search >= 0) c->search = o->search == 1;
+    if (o->trail >= 0) c->trail = o->trail == 1;
     if (c->reach_world && !c->geodesic)
       throw InputError("command line", 0, "--reach-world",
                        "needs the reach channel (--geodesic, or an --init "
@@ -358,14 +359,25 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
   const ChannelParams before = o->network.channels;
   redefine(&o->network.channels);
   if (o->network.channels.reach_world != before.reach_world ||
-      o->network.channels.search != before.search) {
-    // The same weights, reading the new channel 4.
+      o->network.channels.search != before.search ||
+      o->network.channels.trail != before.trail) {
+    // The same weights, reading the new channel 4; a trail channel added
+    // (a new last input channel of the stem) starts at zero weight, one
+    // removed is dropped.
     auto redefined = std::make_unique<TorchNet>(o->network, o->seed);
     torch::NoGradGuard no_grad;
     auto params = redefined->impl().module->named_parameters();
     auto buffers = redefined->impl().module->named_buffers();
-    for (const auto& p : net->impl().module->named_parameters())
-      params[p.key()].copy_(p.value());
+    for (const auto& p : net->impl().module->named_parameters()) {
+      torch::Tensor to = params[p.key()];
+      if (to.sizes() == p.value().sizes()) {
+        to.copy_(p.value());
+      } else {  // the stem: [width, channels, 3, 3]
+        const int64_t common = std::min(to.size(1), p.value().size(1));
+        to.zero_();
+        to.narrow(1, 0, common).copy_(p.value().narrow(1, 0, common));
+      }
+    }
     for (const auto& b : net->impl().module->named_buffers())
       if (buffers.contains(b.key())) buffers[b.key()].copy_(b.value());
     net = std::move(redefined);
