@@ -7,7 +7,7 @@
         m.step(greedy.decide(m))
     print(m.success, m.flowtime, m.summary()["steps"])
 
-Moves are ints: 0 left, 1 right, 2 up, 3 down (4 stays). A mission is the
+Moves are ints: 0 left, 1 right, 2 up, 3 down, 4 stay. A mission is the
 same loop as `aia run` (world, physics, sensing, DKF, world rule); what the
 robots know is in `state()`, the ground truth under its "truth" key, for
 scoring only. docs/python.md is the reference.
@@ -108,8 +108,8 @@ class Mission:
         return self._m.valid_moves()
 
     def step(self, moves):
-        """Applies one move per robot (the world rule replaces an invalid
-        one), runs the physics, senses and fuses. Returns what changed:
+        """Applies one move per robot (4 stays in place; the world rule
+        replaces a move off the lattice), runs the physics, senses and fuses. Returns what changed:
         step, invalid_moves (replaced this step), localized (targets below
         eps in the team's best estimate), done, success."""
         import numpy as np

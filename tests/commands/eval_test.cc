@@ -626,8 +626,9 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
   const std::string effective = ReadFile(dir + "/e/effective.yaml");
   const auto sha = testing::RunCommand("sha256sum '" + model + "'");
   ASSERT_EQ(sha.exit_code, 0);
-  EXPECT_NE(effective.find("#   igbnet: {max_reversals: 1, max_walk: 0, "
-                           "search: true, share_search: true, no_undo: "
+  EXPECT_NE(effective.find("#   igbnet: {coordination: rules, "
+                           "max_reversals: 1, max_walk: 0, search: true, "
+                           "share_search: true, no_undo: "
                            "true, claims: route}; model " +
                            model + " sha256 " + sha.out.substr(0, 64) + "\n"),
             std::string::npos)

@@ -119,10 +119,11 @@ def test_moves_are_checked():
         m.step([0])
     with pytest.raises(ValueError, match=r"moves\[1\]: must be 0 \(left\)"):
         m.step([0, 7])
-    # 4 (stay) is no move of the lattice: the world rule replaces it, as it
-    # does a builtin policy's.
-    changed = m.step([4, 0])
-    assert changed["step"] == 1 and changed["invalid_moves"] == 1
+    # 4 (stay) is a valid decision: the robot keeps its lattice point.
+    before = m.state()["lattice"].copy()
+    changed = m.step([4, 4])
+    assert changed["step"] == 1 and changed["invalid_moves"] == 0
+    assert (m.state()["lattice"] == before).all()
     m2 = aia.Mission(DEFAULT, seed=1, overrides={"mission.max_steps": 1})
     m2.step(np.zeros(m2.num_robots, dtype=int))
     assert m2.done
