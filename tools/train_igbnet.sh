@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Reproduces the shipped models (docs/learning.md, The shipped models):
-#   models/igbnet.pt        the default: five channels (the geodesic heat),
+#   models/igbnet.pt        the default: five channels (the reach channel),
 #                           trained on domain-randomized worlds (generated
 #                           mazes, offices, corridors and caves, 20 to 40 m,
 #                           0 to 120 boxes, 2 to 80 robots, range graphs with
