@@ -12,9 +12,11 @@ this, tests/CMakeLists.txt: docs.commands_and_links). Two checks:
    answers `aia nosuch --help` with the top-level help and exit 0, so the exit
    status alone would not do.)
 2. Every relative link, `[text](path)` or `![alt](path)` outside code, names
-   a file or folder that exists (relative to the Markdown file), and a
-   `#fragment` on a Markdown file names one of its headings (GitHub's
-   anchors: lower case, punctuation dropped, spaces to dashes).
+   a file or folder that exists inside the repository (relative to the
+   Markdown file), and a `#fragment` on a Markdown file names one of its
+   headings (GitHub's anchors: lower case, punctuation dropped, spaces to
+   dashes). A code span that is a relative path to a Markdown file
+   starting with `../` must name one inside the repository too.
 
 Each problem is printed as FILE:LINE: what is wrong; the exit status is 1 when
 there is any, 2 on bad usage.
@@ -125,6 +127,20 @@ def main(argv):
         name = os.path.relpath(path, ROOT)
         for number, kind, text in scan(path):
             if kind == "code":
+                # A Markdown file named by a relative path in a code span
+                # (docs/learning.md once named `../shared/docs/SPEC.md`,
+                # outside the repository).
+                if re.match(r"^(?:\.\./)+[\w.-][\w./-]*\.md$", text.strip()):
+                    dest = os.path.normpath(
+                        os.path.join(os.path.dirname(path), text.strip()))
+                    if not (dest + os.sep).startswith(ROOT + os.sep):
+                        print("%s:%d: path %s: outside the repository" %
+                              (name, number, text.strip()))
+                        problems += 1
+                    elif not os.path.exists(dest):
+                        print("%s:%d: path %s: no such file" %
+                              (name, number, text.strip()))
+                        problems += 1
                 for m in COMMAND.finditer(text):
                     word = m.group(1)
                     checked_commands += 1
