@@ -9,9 +9,12 @@
 #   models/igbnet_10x10.pt  the paper's configuration: four channels, the
 #                           paper's dataset alone (1500 open worlds of 10
 #                           robots), kept so that its results can be repeated.
-# With MODELS=all it also trains the ablation's four-channel model on the
-# randomized data and the 10-robot-only model (the same inputs and worlds,
-# teams of 10 only; the scalability check).
+# With MODELS=learned it also trains models/igbnet_learned.pt, the model
+# meant for policy.coordination=none (the network alone; DAgger rounds,
+# about 2 hours more). With MODELS=all it also trains the ablation's
+# four-channel model on the randomized data and the 10-robot-only model
+# (the same inputs and worlds, teams of 10 only; the scalability check)
+# and the learned model.
 #
 # Every step resumes: run it again after an interruption and it goes on
 # where it stopped. On 2 cores: the data about 20 minutes (two processes),
@@ -100,8 +103,63 @@ if [[ $models == all ]]; then
   "$aia" train --data "${ten_paths[@]}" --geodesic --epochs 3 --threads 2 \
     --out "$work/igbnet_10only.pt" --weak-weight 0 --lr 1e-3 --lr-min 1e-5 --resume --quiet
 fi
-for m in igbnet igbnet_10x10; do
+shipped=(igbnet igbnet_10x10)
+if [[ $models == all || $models == learned ]]; then
+  # The learned-coordination model (docs/learning.md, Learned coordination):
+  # the default model's weights, its reach channel over the whole workspace
+  # toward each target's search points and a trail channel (the pixel the
+  # robot came from) added, one epoch on the data above; then DAgger rounds:
+  # the model alone (policy.coordination=none) acts in 15 kinds of world,
+  # the expert labels the states it visits, and the next model is trained on
+  # the data above and every round so far. About 25 minutes a round.
+  learn() {  # learn OUT INIT DATA...
+    local out=$1 init=$2
+    shift 2
+    "$aia" train --data "$@" --init "$init" --epochs 1 --lr 3e-4 --lr-min 1e-5 \
+      --weak-weight 0 --threads 2 --out "$out" --resume --quiet
+  }
+  "$aia" train --data "${all_paths[@]}" --init "$work/igbnet.pt" --reach-world 1 \
+    --search 1 --trail 1 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
+    --threads 2 --out "$work/learned0.pt" --resume --quiet
+  dagger_paths=()
+  rounds=${ROUNDS:-3}
+  for ((r = 1; r <= rounds; r++)); do
+    actor="$work/learned$((r - 1)).pt"
+    base=$((30000000 + r * 1000000))
+    dag() {  # dag NAME SEED STEPS ARGS...: the actor alone acts
+      local name=$1 seed=$2 steps=$3
+      shift 3
+      ds "dag$r/$name" --policy igbnet --model "$actor" \
+        --set policy.coordination=none --keep 20 --max-steps "$steps" \
+        --first-seed "$seed" "$@"
+      dagger_paths+=("$work/dag$r/$name")
+    }
+    g=workspace.obstacles.generator.type
+    dag maze30 $((base + 100000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=maze
+    dag rooms30 $((base + 200000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=rooms
+    dag corr30 $((base + 300000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=corridors
+    dag cave30 $((base + 400000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=cave
+    dag maze40 $((base + 500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=maze
+    dag open10 $((base + 600000)) 200 --episodes 100
+    dag rooms40 $((base + 1500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=rooms
+    dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
+    dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
+    dag corr20_5 $((base + 900000)) 200 --episodes 100 --size 5x5 --set $g=corridors
+    dag cave20_5 $((base + 1000000)) 200 --episodes 100 --size 5x5 --set $g=cave
+    dag open2x20 $((base + 1100000)) 200 --episodes 100 --size 2x20
+    dag range $((base + 1200000)) 200 --episodes 100 --set communication.mode=range \
+      --set communication.range=4 --set communication.packet_loss_lambda=1
+    dag dens40 $((base + 1300000)) 150 --episodes 50 --set "workspace.size=[40,40]" \
+      --set workspace.obstacles.random.count=120
+    dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
+    learn "$work/learned$r.pt" "$actor" "${all_paths[@]}" "${dagger_paths[@]}"
+  done
+  cp "$work/learned$rounds.pt" "$work/igbnet_learned.pt"
+  cp "$work/learned$rounds.train.csv" "$work/igbnet_learned.train.csv"
+  shipped+=(igbnet_learned)
+fi
+for m in "${shipped[@]}"; do
   cp "$work/$m.pt" "models/$m.pt"
   cp "$work/$m.train.csv" "models/$m.train.csv"
 done
-echo "models/igbnet.pt and models/igbnet_10x10.pt <- $work"
+echo "models/{$(IFS=,; echo "${shipped[*]}")}.pt <- $work"
