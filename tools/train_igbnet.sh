@@ -132,26 +132,34 @@ if [[ $models == all || $models == learned ]]; then
       ds "dag$r/$name" --policy igbnet --model "$actor" \
         --set policy.coordination=none --keep 20 --max-steps "$steps" \
         --first-seed "$seed" "$@"
-      dagger_paths+=("$work/dag$r/$name")
     }
     g=workspace.obstacles.generator.type
-    dag maze30 $((base + 100000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=maze
-    dag rooms30 $((base + 200000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=rooms
-    dag corr30 $((base + 300000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=corridors
-    dag cave30 $((base + 400000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=cave
-    dag maze40 $((base + 500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=maze
-    dag open10 $((base + 600000)) 200 --episodes 100
-    dag rooms40 $((base + 1500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=rooms
-    dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
-    dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
-    dag corr20_5 $((base + 900000)) 200 --episodes 100 --size 5x5 --set $g=corridors
-    dag cave20_5 $((base + 1000000)) 200 --episodes 100 --size 5x5 --set $g=cave
-    dag open2x20 $((base + 1100000)) 200 --episodes 100 --size 2x20
-    dag range $((base + 1200000)) 200 --episodes 100 --set communication.mode=range \
-      --set communication.range=4 --set communication.packet_loss_lambda=1
-    dag dens40 $((base + 1300000)) 150 --episodes 50 --set "workspace.size=[40,40]" \
-      --set workspace.obstacles.random.count=120
-    dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
+    (
+      dag maze30 $((base + 100000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=maze
+      dag rooms30 $((base + 200000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=rooms
+      dag corr30 $((base + 300000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=corridors
+      dag cave30 $((base + 400000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=cave
+      dag maze40 $((base + 500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=maze
+      dag open10 $((base + 600000)) 200 --episodes 100
+      dag rooms40 $((base + 1500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=rooms
+    ) &
+    (
+      dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
+      dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
+      dag corr20_5 $((base + 900000)) 200 --episodes 100 --size 5x5 --set $g=corridors
+      dag cave20_5 $((base + 1000000)) 200 --episodes 100 --size 5x5 --set $g=cave
+      dag open2x20 $((base + 1100000)) 200 --episodes 100 --size 2x20
+      dag range $((base + 1200000)) 200 --episodes 100 --set communication.mode=range \
+        --set communication.range=4 --set communication.packet_loss_lambda=1
+      dag dens40 $((base + 1300000)) 150 --episodes 50 --set "workspace.size=[40,40]" \
+        --set workspace.obstacles.random.count=120
+      dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
+    ) &
+    wait
+    for name in maze30 rooms30 corr30 cave30 maze40 open10 rooms40 rooms20_3 \
+      maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40; do
+      dagger_paths+=("$work/dag$r/$name")
+    done
     learn "$work/learned$r.pt" "$actor" "${all_paths[@]}" "${dagger_paths[@]}"
   done
   cp "$work/learned$rounds.pt" "$work/igbnet_learned.pt"
