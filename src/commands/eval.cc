@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -28,6 +27,7 @@
 #include "aia/core/error.h"
 #include "aia/core/interrupt.h"
 #include "aia/core/io.h"
+#include "aia/core/thread_pool.h"
 #include "aia/runtime/episode.h"
 #include "aia/runtime/instance.h"
 #include "aia/runtime/mission.h"
@@ -841,63 +841,56 @@ int WorkerThreads(int requested, std::size_t work) {
       1, std::min<int>(threads, static_cast<int>(std::max<size_t>(work, 1))));
 }
 
-// The work queue: `threads` workers take instances in turn and record their
-// rows; the first failure of a run (bad input found in it, say: a generated
-// world that cannot be built) stops the handing out and is kept as it is.
-// Start() returns at once; Wait() joins.
+// The work queue: `threads` threads of a pool take instances in turn and
+// record their rows; the first failure of a run (bad input found in it, say:
+// a generated world that cannot be built) stops the handing out and is kept
+// as it is. Start() returns at once; Join() waits.
 class WorkQueue {
  public:
   WorkQueue(const std::vector<Work>& work, const EvalSetup& setup,
-            RowSink* sink)
-      : work_(work), setup_(setup), sink_(sink) {}
+            RowSink* sink, int threads)
+      : work_(work), setup_(setup), sink_(sink), pool_(threads) {}
 
-  void Start(int threads) {
-    running_ = threads;
-    for (int t = 0; t < threads; ++t)
-      pool_.emplace_back([this]() {
-        Worker();
-        --running_;
-      });
-  }
-  // Whether a worker is still running; in one process, Ctrl-C ends the
-  // wait early.
-  bool WaitUnlessInterrupted(bool interruptible) {
-    while (running_ > 0 && !(interruptible && Interrupted()))
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    return running_ == 0;
-  }
-  void Join() {
-    for (auto& t : pool_) t.join();
-  }
-  std::exception_ptr failure() const { return failure_; }
-
- private:
-  void Worker() {
-    while (!Interrupted()) {
-      const size_t w = next_.fetch_add(1);
-      if (w >= work_.size()) return;
-      try {
-        const std::vector<EvalRow> result =
-            RunInstance(*work_[w].instance, setup_, work_[w].todo);
-        std::lock_guard<std::mutex> lock(sink_->mutex());
-        for (const EvalRow& row : result) sink_->Record(row);
-      } catch (const RunInterrupted&) {
-        return;  // no row of a run cut short
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(sink_->mutex());
-        if (!failure_) failure_ = std::current_exception();
-        next_ = work_.size();  // stop handing out work
+  void Start() {
+    pool_.Start(static_cast<int>(work_.size()), [this](int w, int) {
+      if (Interrupted()) {
+        pool_.Cancel();
+        return;
       }
+      std::vector<EvalRow> result;
+      try {
+        result = RunInstance(*work_[w].instance, setup_, work_[w].todo);
+      } catch (const RunInterrupted&) {
+        pool_.Cancel();  // no row of a run cut short
+        return;
+      }
+      std::lock_guard<std::mutex> lock(sink_->mutex());
+      for (const EvalRow& row : result) sink_->Record(row);
+    });
+  }
+  // Whether every run has ended; in one process, Ctrl-C ends the wait
+  // early.
+  bool WaitUnlessInterrupted(bool interruptible) {
+    for (;;) {
+      if (pool_.WaitFor(std::chrono::milliseconds(20))) return true;
+      if (interruptible && Interrupted()) return false;
     }
   }
+  // Waits for the runs; the first failure, or nullptr.
+  std::exception_ptr Join() {
+    try {
+      pool_.Wait();
+    } catch (...) {
+      return std::current_exception();
+    }
+    return nullptr;
+  }
 
+ private:
   const std::vector<Work>& work_;
   const EvalSetup& setup_;
   RowSink* sink_;
-  std::atomic<size_t> next_{0};
-  std::atomic<int> running_{0};
-  std::vector<std::thread> pool_;
-  std::exception_ptr failure_;  // under the sink's mutex
+  ThreadPool pool_;
 };
 
 // Rank 0 under mpirun: the rows the other ranks send, recorded as they
@@ -983,8 +976,8 @@ int RunEval(const EvalOptions& o) {
   std::thread receiver;
   if (root && ranks.distributed())
     receiver = ReceiveRemoteRows(&ranks, &sink, &first_error, &remote_error);
-  WorkQueue queue(work, setup, &sink);
-  queue.Start(WorkerThreads(o.threads, work.size()));
+  WorkQueue queue(work, setup, &sink, WorkerThreads(o.threads, work.size()));
+  queue.Start();
   // Ctrl-C (one process): the rows finished so far are written, with the
   // summary of what is done, and the runs in flight are abandoned.
   if (!queue.WaitUnlessInterrupted(root && !ranks.distributed()) &&
@@ -1000,14 +993,14 @@ int RunEval(const EvalOptions& o) {
     std::fflush(stderr);
     std::_Exit(kInterruptedExitCode);
   }
-  queue.Join();
+  const std::exception_ptr failure = queue.Join();
   if (!root) {
-    ranks.SendDone(queue.failure() ? Message(queue.failure()) : first_error);
+    ranks.SendDone(failure ? Message(failure) : first_error);
     return 0;  // rank 0 reports
   }
   if (receiver.joinable()) receiver.join();
   sink.Flush();
-  if (queue.failure()) std::rethrow_exception(queue.failure());
+  if (failure) std::rethrow_exception(failure);
   if (first_error.empty()) first_error = remote_error;
   if (!first_error.empty()) throw std::runtime_error(first_error);
 
