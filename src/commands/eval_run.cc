@@ -238,6 +238,11 @@ int RunEval(const EvalOptions& o) {
   }
   if (!ranks.AgreeFromRoot(true)) return 2;
   if (!root) rows = ReadRuns(o.out_dir + "/runs.csv");
+  // Rank 0 appends to runs.csv from now on: every rank reads the rows
+  // resumed first, or the shares of the work left would differ (a rank
+  // that read rank 0's first new rows ran rank 0's share, and its own was
+  // never run).
+  ranks.Barrier();
   int total_runs = 0;
   const std::vector<Work> work =
       WorkLeft(instances, policies, rows, ranks, &total_runs);
