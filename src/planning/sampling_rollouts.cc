@@ -66,8 +66,8 @@ Move SamplingTree::StepToward(int q, int k, int depth, Rng* rng) {
 
 void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   const SamplingProblem& p = *problem_;
-  const int* pos = Pos(node);
-  const int depth = depth_[node] + 1;
+  const int* pos = arena_.Pos(node);
+  const int depth = arena_.depth(node) + 1;
   MarkOpen(node);
   std::copy(open_.begin(), open_.end(), avail_.begin());  // open, not taken
   std::fill(assigned_.begin(), assigned_.end(), -1);
@@ -170,7 +170,7 @@ void SamplingTree::PlanTours() {
   for (int k = 0; k < m_; ++k) {
     if (!open_[k]) continue;
     targets.push_back(k);
-    weight[k] = BlockDet(Info(0), k);
+    weight[k] = BlockDet(arena_.Info(0), k);
   }
   Legs legs(this);
   TourSettings settings;
@@ -219,9 +219,9 @@ double SamplingTree::GreedyGain(const double* info, int depth, int v) {
 void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
   const SamplingProblem& p = *problem_;
   const Lattice& lattice = p.map->lattice();
-  const int* from = Pos(node);
-  const int depth = depth_[node] + 1;
-  const double* info = Info(node);
+  const int* from = arena_.Pos(node);
+  const int depth = arena_.depth(node) + 1;
+  const double* info = arena_.Info(node);
   if (kind == RolloutKind::kNearest) {
     Rng unused(0);
     Assign(node, /*sorted=*/true, unused);
@@ -263,8 +263,8 @@ int SamplingTree::Rollout(RolloutKind kind, const SamplingParams& params) {
                       ? params.max_depth
                       : 2 * (lattice.nx() + lattice.ny()) * std::max(1, m_);
   int v = 0;
-  while (unloc_[v] > 0 && depth_[v] < cap &&
-         static_cast<long>(parent_.size()) < node_cap_) {
+  while (arena_.unloc(v) > 0 && arena_.depth(v) < cap &&
+         static_cast<long>(arena_.size()) < node_cap_) {
     RolloutMoves(v, kind);
     const int child = AddNode(v, child_pos_.data());
     Register(child, params);
@@ -283,7 +283,8 @@ void SamplingTree::SeededRollouts(const SamplingParams& params, int root,
       {RolloutKind::kGreedy, "greedy"}};
   for (const auto& [kind, name] : kinds) {
     const int end = Rollout(kind, params);
-    plan->rollouts.push_back({name, unloc_[end] == 0, depth_[end], cost_[end]});
+    plan->rollouts.push_back(
+        {name, arena_.unloc(end) == 0, arena_.depth(end), arena_.cost(end)});
   }
   last_ = root;
 }

@@ -29,6 +29,7 @@
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
+#include "aia/planning/node_arena.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/tours.h"
 #include "aia/world/map.h"
@@ -95,30 +96,6 @@ struct SamplingParams {
 // until the trees solving at the same time leave it room (docs/design.md,
 // Policies). Waiting changes when a plan is made, never which plan.
 inline constexpr double kMaxTreeBytes = 1.0 * (1L << 30);
-
-// The tree's arena: large blocks are mapped from the kernel and returned to
-// it when freed, so that a finished large solve gives its memory back
-// whatever the process's malloc keeps (jemalloc in build/aia keeps freed
-// pages), and only the pages a tree fills are resident.
-template <typename T>
-struct ArenaAllocator {
-  using value_type = T;
-  ArenaAllocator() = default;
-  template <typename U>
-  ArenaAllocator(const ArenaAllocator<U>&) {}  // NOLINT: allocator rebind
-  T* allocate(std::size_t n);
-  void deallocate(T* p, std::size_t n);
-  template <typename U>
-  bool operator==(const ArenaAllocator<U>&) const {
-    return true;
-  }
-  template <typename U>
-  bool operator!=(const ArenaAllocator<U>&) const {
-    return false;
-  }
-};
-template <typename T>
-using ArenaVector = std::vector<T, ArenaAllocator<T>>;
 
 // Goal paths whose J is within this fraction of eps of the cheapest one
 // count as equally good, and the shortest of them is returned. One step of
@@ -210,12 +187,6 @@ class SamplingTree {
   double BlockDet(const double* packed, int k) const;
   // det Sigma_k after adding r to its position precision.
   double BlockDetAfter(const double* packed, int k, double r) const;
-  const double* Info(int node) const {
-    return info_.data() + static_cast<size_t>(node) * stride_;
-  }
-  const int* Pos(int node) const {
-    return pos_.data() + static_cast<size_t>(node) * n_;
-  }
   void MarkOpen(int node);  // open_[k]: det Sigma_k > eps at the node
   void Assign(int node, bool sorted, Rng& rng);
   int NearestOpen(int q, int depth);
@@ -290,11 +261,7 @@ class SamplingTree {
   std::vector<std::pair<int, double>> obs_;
   bool any_moving_ = false;
 
-  // Arena.
-  ArenaVector<int> pos_;      // nodes x n
-  ArenaVector<double> info_;  // nodes x stride
-  ArenaVector<int> parent_, depth_, unloc_;
-  ArenaVector<double> cost_, det_sum_;
+  NodeArena arena_;
   std::vector<std::vector<int>> levels_;  // expandable nodes per depth
   // Search state.
   std::vector<int> goals_;  // goal nodes within the tolerance of j_min_
@@ -338,7 +305,6 @@ class SamplingTree {
   std::vector<int> open_list_;   // open targets, ascending
   std::vector<std::pair<int, int>> near_;  // (distance bound, target)
   std::vector<char> avail_;
-  ArenaVector<double> lower_;  // per node: lower bound of the total cost
   std::vector<int> bfs_queue_;
 };
 
