@@ -115,52 +115,20 @@ Vec2 SamplingTree::MeasurePoint(int depth, int k) {
   return slot.at_mean ? MeanAt(depth, k) : slot.point;
 }
 
-void SamplingTree::Buckets::Reset(int nx, int ny, int count) {
-  const double side = std::sqrt(2.0 * nx * ny / std::max(1, count));
-  cell = std::clamp(static_cast<int>(std::lround(side)), 4, 64);
-  gx = (nx + cell - 1) / cell;
-  gy = (ny + cell - 1) / cell;
-  begin.assign(static_cast<size_t>(gx) * gy + 1, 0);
-}
-
-namespace {
-
-// Fills a bucket grid's CSR from the bucket of each item (-1: left out).
-template <typename BucketOf>
-void FillBuckets(int count, BucketOf&& bucket_of, std::vector<int>* begin,
-                 std::vector<int>* items, std::vector<int>* fill) {
-  for (int t = 0; t < count; ++t) {
-    const int b = bucket_of(t);
-    if (b >= 0) ++(*begin)[b + 1];
-  }
-  for (size_t c = 1; c < begin->size(); ++c) (*begin)[c] += (*begin)[c - 1];
-  items->resize(begin->back());
-  fill->assign(begin->begin(), begin->end() - 1);
-  for (int t = 0; t < count; ++t) {
-    const int b = bucket_of(t);
-    if (b >= 0) (*items)[(*fill)[b]++] = t;
-  }
-}
-
-}  // namespace
-
 void SamplingTree::BuildOpenIndex() {
   open_indexed_ =
       indexed_ && static_cast<int>(open_list_.size()) > kLinearTargets;
   if (!open_indexed_) return;
   const Lattice& lattice = problem_->map->lattice();
-  Buckets& g = open_index_;
-  g.Reset(lattice.nx(), lattice.ny(), static_cast<int>(open_list_.size()));
+  BucketGrid& g = open_index_;
   // Items are positions in open_list_; the index holds target ids.
-  FillBuckets(
-      static_cast<int>(open_list_.size()),
-      [&](int t) {
-        const Rect& b = region_box_[open_list_[t]];
-        if (b.x0 > b.x1) return -1;  // no region: its field is -1 everywhere
-        return g.Of((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2);
-      },
-      &g.begin, &g.items, &g.fill);
-  for (int& t : g.items) t = open_list_[t];
+  g.Fill(lattice.nx(), lattice.ny(), static_cast<int>(open_list_.size()),
+         [&](int t) {
+           const LatticeRect& b = region_box_[open_list_[t]];
+           if (b.empty()) return -1;  // no region: its field is -1 everywhere
+           return g.Of((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2);
+         });
+  g.Relabel(open_list_);
 }
 
 void SamplingTree::BuildRobotIndex(const int* positions) {
@@ -168,45 +136,12 @@ void SamplingTree::BuildRobotIndex(const int* positions) {
   const Lattice& lattice = p.map->lattice();
   robots_indexed_ = indexed_ && n_ > kLinearRobots;
   if (!robots_indexed_) return;
-  Buckets& g = robot_index_;
-  g.Reset(lattice.nx(), lattice.ny(), n_);
-  FillBuckets(
-      n_,
-      [&](int i) {
-        if (!p.active[i]) return -1;
-        return g.Of(lattice.Ix(positions[i]), lattice.Iy(positions[i]));
-      },
-      &g.begin, &g.items, &g.fill);
+  BucketGrid& g = robot_index_;
+  g.Fill(lattice.nx(), lattice.ny(), n_, [&](int i) {
+    if (!p.active[i]) return -1;
+    return g.Of(lattice.Ix(positions[i]), lattice.Iy(positions[i]));
+  });
 }
-
-namespace {
-
-// L1 distance (lattice steps) from (x, y) to a rectangle: a lower bound of
-// the BFS distance to any point in it, each move changing one coordinate by
-// one.
-inline int RectDistance(int x, int y, int x0, int x1, int y0, int y1) {
-  return std::max({0, x0 - x, x - x1}) + std::max({0, y0 - y, y - y1});
-}
-
-// Calls visit(bucket) for the buckets at Chebyshev distance r from the bucket
-// rectangle [bx0, bx1] x [by0, by1] (the rectangle itself for r = 0),
-// clipped to the grid of gx x gy buckets.
-template <typename Visit>
-void VisitRing(int bx0, int bx1, int by0, int by1, int r, int gx, int gy,
-               Visit&& visit) {
-  const int x0 = bx0 - r, x1 = bx1 + r, y0 = by0 - r, y1 = by1 + r;
-  for (int y = std::max(0, y0); y <= std::min(gy - 1, y1); ++y) {
-    if (r == 0 || y == y0 || y == y1) {
-      for (int x = std::max(0, x0); x <= std::min(gx - 1, x1); ++x)
-        visit(y * gx + x);
-    } else {
-      if (x0 >= 0) visit(y * gx + x0);
-      if (x1 < gx) visit(y * gx + x1);
-    }
-  }
-}
-
-}  // namespace
 
 int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
                                 int* dist) {
@@ -218,9 +153,9 @@ int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
     const Lattice& lattice = problem_->map->lattice();
     const int x = lattice.Ix(q), y = lattice.Iy(q);
     for (int k : open_list_) {
-      const Rect& b = region_box_[k];
-      if (!ok[k] || b.x0 > b.x1) continue;
-      near_.push_back({RectDistance(x, y, b.x0, b.x1, b.y0, b.y1), k});
+      const LatticeRect& b = region_box_[k];
+      if (!ok[k] || b.empty()) continue;
+      near_.push_back({b.Distance(x, y), k});
     }
     while (!near_.empty()) {  // the least bound next, by selection
       size_t j = 0;
@@ -257,25 +192,21 @@ int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
   // the next ring could hold a better one; a field is read (a cache miss,
   // likely) only while the bound may beat the best.
   const Lattice& lattice = problem_->map->lattice();
-  const Buckets& g = open_index_;
+  const BucketGrid& g = open_index_;
   const int x = lattice.Ix(q), y = lattice.Iy(q);
-  const int bx = x / g.cell, by = y / g.cell;
-  const int rings = std::max(g.gx, g.gy);
+  const int bx = x / g.cell(), by = y / g.cell();
+  const int rings = g.rings();
   near_.clear();
   int r = 0;
   for (;;) {
-    while (r <= rings && (near_.empty() ||
-                          near_.front().first >= (r - 1) * g.cell + 1 - pad_)) {
-      VisitRing(bx, bx, by, by, r, g.gx, g.gy, [&](int c) {
-        for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
-          const int k = g.items[t];
-          if (!ok[k]) continue;
-          const Rect& b = region_box_[k];
-          const int lb = RectDistance(x, y, b.x0, b.x1, b.y0, b.y1);
-          if (best >= 0 && lb > best_d) continue;  // never read
-          near_.push_back({lb, k});
-          std::push_heap(near_.begin(), near_.end(), std::greater<>());
-        }
+    while (r <= rings && (near_.empty() || near_.front().first >=
+                                               (r - 1) * g.cell() + 1 - pad_)) {
+      g.VisitRing(bx, bx, by, by, r, [&](int k) {
+        if (!ok[k]) return;
+        const int lb = region_box_[k].Distance(x, y);
+        if (best >= 0 && lb > best_d) return;  // never read
+        near_.push_back({lb, k});
+        std::push_heap(near_.begin(), near_.end(), std::greater<>());
       });
       ++r;
     }
@@ -305,26 +236,21 @@ int SamplingTree::ReachOf(int k, const int* positions) const {
     }
     return reach;
   }
-  const Rect& b = region_box_[k];
-  if (b.x0 > b.x1) return reach;  // no region
+  const LatticeRect& b = region_box_[k];
+  if (b.empty()) return reach;  // no region
   const Lattice& lattice = p.map->lattice();
-  const Buckets& g = robot_index_;
-  const int bx0 = b.x0 / g.cell, bx1 = b.x1 / g.cell;
-  const int by0 = b.y0 / g.cell, by1 = b.y1 / g.cell;
-  const int rings = std::max(g.gx, g.gy);
+  const BucketGrid& g = robot_index_;
+  const int bx0 = b.x0 / g.cell(), bx1 = b.x1 / g.cell();
+  const int by0 = b.y0 / g.cell(), by1 = b.y1 / g.cell();
   // A robot in ring r >= 1 around the region's buckets is at least
   // (r - 1) cell + 1 steps away.
-  for (int r = 0; r <= rings; ++r) {
-    if (r > 0 && (r - 1) * g.cell + 1 >= reach) break;
-    VisitRing(bx0, bx1, by0, by1, r, g.gx, g.gy, [&](int c) {
-      for (int t = g.begin[c]; t < g.begin[c + 1]; ++t) {
-        const int q = positions[g.items[t]];
-        if (RectDistance(lattice.Ix(q), lattice.Iy(q), b.x0, b.x1, b.y0,
-                         b.y1) >= reach)
-          continue;
-        const int f = field[q];
-        if (f >= 0) reach = std::min(reach, f);
-      }
+  for (int r = 0; r <= g.rings(); ++r) {
+    if (r > 0 && (r - 1) * g.cell() + 1 >= reach) break;
+    g.VisitRing(bx0, bx1, by0, by1, r, [&](int i) {
+      const int q = positions[i];
+      if (b.Distance(lattice.Ix(q), lattice.Iy(q)) >= reach) return;
+      const int f = field[q];
+      if (f >= 0) reach = std::min(reach, f);
     });
   }
   return reach;

@@ -160,28 +160,21 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   // targets' per span of depths, when first asked for.
   slots_.assign(m_, {});
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
-  region_box_.assign(m_, Rect{});
+  region_box_.assign(m_, LatticeRect{});
   static_field_.assign(m_, nullptr);
   for (int k = 0; k < m_; ++k) {
     slots_[k].assign(targets_[k].is_static ? 1 : kMaxBuckets, AimSlot{});
     if (!targets_[k].is_static) continue;
     static_field_[k] = Slot(0, k).field.data();
-    Rect& box = region_box_[k];
     for (const auto& [q, r] : region_) {
       per_point[q].push_back({k, r});
-      const int x = lattice.Ix(q), y = lattice.Iy(q);
-      if (box.x0 > box.x1) {
-        box = {x, x, y, y};
-      } else {
-        box = {std::min(box.x0, x), std::max(box.x1, x), std::min(box.y0, y),
-               std::max(box.y1, y)};
-      }
+      region_box_[k].Add(lattice.Ix(q), lattice.Iy(q));
     }
   }
   indexed_ = !any_moving_ && use_index_;
   pad_ = 0;
-  for (const Rect& b : region_box_) {
-    if (b.x0 > b.x1) continue;
+  for (const LatticeRect& b : region_box_) {
+    if (b.empty()) continue;
     const int cx = (b.x0 + b.x1) / 2, cy = (b.y0 + b.y1) / 2;
     pad_ = std::max({pad_, cx - b.x0, b.x1 - cx, cy - b.y0, b.y1 - cy});
   }

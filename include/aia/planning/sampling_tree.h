@@ -29,6 +29,7 @@
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
+#include "aia/planning/bucket_grid.h"
 #include "aia/planning/node_arena.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/tours.h"
@@ -282,25 +283,14 @@ class SamplingTree {
   std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
   // Spatial indexes.
-  struct Rect {
-    int x0 = 0, x1 = -1, y0 = 0,
-        y1 = -1;  // lattice coordinates; x0 > x1: empty
-  };
-  // Items in square buckets of lattice points, as CSR.
-  struct Buckets {
-    int cell = 8, gx = 0, gy = 0;  // bucket side (lattice points), buckets
-    std::vector<int> begin, items, fill;
-    // Sized for about two of `count` items per bucket, emptied.
-    void Reset(int nx, int ny, int count);
-    int Of(int x, int y) const { return (y / cell) * gx + x / cell; }
-  };
-  std::vector<Rect> region_box_;  // per static target, its region's bounds
+  // Per static target, its region's bounds.
+  std::vector<LatticeRect> region_box_;
   std::vector<const int*> static_field_;  // per static target, its field
   bool indexed_ = false;  // all targets static: the indexes are used
   int pad_ = 0;  // the largest distance from a region's centre to its bounds
-  Buckets open_index_;           // the open targets by their region's centre
+  BucketGrid open_index_;        // the open targets by their region's centre
   bool open_indexed_ = false;    // open_index_ holds open_list_
-  Buckets robot_index_;          // a node's active robots by their point
+  BucketGrid robot_index_;       // a node's active robots by their point
   bool robots_indexed_ = false;  // robot_index_ holds the current node's
   std::vector<int> open_list_;   // open targets, ascending
   std::vector<std::pair<int, int>> near_;  // (distance bound, target)
