@@ -27,8 +27,9 @@ void SamplingTree::UsefulUntil(const std::vector<int>& path,
         useful = useful || open_[obs_[o].first];
       for (int k = 0; k < m_ && !useful && any_moving_; ++k)
         useful = open_[k] && !targets_[k].is_static &&
-                 PredictedPrecision(*p.map, *p.sensor, lattice.Point(pos[i]),
-                                    MeasurePoint(static_cast<int>(d), k)) > 0.0;
+                 PredictedPrecision(
+                     *p.map, *p.sensor, lattice.Point(pos[i]),
+                     aims_.MeasurePoint(static_cast<int>(d), k)) > 0.0;
       if (useful) (*until)[i] = static_cast<int>(d);
     }
   }
@@ -93,7 +94,7 @@ void SamplingTree::ExtractPlan(const SamplingParams& params,
   }
   UsefulUntil(path, &plan->useful_until);
   plan->aims.resize(m_);
-  for (int k = 0; k < m_; ++k) plan->aims[k] = MeasurePoint(0, k);
+  for (int k = 0; k < m_; ++k) plan->aims[k] = aims_.MeasurePoint(0, k);
   plan->tour_makespan = tour_makespan_;
   plan->nodes = static_cast<long>(arena_.size());
   plan->iterations = iteration_;

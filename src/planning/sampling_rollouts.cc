@@ -26,7 +26,9 @@ class SamplingTree::Legs : public LegOracle {
   bool TimeVarying(int k) const override {
     return !tree_->targets_[k].is_static;
   }
-  int Distance(int from, int k) override { return tree_->FieldAt(0, k)[from]; }
+  int Distance(int from, int k) override {
+    return tree_->aims_.FieldAt(0, k)[from];
+  }
 
  private:
   SamplingTree* tree_;
@@ -42,7 +44,7 @@ Move SamplingTree::StepToward(int q, int k, int depth, Rng* rng) {
   const Lattice& lattice = problem_->map->lattice();
   if (k >= 0) {
     const int* f =
-        static_field_[k] ? static_field_[k] : FieldAt(depth, k).data();
+        static_field_[k] ? static_field_[k] : aims_.FieldAt(depth, k).data();
     const int here = f[q];
     if (here > 0) {  // StepDownField
       for (Move m : kMoves) {
@@ -77,7 +79,7 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
     for (int i = 0; i < n_; ++i) {
       if (!p.active[i]) continue;
       for (int k : open_list_) {
-        const int d = FieldAt(depth, k)[pos[i]];
+        const int d = aims_.FieldAt(depth, k)[pos[i]];
         if (d >= 0) pairs_.push_back({d, i * m_ + k});
       }
     }
@@ -149,7 +151,7 @@ Leg SamplingTree::ComputeLeg(int from, int t, int k) {
   const int cap = lattice.size();
   int cur = from;
   for (int s = 0; s <= cap; ++s) {
-    const int here = FieldAt(t + s, k)[cur];
+    const int here = aims_.FieldAt(t + s, k)[cur];
     if (here < 0) return {};
     // Arrived (at the root a robot in the region still needs a step).
     if (here == 0 && t + s > 0) return {s, cur};
@@ -207,7 +209,8 @@ double SamplingTree::GreedyGain(const double* info, int depth, int v) {
       for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o)
         if (obs_[o].first == k) r = obs_[o].second;
     } else {
-      r = PredictedPrecision(*p.map, *p.sensor, there, MeasurePoint(depth, k));
+      r = PredictedPrecision(*p.map, *p.sensor, there,
+                             aims_.MeasurePoint(depth, k));
     }
     if (r <= 0.0) continue;
     gain += LogDetDrop(std::log(BlockDet(info, k)),

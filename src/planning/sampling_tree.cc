@@ -137,36 +137,25 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   m_ = layout.num_targets();
   targets_.assign(m_, {});
   models_.assign(m_, nullptr);
-  full_mean_.assign(m_, {});
   stride_ = 0;
   any_moving_ = false;
-  means_.assign(1, std::vector<Vec2>(m_));
   for (int k = 0; k < m_; ++k) {
-    const TargetModel& model = layout.model(k);
     targets_[k] = {layout.dim(k), stride_, layout.is_static(k)};
     stride_ += PackedSize(layout.dim(k));
-    models_[k] = &model;
-    full_mean_[k] = belief.Mean(p.belief_row, k);
-    means_[0][k] = full_mean_[k].head<2>();
+    models_[k] = &layout.model(k);
     any_moving_ = any_moving_ || !layout.is_static(k);
   }
-  // What the active robots can reach.
-  std::vector<int> sources;
-  for (int i = 0; i < n_; ++i)
-    if (p.active[i]) sources.push_back(p.start[i]);
-  BfsDistances(lattice, sources.data(), static_cast<int>(sources.size()),
-               &reach_, &bfs_queue_);
   // Aims, observation regions and fields of the static targets now; moving
   // targets' per span of depths, when first asked for.
-  slots_.assign(m_, {});
+  aims_.Reset(*p.map, *p.sensor, belief, p.belief_row, p.missed, p.start,
+              p.active);
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
   region_box_.assign(m_, LatticeRect{});
   static_field_.assign(m_, nullptr);
   for (int k = 0; k < m_; ++k) {
-    slots_[k].assign(targets_[k].is_static ? 1 : kMaxBuckets, AimSlot{});
     if (!targets_[k].is_static) continue;
-    static_field_[k] = Slot(0, k).field.data();
-    for (const auto& [q, r] : region_) {
+    static_field_[k] = aims_.FieldAt(0, k).data();
+    for (const auto& [q, r] : aims_.last_region()) {
       per_point[q].push_back({k, r});
       region_box_[k].Add(lattice.Ix(q), lattice.Iy(q));
     }
@@ -253,7 +242,7 @@ int SamplingTree::AddNode(int parent, const int* positions) {
         for (int k = 0; k < m_; ++k) {
           if (targets_[k].is_static) continue;
           const double r = PredictedPrecision(*p.map, *p.sensor, here,
-                                              MeasurePoint(depth, k));
+                                              aims_.MeasurePoint(depth, k));
           if (r > 0.0)
             AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, r);
         }
@@ -370,7 +359,7 @@ int SamplingTree::StartRoot(const SamplingProblem& problem, int* bound) {
     if (targets_[k].is_static) {
       for (int i = 0; i < n_; ++i) {
         const int f =
-            problem.active[i] ? slots_[k][0].field[problem.start[i]] : -1;
+            problem.active[i] ? aims_.FieldAt(0, k)[problem.start[i]] : -1;
         if (f >= 0 && (nearest < 0 || f < nearest)) nearest = f;
       }
     }

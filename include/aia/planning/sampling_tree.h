@@ -29,6 +29,7 @@
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
+#include "aia/planning/aim_table.h"
 #include "aia/planning/bucket_grid.h"
 #include "aia/planning/node_arena.h"
 #include "aia/planning/policy.h"
@@ -172,14 +173,6 @@ class SamplingTree {
     int offset = 0;  // into a node's packed information
     bool is_static = true;
   };
-  // Where a target is planned for a span of depths, and the BFS field toward
-  // the lattice points that see it there.
-  struct AimSlot {
-    bool ready = false;
-    bool at_mean = true;  // the predicted mean itself (else `point`)
-    Vec2 point{0.0, 0.0};
-    std::vector<int> field;
-  };
   enum class RolloutKind { kTours, kMakespanTours, kNearest, kGreedy };
   class Legs;
 
@@ -204,17 +197,6 @@ class SamplingTree {
   int ReachOf(int k, const int* positions) const;
   int NextInTour(const std::vector<int>& tour) const;
   Move StepToward(int q, int k, int depth, Rng* rng);
-  int Bucket(int depth, int k) const;
-  AimSlot& Slot(int depth, int k);
-  const std::vector<int>& FieldAt(int depth, int k) {
-    return Slot(depth, k).field;
-  }
-  Vec2 MeasurePoint(int depth, int k);
-  bool FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
-               const std::vector<int>* missed, Vec2* aim,
-               std::vector<std::pair<int, double>>* region);
-  void RegionOf(const Vec2& x, std::vector<std::pair<int, double>>* region);
-  const Vec2& MeanAt(int depth, int k);
   Leg ComputeLeg(int from, int t, int k);
   void PlanTours();
   int Rollout(RolloutKind kind, const SamplingParams& params);
@@ -252,11 +234,7 @@ class SamplingTree {
   long node_cap_ = 0;  // max_nodes, or fewer to stay within kMaxTreeBytes
   std::vector<TargetInfo> targets_;
   std::vector<const TargetModel*> models_;
-  std::vector<std::vector<Vec2>> means_;  // [depth][k] position means
-  std::vector<Eigen::VectorXd>
-      full_mean_;  // working state for mean propagation
-  std::vector<std::vector<AimSlot>> slots_;  // [k][bucket]
-  std::vector<int> reach_;  // BFS distance from the nearest active robot
+  AimTable aims_;  // where each target is planned to be seen
   // Static targets observable from each lattice point: CSR (target, r).
   std::vector<int> obs_begin_;
   std::vector<std::pair<int, double>> obs_;
@@ -280,7 +258,6 @@ class SamplingTree {
   // Scratch.
   std::vector<int> assigned_, order_, child_pos_;
   std::vector<char> open_;
-  std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
   // Spatial indexes.
   // Per static target, its region's bounds.
@@ -295,7 +272,6 @@ class SamplingTree {
   std::vector<int> open_list_;   // open targets, ascending
   std::vector<std::pair<int, int>> near_;  // (distance bound, target)
   std::vector<char> avail_;
-  std::vector<int> bfs_queue_;
 };
 
 }  // namespace aia

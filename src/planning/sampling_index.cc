@@ -1,6 +1,7 @@
-// Where each target is seen (planning/sampling_tree.h): the aims the tree
-// plans for, their observation regions and BFS fields, and the spatial
-// indexes of open targets and robots.
+// The sampling tree's spatial indexes (planning/sampling_tree.h): open
+// targets by the centre of their observation region and a node's robots by
+// their point, in bucket grids (bucket_grid.h), and the nearest-target and
+// reach queries they answer.
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
@@ -21,99 +22,6 @@ namespace aia {
 // same.
 constexpr int kLinearTargets = 32;
 constexpr int kLinearRobots = 32;
-
-const Vec2& SamplingTree::MeanAt(int depth, int k) {
-  while (static_cast<int>(means_.size()) <= depth) {
-    std::vector<Vec2> next(m_);
-    for (int j = 0; j < m_; ++j) {
-      if (!targets_[j].is_static)
-        full_mean_[j] = models_[j]->A * full_mean_[j] + models_[j]->b;
-      next[j] = full_mean_[j].head<2>();
-    }
-    means_.push_back(std::move(next));
-  }
-  return means_[depth][k];
-}
-
-int SamplingTree::Bucket(int depth, int k) const {
-  if (targets_[k].is_static) return 0;
-  return std::min(depth / kBucket, kMaxBuckets - 1);
-}
-
-void SamplingTree::RegionOf(const Vec2& x,
-                            std::vector<std::pair<int, double>>* region) {
-  const SamplingProblem& p = *problem_;
-  const Lattice& lattice = p.map->lattice();
-  const int span =
-      static_cast<int>(std::ceil(p.sensor->range / lattice.step())) + 1;
-  region->clear();
-  const int c = lattice.NearestPoint(x);
-  for (int iy = std::max(0, lattice.Iy(c) - span);
-       iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy) {
-    for (int ix = std::max(0, lattice.Ix(c) - span);
-         ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
-      const int q = lattice.Index(ix, iy);
-      if (!lattice.Free(q) || reach_[q] < 0) continue;
-      const double r =
-          PredictedPrecision(*p.map, *p.sensor, lattice.Point(q), x);
-      if (r > 0.0) region->push_back({q, r});
-    }
-  }
-}
-
-bool SamplingTree::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
-                           const std::vector<int>* missed, Vec2* aim,
-                           std::vector<std::pair<int, double>>* region) {
-  // Among candidates of one ring, the one whose region is nearest to a robot.
-  const SamplingProblem& p = *problem_;
-  const bool found = SearchAim(
-      *p.map, *p.sensor, mean, cov, missed,
-      [&](const Vec2& x) {
-        RegionOf(x, &trial_region_);
-        if (trial_region_.empty()) return -1;
-        int near = std::numeric_limits<int>::max();
-        for (const auto& [q, r] : trial_region_)
-          near = std::min(near, reach_[q]);
-        return near;
-      },
-      aim);
-  if (found) {
-    RegionOf(*aim, region);
-  } else {
-    region->clear();
-  }
-  return found;
-}
-
-SamplingTree::AimSlot& SamplingTree::Slot(int depth, int k) {
-  AimSlot& slot = slots_[k][Bucket(depth, k)];
-  if (slot.ready) return slot;
-  const SamplingProblem& p = *problem_;
-  const int b = Bucket(depth, k);
-  const Vec2 mean = targets_[k].is_static
-                        ? means_[0][k]
-                        : MeanAt(b * kBucket + kBucket / 2, k);
-  const Eigen::MatrixXd sigma =
-      p.belief->Covariance(p.belief_row, k).topLeftCorner(2, 2);
-  const std::vector<int>* missed =
-      (targets_[k].is_static && static_cast<int>(p.missed.size()) > k)
-          ? &p.missed[k]
-          : nullptr;
-  FindAim(mean, Eigen::Matrix2d(sigma), missed, &slot.point, &region_);
-  slot.at_mean = !targets_[k].is_static && slot.point == mean;
-  std::vector<int> sources;
-  sources.reserve(region_.size());
-  for (const auto& [q, r] : region_) sources.push_back(q);
-  BfsDistances(p.map->lattice(), sources.data(),
-               static_cast<int>(sources.size()), &slot.field, &bfs_queue_);
-  slot.ready = true;
-  return slot;
-}
-
-Vec2 SamplingTree::MeasurePoint(int depth, int k) {
-  const AimSlot& slot = Slot(depth, k);
-  return slot.at_mean ? MeanAt(depth, k) : slot.point;
-}
 
 void SamplingTree::BuildOpenIndex() {
   open_indexed_ =
@@ -177,7 +85,7 @@ int SamplingTree::NearestTarget(int q, int depth, const std::vector<char>& ok,
   if (!open_indexed_) {
     for (int k : open_list_) {
       if (!ok[k]) continue;
-      const int d = FieldAt(depth, k)[q];
+      const int d = aims_.FieldAt(depth, k)[q];
       if (d >= 0 && d < best_d) {
         best = k;
         best_d = d;
