@@ -9,13 +9,10 @@
 
 #include <algorithm>
 #include <atomic>
-#include <condition_variable>
 #include <cstdint>
 #include <exception>
-#include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -29,6 +26,7 @@
 #include "aia/core/field_values.h"
 #include "aia/core/interrupt.h"
 #include "aia/core/rng.h"
+#include "aia/core/thread_pool.h"
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/channels.h"
 #include "aia/learning/dataset.h"
@@ -494,83 +492,6 @@ class BuiltinPolicy {
   PolicyStatus status_ = PolicyStatus::kOk;
 };
 
-// Threads kept for the life of a VectorMissions: a thread made per step
-// costs more than it saves (glibc sets up an arena and a cache for each new
-// thread).
-class WorkerPool {
- public:
-  explicit WorkerPool(int threads) {
-    for (int t = 1; t < threads; ++t) workers_.emplace_back([this] { Loop(); });
-  }
-  ~WorkerPool() {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      quit_ = true;
-    }
-    wake_.notify_all();
-    for (std::thread& t : workers_) t.join();
-  }
-  WorkerPool(const WorkerPool&) = delete;
-  WorkerPool& operator=(const WorkerPool&) = delete;
-
-  // f(i) for i in [0, n) on the pool and the calling thread; the first
-  // exception is rethrown here once every call has ended.
-  void Run(int n, const std::function<void(int)>& f) {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      job_ = &f;
-      n_ = n;
-      next_ = 0;
-      busy_ = static_cast<int>(workers_.size());
-      failure_ = nullptr;
-      ++generation_;
-    }
-    wake_.notify_all();
-    Work();
-    std::unique_lock<std::mutex> lock(mu_);
-    finished_.wait(lock, [this] { return busy_ == 0; });
-    job_ = nullptr;
-    if (failure_) std::rethrow_exception(failure_);
-  }
-
- private:
-  void Work() {
-    for (int i = next_++; i < n_; i = next_++) {
-      try {
-        (*job_)(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mu_);
-        if (!failure_) failure_ = std::current_exception();
-      }
-    }
-  }
-  void Loop() {
-    std::uint64_t seen = 0;
-    for (;;) {
-      {
-        std::unique_lock<std::mutex> lock(mu_);
-        wake_.wait(lock, [&] { return quit_ || generation_ != seen; });
-        if (quit_) return;
-        seen = generation_;
-      }
-      Work();
-      std::lock_guard<std::mutex> lock(mu_);
-      if (--busy_ == 0) finished_.notify_one();
-    }
-  }
-
-  std::vector<std::thread> workers_;
-  std::mutex mu_;
-  std::condition_variable wake_, finished_;
-  const std::function<void(int)>* job_ = nullptr;
-  std::atomic<int> next_{0};
-  int n_ = 0;
-  int busy_ = 0;
-  std::uint64_t generation_ = 0;
-  bool quit_ = false;
-  std::exception_ptr failure_;
-};
-
 // n missions of one scenario (seeds given), stepped together on C++
 // threads without the GIL.
 class VectorMissions {
@@ -578,9 +499,10 @@ class VectorMissions {
   VectorMissions(const std::string& scenario,
                  const std::vector<std::uint64_t>& seeds,
                  const KeyValues& overrides, int threads)
-      : pool_(threads > 0 ? threads
-                          : static_cast<int>(std::max(
-                                1u, std::thread::hardware_concurrency()))) {
+      : pool_((threads > 0 ? threads
+                           : static_cast<int>(std::max(
+                                 1u, std::thread::hardware_concurrency()))) -
+              1) {
     if (seeds.empty()) throw py::value_error("n: must be at least 1");
     for (std::uint64_t seed : seeds)
       missions_.push_back(std::make_unique<Mission>(scenario, seed, overrides));
@@ -608,10 +530,14 @@ class VectorMissions {
       before[i] = missions_[i]->episode().invalid_moves();
     {
       py::gil_scoped_release release;
-      pool_.Run(n, [&](int i) {
-        if (!missions_[i]->episode().done())
-          missions_[i]->StepWith(std::move(next[i]));
-      });
+      // A failed mission must not keep the others from stepping.
+      pool_.Run(
+          n,
+          [&](int i, int) {
+            if (!missions_[i]->episode().done())
+              missions_[i]->StepWith(std::move(next[i]));
+          },
+          OnFailure::kFinish);
     }
     auto step = Array<long long>({n});
     auto done = Array<bool>({n});
@@ -637,7 +563,7 @@ class VectorMissions {
   }
 
  private:
-  WorkerPool pool_;
+  ThreadPool pool_;  // the caller is the first of `threads`
   std::vector<std::unique_ptr<Mission>> missions_;
 };
 

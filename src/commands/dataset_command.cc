@@ -259,6 +259,109 @@ std::string Recipe(const DatasetOptions& o) {
   return r;
 }
 
+// What every episode of the shard shares.
+struct DatasetSetup {
+  PolicyRegistry registry;
+  GeneratedSpec spec;  // the episodes' scenario (seed: the first episode's)
+  Scenario base;       // spec read
+  std::shared_ptr<const PolicySpec> acting;  // --policy
+  std::shared_ptr<const PolicySpec> expert;  // the shadow that labels
+};
+
+// The flags checked, the policies resolved and the world of the first seed
+// built now: a size the world cannot hold is bad input before any work (the
+// episodes' other seeds are named as they come).
+DatasetSetup PrepareDataset(const DatasetOptions& o) {
+  if (o.out.empty())
+    throw InputError("command line", 0, "--out", "is required");
+  {
+    DatasetOptions flags = o;
+    CheckFlags(&flags);  // their declarations: `--flag: what`
+  }
+  DatasetSetup d;
+  d.registry = AllPolicies();
+  if (!d.registry.Has(o.policy))
+    throw InputError("command line", 0, "--policy",
+                     d.registry.UnknownPolicy(o.policy));
+  d.spec = DatasetSpec(o);
+  d.base = ReadGenerated(d.spec);
+  d.acting = d.registry.Resolve(d.base);
+  Scenario expert_scenario = d.base;
+  expert_scenario.policy.name = "expert";
+  expert_scenario.policy.params = ConfigNode();
+  d.expert = d.registry.Resolve(expert_scenario);
+  try {
+    BuildInstance(d.base);
+  } catch (const InputError& e) {
+    NameTheFlag(e, d.spec);
+  }
+  return d;
+}
+
+// The shard's file, checked and locked: DIR/shard-I-of-N.sqlite.
+std::string OpenShard(const DatasetOptions& o, const DatasetSetup& d) {
+  const std::string file = o.out + "/shard-" + std::to_string(o.shard.index) +
+                           "-of-" + std::to_string(o.shard.count) + ".sqlite";
+  // The shard and SQLite's files beside it: a FIFO there would block SQLite.
+  CheckOutputFiles({file, file + "-journal", file + "-wal", file + "-shm"},
+                   "--out", "the shard written");
+  MakeOutputDir(o.out, "--out");
+  CheckNotAnInput(file, "--out", MissionInputs(d.base, d.acting.get()),
+                  "the shard written");
+  CheckOneShardSet(o.out, o.shard.count);
+  // One writer per shard (the ranks of an mpirun share the folder): an
+  // flock on the shard file itself, which SQLite's own (fcntl) locks leave
+  // alone; an empty new file is an empty database to SQLite.
+  LockOutput(file, "--out");
+  return file;
+}
+
+// One episode of the dataset: its world record and the samples kept (none
+// when it went over --max-seconds), or killed (a test's stop).
+struct DatasetEpisode {
+  bool killed = false;
+  bool over_time = false;
+  DatasetWorld world;
+  std::vector<DatasetSample> kept;
+};
+
+// Runs episode e (seed first_seed + e) with the acting policy, the expert's
+// shadow labelling each decision; `stop` makes the observer stop it (the
+// tests' --stop-after-episodes).
+DatasetEpisode RunDatasetEpisode(const DatasetOptions& o, const DatasetSetup& d,
+                                 int e, bool stop) {
+  Scenario s = d.base;
+  s.seed = o.first_seed + static_cast<std::uint64_t>(e);
+  std::unique_ptr<Policy> shadow_owner;
+  ExpertPolicy* shadow = nullptr;
+  if (o.policy != "expert") {
+    shadow_owner = d.expert->Create();
+    shadow = dynamic_cast<ExpertPolicy*>(shadow_owner.get());
+  }
+  std::shared_ptr<const Instance> instance;
+  try {
+    instance = BuildInstance(s);
+  } catch (const InputError& error) {
+    GeneratedSpec spec = d.spec;
+    spec.seed = s.seed;
+    NameTheFlag(error, spec);
+  }
+  Episode episode(instance, d.acting->Create());
+  DatasetObserver observer(shadow, e, stop ? 3 : -1, o.max_seconds, o.keep,
+                           instance->scenario.mission.max_steps, s.seed);
+  episode.AddObserver(&observer);
+  episode.Run();
+  DatasetEpisode out;
+  if (observer.killed()) {
+    out.killed = true;
+    return out;
+  }
+  out.over_time = observer.over_time();
+  if (!out.over_time) out.kept = KeptSamples(&observer.steps(), o.keep, s.seed);
+  out.world = EpisodeWorld(episode, e, out.over_time);
+  return out;
+}
+
 }  // namespace
 
 void DatasetOptions::Validate(const FieldChecker& c) const {
@@ -268,46 +371,8 @@ void DatasetOptions::Validate(const FieldChecker& c) const {
 }
 
 int RunDataset(const DatasetOptions& o) {
-  if (o.out.empty())
-    throw InputError("command line", 0, "--out", "is required");
-  {
-    DatasetOptions flags = o;
-    CheckFlags(&flags);  // their declarations: `--flag: what`
-  }
-  const PolicyRegistry registry = AllPolicies();
-  if (!registry.Has(o.policy))
-    throw InputError("command line", 0, "--policy",
-                     registry.UnknownPolicy(o.policy));
-  GeneratedSpec spec = DatasetSpec(o);
-  const Scenario base = ReadGenerated(spec);
-  const std::shared_ptr<const PolicySpec> acting = registry.Resolve(base);
-  Scenario expert_scenario = base;
-  expert_scenario.policy.name = "expert";
-  expert_scenario.policy.params = ConfigNode();
-  const std::shared_ptr<const PolicySpec> expert_spec =
-      registry.Resolve(expert_scenario);
-
-  // The world of the first seed, built now: a size the world cannot hold is
-  // bad input before any work (the episodes' other seeds are named below).
-  try {
-    BuildInstance(base);
-  } catch (const InputError& e) {
-    NameTheFlag(e, spec);
-  }
-
-  const std::string file = o.out + "/shard-" + std::to_string(o.shard.index) +
-                           "-of-" + std::to_string(o.shard.count) + ".sqlite";
-  // The shard and SQLite's files beside it: a FIFO there would block SQLite.
-  CheckOutputFiles({file, file + "-journal", file + "-wal", file + "-shm"},
-                   "--out", "the shard written");
-  MakeOutputDir(o.out, "--out");
-  CheckNotAnInput(file, "--out", MissionInputs(base, acting.get()),
-                  "the shard written");
-  CheckOneShardSet(o.out, o.shard.count);
-  // One writer per shard (the ranks of an mpirun share the folder): an
-  // flock on the shard file itself, which SQLite's own (fcntl) locks leave
-  // alone; an empty new file is an empty database to SQLite.
-  LockOutput(file, "--out");
+  const DatasetSetup d = PrepareDataset(o);
+  const std::string file = OpenShard(o, d);
   DatasetWriter writer(file, Recipe(o), "--out");
 
   std::vector<int> todo;
@@ -320,40 +385,17 @@ int RunDataset(const DatasetOptions& o) {
   int written = 0, skipped = 0;
   long samples = 0;
   for (int e : todo) {
-    Scenario s = base;
-    s.seed = o.first_seed + static_cast<std::uint64_t>(e);
-    std::unique_ptr<Policy> shadow_owner;
-    ExpertPolicy* shadow = nullptr;
-    if (o.policy != "expert") {
-      shadow_owner = expert_spec->Create();
-      shadow = dynamic_cast<ExpertPolicy*>(shadow_owner.get());
-    }
-    std::shared_ptr<const Instance> instance;
-    try {
-      instance = BuildInstance(s);
-    } catch (const InputError& e) {
-      spec.seed = s.seed;
-      NameTheFlag(e, spec);
-    }
-    Episode episode(instance, acting->Create());
-    DatasetObserver observer(
-        shadow, e,
-        o.stop_after_episodes >= 0 && written >= o.stop_after_episodes ? 3 : -1,
-        o.max_seconds, o.keep, instance->scenario.mission.max_steps, s.seed);
-    episode.AddObserver(&observer);
-    episode.Run();
-    if (observer.killed()) {
+    DatasetEpisode episode = RunDatasetEpisode(
+        o, d, e,
+        o.stop_after_episodes >= 0 && written >= o.stop_after_episodes);
+    if (episode.killed) {
       line.Finish();
       return written;
     }
-    const bool over_time = observer.over_time();
-    skipped += over_time ? 1 : 0;
-
-    std::vector<DatasetSample> kept;
-    if (!over_time) kept = KeptSamples(&observer.steps(), o.keep, s.seed);
-    writer.WriteEpisode(EpisodeWorld(episode, e, over_time), kept);
+    skipped += episode.over_time ? 1 : 0;
+    writer.WriteEpisode(episode.world, episode.kept);
     ++written;
-    samples += static_cast<long>(kept.size());
+    samples += static_cast<long>(episode.kept.size());
     const double secs =
         std::chrono::duration<double>(Clock::now() - t0).count();
     char buf[200];

@@ -79,6 +79,12 @@ bool Ranks::AgreeFromRoot(bool go_on) {
 #endif
 }
 
+void Ranks::Barrier() {
+#ifdef AIA_WITH_MPI
+  if (initialized_) Check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+#endif
+}
+
 void Ranks::SendLine(const std::string& line) {
 #ifdef AIA_WITH_MPI
   Check(MPI_Send(line.data(), static_cast<int>(line.size()), MPI_CHAR, 0,

@@ -289,6 +289,82 @@ void PrepareOutputs(const RenderOptions& options,
   if (!options.frames_dir.empty()) RemoveStaleTemporaries(options.frames_dir);
 }
 
+// --out: an .mp4 file that may be written, and the files next to it
+// (FILE.summary.json, ...) and the PNG frames of --frames that may be
+// written too. Returns the prefix of the files next to it ("DIR/NAME.").
+std::string CheckVideoPaths(const RenderOptions& options) {
+  const fs::path out(options.out_file);
+  if (options.out_file.empty() || out.extension() != ".mp4" ||
+      out.stem().empty())
+    throw InputError("command line", 0, "--out",
+                     "must name an .mp4 file, got '" + options.out_file + "'");
+  CheckOutputFile(options.out_file, "--out");
+  const std::string prefix =
+      (out.parent_path() / (out.stem().string() + ".")).string();
+  std::vector<std::string> next_to_it;
+  for (const std::string& name : MissionFileNames())
+    next_to_it.push_back(prefix + name);
+  CheckOutputFiles(next_to_it, "--out", "written next to the video");
+  CheckFrameFiles(options.frames_dir);
+  return prefix;
+}
+
+// The video section of FILE.summary.json: the file, its frames, and where
+// the wall time went.
+nlohmann::ordered_json VideoSection(const RenderResult& r,
+                                    const Scenario& scenario,
+                                    const FrameRenderer& renderer,
+                                    const VideoObserver& filming,
+                                    EdgeMode edges, double wall) {
+  nlohmann::ordered_json v;
+  v["file"] = fs::path(r.video).filename().string();
+  v["codec"] = r.codec;
+  v["width"] = r.width;
+  v["height"] = r.height;
+  v["fps"] = r.fps;
+  v["frames"] = r.frames;
+  v["held_frames"] = filming.held();
+  v["duration_s"] = r.video_seconds;
+  v["sim_seconds"] = filming.sim_time();
+  v["heatmap_robot"] = scenario.render.follow_robot;
+  v["png_frames"] = r.png_frames;
+  v["frames_per_second"] = r.frames_per_second;
+  // The video's own cost: frames per second of scene, overlay and encoder
+  // time, without the mission's.
+  const double video_seconds = renderer.scene_seconds() +
+                               renderer.overlay_seconds() +
+                               filming.write_seconds();
+  v["render_frames_per_second"] =
+      video_seconds > 0.0 ? r.frames / video_seconds : 0.0;
+  v["edges"] = EnumNameOf(edges);
+  v["compact"] = renderer.compact();
+  // Where the wall time went (the mission's own phases are in
+  // diagnostics.json and `aia bench`); mission: the rest (start-up, policy,
+  // physics, fusion, result files).
+  nlohmann::ordered_json t;
+  t["scene"] = renderer.scene_seconds();
+  t["overlay"] = renderer.overlay_seconds();
+  t["encode"] = filming.write_seconds();
+  t["mission"] = std::max(0.0, wall - video_seconds);
+  t["total"] = wall;
+  v["seconds"] = t;
+  return v;
+}
+
+// The command's one line.
+void PrintRendered(const std::string& scenario, const RenderResult& r) {
+  const MissionSummary& s = r.mission;
+  std::printf(
+      "%s: policy %s, seed %llu: %s in %d steps (%d robots, %d targets, "
+      "%ld invalid moves); %d frames at %d fps (%.2f s, %dx%d, %s), "
+      "%.1f frames/s -> %s\n",
+      scenario.c_str(), s.policy.c_str(),
+      static_cast<unsigned long long>(s.seed),
+      s.success ? "success" : "no success", s.success ? s.flowtime : s.steps,
+      s.robots, s.targets, s.invalid_moves, r.frames, r.fps, r.video_seconds,
+      r.width, r.height, r.codec.c_str(), r.frames_per_second, r.video.c_str());
+}
+
 }  // namespace
 
 double RenderMemoryNeed(int width, int height) {
@@ -301,23 +377,7 @@ RenderResult RenderMission(const RenderOptions& options) {
   Scenario scenario =
       LoadScenario(options.scenario_path, RenderOverrides(options, registry));
   CheckRenderSection(scenario, options);
-
-  const fs::path out(options.out_file);
-  if (options.out_file.empty() || out.extension() != ".mp4" ||
-      out.stem().empty())
-    throw InputError("command line", 0, "--out",
-                     "must name an .mp4 file, got '" + options.out_file + "'");
-  CheckOutputFile(options.out_file, "--out");
-  const std::string prefix =
-      (out.parent_path() / (out.stem().string() + ".")).string();
-  {
-    std::vector<std::string> next_to_it;
-    for (const std::string& name : MissionFileNames())
-      next_to_it.push_back(prefix + name);
-    CheckOutputFiles(next_to_it, "--out", "written next to the video");
-    CheckFrameFiles(options.frames_dir);
-  }
-
+  const std::string prefix = CheckVideoPaths(options);
   const PreparedMission mission = PrepareMission(scenario, registry);
   PrepareOutputs(options, mission, prefix);
   const int fps = scenario.render.fps;
@@ -365,54 +425,12 @@ RenderResult RenderMission(const RenderOptions& options) {
 
   nlohmann::ordered_json j =
       nlohmann::ordered_json::parse(SummaryJson(summary, runner.episode()));
-  nlohmann::ordered_json v;
-  v["file"] = out.filename().string();
-  v["codec"] = r.codec;
-  v["width"] = width;
-  v["height"] = height;
-  v["fps"] = fps;
-  v["frames"] = r.frames;
-  v["held_frames"] = filming.held();
-  v["duration_s"] = r.video_seconds;
-  v["sim_seconds"] = filming.sim_time();
-  v["heatmap_robot"] = scenario.render.follow_robot;
-  v["png_frames"] = r.png_frames;
-  v["frames_per_second"] = r.frames_per_second;
-  // The video's own cost: frames per second of scene, overlay and encoder
-  // time, without the mission's.
-  const double video_seconds = renderer.scene_seconds() +
-                               renderer.overlay_seconds() +
-                               filming.write_seconds();
-  v["render_frames_per_second"] =
-      video_seconds > 0.0 ? r.frames / video_seconds : 0.0;
-  v["edges"] = EnumNameOf(settings.edges);
-  v["compact"] = renderer.compact();
-  // Where the wall time went (the mission's own phases are in
-  // diagnostics.json and `aia bench`); mission: the rest (start-up, policy,
-  // physics, fusion, result files).
-  nlohmann::ordered_json t;
-  t["scene"] = renderer.scene_seconds();
-  t["overlay"] = renderer.overlay_seconds();
-  t["encode"] = filming.write_seconds();
-  t["mission"] = std::max(0.0, wall - video_seconds);
-  t["total"] = wall;
-  v["seconds"] = t;
-  j["video"] = v;
+  j["video"] =
+      VideoSection(r, scenario, renderer, filming, settings.edges, wall);
   WriteFileAtomic(
       prefix + "summary.json",
       j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-
-  const MissionSummary& s = r.mission;
-  std::printf(
-      "%s: policy %s, seed %llu: %s in %d steps (%d robots, %d targets, "
-      "%ld invalid moves); %d frames at %d fps (%.2f s, %dx%d, %s), "
-      "%.1f frames/s -> %s\n",
-      scenario.name.c_str(), s.policy.c_str(),
-      static_cast<unsigned long long>(s.seed),
-      s.success ? "success" : "no success", s.success ? s.flowtime : s.steps,
-      s.robots, s.targets, s.invalid_moves, r.frames, fps, r.video_seconds,
-      width, height, r.codec.c_str(), r.frames_per_second,
-      options.out_file.c_str());
+  PrintRendered(scenario.name, r);
   return r;
 }
 

@@ -1,21 +1,55 @@
 // The learned policy's threads (learning/network.h: PolicyThreads,
-// ParallelFor): no torch here; a worker sets libtorch's threads only when
-// the plugin is loaded (a network exists).
+// ParallelFor) on the project's thread pool (core/thread_pool.h): no torch
+// here; a worker sets libtorch's threads only when the plugin is loaded (a
+// network exists).
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
-#include <exception>
 #include <functional>
-#include <mutex>
-#include <thread>
-#include <vector>
+#include <memory>
 
+#include "aia/core/thread_pool.h"
 #include "aia/learning/network.h"
 #include "torch_backend.h"
 
 namespace aia {
 
 namespace {
+
 std::atomic<int> policy_threads{1};
+
+// The pool of the calling thread, kept from call to call (a thread made per
+// call costs more than it saves), with PolicyThreads() - 1 threads of its
+// own. Per calling thread, so that callers on several threads (missions
+// stepped in parallel) never wait for each other, as when each call made
+// its own threads.
+ThreadPool& CallerPool(int workers) {
+  thread_local std::unique_ptr<ThreadPool> pool;
+  thread_local pid_t owner = 0;
+  if (owner != ::getpid()) {
+    // In a child forked since (Python's multiprocessing), the threads are
+    // gone: the pool is left behind, never joined.
+    (void)pool.release();
+    owner = ::getpid();
+  }
+  if (!pool || pool->workers() != workers)
+    pool = std::make_unique<ThreadPool>(workers);
+  return *pool;
+}
+
+// libtorch (its OpenMP team too) runs single-threaded on the pool's threads:
+// nested teams spin against each other on two cores. Set once per thread,
+// as soon as the plugin is loaded.
+void SingleThreadedTorch() {
+  thread_local bool single = false;
+  if (single) return;
+  if (const TorchBackend* torch = TorchIfLoaded()) {
+    torch->set_threads(1);
+    single = true;
+  }
+}
+
 }  // namespace
 
 void SetPolicyThreads(int threads) {
@@ -29,32 +63,16 @@ void ParallelFor(int n, int grain,
   if (n <= 0) return;
   grain = std::max(1, grain);
   const int chunks = (n + grain - 1) / grain;
-  const int workers = std::min(PolicyThreads(), chunks);
-  if (workers <= 1) {
+  const int threads = PolicyThreads();
+  if (std::min(threads, chunks) <= 1) {
     f(0, n, 0);
     return;
   }
-  std::atomic<int> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  const auto work = [&](int worker) {
-    // This thread's libtorch (its OpenMP team too) runs single-threaded.
-    const TorchBackend* torch = TorchIfLoaded();
-    if (worker > 0 && torch) torch->set_threads(1);
-    try {
-      for (int c = next++; c < chunks; c = next++)
-        f(c * grain, std::min(n, (c + 1) * grain), worker);
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
-      next = chunks;
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (std::thread& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  // The chunks depend on n and grain alone, never on the threads.
+  CallerPool(threads - 1).Run(chunks, [&](int c, int worker) {
+    if (worker > 0) SingleThreadedTorch();
+    f(c * grain, std::min(n, (c + 1) * grain), worker);
+  });
 }
 
 }  // namespace aia

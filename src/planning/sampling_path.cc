@@ -19,7 +19,7 @@ void SamplingTree::UsefulUntil(const std::vector<int>& path,
   until->assign(n_, 0);
   for (size_t d = 1; d < path.size(); ++d) {
     MarkOpen(path[d - 1]);
-    const int* pos = Pos(path[d]);
+    const int* pos = arena_.Pos(path[d]);
     for (int i = 0; i < n_; ++i) {
       if (!p.active[i]) continue;
       bool useful = false;
@@ -27,8 +27,9 @@ void SamplingTree::UsefulUntil(const std::vector<int>& path,
         useful = useful || open_[obs_[o].first];
       for (int k = 0; k < m_ && !useful && any_moving_; ++k)
         useful = open_[k] && !targets_[k].is_static &&
-                 PredictedPrecision(*p.map, *p.sensor, lattice.Point(pos[i]),
-                                    MeasurePoint(static_cast<int>(d), k)) > 0.0;
+                 PredictedPrecision(
+                     *p.map, *p.sensor, lattice.Point(pos[i]),
+                     aims_.MeasurePoint(static_cast<int>(d), k)) > 0.0;
       if (useful) (*until)[i] = static_cast<int>(d);
     }
   }
@@ -37,23 +38,23 @@ void SamplingTree::UsefulUntil(const std::vector<int>& path,
 int SamplingTree::RewriteIdle(int end) {
   const SamplingProblem& p = *problem_;
   const Lattice& lattice = p.map->lattice();
-  std::vector<int> path(depth_[end] + 1);
-  for (int v = end; v >= 0; v = parent_[v]) path[depth_[v]] = v;
+  std::vector<int> path(arena_.depth(end) + 1);
+  for (int v = end; v >= 0; v = arena_.parent(v)) path[arena_.depth(v)] = v;
   std::vector<int> until;
   UsefulUntil(path, &until);
   bool idle = false;
   for (int i = 0; i < n_; ++i)
-    idle = idle || (p.active[i] && until[i] < depth_[end]);
+    idle = idle || (p.active[i] && until[i] < arena_.depth(end));
   if (!idle) return end;
   // Replay: robots with useful work left keep their moves, the others head
   // for the nearest target the team has not localized. Information only
   // grows, so every target is localized no later than on the original path,
   // and J is no larger.
   int v = 0;
-  for (int d = 1; d <= depth_[end] && unloc_[v] > 0; ++d) {
+  for (int d = 1; d <= arena_.depth(end) && arena_.unloc(v) > 0; ++d) {
     MarkOpen(v);
-    const int* from = Pos(v);
-    const int* planned = Pos(path[d]);
+    const int* from = arena_.Pos(v);
+    const int* planned = arena_.Pos(path[d]);
     for (int i = 0; i < n_; ++i) {
       child_pos_[i] = from[i];
       if (!p.active[i]) continue;
@@ -66,7 +67,8 @@ int SamplingTree::RewriteIdle(int end) {
     }
     v = AddNode(v, child_pos_.data());
   }
-  if (unloc_[v] != 0 || cost_[v] > cost_[end] + tol_ || depth_[v] > depth_[end])
+  if (arena_.unloc(v) != 0 || arena_.cost(v) > arena_.cost(end) + tol_ ||
+      arena_.depth(v) > arena_.depth(end))
     return end;  // cannot happen (see above); kept as a guard
   return v;
 }
@@ -79,32 +81,27 @@ void SamplingTree::ExtractPlan(const SamplingParams& params,
   if (plan->found && params.routing) end = RewriteIdle(end);
   plan->status =
       plan->found ? PolicyStatus::kOk : PolicyStatus::kBudgetExhausted;
-  plan->depth = depth_[end];
-  plan->cost = cost_[end];
+  plan->depth = arena_.depth(end);
+  plan->cost = arena_.cost(end);
   plan->configs.assign(plan->depth + 1, std::vector<int>(n_));
   plan->det.assign(plan->depth + 1, std::vector<double>(m_));
   std::vector<int> path(plan->depth + 1);
-  for (int v = end; v >= 0; v = parent_[v]) {
-    const int d = depth_[v];
+  for (int v = end; v >= 0; v = arena_.parent(v)) {
+    const int d = arena_.depth(v);
     path[d] = v;
-    std::copy(pos_.begin() + static_cast<size_t>(v) * n_,
-              pos_.begin() + static_cast<size_t>(v + 1) * n_,
-              plan->configs[d].begin());
-    for (int k = 0; k < m_; ++k) plan->det[d][k] = BlockDet(Info(v), k);
+    std::copy(arena_.Pos(v), arena_.Pos(v) + n_, plan->configs[d].begin());
+    for (int k = 0; k < m_; ++k) plan->det[d][k] = BlockDet(arena_.Info(v), k);
   }
   UsefulUntil(path, &plan->useful_until);
   plan->aims.resize(m_);
-  for (int k = 0; k < m_; ++k) plan->aims[k] = MeasurePoint(0, k);
+  for (int k = 0; k < m_; ++k) plan->aims[k] = aims_.MeasurePoint(0, k);
   plan->tour_makespan = tour_makespan_;
-  plan->nodes = static_cast<long>(parent_.size());
+  plan->nodes = static_cast<long>(arena_.size());
   plan->iterations = iteration_;
   plan->first_goal_iteration = first_goal_iteration_;
   // What the nodes fill (a reserved arena's untouched pages are not
   // resident).
-  plan->arena_bytes =
-      pos_.size() * sizeof(int) + info_.size() * sizeof(double) +
-      (parent_.size() + depth_.size() + unloc_.size()) * sizeof(int) +
-      (cost_.size() + det_sum_.size() + lower_.size()) * sizeof(double);
+  plan->arena_bytes = arena_.bytes();
 }
 
 }  // namespace aia

@@ -26,7 +26,9 @@ class SamplingTree::Legs : public LegOracle {
   bool TimeVarying(int k) const override {
     return !tree_->targets_[k].is_static;
   }
-  int Distance(int from, int k) override { return tree_->FieldAt(0, k)[from]; }
+  int Distance(int from, int k) override {
+    return tree_->aims_.FieldAt(0, k)[from];
+  }
 
  private:
   SamplingTree* tree_;
@@ -42,7 +44,7 @@ Move SamplingTree::StepToward(int q, int k, int depth, Rng* rng) {
   const Lattice& lattice = problem_->map->lattice();
   if (k >= 0) {
     const int* f =
-        static_field_[k] ? static_field_[k] : FieldAt(depth, k).data();
+        static_field_[k] ? static_field_[k] : aims_.FieldAt(depth, k).data();
     const int here = f[q];
     if (here > 0) {  // StepDownField
       for (Move m : kMoves) {
@@ -66,8 +68,8 @@ Move SamplingTree::StepToward(int q, int k, int depth, Rng* rng) {
 
 void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
   const SamplingProblem& p = *problem_;
-  const int* pos = Pos(node);
-  const int depth = depth_[node] + 1;
+  const int* pos = arena_.Pos(node);
+  const int depth = arena_.depth(node) + 1;
   MarkOpen(node);
   std::copy(open_.begin(), open_.end(), avail_.begin());  // open, not taken
   std::fill(assigned_.begin(), assigned_.end(), -1);
@@ -77,7 +79,7 @@ void SamplingTree::Assign(int node, bool sorted, Rng& rng) {
     for (int i = 0; i < n_; ++i) {
       if (!p.active[i]) continue;
       for (int k : open_list_) {
-        const int d = FieldAt(depth, k)[pos[i]];
+        const int d = aims_.FieldAt(depth, k)[pos[i]];
         if (d >= 0) pairs_.push_back({d, i * m_ + k});
       }
     }
@@ -149,7 +151,7 @@ Leg SamplingTree::ComputeLeg(int from, int t, int k) {
   const int cap = lattice.size();
   int cur = from;
   for (int s = 0; s <= cap; ++s) {
-    const int here = FieldAt(t + s, k)[cur];
+    const int here = aims_.FieldAt(t + s, k)[cur];
     if (here < 0) return {};
     // Arrived (at the root a robot in the region still needs a step).
     if (here == 0 && t + s > 0) return {s, cur};
@@ -170,7 +172,7 @@ void SamplingTree::PlanTours() {
   for (int k = 0; k < m_; ++k) {
     if (!open_[k]) continue;
     targets.push_back(k);
-    weight[k] = BlockDet(Info(0), k);
+    weight[k] = BlockDet(arena_.Info(0), k);
   }
   Legs legs(this);
   TourSettings settings;
@@ -207,7 +209,8 @@ double SamplingTree::GreedyGain(const double* info, int depth, int v) {
       for (int o = obs_begin_[v]; o < obs_begin_[v + 1]; ++o)
         if (obs_[o].first == k) r = obs_[o].second;
     } else {
-      r = PredictedPrecision(*p.map, *p.sensor, there, MeasurePoint(depth, k));
+      r = PredictedPrecision(*p.map, *p.sensor, there,
+                             aims_.MeasurePoint(depth, k));
     }
     if (r <= 0.0) continue;
     gain += LogDetDrop(std::log(BlockDet(info, k)),
@@ -219,9 +222,9 @@ double SamplingTree::GreedyGain(const double* info, int depth, int v) {
 void SamplingTree::RolloutMoves(int node, RolloutKind kind) {
   const SamplingProblem& p = *problem_;
   const Lattice& lattice = p.map->lattice();
-  const int* from = Pos(node);
-  const int depth = depth_[node] + 1;
-  const double* info = Info(node);
+  const int* from = arena_.Pos(node);
+  const int depth = arena_.depth(node) + 1;
+  const double* info = arena_.Info(node);
   if (kind == RolloutKind::kNearest) {
     Rng unused(0);
     Assign(node, /*sorted=*/true, unused);
@@ -263,8 +266,8 @@ int SamplingTree::Rollout(RolloutKind kind, const SamplingParams& params) {
                       ? params.max_depth
                       : 2 * (lattice.nx() + lattice.ny()) * std::max(1, m_);
   int v = 0;
-  while (unloc_[v] > 0 && depth_[v] < cap &&
-         static_cast<long>(parent_.size()) < node_cap_) {
+  while (arena_.unloc(v) > 0 && arena_.depth(v) < cap &&
+         static_cast<long>(arena_.size()) < node_cap_) {
     RolloutMoves(v, kind);
     const int child = AddNode(v, child_pos_.data());
     Register(child, params);
@@ -283,7 +286,8 @@ void SamplingTree::SeededRollouts(const SamplingParams& params, int root,
       {RolloutKind::kGreedy, "greedy"}};
   for (const auto& [kind, name] : kinds) {
     const int end = Rollout(kind, params);
-    plan->rollouts.push_back({name, unloc_[end] == 0, depth_[end], cost_[end]});
+    plan->rollouts.push_back(
+        {name, arena_.unloc(end) == 0, arena_.depth(end), arena_.cost(end)});
   }
   last_ = root;
 }

@@ -1,7 +1,5 @@
 #include "aia/planning/sampling_tree.h"
 
-#include <sys/mman.h>
-
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
@@ -130,9 +128,6 @@ class TreeMemoryLease {
   double bytes_;
 };
 
-// Blocks from this size on are mapped (ArenaAllocator).
-constexpr std::size_t kMappedBytes = std::size_t{1} << 20;
-
 void SamplingTree::Prepare(const SamplingProblem& p) {
   problem_ = &p;
   const BeliefSet& belief = *p.belief;
@@ -142,51 +137,33 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   m_ = layout.num_targets();
   targets_.assign(m_, {});
   models_.assign(m_, nullptr);
-  full_mean_.assign(m_, {});
   stride_ = 0;
   any_moving_ = false;
-  means_.assign(1, std::vector<Vec2>(m_));
   for (int k = 0; k < m_; ++k) {
-    const TargetModel& model = layout.model(k);
     targets_[k] = {layout.dim(k), stride_, layout.is_static(k)};
     stride_ += PackedSize(layout.dim(k));
-    models_[k] = &model;
-    full_mean_[k] = belief.Mean(p.belief_row, k);
-    means_[0][k] = full_mean_[k].head<2>();
+    models_[k] = &layout.model(k);
     any_moving_ = any_moving_ || !layout.is_static(k);
   }
-  // What the active robots can reach.
-  std::vector<int> sources;
-  for (int i = 0; i < n_; ++i)
-    if (p.active[i]) sources.push_back(p.start[i]);
-  BfsDistances(lattice, sources.data(), static_cast<int>(sources.size()),
-               &reach_, &bfs_queue_);
   // Aims, observation regions and fields of the static targets now; moving
   // targets' per span of depths, when first asked for.
-  slots_.assign(m_, {});
+  aims_.Reset(*p.map, *p.sensor, belief, p.belief_row, p.missed, p.start,
+              p.active);
   std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
-  region_box_.assign(m_, Rect{});
+  region_box_.assign(m_, LatticeRect{});
   static_field_.assign(m_, nullptr);
   for (int k = 0; k < m_; ++k) {
-    slots_[k].assign(targets_[k].is_static ? 1 : kMaxBuckets, AimSlot{});
     if (!targets_[k].is_static) continue;
-    static_field_[k] = Slot(0, k).field.data();
-    Rect& box = region_box_[k];
-    for (const auto& [q, r] : region_) {
+    static_field_[k] = aims_.FieldAt(0, k).data();
+    for (const auto& [q, r] : aims_.last_region()) {
       per_point[q].push_back({k, r});
-      const int x = lattice.Ix(q), y = lattice.Iy(q);
-      if (box.x0 > box.x1) {
-        box = {x, x, y, y};
-      } else {
-        box = {std::min(box.x0, x), std::max(box.x1, x), std::min(box.y0, y),
-               std::max(box.y1, y)};
-      }
+      region_box_[k].Add(lattice.Ix(q), lattice.Iy(q));
     }
   }
   indexed_ = !any_moving_ && use_index_;
   pad_ = 0;
-  for (const Rect& b : region_box_) {
-    if (b.x0 > b.x1) continue;
+  for (const LatticeRect& b : region_box_) {
+    if (b.empty()) continue;
     const int cx = (b.x0 + b.x1) / 2, cy = (b.y0 + b.y1) / 2;
     pad_ = std::max({pad_, cx - b.x0, b.x1 - cx, cy - b.y0, b.y1 - cy});
   }
@@ -198,14 +175,7 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   }
   obs_begin_[lattice.size()] = static_cast<int>(obs_.size());
 
-  pos_.clear();
-  info_.clear();
-  parent_.clear();
-  depth_.clear();
-  unloc_.clear();
-  cost_.clear();
-  det_sum_.clear();
-  lower_.clear();
+  arena_.Reset(n_, stride_);
   for (auto& level : levels_) level.clear();
   goals_.clear();
   best_ = -1;
@@ -227,11 +197,9 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
 
 int SamplingTree::AddNode(int parent, const int* positions) {
   const SamplingProblem& p = *problem_;
-  const int id = static_cast<int>(parent_.size());
-  const int depth = parent < 0 ? 0 : depth_[parent] + 1;
-  pos_.insert(pos_.end(), positions, positions + n_);
-  info_.resize(info_.size() + stride_);
-  double* info = info_.data() + static_cast<size_t>(id) * stride_;
+  const int id = arena_.size();
+  const int depth = parent < 0 ? 0 : arena_.depth(parent) + 1;
+  double* info = arena_.Open(positions);
   if (parent < 0) {
     for (int k = 0; k < m_; ++k) {
       const auto omega = p.belief->Omega(p.belief_row, k);
@@ -242,7 +210,7 @@ int SamplingTree::AddNode(int parent, const int* positions) {
       }
     }
   } else {
-    const double* from = info_.data() + static_cast<size_t>(parent) * stride_;
+    const double* from = arena_.Info(parent);
     std::copy(from, from + stride_, info);
     // Time update of the moving targets (static ones are unchanged): the
     // filter's own, on the unpacked block.
@@ -274,7 +242,7 @@ int SamplingTree::AddNode(int parent, const int* positions) {
         for (int k = 0; k < m_; ++k) {
           if (targets_[k].is_static) continue;
           const double r = PredictedPrecision(*p.map, *p.sensor, here,
-                                              MeasurePoint(depth, k));
+                                              aims_.MeasurePoint(depth, k));
           if (r > 0.0)
             AddPositionPrecision(info + targets_[k].offset, targets_[k].dim, r);
         }
@@ -309,18 +277,13 @@ int SamplingTree::AddNode(int parent, const int* positions) {
     if (reach != std::numeric_limits<int>::max() && reach > 1)
       ahead += d * (reach - 1);
   }
-  const double cost = parent < 0 ? 0.0 : cost_[parent] + sum;
-  parent_.push_back(parent);
-  depth_.push_back(depth);
-  unloc_.push_back(unloc);
-  det_sum_.push_back(sum);
-  cost_.push_back(cost);
-  lower_.push_back(cost + ahead);
+  const double cost = parent < 0 ? 0.0 : arena_.cost(parent) + sum;
+  arena_.Close(parent, depth, unloc, sum, cost, cost + ahead);
   return id;
 }
 
 void SamplingTree::MarkOpen(int node) {
-  const double* info = Info(node);
+  const double* info = arena_.Info(node);
   open_list_.clear();
   for (int k = 0; k < m_; ++k) {
     open_[k] = BlockDet(info, k) > problem_->eps ? 1 : 0;
@@ -330,13 +293,14 @@ void SamplingTree::MarkOpen(int node) {
 }
 
 bool SamplingTree::Expandable(int v, const SamplingParams& params) const {
-  if (unloc_[v] == 0) return false;
-  if (params.max_depth > 0 && depth_[v] >= params.max_depth) return false;
+  if (arena_.unloc(v) == 0) return false;
+  if (params.max_depth > 0 && arena_.depth(v) >= params.max_depth) return false;
   if (best_ < 0) return true;
   // A descendant must beat j_min_ by more than the tolerance, or come within
   // it at a shorter horizon than the selected goal's.
-  if (lower_[v] >= j_min_ + tol_) return false;
-  return lower_[v] < j_min_ - tol_ || depth_[v] + 1 < depth_[best_];
+  if (arena_.lower(v) >= j_min_ + tol_) return false;
+  return arena_.lower(v) < j_min_ - tol_ ||
+         arena_.depth(v) + 1 < arena_.depth(best_);
 }
 
 void SamplingTree::Select() {
@@ -345,10 +309,11 @@ void SamplingTree::Select() {
   size_t kept = 0;
   best_ = -1;
   for (int g : goals_) {
-    if (cost_[g] > j_min_ + tol_) continue;
+    if (arena_.cost(g) > j_min_ + tol_) continue;
     goals_[kept++] = g;
-    if (best_ < 0 || depth_[g] < depth_[best_] ||
-        (depth_[g] == depth_[best_] && cost_[g] < cost_[best_]))
+    if (best_ < 0 || arena_.depth(g) < arena_.depth(best_) ||
+        (arena_.depth(g) == arena_.depth(best_) &&
+         arena_.cost(g) < arena_.cost(best_)))
       best_ = g;
   }
   goals_.resize(kept);
@@ -356,19 +321,19 @@ void SamplingTree::Select() {
 
 void SamplingTree::Register(int child, const SamplingParams& params) {
   last_ = child;
-  if (unloc_[child] < unloc_[best_partial_] ||
-      (unloc_[child] == unloc_[best_partial_] &&
-       det_sum_[child] < det_sum_[best_partial_]))
+  if (arena_.unloc(child) < arena_.unloc(best_partial_) ||
+      (arena_.unloc(child) == arena_.unloc(best_partial_) &&
+       arena_.det_sum(child) < arena_.det_sum(best_partial_)))
     best_partial_ = child;
-  if (unloc_[child] == 0) {
+  if (arena_.unloc(child) == 0) {
     if (best_ < 0) first_goal_iteration_ = iteration_;
-    if (cost_[child] <= j_min_ + tol_) {
-      j_min_ = std::min(j_min_, cost_[child]);
+    if (arena_.cost(child) <= j_min_ + tol_) {
+      j_min_ = std::min(j_min_, arena_.cost(child));
       goals_.push_back(child);
       Select();
     }
   } else if (Expandable(child, params)) {
-    const int d = depth_[child];
+    const int d = arena_.depth(child);
     if (static_cast<int>(levels_.size()) <= d) levels_.resize(d + 1);
     levels_[d].push_back(child);
   }
@@ -380,7 +345,7 @@ int SamplingTree::StartRoot(const SamplingProblem& problem, int* bound) {
   levels_[0].push_back(root);
   best_partial_ = root;
   last_ = root;
-  if (unloc_[root] == 0) {
+  if (arena_.unloc(root) == 0) {
     goals_.push_back(root);
     j_min_ = 0.0;
     best_ = root;
@@ -394,7 +359,7 @@ int SamplingTree::StartRoot(const SamplingProblem& problem, int* bound) {
     if (targets_[k].is_static) {
       for (int i = 0; i < n_; ++i) {
         const int f =
-            problem.active[i] ? slots_[k][0].field[problem.start[i]] : -1;
+            problem.active[i] ? aims_.FieldAt(0, k)[problem.start[i]] : -1;
         if (f >= 0 && (nearest < 0 || f < nearest)) nearest = f;
       }
     }
@@ -411,12 +376,11 @@ double SamplingTree::MostNodes(const SamplingParams& params) const {
   // still to come.
   const double grown = std::min(
       static_cast<double>(node_cap_),
-      static_cast<double>(parent_.size()) +
-          static_cast<double>(params.anytime) +
+      static_cast<double>(arena_.size()) + static_cast<double>(params.anytime) +
           (best_ >= 0 ? 0.0 : static_cast<double>(params.max_iterations)));
   const double deepest =
-      *std::max_element(depth_.begin(), depth_.end()) +
-      std::max(0.0, grown - static_cast<double>(parent_.size()));
+      arena_.MaxDepth() +
+      std::max(0.0, grown - static_cast<double>(arena_.size()));
   const double rewrite_cap =
       !params.routing ? 0.0
       : params.max_depth > 0
@@ -427,23 +391,12 @@ double SamplingTree::MostNodes(const SamplingParams& params) const {
 }
 
 void SamplingTree::ReserveArena(double nodes) {
-  const auto count = static_cast<std::size_t>(nodes);
-  pos_.reserve(count * n_);
-  info_.reserve(count * stride_);
-  for (auto* v : {&parent_, &depth_, &unloc_}) v->reserve(count);
-  for (auto* v : {&cost_, &det_sum_, &lower_}) v->reserve(count);
+  arena_.Reserve(static_cast<std::size_t>(nodes));
 }
 
 void SamplingTree::ReleaseArena() {
   const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
-  release(pos_);
-  release(info_);
-  release(parent_);
-  release(depth_);
-  release(unloc_);
-  release(cost_);
-  release(det_sum_);
-  release(lower_);
+  arena_.Release();
   release(levels_);
   release(goals_);
 }
@@ -476,19 +429,19 @@ void SamplingTree::Expand(int node, const SamplingParams& params, Rng& rng) {
       if (!problem.active[i]) continue;
       assigned_[i] = NextInTour(tours_[i]);
       if (assigned_[i] < 0)
-        assigned_[i] = NearestOpen(Pos(node)[i], depth_[node] + 1);
+        assigned_[i] = NearestOpen(arena_.Pos(node)[i], arena_.depth(node) + 1);
     }
   } else {
     Assign(node, rng.Uniform() < params.p_sorted, rng);
   }
-  const int* from = Pos(node);
+  const int* from = arena_.Pos(node);
   for (int i = 0; i < n_; ++i) {
     const int q = from[i];
     child_pos_[i] = q;
     if (!problem.active[i]) continue;
     const int k = assigned_[i];
     const Move move = (k >= 0 && rng.Uniform() < params.p_u)
-                          ? StepToward(q, k, depth_[node] + 1, &rng)
+                          ? StepToward(q, k, arena_.depth(node) + 1, &rng)
                           : RandomValidMove(lattice, q, rng);
     child_pos_[i] = lattice.Next(q, move);
     if (child_pos_[i] < 0) child_pos_[i] = q;
@@ -526,7 +479,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   while (best_ != root) {
     if (best_ >= 0 && since_goal >= params.anytime) break;
     if (best_ < 0 && iteration_ >= params.max_iterations) break;
-    if (static_cast<long>(parent_.size()) >= node_cap_) break;
+    if (static_cast<long>(arena_.size()) >= node_cap_) break;
     ++iteration_;
     if (best_ >= 0) ++since_goal;
     const int node = SelectNode(params, rng);
@@ -541,28 +494,5 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
           .count();
   return plan;
 }
-
-template <typename T>
-T* ArenaAllocator<T>::allocate(std::size_t n) {
-  const std::size_t bytes = n * sizeof(T);
-  if (bytes < kMappedBytes) return static_cast<T*>(::operator new(bytes));
-  void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE,
-                   MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
-  if (p == MAP_FAILED) throw std::bad_alloc();
-  return static_cast<T*>(p);
-}
-
-template <typename T>
-void ArenaAllocator<T>::deallocate(T* p, std::size_t n) {
-  const std::size_t bytes = n * sizeof(T);
-  if (bytes < kMappedBytes) {
-    ::operator delete(p);
-  } else {
-    ::munmap(p, bytes);
-  }
-}
-
-template struct ArenaAllocator<int>;
-template struct ArenaAllocator<double>;
 
 }  // namespace aia

@@ -100,11 +100,16 @@ double TourPlanner::ObjectiveWith(const std::vector<RouteValue>& values, int a,
   return makespan + 0.5 * latency / (weight_sum_ * (makespan + 1.0) + 1e-300);
 }
 
-void TourPlanner::Insert(const std::vector<int>& robots,
-                         const std::vector<int>& targets,
-                         const TourSettings& settings, Tours* tours,
-                         std::vector<RouteValue>* values_out) {
-  std::vector<RouteValue>& values = *values_out;
+struct TourPlanner::Insertion {
+  int robot = -1, pos = -1;
+  RouteValue value;      // the robot's route with the target inserted
+  double best = kInf;    // the objective then
+  double second = kInf;  // the best objective in another robot's route
+};
+
+void TourPlanner::ChooseCandidates(const std::vector<int>& robots,
+                                   const std::vector<int>& targets,
+                                   const TourSettings& settings) {
   const int num = static_cast<int>(targets.size());
   // Each target's candidate robots, in ascending order: all of them, or the
   // `candidates` whose starts are nearest (then the lowest ids).
@@ -133,83 +138,203 @@ void TourPlanner::Insert(const std::vector<int>& robots,
     inserted_[t].assign(c.size(), {});
     inserted_version_[t].assign(c.size(), -1);
   }
-  std::vector<long> version(tours->order.size(), 0);
+}
 
+TourPlanner::Insertion TourPlanner::BestInsertion(
+    int t, int k, const Tours& tours, const std::vector<RouteValue>& values,
+    const std::vector<long>& version) {
+  // A route's values with the target inserted are computed again only when
+  // the route has changed; the budget counts the evaluations as if they
+  // were all made anew.
+  Insertion best;
+  for (size_t c = 0; c < candidates_[t].size(); ++c) {
+    const int i = candidates_[t][c];
+    const std::vector<int>& route = tours.order[i];
+    std::vector<RouteValue>& inserted = inserted_[t][c];
+    if (inserted_version_[t][c] != version[i]) {
+      inserted.resize(route.size() + 1);
+      for (size_t p = 0; p <= route.size(); ++p) {
+        trial_ = route;
+        trial_.insert(trial_.begin() + p, k);
+        inserted[p] = Value(i, trial_);
+      }
+      inserted_version_[t][c] = version[i];
+    }
+    evaluations_ += static_cast<long>(route.size()) + 1;
+    double robot_best = kInf;
+    int robot_pos = -1;
+    RouteValue robot_value;
+    for (size_t p = 0; p <= route.size(); ++p) {
+      const RouteValue& v = inserted[p];
+      const double obj = ObjectiveWith(values, i, v, -1, {});
+      if (obj < robot_best) {
+        robot_best = obj;
+        robot_pos = static_cast<int>(p);
+        robot_value = v;
+      }
+    }
+    if (robot_best < best.best) {
+      best.second = best.best;
+      best.best = robot_best;
+      best.robot = i;
+      best.pos = robot_pos;
+      best.value = robot_value;
+    } else if (robot_best < best.second) {
+      best.second = robot_best;
+    }
+  }
+  return best;
+}
+
+void TourPlanner::Insert(const std::vector<int>& robots,
+                         const std::vector<int>& targets,
+                         const TourSettings& settings, Tours* tours,
+                         std::vector<RouteValue>* values_out) {
+  std::vector<RouteValue>& values = *values_out;
+  const int num = static_cast<int>(targets.size());
+  ChooseCandidates(robots, targets, settings);
+  std::vector<long> version(tours->order.size(), 0);
   // Regret-2 insertion: the target whose best insertion is cheapest compared
-  // with its best insertion in another robot's route goes first. A route's
-  // values with a target inserted are computed again only when the route has
-  // changed; the budget counts the evaluations as if they were all made anew.
+  // with its best insertion in another robot's route goes first.
   std::vector<int> remaining(num);
   for (int t = 0; t < num; ++t) remaining[t] = t;
-  std::vector<int> trial;
   while (!remaining.empty()) {
-    int pick = -1, pick_robot = -1, pick_pos = -1;
-    double pick_key = -kInf, pick_best = kInf;
-    RouteValue pick_value;
+    int pick = -1;
+    double pick_key = -kInf;
+    Insertion chosen;
     for (size_t r = 0; r < remaining.size(); ++r) {
       const int t = remaining[r];
-      const int k = targets[t];
-      double best1 = kInf, best2 = kInf;
-      int robot1 = -1, pos1 = -1;
-      RouteValue value1;
-      for (size_t c = 0; c < candidates_[t].size(); ++c) {
-        const int i = candidates_[t][c];
-        const std::vector<int>& route = tours->order[i];
-        std::vector<RouteValue>& inserted = inserted_[t][c];
-        if (inserted_version_[t][c] != version[i]) {
-          inserted.resize(route.size() + 1);
-          for (size_t p = 0; p <= route.size(); ++p) {
-            trial = route;
-            trial.insert(trial.begin() + p, k);
-            inserted[p] = Value(i, trial);
-          }
-          inserted_version_[t][c] = version[i];
-        }
-        evaluations_ += static_cast<long>(route.size()) + 1;
-        double robot_best = kInf;
-        int robot_pos = -1;
-        RouteValue robot_value;
-        for (size_t p = 0; p <= route.size(); ++p) {
-          const RouteValue& v = inserted[p];
-          const double obj = ObjectiveWith(values, i, v, -1, {});
-          if (obj < robot_best) {
-            robot_best = obj;
-            robot_pos = static_cast<int>(p);
-            robot_value = v;
-          }
-        }
-        if (robot_best < best1) {
-          best2 = best1;
-          best1 = robot_best;
-          robot1 = i;
-          pos1 = robot_pos;
-          value1 = robot_value;
-        } else if (robot_best < best2) {
-          best2 = robot_best;
-        }
-      }
-      if (best1 == kInf) continue;
-      const double key = robots.size() > 1 ? best2 - best1 : -best1;
-      if (key > pick_key || (key == pick_key && best1 < pick_best)) {
+      const Insertion in =
+          BestInsertion(t, targets[t], *tours, values, version);
+      if (in.best == kInf) continue;
+      const double key = robots.size() > 1 ? in.second - in.best : -in.best;
+      if (key > pick_key || (key == pick_key && in.best < chosen.best)) {
         pick_key = key;
-        pick_best = best1;
         pick = static_cast<int>(r);
-        pick_robot = robot1;
-        pick_pos = pos1;
-        pick_value = value1;
+        chosen = in;
       }
     }
     if (pick < 0) {  // nothing left that any robot can reach
       for (int t : remaining) tours->unassigned.push_back(targets[t]);
       break;
     }
-    std::vector<int>& route = tours->order[pick_robot];
-    route.insert(route.begin() + pick_pos, targets[remaining[pick]]);
-    ++version[pick_robot];
-    values[pick_robot] = pick_value;
+    std::vector<int>& route = tours->order[chosen.robot];
+    route.insert(route.begin() + chosen.pos, targets[remaining[pick]]);
+    ++version[chosen.robot];
+    values[chosen.robot] = chosen.value;
     Summarize(values);
     remaining.erase(remaining.begin() + pick);
   }
+}
+
+struct TourPlanner::Search {
+  const std::vector<int>& robots;
+  long budget;
+  Tours& tours;
+  std::vector<RouteValue>& values;
+  double current;           // the objective of the tours now
+  std::vector<int> ra, rb;  // routes tried
+};
+
+bool TourPlanner::Take(Search* s, int a, const std::vector<int>& route_a,
+                       const RouteValue& va, int b,
+                       const std::vector<int>& route_b, const RouteValue& vb) {
+  constexpr double kTolerance = 1e-12;
+  const double obj = ObjectiveWith(s->values, a, va, b, vb);
+  if (!(obj < s->current - kTolerance)) return false;
+  s->tours.order[a] = route_a;
+  s->values[a] = va;
+  if (b >= 0) {
+    s->tours.order[b] = route_b;
+    s->values[b] = vb;
+  }
+  s->current = Objective(s->values);
+  return true;
+}
+
+bool TourPlanner::Relocate(Search* s) {
+  std::vector<std::vector<int>>& order = s->tours.order;
+  std::vector<int>& ra = s->ra;
+  std::vector<int>& rb = s->rb;
+  for (int i : s->robots) {
+    for (size_t p = 0; p < order[i].size() && evaluations_ < s->budget; ++p) {
+      const int k = order[i][p];
+      ra = order[i];
+      ra.erase(ra.begin() + p);
+      const RouteValue va = Evaluate(i, ra);
+      for (int j : s->robots) {
+        const std::vector<int>& base = (j == i) ? ra : order[j];
+        for (size_t q = 0; q <= base.size() && evaluations_ < s->budget; ++q) {
+          if (j == i && q == p) continue;
+          rb = base;
+          rb.insert(rb.begin() + q, k);
+          const RouteValue vb = Evaluate(j, rb);
+          if ((j == i) ? Take(s, i, rb, vb, -1, rb, vb)
+                       : Take(s, i, ra, va, j, rb, vb))
+            return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
+bool TourPlanner::Swap(Search* s) {
+  const std::vector<int>& robots = s->robots;
+  std::vector<std::vector<int>>& order = s->tours.order;
+  std::vector<int>& ra = s->ra;
+  std::vector<int>& rb = s->rb;
+  for (size_t a = 0; a < robots.size() && evaluations_ < s->budget; ++a) {
+    const int i = robots[a];
+    for (size_t b = a; b < robots.size() && evaluations_ < s->budget; ++b) {
+      const int j = robots[b];
+      for (size_t p = 0; p < order[i].size(); ++p) {
+        for (size_t q = (i == j) ? p + 1 : 0;
+             q < order[j].size() && evaluations_ < s->budget; ++q) {
+          ra = order[i];
+          bool taken;
+          if (i == j) {
+            std::swap(ra[p], ra[q]);
+            const RouteValue va = Evaluate(i, ra);
+            taken = Take(s, i, ra, va, -1, ra, va);
+          } else {
+            rb = order[j];
+            std::swap(ra[p], rb[q]);
+            const RouteValue va = Evaluate(i, ra), vb = Evaluate(j, rb);
+            taken = Take(s, i, ra, va, j, rb, vb);
+          }
+          if (taken) return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
+bool TourPlanner::TwoOpt(Search* s) {
+  std::vector<int>& ra = s->ra;
+  for (int i : s->robots) {
+    const size_t len = s->tours.order[i].size();
+    for (size_t p = 0; p + 1 < len && evaluations_ < s->budget; ++p) {
+      for (size_t q = p + 2; q <= len && evaluations_ < s->budget; ++q) {
+        ra = s->tours.order[i];
+        std::reverse(ra.begin() + p, ra.begin() + q);
+        const RouteValue va = Evaluate(i, ra);
+        if (Take(s, i, ra, va, -1, ra, va)) return true;
+      }
+    }
+  }
+  return false;
+}
+
+void TourPlanner::LocalSearch(const std::vector<int>& robots,
+                              const TourSettings& settings, Tours* tours,
+                              std::vector<RouteValue>* values) {
+  Search s{robots, settings.budget, *tours, *values, Objective(*values), {},
+           {}};
+  bool improved = true;
+  while (improved && evaluations_ < s.budget)
+    improved = Relocate(&s) || Swap(&s) || TwoOpt(&s);
 }
 
 Tours TourPlanner::Plan(const std::vector<int>& starts,
@@ -236,96 +361,8 @@ Tours TourPlanner::Plan(const std::vector<int>& starts,
     tours.unassigned = targets;
     return tours;
   }
-
   Insert(robots, targets, settings, &tours, &values);
-
-  // Local search: relocate, swap, 2-opt; first improvement, until no move
-  // improves or the budget is spent.
-  double current = Objective(values);
-  const double tol = 1e-12;
-  auto spent = [&] { return evaluations_ >= settings.budget; };
-  std::vector<int> ra, rb;
-  // Takes route a (and b, unless b < 0) when that lowers the objective.
-  auto take = [&](int a, const std::vector<int>& route_a, const RouteValue& va,
-                  int b, const std::vector<int>& route_b,
-                  const RouteValue& vb) {
-    const double obj = ObjectiveWith(values, a, va, b, vb);
-    if (!(obj < current - tol)) return false;
-    tours.order[a] = route_a;
-    values[a] = va;
-    if (b >= 0) {
-      tours.order[b] = route_b;
-      values[b] = vb;
-    }
-    current = Objective(values);
-    return true;
-  };
-  bool improved = true;
-  while (improved && !spent()) {
-    improved = false;
-    // Relocate one target to any position of any route.
-    for (int i : robots) {
-      for (size_t p = 0; p < tours.order[i].size() && !improved && !spent();
-           ++p) {
-        const int k = tours.order[i][p];
-        ra = tours.order[i];
-        ra.erase(ra.begin() + p);
-        const RouteValue va = Evaluate(i, ra);
-        for (int j : robots) {
-          const std::vector<int>& base = (j == i) ? ra : tours.order[j];
-          for (size_t q = 0; q <= base.size() && !improved && !spent(); ++q) {
-            if (j == i && q == p) continue;
-            rb = base;
-            rb.insert(rb.begin() + q, k);
-            const RouteValue vb = Evaluate(j, rb);
-            improved = (j == i) ? take(i, rb, vb, -1, rb, vb)
-                                : take(i, ra, va, j, rb, vb);
-          }
-          if (improved) break;
-        }
-      }
-      if (improved) break;
-    }
-    if (improved) continue;
-    // Swap two targets (in one route or two).
-    for (size_t a = 0; a < robots.size() && !improved && !spent(); ++a) {
-      const int i = robots[a];
-      for (size_t b = a; b < robots.size() && !improved && !spent(); ++b) {
-        const int j = robots[b];
-        for (size_t p = 0; p < tours.order[i].size() && !improved; ++p) {
-          for (size_t q = (i == j) ? p + 1 : 0;
-               q < tours.order[j].size() && !improved && !spent(); ++q) {
-            ra = tours.order[i];
-            if (i == j) {
-              std::swap(ra[p], ra[q]);
-              const RouteValue va = Evaluate(i, ra);
-              improved = take(i, ra, va, -1, ra, va);
-            } else {
-              rb = tours.order[j];
-              std::swap(ra[p], rb[q]);
-              const RouteValue va = Evaluate(i, ra), vb = Evaluate(j, rb);
-              improved = take(i, ra, va, j, rb, vb);
-            }
-          }
-        }
-      }
-    }
-    if (improved) continue;
-    // 2-opt: reverse a stretch of one route.
-    for (int i : robots) {
-      const size_t len = tours.order[i].size();
-      for (size_t p = 0; p + 1 < len && !improved && !spent(); ++p) {
-        for (size_t q = p + 2; q <= len && !improved && !spent(); ++q) {
-          ra = tours.order[i];
-          std::reverse(ra.begin() + p, ra.begin() + q);
-          const RouteValue va = Evaluate(i, ra);
-          improved = take(i, ra, va, -1, ra, va);
-        }
-      }
-      if (improved) break;
-    }
-  }
-
+  LocalSearch(robots, settings, &tours, &values);
   for (int i : robots) {
     tours.latency += values[i].latency;
     tours.makespan = std::max(tours.makespan, values[i].makespan);

@@ -75,38 +75,12 @@ PhysicsModel::PhysicsModel(const World& world, const Scenario& scenario,
       physics_(scenario.physics),
       robot_model_(scenario.robots.model) {
   model_ = CompileMjcf(mjcf_);
-  const mjModel* m = model_.get();
   const MujocoModelSizes sizes = ModelSizesOf(world, scenario, contacts);
   hessians_ = sizes.solver.hessians;
   one_row_contacts_ = sizes.one_row_contacts;
-  const bool wheeled = robot_model_ == RobotModel::kDiffDrive;
-  const int n = world.NumRobots();
-  auto joint = [m](const std::string& name) {
-    const int j = mj_name2id(m, mjOBJ_JOINT, name.c_str());
-    AIA_CHECK(j >= 0);
-    return j;
-  };
-  for (int i = 0; i < n; ++i) {
-    const std::string robot = "robot" + std::to_string(i);
-    const int j = joint(robot + (wheeled ? "_root" : "_x"));
+  for (int i = 0; i < world.NumRobots(); ++i)
     starts_.push_back(world.map.lattice().Point(world.robot_starts[i]));
-    qpos_adr_.push_back(m->jnt_qposadr[j]);
-    qvel_adr_.push_back(m->jnt_dofadr[j]);
-    if (wheeled) {
-      wheel_dof_.push_back({m->jnt_dofadr[joint(robot + "_left")],
-                            m->jnt_dofadr[joint(robot + "_right")]});
-    }
-  }
-  if (wheeled) {
-    const DiffDriveConfig& d = scenario.robots.diff_drive;
-    wheel_kv_ = n > 0 ? m->dof_damping[wheel_dof_[0][0]] : 0.0;
-    max_torque_ = d.max_torque;
-    law_ = DiffDriveLaw(d, scenario.physics.tolerance);
-  } else {
-    const int kp = mj_name2id(m, mjOBJ_NUMERIC, kKpNumeric);
-    AIA_CHECK(kp >= 0 && m->numeric_size[kp] == 1);
-    kp_ = m->numeric_data[m->numeric_adr[kp]];
-  }
+  driver_ = MakeRobotDriver(model_.get(), scenario, starts_);
   for (int k = 0; k < world.NumTargets(); ++k) {
     const int body = mj_name2id(model_.get(), mjOBJ_BODY,
                                 ("target" + std::to_string(k)).c_str());
@@ -123,58 +97,16 @@ Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
   data_ = MjDataPtr(mj_makeData(m_));
   if (data_ == nullptr)
     throw PhysicsError("MuJoCo cannot allocate the simulation's data");
+  driver_ = model_->driver_.get();
   waypoints_ = model_->starts_;
-  targets_.assign(waypoints_.size(), Vec2::Zero());
   robot_stalls_.assign(waypoints_.size(), 0);
   robot_timeouts_.assign(waypoints_.size(), 0);
   turning_.assign(waypoints_.size(), 0);
   mj_forward(m_, data_.get());
 }
 
-void Simulation::PullPointRobots() {
-  mjData* d = data_.get();
-  // The waypoint controller: a spring toward each robot's waypoint, evaluated
-  // as MuJoCo evaluates a position actuator (gain * target + bias * q, with
-  // bias = -kp), so that it gives the same numbers; the joints' damping,
-  // integrated implicitly by MuJoCo, makes it critical.
-  const int n = num_robots();
-  const mjtNum kp = model_->kp_;
-  for (int i = 0; i < n; ++i) {
-    const int q = model_->qpos_adr_[i], v = model_->qvel_adr_[i];
-    for (int c = 0; c < 2; ++c) {
-      // MuJoCo's affine bias [0, -kp, 0] . [1, length, velocity].
-      mjtNum bias = 0.0 + (-kp) * d->qpos[q + c];
-      bias += 0.0 * d->qvel[v + c];
-      d->qfrc_applied[v + c] = kp * targets_[i][c] + bias;
-    }
-  }
-}
-
-void Simulation::DriveWheels() {
-  // Each robot's controller (sim/diff_drive.h) sets its wheels' speeds; the
-  // motors' velocity loops (the wheels' damping, implicit in MuJoCo, plus
-  // this drive torque) follow them within their torque limit.
-  mjData* d = data_.get();
-  const PhysicsModel& pm = *model_;
-  const int n = num_robots();
-  for (int i = 0; i < n; ++i) {
-    const WheelSpeeds w =
-        pm.law_.Control(RobotPosition(i), RobotHeading(i), waypoints_[i]);
-    turning_[i] = w.turning ? 1 : 0;
-    const int left = pm.wheel_dof_[i][0], right = pm.wheel_dof_[i][1];
-    d->qfrc_applied[left] =
-        MotorTorque(pm.wheel_kv_, w.left, d->qvel[left], pm.max_torque_);
-    d->qfrc_applied[right] =
-        MotorTorque(pm.wheel_kv_, w.right, d->qvel[right], pm.max_torque_);
-  }
-}
-
 void Simulation::StepPhysics() {
-  if (robot_model() == RobotModel::kDiffDrive) {
-    DriveWheels();
-  } else {
-    PullPointRobots();
-  }
+  driver_->Drive(waypoints_, data_.get(), &turning_);
   mjData* d = data_.get();
   const int nq = m_->nq, nv = m_->nv, na = m_->na;
   saved_.resize(1 + nq + 2 * nv + na);
@@ -274,43 +206,26 @@ Simulation::Simulation(const World& world, const Scenario& scenario)
     : Simulation(std::make_shared<const PhysicsModel>(world, scenario)) {}
 
 Vec2 Simulation::RobotPosition(int i) const {
-  const mjtNum* q = data_->qpos + model_->qpos_adr_[i];
-  // A free joint holds the body's position in the world frame.
-  if (robot_model() == RobotModel::kDiffDrive) return {q[0], q[1]};
-  return model_->starts_[i] + Vec2(q[0], q[1]);
+  return driver_->Position(data_.get(), i);
 }
 
 Vec2 Simulation::RobotVelocity(int i) const {
-  const mjtNum* v = data_->qvel + model_->qvel_adr_[i];
-  return {v[0], v[1]};
+  return driver_->Velocity(data_.get(), i);
 }
 
 double Simulation::RobotHeading(int i) const {
-  if (robot_model() != RobotModel::kDiffDrive) return 0.0;
-  return YawOf(data_->qpos + model_->qpos_adr_[i] + 3);
+  return driver_->Heading(data_.get(), i);
 }
 
 double Simulation::ToGo(int i) const {
-  if (robot_model() != RobotModel::kDiffDrive)
-    return (RobotPosition(i) - waypoints_[i]).norm();
-  return model_->law_.ToGo(RobotPosition(i), RobotHeading(i), waypoints_[i]);
+  return driver_->ToGo(data_.get(), i, waypoints_[i]);
 }
 
 bool Simulation::Slow(int i, double speed) const {
-  const Vec2 v = RobotVelocity(i);
-  if (robot_model() != RobotModel::kDiffDrive)
-    return v.squaredNorm() <= speed * speed;
-  // The free joint's angular velocity is in the body's frame: z is the turn
-  // rate while the robot stands upright.
-  const double turn = data_->qvel[model_->qvel_adr_[i] + 5];
-  return v.norm() + std::fabs(turn) * model_->law_.half_track() <= speed;
+  return driver_->Slow(data_.get(), i, speed);
 }
 
-void Simulation::SetWaypoint(int i, const Vec2& p) {
-  waypoints_[i] = p;
-  const Vec2& start = model_->starts_[i];
-  targets_[i] = p - start;
-}
+void Simulation::SetWaypoint(int i, const Vec2& p) { waypoints_[i] = p; }
 
 Vec2 Simulation::TargetPosition(int k) const {
   const mjtNum* p = data_->mocap_pos + 3 * model_->mocap_id_[k];
@@ -327,7 +242,6 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
     const std::function<void(double)>& on_substep) {
   PhysicsStepStats stats;
   const PhysicsConfig& physics = model_->physics();
-  const bool wheeled = robot_model() == RobotModel::kDiffDrive;
   const double dt = m_->opt.timestep;
   const int max_steps = std::max(
       1, static_cast<int>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
@@ -338,13 +252,9 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
   const double settle_time =
       0.05;  // s: a robot is never called stalled before this
   // A robot in a sliding contact can creep on for seconds faster than
-  // stall_speed: it is stuck too when its distance to the waypoint has not
-  // shrunk by the tolerance over the last progress window (a diff_drive
-  // robot's wheel travel left, by the tolerance or, on its last
-  // centimetres, where its speed fades with the distance, by a quarter of
-  // what is left beyond the tolerance). A wheeled robot starts from rest
-  // and may first turn in place: its window is longer.
-  const double progress_window = wheeled ? 0.25 : 0.1;  // s
+  // stall_speed: it is stuck too when what it has to go has not shrunk by
+  // the driver's EnoughProgress over the last progress window.
+  const double progress_window = driver_->progress_window();  // s
   const int check_every =
       std::max(1, static_cast<int>(std::lround(progress_window / dt)));
   const int n = num_robots();
@@ -367,9 +277,7 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
     if ((s + 1) % check_every == 0) {
       for (int i = 0; i < n; ++i) {
         const double d = ToGo(i);
-        const double enough =
-            wheeled ? std::min(tol, 0.25 * std::max(0.0, progress_[i] - tol))
-                    : tol;
+        const double enough = driver_->EnoughProgress(progress_[i], tol);
         stuck_[i] = progress_[i] - d < enough ? 1 : 0;
         progress_[i] = d;
       }

@@ -239,32 +239,18 @@ struct Frame {
   }
 };
 
-// Corridors of `corridor` steps along u, each lined with a band of rooms on
-// both sides (back to back between two corridors), joined by cross
-// corridors along v (one per 25 m of length, at least one) that cut through
-// the bands; every room has one door onto its corridor.
-void Corridors(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
-  const int c = StepsIn(g.corridor, step);
-  const int m = std::max(1, StepsIn(g.room_size.x(), step));
-  const int big = std::max(m, StepsIn(g.room_size.y(), step));
-  const int d = StepsIn(g.door, step);
-  AIA_CHECK(c >= 1 && d >= 1);
-  Frame f{l, rng.Bernoulli(0.5)};
-  const int lu = f.Lu(), lv = f.Lv();
-  AIA_CHECK(lu >= c + m && lv >= c + m);  // Scenario::Validate
+// A strip across the corridors (v0 <= v < v1): a corridor, or a band of
+// rooms whose doors open onto the line door_line (its corridor side).
+struct Strip {
+  int v0, v1;
+  bool corridor;
+  int door_line;  // bands: the line of their corridor side
+};
 
-  // Across: bands of rooms and corridors.
-  struct Strip {
-    int v0, v1;
-    bool corridor;
-    int door_line;  // bands: the line of their corridor side
-  };
-  int units = std::max(1, static_cast<int>(std::lround(static_cast<double>(lv) /
-                                                       (c + m + big))));
-  while (units > 1 && lv < units * (c + 2 * m)) --units;
-  const bool two_sided = lv >= c + 2 * m;
-  const int bands = two_sided ? 2 * units : 1;
-  const int avail = lv - units * c;
+// The depths of `bands` bands of rooms, each drawn in [m, big], then moved
+// a step at a time until they sum to `avail` (every band at big: deeper
+// rooms).
+std::vector<int> BandDepths(int bands, int avail, int m, int big, Rng& rng) {
   std::vector<int> depth(bands);
   int sum = 0;
   for (int& x : depth) sum += (x = UniformIn(rng, m, big));
@@ -280,6 +266,19 @@ void Corridors(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
     depth[i] += by;
     sum += by;
   }
+  return depth;
+}
+
+// Across the width lv: units of a corridor of c steps between two bands of
+// rooms, or, where lv holds no two bands, one corridor on a side of one
+// band.
+std::vector<Strip> Strips(int lv, int c, int m, int big, Rng& rng) {
+  int units = std::max(1, static_cast<int>(std::lround(static_cast<double>(lv) /
+                                                       (c + m + big))));
+  while (units > 1 && lv < units * (c + 2 * m)) --units;
+  const bool two_sided = lv >= c + 2 * m;
+  const std::vector<int> depth =
+      BandDepths(two_sided ? 2 * units : 1, lv - units * c, m, big, rng);
   std::vector<Strip> strips;
   int v = 0;
   if (two_sided) {
@@ -298,61 +297,92 @@ void Corridors(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
     strips.push_back({0, lv - c, false, lv - c});
     strips.push_back({lv - c, lv, true, 0});
   }
+  return strips;
+}
 
-  // Along: cross corridors [p, p + c), one per 25 m, each in its own equal
-  // share of the length with at least a room's width beside it.
+// Along the length lu: the cross corridors and the stretches of rooms
+// between them.
+struct CrossCorridors {
+  std::vector<std::uint8_t> in_cross;     // per u
+  std::vector<std::pair<int, int>> gaps;  // room stretches [u0, u1)
+};
+
+// Cross corridors [p, p + c), one per 25 m, each in its own equal share of
+// the length with at least a room's width beside it.
+CrossCorridors Cross(int lu, int c, int m, double step, Rng& rng) {
   const int wanted = static_cast<int>(std::lround(lu * step / 25.0));
   const int cross = std::max(1, std::min(wanted, lu / (c + m)));
-  std::vector<std::uint8_t> in_cross(lu, 0);
-  std::vector<std::pair<int, int>> gaps;  // room stretches [u0, u1)
+  CrossCorridors out;
+  out.in_cross.assign(lu, 0);
   int u = 0;
   for (int k = 0; k < cross; ++k) {
     const int s0 = static_cast<int>(static_cast<long long>(k) * lu / cross);
     const int s1 = static_cast<int>(static_cast<long long>(k + 1) * lu / cross);
     const int lo = s0 + m, hi = s1 - c - m;
     const int p = hi >= lo ? UniformIn(rng, lo, hi) : s0;
-    if (p > u) gaps.push_back({u, p});
-    for (int i = p; i < p + c; ++i) in_cross[i] = 1;
+    if (p > u) out.gaps.push_back({u, p});
+    for (int i = p; i < p + c; ++i) out.in_cross[i] = 1;
     u = p + c;
   }
-  if (u < lu) gaps.push_back({u, lu});
+  if (u < lu) out.gaps.push_back({u, lu});
+  return out;
+}
 
-  for (const Strip& s : strips) {
-    if (s.corridor) continue;
-    // The band's walls along u: toward its corridor, with doors, and
-    // toward the next band or corridor above it when that is a band.
-    std::vector<std::uint8_t> door(lu, 0);
-    for (const auto& [g0, g1] : gaps) {
-      // Rooms of uniform width in [min, max], the last taking the rest.
-      int r0 = g0;
-      while (r0 < g1) {
-        int r1 = g1;
-        const int widest = std::min(big, g1 - r0 - m);
-        if (g1 - r0 > big && widest >= m) r1 = r0 + UniformIn(rng, m, widest);
-        const int width = std::min(d, r1 - r0);
-        const int a = UniformIn(rng, r0, r1 - width);
-        for (int i = a; i < a + width; ++i) door[i] = 1;
-        if (r1 < g1)
-          for (int vv = s.v0; vv < s.v1; ++vv) f.WallU(r1 - 1, vv);
-        r0 = r1;
-      }
-    }
-    for (int i = 0; i < lu; ++i) {
-      if (in_cross[i]) continue;
-      if (s.door_line > 0 && s.door_line < lv && !door[i])
-        f.WallV(i, s.door_line - 1);
-      // Back to back with the next band (its own walls face its corridor).
-      if (s.v1 < lv && s.door_line != s.v1) f.WallV(i, s.v1 - 1);
-    }
-    // The cross corridors' sides through the band.
-    for (int i = 0; i < lu; ++i) {
-      if (!in_cross[i]) continue;
-      for (int vv = s.v0; vv < s.v1; ++vv) {
-        if (i > 0 && !in_cross[i - 1]) f.WallU(i - 1, vv);
-        if (i + 1 < lu && !in_cross[i + 1]) f.WallU(i, vv);
-      }
+// One band's walls: rooms of uniform width in [m, big] along each stretch
+// (the last taking the rest), each with a door of d steps onto its
+// corridor; the band's walls along u, toward its corridor (but the doors)
+// and back to back with the next band; the cross corridors' sides through
+// it.
+void BandWalls(const Strip& s, const CrossCorridors& x, int m, int big, int d,
+               Rng& rng, Frame* f) {
+  const int lu = f->Lu(), lv = f->Lv();
+  std::vector<std::uint8_t> door(lu, 0);
+  for (const auto& [g0, g1] : x.gaps) {
+    int r0 = g0;
+    while (r0 < g1) {
+      int r1 = g1;
+      const int widest = std::min(big, g1 - r0 - m);
+      if (g1 - r0 > big && widest >= m) r1 = r0 + UniformIn(rng, m, widest);
+      const int width = std::min(d, r1 - r0);
+      const int a = UniformIn(rng, r0, r1 - width);
+      for (int i = a; i < a + width; ++i) door[i] = 1;
+      if (r1 < g1)
+        for (int vv = s.v0; vv < s.v1; ++vv) f->WallU(r1 - 1, vv);
+      r0 = r1;
     }
   }
+  for (int i = 0; i < lu; ++i) {
+    if (x.in_cross[i]) continue;
+    if (s.door_line > 0 && s.door_line < lv && !door[i])
+      f->WallV(i, s.door_line - 1);
+    // Back to back with the next band (its own walls face its corridor).
+    if (s.v1 < lv && s.door_line != s.v1) f->WallV(i, s.v1 - 1);
+  }
+  for (int i = 0; i < lu; ++i) {
+    if (!x.in_cross[i]) continue;
+    for (int vv = s.v0; vv < s.v1; ++vv) {
+      if (i > 0 && !x.in_cross[i - 1]) f->WallU(i - 1, vv);
+      if (i + 1 < lu && !x.in_cross[i + 1]) f->WallU(i, vv);
+    }
+  }
+}
+
+// Corridors of `corridor` steps along u, each lined with a band of rooms on
+// both sides (back to back between two corridors), joined by cross
+// corridors along v (one per 25 m of length, at least one) that cut through
+// the bands; every room has one door onto its corridor.
+void Corridors(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
+  const int c = StepsIn(g.corridor, step);
+  const int m = std::max(1, StepsIn(g.room_size.x(), step));
+  const int big = std::max(m, StepsIn(g.room_size.y(), step));
+  const int d = StepsIn(g.door, step);
+  AIA_CHECK(c >= 1 && d >= 1);
+  Frame f{l, rng.Bernoulli(0.5)};
+  AIA_CHECK(f.Lu() >= c + m && f.Lv() >= c + m);  // Scenario::Validate
+  const std::vector<Strip> strips = Strips(f.Lv(), c, m, big, rng);
+  const CrossCorridors cross = Cross(f.Lu(), c, m, step, rng);
+  for (const Strip& s : strips)
+    if (!s.corridor) BandWalls(s, cross, m, big, d, rng, &f);
 }
 
 // ---------------------------------------------------------------- cave ---

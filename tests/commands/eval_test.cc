@@ -10,11 +10,13 @@
 #include <sstream>
 #include <tuple>
 
+#include "aia/commands/eval_folder.h"
 #include "aia/commands/ranks.h"
 #include "aia/core/interrupt.h"
 #include "aia/core/io.h"
 #include "aia/planning/decsb.h"
 #include "aia/runtime/mission.h"
+#include "aia/scenario/yaml.h"
 #include "support/test_support.h"
 
 namespace aia {
@@ -550,7 +552,8 @@ TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
   ASSERT_EQ(eval({"--set", "sensor.range=3"}).exit_code, 0);
   const std::string effective = ReadFile(dir + "/effective.yaml");
   EXPECT_NE(effective.find("range: 3"), std::string::npos) << effective;
-  EXPECT_NE(effective.find("#   greedy: {}"), std::string::npos) << effective;
+  EXPECT_NE(effective.find("\npolicies:\n  greedy: {}\n"), std::string::npos)
+      << effective;
   // The same configuration resumes (nothing left to run) ...
   auto r = eval({"--set", "sensor.range=3"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -626,12 +629,15 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
   const std::string effective = ReadFile(dir + "/e/effective.yaml");
   const auto sha = testing::RunCommand("sha256sum '" + model + "'");
   ASSERT_EQ(sha.exit_code, 0);
-  EXPECT_NE(effective.find("#   igbnet: {coordination: rules, "
-                           "max_reversals: 1, max_walk: 0, search: true, "
-                           "share_search: true, no_undo: "
-                           "true, claims: route}; model " +
-                           model + " sha256 " + sha.out.substr(0, 64) + "\n"),
-            std::string::npos)
+  // The policy's parameters and its model file, as a mapping that parses.
+  const ConfigNode config = ParseYaml(effective, "effective.yaml");
+  ASSERT_NE(config.Find("policies"), nullptr) << effective;
+  const ConfigNode* igbnet = config.Find("policies")->Find("igbnet");
+  ASSERT_NE(igbnet, nullptr) << effective;
+  EXPECT_EQ(ShowNode(*igbnet, 100000),
+            "{coordination: rules, max_reversals: 1, max_walk: 0, search: "
+            "true, share_search: true, no_undo: true, claims: route, model: " +
+                model + ", model_sha256: " + sha.out.substr(0, 64) + "}")
       << effective;
   EXPECT_EQ(eval().exit_code, 0);  // the same model resumes
   std::filesystem::copy_file(testing::SourcePath("models/igbnet.pt"), model,
@@ -643,6 +649,165 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
             std::string::npos)
       << r.err;
   std::filesystem::remove_all(dir);
+}
+
+// effective.yaml in the form an older aia wrote (issue 38): the policies in
+// comment lines "#   NAME: PARAMS", a learned one's model after "; model ",
+// the expert of F* on a line of its own, then the scenario keys.
+std::string OlderForm(const std::string& effective,
+                      const std::vector<std::string>& policy_lines) {
+  const ConfigNode config = ParseYaml(effective, "effective.yaml");
+  ConfigNode expert = *config.Find("policy");
+  expert.Erase("name");
+  std::string text =
+      "# aia eval: the scenario of every instance, overrides applied. Per\n"
+      "# instance, robots.count and targets.count are its size and seed its\n"
+      "# seed (--sizes, --seeds, --seed-base); the expert gives F*, and each\n"
+      "# policy runs with these parameters:\n"
+      "#   expert (F*): " +
+      ShowNode(expert, 100000) + "\n";
+  for (const std::string& line : policy_lines) text += "#   " + line + "\n";
+  // The scenario keys: every line from the first key after `policies`.
+  std::istringstream in(effective);
+  std::string line;
+  bool in_policies = false, body = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("policies:", 0) == 0) in_policies = true;
+    if (in_policies && !line.empty() && line[0] != ' ' &&
+        line.rfind("policies:", 0) != 0)
+      body = true;
+    if (body) text += line + "\n";
+  }
+  return text;
+}
+
+// A folder of an older aia, its policies in comment lines, still resumes:
+// its rows are kept, its effective.yaml rewritten as a mapping; its model
+// lines are still checked.
+TEST(EvalTest, AnOlderFolderStillResumes) {
+  const std::string dir = testing::MakeTempDir("aia_eval_");
+  const std::string model = dir + "/model.pt";
+  std::filesystem::copy_file(testing::SourcePath("models/igbnet_10x10.pt"),
+                             model);
+  const auto eval = [&](const std::string& policies) {
+    return RunAia({"eval", "--sizes", "2x1", "--seeds", "2", "--policies",
+                   policies, "--set", "policy.model=" + model, "--out",
+                   dir + "/e", "--quiet"});
+  };
+  ASSERT_EQ(eval("greedy,igbnet").exit_code, 0);
+  const std::string effective = ReadFile(dir + "/e/effective.yaml");
+  const std::string sha =
+      testing::RunCommand("sha256sum '" + model + "'").out.substr(0, 64);
+  const std::string igbnet_line =
+      "igbnet: {coordination: rules, max_reversals: 1, max_walk: 0, search: "
+      "true, share_search: true, no_undo: true, claims: route}; model " +
+      model + " sha256 " + sha;
+  const std::string older =
+      OlderForm(effective, {"greedy: {}", igbnet_line, "random: {}"});
+  ASSERT_EQ(older.find("policies"), std::string::npos) << older;
+  WriteFileAtomic(dir + "/e/effective.yaml", older);
+  auto r = eval("greedy,igbnet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("4 rows already done, 0 to run"), std::string::npos)
+      << r.out;
+  // Rewritten as this aia writes it, the older folder's other policy kept.
+  const ConfigNode folder =
+      ParseYaml(ReadFile(dir + "/e/effective.yaml"), "effective.yaml");
+  ConfigNode written = ParseYaml(effective, "effective.yaml");
+  written.Find("policies")->Set("random", ConfigNode::Map());
+  EXPECT_TRUE(SameValue(folder, written))
+      << ReadFile(dir + "/e/effective.yaml");
+  // An older folder made with another model, or one that did not record it,
+  // is refused.
+  WriteFileAtomic(
+      dir + "/e/effective.yaml",
+      OlderForm(effective,
+                {"greedy: {}", igbnet_line.substr(0, igbnet_line.size() - 64) +
+                                   std::string(64, 'a')}));
+  r = eval("greedy,igbnet");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("igbnet's model file differs: another file, or the "
+                       "same one retrained"),
+            std::string::npos)
+      << r.err;
+  WriteFileAtomic(
+      dir + "/e/effective.yaml",
+      OlderForm(effective,
+                {"igbnet: {coordination: rules, max_reversals: 1, max_walk: 0, "
+                 "search: true, share_search: true, no_undo: true, claims: "
+                 "route}"}));
+  r = eval("igbnet");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("igbnet's model file differs: the folder does not "
+                       "record which was used"),
+            std::string::npos)
+      << r.err;
+  // ... and other parameters.
+  WriteFileAtomic(dir + "/e/effective.yaml",
+                  OlderForm(effective, {"igbnet: {coordination: none}"}));
+  r = eval("igbnet");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("igbnet's parameters differ"), std::string::npos)
+      << r.err;
+  std::filesystem::remove_all(dir);
+}
+
+// The folder's configuration compared as trees: the scenario keys, then each
+// policy of both (its parameters, then its model file); a policy of one
+// alone fits, and the folder's stay in the merged configuration.
+TEST(EvalFolderTest, ConfigurationsComparedAsTrees) {
+  const auto config = [](const std::string& yaml) {
+    return ReadEvalConfig(yaml, "effective.yaml");
+  };
+  const ConfigNode run = config(
+      "policies:\n  greedy: {}\n  igbnet: {claims: route, model: /m.pt, "
+      "model_sha256: ab}\nseed: 0\nsensor: {range: 2}\n");
+  EXPECT_EQ(ConfigMismatch(run, run), "");
+  // Written another way: the same.
+  EXPECT_EQ(ConfigMismatch(config("sensor:\n  range: 2\nseed: 0\npolicies:\n"
+                                  "  igbnet:\n    model_sha256: ab\n    "
+                                  "model: /m.pt\n    claims: route\n"),
+                           run),
+            "");
+  EXPECT_EQ(ConfigMismatch(config("policies: {}\nseed: 0\nsensor: {range: "
+                                  "3}\n"),
+                           run),
+            "the scenario differs (--set)");
+  EXPECT_EQ(ConfigMismatch(config("policies: {igbnet: {claims: none, model: "
+                                  "/m.pt, model_sha256: ab}}\nseed: "
+                                  "0\nsensor: {range: 2}\n"),
+                           run),
+            "igbnet's parameters differ");
+  EXPECT_EQ(ConfigMismatch(config("policies: {igbnet: {claims: route, model: "
+                                  "/m.pt, model_sha256: cd}}\nseed: "
+                                  "0\nsensor: {range: 2}\n"),
+                           run),
+            "igbnet's model file differs: another file, or the same one "
+            "retrained (its SHA-256 changed)");
+  // An older folder's comment lines read as the same tree.
+  const ConfigNode older = config(
+      "# aia eval: ...\n#   expert (F*): {p_v: 0.9}\n#   greedy: {}\n"
+      "#   igbnet: {claims: route}; model /m.pt sha256 ab\n"
+      "#   decsb: {horizon: 4}\nseed: 0\nsensor: {range: 2}\n");
+  EXPECT_EQ(ConfigMismatch(older, run), "");
+  const ConfigNode merged = WithFolderPolicies(older, run);
+  EXPECT_EQ(ShowNode(*merged.Find("policies"), 1000),
+            "{greedy: {}, igbnet: {claims: route, model: /m.pt, model_sha256: "
+            "ab}, decsb: {horizon: 4}}");
+  // A `policies` key that is not a mapping of mappings is bad input at its
+  // line.
+  for (const std::string& bad :
+       {std::string("seed: 0\npolicies: [greedy]\n"),
+        std::string("seed: 0\npolicies:\n  greedy: 3\n")}) {
+    try {
+      config(bad);
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "effective.yaml");
+      EXPECT_GE(e.line(), 2) << e.Format();
+      EXPECT_EQ(e.key().rfind("policies", 0), 0u) << e.Format();
+    }
+  }
 }
 
 }  // namespace

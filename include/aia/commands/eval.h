@@ -6,12 +6,13 @@
 //      setup: the world is built once, the expert's F* computed, then each
 //      policy runs to success or 3 F* steps on that same world;
 //   3. SummaryCsv: rows merged into success rates and flowtime increases.
-// RunEval drives them on a thread pool, writing DIR/runs.csv (one row per
-// instance and policy, appended as they finish, so an interrupted eval
-// resumes), DIR/summary.csv and DIR/effective.yaml.
+// RunEval (eval_run.cc) drives them on a thread pool into an output folder
+// (eval_folder.h: DIR/runs.csv, appended as runs finish so that an
+// interrupted eval resumes, DIR/summary.csv and DIR/effective.yaml).
 #ifndef AIA_COMMANDS_EVAL_H_
 #define AIA_COMMANDS_EVAL_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <exception>
 #include <limits>
@@ -62,6 +63,11 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
                         const std::vector<std::string>& sets,
                         const PolicyRegistry& registry,
                         const std::vector<EvalInstance>& instances = {});
+
+// The horizon of an instance and the denominator of its flowtime increase:
+// 3 F* steps, with F* = 0 (targets all localized at the start) counted as 1
+// so that the ratio is defined.
+inline int EvalHorizon(int fstar) { return 3 * std::max(fstar, 1); }
 
 // One row of runs.csv.
 struct EvalRow {
@@ -122,18 +128,6 @@ struct RunInterrupted : std::exception {
 std::vector<EvalRow> RunInstance(const EvalInstance& instance,
                                  const EvalSetup& setup,
                                  const std::vector<std::string>& policies = {});
-
-// runs.csv rows and their text.
-std::string FormatRow(const EvalRow& row);
-// Parses runs.csv. Rows that do not parse (e.g. a line cut short by an
-// interruption), hold impossible values (a negative flowtime, a success
-// beyond the horizon) or repeat a run (every copy) are dropped, each with a
-// "line N: why" in `problems` when given. The file is read line by line; a
-// line longer than 64 KiB (a file cut by a crash may end in gigabytes of
-// NULs), a FIFO or a device is InputError naming --out, the file and the
-// line.
-std::vector<EvalRow> ReadRuns(const std::string& path,
-                              std::vector<std::string>* problems = nullptr);
 
 // summary.csv text from rows, sizes and policies in the given order.
 // One row of summary.csv: a size and a policy over the instances with an

@@ -26,6 +26,8 @@ class Ranks {
   // Rank 0 tells every rank whether to go on (after checks only it makes,
   // e.g. on the output folder); returns the verdict on every rank.
   bool AgreeFromRoot(bool go_on);
+  // Returns on every rank once every rank has called it.
+  void Barrier();
 
   // Ranks other than 0: one line of results to rank 0, then, once, the end
   // of this rank's work (`error` empty on success).

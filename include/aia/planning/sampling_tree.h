@@ -29,6 +29,9 @@
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
+#include "aia/planning/aim_table.h"
+#include "aia/planning/bucket_grid.h"
+#include "aia/planning/node_arena.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/tours.h"
 #include "aia/world/map.h"
@@ -95,30 +98,6 @@ struct SamplingParams {
 // until the trees solving at the same time leave it room (docs/design.md,
 // Policies). Waiting changes when a plan is made, never which plan.
 inline constexpr double kMaxTreeBytes = 1.0 * (1L << 30);
-
-// The tree's arena: large blocks are mapped from the kernel and returned to
-// it when freed, so that a finished large solve gives its memory back
-// whatever the process's malloc keeps (jemalloc in build/aia keeps freed
-// pages), and only the pages a tree fills are resident.
-template <typename T>
-struct ArenaAllocator {
-  using value_type = T;
-  ArenaAllocator() = default;
-  template <typename U>
-  ArenaAllocator(const ArenaAllocator<U>&) {}  // NOLINT: allocator rebind
-  T* allocate(std::size_t n);
-  void deallocate(T* p, std::size_t n);
-  template <typename U>
-  bool operator==(const ArenaAllocator<U>&) const {
-    return true;
-  }
-  template <typename U>
-  bool operator!=(const ArenaAllocator<U>&) const {
-    return false;
-  }
-};
-template <typename T>
-using ArenaVector = std::vector<T, ArenaAllocator<T>>;
 
 // Goal paths whose J is within this fraction of eps of the cheapest one
 // count as equally good, and the shortest of them is returned. One step of
@@ -194,14 +173,6 @@ class SamplingTree {
     int offset = 0;  // into a node's packed information
     bool is_static = true;
   };
-  // Where a target is planned for a span of depths, and the BFS field toward
-  // the lattice points that see it there.
-  struct AimSlot {
-    bool ready = false;
-    bool at_mean = true;  // the predicted mean itself (else `point`)
-    Vec2 point{0.0, 0.0};
-    std::vector<int> field;
-  };
   enum class RolloutKind { kTours, kMakespanTours, kNearest, kGreedy };
   class Legs;
 
@@ -210,12 +181,6 @@ class SamplingTree {
   double BlockDet(const double* packed, int k) const;
   // det Sigma_k after adding r to its position precision.
   double BlockDetAfter(const double* packed, int k, double r) const;
-  const double* Info(int node) const {
-    return info_.data() + static_cast<size_t>(node) * stride_;
-  }
-  const int* Pos(int node) const {
-    return pos_.data() + static_cast<size_t>(node) * n_;
-  }
   void MarkOpen(int node);  // open_[k]: det Sigma_k > eps at the node
   void Assign(int node, bool sorted, Rng& rng);
   int NearestOpen(int q, int depth);
@@ -232,17 +197,6 @@ class SamplingTree {
   int ReachOf(int k, const int* positions) const;
   int NextInTour(const std::vector<int>& tour) const;
   Move StepToward(int q, int k, int depth, Rng* rng);
-  int Bucket(int depth, int k) const;
-  AimSlot& Slot(int depth, int k);
-  const std::vector<int>& FieldAt(int depth, int k) {
-    return Slot(depth, k).field;
-  }
-  Vec2 MeasurePoint(int depth, int k);
-  bool FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
-               const std::vector<int>* missed, Vec2* aim,
-               std::vector<std::pair<int, double>>* region);
-  void RegionOf(const Vec2& x, std::vector<std::pair<int, double>>* region);
-  const Vec2& MeanAt(int depth, int k);
   Leg ComputeLeg(int from, int t, int k);
   void PlanTours();
   int Rollout(RolloutKind kind, const SamplingParams& params);
@@ -280,21 +234,13 @@ class SamplingTree {
   long node_cap_ = 0;  // max_nodes, or fewer to stay within kMaxTreeBytes
   std::vector<TargetInfo> targets_;
   std::vector<const TargetModel*> models_;
-  std::vector<std::vector<Vec2>> means_;  // [depth][k] position means
-  std::vector<Eigen::VectorXd>
-      full_mean_;  // working state for mean propagation
-  std::vector<std::vector<AimSlot>> slots_;  // [k][bucket]
-  std::vector<int> reach_;  // BFS distance from the nearest active robot
+  AimTable aims_;  // where each target is planned to be seen
   // Static targets observable from each lattice point: CSR (target, r).
   std::vector<int> obs_begin_;
   std::vector<std::pair<int, double>> obs_;
   bool any_moving_ = false;
 
-  // Arena.
-  ArenaVector<int> pos_;      // nodes x n
-  ArenaVector<double> info_;  // nodes x stride
-  ArenaVector<int> parent_, depth_, unloc_;
-  ArenaVector<double> cost_, det_sum_;
+  NodeArena arena_;
   std::vector<std::vector<int>> levels_;  // expandable nodes per depth
   // Search state.
   std::vector<int> goals_;  // goal nodes within the tolerance of j_min_
@@ -312,34 +258,20 @@ class SamplingTree {
   // Scratch.
   std::vector<int> assigned_, order_, child_pos_;
   std::vector<char> open_;
-  std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<std::pair<int, int>> pairs_;  // (distance, robot * m + target)
   // Spatial indexes.
-  struct Rect {
-    int x0 = 0, x1 = -1, y0 = 0,
-        y1 = -1;  // lattice coordinates; x0 > x1: empty
-  };
-  // Items in square buckets of lattice points, as CSR.
-  struct Buckets {
-    int cell = 8, gx = 0, gy = 0;  // bucket side (lattice points), buckets
-    std::vector<int> begin, items, fill;
-    // Sized for about two of `count` items per bucket, emptied.
-    void Reset(int nx, int ny, int count);
-    int Of(int x, int y) const { return (y / cell) * gx + x / cell; }
-  };
-  std::vector<Rect> region_box_;  // per static target, its region's bounds
+  // Per static target, its region's bounds.
+  std::vector<LatticeRect> region_box_;
   std::vector<const int*> static_field_;  // per static target, its field
   bool indexed_ = false;  // all targets static: the indexes are used
   int pad_ = 0;  // the largest distance from a region's centre to its bounds
-  Buckets open_index_;           // the open targets by their region's centre
+  BucketGrid open_index_;        // the open targets by their region's centre
   bool open_indexed_ = false;    // open_index_ holds open_list_
-  Buckets robot_index_;          // a node's active robots by their point
+  BucketGrid robot_index_;       // a node's active robots by their point
   bool robots_indexed_ = false;  // robot_index_ holds the current node's
   std::vector<int> open_list_;   // open targets, ascending
   std::vector<std::pair<int, int>> near_;  // (distance bound, target)
   std::vector<char> avail_;
-  ArenaVector<double> lower_;  // per node: lower bound of the total cost
-  std::vector<int> bfs_queue_;
 };
 
 }  // namespace aia

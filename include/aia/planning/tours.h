@@ -77,9 +77,35 @@ class TourPlanner {
   };
   RouteValue Evaluate(int robot, const std::vector<int>& route);
   RouteValue Value(int robot, const std::vector<int>& route);  // uncounted
+
+  // Regret insertion (Plan's first phase): every target into a route.
   void Insert(const std::vector<int>& robots, const std::vector<int>& targets,
               const TourSettings& settings, Tours* tours,
               std::vector<RouteValue>* values);
+  // Each target's candidate robots (candidates_) and their scratch.
+  void ChooseCandidates(const std::vector<int>& robots,
+                        const std::vector<int>& targets,
+                        const TourSettings& settings);
+  // Where target k (index t of the targets) goes best, and its regret.
+  struct Insertion;
+  Insertion BestInsertion(int t, int k, const Tours& tours,
+                          const std::vector<RouteValue>& values,
+                          const std::vector<long>& version);
+
+  // The local search (Plan's second phase): relocate, swap and 2-opt moves,
+  // first improvement, until no move improves or the budget is spent. Each
+  // move returns whether it took one.
+  struct Search;
+  void LocalSearch(const std::vector<int>& robots, const TourSettings& settings,
+                   Tours* tours, std::vector<RouteValue>* values);
+  bool Relocate(Search* s);  // one target to any position of any route
+  bool Swap(Search* s);      // two targets, in one route or two
+  bool TwoOpt(Search* s);    // a stretch of one route reversed
+  // Takes route a (and b, unless b < 0) when that lowers the objective.
+  bool Take(Search* s, int a, const std::vector<int>& route_a,
+            const RouteValue& va, int b, const std::vector<int>& route_b,
+            const RouteValue& vb);
+
   void Summarize(const std::vector<RouteValue>& values);
   double Objective(const std::vector<RouteValue>& values);
   double ObjectiveWith(const std::vector<RouteValue>& values, int a,
@@ -101,6 +127,7 @@ class TourPlanner {
   std::vector<std::vector<int>> candidates_;
   std::vector<std::vector<std::vector<RouteValue>>> inserted_;
   std::vector<std::vector<long>> inserted_version_;
+  std::vector<int> trial_;  // a route with a target inserted
 };
 
 }  // namespace aia

@@ -20,7 +20,7 @@
 #include "aia/core/types.h"
 #include "aia/estimation/sensor_model.h"
 #include "aia/scenario/config.h"
-#include "aia/sim/diff_drive.h"
+#include "aia/sim/robot_driver.h"
 #include "aia/world/mjcf.h"
 #include "aia/world/world.h"
 
@@ -108,17 +108,8 @@ class PhysicsModel {
   int hessians_ = kPointHessians;
   long one_row_contacts_ = 0;
   std::vector<Vec2> starts_;
-  // Per robot. Point: qpos/qvel index of its x joint (y next). diff_drive:
-  // of its free joint (x, y, z, quaternion; linear then angular velocity).
-  std::vector<int> qpos_adr_;
-  std::vector<int> qvel_adr_;
-  double kp_ = 0.0;  // point: the waypoint spring, as the MJCF states it
-  // diff_drive: each robot's left and right wheel dof, the motors' velocity
-  // loop gain (the wheels' damping, as the MJCF states it) and torque limit.
-  std::vector<std::array<int, 2>> wheel_dof_;
-  double wheel_kv_ = 0.0;
-  double max_torque_ = 0.0;
-  DiffDriveLaw law_;
+  // How the robots of the model move (robot_driver.h).
+  std::unique_ptr<const RobotDriver> driver_;
   std::vector<int> mocap_id_;
 };
 
@@ -195,12 +186,9 @@ class Simulation {
 
  private:
   void Grow();
-  // The controllers' forces for the next mj_step.
-  void PullPointRobots();
-  void DriveWheels();
   // How far robot i still has to go, and whether it moves no faster than
-  // `speed` (point: distance and speed; diff_drive: wheel travel and rim
-  // speed, turning included).
+  // `speed` (RobotDriver: a point's distance and speed; a wheeled robot's
+  // wheel travel and rim speed, turning included).
   double ToGo(int i) const;
   bool Slow(int i, double speed) const;
 
@@ -208,8 +196,8 @@ class Simulation {
   MjModelPtr own_model_;  // set once the contact budget has grown
   const mjModel* m_ = nullptr;
   MjDataPtr data_;
+  const RobotDriver* driver_ = nullptr;  // the model's
   std::vector<Vec2> waypoints_;
-  std::vector<Vec2> targets_;     // waypoints as displacements from the starts
   std::vector<mjtNum> saved_;     // time, qpos, qvel, qacc_warmstart, act
   std::vector<double> progress_;  // distance to the waypoint at a checkpoint
   std::vector<std::uint8_t> stuck_;
@@ -222,7 +210,6 @@ class Simulation {
   double physics_seconds_ = 0.0;
   long mj_steps_ = 0, contacts_summed_ = 0;
 };
-
 
 // One round of sensing (docs/design.md, Sensing): robot i (if active) measures
 // target k when it is within range and, with line of sight on, a ray between
