@@ -133,8 +133,7 @@ long long IntegerArg(py::handle h, const std::string& where,
   if (overflow != 0 || v < lo || v > hi)
     Refuse(where, arg,
            "must be an integer in [" + std::to_string(lo) + ", " +
-               std::to_string(hi) + "], got " +
-               py::str(i).cast<std::string>());
+               std::to_string(hi) + "], got " + py::str(i).cast<std::string>());
   return v;
 }
 
@@ -142,8 +141,9 @@ long long IntegerArg(py::handle h, const std::string& where,
 std::optional<std::uint64_t> SeedArg(py::handle h, const std::string& where,
                                      const std::string& arg, bool none_ok) {
   if (none_ok && h.is_none()) return std::nullopt;
-  const std::string expect = std::string("must be an integer in [0, 2^64 - 1]") +
-                             (none_ok ? " or None" : "");
+  const std::string expect =
+      std::string("must be an integer in [0, 2^64 - 1]") +
+      (none_ok ? " or None" : "");
   const py::object i = AsInteger(h);
   if (!i) Refuse(where, arg, expect + ", got " + Shown(h));
   const unsigned long long v = PyLong_AsUnsignedLongLong(i.ptr());
@@ -166,15 +166,11 @@ std::string ShapeText(const std::vector<py::ssize_t>& shape) {
 // The integers of a Python list, tuple or numpy array of exactly `shape`
 // (-1: any length), each in [lo, hi], flat in C order. `expect` says what
 // one is ("0 (left), ..."), `shape_name` what the shape means.
-std::vector<long long> Integers(py::handle obj,
-                                const std::vector<py::ssize_t>& shape,
-                                long long lo, long long hi,
-                                const std::string& where,
-                                const std::string& arg,
-                                const std::string& expect,
-                                const std::string& shape_name) {
-  static const py::handle numpy =
-      py::module_::import("numpy").release();
+std::vector<long long> Integers(
+    py::handle obj, const std::vector<py::ssize_t>& shape, long long lo,
+    long long hi, const std::string& where, const std::string& arg,
+    const std::string& expect, const std::string& shape_name) {
+  static const py::handle numpy = py::module_::import("numpy").release();
   const bool is_array = py::isinstance<py::array>(obj);
   if (!is_array && !PyList_Check(obj.ptr()) && !PyTuple_Check(obj.ptr()))
     Refuse(where, arg,
@@ -215,7 +211,9 @@ std::vector<long long> Integers(py::handle obj,
     }
     for (std::size_t d : at) index += "[" + std::to_string(d) + "]";
     const py::object i = AsInteger(items[k]);
-    if (!i) Refuse(where, arg + index, "must be " + expect + ", got " + Shown(items[k]));
+    if (!i)
+      Refuse(where, arg + index,
+             "must be " + expect + ", got " + Shown(items[k]));
     int overflow = 0;
     const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
     if (overflow != 0 || v < lo || v > hi)
@@ -835,8 +833,9 @@ class VectorMissions {
         MovesFrom(moves, {n, robots}, "aia.VectorMissions.step");
     std::vector<std::vector<Move>> next(n);
     for (int i = 0; i < n; ++i)
-      next[i].assign(flat.begin() + static_cast<std::ptrdiff_t>(i) * robots,
-                     flat.begin() + static_cast<std::ptrdiff_t>(i + 1) * robots);
+      next[i].assign(
+          flat.begin() + static_cast<std::ptrdiff_t>(i) * robots,
+          flat.begin() + static_cast<std::ptrdiff_t>(i + 1) * robots);
     std::vector<long> before(n);
     std::vector<bool> stepped(n);
     for (int i = 0; i < n; ++i) {
@@ -957,7 +956,8 @@ class PyDataset {
     if (IsBool(share_arg) || !PyNumber_Check(share_arg.ptr()))
       Refuse("aia.Dataset.split", "val_share",
              "must be a number in [0, 1], got " + Shown(share_arg));
-    const double share = py::float_(py::reinterpret_borrow<py::object>(share_arg));
+    const double share =
+        py::float_(py::reinterpret_borrow<py::object>(share_arg));
     if (!(share >= 0.0 && share <= 1.0))
       Refuse("aia.Dataset.split", "val_share",
              "must be a number in [0, 1], got " + Shown(share_arg));
@@ -1163,11 +1163,11 @@ class CStdioCapture {
 // aia.evaluate's core: `aia eval` with one more policy, the callable.
 // Returns the exit code and what aia eval wrote to stderr (notes such as
 // dropped rows; the wrapper turns them into Python warnings).
-py::tuple Evaluate(py::object decide, const std::string& name,
-                   bool centralized, const std::vector<std::string>& sizes,
-                   int seeds, std::uint64_t seed_base, const std::string& out,
-                   int threads, const std::vector<std::string>& sets,
-                   py::object progress, int done_before, int total) {
+py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
+                   const std::vector<std::string>& sizes, int seeds,
+                   std::uint64_t seed_base, const std::string& out, int threads,
+                   const std::vector<std::string>& sets, py::object progress,
+                   int done_before, int total) {
   EvalOptions o;
   o.sizes.clear();
   for (std::size_t i = 0; i < sizes.size(); ++i) {
@@ -1235,15 +1235,30 @@ void BindErrors(py::module_& m) {
 }
 
 void BindMoves(py::module_& m) {
-  py::enum_<Move>(m, "Move", py::arithmetic(),
-                  "A robot's move on the lattice. Moves are plain ints "
-                  "too: Move.UP == 2.")
-      .value("LEFT", Move::kLeft, "0: -x")
+  py::enum_<Move> move(m, "Move", py::arithmetic(),
+                       "A robot's move on the lattice; equal to its int "
+                       "(Move.UP == 2).");
+  move.value("LEFT", Move::kLeft, "0: -x")
       .value("RIGHT", Move::kRight, "1: +x")
       .value("UP", Move::kUp, "2: +y")
       .value("DOWN", Move::kDown, "3: -y")
       .value("STAY", Move::kStay,
              "4: the robot keeps its lattice point (a valid decision)");
+  // Equal to its int and hashed as it (pybind11 compares an enum class
+  // only with its own type), so that Move.UP == 2 and {2: x}[Move.UP]:
+  // these replace pybind11's own, not overload them.
+  const auto equal = [](Move a, py::handle b) {
+    const py::object i = AsInteger(b);
+    return i && i.equal(py::int_(static_cast<int>(a)));
+  };
+  move.attr("__eq__") =
+      py::cpp_function(equal, py::name("__eq__"), py::is_method(move));
+  move.attr("__ne__") =
+      py::cpp_function([equal](Move a, py::handle b) { return !equal(a, b); },
+                       py::name("__ne__"), py::is_method(move));
+  move.attr("__hash__") =
+      py::cpp_function([](Move a) { return static_cast<int>(a); },
+                       py::name("__hash__"), py::is_method(move));
 }
 
 void BindMission(py::module_& m) {
@@ -1304,8 +1319,7 @@ void BindMission(py::module_& m) {
            "diagnostics.json's text.")
       .def_property_readonly("num_robots", &Mission::num_robots)
       .def_property_readonly("num_targets", &Mission::num_targets)
-      .def_property_readonly("steps", &Mission::step,
-                             "decision steps taken")
+      .def_property_readonly("steps", &Mission::step, "decision steps taken")
       .def_property_readonly("done", &Mission::done)
       .def_property_readonly("success", &Mission::success)
       .def_property_readonly("flowtime", &Mission::flowtime,
@@ -1338,8 +1352,8 @@ void BindVectorMissions(py::module_& m) {
       .def(py::init([](const std::string& scenario, py::handle seeds,
                        const KeyValues& overrides, py::handle threads,
                        bool autoreset) {
-             const int t = static_cast<int>(IntegerArg(
-                 threads, "aia.VectorMissions", "threads", 0, 4096));
+             const int t = static_cast<int>(
+                 IntegerArg(threads, "aia.VectorMissions", "threads", 0, 4096));
              std::vector<std::uint64_t> s;
              for (py::handle seed : seeds)
                s.push_back(*SeedArg(seed, "aia.VectorMissions", "seed", false));
@@ -1385,8 +1399,8 @@ void BindDataset(py::module_& m) {
       .def_property_readonly("num_worlds", &PyDataset::num_worlds)
       .def("samples", &PyDataset::Samples,
            "Per sample: label, useful, acted, world, episode, step, robot.")
-      .def("validation_worlds", &PyDataset::ValidationWorlds,
-           py::arg("share"), py::arg("seed"),
+      .def("validation_worlds", &PyDataset::ValidationWorlds, py::arg("share"),
+           py::arg("seed"),
            "Whether each world is held out, as aia train splits.")
       .def("batch", &PyDataset::Batch, py::arg("indices"),
            "(images (B, C, H, W) float32, labels (B,) int64).");

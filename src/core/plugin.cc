@@ -1,9 +1,8 @@
 #include "aia/core/plugin.h"
 
 #include <dlfcn.h>
-#include <unistd.h>
-
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <climits>
 #include <mutex>

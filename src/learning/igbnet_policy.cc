@@ -21,8 +21,7 @@ std::string DefaultModelPath() {
   const std::filesystem::path here = "models/igbnet.pt";
   // An installed aia's own model, whatever the working folder holds.
   if (const std::string data = InstalledDataDir(); !data.empty()) {
-    const std::filesystem::path installed =
-        std::filesystem::path(data) / here;
+    const std::filesystem::path installed = std::filesystem::path(data) / here;
     if (std::filesystem::is_regular_file(installed, ec))
       return installed.lexically_normal().string();
   }
