@@ -16,10 +16,10 @@ from aia import network  # noqa: E402  (needs torch)
 SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
 BINARY = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
 DEFAULT = str(SOURCE / "scenarios" / "default.yaml")
-# The network's moves alone: no deadlock rule, no undo rule, no search aims,
-# every open target shown.
-ARGMAX = {"max_reversals": 0, "no_undo": False, "search": False,
-          "claims": "none"}
+# The network's moves alone (docs/python.md, What policy.coordination does
+# to a model trained in Python): nothing hand-written chooses or changes a
+# move or the channels.
+ARGMAX = {"coordination": "none"}
 
 
 @pytest.fixture(scope="module")
