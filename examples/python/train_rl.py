@@ -158,6 +158,10 @@ def main():
     p.add_argument("--test-seeds", type=int, default=100)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--compare", action="store_true",
+                   help="also score the test missions with the C++ policy "
+                        "on this model (coordination none and rules), the "
+                        "shipped model and greedy")
     p.add_argument("--quick", action="store_true",
                    help="a smoke run: 2 small updates, a tiny network")
     args = p.parse_args()
@@ -328,6 +332,26 @@ def main():
     print(f"test ({len(test)} missions, seeds {test[0]}..{test[-1]}): "
           f"success {success:.2f}, mean steps {steps:.1f} (the network's "
           f"most probable valid move: policy.coordination=none)")
+    if args.compare:
+        shipped = os.path.join(os.path.dirname(SCENARIO), "..", "models",
+                               "igbnet.pt")
+        rows = [("this model, C++ igbnet, coordination none", args.out,
+                 "none"),
+                ("this model, C++ igbnet, coordination rules", args.out,
+                 "rules"),
+                ("models/igbnet.pt, coordination none", shipped, "none"),
+                ("models/igbnet.pt, coordination rules", shipped, "rules")]
+        for label, path, coordination in rows:
+            rate = cpp_success_rate(path, args.scenario, overrides, test,
+                                    coordination)
+            print(f"  {label}: success {rate:.2f}", flush=True)
+        v = aia.VectorMissions(len(test), args.scenario, seed=test[0],
+                               overrides=overrides)
+        greedy = [aia.builtin_policy("greedy") for _ in test]
+        while not v.done.all():
+            v.step(np.stack([g.decide(m) for g, m in zip(greedy, v.missions)]))
+        print(f"  greedy: success "
+              f"{np.mean([m.success for m in v.missions]):.2f}", flush=True)
     print(f"wrote {args.out} and {log_path}; "
           f"{time.monotonic() - start:.0f} s", flush=True)
     log.close()
