@@ -265,13 +265,22 @@ py::array_t<T> Array(std::vector<py::ssize_t> shape) {
 }
 
 // Channel settings from Python (key, YAML text) pairs, read as a model's
-// metadata is: `channels: window: must be an integer in [4, 512], got 2`.
-ChannelParams ChannelSettings(const KeyValues& params) {
+// metadata is, errors naming `where`: `aia.Dataset: channels: window: must
+// be an integer in [4, 512], got 2`.
+ChannelParams ChannelSettings(const KeyValues& params,
+                              const std::string& where) {
   ChannelParams settings;
-  ConfigNode node = ConfigNode::Map();
-  for (const auto& [key, value] : params)
-    node.Set(key, ParseYamlValue(value, "channels: " + key));
-  ReadFields(node, ReadOptions{"channels", "", ""}, "", &settings);
+  try {
+    ConfigNode node = ConfigNode::Map();
+    for (const auto& [key, value] : params)
+      node.Set(key, ParseYamlValue(value, "channels: " + key));
+    ReadFields(node, ReadOptions{"channels", "", ""}, "", &settings);
+  } catch (const InputError& e) {
+    throw InputError(
+        where, 0,
+        e.key().rfind("channels: ", 0) == 0 ? e.key() : "channels: " + e.key(),
+        e.message());
+  }
   return settings;
 }
 
@@ -449,7 +458,8 @@ class Mission {
   // renderer (learning/channels.h) with these channel settings; the heat of
   // each robot's own fused belief, its neighbours from this step's graph.
   py::array_t<float> Channels(const KeyValues& params) const {
-    const ChannelParams settings = ChannelSettings(params);
+    const ChannelParams settings =
+        ChannelSettings(params, "aia.Mission.channels");
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
@@ -907,7 +917,7 @@ class VectorMissions {
 class PyDataset {
  public:
   PyDataset(const std::vector<std::string>& paths, const KeyValues& params) {
-    channels_ = ChannelSettings(params);
+    channels_ = ChannelSettings(params, "aia.Dataset");
     data_ = ReadDataset(paths, "paths");
     if (data_.samples.empty())
       throw InputError("Dataset", 0, "paths", "holds no samples");

@@ -213,6 +213,11 @@ def test_dataset_arguments(tmp_path):
     refused(lambda: aia.Dataset([]), "aia.Dataset: paths: ")
 
 
+def test_channel_settings_name_the_callable(mission):
+    refused(lambda: mission.channels(window=2), "aia.Mission.channels: "
+            "channels: window: must be an integer in [4, 512], got 2")
+
+
 def test_render_arguments(mission):
     refused(lambda: mission.render(10.5, 100), "aia.Mission.render: width: ",
             "got 10.5 (float)")
