@@ -198,26 +198,44 @@ std::vector<long long> Integers(
     Refuse(where, arg,
            "must be integers " + expect + ", got an array of " +
                py::str(a.dtype()).cast<std::string>());
+  // "[i][j]" of the flat element k, for an error.
+  const auto index_of = [&got](std::size_t k) {
+    std::vector<std::size_t> at(got.size());
+    for (std::size_t d = got.size(); d-- > 0;) {
+      at[d] = k % static_cast<std::size_t>(got[d]);
+      k /= static_cast<std::size_t>(got[d]);
+    }
+    std::string index;
+    for (std::size_t d : at) index += "[" + std::to_string(d) + "]";
+    return index;
+  };
+  // An integer array whose values fit int64: read as such (no Python
+  // object per element).
+  if (kind == 'i' || (kind == 'u' && a.dtype().itemsize() < 8)) {
+    const auto c = py::array_t<long long, py::array::c_style |
+                                              py::array::forcecast>::ensure(a);
+    if (c) {
+      const long long* v = c.data();
+      for (py::ssize_t k = 0; k < c.size(); ++k)
+        if (v[k] < lo || v[k] > hi)
+          Refuse(where, arg + index_of(static_cast<std::size_t>(k)),
+                 "must be " + expect + ", got " + std::to_string(v[k]));
+      return std::vector<long long>(v, v + c.size());
+    }
+    PyErr_Clear();
+  }
   const py::list items = a.attr("ravel")().attr("tolist")();
   std::vector<long long> out;
   out.reserve(items.size());
   for (std::size_t k = 0; k < items.size(); ++k) {
-    std::string index;
-    std::size_t rest = k;
-    std::vector<std::size_t> at(got.size());
-    for (std::size_t d = got.size(); d-- > 0;) {
-      at[d] = rest % static_cast<std::size_t>(got[d]);
-      rest /= static_cast<std::size_t>(got[d]);
-    }
-    for (std::size_t d : at) index += "[" + std::to_string(d) + "]";
     const py::object i = AsInteger(items[k]);
     if (!i)
-      Refuse(where, arg + index,
+      Refuse(where, arg + index_of(k),
              "must be " + expect + ", got " + Shown(items[k]));
     int overflow = 0;
     const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
     if (overflow != 0 || v < lo || v > hi)
-      Refuse(where, arg + index,
+      Refuse(where, arg + index_of(k),
              "must be " + expect + ", got " + py::str(i).cast<std::string>());
     out.push_back(v);
   }
