@@ -131,13 +131,13 @@ class Mission:
 
     def state(self):
         """What the robots know now, as numpy arrays (N robots, M targets):
-        steps (decision steps taken); positions (N, 2) metres; lattice (N,) lattice indices and
-        cells (N, 2) their (ix, iy); active (N,); neighbors (N, N) this
-        step's communication graph; mean (N, M, 2), cov (N, M, 2, 2) and
-        det (N, M) of each robot's fused belief (position part); the
-        targets' log_det_prior (M,); eps; workspace (width, height) in
-        metres. The ground truth, for scoring
-        only, under "truth": target_positions (M, 2)."""
+        steps (decision steps taken); positions (N, 2) metres; lattice
+        (N,) lattice indices and cells (N, 2) their (ix, iy); active (N,);
+        neighbors (N, N) this step's communication graph; mean (N, M, 2),
+        cov (N, M, 2, 2) and det (N, M) of each robot's fused belief
+        (position part); the targets' log_det_prior (M,); eps; workspace
+        (width, height) in metres. The ground truth, for scoring only,
+        under "truth": target_positions (M, 2)."""
         return self._m.state()
 
     def channels(self, frame=None, **params):
