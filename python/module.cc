@@ -2,7 +2,8 @@
 // wraps it; docs/python.md). A Mission is one episode of the same loop as
 // `aia run` (runtime/episode.h) whose moves come from Python; a builtin
 // policy is a registered policy deciding on a mission's state with the
-// same truth fence as in the loop.
+// same truth fence as in the loop. Each area is bound by its own Bind*
+// function at the end of the file.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -10,6 +11,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <map>
 #include <memory>
@@ -25,11 +28,13 @@
 #include "aia/core/field_io.h"
 #include "aia/core/field_values.h"
 #include "aia/core/interrupt.h"
+#include "aia/core/plugin.h"
 #include "aia/core/rng.h"
 #include "aia/core/thread_pool.h"
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/channels.h"
 #include "aia/learning/dataset.h"
+#include "aia/learning/igbnet_policy.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
@@ -71,29 +76,203 @@ class ExternalPolicy : public NamedPolicy<ExternalPolicy> {
   std::vector<Move> next;
 };
 
-// A move from Python: 0 (left), 1 (right), 2 (up), 3 (down) or 4 (stay);
-// `where` names it in the error ("3" for moves[3]).
-Move ToMove(long long m, const std::string& where) {
-  if (m < 0 || m > 4)
-    throw py::value_error("moves[" + where +
-                          "]: must be 0 (left), 1 (right), 2 (up), 3 (down) "
-                          "or 4 (stay), got " +
-                          std::to_string(m));
-  return static_cast<Move>(m);
+// ---------------------------------------------------------------------------
+// Input from Python: every bad value is one aia.InputError (a ValueError)
+// that names the Python callable and argument, "aia.Mission.step: moves[2]:
+// must be 0 (left), ..., got 1.7 (float)"; nothing is converted silently.
+
+[[noreturn]] void Refuse(const std::string& where, const std::string& arg,
+                         const std::string& what) {
+  throw InputError(where, 0, arg, what);
 }
 
-// Moves from Python: one per robot.
-std::vector<Move> MovesFrom(const py::array_t<long long>& moves, int n) {
-  const py::buffer_info b = moves.request();
-  if (b.ndim != 1 || b.shape[0] != n)
-    throw py::value_error(
-        "moves: must be one move per robot (" + std::to_string(n) +
-        "), got shape " +
-        py::str(py::tuple(py::cast(b.shape))).cast<std::string>());
-  std::vector<Move> out(n);
-  const auto view = moves.unchecked<1>();
-  for (int i = 0; i < n; ++i) out[i] = ToMove(view(i), std::to_string(i));
+// A Python value as an error shows it: its repr (cut short) and its type.
+std::string Shown(py::handle h) {
+  std::string text;
+  try {
+    text = py::repr(h).cast<std::string>();
+  } catch (const py::error_already_set&) {
+    text = "?";
+  }
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text + " (" + Py_TYPE(h.ptr())->tp_name + ")";
+}
+
+bool IsBool(py::handle h) {
+  if (PyBool_Check(h.ptr())) return true;
+  static const py::handle numpy_bool =
+      py::object(py::module_::import("numpy").attr("bool_")).release();
+  return PyObject_IsInstance(h.ptr(), numpy_bool.ptr()) == 1;
+}
+
+// An integer from Python (an int, a numpy integer, an aia.Move), or
+// nullptr for anything else: bools, floats (NaN and inf too), strings.
+py::object AsInteger(py::handle h) {
+  if (IsBool(h) || PyFloat_Check(h.ptr()) || !PyIndex_Check(h.ptr()))
+    return py::object();
+  PyObject* i = PyNumber_Index(h.ptr());
+  if (i == nullptr) {
+    PyErr_Clear();
+    return py::object();
+  }
+  return py::reinterpret_steal<py::object>(i);
+}
+
+// An integer argument in [lo, hi].
+long long IntegerArg(py::handle h, const std::string& where,
+                     const std::string& arg, long long lo, long long hi) {
+  const py::object i = AsInteger(h);
+  if (!i)
+    Refuse(where, arg,
+           "must be an integer in [" + std::to_string(lo) + ", " +
+               std::to_string(hi) + "], got " + Shown(h));
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
+  if (overflow != 0 || v < lo || v > hi)
+    Refuse(where, arg,
+           "must be an integer in [" + std::to_string(lo) + ", " +
+               std::to_string(hi) + "], got " + py::str(i).cast<std::string>());
+  return v;
+}
+
+// A seed: an integer in [0, 2^64 - 1]; None when `none_ok` (the file's).
+std::optional<std::uint64_t> SeedArg(py::handle h, const std::string& where,
+                                     const std::string& arg, bool none_ok) {
+  if (none_ok && h.is_none()) return std::nullopt;
+  const std::string expect =
+      std::string("must be an integer in [0, 2^64 - 1]") +
+      (none_ok ? " or None" : "");
+  const py::object i = AsInteger(h);
+  if (!i) Refuse(where, arg, expect + ", got " + Shown(h));
+  const unsigned long long v = PyLong_AsUnsignedLongLong(i.ptr());
+  if (PyErr_Occurred()) {
+    PyErr_Clear();
+    Refuse(where, arg, expect + ", got " + py::str(i).cast<std::string>());
+  }
+  return static_cast<std::uint64_t>(v);
+}
+
+std::string ShapeText(const std::vector<py::ssize_t>& shape) {
+  std::string out = "(";
+  for (std::size_t k = 0; k < shape.size(); ++k) {
+    if (k) out += ", ";
+    out += shape[k] < 0 ? std::string("any") : std::to_string(shape[k]);
+  }
+  return out + (shape.size() == 1 ? ",)" : ")");
+}
+
+// The integers of a Python list, tuple or numpy array of exactly `shape`
+// (-1: any length), each in [lo, hi], flat in C order. `expect` says what
+// one is ("0 (left), ..."), `shape_name` what the shape means.
+std::vector<long long> Integers(
+    py::handle obj, const std::vector<py::ssize_t>& shape, long long lo,
+    long long hi, const std::string& where, const std::string& arg,
+    const std::string& expect, const std::string& shape_name) {
+  static const py::handle numpy = py::module_::import("numpy").release();
+  const bool is_array = py::isinstance<py::array>(obj);
+  if (!is_array && !PyList_Check(obj.ptr()) && !PyTuple_Check(obj.ptr()))
+    Refuse(where, arg,
+           "must be a list or numpy array of integers " + expect + " " +
+               shape_name + ", got " + Shown(obj));
+  py::array a;
+  try {
+    // A list's own items (object dtype): numpy would make True into 1.
+    a = is_array ? py::reinterpret_borrow<py::array>(obj)
+                 : py::array(numpy.attr("asarray")(
+                       obj, py::arg("dtype") = py::dtype("O")));
+  } catch (const py::error_already_set&) {
+    Refuse(where, arg, "must be " + shape_name + ", got " + Shown(obj));
+  }
+  std::vector<py::ssize_t> got(a.shape(), a.shape() + a.ndim());
+  bool fits = got.size() == shape.size();
+  for (std::size_t k = 0; fits && k < shape.size(); ++k)
+    fits = shape[k] < 0 || got[k] == shape[k];
+  if (!fits)
+    Refuse(where, arg,
+           "must have shape " + ShapeText(shape) + ", " + shape_name +
+               ", got shape " + ShapeText(got));
+  const char kind = a.dtype().kind();
+  if (kind != 'i' && kind != 'u' && kind != 'O')
+    Refuse(where, arg,
+           "must be integers " + expect + ", got an array of " +
+               py::str(a.dtype()).cast<std::string>());
+  // "[i][j]" of the flat element k, for an error.
+  const auto index_of = [&got](std::size_t k) {
+    std::vector<std::size_t> at(got.size());
+    for (std::size_t d = got.size(); d-- > 0;) {
+      at[d] = k % static_cast<std::size_t>(got[d]);
+      k /= static_cast<std::size_t>(got[d]);
+    }
+    std::string index;
+    for (std::size_t d : at) index += "[" + std::to_string(d) + "]";
+    return index;
+  };
+  // An integer array whose values fit int64: read as such (no Python
+  // object per element).
+  if (kind == 'i' || (kind == 'u' && a.dtype().itemsize() < 8)) {
+    const auto c = py::array_t<long long, py::array::c_style |
+                                              py::array::forcecast>::ensure(a);
+    if (c) {
+      const long long* v = c.data();
+      for (py::ssize_t k = 0; k < c.size(); ++k)
+        if (v[k] < lo || v[k] > hi)
+          Refuse(where, arg + index_of(static_cast<std::size_t>(k)),
+                 "must be " + expect + ", got " + std::to_string(v[k]));
+      return std::vector<long long>(v, v + c.size());
+    }
+    PyErr_Clear();
+  }
+  const py::list items = a.attr("ravel")().attr("tolist")();
+  std::vector<long long> out;
+  out.reserve(items.size());
+  for (std::size_t k = 0; k < items.size(); ++k) {
+    const py::object i = AsInteger(items[k]);
+    if (!i)
+      Refuse(where, arg + index_of(k),
+             "must be " + expect + ", got " + Shown(items[k]));
+    int overflow = 0;
+    const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
+    if (overflow != 0 || v < lo || v > hi)
+      Refuse(where, arg + index_of(k),
+             "must be " + expect + ", got " + py::str(i).cast<std::string>());
+    out.push_back(v);
+  }
   return out;
+}
+
+constexpr const char* kMoveText =
+    "0 (left), 1 (right), 2 (up), 3 (down) or 4 (stay)";
+
+// One move per robot of each of `shape`'s rows, from Python.
+std::vector<Move> MovesFrom(py::handle moves,
+                            const std::vector<py::ssize_t>& shape,
+                            const std::string& where,
+                            const std::string& arg = "moves") {
+  const std::string shape_name =
+      shape.size() == 1 ? "one move per robot"
+                        : "(missions, robots): one move per robot and mission";
+  const std::vector<long long> v =
+      Integers(moves, shape, 0, 4, where, arg, kMoveText, shape_name);
+  std::vector<Move> out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out[i] = static_cast<Move>(v[i]);
+  return out;
+}
+
+// An error of aia's command-line core (flags, `--set`) as Python's: the
+// callable instead of "command line", the argument instead of the flag.
+InputError Renamed(const InputError& e, const std::string& where) {
+  if (e.file() != "command line") return e;
+  std::string key = e.key();
+  static const std::vector<std::pair<std::string, std::string>> kFlags = {
+      {"--set ", "overrides: "}, {"--seed-base", "seed_base"},
+      {"--sizes", "sizes"},      {"--seeds", "seeds"},
+      {"--threads", "threads"},  {"--out", "out"}};
+  for (const auto& [flag, name] : kFlags)
+    if (key.compare(0, flag.size(), flag) == 0) {
+      key = name + key.substr(flag.size());
+      break;
+    }
+  return InputError(where, 0, key, e.message());
 }
 
 template <typename T>
@@ -102,43 +281,83 @@ py::array_t<T> Array(std::vector<py::ssize_t> shape) {
 }
 
 // Channel settings from Python (key, YAML text) pairs, read as a model's
-// metadata is: `channels: window: must be an integer in [4, 512], got 2`.
-ChannelParams ChannelSettings(const KeyValues& params) {
+// metadata is, errors naming `where`: `aia.Dataset: channels: window: must
+// be an integer in [4, 512], got 2`.
+ChannelParams ChannelSettings(const KeyValues& params,
+                              const std::string& where) {
   ChannelParams settings;
-  ConfigNode node = ConfigNode::Map();
-  for (const auto& [key, value] : params)
-    node.Set(key, ParseYamlValue(value, "channels: " + key));
-  ReadFields(node, ReadOptions{"channels", "", ""}, "", &settings);
+  try {
+    ConfigNode node = ConfigNode::Map();
+    for (const auto& [key, value] : params)
+      node.Set(key, ParseYamlValue(value, "channels: " + key));
+    ReadFields(node, ReadOptions{"channels", "", ""}, "", &settings);
+  } catch (const InputError& e) {
+    throw InputError(
+        where, 0,
+        e.key().rfind("channels: ", 0) == 0 ? e.key() : "channels: " + e.key(),
+        e.message());
+  }
   return settings;
 }
 
 std::atomic<std::uint64_t> g_next_mission_id{1};
 
+// What one step did (Mission.step), as Gymnasium tells it: `terminated`
+// when the mission reached an end state (success, or no robot left),
+// `truncated` when it was cut short (mission.max_steps).
+struct StepResult {
+  int steps = 0;           // decision steps taken so far
+  long invalid_moves = 0;  // moves the world rule replaced at this step
+  int localized = 0;       // targets below eps in the team's best estimate
+  bool terminated = false;
+  bool truncated = false;
+  bool success = false;
+  bool done() const { return terminated || truncated; }
+};
+
 // One mission, owned (its own episode, stepped from Python) or a view of a
 // decision inside aia's own loop (evaluate), valid during that call only.
 class Mission {
  public:
-  Mission(const std::string& scenario, std::optional<std::uint64_t> seed,
-          const KeyValues& overrides)
-      : id_(g_next_mission_id++) {
-    std::vector<Override> all;
-    if (seed) all.push_back({"seed", "seed", std::to_string(*seed)});
-    for (const Override& o : AsOverrides(overrides, "overrides: "))
-      all.push_back(o);
-    instance_ = BuildInstance(LoadScenario(scenario, all));
-    auto policy = std::make_unique<ExternalPolicy>();
-    external_ = policy.get();
-    episode_ = std::make_unique<Episode>(instance_, std::move(policy));
-    episode_->AddObserver(&moves_);
-    episode_->AddObserver(&estimate_);
-    moves_.OnStart(*episode_);
-    estimate_.OnStart(*episode_);
-    seed_ = episode_->scenario().seed;
-    max_steps_ = episode_->mission().max_steps;
+  Mission(std::string scenario, std::optional<std::uint64_t> seed,
+          KeyValues overrides)
+      : scenario_(std::move(scenario)), overrides_(std::move(overrides)) {
+    Start(seed);
   }
   Mission(const DecisionContext* view, std::uint64_t seed, std::uint64_t id,
           int max_steps)
       : id_(id), view_(view), seed_(seed), max_steps_(max_steps) {}
+
+  // (Re)starts the owned mission at `seed` (the file's when none): step 0,
+  // a new id (a builtin policy begins afresh on it). Errors leave the
+  // mission as it was. Touches no Python object (runs on worker threads).
+  void Start(std::optional<std::uint64_t> seed) {
+    std::vector<Override> all;
+    if (seed) all.push_back({"seed", "seed", std::to_string(*seed)});
+    for (const Override& o : AsOverrides(overrides_, "overrides: "))
+      all.push_back(o);
+    std::shared_ptr<const Instance> instance =
+        BuildInstance(LoadScenario(scenario_, all));
+    // What refers to the old episode goes first.
+    picture_.reset();
+    renderer_.reset();
+    picture_added_ = false;
+    picture_width_ = picture_height_ = 0;
+    episode_.reset();
+    instance_ = std::move(instance);
+    auto policy = std::make_unique<ExternalPolicy>();
+    external_ = policy.get();
+    episode_ = std::make_unique<Episode>(instance_, std::move(policy));
+    moves_ = std::make_unique<MoveObserver>();
+    estimate_ = std::make_unique<EstimateObserver>();
+    episode_->AddObserver(moves_.get());
+    episode_->AddObserver(estimate_.get());
+    moves_->OnStart(*episode_);
+    estimate_->OnStart(*episode_);
+    seed_ = episode_->scenario().seed;
+    max_steps_ = episode_->mission().max_steps;
+    id_ = g_next_mission_id++;
+  }
 
   bool owned() const { return episode_ != nullptr; }
   void Invalidate() { view_ = nullptr; }
@@ -149,16 +368,16 @@ class Mission {
   DecisionContext Context() const {
     if (owned()) return episode_->Context();
     if (view_ == nullptr)
-      throw py::value_error(
-          "this mission is a view of one decision of aia.evaluate: it is "
-          "valid only inside the policy's call");
+      Refuse("aia.Mission", "state",
+             "this mission is a view of one decision of aia.evaluate: it is "
+             "valid only inside the policy's call");
     return *view_;
   }
   const Episode& episode() const {
     if (!owned())
-      throw py::value_error(
-          "a mission seen by a policy inside aia.evaluate can only be read "
-          "(state(), num_robots, ...); aia steps it");
+      Refuse("aia.Mission", "step",
+             "a mission seen by a policy inside aia.evaluate can only be "
+             "read (state(), num_robots, ...); aia steps it");
     return *episode_;
   }
   int num_robots() const {
@@ -223,7 +442,7 @@ class Mission {
     for (int k = 0; k < m; ++k)
       prior(k) = ctx.log_det_prior ? (*ctx.log_det_prior)[k] : 0.0;
     py::dict state;
-    state["step"] = ctx.step;
+    state["steps"] = ctx.step;
     state["positions"] = positions;
     state["headings"] = headings;
     state["lattice"] = lattice_index;
@@ -255,7 +474,8 @@ class Mission {
   // renderer (learning/channels.h) with these channel settings; the heat of
   // each robot's own fused belief, its neighbours from this step's graph.
   py::array_t<float> Channels(const KeyValues& params) const {
-    const ChannelParams settings = ChannelSettings(params);
+    const ChannelParams settings =
+        ChannelSettings(params, "aia.Mission.channels");
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
@@ -287,13 +507,13 @@ class Mission {
   // An RGB frame (H, W, 3) of the physics now with aia render's overlays.
   // The renderer is made at the first call (and again for another size);
   // the trails start there.
-  py::array_t<std::uint8_t> Render(int width, int height) {
+  py::array_t<std::uint8_t> Render(py::handle width_arg,
+                                   py::handle height_arg) {
     const Episode& e = episode();  // owned only
-    if (width < 16 || height < 16 || width > 8192 || height > 8192)
-      throw py::value_error(
-          "render: width and height must be in [16, 8192], "
-          "got " +
-          std::to_string(width) + " x " + std::to_string(height));
+    const int width = static_cast<int>(
+        IntegerArg(width_arg, "aia.Mission.render", "width", 16, 8192));
+    const int height = static_cast<int>(
+        IntegerArg(height_arg, "aia.Mission.render", "height", 16, 8192));
     if (!picture_ || width != picture_width_ || height != picture_height_) {
       picture_.reset();
       FrameSettings settings;
@@ -335,51 +555,68 @@ class Mission {
     return out;
   }
 
-  py::dict Step(const py::array_t<long long>& moves) {
-    std::vector<Move> next = MovesFrom(moves, num_robots());
-    const long invalid_before = episode().invalid_moves();
+  StepResult Step(py::handle moves) {
+    std::vector<Move> next =
+        MovesFrom(moves, {num_robots()}, "aia.Mission.step");
+    if (episode().done())
+      Refuse("aia.Mission.step", "moves",
+             "the mission is done (done is True): start another Mission");
+    const long invalid_before = episode_->invalid_moves();
     {
       py::gil_scoped_release release;
       StepWith(std::move(next));
     }
-    const Episode& e = *episode_;
-    py::dict changed;
-    changed["step"] = e.step();
-    changed["invalid_moves"] = e.invalid_moves() - invalid_before;
-    changed["localized"] = e.NumLocalized();
-    changed["done"] = e.done();
-    changed["success"] = e.success();
-    return changed;
+    return Result(invalid_before);
   }
-  // One step with these moves (owned missions; no Python object touched).
+  // One step with these moves (owned missions, not done; no Python object
+  // touched).
   void StepWith(std::vector<Move> moves) {
-    if (episode_->done())
-      throw py::value_error("step: the mission is done (done is True)");
     external_->next = std::move(moves);
     episode_->Step();
     if (episode_->done()) {
-      moves_.OnEnd(*episode_);
-      estimate_.OnEnd(*episode_);
+      moves_->OnEnd(*episode_);
+      estimate_->OnEnd(*episode_);
     }
+  }
+  // The last step's result, the world rule having replaced
+  // invalid_moves() - `invalid_before` of its moves.
+  StepResult Result(long invalid_before) const {
+    const Episode& e = *episode_;
+    StepResult r;
+    r.steps = e.step();
+    r.invalid_moves = e.invalid_moves() - invalid_before;
+    r.localized = e.NumLocalized();
+    r.success = e.success();
+    if (e.done()) {
+      const DecisionContext ctx = e.Context();
+      bool any_active = false;
+      for (int i = 0; i < num_robots(); ++i)
+        any_active = any_active || ctx.comm->Active(i);
+      r.terminated = e.success() || !any_active;
+      r.truncated = !r.terminated;
+    }
+    return r;
   }
 
   std::string SummaryText() const {
     return SummaryJson(Summarize(episode(), 0.0), episode());
   }
   std::string DiagnosticsText() const {
-    return DiagnosticsJson(episode(), moves_, estimate_, 0.0);
+    return DiagnosticsJson(episode(), *moves_, *estimate_, 0.0);
   }
 
  private:
-  std::uint64_t id_;
+  std::string scenario_;
+  KeyValues overrides_;
+  std::uint64_t id_ = 0;
   const DecisionContext* view_ = nullptr;
   std::uint64_t seed_ = 0;
   int max_steps_ = 0;
   std::shared_ptr<const Instance> instance_;
   ExternalPolicy* external_ = nullptr;  // owned by the episode
   std::unique_ptr<Episode> episode_;
-  MoveObserver moves_;
-  EstimateObserver estimate_;
+  std::unique_ptr<MoveObserver> moves_;
+  std::unique_ptr<EstimateObserver> estimate_;
   // render(): the picture kept in step with the episode once made.
   struct PictureObserver {
     PictureObserver(const Episode& e, FrameRenderer* renderer)
@@ -412,19 +649,18 @@ class BuiltinPolicy {
       o.push_back({p.flag, "policy." + p.path, p.value});
     const PolicyRegistry registry = AllPolicies();
     if (!registry.Has(name))
-      throw InputError("builtin_policy", 0, "name",
-                       registry.UnknownPolicy(name));
+      Refuse("aia.builtin_policy", "name", registry.UnknownPolicy(name));
     // On any valid scenario: only its policy section is read.
-    spec_ = registry.Resolve(WithOverrides(GeneratedScenario(1, 1, 0), o));
+    try {
+      spec_ = registry.Resolve(WithOverrides(GeneratedScenario(1, 1, 0), o));
+    } catch (const InputError& e) {
+      throw Renamed(e, "aia.builtin_policy");
+    }
   }
 
   const std::string& name() const { return spec_->name(); }
   bool centralized() const { return spec_->centralized(); }
 
-  // One move per robot from what the robots know at this step (the team's
-  // belief only for a centralized policy). The policy starts afresh (Reset
-  // with the mission's seed) on a new mission or a step that is not the
-  // next one, so that deciding at every step repeats `aia run`.
   // One move per robot from what the robots know at this step (the team's
   // belief only for a centralized policy). Each mission has its own policy
   // state, started afresh (Reset with the mission's seed) at its first
@@ -446,10 +682,9 @@ class BuiltinPolicy {
     if (!state->policy->centralized()) {
       ctx.central = nullptr;
     } else if (ctx.central == nullptr) {
-      throw py::value_error(
-          name() +
-          " decides from the team's belief, which this policy is "
-          "not given: aia.evaluate(..., centralized=True)");
+      Refuse("aia.builtin_policy", name(),
+             "decides from the team's belief, which this policy is not "
+             "given: aia.evaluate(..., centralized=True)");
     }
     std::vector<Move> moves(mission.num_robots(), Move::kStay);
     PolicyStatus status;
@@ -492,87 +727,141 @@ class BuiltinPolicy {
   PolicyStatus status_ = PolicyStatus::kOk;
 };
 
+// What one step of VectorMissions did: StepResult's fields as (n,) arrays,
+// and `info` (with autoreset: each finished mission's last result).
+struct VectorStepResult {
+  py::array_t<long long> steps, invalid_moves, localized;
+  py::array_t<bool> terminated, truncated, success, done;
+  py::dict info;
+};
+
 // n missions of one scenario (seeds given), stepped together on C++
-// threads without the GIL.
+// threads without the GIL; with autoreset, a mission that ends restarts
+// with the next seed.
 class VectorMissions {
  public:
   VectorMissions(const std::string& scenario,
                  const std::vector<std::uint64_t>& seeds,
-                 const KeyValues& overrides, int threads)
+                 const KeyValues& overrides, int threads, bool autoreset)
       : pool_((threads > 0 ? threads
                            : static_cast<int>(std::max(
                                  1u, std::thread::hardware_concurrency()))) -
-              1) {
-    if (seeds.empty()) throw py::value_error("n: must be at least 1");
+              1),
+        autoreset_(autoreset) {
+    if (seeds.empty()) Refuse("aia.VectorMissions", "n", "must be at least 1");
     for (std::uint64_t seed : seeds)
       missions_.push_back(std::make_unique<Mission>(scenario, seed, overrides));
+    next_seed_ = *std::max_element(seeds.begin(), seeds.end()) + 1;
   }
   int size() const { return static_cast<int>(missions_.size()); }
   int num_robots() const { return missions_[0]->num_robots(); }
+  bool autoreset() const { return autoreset_; }
+  std::uint64_t next_seed() const { return next_seed_; }
   Mission& at(int i) { return *missions_.at(i); }
 
-  // moves: (n, robots); missions already done ignore theirs.
-  py::dict Step(const py::array_t<long long>& moves) {
+  // Every mission restarted at these seeds (one each), on the threads.
+  void Reset(const std::vector<std::uint64_t>& seeds) {
+    if (static_cast<int>(seeds.size()) != size())
+      Refuse("aia.VectorMissions.reset", "seed",
+             "one seed per mission: " + std::to_string(size()) + ", got " +
+                 std::to_string(seeds.size()));
+    {
+      py::gil_scoped_release release;
+      pool_.Run(size(), [&](int i, int) { missions_[i]->Start(seeds[i]); });
+    }
+    next_seed_ = *std::max_element(seeds.begin(), seeds.end()) + 1;
+  }
+
+  // moves: (n, robots). Without autoreset a mission already done ignores
+  // its row; with it, a mission that ends at this step restarts with the
+  // next seed, its summary and last state in info["final_info"] and
+  // info["final_state"] (None for the others; info["_final_info"] the
+  // mask), as Gymnasium's vector environments report.
+  VectorStepResult Step(py::handle moves) {
     const int n = size(), robots = num_robots();
-    const py::buffer_info b = moves.request();
-    if (b.ndim != 2 || b.shape[0] != n || b.shape[1] != robots)
-      throw py::value_error("moves: must be (missions, robots) = (" +
-                            std::to_string(n) + ", " + std::to_string(robots) +
-                            ")");
-    std::vector<std::vector<Move>> next(n, std::vector<Move>(robots));
-    const auto view = moves.unchecked<2>();
+    const std::vector<Move> flat =
+        MovesFrom(moves, {n, robots}, "aia.VectorMissions.step");
+    std::vector<std::vector<Move>> next(n);
     for (int i = 0; i < n; ++i)
-      for (int r = 0; r < robots; ++r)
-        next[i][r] =
-            ToMove(view(i, r), std::to_string(i) + "][" + std::to_string(r));
+      next[i].assign(
+          flat.begin() + static_cast<std::ptrdiff_t>(i) * robots,
+          flat.begin() + static_cast<std::ptrdiff_t>(i + 1) * robots);
     std::vector<long> before(n);
-    for (int i = 0; i < n; ++i)
-      before[i] = missions_[i]->episode().invalid_moves();
+    std::vector<bool> stepped(n);
+    for (int i = 0; i < n; ++i) {
+      const Episode& e = missions_[i]->episode();
+      before[i] = e.invalid_moves();
+      stepped[i] = !e.done();
+    }
     {
       py::gil_scoped_release release;
       // A failed mission must not keep the others from stepping.
       pool_.Run(
           n,
           [&](int i, int) {
-            if (!missions_[i]->episode().done())
-              missions_[i]->StepWith(std::move(next[i]));
+            if (stepped[i]) missions_[i]->StepWith(std::move(next[i]));
           },
           OnFailure::kFinish);
     }
-    auto step = Array<long long>({n});
-    auto done = Array<bool>({n});
-    auto success = Array<bool>({n});
-    auto invalid = Array<long long>({n});
-    auto st = step.mutable_unchecked<1>();
-    auto dn = done.mutable_unchecked<1>();
-    auto sc = success.mutable_unchecked<1>();
-    auto iv = invalid.mutable_unchecked<1>();
+    VectorStepResult out;
+    out.steps = py::array_t<long long>(n);
+    out.invalid_moves = py::array_t<long long>(n);
+    out.localized = py::array_t<long long>(n);
+    out.terminated = py::array_t<bool>(n);
+    out.truncated = py::array_t<bool>(n);
+    out.success = py::array_t<bool>(n);
+    out.done = py::array_t<bool>(n);
+    std::vector<int> finished;
     for (int i = 0; i < n; ++i) {
-      const Episode& e = missions_[i]->episode();
-      st(i) = e.step();
-      dn(i) = e.done();
-      sc(i) = e.success();
-      iv(i) = e.invalid_moves() - before[i];
+      const StepResult r = missions_[i]->Result(before[i]);
+      out.steps.mutable_at(i) = r.steps;
+      out.invalid_moves.mutable_at(i) = r.invalid_moves;
+      out.localized.mutable_at(i) = r.localized;
+      out.terminated.mutable_at(i) = r.terminated;
+      out.truncated.mutable_at(i) = r.truncated;
+      out.success.mutable_at(i) = r.success;
+      out.done.mutable_at(i) = r.done();
+      if (r.done()) finished.push_back(i);
     }
-    py::dict changed;
-    changed["step"] = step;
-    changed["done"] = done;
-    changed["success"] = success;
-    changed["invalid_moves"] = invalid;
-    return changed;
+    if (!autoreset_ || finished.empty()) return out;
+    const py::object loads = py::module_::import("json").attr("loads");
+    py::list final_info, final_state;
+    py::array_t<bool> mask(n);
+    for (int i = 0; i < n; ++i) {
+      final_info.append(py::none());
+      final_state.append(py::none());
+      mask.mutable_at(i) = false;
+    }
+    std::vector<std::uint64_t> seeds(n);
+    for (int i : finished) {
+      final_info[i] = loads(missions_[i]->SummaryText());
+      final_state[i] = missions_[i]->State();
+      mask.mutable_at(i) = true;
+      seeds[i] = next_seed_++;
+    }
+    {
+      py::gil_scoped_release release;
+      pool_.Run(static_cast<int>(finished.size()), [&](int k, int) {
+        missions_[finished[k]]->Start(seeds[finished[k]]);
+      });
+    }
+    out.info["final_info"] = final_info;
+    out.info["final_state"] = final_state;
+    out.info["_final_info"] = mask;
+    return out;
   }
 
  private:
   ThreadPool pool_;  // the caller is the first of `threads`
+  bool autoreset_;
+  std::uint64_t next_seed_ = 0;
   std::vector<std::unique_ptr<Mission>> missions_;
 };
 
-// The samples of `aia dataset` shards, rendered as the trainer renders them
-// (learning/dataset.h, the trainer's batches).
 class PyDataset {
  public:
   PyDataset(const std::vector<std::string>& paths, const KeyValues& params) {
-    channels_ = ChannelSettings(params);
+    channels_ = ChannelSettings(params, "aia.Dataset");
     data_ = ReadDataset(paths, "paths");
     if (data_.samples.empty())
       throw InputError("Dataset", 0, "paths", "holds no samples");
@@ -616,7 +905,18 @@ class PyDataset {
 
   // Whether each world is held out for validation, as `aia train` splits
   // (--val-share, --seed).
-  py::array_t<bool> ValidationWorlds(double share, std::uint64_t seed) const {
+  py::array_t<bool> ValidationWorlds(py::handle share_arg,
+                                     py::handle seed_arg) const {
+    if (IsBool(share_arg) || !PyNumber_Check(share_arg.ptr()))
+      Refuse("aia.Dataset.split", "val_share",
+             "must be a number in [0, 1], got " + Shown(share_arg));
+    const double share =
+        py::float_(py::reinterpret_borrow<py::object>(share_arg));
+    if (!(share >= 0.0 && share <= 1.0))
+      Refuse("aia.Dataset.split", "val_share",
+             "must be a number in [0, 1], got " + Shown(share_arg));
+    const std::uint64_t seed =
+        *SeedArg(seed_arg, "aia.Dataset.split", "seed", false);
     py::array_t<bool> out(num_worlds());
     for (int w = 0; w < num_worlds(); ++w) {
       Rng rng(seed, "train/split",
@@ -627,19 +927,20 @@ class PyDataset {
   }
 
   // (B, C, H, W) float32 images of these samples and their labels.
-  py::tuple Batch(const std::vector<long long>& indices) {
-    if (indices.empty()) throw py::value_error("batch: no sample indices");
-    for (long long i : indices)
-      if (i < 0 || i >= size())
-        throw py::index_error("batch: sample " + std::to_string(i) + " of " +
-                              std::to_string(size()));
+  py::tuple Batch(py::handle indices_arg) {
+    const std::vector<long long> indices = Integers(
+        indices_arg, {-1}, 0, size() - 1, "aia.Dataset.batch", "indices",
+        "a sample index in [0, " + std::to_string(size() - 1) + "]",
+        "a list of sample indices");
+    if (indices.empty())
+      Refuse("aia.Dataset.batch", "indices", "no sample indices");
     const ChannelRenderer& first = renderers_[data_.samples[indices[0]].world];
     for (long long i : indices) {
       const ChannelRenderer& r = renderers_[data_.samples[i].world];
       if (r.height() != first.height() || r.width() != first.width())
-        throw py::value_error(
-            "batch: worlds of different sizes in the global frame; use the "
-            "centred frame or one workspace size");
+        Refuse("aia.Dataset.batch", "indices",
+               "worlds of different sizes in the global frame; use the "
+               "centred frame or one workspace size");
     }
     const py::ssize_t b = static_cast<py::ssize_t>(indices.size());
     py::array_t<float> images({b, static_cast<py::ssize_t>(first.channels()),
@@ -673,13 +974,36 @@ class PyDataset {
 // A Python callable as a policy of aia's own loop (evaluate): each decision
 // takes the GIL, hands the callable a view of the decision and reads its
 // moves. A Python exception ends the evaluation and reaches the caller.
+// How far aia.evaluate is: the Python policy's runs finished (each ends
+// when its policy is destroyed), reported to a Python callable from the
+// next decision, which holds the GIL anyway (no thread of its own).
+struct EvalProgress {
+  py::object callback;  // None: no report
+  int done_before = 0;  // runs of this policy already in `out`
+  int total = 0;        // runs of this policy in the evaluation
+  std::atomic<int> finished{0};
+  int reported = 0;
+  void Report() {  // GIL held
+    const int now = finished.load();
+    if (callback.is_none() || now == reported) return;
+    reported = now;
+    callback(std::min(done_before + now, total), total);
+  }
+};
+
+// A Python callable as a policy of aia's own loop (evaluate): each decision
+// takes the GIL, hands the callable a view of the decision and reads its
+// moves. A Python exception ends the evaluation and reaches the caller.
 class CallbackPolicy : public Policy {
  public:
-  CallbackPolicy(std::string name, bool centralized, py::object decide)
+  CallbackPolicy(std::string name, bool centralized, py::object decide,
+                 std::shared_ptr<EvalProgress> progress)
       : name_(std::move(name)),
         centralized_(centralized),
-        decide_(std::move(decide)) {}
+        decide_(std::move(decide)),
+        progress_(std::move(progress)) {}
   ~CallbackPolicy() override {
+    if (started_) ++progress_->finished;
     py::gil_scoped_acquire gil;
     decide_ = py::object();
   }
@@ -688,10 +1012,12 @@ class CallbackPolicy : public Policy {
   void Reset(const Map&, int, int, std::uint64_t seed) override {
     seed_ = seed;
     id_ = g_next_mission_id++;
+    started_ = true;
   }
   PolicyStatus Decide(const DecisionContext& ctx,
                       std::vector<Move>* moves) override {
     py::gil_scoped_acquire gil;
+    progress_->Report();
     const int n = static_cast<int>(moves->size());
     py::object view = py::cast(new Mission(&ctx, seed_, id_, 0),
                                py::return_value_policy::take_ownership);
@@ -700,10 +1026,7 @@ class CallbackPolicy : public Policy {
       ~Invalidate() { view.cast<Mission&>().Invalidate(); }
     } invalidate{view};
     const py::object result = decide_(view);
-    *moves = MovesFrom(
-        py::array_t<long long, py::array::c_style | py::array::forcecast>(
-            result),
-        n);
+    *moves = MovesFrom(result, {n}, "aia.evaluate", "policy's moves");
     return PolicyStatus::kOk;
   }
 
@@ -711,20 +1034,26 @@ class CallbackPolicy : public Policy {
   std::string name_;
   bool centralized_;
   py::object decide_;
+  std::shared_ptr<EvalProgress> progress_;
   std::uint64_t seed_ = 0, id_ = 0;
+  bool started_ = false;
 };
 
 class CallbackSpec : public PolicySpec {
  public:
-  CallbackSpec(const std::string& name, bool centralized, py::object decide)
-      : PolicySpec(name, centralized), decide_(std::move(decide)) {}
+  CallbackSpec(const std::string& name, bool centralized, py::object decide,
+               std::shared_ptr<EvalProgress> progress)
+      : PolicySpec(name, centralized),
+        decide_(std::move(decide)),
+        progress_(std::move(progress)) {}
   ~CallbackSpec() override {
     py::gil_scoped_acquire gil;
     decide_ = py::object();
   }
   std::unique_ptr<Policy> Create() const override {
     py::gil_scoped_acquire gil;
-    return std::make_unique<CallbackPolicy>(name(), centralized(), decide_);
+    return std::make_unique<CallbackPolicy>(name(), centralized(), decide_,
+                                            progress_);
   }
   // effective.yaml's line: rows under this name are resumed whatever the
   // code does, so a changed policy needs another name.
@@ -738,23 +1067,70 @@ class CallbackSpec : public PolicySpec {
 
  private:
   py::object decide_;
+  std::shared_ptr<EvalProgress> progress_;
+};
+
+// The C library's stdout and stderr (what `aia eval` prints: its header,
+// summary table and notes) caught in memory while one lives, so that
+// aia.evaluate writes nothing itself; Python's own sys.stdout and
+// sys.stderr write to the file descriptors and are untouched.
+class CStdioCapture {
+ public:
+  CStdioCapture() : out_(stdout), err_file_saved_(stderr) {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    out_file_ = open_memstream(&out_text_, &out_size_);
+    err_file_ = open_memstream(&err_text_, &err_size_);
+    if (out_file_) stdout = out_file_;
+    if (err_file_) stderr = err_file_;
+  }
+  ~CStdioCapture() { Finish(); }
+  CStdioCapture(const CStdioCapture&) = delete;
+  CStdioCapture& operator=(const CStdioCapture&) = delete;
+
+  // Restores stdout and stderr; returns what was written to stderr.
+  std::string Finish() {
+    if (done_) return err_;
+    done_ = true;
+    stdout = out_;
+    stderr = err_file_saved_;
+    if (out_file_) std::fclose(out_file_);
+    if (err_file_) std::fclose(err_file_);
+    if (err_text_) err_.assign(err_text_, err_size_);
+    std::free(out_text_);
+    std::free(err_text_);
+    return err_;
+  }
+
+ private:
+  FILE* out_;
+  FILE* err_file_saved_;
+  FILE* out_file_ = nullptr;
+  FILE* err_file_ = nullptr;
+  char* out_text_ = nullptr;
+  char* err_text_ = nullptr;
+  std::size_t out_size_ = 0, err_size_ = 0;
+  bool done_ = false;
+  std::string err_;
 };
 
 // aia.evaluate's core: `aia eval` with one more policy, the callable.
-int Evaluate(py::object decide, const std::string& name, bool centralized,
-             const std::vector<std::string>& sizes, int seeds,
-             std::uint64_t seed_base, const std::string& out, int threads,
-             const std::vector<std::string>& sets, bool progress) {
+// Returns the exit code and what aia eval wrote to stderr (notes such as
+// dropped rows; the wrapper turns them into Python warnings).
+py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
+                   const std::vector<std::string>& sizes, int seeds,
+                   std::uint64_t seed_base, const std::string& out, int threads,
+                   const std::vector<std::string>& sets, py::object progress,
+                   int done_before, int total) {
   EvalOptions o;
   o.sizes.clear();
   for (std::size_t i = 0; i < sizes.size(); ++i) {
     std::string why;
     const std::optional<TeamSize> size = TeamSize::FromText(sizes[i], &why);
     if (!size)
-      throw InputError(
-          "evaluate", 0, "sizes[" + std::to_string(i) + "]",
-          (why.empty() ? "must be " + std::string(TeamSize::kExpect) : why) +
-              ", got '" + sizes[i] + "'");
+      Refuse("aia.evaluate", "sizes[" + std::to_string(i) + "]",
+             (why.empty() ? "must be " + std::string(TeamSize::kExpect) : why) +
+                 ", got '" + sizes[i] + "'");
     o.sizes.push_back(*size);
   }
   o.seeds = seeds;
@@ -762,34 +1138,45 @@ int Evaluate(py::object decide, const std::string& name, bool centralized,
   o.out_dir = out;
   o.threads = threads;
   o.sets = sets;
-  o.progress = progress;
+  o.progress = false;  // aia eval's own line would bypass sys.stderr
   o.exit_on_interrupt = false;
-  o.extra_policies = {
-      std::make_shared<CallbackSpec>(name, centralized, std::move(decide))};
-  py::gil_scoped_release release;
-  InterruptScope scope;  // Ctrl-C: the rows done are written; back to Python
-  return RunEval(o);
+  auto report = std::make_shared<EvalProgress>();
+  report->callback = std::move(progress);
+  report->done_before = done_before;
+  report->total = total;
+  o.extra_policies = {std::make_shared<CallbackSpec>(
+      name, centralized, std::move(decide), report)};
+  int rc = 0;
+  std::string notes;
+  {
+    py::gil_scoped_release release;
+    CStdioCapture quiet;
+    InterruptScope scope;  // Ctrl-C: the rows done are written; back to Python
+    try {
+      rc = RunEval(o);
+    } catch (const InputError& e) {
+      throw Renamed(e, "aia.evaluate");
+    }
+    notes = quiet.Finish();
+  }
+  return py::make_tuple(rc, notes);
 }
 
-}  // namespace
-}  // namespace python
-}  // namespace aia
+// ---------------------------------------------------------------------------
+// The bindings, one function per area.
 
-PYBIND11_MODULE(_aia, m) {
-  using aia::python::BuiltinPolicy;
-  using aia::python::Mission;
-  m.doc() = "aia's C++ core (use the aia package)";
-  // numpy's C API is set up once, here: done first on a worker thread it
-  // would import numpy under a static's guard while another thread holds
-  // the GIL and waits on that guard.
-  py::module_::import("numpy");
-  (void)py::array_t<long long>(1);
-  static py::exception<aia::InputError> input_error(m, "InputError",
-                                                    PyExc_ValueError);
+void BindErrors(py::module_& m) {
+  static py::exception<InputError> input_error(m, "InputError",
+                                               PyExc_ValueError);
+  input_error.doc() =
+      "Bad input: a scenario, an override, a model file or an argument "
+      "given from Python. A ValueError; its text is one line, "
+      "'WHERE: KEY: what is wrong' (WHERE a file and line, or the Python "
+      "callable).";
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
-    } catch (const aia::InputError& e) {
+    } catch (const InputError& e) {
       // A scenario's bytes need not be UTF-8: shown escaped, not lost.
       const std::string text = e.Format();
       PyObject* message = PyUnicode_DecodeUTF8(
@@ -799,66 +1186,238 @@ PYBIND11_MODULE(_aia, m) {
       Py_XDECREF(message);
     }
   });
+}
 
-  py::class_<Mission>(m, "Mission")
-      .def(py::init<const std::string&, std::optional<std::uint64_t>,
-                    const aia::python::KeyValues&>(),
+void BindMoves(py::module_& m) {
+  py::enum_<Move> move(m, "Move", py::arithmetic(),
+                       "A robot's move on the lattice; equal to its int "
+                       "(Move.UP == 2).");
+  move.value("LEFT", Move::kLeft, "0: -x")
+      .value("RIGHT", Move::kRight, "1: +x")
+      .value("UP", Move::kUp, "2: +y")
+      .value("DOWN", Move::kDown, "3: -y")
+      .value("STAY", Move::kStay,
+             "4: the robot keeps its lattice point (a valid decision)");
+  // Equal to its int and hashed as it (pybind11 compares an enum class
+  // only with its own type), so that Move.UP == 2 and {2: x}[Move.UP]:
+  // these replace pybind11's own, not overload them.
+  const auto equal = [](Move a, py::handle b) {
+    const py::object i = AsInteger(b);
+    return i && i.equal(py::int_(static_cast<int>(a)));
+  };
+  move.attr("__eq__") =
+      py::cpp_function(equal, py::name("__eq__"), py::is_method(move));
+  move.attr("__ne__") =
+      py::cpp_function([equal](Move a, py::handle b) { return !equal(a, b); },
+                       py::name("__ne__"), py::is_method(move));
+  move.attr("__hash__") =
+      py::cpp_function([](Move a) { return static_cast<int>(a); },
+                       py::name("__hash__"), py::is_method(move));
+}
+
+void BindMission(py::module_& m) {
+  py::class_<StepResult>(m, "StepResult",
+                         "What one Mission.step did, as Gymnasium tells it.")
+      .def_readonly("steps", &StepResult::steps,
+                    "decision steps taken so far (Mission.steps)")
+      .def_readonly("invalid_moves", &StepResult::invalid_moves,
+                    "moves the world rule replaced at this step")
+      .def_readonly("localized", &StepResult::localized,
+                    "targets below eps in the team's best estimate")
+      .def_readonly("terminated", &StepResult::terminated,
+                    "the mission reached an end state: success, or no "
+                    "robot left")
+      .def_readonly("truncated", &StepResult::truncated,
+                    "the mission was cut short: mission.max_steps")
+      .def_readonly("success", &StepResult::success,
+                    "every target localized (summary.json's success)")
+      .def_property_readonly("done", &StepResult::done,
+                             "terminated or truncated")
+      .def("__repr__", [](const StepResult& r) {
+        return "StepResult(steps=" + std::to_string(r.steps) +
+               ", invalid_moves=" + std::to_string(r.invalid_moves) +
+               ", localized=" + std::to_string(r.localized) +
+               ", terminated=" + (r.terminated ? "True" : "False") +
+               ", truncated=" + (r.truncated ? "True" : "False") +
+               ", success=" + (r.success ? "True" : "False") + ")";
+      });
+
+  py::class_<Mission>(m, "Mission",
+                      "One mission of a scenario file, stepped from Python "
+                      "(aia.Mission wraps it).")
+      .def(py::init([](const std::string& scenario, py::handle seed,
+                       const KeyValues& overrides) {
+             const std::optional<std::uint64_t> s =
+                 SeedArg(seed, "aia.Mission", "seed", true);
+             try {
+               return std::make_unique<Mission>(scenario, s, overrides);
+             } catch (const InputError& e) {
+               throw Renamed(e, "aia.Mission");
+             }
+           }),
            py::arg("scenario"), py::arg("seed") = py::none(),
-           py::arg("overrides") = aia::python::KeyValues{})
-      .def("state", &Mission::State)
-      .def("step", &Mission::Step, py::arg("moves"))
-      .def("valid_moves", &Mission::ValidMoves)
+           py::arg("overrides") = KeyValues{})
+      .def("state", &Mission::State,
+           "What the robots know now (numpy arrays), the truth apart.")
+      .def("step", &Mission::Step, py::arg("moves"),
+           "One decision step: one integer move 0..4 per robot.")
+      .def("valid_moves", &Mission::ValidMoves,
+           "(N, 4) bool: the moves that stay on the lattice.")
       .def("render", &Mission::Render, py::arg("width") = 640,
-           py::arg("height") = 480)
-      .def("channels", &Mission::Channels,
-           py::arg("params") = aia::python::KeyValues{})
-      .def("summary_json", &Mission::SummaryText)
-      .def("diagnostics_json", &Mission::DiagnosticsText)
+           py::arg("height") = 480,
+           "An RGB frame (H, W, 3) uint8 with aia render's overlays.")
+      .def("channels", &Mission::Channels, py::arg("params") = KeyValues{},
+           "I-GBNet's input of every robot, (N, C, H, W) float32.")
+      .def("summary_json", &Mission::SummaryText, "summary.json's text.")
+      .def("diagnostics_json", &Mission::DiagnosticsText,
+           "diagnostics.json's text.")
       .def_property_readonly("num_robots", &Mission::num_robots)
       .def_property_readonly("num_targets", &Mission::num_targets)
-      .def_property_readonly("step_count", &Mission::step)
+      .def_property_readonly("steps", &Mission::step, "decision steps taken")
       .def_property_readonly("done", &Mission::done)
       .def_property_readonly("success", &Mission::success)
-      .def_property_readonly("flowtime", &Mission::flowtime)
+      .def_property_readonly("flowtime", &Mission::flowtime,
+                             "steps to success; -1 until then")
       .def_property_readonly("max_steps", &Mission::max_steps)
       .def_property_readonly("seed", &Mission::seed)
-      .def_property_readonly("owned", &Mission::owned);
+      .def_property_readonly("owned", &Mission::owned,
+                             "False for a view inside aia.evaluate");
+}
 
-  py::class_<aia::python::VectorMissions>(m, "VectorMissions")
-      .def(py::init<const std::string&, const std::vector<std::uint64_t>&,
-                    const aia::python::KeyValues&, int>(),
+void BindVectorMissions(py::module_& m) {
+  py::class_<VectorStepResult>(
+      m, "VectorStepResult",
+      "What one VectorMissions.step did: StepResult's fields as (n,) "
+      "arrays, and info.")
+      .def_readonly("steps", &VectorStepResult::steps)
+      .def_readonly("invalid_moves", &VectorStepResult::invalid_moves)
+      .def_readonly("localized", &VectorStepResult::localized)
+      .def_readonly("terminated", &VectorStepResult::terminated)
+      .def_readonly("truncated", &VectorStepResult::truncated)
+      .def_readonly("success", &VectorStepResult::success)
+      .def_readonly("done", &VectorStepResult::done)
+      .def_readonly("info", &VectorStepResult::info,
+                    "with autoreset: final_info (summary dicts), "
+                    "final_state (state dicts), _final_info (mask)");
+
+  py::class_<VectorMissions>(
+      m, "VectorMissions",
+      "Missions of one scenario stepped together on C++ threads.")
+      .def(py::init([](const std::string& scenario, py::handle seeds,
+                       const KeyValues& overrides, py::handle threads,
+                       bool autoreset) {
+             const int t = static_cast<int>(
+                 IntegerArg(threads, "aia.VectorMissions", "threads", 0, 4096));
+             std::vector<std::uint64_t> s;
+             for (py::handle seed : seeds)
+               s.push_back(*SeedArg(seed, "aia.VectorMissions", "seed", false));
+             try {
+               return std::make_unique<VectorMissions>(scenario, s, overrides,
+                                                       t, autoreset);
+             } catch (const InputError& e) {
+               throw Renamed(e, "aia.VectorMissions");
+             }
+           }),
            py::arg("scenario"), py::arg("seeds"),
-           py::arg("overrides") = aia::python::KeyValues{},
-           py::arg("threads") = 0)
-      .def("__len__", &aia::python::VectorMissions::size)
-      .def("mission", &aia::python::VectorMissions::at,
-           py::return_value_policy::reference_internal)
-      .def("step", &aia::python::VectorMissions::Step, py::arg("moves"))
-      .def_property_readonly("num_robots",
-                             &aia::python::VectorMissions::num_robots);
+           py::arg("overrides") = KeyValues{}, py::arg("threads") = 0,
+           py::arg("autoreset") = false)
+      .def("__len__", &VectorMissions::size)
+      .def("mission", &VectorMissions::at,
+           py::return_value_policy::reference_internal,
+           "The i-th mission (the same object across autoresets).")
+      .def(
+          "reset",
+          [](VectorMissions& v, py::handle seeds) {
+            std::vector<std::uint64_t> s;
+            for (py::handle seed : seeds)
+              s.push_back(
+                  *SeedArg(seed, "aia.VectorMissions.reset", "seed", false));
+            v.Reset(s);
+          },
+          py::arg("seeds"), "Every mission restarted, one seed each.")
+      .def("step", &VectorMissions::Step, py::arg("moves"),
+           "One step of every mission: (n, robots) integer moves 0..4.")
+      .def_property_readonly("num_robots", &VectorMissions::num_robots)
+      .def_property_readonly("autoreset", &VectorMissions::autoreset)
+      .def_property_readonly("next_seed", &VectorMissions::next_seed,
+                             "the seed the next restart takes");
+}
 
-  py::class_<aia::python::PyDataset>(m, "Dataset")
-      .def(py::init<const std::vector<std::string>&,
-                    const aia::python::KeyValues&>(),
-           py::arg("paths"), py::arg("params") = aia::python::KeyValues{})
-      .def("__len__", &aia::python::PyDataset::size)
-      .def_property_readonly("num_worlds", &aia::python::PyDataset::num_worlds)
-      .def("samples", &aia::python::PyDataset::Samples)
-      .def("validation_worlds", &aia::python::PyDataset::ValidationWorlds,
-           py::arg("share"), py::arg("seed"))
-      .def("batch", &aia::python::PyDataset::Batch, py::arg("indices"));
+void BindDataset(py::module_& m) {
+  py::class_<PyDataset>(m, "Dataset",
+                        "The samples of aia dataset shards, rendered by the "
+                        "C++ renderer.")
+      .def(py::init<const std::vector<std::string>&, const KeyValues&>(),
+           py::arg("paths"), py::arg("params") = KeyValues{})
+      .def("__len__", &PyDataset::size)
+      .def_property_readonly("num_worlds", &PyDataset::num_worlds)
+      .def("samples", &PyDataset::Samples,
+           "Per sample: label, useful, acted, world, episode, step, robot.")
+      .def("validation_worlds", &PyDataset::ValidationWorlds, py::arg("share"),
+           py::arg("seed"),
+           "Whether each world is held out, as aia train splits.")
+      .def("batch", &PyDataset::Batch, py::arg("indices"),
+           "(images (B, C, H, W) float32, labels (B,) int64).");
+}
 
-  py::class_<BuiltinPolicy>(m, "BuiltinPolicy")
-      .def(py::init<const std::string&, const aia::python::KeyValues&>(),
-           py::arg("name"), py::arg("params") = aia::python::KeyValues{})
-      .def("decide", &BuiltinPolicy::Decide, py::arg("mission"))
+void BindPolicies(py::module_& m) {
+  py::class_<BuiltinPolicy>(m, "BuiltinPolicy",
+                            "A registered policy deciding on a mission.")
+      .def(py::init<const std::string&, const KeyValues&>(), py::arg("name"),
+           py::arg("params") = KeyValues{})
+      .def("decide", &BuiltinPolicy::Decide, py::arg("mission"),
+           "One move per robot (int64) from what the robots know.")
       .def_property_readonly("name", &BuiltinPolicy::name)
       .def_property_readonly("centralized", &BuiltinPolicy::centralized)
       .def_property_readonly("last_status", &BuiltinPolicy::LastStatus);
+  m.def(
+      "policy_names", [] { return AllPolicies().Names(); },
+      "The registered policies' names.");
+}
 
-  m.def("policy_names", [] { return aia::AllPolicies().Names(); });
-  m.def("evaluate", &aia::python::Evaluate, py::arg("decide"), py::arg("name"),
+void BindEvaluate(py::module_& m) {
+  m.def("evaluate", &Evaluate, py::arg("decide"), py::arg("name"),
         py::arg("centralized"), py::arg("sizes"), py::arg("seeds"),
         py::arg("seed_base"), py::arg("out"), py::arg("threads"),
-        py::arg("sets"), py::arg("progress"));
+        py::arg("sets"), py::arg("progress"), py::arg("done_before"),
+        py::arg("total"),
+        "aia eval with the callable as one more policy; returns (exit "
+        "code, what aia eval wrote to stderr).");
+}
+
+void BindInstallation(py::module_& m) {
+  m.def(
+      "_use_installed",
+      [](const std::string& lib_dir, const std::string& data_dir) {
+        SetInstalledDirs(lib_dir, data_dir);
+      },
+      py::arg("lib_dir"), py::arg("data_dir"),
+      "An installed package's own plugins and data (its _install.py).");
+  m.def(
+      "_installed_dirs",
+      [] { return py::make_tuple(InstalledLibDir(), InstalledDataDir()); },
+      "(plugin folder, data folder) of an installed aia, '' in a build.");
+  m.def("_default_model_path", &DefaultModelPath,
+        "Where policy.model points when a scenario does not say.");
+}
+
+}  // namespace
+}  // namespace python
+}  // namespace aia
+
+PYBIND11_MODULE(_aia, m) {
+  m.doc() = "aia's C++ core (use the aia package)";
+  // numpy's C API is set up once, here: done first on a worker thread it
+  // would import numpy under a static's guard while another thread holds
+  // the GIL and waits on that guard.
+  py::module_::import("numpy");
+  (void)py::array_t<long long>(1);
+  aia::python::BindErrors(m);
+  aia::python::BindMoves(m);
+  aia::python::BindMission(m);
+  aia::python::BindVectorMissions(m);
+  aia::python::BindDataset(m);
+  aia::python::BindPolicies(m);
+  aia::python::BindEvaluate(m);
+  aia::python::BindInstallation(m);
 }

@@ -21,16 +21,40 @@ readelf -d "$tmp/example/my_aia" | grep -q "RUNPATH.*$tmp/prefix/lib/aia" ||
   --out "$tmp/eval" --quiet > "$tmp/eval.log"
 grep -q '^3x3,nearest_mean,2,' "$tmp/eval/summary.csv"
 grep -q '^3x3,greedy,2,' "$tmp/eval/summary.csv"
-# The installed Python package imports and steps a mission.
+# The installed Python package imports and steps a mission, with its own
+# plugin and model (the build tree, still there, is not used), also when run
+# from the source tree (whose models/igbnet.pt is there).
 site=$(ls -d "$tmp"/prefix/lib/python3*/dist-packages 2>/dev/null | head -1)
 if [ -n "$site" ]; then
-  PYTHONPATH="$site" /usr/bin/python3 -c "
-import aia, sys
+  (cd "$src" && PYTHONPATH="$site" /usr/bin/python3 -c "
+import os, aia
+from aia import _aia
+prefix = os.path.realpath('$tmp/prefix')
 assert aia.__file__.startswith('$site'), aia.__file__
+lib, data = _aia._installed_dirs()
+assert os.path.realpath(lib) == prefix + '/lib/aia', lib
+assert os.path.realpath(data) == prefix + '/share/aia', data
+model = os.path.realpath(_aia._default_model_path())
+assert model == prefix + '/share/aia/models/igbnet.pt', model
 m = aia.Mission('$src/scenarios/default.yaml', overrides={'robots.count': 2, 'targets.count': 1})
 m.step(aia.builtin_policy('greedy').decide(m))
-assert m.steps == 1"
+m.step(aia.builtin_policy('igbnet').decide(m))
+assert m.steps == 2
+maps = [l.split()[-1] for l in open('/proc/self/maps') if 'libaia_torch' in l]
+assert maps and all(os.path.realpath(p) == prefix + '/lib/aia/libaia_torch.so'
+                    for p in maps), maps")
 fi
+# The installed CLI likewise, run from the source tree: its own plugin
+# (LD_DEBUG=files names each file the loader opens) and its own model.
+(cd "$src" && LD_DEBUG=files LD_DEBUG_OUTPUT="$tmp/ld" "$tmp/prefix/bin/aia" \
+  run scenarios/default.yaml --policy igbnet --max-steps 2 --out "$tmp/run" \
+  --quiet > /dev/null)
+loaded=$(cat "$tmp"/ld.* | grep -o 'file=[^ ]*libaia_torch.so' | sort -u)
+[ "$loaded" = "file=$tmp/prefix/bin/../lib/aia/libaia_torch.so" ] ||
+  { echo "the installed aia loaded: $loaded"; exit 1; }
+grep -q "model: $(realpath "$tmp/prefix")/share/aia/models/igbnet.pt" \
+  "$tmp/run/effective.yaml" ||
+  { echo "the installed aia's model:"; grep model "$tmp/run/effective.yaml"; exit 1; }
 # What was installed: the program, the plugins, the models, the package.
 for f in bin/aia lib/aia/libaia_torch.so lib/aia/libaia_media.so \
   share/aia/models/igbnet.pt lib/cmake/aia/aiaConfig.cmake \

@@ -7,7 +7,8 @@
         m.step(greedy.decide(m))
     print(m.success, m.flowtime, m.summary()["steps"])
 
-Moves are ints: 0 left, 1 right, 2 up, 3 down, 4 stay. A mission is the
+Moves are ints (or aia.Move): 0 left, 1 right, 2 up, 3 down, 4 stay (the
+robot keeps its lattice point). A mission is the
 same loop as `aia run` (world, physics, sensing, DKF, world rule); what the
 robots know is in `state()`, the ground truth under its "truth" key, for
 scoring only. docs/python.md is the reference.
@@ -15,15 +16,62 @@ scoring only. docs/python.md is the reference.
 
 import json as _json
 import math as _math
+import operator as _operator
 import os
 import re
+import sys as _sys
+import warnings as _warnings
+
+import numpy as _np
 
 from . import _aia
 
-__all__ = ["Dataset", "InputError", "Mission", "VectorMissions",
-           "builtin_policy", "evaluate", "parallel_env", "policy_names"]
+__all__ = ["Dataset", "InputError", "Mission", "Move", "StepResult",
+           "VectorMissions", "VectorStepResult", "aec_env", "builtin_policy",
+           "evaluate", "parallel_env", "policy_names"]
 
 InputError = _aia.InputError
+Move = _aia.Move
+StepResult = _aia.StepResult
+VectorStepResult = _aia.VectorStepResult
+
+# An installed package (cmake --install, or a wheel) says where its own
+# plugins and models are, relative to itself (_install.py, written at
+# install time), so that it never loads a build tree's.
+try:
+    from . import _install
+except ImportError:  # the build tree's package
+    _install = None
+if _install is not None:
+    _here = os.path.dirname(os.path.abspath(__file__))
+    _aia._use_installed(
+        os.path.normpath(os.path.join(_here, _install.PLUGIN_DIR)),
+        os.path.normpath(os.path.join(_here, _install.DATA_DIR)))
+
+
+def _shown(value):
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:57] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def _integer(value, where, arg, low=0, high=None):
+    """`value` as an int if it is an integer (an int or numpy integer, not
+    a bool or a float) in [low, high]; else aia.InputError."""
+    expect = f"an integer >= {low}" if high is None else \
+        f"an integer in [{low}, {high}]"
+    if isinstance(value, (bool, _np.bool_)) or \
+            not hasattr(type(value), "__index__"):
+        raise InputError(f"{where}: {arg}: must be {expect}, got "
+                         f"{_shown(value)}")
+    v = _operator.index(value)
+    if v < low or (high is not None and v > high):
+        raise InputError(f"{where}: {arg}: must be {expect}, got {v}")
+    return v
+
+
+_SEED_MAX = 2 ** 64 - 1
 
 
 def _yaml_text(key, value):
@@ -42,17 +90,24 @@ def _yaml_text(key, value):
         return value
     if isinstance(value, (list, tuple, dict)):
         return _json.dumps(value)
-    raise TypeError(f"{key}: a value of type {type(value).__name__} is not a "
-                    "scenario value (give a bool, number, string, list or dict)")
+    raise InputError(f"{key}: a value of type {type(value).__name__} is not "
+                     "a scenario value (give a bool, number, string, list or "
+                     "dict)")
 
 
-def _pairs(mapping, what):
+def _pairs(mapping, what, where="aia"):
     if mapping is None:
         return []
     if not isinstance(mapping, dict):
-        raise TypeError(f"{what}: must be a dict of keys to values, got "
-                        f"{type(mapping).__name__}")
-    return [(str(k), _yaml_text(k, v)) for k, v in mapping.items()]
+        raise InputError(f"{where}: {what}: must be a dict of keys to "
+                         f"values, got {_shown(mapping)}")
+    out = []
+    for k, v in mapping.items():
+        try:
+            out.append((str(k), _yaml_text(k, v)))
+        except InputError as e:
+            raise InputError(f"{where}: {what}: {e}") from None
+    return out
 
 
 class Mission:
@@ -61,8 +116,9 @@ class Mission:
     {"sensor.range": 3, "robots.count": 5}."""
 
     def __init__(self, scenario, seed=None, overrides=None):
-        self._m = _aia.Mission(str(scenario), seed,
-                               _pairs(overrides, "overrides"))
+        self._m = _aia.Mission(_path(scenario, "aia.Mission", "scenario"),
+                               seed, _pairs(overrides, "overrides",
+                                            "aia.Mission"))
 
     @classmethod
     def _view(cls, core):
@@ -75,13 +131,13 @@ class Mission:
 
     def state(self):
         """What the robots know now, as numpy arrays (N robots, M targets):
-        step; positions (N, 2) metres; lattice (N,) lattice indices and
-        cells (N, 2) their (ix, iy); active (N,); neighbors (N, N) this
-        step's communication graph; mean (N, M, 2), cov (N, M, 2, 2) and
-        det (N, M) of each robot's fused belief (position part); the
-        targets' log_det_prior (M,); eps; workspace (width, height) in
-        metres. The ground truth, for scoring
-        only, under "truth": target_positions (M, 2)."""
+        steps (decision steps taken); positions (N, 2) metres; lattice
+        (N,) lattice indices and cells (N, 2) their (ix, iy); active (N,);
+        neighbors (N, N) this step's communication graph; mean (N, M, 2),
+        cov (N, M, 2, 2) and det (N, M) of each robot's fused belief
+        (position part); the targets' log_det_prior (M,); eps; workspace
+        (width, height) in metres. The ground truth, for scoring only,
+        under "truth": target_positions (M, 2)."""
         return self._m.state()
 
     def channels(self, frame=None, **params):
@@ -94,13 +150,14 @@ class Mission:
         ...; docs/learning.md, Channels), checked as a model's are."""
         if frame is not None:
             params["frame"] = frame
-        return self._m.channels(_pairs(params, "channels"))
+        return self._m.channels(_pairs(params, "channels",
+                                       "aia.Mission.channels"))
 
     def render(self, width=640, height=480):
         """An RGB frame, an (H, W, 3) uint8 array, of the physics now with
         `aia render`'s overlays (estimates, sensing, messages, trails from
         the first render() on). Made offscreen (OSMesa), on this thread."""
-        return self._m.render(int(width), int(height))
+        return self._m.render(width, height)
 
     def valid_moves(self):
         """(N, 4) bool: which of each robot's moves (left, right, up, down)
@@ -108,12 +165,15 @@ class Mission:
         return self._m.valid_moves()
 
     def step(self, moves):
-        """Applies one move per robot (4 stays in place; the world rule
-        replaces a move off the lattice), runs the physics, senses and fuses. Returns what changed:
-        step, invalid_moves (replaced this step), localized (targets below
-        eps in the team's best estimate), done, success."""
-        import numpy as np
-        return self._m.step(np.asarray(moves, dtype=np.int64).reshape(-1))
+        """Applies one move per robot: a list or numpy array of integers
+        0..4 of shape (num_robots,) exactly (4 stays in place; the world
+        rule replaces a move off the lattice); floats, bools and any other
+        shape are refused (aia.InputError). Runs the physics, senses and
+        fuses. Returns a StepResult: steps, invalid_moves (replaced this
+        step), localized (targets below eps in the team's best estimate),
+        terminated (success, or no robot left), truncated (past
+        mission.max_steps), success, done (terminated or truncated)."""
+        return self._m.step(moves)
 
     @property
     def done(self):
@@ -139,8 +199,8 @@ class Mission:
 
     @property
     def steps(self):
-        """Decision steps taken."""
-        return self._m.step_count
+        """Decision steps taken (state()["steps"], StepResult.steps)."""
+        return self._m.steps
 
     @property
     def max_steps(self):
@@ -162,21 +222,38 @@ class Mission:
         return _json.loads(self._m.summary_json())
 
 
+def _path(value, where, arg):
+    if not isinstance(value, (str, os.PathLike)):
+        raise InputError(f"{where}: {arg}: must be a path (str or "
+                         f"os.PathLike), got {_shown(value)}")
+    return os.fspath(value)
+
+
 class VectorMissions:
     """n missions of one scenario, seeds seed .. seed + n - 1 (default: the
     file's seed + i), stepped together on C++ threads (threads 0: all
-    cores) with the GIL released. missions[i] is each one's Mission."""
+    cores) with the GIL released. missions[i] is each one's Mission.
 
-    def __init__(self, n, scenario, seed=None, overrides=None, threads=0):
-        n = int(n)
-        if n < 1:
-            raise ValueError(f"n: must be at least 1, got {n}")
+    With autoreset=True a mission that ends at a step restarts at once with
+    the next seed (seed + n, seed + n + 1, ... in the order they end), as
+    Gymnasium's vector environments do; that step's result still shows how
+    it ended, and its info holds its last summary and state."""
+
+    def __init__(self, n, scenario, seed=None, overrides=None, threads=0,
+                 autoreset=False):
+        where = "aia.VectorMissions"
+        n = _integer(n, where, "n", 1)
+        scenario = _path(scenario, where, "scenario")
         if seed is None:
             seed = Mission(scenario, overrides=overrides).seed
-        seeds = [int(seed) + i for i in range(n)]
-        self._v = _aia.VectorMissions(str(scenario), seeds,
-                                      _pairs(overrides, "overrides"),
-                                      int(threads))
+        seed = _integer(seed, where, "seed", 0, _SEED_MAX - n + 1)
+        threads = _integer(threads, where, "threads", 0)
+        if not isinstance(autoreset, (bool, _np.bool_)):
+            raise InputError(f"{where}: autoreset: must be True or False, "
+                             f"got {_shown(autoreset)}")
+        self._v = _aia.VectorMissions(
+            scenario, [seed + i for i in range(n)],
+            _pairs(overrides, "overrides", where), threads, bool(autoreset))
         self.missions = [Mission._view(self._v.mission(i)) for i in range(n)]
 
     def __len__(self):
@@ -187,25 +264,49 @@ class VectorMissions:
         return self._v.num_robots
 
     @property
+    def autoreset(self):
+        return self._v.autoreset
+
+    @property
     def done(self):
         """(n,) bool: each mission's done."""
-        import numpy as np
-        return np.array([m.done for m in self.missions])
+        return _np.array([m.done for m in self.missions])
+
+    @property
+    def seeds(self):
+        """(n,) uint64: each mission's seed now."""
+        return _np.array([m.seed for m in self.missions], dtype=_np.uint64)
+
+    def reset(self, seed=None, options=None):
+        """Every mission restarted: at seeds seed .. seed + n - 1, else at
+        the n seeds after the last one used. Returns (states(), info) with
+        info["seeds"], as Gymnasium's reset returns (observation, info)."""
+        n = len(self)
+        if seed is None:
+            seed = self._v.next_seed
+        seed = _integer(seed, "aia.VectorMissions.reset", "seed", 0,
+                        _SEED_MAX - n + 1)
+        self._v.reset([seed + i for i in range(n)])
+        return self.states(), {"seeds": self.seeds}
 
     def step(self, moves):
-        """moves: (n, robots) ints; a mission already done ignores its
-        row. Returns stacked arrays: step, done, success, invalid_moves."""
-        import numpy as np
-        return self._v.step(np.ascontiguousarray(moves, dtype=np.int64))
+        """moves: (n, robots) integers 0..4 (a list of lists or an integer
+        array; floats, bools and other shapes are refused). Returns a
+        VectorStepResult: steps, invalid_moves, localized, terminated,
+        truncated, success and done as (n,) arrays, and info. Without
+        autoreset a mission already done ignores its row; with it, info
+        holds final_info (the summary() of each mission that ended at this
+        step, else None), final_state (its last state()) and _final_info
+        (the mask)."""
+        return self._v.step(moves)
 
     def states(self):
         """Every mission's state(), stacked: each array gains a first axis
         of n (the ground truth under "truth" likewise)."""
-        import numpy as np
         states = [m.state() for m in self.missions]
-        out = {k: np.stack([s[k] for s in states])
+        out = {k: _np.stack([s[k] for s in states])
                for k in states[0] if k != "truth"}
-        out["truth"] = {k: np.stack([s["truth"][k] for s in states])
+        out["truth"] = {k: _np.stack([s["truth"][k] for s in states])
                         for k in states[0]["truth"]}
         return out
 
@@ -223,8 +324,12 @@ class Dataset:
     def __init__(self, paths, **channels):
         if isinstance(paths, (str, os.PathLike)):
             paths = [paths]
-        self._d = _aia.Dataset([str(p) for p in paths],
-                               _pairs(channels, "channels"))
+        if not isinstance(paths, (list, tuple)) or not paths:
+            raise InputError(f"aia.Dataset: paths: must be a path or a "
+                             f"non-empty list of paths, got {_shown(paths)}")
+        self._d = _aia.Dataset(
+            [_path(p, "aia.Dataset", "paths") for p in paths],
+            _pairs(channels, "channels", "aia.Dataset"))
         samples = self._d.samples()
         self.labels = samples["label"]
         self.useful = samples["useful"]
@@ -244,23 +349,25 @@ class Dataset:
     def split(self, val_share=0.1, seed=1):
         """(train, validation) sample indices, split by world as `aia train
         --val-share --seed` splits (its defaults)."""
-        import numpy as np
-        held = self._d.validation_worlds(float(val_share), int(seed))
+        held = self._d.validation_worlds(val_share, seed)
         val = held[self.world]
-        return np.flatnonzero(~val), np.flatnonzero(val)
+        return _np.flatnonzero(~val), _np.flatnonzero(val)
 
     def batch(self, indices):
         """(images (B, C, H, W) float32, labels (B,) int64) of these
-        samples."""
-        import numpy as np
-        return self._d.batch(np.asarray(indices, dtype=np.int64).tolist())
+        samples: a list or integer array of indices in [0, len)."""
+        return self._d.batch(indices)
 
 
 class _BuiltinPolicy:
     """A registered policy: decide(mission) -> one move per robot."""
 
     def __init__(self, name, params):
-        self._p = _aia.BuiltinPolicy(str(name), _pairs(params, "params"))
+        if not isinstance(name, str):
+            raise InputError(f"aia.builtin_policy: name: must be a str, got "
+                             f"{_shown(name)}")
+        self._p = _aia.BuiltinPolicy(name, _pairs(params, "params",
+                                                  "aia.builtin_policy"))
 
     @property
     def name(self):
@@ -280,6 +387,9 @@ class _BuiltinPolicy:
         """Moves for this step from what the robots know (the team's belief
         only for a centralized policy). Deciding at every step of a mission
         repeats `aia run` with this policy."""
+        if not isinstance(mission, Mission):
+            raise InputError(f"{self!r}.decide: mission: must be an "
+                             f"aia.Mission, got {_shown(mission)}")
         return self._p.decide(mission._m)
 
     def __call__(self, mission):
@@ -296,6 +406,51 @@ def builtin_policy(name, **params):
 
 
 _NAME = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
+
+
+def _runs_done(out, name, sizes, seeds, seed_base):
+    """How many of this evaluation's runs of `name` out/runs.csv holds."""
+    import csv
+    path = os.path.join(out, "runs.csv")
+    if not os.path.isfile(path):
+        return 0
+    wanted = set(sizes)
+    done = set()
+    try:
+        with open(path, newline="") as f:
+            for r in csv.DictReader(f):
+                try:
+                    seed = int(r["seed"])
+                except (KeyError, TypeError, ValueError):
+                    continue
+                if r.get("policy") == name and r.get("size") in wanted and \
+                        seed_base <= seed < seed_base + seeds:
+                    done.add((r["size"], seed))
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return 0
+    return len(done)
+
+
+class _ProgressBar:
+    """A one-line progress bar on sys.stderr, as tqdm draws one."""
+
+    def __init__(self, name):
+        self.name = name
+        self.shown = False
+
+    def __call__(self, done, total):
+        width = 24
+        filled = width * done // max(total, 1)
+        _sys.stderr.write(f"\r[aia.evaluate] {self.name} "
+                          f"|{'#' * filled}{'.' * (width - filled)}| "
+                          f"{done}/{total} runs")
+        _sys.stderr.flush()
+        self.shown = True
+
+    def end(self, out):
+        if self.shown:
+            _sys.stderr.write(f"  -> {out}\n")
+            _sys.stderr.flush()
 
 
 def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
@@ -315,32 +470,78 @@ def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
     gives it the team's belief too (for builtin_policy("expert")).
     `overrides` are `--set` keys for every instance. `threads` 0: all
     cores (the expert's F* runs in parallel; Python calls take turns).
-    Returns summary.csv's rows as dicts."""
+
+    Nothing is printed to stdout. `progress`: True draws a bar on
+    sys.stderr; False is silent; a callable is called as progress(done,
+    total) with this policy's runs (those already in `out` counted done).
+    Notes of `aia eval` (rows dropped from a damaged runs.csv) come as
+    RuntimeWarnings. Returns summary.csv's rows as dicts."""
+    where = "aia.evaluate"
     decide = getattr(policy, "decide", policy)
     if not callable(decide):
-        raise TypeError("policy: must be callable, or have decide(mission)")
+        raise InputError(f"{where}: policy: must be callable, or have "
+                         f"decide(mission), got {_shown(policy)}")
     if name is None:
         name = getattr(policy, "name", None) or getattr(policy, "__name__", "")
         if not isinstance(name, str) or not _NAME.match(name):
             name = "python"
     if not isinstance(name, str) or not _NAME.match(name):
-        raise ValueError(f"name: must be 1 to 64 letters, digits, '_', '.' "
-                         f"or '-', got {name!r}")
+        raise InputError(f"{where}: name: must be 1 to 64 letters, digits, "
+                         f"'_', '.' or '-', got {name!r}")
     if isinstance(sizes, str):
         sizes = [sizes]
+    if not isinstance(sizes, (list, tuple)) or \
+            not all(isinstance(s, str) for s in sizes):
+        raise InputError(f"{where}: sizes: must be a list of sizes like "
+                         f"'10x10', got {_shown(sizes)}")
+    seeds = _integer(seeds, where, "seeds", 1, 2 ** 31 - 1)
+    seed_base = _integer(seed_base, where, "seed_base", 0, _SEED_MAX)
+    if seed_base + seeds - 1 > _SEED_MAX:
+        raise InputError(f"{where}: seed_base: the last seed, seed_base + "
+                         f"seeds - 1, must fit in 64 bits")
+    threads = _integer(threads, where, "threads", 0, 4096)
+    if not isinstance(centralized, (bool, _np.bool_)):
+        raise InputError(f"{where}: centralized: must be True or False, got "
+                         f"{_shown(centralized)}")
+    bar = None
+    if progress is True:
+        bar = _ProgressBar(name)
+        report = bar
+    elif progress is False or progress is None:
+        report = None
+    elif callable(progress):
+        report = progress
+    else:
+        raise InputError(f"{where}: progress: must be True, False or a "
+                         f"callable progress(done, total), got "
+                         f"{_shown(progress)}")
     if out is None:
         import tempfile
         out = tempfile.mkdtemp(prefix="aia_evaluate_")
-    sets = [f"{k}={v}" for k, v in _pairs(overrides, "overrides")]
-    rc = _aia.evaluate(lambda view: decide(Mission._view(view)), name,
-                       bool(centralized), [str(s) for s in sizes], int(seeds),
-                       int(seed_base), str(out), int(threads), sets,
-                       bool(progress))
+    out = _path(out, where, "out")
+    sets = [f"{k}={v}" for k, v in _pairs(overrides, "overrides", where)]
+    total = len(sizes) * seeds
+    done_before = _runs_done(out, name, sizes, seeds, seed_base)
+    if report is not None:
+        report(done_before, total)
+    rc, notes = _aia.evaluate(lambda view: decide(Mission._view(view)), name,
+                              bool(centralized), list(sizes), seeds,
+                              seed_base, out, threads, sets, report,
+                              done_before, total)
+    for line in notes.splitlines():
+        if line.strip() and "interrupted;" not in line:
+            _warnings.warn(line, RuntimeWarning, stacklevel=2)
     if rc == 130:
+        if bar is not None:
+            bar.end(out)
         raise KeyboardInterrupt(f"aia.evaluate: interrupted; the finished "
                                 f"rows are in {out}/runs.csv: call again "
                                 "with the same arguments to go on")
-    return _read_summary(os.path.join(str(out), "summary.csv"))
+    if report is not None:
+        report(total, total)
+    if bar is not None:
+        bar.end(out)
+    return _read_summary(os.path.join(out, "summary.csv"))
 
 
 def _read_summary(path):
@@ -370,6 +571,14 @@ def parallel_env(scenario, seed=None, overrides=None, render_mode=None,
     from .env import ParallelEnv
     return ParallelEnv(scenario, seed=seed, overrides=overrides,
                        render_mode=render_mode, **kwargs)
+
+
+def aec_env(scenario, seed=None, overrides=None, render_mode=None, **kwargs):
+    """The PettingZoo AEC API over parallel_env (aia.env.AECEnv: agents act
+    in turn; the mission steps when every live agent has acted)."""
+    from .env import AECEnv, ParallelEnv
+    return AECEnv(ParallelEnv(scenario, seed=seed, overrides=overrides,
+                              render_mode=render_mode, **kwargs))
 
 
 def policy_names():

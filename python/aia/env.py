@@ -1,13 +1,15 @@
-"""The PettingZoo ParallelEnv API over aia.Mission (docs/python.md).
+"""The PettingZoo APIs over aia.Mission (docs/python.md): ParallelEnv, and
+AECEnv, its turn-by-turn form.
 
 Agents are robot_0 ... robot_{N-1}. Each agent observes its I-GBNet
 channels (what its own belief, its neighbours and the map show around it)
-and a few numbers; its action is a move, 0 left, 1 right, 2 up, 3 down.
-Its reward at a step is the drop of its own summed log det Sigma (each
-target counted down to log eps only, as the greedy policy counts gains),
-less `step_penalty`. At success every agent terminates and `agents` is
-empty; past mission.max_steps every agent is truncated; a failed robot
-terminates and leaves `agents`.
+and a few numbers; its action is a move, 0 left, 1 right, 2 up, 3 down
+(infos[agent]["action_mask"] says which stay on the lattice). Its reward at
+a step is the drop of its own summed log det Sigma (each target counted
+down to log eps only, as the greedy policy counts gains), less
+`step_penalty`. At success every agent terminates and `agents` is empty;
+past mission.max_steps every agent is truncated; a failed robot terminates
+and leaves `agents`.
 
 gymnasium's spaces are used when gymnasium imports; else the small
 stand-ins below, with shape, dtype, n, sample(), contains() and seed().
@@ -15,7 +17,7 @@ stand-ins below, with shape, dtype, n, sample(), contains() and seed().
 
 import numpy as np
 
-from . import Mission
+from . import InputError, Mission, _integer, _shown
 
 try:  # pragma: no cover - gymnasium is not packaged in Debian 12
     from gymnasium import spaces as _spaces
@@ -39,11 +41,19 @@ class Discrete:
         return int(self._rng.integers(self.n))
 
     def contains(self, x):
-        try:
-            v = int(x)
-        except (TypeError, ValueError):
+        """Integers only (an int or numpy integer, not a bool or a float),
+        as gymnasium's Discrete."""
+        if isinstance(x, (bool, np.bool_)):
             return False
-        return v == x and 0 <= v < self.n
+        if isinstance(x, (int, np.integer)):
+            return 0 <= int(x) < self.n
+        if isinstance(x, np.ndarray) and x.shape == () and \
+                np.issubdtype(x.dtype, np.integer):
+            return 0 <= int(x) < self.n
+        return False
+
+    def __eq__(self, other):
+        return isinstance(other, Discrete) and other.n == self.n
 
     def __repr__(self):
         return f"Discrete({self.n})"
@@ -72,6 +82,12 @@ class Box:
         return (x.shape == self.shape and np.can_cast(x.dtype, self.dtype)
                 and bool(np.all(x >= self.low)) and bool(np.all(x <= self.high)))
 
+    def __eq__(self, other):
+        return (isinstance(other, Box) and other.shape == self.shape and
+                other.dtype == self.dtype and
+                np.array_equal(other.low, self.low) and
+                np.array_equal(other.high, self.high))
+
     def __repr__(self):
         return f"Box({self.shape}, {self.dtype})"
 
@@ -98,20 +114,33 @@ class Dict:
         return (isinstance(x, dict) and set(x) == set(self.spaces) and
                 all(s.contains(x[k]) for k, s in self.spaces.items()))
 
+    def __eq__(self, other):
+        return isinstance(other, Dict) and other.spaces == self.spaces
+
     def __repr__(self):
         return f"Dict({self.spaces})"
 
 
-def _make_spaces(channels_shape, vector_size):
+def _observation_space(channels_shape, vector_size):
     if _spaces is not None:  # pragma: no cover
-        obs = _spaces.Dict({
+        return _spaces.Dict({
             "channels": _spaces.Box(0.0, np.inf, channels_shape, np.float32),
             "vector": _spaces.Box(-np.inf, np.inf, (vector_size,),
                                   np.float32)})
-        return obs, _spaces.Discrete(4)
-    obs = Dict({"channels": Box(0.0, np.inf, channels_shape, np.float32),
-                "vector": Box(-np.inf, np.inf, (vector_size,), np.float32)})
-    return obs, Discrete(4)
+    return Dict({"channels": Box(0.0, np.inf, channels_shape, np.float32),
+                 "vector": Box(-np.inf, np.inf, (vector_size,), np.float32)})
+
+
+def _action_space():
+    if _spaces is not None:  # pragma: no cover
+        return _spaces.Discrete(4)
+    return Discrete(4)
+
+
+def _box(size):
+    if _spaces is not None:  # pragma: no cover
+        return _spaces.Box(-np.inf, np.inf, (size,), np.float32)
+    return Box(-np.inf, np.inf, (size,), np.float32)
 
 
 # The vector features of an agent's observation, in order.
@@ -126,24 +155,44 @@ class ParallelEnv:
 
     def __init__(self, scenario, seed=None, overrides=None, render_mode=None,
                  channels=None, step_penalty=0.01):
+        where = "aia.parallel_env"
         if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode: must be None or 'rgb_array', got "
-                             f"{render_mode!r}")
+            raise InputError(f"{where}: render_mode: must be None or "
+                             f"'rgb_array', got {render_mode!r}")
+        if channels is not None and not isinstance(channels, dict):
+            raise InputError(f"{where}: channels: must be a dict of channel "
+                             f"settings, got {_shown(channels)}")
+        if isinstance(step_penalty, (bool, np.bool_)) or \
+                not isinstance(step_penalty, (int, float, np.number)) or \
+                not np.isfinite(step_penalty):
+            raise InputError(f"{where}: step_penalty: must be a finite "
+                             f"number, got {_shown(step_penalty)}")
         self.render_mode = render_mode
-        self._scenario = str(scenario)
+        self._scenario = scenario
         self._overrides = dict(overrides or {})
         self._channels = dict(channels or {})
         self._step_penalty = float(step_penalty)
         first = Mission(self._scenario, seed=seed, overrides=self._overrides)
         self._seed = first.seed
         self._next_seed = first.seed
-        self.possible_agents = [f"robot_{i}" for i in range(first.num_robots)]
+        n, m = first.num_robots, first.num_targets
+        self.possible_agents = [f"robot_{i}" for i in range(n)]
         self._robot = {a: i for i, a in enumerate(self.possible_agents)}
         self.agents = []
         shape = first.channels(**self._channels).shape[1:]
-        self._observation_space, self._action_space = _make_spaces(
-            shape, len(VECTOR_FEATURES))
+        # One space object per agent: seeding one seeds that one only.
+        self.observation_spaces = {
+            a: _observation_space(shape, len(VECTOR_FEATURES))
+            for a in self.possible_agents}
+        self.action_spaces = {a: _action_space()
+                              for a in self.possible_agents}
+        # state(): positions (N, 2) and active (N,) of the robots; per
+        # target the team's best clipped log det share and its mean (M, 2);
+        # the step share.
+        self.state_space = _box(3 * n + 3 * m + 1)
         self._mission = None
+        self._closed = False
+        self._left = {}
 
     @property
     def num_agents(self):
@@ -153,35 +202,53 @@ class ParallelEnv:
     def max_num_agents(self):
         return len(self.possible_agents)
 
+    @property
+    def unwrapped(self):
+        return self
+
     def observation_space(self, agent):
-        self._index(agent)
-        return self._observation_space
+        return self.observation_spaces[self._agent(agent)]
 
     def action_space(self, agent):
-        self._index(agent)
-        return self._action_space
+        return self.action_spaces[self._agent(agent)]
 
-    def _index(self, agent):
-        try:
-            return self._robot[agent]
-        except KeyError:
+    def _agent(self, agent):
+        if agent not in self._robot:
             raise KeyError(f"unknown agent {agent!r}; agents are robot_0 .. "
-                           f"robot_{len(self.possible_agents) - 1}") from None
+                           f"robot_{len(self.possible_agents) - 1}")
+        return agent
+
+    def _open(self, what):
+        if self._closed:
+            raise InputError(f"aia.ParallelEnv.{what}: the env is closed "
+                             "(close() was called): make another one")
+
+    def _started(self, what):
+        self._open(what)
+        if self._mission is None:
+            raise InputError(f"aia.ParallelEnv.{what}: call reset() before "
+                             f"{what}()")
 
     def reset(self, seed=None, options=None):
         """A new mission: at `seed`, else the constructor's seed at the first
         reset and the previous one + 1 after."""
+        self._open("reset")
         if seed is not None:
-            self._next_seed = int(seed)
+            self._next_seed = _integer(seed, "aia.ParallelEnv.reset", "seed",
+                                       0, 2 ** 64 - 1)
         self._mission = Mission(self._scenario, seed=self._next_seed,
                                 overrides=self._overrides)
-        self._next_seed += 1
+        self._next_seed = (self._next_seed + 1) % 2 ** 64
         state = self._mission.state()
         self._log_det = self._own_log_det(state)
         self.agents = [a for i, a in enumerate(self.possible_agents)
                        if state["active"][i]]
+        self._left = {}
         observations = self._observations(state)
-        infos = {a: {"seed": self._mission.seed} for a in self.agents}
+        masks = self._mission.valid_moves().astype(np.int8)
+        infos = {a: {"seed": self._mission.seed,
+                     "action_mask": masks[self._robot[a]]}
+                 for a in self.agents}
         return observations, infos
 
     def _own_log_det(self, state):
@@ -189,13 +256,13 @@ class ParallelEnv:
         with np.errstate(divide="ignore"):
             return np.maximum(np.log(state["det"]), log_eps).sum(axis=1)
 
-    def _observations(self, state):
+    def _observations(self, state, agents=None):
         m = self._mission
         channels = m.channels(**self._channels)
         localized = (state["det"] < state["eps"]).mean(axis=1)
-        step_share = state["step"] / max(m.max_steps, 1)
+        step_share = state["steps"] / max(m.max_steps, 1)
         out = {}
-        for a in self.agents:
+        for a in self.agents if agents is None else agents:
             i = self._robot[a]
             x, y = state["positions"][i] / state["workspace"]
             out[a] = {"channels": channels[i],
@@ -203,29 +270,46 @@ class ParallelEnv:
                                          dtype=np.float32)}
         return out
 
-    def step(self, actions):
-        """actions: {agent: move} for every agent in `agents`."""
-        if self._mission is None:
-            raise RuntimeError("call reset() before step()")
+    def _moves(self, actions):
+        if not isinstance(actions, dict):
+            raise InputError(f"aia.ParallelEnv.step: actions: must be a dict "
+                             f"of agent -> move, got {_shown(actions)}")
+        for a in actions:
+            if a not in self._robot:
+                raise InputError(
+                    f"aia.ParallelEnv.step: actions: unknown agent {a!r}; "
+                    f"agents are robot_0 .. "
+                    f"robot_{len(self.possible_agents) - 1}")
+            if a not in self.agents:
+                why = (f"it left at step {self._left[a]}" if a in self._left
+                       else "it was not active at reset")
+                raise InputError(f"aia.ParallelEnv.step: actions[{a!r}]: "
+                                 f"{a} is not among the agents ({why})")
         missing = [a for a in self.agents if a not in actions]
         if missing:
-            raise ValueError(f"actions: no move for {', '.join(missing)}")
+            raise InputError(f"aia.ParallelEnv.step: actions: no move for "
+                             f"{', '.join(missing)}")
         moves = np.full(len(self.possible_agents), 4, dtype=np.int64)
         for a, move in actions.items():
-            i = self._index(a)
-            if a in self.agents:
-                if not self._action_space.contains(move):
-                    raise ValueError(f"actions[{a!r}]: must be 0 (left), 1 "
-                                     f"(right), 2 (up) or 3 (down), got "
-                                     f"{move!r}")
-                moves[i] = int(move)
-        self._mission.step(moves)
+            moves[self._robot[a]] = _integer(
+                move, "aia.ParallelEnv.step", f"actions[{a!r}]", 0, 3)
+        return moves
+
+    def step(self, actions):
+        """actions: {agent: move} for every agent in `agents`, each an
+        integer 0 (left), 1 (right), 2 (up) or 3 (down)."""
+        self._started("step")
+        if not self.agents:
+            raise InputError("aia.ParallelEnv.step: the mission is over "
+                             "(agents is empty): call reset()")
+        self._mission.step(self._moves(actions))
         state = self._mission.state()
         log_det = self._own_log_det(state)
         drop = self._log_det - log_det
         self._log_det = log_det
         success = self._mission.success
         truncated = self._mission.done and not success
+        masks = self._mission.valid_moves().astype(np.int8)
         alive = self.agents
         rewards, terminations, truncations, infos = {}, {}, {}, {}
         for a in alive:
@@ -234,26 +318,43 @@ class ParallelEnv:
             failed = not state["active"][i]
             terminations[a] = bool(success or failed)
             truncations[a] = bool(truncated and not failed)
-            infos[a] = {}
+            infos[a] = {"action_mask": masks[i]}
         self.agents = [a for a in alive
                        if not (terminations[a] or truncations[a])]
-        observations = self._observations(state)
-        # The agents that left see their last observation too.
         for a in alive:
-            if a not in observations:
-                i = self._robot[a]
-                observations[a] = self._last_observation(state, i)
+            if a not in self.agents:
+                self._left[a] = state["steps"]
+        # The agents that left see their last observation too.
+        observations = self._observations(state, alive)
         return observations, rewards, terminations, truncations, infos
 
-    def _last_observation(self, state, i):
-        agents, self.agents = self.agents, [self.possible_agents[i]]
-        try:
-            return self._observations(state)[self.possible_agents[i]]
-        finally:
-            self.agents = agents
-
     def state(self):
-        """The whole team's state (aia.Mission.state), for a critic."""
+        """The team's state as one float32 array (state_space), for a
+        centralized critic: robot positions / workspace (N, 2), active (N,),
+        per target the team's best log det Sigma as a share between log eps
+        (0) and the prior (1), that estimate's mean / workspace (M, 2), and
+        steps / max_steps. No ground truth (state_dict() has it)."""
+        self._started("state")
+        s = self._mission.state()
+        n, m = s["det"].shape
+        size = np.asarray(s["workspace"], dtype=np.float64)
+        log_eps = np.log(s["eps"])
+        with np.errstate(divide="ignore"):
+            log_det = np.maximum(np.log(s["det"]), log_eps)  # (N, M)
+        best = np.argmin(log_det, axis=0)                     # (M,)
+        span = np.maximum(s["log_det_prior"] - log_eps, 1e-9)
+        share = (log_det[best, np.arange(m)] - log_eps) / span
+        means = s["mean"][best, np.arange(m)] / size
+        return np.concatenate([
+            (s["positions"] / size).ravel(), s["active"].astype(np.float64),
+            share, means.ravel(),
+            [s["steps"] / max(self._mission.max_steps, 1)]]).astype(
+                np.float32)
+
+    def state_dict(self):
+        """The whole team's state as aia.Mission.state() gives it (the
+        ground truth under "truth")."""
+        self._started("state_dict")
         return self._mission.state()
 
     @property
@@ -264,9 +365,136 @@ class ParallelEnv:
         """With render_mode "rgb_array": the mission's frame (H, W, 3)."""
         if self.render_mode is None:
             return None
-        if self._mission is None:
-            raise RuntimeError("call reset() before render()")
+        self._started("render")
         return self._mission.render(width, height)
 
     def close(self):
+        """Ends the env: every call but close() is refused after."""
         self._mission = None
+        self.agents = []
+        self._closed = True
+
+
+class AECEnv:
+    """A ParallelEnv as PettingZoo's AEC API (what pettingzoo's
+    parallel_to_aec gives): agents act in turn (agent_selection), the
+    mission steps once every live agent has acted; an agent that ended
+    stays in `agents` until it is stepped with None."""
+
+    metadata = ParallelEnv.metadata
+
+    def __init__(self, parallel):
+        self._env = parallel
+        self.possible_agents = list(parallel.possible_agents)
+        self.observation_spaces = parallel.observation_spaces
+        self.action_spaces = parallel.action_spaces
+        self.agents = []
+        self.agent_selection = None
+        self.rewards = {}
+        self._cumulative_rewards = {}
+        self.terminations = {}
+        self.truncations = {}
+        self.infos = {}
+        self._observations = {}
+        self._actions = {}
+
+    @property
+    def unwrapped(self):
+        return self._env
+
+    @property
+    def num_agents(self):
+        return len(self.agents)
+
+    @property
+    def max_num_agents(self):
+        return len(self.possible_agents)
+
+    def observation_space(self, agent):
+        return self._env.observation_space(agent)
+
+    def action_space(self, agent):
+        return self._env.action_space(agent)
+
+    def reset(self, seed=None, options=None):
+        self._observations, self.infos = self._env.reset(seed, options)
+        self.agents = list(self._env.agents)
+        self.rewards = {a: 0.0 for a in self.agents}
+        self._cumulative_rewards = {a: 0.0 for a in self.agents}
+        self.terminations = {a: False for a in self.agents}
+        self.truncations = {a: False for a in self.agents}
+        self._actions = {}
+        self.agent_selection = self.agents[0] if self.agents else None
+
+    def observe(self, agent):
+        return self._observations.get(agent)
+
+    def last(self, observe=True):
+        a = self.agent_selection
+        return (self.observe(a) if observe else None,
+                self._cumulative_rewards[a], self.terminations[a],
+                self.truncations[a], self.infos[a])
+
+    def _ended(self, agent):
+        return self.terminations[agent] or self.truncations[agent]
+
+    def step(self, action):
+        a = self.agent_selection
+        if a is None:
+            raise InputError("aia.AECEnv.step: no agent left: call reset()")
+        if self._ended(a):
+            if action is not None:
+                raise InputError(f"aia.AECEnv.step: action: {a} has ended: "
+                                 f"step it with None, got {_shown(action)}")
+            self.agents.remove(a)
+            for d in (self.rewards, self._cumulative_rewards,
+                      self.terminations, self.truncations, self.infos):
+                d.pop(a, None)
+            self.agent_selection = self._next(None)
+            return
+        self._cumulative_rewards[a] = 0.0
+        self._actions[a] = action
+        live = [b for b in self.agents if not self._ended(b)]
+        if len(self._actions) < len(live):
+            self.agent_selection = self._next(a)
+            for b in self.rewards:
+                self.rewards[b] = 0.0
+            return
+        obs, rewards, terms, truncs, infos = self._env.step(self._actions)
+        self._actions = {}
+        self._observations.update(obs)
+        for b in rewards:
+            self.rewards[b] = rewards[b]
+            self._cumulative_rewards[b] += rewards[b]
+            self.terminations[b] = terms[b]
+            self.truncations[b] = truncs[b]
+            self.infos[b] = infos[b]
+        # Ended agents first (each is stepped with None), then the live.
+        ended = [b for b in self.agents if self._ended(b)]
+        self.agent_selection = ended[0] if ended else self._next(None)
+
+    def _next(self, after):
+        """The next agent to act: an ended one first, else the live agent
+        after `after` (None: the first) that has not acted this round."""
+        for b in self.agents:
+            if self._ended(b):
+                return b
+        live = [b for b in self.agents if b not in self._actions]
+        if not live:
+            return None
+        if after is None or after not in self.agents:
+            return live[0]
+        order = self.agents[self.agents.index(after) + 1:] + self.agents
+        for b in order:
+            if b in live:
+                return b
+        return live[0]
+
+    def state(self):
+        return self._env.state()
+
+    def render(self, *args, **kwargs):
+        return self._env.render(*args, **kwargs)
+
+    def close(self):
+        self._env.close()

@@ -1,9 +1,11 @@
 #include "aia/core/plugin.h"
 
 #include <dlfcn.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <climits>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -15,18 +17,43 @@ std::string FileName(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-// The build's file, then beside the program, then where `cmake --install`
+bool IsDir(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+std::string WithSlash(std::string dir) {
+  if (!dir.empty() && dir.back() != '/') dir += '/';
+  return dir;
+}
+
+struct InstalledDirs {
+  std::mutex mu;
+  bool set = false;
+  std::string lib, data;
+};
+
+InstalledDirs& Installed() {
+  static InstalledDirs dirs;
+  return dirs;
+}
+
+// An installed aia's own plugin first; then the build's file, then beside
+// the program, then where `cmake --install`
 // puts it relative to the program (PREFIX/bin/aia, PREFIX/lib/aia/), then
 // the bare name, which the dynamic loader looks up along the program's
 // RUNPATH (find_package(aia) adds PREFIX/lib/aia to it) and
 // LD_LIBRARY_PATH.
 std::vector<std::string> Candidates(const std::string& built_path) {
-  std::vector<std::string> paths = {built_path};
+  std::vector<std::string> paths;
+  const std::string installed = InstalledLibDir();
+  if (!installed.empty()) paths.push_back(installed + FileName(built_path));
+  paths.push_back(built_path);
   const std::string dir = ExecutableDir();
   if (!dir.empty()) {
     for (const std::string& p : {dir + FileName(built_path),
                                  dir + "../lib/aia/" + FileName(built_path)})
-      if (p != built_path) paths.push_back(p);
+      if (p != built_path && p != paths.front()) paths.push_back(p);
   }
   paths.push_back(FileName(built_path));
   return paths;
@@ -41,6 +68,34 @@ std::string ExecutableDir() {
   std::string dir(exe, static_cast<std::size_t>(n));
   dir.resize(dir.rfind('/') + 1);
   return dir;
+}
+
+void SetInstalledDirs(const std::string& lib_dir, const std::string& data_dir) {
+  InstalledDirs& d = Installed();
+  std::lock_guard<std::mutex> lock(d.mu);
+  d.set = true;
+  d.lib = WithSlash(lib_dir);
+  d.data = WithSlash(data_dir);
+}
+
+std::string InstalledLibDir() {
+  InstalledDirs& d = Installed();
+  {
+    std::lock_guard<std::mutex> lock(d.mu);
+    if (d.set) return d.lib;
+  }
+  const std::string dir = ExecutableDir();
+  return !dir.empty() && IsDir(dir + "../lib/aia") ? dir + "../lib/aia/" : "";
+}
+
+std::string InstalledDataDir() {
+  InstalledDirs& d = Installed();
+  {
+    std::lock_guard<std::mutex> lock(d.mu);
+    if (d.set) return d.data;
+  }
+  const std::string dir = ExecutableDir();
+  return !dir.empty() && IsDir(dir + "../lib/aia") ? dir + "../share/aia/" : "";
 }
 
 const void* LoadPluginTable(const std::string& built_path, const char* symbol,

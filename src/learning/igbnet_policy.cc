@@ -19,16 +19,15 @@ namespace aia {
 std::string DefaultModelPath() {
   std::error_code ec;
   const std::filesystem::path here = "models/igbnet.pt";
+  // An installed aia's own model, whatever the working folder holds.
+  if (const std::string data = InstalledDataDir(); !data.empty()) {
+    const std::filesystem::path installed = std::filesystem::path(data) / here;
+    if (std::filesystem::is_regular_file(installed, ec))
+      return installed.lexically_normal().string();
+  }
   if (std::filesystem::is_regular_file(here, ec)) return here.string();
   const std::filesystem::path source =
       std::filesystem::path(AIA_SOURCE_DIR) / here;
-  if (std::filesystem::is_regular_file(source, ec)) return source.string();
-  // An installed aia (cmake --install): PREFIX/share/aia/models/.
-  const std::string dir = ExecutableDir();
-  const std::filesystem::path installed =
-      std::filesystem::path(dir) / "../share/aia" / here;
-  if (!dir.empty() && std::filesystem::is_regular_file(installed, ec))
-    return installed.lexically_normal().string();
   return source.string();
 }
 

@@ -1,6 +1,7 @@
-"""aia.parallel_env against the PettingZoo ParallelEnv API (what
-pettingzoo.test.parallel_api_test checks, pettingzoo not being packaged in
-Debian) and against its documented rewards."""
+"""aia.parallel_env against the PettingZoo ParallelEnv API (pettingzoo's own
+parallel_api_test when pettingzoo imports; it is not packaged in Debian, so
+check_api below checks what it checks) and against its documented
+rewards; aia.aec_env against the AEC API."""
 
 import os
 from pathlib import Path
@@ -25,8 +26,9 @@ def check_api(env, steps):
     for a in env.agents:
         assert env.observation_space(a).contains(observations[a]), a
         assert env.action_space(a).n == 4
-        assert env.observation_space(a) is env.observation_space(
-            env.possible_agents[0])
+        assert env.observation_space(a) is env.observation_spaces[a]
+        assert env.action_space(a) is env.action_spaces[a]
+        assert set(infos[a]["action_mask"]) <= {0, 1}
     for _ in range(steps):
         if not env.agents:
             break
@@ -87,7 +89,7 @@ def test_a_failed_robot_leaves_the_agents():
         live = list(env.agents)
         _, _, term, _, _ = env.step(
             {a: int(moves[env.possible_agents.index(a)]) for a in live})
-        active = env.state()["active"]
+        active = env.state_dict()["active"]
         for a in live:
             i = env.possible_agents.index(a)
             if not active[i]:
@@ -108,9 +110,9 @@ def test_rewards_are_the_drop_of_the_own_summed_log_det():
             return np.maximum(np.log(state["det"]),
                               np.log(state["eps"])).sum(axis=1)
 
-    before = own(env.state())
+    before = own(env.state_dict())
     _, rewards, _, _, _ = env.step({a: 1 for a in env.agents})
-    after = own(env.state())
+    after = own(env.state_dict())
     for i, a in enumerate(env.possible_agents):
         assert rewards[a] == pytest.approx(before[i] - after[i] - penalty)
 
@@ -133,14 +135,15 @@ def test_same_seed_same_observations_and_rewards():
 def test_bad_actions():
     env = aia.parallel_env(DEFAULT, overrides={"robots.count": 2,
                                                "targets.count": 1})
-    with pytest.raises(RuntimeError, match="reset"):
+    with pytest.raises(aia.InputError, match="reset"):
         env.step({})
     env.reset(seed=1)
-    with pytest.raises(ValueError, match="no move for robot_1"):
+    with pytest.raises(aia.InputError, match="no move for robot_1"):
         env.step({"robot_0": 0})
-    with pytest.raises(ValueError, match=r"actions\['robot_0'\]: must be 0"):
+    with pytest.raises(aia.InputError, match=r"actions\['robot_0'\]: must "
+                       r"be an integer in \[0, 3\], got 7"):
         env.step({"robot_0": 7, "robot_1": 0})
-    with pytest.raises(ValueError, match="render_mode"):
+    with pytest.raises(aia.InputError, match="render_mode"):
         aia.parallel_env(DEFAULT, render_mode="human")
     assert env.render() is None  # no render_mode
     shown = aia.parallel_env(DEFAULT, render_mode="rgb_array",
@@ -166,7 +169,7 @@ def test_rewards_follow_aia_runs_trace(tmp_path):
                 float(v) for c, v in row.items() if c.startswith("det_r")]
     env = aia.parallel_env(DEFAULT, step_penalty=0.0)
     env.reset(seed=8)
-    eps = env.state()["eps"]
+    eps = env.state_dict()["eps"]
     targets = env.mission.num_targets
 
     def own(step):
@@ -186,3 +189,98 @@ def test_rewards_follow_aia_runs_trace(tmp_path):
             assert got == pytest.approx(want[env.possible_agents.index(a)],
                                         abs=1e-5), (step, a)
     assert (step, 0) in det and (step + 1, 0) not in det
+
+
+def test_spaces_are_each_agents_own():
+    env = aia.parallel_env(DEFAULT, overrides={"robots.count": 3,
+                                               "targets.count": 2})
+    assert env.unwrapped is env
+    spaces = [env.action_space(a) for a in env.possible_agents]
+    assert len({id(s) for s in spaces}) == 3
+    assert spaces[0] == spaces[1]
+    spaces[0].seed(7)
+    spaces[1].seed(7)
+    spaces[2].seed(8)
+    a = [spaces[0].sample() for _ in range(20)]
+    assert a == [spaces[1].sample() for _ in range(20)]
+    # Seeding robot_0's again replays it and leaves robot_1's stream alone.
+    spaces[0].seed(7)
+    assert [spaces[0].sample() for _ in range(20)] == a
+    assert spaces[2].sample() is not None
+    assert env.observation_spaces["robot_2"] is not \
+        env.observation_spaces["robot_0"]
+    assert not env.action_space("robot_0").contains(2.0)
+    assert not env.action_space("robot_0").contains(True)
+    assert env.action_space("robot_0").contains(np.int64(3))
+
+
+def test_state_is_an_array_and_state_dict_keeps_the_truth():
+    env = aia.parallel_env(DEFAULT, overrides={"robots.count": 3,
+                                               "targets.count": 2})
+    _, infos = env.reset(seed=4)
+    s = env.state()
+    assert s.dtype == np.float32 and s.shape == env.state_space.shape
+    assert s.shape == (3 * 3 + 3 * 2 + 1,)
+    assert env.state_space.contains(s)
+    d = env.state_dict()
+    assert "truth" in d
+    np.testing.assert_allclose(s[:6], (d["positions"] / d["workspace"])
+                               .ravel(), rtol=1e-6)
+    assert (s[6:9] == 1).all()  # every robot active
+    assert ((s[9:11] >= 0) & (s[9:11] <= 1.0 + 1e-6)).all()
+    assert s[-1] == 0.0
+    env.step({a: 1 for a in env.agents})
+    assert env.state()[-1] == pytest.approx(1 / env.mission.max_steps)
+    masks = env.mission.valid_moves()
+    for i, a in enumerate(env.possible_agents):
+        assert (infos[a]["action_mask"] ==
+                aia.Mission(DEFAULT, seed=4, overrides={
+                    "robots.count": 3, "targets.count": 2})
+                .valid_moves()[i]).all()
+    assert masks.shape == (3, 4)
+
+
+def test_the_aec_env_steps_the_mission_once_every_agent_acted():
+    small = {"robots.count": 3, "targets.count": 2}
+    aec = aia.aec_env(DEFAULT, overrides=small)
+    par = aia.parallel_env(DEFAULT, overrides=small)
+    aec.reset(seed=6)
+    par.reset(seed=6)
+    rng = np.random.default_rng(0)
+    turns = 0
+    while aec.agents:
+        round_actions = {a: int(rng.integers(4)) for a in par.agents}
+        _, rewards, terms, truncs, _ = par.step(round_actions)
+        acted = set()
+        while len(acted) < len(round_actions):
+            a = aec.agent_selection
+            obs, _, term, trunc, info = aec.last()
+            assert not (term or trunc) and a not in acted
+            assert aec.observation_space(a).contains(obs)
+            assert aec.unwrapped.mission.steps == par.mission.steps - 1
+            aec.step(round_actions[a])
+            acted.add(a)
+            turns += 1
+        assert aec.unwrapped.mission.steps == par.mission.steps
+        for a in round_actions:
+            assert aec.rewards[a] == rewards[a]
+            assert aec.terminations[a] == terms[a]
+            assert aec.truncations[a] == truncs[a]
+        # Ended agents are stepped with None, then leave.
+        while aec.agents and (aec.terminations[aec.agent_selection] or
+                              aec.truncations[aec.agent_selection]):
+            with pytest.raises(aia.InputError, match="step it with None"):
+                aec.step(0)
+            aec.step(None)
+        if turns > 3 * 400:
+            break
+    assert not aec.agents and not par.agents
+    assert aec.agent_selection is None
+
+
+def test_pettingzoos_own_parallel_api_test():
+    test = pytest.importorskip("pettingzoo.test")
+    env = aia.parallel_env(DEFAULT, seed=1,
+                           overrides={"robots.count": 3, "targets.count": 2,
+                                      "mission.max_steps": 30})
+    test.parallel_api_test(env, num_cycles=40)

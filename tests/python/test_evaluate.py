@@ -74,7 +74,7 @@ def test_bad_names_sizes_and_exceptions(tmp_path):
     with pytest.raises(aia.InputError, match="registered policy's name"):
         aia.evaluate(lambda m: [0] * m.num_robots, ["2x1"], 1,
                      out=tmp_path / "a", name="greedy", progress=False)
-    with pytest.raises(ValueError, match="name: must be"):
+    with pytest.raises(aia.InputError, match="name: must be"):
         aia.evaluate(lambda m: [0], ["2x1"], 1, out=tmp_path / "b",
                      name="a b", progress=False)
     with pytest.raises(aia.InputError, match=r"sizes\[1\]: robots and "
@@ -95,7 +95,7 @@ def test_bad_names_sizes_and_exceptions(tmp_path):
         aia.evaluate(lambda m: [9] * m.num_robots, ["2x1"], 1,
                      out=tmp_path / "e", name="nine", progress=False)
     expert = aia.builtin_policy("expert")
-    with pytest.raises(ValueError, match="centralized=True"):
+    with pytest.raises(aia.InputError, match="centralized=True"):
         aia.evaluate(expert, ["2x1"], 1, out=tmp_path / "f", name="ex",
                      progress=False)
     rows = aia.evaluate(expert, ["2x1"], 1, out=tmp_path / "g", name="ex",
@@ -151,3 +151,47 @@ def test_ctrl_c_keeps_every_finished_row_and_the_rerun_goes_on(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "finished" in p.stdout
     assert rows_of(runs, "slow") == cli
+
+
+QUIET = """
+import sys, aia
+greedy = aia.builtin_policy("greedy")
+print("before")
+def policy(m):
+    sys.stdout.write("decided\\n")  # one write: policies run on threads
+    sys.stdout.flush()
+    return greedy.decide(m)
+rows = aia.evaluate(policy, ["2x1"], 2, out=sys.argv[1], name="mine",
+                    progress=%s)
+print("after", len(rows))
+"""
+
+
+def test_quiet_means_quiet_and_progress_goes_to_stderr(tmp_path):
+    r = subprocess.run([sys.executable, "-c", QUIET % "False",
+                        str(tmp_path / "q")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    # Only the script's own prints, in the order it made them.
+    assert lines[0] == "before" and lines[-1] == "after 1"
+    assert set(lines[1:-1]) == {"decided"}
+    assert r.stderr == ""
+    r = subprocess.run([sys.executable, "-c", QUIET % "True",
+                        str(tmp_path / "p")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert set(r.stdout.splitlines()[1:-1]) == {"decided"}
+    assert "[aia.evaluate] mine" in r.stderr and "2/2 runs" in r.stderr
+
+
+def test_progress_callback(tmp_path):
+    greedy = aia.builtin_policy("greedy")
+    seen = []
+    aia.evaluate(greedy, ["2x1"], 3, out=tmp_path, name="g",
+                 progress=lambda done, total: seen.append((done, total)),
+                 threads=1)
+    assert seen[0] == (0, 3) and seen[-1] == (3, 3)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+    seen.clear()
+    aia.evaluate(greedy, ["2x1"], 4, out=tmp_path, name="g",
+                 progress=lambda done, total: seen.append((done, total)))
+    assert seen[0] == (3, 4) and seen[-1] == (4, 4)

@@ -32,7 +32,7 @@ def test_state_holds_what_the_robots_know_and_the_truth_apart():
     s = m.state()
     n, k = 4, 3
     assert (m.num_robots, m.num_targets) == (n, k)
-    assert s["step"] == 0 and m.steps == 0 and not m.done
+    assert s["steps"] == 0 and m.steps == 0 and not m.done
     assert s["positions"].shape == (n, 2) and s["positions"].dtype == np.float64
     assert s["lattice"].shape == (n,) and s["cells"].shape == (n, 2)
     assert s["active"].dtype == np.bool_ and s["active"].all()
@@ -84,7 +84,7 @@ def test_delegating_every_step_repeats_aia_run(scenario, seed, policy):
         s = m.state()
         for k in range(m.num_targets):
             assert ["%.6e" % d for d in s["det"][:, k]] == \
-                trace[(s["step"], k)], (s["step"], k)
+                trace[(s["steps"], k)], (s["steps"], k)
             seen += 1
         if m.done:
             break
@@ -115,20 +115,34 @@ def test_same_seed_same_states():
 def test_moves_are_checked():
     m = aia.Mission(DEFAULT, seed=1, overrides={"robots.count": 2,
                                                 "targets.count": 1})
-    with pytest.raises(ValueError, match=r"one move per robot \(2\)"):
+    with pytest.raises(aia.InputError, match=r"one move per robot, got "
+                       r"shape \(1,\)"):
         m.step([0])
-    with pytest.raises(ValueError, match=r"moves\[1\]: must be 0 \(left\)"):
+    with pytest.raises(aia.InputError, match=r"moves\[1\]: must be 0 "
+                       r"\(left\)"):
         m.step([0, 7])
     # 4 (stay) is a valid decision: the robot keeps its lattice point.
     before = m.state()["lattice"].copy()
     changed = m.step([4, 4])
-    assert changed["step"] == 1 and changed["invalid_moves"] == 0
+    assert changed.steps == 1 == m.steps == m.state()["steps"]
+    assert changed.invalid_moves == 0
+    assert not (changed.terminated or changed.truncated or changed.done)
     assert (m.state()["lattice"] == before).all()
     m2 = aia.Mission(DEFAULT, seed=1, overrides={"mission.max_steps": 1})
-    m2.step(np.zeros(m2.num_robots, dtype=int))
-    assert m2.done
-    with pytest.raises(ValueError, match="the mission is done"):
+    last = m2.step(np.zeros(m2.num_robots, dtype=int))
+    assert m2.done and last.done and last.truncated and not last.terminated
+    assert "truncated=True" in repr(last)
+    with pytest.raises(aia.InputError, match="the mission is done"):
         m2.step(np.zeros(m2.num_robots, dtype=int))
+
+
+def test_success_terminates():
+    m = aia.Mission(DEFAULT, seed=3)
+    greedy = aia.builtin_policy("greedy")
+    while not m.done:
+        r = m.step(greedy.decide(m))
+    assert r.success and r.terminated and not r.truncated
+    assert r.steps == m.steps == m.flowtime
 
 
 def expectation(path):
@@ -166,7 +180,7 @@ def test_overrides_and_params_are_checked_as_keys():
     with pytest.raises(aia.InputError, match=r"p_v: must be a number in "
                        r"\[0, 1\], got 2"):
         aia.builtin_policy("decsb", p_v=2)
-    with pytest.raises(TypeError, match="not a scenario value"):
+    with pytest.raises(aia.InputError, match="not a scenario value"):
         aia.Mission(DEFAULT, overrides={"seed": object()})
     # Lists go as YAML flow sequences, booleans as true/false.
     m = aia.Mission(DEFAULT, overrides={

@@ -42,5 +42,6 @@ def test_frames_follow_the_mission():
         m.step(greedy.decide(m))
     assert (m.render(160, 120) != first).any()
     assert m.render(200, 100).shape == (100, 200, 3)
-    with pytest.raises(ValueError, match=r"render: width and height must be"):
+    with pytest.raises(aia.InputError, match=r"aia.Mission.render: width: "
+                       r"must be an integer in \[16, 8192\]"):
         m.render(8, 8)

@@ -16,10 +16,10 @@ from aia import network  # noqa: E402  (needs torch)
 SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
 BINARY = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
 DEFAULT = str(SOURCE / "scenarios" / "default.yaml")
-# The network's moves alone: no deadlock rule, no undo rule, no search aims,
-# every open target shown.
-ARGMAX = {"max_reversals": 0, "no_undo": False, "search": False,
-          "claims": "none"}
+# The network's moves alone (docs/python.md, What policy.coordination does
+# to a model trained in Python): nothing hand-written chooses or changes a
+# move or the channels.
+ARGMAX = {"coordination": "none"}
 
 
 @pytest.fixture(scope="module")
@@ -44,8 +44,21 @@ def test_the_dataset_reads_and_renders_the_shards(data):
     assert images.shape == (3, 4, 40, 40) and images.dtype == np.float32
     assert (labels == d.labels[[0, 5, 7]]).all()
     assert aia.Dataset(data, geodesic=True).batch([0])[0].shape[1] == 5
-    with pytest.raises(IndexError):
+    with pytest.raises(aia.InputError, match=r"aia.Dataset.batch: "
+                       r"indices\[0\]: must be a sample index in \[0, "):
         d.batch([len(d)])
+    with pytest.raises(aia.InputError, match=r"indices\[0\]: .*got 1.5"):
+        d.batch([1.5])
+    with pytest.raises(aia.InputError, match=r"indices: must be integers"):
+        d.batch(np.array([1.0]))
+    with pytest.raises(aia.InputError, match=r"got True \(bool\)"):
+        d.batch([True])
+    with pytest.raises(aia.InputError, match=r"no sample indices"):
+        d.batch([])
+    with pytest.raises(aia.InputError, match=r"val_share: must be a number "
+                       r"in \[0, 1\]"):
+        d.split(val_share=2)
+    assert len(d.batch(np.array([0, 1], dtype=np.int32))[1]) == 2
     with pytest.raises(aia.InputError, match="channels: window"):
         aia.Dataset(data, window=1)
 

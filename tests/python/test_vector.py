@@ -26,7 +26,7 @@ def test_missions_stepped_together_are_the_missions_stepped_alone():
         for i, m in enumerate(alone):
             if not m.done:
                 m.step(mine[i].decide(m))
-        assert (changed["done"] == [m.done for m in alone]).all()
+        assert (changed.done == [m.done for m in alone]).all()
         states = v.states()
         for i, m in enumerate(alone):
             assert (states["det"][i] == m.state()["det"]).all()
@@ -37,12 +37,71 @@ def test_missions_stepped_together_are_the_missions_stepped_alone():
 
 def test_vector_moves_are_checked():
     v = aia.VectorMissions(2, DEFAULT, seed=1, overrides=SMALL)
-    with pytest.raises(ValueError, match=r"\(missions, robots\) = \(2, 3\)"):
-        v.step(np.zeros((3, 3)))
-    with pytest.raises(ValueError, match=r"moves\[1\]\[2\]: must be 0"):
+    with pytest.raises(aia.InputError, match=r"must have shape \(2, 3\), "
+                       r"\(missions, robots\)"):
+        v.step(np.zeros((3, 3), dtype=int))
+    with pytest.raises(aia.InputError, match=r"moves\[1\]\[2\]: must be 0"):
         v.step([[0, 0, 0], [0, 0, 5]])
-    with pytest.raises(ValueError, match="n: must be at least 1"):
+    with pytest.raises(aia.InputError, match="n: must be an integer >= 1"):
         aia.VectorMissions(0, DEFAULT)
+
+
+def play(v, rounds):
+    """Greedy moves for every mission for `rounds` steps; the results."""
+    policies = [aia.builtin_policy("greedy") for _ in range(len(v))]
+    out = []
+    for _ in range(rounds):
+        moves = np.stack([p.decide(m) for p, m in zip(policies, v.missions)])
+        out.append(v.step(moves))
+    return out
+
+
+def test_autoreset_restarts_with_the_next_seed_and_reports_the_end():
+    limit = {**SMALL, "mission.max_steps": 4}
+    v = aia.VectorMissions(2, DEFAULT, seed=30, overrides=limit,
+                           autoreset=True)
+    results = play(v, 9)
+    ends = [k for k, r in enumerate(results) if r.done.any()]
+    assert ends == [3, 7]  # every 4 steps, both missions together
+    first = results[3]
+    assert first.truncated.all() and not first.terminated.any()
+    assert first.steps.tolist() == [4, 4]
+    assert first.info["_final_info"].tolist() == [True, True]
+    assert [s["seed"] for s in first.info["final_info"]] == [30, 31]
+    assert [s["steps"] for s in first.info["final_info"]] == [4, 4]
+    # Each one's last state is the state its mission ended in.
+    alone = aia.Mission(DEFAULT, seed=31, overrides=limit)
+    greedy = aia.builtin_policy("greedy")
+    while not alone.done:
+        alone.step(greedy.decide(alone))
+    assert (first.info["final_state"][1]["det"] ==
+            alone.state()["det"]).all()
+    # Restarted with the next seeds, in the order they ended.
+    assert results[7].info["final_info"][0]["seed"] == 32
+    assert results[7].info["final_info"][1]["seed"] == 33
+    assert v.seeds.tolist() == [34, 35]
+    assert [m.steps for m in v.missions] == [1, 1]
+    assert results[4].info == {} and not results[4].done.any()
+
+
+def test_reset_and_a_finished_row_without_autoreset():
+    v = aia.VectorMissions(2, DEFAULT, seed=5, overrides=SMALL)
+    states, info = v.reset(seed=40)
+    assert info["seeds"].tolist() == [40, 41]
+    assert states["det"].shape[0] == 2
+    fresh = aia.Mission(DEFAULT, seed=41, overrides=SMALL)
+    assert (states["det"][1] == fresh.state()["det"]).all()
+    play(v, 2)
+    _, info = v.reset()  # the next seeds
+    assert info["seeds"].tolist() == [42, 43]
+    assert [m.steps for m in v.missions] == [0, 0]
+    # Without autoreset a finished mission keeps its end and ignores its row.
+    short = aia.VectorMissions(1, DEFAULT, seed=2,
+                               overrides={**SMALL, "mission.max_steps": 1})
+    r = short.step([[0, 0, 0]])
+    assert r.done.tolist() == [True] and r.info == {}
+    r = short.step([[1, 1, 1]])
+    assert r.steps.tolist() == [1] and r.done.tolist() == [True]
 
 
 def test_channels_come_from_the_cpp_renderer():

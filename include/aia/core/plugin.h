@@ -19,7 +19,8 @@ struct PluginHeader {
 };
 
 // Loads the plugin (`built_path`, where the build wrote it, else the file of
-// that name beside the running program) and returns its table, the result
+// that name beside the running program; an installed aia's own plugin,
+// InstalledLibDir(), before either) and returns its table, the result
 // of its `symbol`. A missing plugin, or one of another version or table
 // size, is a std::runtime_error on one line that says `what` the plugin is
 // for and names each place tried. Not cached: callers keep the table (a
@@ -31,6 +32,17 @@ const void* LoadPluginTable(const std::string& built_path, const char* symbol,
 // The running program's folder with a trailing '/', or "" (for files
 // installed beside it: PREFIX/bin/../lib/aia, PREFIX/bin/../share/aia).
 std::string ExecutableDir();
+
+// An installed aia's folders (PREFIX/lib/aia/ and PREFIX/share/aia/, with
+// a trailing '/'), so that it loads its own plugins and models even while
+// the build tree it was installed from still exists. A program installed as
+// PREFIX/bin/ finds them by itself (PREFIX/lib/aia/ beside it); code that
+// runs inside another program (the Python package's module) says where they
+// are with SetInstalledDirs, once, before anything is loaded.
+void SetInstalledDirs(const std::string& lib_dir, const std::string& data_dir);
+// "" when this aia is not an installed one (it runs from its build tree).
+std::string InstalledLibDir();
+std::string InstalledDataDir();
 
 }  // namespace aia
 

@@ -22,8 +22,10 @@
 
 namespace aia {
 
-// Where `policy.model` points when a scenario does not say: models/igbnet.pt
-// under the working folder if it is there, else under the source tree.
+// Where `policy.model` points when a scenario does not say: an installed
+// aia's own PREFIX/share/aia/models/igbnet.pt (core/plugin.h,
+// InstalledDataDir); else models/igbnet.pt under the working folder if it is
+// there, else under the source tree.
 std::string DefaultModelPath();
 
 // The model at `path`, loaded once per process; errors as IgbNet::Load.

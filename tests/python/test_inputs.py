@@ -1,0 +1,234 @@
+"""Bad input from Python: each case one aia.InputError (a ValueError) on one
+line that names the Python callable and argument, never a silent
+conversion, another exception type or a crash (issue 39, docs/python.md)."""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import aia
+
+SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
+DEFAULT = str(SOURCE / "scenarios" / "default.yaml")
+SMALL = {"robots.count": 3, "targets.count": 2}
+
+
+def refused(f, *match):
+    """f() raises aia.InputError whose one-line text holds every `match`."""
+    with pytest.raises(aia.InputError) as e:
+        f()
+    text = str(e.value)
+    assert "\n" not in text, text
+    assert "command line" not in text, text
+    for m in match:
+        assert m in text, (m, text)
+    return text
+
+
+@pytest.fixture(scope="module")
+def mission():
+    return aia.Mission(DEFAULT, seed=1, overrides=SMALL)
+
+
+@pytest.mark.parametrize("moves,match", [
+    (np.array([1.7, 1.2, 0.3]), "got an array of float64"),
+    ([1.7, 1, 0], "moves[0]: must be 0 (left)"),
+    ([True, False, True], "moves[0]: must be 0 (left)"),
+    ([1, True, 0], "got True (bool)"),
+    (np.array([True, False, True]), "got an array of bool"),
+    ([2.0, 0, 0], "got 2.0 (float)"),
+    ([float("nan"), 0, 0], "got nan (float)"),
+    ([float("inf"), 0, 0], "got inf (float)"),
+    (np.zeros((3, 2), dtype=int), "got shape (3, 2)"),
+    (np.zeros((3, 1), dtype=int), "got shape (3, 1)"),
+    (np.zeros((1, 3), dtype=int), "got shape (1, 3)"),
+    ([[0], [1], [2]], "got shape (3, 1)"),
+    ([0, 0], "must have shape (3,), one move per robot, got shape (2,)"),
+    ([0, 0, 5], "moves[2]: must be 0 (left), 1 (right), 2 (up), 3 (down) "
+                "or 4 (stay), got 5"),
+    ([0, 0, -1], "got -1"),
+    ([0, 0, 2 ** 70], "got 1180591620717411303424"),
+    (np.array([0, 0, 9], dtype=np.uint64), "got 9"),
+    (["0", 0, 0], "got '0' (str)"),
+    ([[0, 1], [2]], "shape"),
+    (3, "must be a list or numpy array"),
+    ("012", "must be a list or numpy array"),
+    (None, "must be a list or numpy array"),
+])
+def test_bad_moves_are_refused_and_nothing_moves(mission, moves, match):
+    before = mission.steps
+    text = refused(lambda: mission.step(moves), match)
+    assert text.startswith("aia.Mission.step: moves"), text
+    assert mission.steps == before
+
+
+def test_integer_moves_of_every_kind_are_taken(mission):
+    before = mission.steps
+    for moves in ([4, 4, 4], (4, 4, 4), np.array([4, 4, 4], dtype=np.uint8),
+                  np.array([4, 4, 4], dtype=np.int32),
+                  [np.int64(4), 4, aia.Move.STAY],
+                  [aia.Move.STAY] * 3):
+        mission.step(moves)
+    assert mission.steps == before + 6
+
+
+def test_the_move_enum():
+    assert [int(m) for m in (aia.Move.LEFT, aia.Move.RIGHT, aia.Move.UP,
+                             aia.Move.DOWN, aia.Move.STAY)] == [0, 1, 2, 3, 4]
+    assert aia.Move.UP == 2 and aia.Move(3) == aia.Move.DOWN
+
+
+@pytest.mark.parametrize("seed,match", [
+    (-1, "seed: must be an integer in [0, 2^64 - 1] or None, got -1"),
+    ("x", "got 'x' (str)"),
+    (1.5, "got 1.5 (float)"),
+    (True, "got True (bool)"),
+    (2 ** 64, "got 18446744073709551616"),
+])
+def test_bad_seeds(seed, match):
+    refused(lambda: aia.Mission(DEFAULT, seed=seed), "aia.Mission: ", match)
+    refused(lambda: aia.VectorMissions(2, DEFAULT, seed=seed,
+                                       overrides=SMALL),
+            "aia.VectorMissions: seed: ")
+    env = aia.parallel_env(DEFAULT, overrides=SMALL)
+    refused(lambda: env.reset(seed=seed), "aia.ParallelEnv.reset: seed: ")
+
+
+def test_big_seeds_are_seeds():
+    assert aia.Mission(DEFAULT, seed=2 ** 64 - 1, overrides=SMALL).seed == \
+        2 ** 64 - 1
+    assert aia.Mission(DEFAULT, seed=np.uint64(7), overrides=SMALL).seed == 7
+
+
+def test_overrides_name_the_argument_not_the_command_line():
+    refused(lambda: aia.Mission(DEFAULT, overrides={"sensor.range": -1}),
+            "aia.Mission: overrides: sensor.range: must be a number in "
+            "[0.001, 10000], got -1")
+    refused(lambda: aia.Mission(DEFAULT, overrides=[("a", 1)]),
+            "aia.Mission: overrides: must be a dict")
+    refused(lambda: aia.Mission(DEFAULT, overrides={"seed": object()}),
+            "aia.Mission: overrides: seed: a value of type object is not a "
+            "scenario value")
+    refused(lambda: aia.Mission(3), "aia.Mission: scenario: must be a path")
+    refused(lambda: aia.builtin_policy("decsb", p_v=2),
+            "aia.builtin_policy: p_v: must be a number in [0, 1], got 2")
+
+
+def test_evaluate_arguments(tmp_path):
+    def left(m):
+        return [0] * m.num_robots
+    refused(lambda: aia.evaluate(left, ["2x1"], 1, out=tmp_path / "a",
+                                 overrides={"sensor.range": -1},
+                                 progress=False),
+            "aia.evaluate: overrides: sensor.range: must be a number")
+    refused(lambda: aia.evaluate(left, ["2x1"], 1.5, out=tmp_path / "b",
+                                 progress=False),
+            "aia.evaluate: seeds: must be an integer in [1, ", "got 1.5")
+    refused(lambda: aia.evaluate(left, ["2x1"], 1, seed_base=-3,
+                                 out=tmp_path / "c", progress=False),
+            "aia.evaluate: seed_base: ", "got -3")
+    refused(lambda: aia.evaluate(left, ["2x1"], 1, threads=-1,
+                                 out=tmp_path / "d", progress=False),
+            "aia.evaluate: threads: ", "got -1")
+    refused(lambda: aia.evaluate(left, ["2x1"], 1, out=tmp_path / "e",
+                                 progress="yes"),
+            "aia.evaluate: progress: must be True, False or a callable")
+    refused(lambda: aia.evaluate(42, ["2x1"], 1, out=tmp_path / "f"),
+            "aia.evaluate: policy: must be callable")
+    (tmp_path / "file").write_text("x")
+    refused(lambda: aia.evaluate(left, ["2x1"], 1, out=tmp_path / "file",
+                                 progress=False),
+            "aia.evaluate: out: ")
+
+
+def test_vector_missions_arguments():
+    refused(lambda: aia.VectorMissions(2, DEFAULT, threads=-1),
+            "aia.VectorMissions: threads: must be an integer >= 0, got -1")
+    refused(lambda: aia.VectorMissions(2.0, DEFAULT),
+            "aia.VectorMissions: n: ", "got 2.0 (float)")
+    refused(lambda: aia.VectorMissions(0, DEFAULT),
+            "aia.VectorMissions: n: must be an integer >= 1, got 0")
+    v = aia.VectorMissions(2, DEFAULT, seed=1, overrides=SMALL)
+    refused(lambda: v.step(np.zeros((2, 3))), "got an array of float64")
+    refused(lambda: v.step([[float("nan"), 0, 0], [0, 0, 0]]),
+            "aia.VectorMissions.step: moves[0][0]: ", "got nan (float)")
+    refused(lambda: v.step(np.zeros((3, 3), dtype=int)),
+            "must have shape (2, 3)", "got shape (3, 3)")
+    refused(lambda: v.step(np.zeros(6, dtype=int)), "got shape (6,)")
+    refused(lambda: v.reset(seed=-1), "aia.VectorMissions.reset: seed: ")
+
+
+def test_a_closed_env_refuses_everything():
+    env = aia.parallel_env(DEFAULT, overrides=SMALL)
+    refused(lambda: env.step({}), "aia.ParallelEnv.step: call reset() "
+            "before step()")
+    refused(lambda: env.state(), "call reset() before state()")
+    env.reset(seed=1)
+    env.close()
+    for call, what in ((lambda: env.state(), "state"),
+                       (lambda: env.state_dict(), "state_dict"),
+                       (lambda: env.step({"robot_0": 0}), "step"),
+                       (lambda: env.reset(), "reset")):
+        refused(call, f"aia.ParallelEnv.{what}: the env is closed")
+
+
+def test_env_actions():
+    env = aia.parallel_env(DEFAULT, overrides=SMALL)
+    env.reset(seed=1)
+    ok = {a: 0 for a in env.agents}
+    for bad, match in ((2.0, "got 2.0 (float)"), (True, "got True (bool)"),
+                       (4, "must be an integer in [0, 3], got 4"),
+                       (np.float64(1), "(float64)"), ("1", "(str)")):
+        refused(lambda: env.step({**ok, "robot_1": bad}),
+                "aia.ParallelEnv.step: actions['robot_1']: ", match)
+    refused(lambda: env.step({**ok, "robot_9": 0}), "unknown agent 'robot_9'")
+    refused(lambda: env.step([0, 0, 0]), "actions: must be a dict")
+    env.step({a: np.int64(1) for a in env.agents})  # numpy integers are moves
+
+
+def test_an_action_for_an_agent_that_left():
+    env = aia.parallel_env(str(SOURCE / "scenarios" / "robustness.yaml"),
+                           seed=0)
+    env.reset()
+    greedy = aia.builtin_policy("greedy")
+    while env.agents:
+        moves = greedy.decide(env.mission)
+        live = list(env.agents)
+        env.step({a: int(moves[env.possible_agents.index(a)]) for a in live})
+        gone = [a for a in live if a not in env.agents]
+        if env.agents and gone:
+            actions = {a: 0 for a in env.agents}
+            actions[gone[0]] = 0
+            refused(lambda: env.step(actions),
+                    f"actions['{gone[0]}']: {gone[0]} is not among the "
+                    "agents (it left at step")
+            return
+    pytest.fail("no robot left while others went on")
+
+
+def test_dataset_arguments(tmp_path):
+    refused(lambda: aia.Dataset(12), "aia.Dataset: paths: ")
+    refused(lambda: aia.Dataset([]), "aia.Dataset: paths: ")
+
+
+def test_channel_settings_name_the_callable(mission):
+    refused(lambda: mission.channels(window=2), "aia.Mission.channels: "
+            "channels: window: must be an integer in [4, 512], got 2")
+
+
+def test_render_arguments(mission):
+    refused(lambda: mission.render(10.5, 100), "aia.Mission.render: width: ",
+            "got 10.5 (float)")
+    refused(lambda: mission.render(640, 8), "aia.Mission.render: height: "
+            "must be an integer in [16, 8192], got 8")
+
+
+def test_builtin_policy_arguments(mission):
+    greedy = aia.builtin_policy("greedy")
+    refused(lambda: greedy.decide("mission"), "mission: must be an "
+            "aia.Mission")
+    refused(lambda: aia.builtin_policy(3), "aia.builtin_policy: name: ")
+    refused(lambda: aia.builtin_policy("nope"), "aia.builtin_policy: name: "
+            "unknown policy 'nope'")
