@@ -43,6 +43,7 @@
 #include "aia/runtime/mission.h"
 #include "aia/runtime/observers.h"
 #include "aia/runtime/policies.h"
+#include "aia/runtime/policy_states.h"
 #include "aia/scenario/loader.h"
 #include "aia/scenario/yaml.h"
 
@@ -669,16 +670,13 @@ class BuiltinPolicy {
   // (evaluate). Called with the GIL held; the decision runs without it.
   py::array_t<long long> Decide(const Mission& mission) {
     DecisionContext ctx = mission.Context();
-    std::shared_ptr<State>& slot = states_[mission.id()];
-    if (!slot || ctx.step != slot->next_step) {
-      slot = std::make_shared<State>();
-      slot->policy = spec_->Create();
-      slot->policy->Reset(*ctx.map, mission.num_robots(), mission.num_targets(),
-                          mission.seed());
-    }
-    const std::shared_ptr<State> state = slot;  // kept while deciding
-    state->last_use = ++uses_;
-    Forget();
+    const std::shared_ptr<PolicyStates::Entry> state =
+        states_.For(mission.id(), ctx.step, [&] {
+          std::unique_ptr<Policy> policy = spec_->Create();
+          policy->Reset(*ctx.map, mission.num_robots(), mission.num_targets(),
+                        mission.seed());
+          return policy;
+        });
     if (!state->policy->centralized()) {
       ctx.central = nullptr;
     } else if (ctx.central == nullptr) {
@@ -693,7 +691,7 @@ class BuiltinPolicy {
       status = state->policy->Decide(ctx, &moves);
     }
     status_ = status;
-    state->next_step = ctx.step + 1;
+    PolicyStates::Decided(state.get(), ctx.step);
     py::array_t<long long> out(static_cast<py::ssize_t>(moves.size()));
     auto v = out.mutable_unchecked<1>();
     for (std::size_t i = 0; i < moves.size(); ++i)
@@ -705,25 +703,8 @@ class BuiltinPolicy {
   }
 
  private:
-  struct State {
-    std::unique_ptr<Policy> policy;
-    int next_step = 0;
-    std::uint64_t last_use = 0;
-  };
-  // The states of the kMissions missions decided for most recently.
-  static constexpr std::size_t kMissions = 256;
-  void Forget() {
-    while (states_.size() > kMissions) {
-      auto oldest = states_.begin();
-      for (auto it = states_.begin(); it != states_.end(); ++it)
-        if (it->second->last_use < oldest->second->last_use) oldest = it;
-      states_.erase(oldest);
-    }
-  }
-
   std::shared_ptr<const PolicySpec> spec_;
-  std::map<std::uint64_t, std::shared_ptr<State>> states_;  // by mission id
-  std::uint64_t uses_ = 0;
+  PolicyStates states_;  // each mission's own policy
   PolicyStatus status_ = PolicyStatus::kOk;
 };
 

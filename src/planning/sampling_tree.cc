@@ -82,8 +82,8 @@ double ResidentNodeBytes(int n, int stride) {
 // small teams); their memory is kept for the next solve.
 constexpr double kSmallTreeBytes = 32.0 * (1 << 20);
 
-// The process's budget of tree memory, kMaxTreeBytes for all the large
-// solves running at once. A solve takes all it may need before it starts
+// The process's budget of tree memory (TreeBudgetBytes()) for all the
+// large solves running at once. A solve takes all it may need before it starts
 // and holds nothing else meanwhile, and one solve never needs more than the
 // whole budget, so waiting cannot deadlock.
 class TreeMemory {
@@ -104,17 +104,38 @@ class TreeMemory {
     }
     ready_.notify_all();
   }
+  double budget() {
+    const std::lock_guard<std::mutex> lock(mu_);
+    return budget_;
+  }
+  void SetBudget(double bytes) {
+    {
+      const std::lock_guard<std::mutex> lock(mu_);
+      AIA_CHECK(free_ == budget_);  // no solve holds a part of it
+      budget_ = free_ = bytes;
+    }
+    ready_.notify_all();
+  }
 
  private:
   std::mutex mu_;
   std::condition_variable ready_;
+  double budget_ = kMaxTreeBytes;
   double free_ = kMaxTreeBytes;
 };
+
+double TreeBudgetBytes() { return TreeMemory::Get().budget(); }
+
+void SetTreeBudgetBytes(double bytes) {
+  AIA_CHECK(bytes >= 64.0 * (1 << 20));
+  TreeMemory::Get().SetBudget(bytes);
+}
 
 class TreeMemoryLease {
  public:
   explicit TreeMemoryLease(double bytes)
-      : bytes_(bytes > kSmallTreeBytes ? std::min(bytes, kMaxTreeBytes) : 0.0) {
+      : bytes_(bytes > kSmallTreeBytes ? std::min(bytes, TreeBudgetBytes())
+                                       : 0.0) {
     if (bytes_ > 0.0) TreeMemory::Get().Take(bytes_);
   }
   ~TreeMemoryLease() {
@@ -461,7 +482,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
   // scalars, in vectors that may hold up to twice what they use.
   const double node_bytes = 2.0 * (4.0 * n_ + 8.0 * stride_ + 40.0);
   node_cap_ = std::min<long>(params.max_nodes,
-                             static_cast<long>(kMaxTreeBytes / node_bytes));
+                             static_cast<long>(TreeBudgetBytes() / node_bytes));
   SamplingPlan plan;
   const int root = StartRoot(problem, &plan.bound);
   if (params.routing && best_ != root) SeededRollouts(params, root, &plan);

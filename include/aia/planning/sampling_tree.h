@@ -99,6 +99,13 @@ struct SamplingParams {
 // Policies). Waiting changes when a plan is made, never which plan.
 inline constexpr double kMaxTreeBytes = 1.0 * (1L << 30);
 
+// The process's tree budget: kMaxTreeBytes unless set. Setting it (at least
+// 64 MiB) is for a program that embeds the planner in less memory, or a
+// test that checks the sharing without taking a GiB; set it before any
+// solve starts.
+double TreeBudgetBytes();
+void SetTreeBudgetBytes(double bytes);
+
 // Goal paths whose J is within this fraction of eps of the cheapest one
 // count as equally good, and the shortest of them is returned. One step of
 // one unlocalized target's latency adds more than eps to J, so this only
@@ -231,7 +238,7 @@ class SamplingTree {
   // Problem data.
   const SamplingProblem* problem_ = nullptr;
   int n_ = 0, m_ = 0, stride_ = 0;
-  long node_cap_ = 0;  // max_nodes, or fewer to stay within kMaxTreeBytes
+  long node_cap_ = 0;  // max_nodes, or fewer to stay within the tree budget
   std::vector<TargetInfo> targets_;
   std::vector<const TargetModel*> models_;
   AimTable aims_;  // where each target is planned to be seen
