@@ -4,7 +4,9 @@ AECEnv, its turn-by-turn form.
 Agents are robot_0 ... robot_{N-1}. Each agent observes its I-GBNet
 channels (what its own belief, its neighbours and the map show around it)
 and a few numbers; its action is a move, 0 left, 1 right, 2 up, 3 down
-(infos[agent]["action_mask"] says which stay on the lattice). Its reward at
+(infos[agent]["action_mask"] says which stay on the lattice; the stay,
+move 4, which Mission.step takes, is not an action here: the paper's four
+moves, so that a team cannot learn to idle). Its reward at
 a step is the drop of its own summed log det Sigma (each target counted
 down to log eps only, as the greedy policy counts gains), less
 `step_penalty`. At success every agent terminates and `agents` is empty;

@@ -1,5 +1,6 @@
 // I-GBNet's input (docs/learning.md, Channels): per robot, four images over
-// the workspace, one definition shared by the dataset reader, the trainer,
+// the workspace and up to two optional ones (4 reach; a last one, trail:
+// ChannelParams::trail), one definition shared by the dataset reader, the trainer,
 // the igbnet policy (Python reads the states: tools/igbnet.py). No torch here.
 //   0 occupancy: the share of the pixel covered by obstacles (1 outside the
 //     workspace);
@@ -17,7 +18,9 @@
 //     number of valid lattice moves inside the image (so walls and doors
 //     shape it); observation pixels beyond the window count at the window's
 //     border with the moves beyond it; 0 where a robot cannot stand; divided
-//     by its largest value in the image.
+//     by its largest value in the image. ChannelParams' reach_world and
+//     search change where it is computed and from which sources;
+//   last, trail (ChannelParams::trail): 1 at the pixel the robot came from.
 // Two frames. Global (the paper's): the whole workspace, pixel (ix, iy)
 // covering [ix, ix + 1) x [iy, iy + 1) cells of `cell` metres. Centred: a
 // window of `window` x `window` pixels of the same global pixel grid, the
@@ -43,7 +46,7 @@
 
 namespace aia {
 
-// Channels of the paper's network; the reach channel makes a fifth.
+// Channels of the paper's network; reach and trail make up to six.
 inline constexpr int kNumChannels = 4;
 inline constexpr int kMaxChannels = 6;
 
