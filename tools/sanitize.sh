@@ -24,7 +24,13 @@ fi
 jobs=${AIA_JOBS:-$(nproc)}
 cmake --build "$dir" -j "$jobs"
 supp=$PWD/tools/sanitizers
-export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:suppressions=$supp/asan.supp
+# intercept_tls_get_addr=0: at the exit of a process that loaded the
+# libtorch plugin, LeakSanitizer's tracer crashed reading the plugin's
+# dynamic TLS blocks (`Tracer caught signal 11`, a bogus DTLS range; clang
+# 14's compiler-rt on glibc 2.36), after the test had passed, in whichever
+# test of the learning suite it struck (valgrind finds nothing there). Not
+# tracking dynamic TLS ends it; leaks are still checked everywhere.
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:intercept_tls_get_addr=0:suppressions=$supp/asan.supp
 export LSAN_OPTIONS=suppressions=$supp/lsan.supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:suppressions=$supp/ubsan.supp
 labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|learning|render|fuzz|runtime|commands}
@@ -38,16 +44,8 @@ labels=${AIA_SANITIZE_LABELS:-core|estimation|comm|scenario|world|sim|planning|l
 # run of it, 200 s here; the filter's memory is checked by every other
 # estimation test).
 exclude='^golden\.|TwoMpiRanksGiveTheFilesOfOneProcess|^ExperimentTest\.|HundredThousandStepsKeepEveryBlockSpd'
-# Run with leak detection off (AddressSanitizer and UBSan still on): at this
-# test's exit LeakSanitizer's tracer crashes reading a dynamic TLS block of
-# the dlopen'd libtorch plugin (`Tracer caught signal 11`, a bogus DTLS range;
-# clang 14's compiler-rt on glibc 2.36) after the test has passed; valgrind
-# finds nothing in the same test.
-no_leak_check='IgbNetPolicyTest\.NoUndoMovesOnWhereNothingIsOpen'
 cd "$dir"
 status=0
 ctest --output-on-failure -j "$jobs" --timeout 900 -L "$labels" \
-  -E "$exclude|$no_leak_check" || status=$?
-ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} \
-  ctest --output-on-failure --timeout 900 -R "$no_leak_check" || status=$?
+  -E "$exclude" || status=$?
 exit "$status"
