@@ -88,36 +88,8 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
 
 void SearchMemory::Share(const DecisionContext& ctx,
                          const std::vector<int>& robots) {
-  // What each robot's neighbours missed, from the lists as Update left them
-  // (so the order of the robots does not matter), added to its own.
-  const double log_eps = std::log(ctx.eps);
-  incoming_.clear();
-  for (int i : robots) {
-    for (int k = 0; k < num_targets_; ++k) {
-      const Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
-      if (std::isnan(s.log_det) || s.log_det <= log_eps ||
-          !ctx.beliefs->layout().is_static(k))
-        continue;
-      for (int j : ctx.comm->Neighbors(i)) {
-        if (j == i) continue;
-        for (int q :
-             slots_[static_cast<std::size_t>(j) * num_targets_ + k].missed)
-          if (std::find(s.missed.begin(), s.missed.end(), q) == s.missed.end())
-            incoming_.push_back({i, k, q});
-      }
-    }
-  }
-  std::sort(incoming_.begin(), incoming_.end());
-  incoming_.erase(std::unique(incoming_.begin(), incoming_.end()),
-                  incoming_.end());
-  for (std::size_t a = 0; a < incoming_.size();) {
-    const int i = incoming_[a][0], k = incoming_[a][1];
-    Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
-    for (; a < incoming_.size() && incoming_[a][0] == i && incoming_[a][1] == k;
-         ++a)
-      s.missed.push_back(incoming_[a][2]);
-    Reaim(ctx, i, k);
-  }
+  sharing_.Share(ctx, robots, num_targets_, &slots_,
+                 [&](int i, int k) { Reaim(ctx, i, k); });
 }
 
 void SearchPoints::Reset(int num_robots, int num_targets) {
@@ -219,34 +191,8 @@ void SearchPoints::Update(const DecisionContext& ctx, int robot) {
 
 void SearchPoints::Share(const DecisionContext& ctx,
                          const std::vector<int>& robots) {
-  const double log_eps = std::log(ctx.eps);
-  incoming_.clear();
-  for (int i : robots) {
-    for (int k = 0; k < num_targets_; ++k) {
-      const Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
-      if (std::isnan(s.log_det) || s.log_det <= log_eps ||
-          !ctx.beliefs->layout().is_static(k))
-        continue;
-      for (int j : ctx.comm->Neighbors(i)) {
-        if (j == i) continue;
-        for (int q :
-             slots_[static_cast<std::size_t>(j) * num_targets_ + k].missed)
-          if (std::find(s.missed.begin(), s.missed.end(), q) == s.missed.end())
-            incoming_.push_back({i, k, q});
-      }
-    }
-  }
-  std::sort(incoming_.begin(), incoming_.end());
-  incoming_.erase(std::unique(incoming_.begin(), incoming_.end()),
-                  incoming_.end());
-  for (std::size_t a = 0; a < incoming_.size();) {
-    const int i = incoming_[a][0], k = incoming_[a][1];
-    Slot& s = slots_[static_cast<std::size_t>(i) * num_targets_ + k];
-    for (; a < incoming_.size() && incoming_[a][0] == i && incoming_[a][1] == k;
-         ++a)
-      s.missed.push_back(incoming_[a][2]);
-    Recompute(ctx, i, k);
-  }
+  sharing_.Share(ctx, robots, num_targets_, &slots_,
+                 [&](int i, int k) { Recompute(ctx, i, k); });
 }
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,

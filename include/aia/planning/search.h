@@ -52,6 +52,100 @@ bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
                const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
                Vec2* aim);
 
+// Share's work, one definition for SearchMemory and SearchPoints: each
+// robot among `robots` takes the points its neighbours in this step's graph
+// missed for a static target still open in its own belief (log det above
+// log eps) and not in its own list, read as Update left the lists (so the
+// order of the robots does not matter); then, per (robot, target) that took
+// any, in ascending order of both, `then(i, k)` after its points were
+// appended in ascending order. Only the targets a neighbour missed any
+// point of are visited (a list per robot, made in one pass over the slots);
+// a point is new to robot i when no stamp of this (i, k) marks it: its own
+// list is stamped once and each point taken is stamped too, so neighbours'
+// duplicates drop out. O(robots x targets) for the lists, then per robot
+// O(P log P) for the P (target, neighbour) pairs with misses plus the
+// points themselves; no list searched. Reuses its scratch.
+class NeighbourMisses {
+ public:
+  template <typename Slot, typename Then>
+  void Share(const DecisionContext& ctx, const std::vector<int>& robots,
+             int num_targets, std::vector<Slot>* slots, Then then) {
+    const double log_eps = std::log(ctx.eps);
+    incoming_.clear();
+    const auto points = static_cast<std::size_t>(ctx.map->lattice().size());
+    if (mark_.size() != points) {
+      mark_.assign(points, 0);
+      stamp_ = 0;
+    }
+    const auto at = [&](int i, int k) -> Slot& {
+      return (*slots)[static_cast<std::size_t>(i) * num_targets + k];
+    };
+    // Per robot, the targets it missed any point of (CSR), in one pass over
+    // the slots: the pairs below visit only those, not every target.
+    const int num_robots =
+        num_targets > 0 ? static_cast<int>(slots->size()) / num_targets : 0;
+    missing_begin_.assign(static_cast<std::size_t>(num_robots) + 1, 0);
+    missing_.clear();
+    for (int j = 0; j < num_robots; ++j) {
+      for (int k = 0; k < num_targets; ++k)
+        if (!at(j, k).missed.empty()) missing_.push_back(k);
+      missing_begin_[j + 1] = static_cast<int>(missing_.size());
+    }
+    for (int i : robots) {
+      // (target, neighbour) for each target a neighbour missed points of.
+      pairs_.clear();
+      for (int j : ctx.comm->Neighbors(i)) {
+        if (j == i) continue;
+        for (int e = missing_begin_[j]; e < missing_begin_[j + 1]; ++e)
+          pairs_.push_back({missing_[e], j});
+      }
+      std::sort(pairs_.begin(), pairs_.end());
+      for (std::size_t a = 0; a < pairs_.size();) {
+        const int k = pairs_[a].first;
+        std::size_t b = a;
+        while (b < pairs_.size() && pairs_[b].first == k) ++b;
+        const Slot& s = at(i, k);
+        if (!std::isnan(s.log_det) && s.log_det > log_eps &&
+            ctx.beliefs->layout().is_static(k)) {
+          NextStamp();
+          for (int q : s.missed) mark_[q] = stamp_;
+          for (std::size_t c = a; c < b; ++c) {
+            for (int q : at(pairs_[c].second, k).missed) {
+              if (mark_[q] == stamp_) continue;
+              mark_[q] = stamp_;
+              incoming_.push_back({i, k, q});
+            }
+          }
+        }
+        a = b;
+      }
+    }
+    std::sort(incoming_.begin(), incoming_.end());
+    for (std::size_t a = 0; a < incoming_.size();) {
+      const int i = incoming_[a][0], k = incoming_[a][1];
+      Slot& s = at(i, k);
+      for (; a < incoming_.size() && incoming_[a][0] == i &&
+             incoming_[a][1] == k;
+           ++a)
+        s.missed.push_back(incoming_[a][2]);
+      then(i, k);
+    }
+  }
+
+ private:
+  void NextStamp() {
+    if (++stamp_ == 0) {  // wrapped: no stale mark may match
+      std::fill(mark_.begin(), mark_.end(), 0u);
+      stamp_ = 1;
+    }
+  }
+  std::vector<std::array<int, 3>> incoming_;  // (robot, target, point)
+  std::vector<int> missing_begin_, missing_;  // per robot: targets missed
+  std::vector<std::pair<int, int>> pairs_;    // (target, neighbour)
+  std::vector<std::uint32_t> mark_;  // per lattice point
+  std::uint32_t stamp_ = 0;
+};
+
 // What one team's robots learned from their own missed measurements of
 // static targets, per robot and target: the lattice points from which the
 // robot saw its aim without its belief shrinking, and the aim that follows
@@ -95,7 +189,7 @@ class SearchMemory {
   bool Reaim(const DecisionContext& ctx, int robot, int k);
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
-  std::vector<std::array<int, 3>> incoming_;  // Share's (robot, target, point)
+  NeighbourMisses sharing_;
   std::vector<Slot> slots_;
 };
 
@@ -150,7 +244,7 @@ class SearchPoints {
   void Recompute(const DecisionContext& ctx, int robot, int k);
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
-  std::vector<std::array<int, 3>> incoming_;
+  NeighbourMisses sharing_;
   std::vector<Slot> slots_;
 };
 
