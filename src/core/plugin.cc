@@ -78,24 +78,29 @@ void SetInstalledDirs(const std::string& lib_dir, const std::string& data_dir) {
   d.data = WithSlash(data_dir);
 }
 
-std::string InstalledLibDir() {
+namespace {
+
+// The folder set by SetInstalledDirs, else `relative` beside the executable
+// when it runs from an installed prefix (../lib/aia exists), else "".
+std::string InstalledDir(std::string InstalledDirs::*set_dir,
+                         const char* relative) {
   InstalledDirs& d = Installed();
   {
     std::lock_guard<std::mutex> lock(d.mu);
-    if (d.set) return d.lib;
+    if (d.set) return d.*set_dir;
   }
   const std::string dir = ExecutableDir();
-  return !dir.empty() && IsDir(dir + "../lib/aia") ? dir + "../lib/aia/" : "";
+  return !dir.empty() && IsDir(dir + "../lib/aia") ? dir + relative : "";
+}
+
+}  // namespace
+
+std::string InstalledLibDir() {
+  return InstalledDir(&InstalledDirs::lib, "../lib/aia/");
 }
 
 std::string InstalledDataDir() {
-  InstalledDirs& d = Installed();
-  {
-    std::lock_guard<std::mutex> lock(d.mu);
-    if (d.set) return d.data;
-  }
-  const std::string dir = ExecutableDir();
-  return !dir.empty() && IsDir(dir + "../lib/aia") ? dir + "../share/aia/" : "";
+  return InstalledDir(&InstalledDirs::data, "../share/aia/");
 }
 
 const void* LoadPluginTable(const std::string& built_path, const char* symbol,

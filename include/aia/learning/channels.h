@@ -1,7 +1,8 @@
 // I-GBNet's input (docs/learning.md, Channels): per robot, four images over
 // the workspace and up to two optional ones (4 reach; a last one, trail:
-// ChannelParams::trail), one definition shared by the dataset reader, the trainer,
-// the igbnet policy (Python reads the states: tools/igbnet.py). No torch here.
+// ChannelParams::trail), one definition shared by the dataset reader, the
+// trainer, the igbnet policy (Python reads the states: tools/igbnet.py). No
+// torch here.
 //   0 occupancy: the share of the pixel covered by obstacles (1 outside the
 //     workspace);
 //   1 own position: 1 at the robot's pixel;

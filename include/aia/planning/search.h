@@ -124,8 +124,8 @@ class NeighbourMisses {
     for (std::size_t a = 0; a < incoming_.size();) {
       const int i = incoming_[a][0], k = incoming_[a][1];
       Slot& s = at(i, k);
-      for (; a < incoming_.size() && incoming_[a][0] == i &&
-             incoming_[a][1] == k;
+      for (;
+           a < incoming_.size() && incoming_[a][0] == i && incoming_[a][1] == k;
            ++a)
         s.missed.push_back(incoming_[a][2]);
       then(i, k);
@@ -142,7 +142,7 @@ class NeighbourMisses {
   std::vector<std::array<int, 3>> incoming_;  // (robot, target, point)
   std::vector<int> missing_begin_, missing_;  // per robot: targets missed
   std::vector<std::pair<int, int>> pairs_;    // (target, neighbour)
-  std::vector<std::uint32_t> mark_;  // per lattice point
+  std::vector<std::uint32_t> mark_;           // per lattice point
   std::uint32_t stamp_ = 0;
 };
 

@@ -34,8 +34,9 @@ class PolicyStates {
   // recently used entries beyond the capacity are forgotten; the returned
   // one stays valid while it is held. After deciding, call Decided. Not
   // thread-safe: the caller serializes (the Python module holds the GIL).
-  std::shared_ptr<Entry> For(std::uint64_t id, int step,
-                             const std::function<std::unique_ptr<Policy>()>& make);
+  std::shared_ptr<Entry> For(
+      std::uint64_t id, int step,
+      const std::function<std::unique_ptr<Policy>()>& make);
   // Records that `entry` decided at `step`.
   static void Decided(Entry* entry, int step) { entry->next_step = step + 1; }
 
