@@ -19,6 +19,7 @@ Runs on a GPU when torch sees one. A small network and few epochs by
 default (flags below); `aia train` is the shipped recipe.
 """
 import argparse
+import gc
 import glob
 import os
 import tempfile
@@ -169,6 +170,12 @@ def train(rank, world, local, args, init, local_world):
         print(f"wrote {args.out}", flush=True)
     if distributed:
         dist.barrier()
+        # Drop DDP's reducer while the group still holds itself: the group's
+        # last reference going with the reducer would join gloo's worker
+        # threads with the GIL held, and a worker freeing a tensor Python
+        # made needs the GIL (a hang at exit, torch 1.13).
+        del model
+        gc.collect()
         dist.destroy_process_group()
 
 
