@@ -103,6 +103,42 @@ Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
   robot_timeouts_.assign(waypoints_.size(), 0);
   turning_.assign(waypoints_.size(), 0);
   mj_forward(m_, data_.get());
+  IndexRayGeoms();
+}
+
+void Simulation::IndexRayGeoms() {
+  // mj_ray's own rules (engine_ray.c, ray_eliminate) for which geoms a ray
+  // with this group and flg_static = 1 tests: in the group, not invisible
+  // by rgba or material. Any that is not a static primitive (mesh, height
+  // field, plane, a moving body) sends every ray to mj_ray.
+  std::vector<Box> bounds;
+  ray_geoms_.clear();
+  Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+  for (int g = 0; g < m_->ngeom; ++g) {
+    const int group = std::clamp(m_->geom_group[g], 0, mjNGROUP - 1);
+    if (group != kGroupObstacle) continue;
+    const int mat = m_->geom_matid[g];
+    if (mat < 0 ? m_->geom_rgba[4 * g + 3] == 0
+                : m_->mat_rgba[4 * mat + 3] == 0)
+      continue;
+    const int type = m_->geom_type[g];
+    if (type == mjGEOM_MESH || type == mjGEOM_HFIELD || type == mjGEOM_PLANE ||
+        m_->body_weldid[m_->geom_bodyid[g]] != 0) {
+      ray_indexed_ = false;
+      return;
+    }
+    const mjtNum* p = data_->geom_xpos + 3 * g;
+    // The bounding sphere, a little larger: a hit on the segment lies in it.
+    const double r = m_->geom_rbound[g] * (1.0 + 1e-9) + 1e-9;
+    const Box b{Vec2(p[0] - r, p[1] - r), Vec2(p[0] + r, p[1] + r)};
+    bounds.push_back(b);
+    ray_geoms_.push_back(g);
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
+  if (ray_geoms_.empty()) lo = hi = Vec2(0.0, 0.0);
+  ray_buckets_.Build(lo, hi, 1.0, bounds);
+  ray_indexed_ = true;
 }
 
 void Simulation::StepPhysics() {
@@ -323,9 +359,19 @@ bool Simulation::RayClear(const Vec2& from, const Vec2& to) const {
   const mjtNum vec[3] = {to.x() - from.x(), to.y() - from.y(), 0.0};
   mjtByte groups[mjNGROUP] = {0};
   groups[kGroupObstacle] = 1;
+  // The ray length is |vec|, so a hit before 1 lies between the two points.
+  // (A ray too short for mj_ray goes to it, for its error.)
+  if (ray_indexed_ && mju_norm3(vec) >= mjMINVAL) {
+    return !ray_buckets_.Any(from.cwiseMin(to), from.cwiseMax(to), [&](int i) {
+      const int g = ray_geoms_[i];
+      const mjtNum x =
+          mju_rayGeom(data_->geom_xpos + 3 * g, data_->geom_xmat + 9 * g,
+                      m_->geom_size + 3 * g, pnt, vec, m_->geom_type[g]);
+      return x >= 0.0 && x < 1.0;
+    });
+  }
   int geom = -1;
-  // Static geoms included (obstacles are static bodies); the ray length is
-  // |vec|, so a hit before 1 lies between the two points.
+  // Static geoms included (obstacles are static bodies).
   const mjtNum x = mj_ray(m_, data_.get(), pnt, vec, groups, 1, -1, &geom);
   return x < 0.0 || x >= 1.0;
 }

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <string>
 
 #include "aia/sim/simulation.h"
 #include "aia/world/mjcf.h"
@@ -125,6 +127,62 @@ TEST(SensingTest, RayClearMatchesWorldLineOfSight) {
     const Vec2 b(rng.Uniform(0.5, 9.5), rng.Uniform(0.5, 9.5));
     EXPECT_EQ(sim.RayClear(a, b), w.map.LineOfSight(a, b))
         << a.transpose() << " -> " << b.transpose();
+  }
+}
+
+// mj_ray itself, as RayClear was before its index: the answer the index
+// must give on every segment.
+bool MjRayClear(const Simulation& sim, const Vec2& from, const Vec2& to) {
+  const mjtNum pnt[3] = {from.x(), from.y(), kSensorHeight};
+  const mjtNum vec[3] = {to.x() - from.x(), to.y() - from.y(), 0.0};
+  mjtByte groups[mjNGROUP] = {0};
+  groups[kGroupObstacle] = 1;
+  int geom = -1;
+  const mjtNum x =
+      mj_ray(sim.model(), sim.data(), pnt, vec, groups, 1, -1, &geom);
+  return x < 0.0 || x >= 1.0;
+}
+
+TEST(SensingTest, RayClearIsMjRayInClutterMazesAndRooms) {
+  // Random segments of up to 4 m, and segments from box corners and edge
+  // midpoints (grazing hits), in a cluttered world and generated maps.
+  for (const char* extra :
+       {"workspace: {size: [30, 30], obstacles: {random: {count: 90}}}\n",
+        "workspace: {size: [30, 30], obstacles: {generator: {type: maze}}}\n",
+        "workspace: {size: [30, 30], obstacles: {generator: {type: "
+        "rooms}}}\n"}) {
+    const Scenario s = ScenarioFromYaml(
+        std::string("robots: {count: 4}\ntargets: {count: 4}\n") + extra);
+    const World w = World::Build(s);
+    Simulation sim(w, s);
+    Rng rng(17);
+    int blocked = 0, trials = 0;
+    const auto check = [&](const Vec2& a, const Vec2& b) {
+      const bool clear = sim.RayClear(a, b);
+      ASSERT_EQ(clear, MjRayClear(sim, a, b))
+          << extra << a.transpose() << " -> " << b.transpose();
+      blocked += !clear;
+      ++trials;
+    };
+    for (int t = 0; t < 3000; ++t) {
+      const Vec2 a(rng.Uniform(-1.0, 31.0), rng.Uniform(-1.0, 31.0));
+      const double r = rng.Uniform(0.0, 4.0), th = rng.Uniform(0.0, 6.3);
+      check(a, a + r * Vec2(std::cos(th), std::sin(th)));
+    }
+    for (const Box& box : w.map.obstacles()) {
+      for (const Vec2& p :
+           {box.lo, box.hi, Vec2(box.lo.x(), box.hi.y()),
+            Vec2(box.hi.x(), box.lo.y()), Vec2(box.Center().x(), box.lo.y()),
+            Vec2(box.lo.x(), box.Center().y())}) {
+        const double th = rng.Uniform(0.0, 6.3);
+        check(p + 2.0 * Vec2(std::cos(th), std::sin(th)), p);
+        check(p - Vec2(1.5, 0.0), p + Vec2(1.5, 0.0));
+        check(p - Vec2(0.0, 1.5), p + Vec2(0.0, 1.5));
+      }
+    }
+    // Both answers occur (the test can tell a wrong index).
+    EXPECT_GT(blocked, trials / 20) << extra;
+    EXPECT_LT(blocked, trials - trials / 20) << extra;
   }
 }
 

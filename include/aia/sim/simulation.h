@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/box_buckets.h"
 #include "aia/core/point_grid.h"
 #include "aia/core/rng.h"
 #include "aia/core/types.h"
@@ -150,7 +151,11 @@ class Simulation {
       const std::function<void(double)>& on_substep = {});
 
   // Whether the segment between two points at sensor height meets no obstacle
-  // (mj_ray against the obstacle geom group only).
+  // (mj_ray against the obstacle geom group only). The same answer as
+  // mj_ray, which in MuJoCo 2.2 visits every geom, from the geoms whose
+  // bounds meet the segment's: the obstacle geoms in buckets, each tested
+  // with mju_rayGeom as mj_ray tests it (mj_ray itself where a geom of the
+  // group is not a static primitive).
   bool RayClear(const Vec2& from, const Vec2& to) const;
 
   // One mj_step. When the contacts of the step overflow MuJoCo's budget
@@ -204,6 +209,12 @@ class Simulation {
   std::vector<long> robot_stalls_, robot_timeouts_;
   std::vector<std::uint8_t> turning_;  // per robot, its controller's last call
   TimeUse time_use_;
+  // RayClear's index: the geoms mj_ray would test (static primitives of the
+  // obstacle group, not invisible), bucketed by their bounding circles.
+  void IndexRayGeoms();
+  std::vector<int> ray_geoms_;
+  BoxBuckets ray_buckets_;
+  bool ray_indexed_ = false;
   std::array<long, mjNWARNING> warnings_{};
   int grows_ = 0, max_contacts_ = 0, max_constraints_ = 0;
   long max_stack_ = 0;

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "aia/core/box_buckets.h"
 #include "aia/core/geometry.h"
 #include "aia/core/grid.h"
 #include "aia/core/types.h"
@@ -44,14 +45,8 @@ class Map {
   Grid<std::uint8_t> occupancy_;
   Lattice lattice_;
   double robot_radius_ = 0.15;
-  // The buckets covering the rectangle [lo, hi], clamped to the grid.
-  void BucketRange(const Vec2& lo, const Vec2& hi, int* x0, int* x1, int* y0,
-                   int* y1) const;
-
-  // Boxes bucketed on a coarse grid for LineOfSight.
-  double bucket_ = 1.0;
-  int bx_ = 0, by_ = 0;
-  std::vector<std::vector<int>> buckets_;
+  // The boxes in 1 m buckets for LineOfSight and PointFree.
+  BoxBuckets buckets_;
 };
 
 }  // namespace aia
