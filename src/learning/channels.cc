@@ -2,18 +2,38 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <mutex>
 #include <queue>
+#include <shared_mutex>
+#include <unordered_map>
 #include <utility>
 
 #include "aia/core/check.h"
 
 namespace aia {
 
+struct ChannelRenderer::ObservationCache {
+  struct Hash {
+    std::size_t operator()(
+        const std::pair<std::uint64_t, std::uint64_t>& a) const {
+      return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^
+                                        a.second);
+    }
+  };
+  std::shared_mutex mutex;
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::vector<int>,
+                     Hash>
+      pixels;
+};
+
 ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
                                  const Vec2& size, const ChannelParams& params,
                                  const Lattice* lattice)
-    : params_(params), size_(size) {
+    : params_(params),
+      size_(size),
+      observation_cache_(std::make_shared<ObservationCache>()) {
   AIA_CHECK(params.cell > 0.0 && params.window > 0 && params.blur >= 0.0 &&
             params.cutoff > 0.0);
   AIA_CHECK_MSG(!params.geodesic || (lattice && params.geodesic_length > 0.0),
@@ -214,6 +234,45 @@ bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
   return true;
 }
 
+const std::vector<int>& ChannelRenderer::ObservationPixels(
+    const Vec2& x) const {
+  std::pair<std::uint64_t, std::uint64_t> key;
+  std::memcpy(&key.first, &x.x(), sizeof(double));
+  std::memcpy(&key.second, &x.y(), sizeof(double));
+  thread_local std::vector<int> found;
+  ObservationCache& cache = *observation_cache_;
+  {
+    std::shared_lock<std::shared_mutex> lock(cache.mutex);
+    const auto it = cache.pixels.find(key);
+    if (it != cache.pixels.end()) {
+      found = it->second;  // copied: another thread may clear the cache
+      return found;
+    }
+  }
+  found.clear();
+  const int nx = occupancy_.nx(), ny = occupancy_.ny();
+  const int reach =
+      static_cast<int>(std::ceil(params_.observe_range / params_.cell));
+  const double r2 = params_.observe_range * params_.observe_range;
+  int mx = 0, my = 0;
+  occupancy_.CellOf(x, &mx, &my);
+  for (int gy = std::max(0, my - reach); gy <= std::min(ny - 1, my + reach);
+       ++gy) {
+    for (int gx = std::max(0, mx - reach); gx <= std::min(nx - 1, mx + reach);
+         ++gx) {
+      const int idx = occupancy_.Index(gx, gy);
+      if (!moves_[idx]) continue;
+      const Vec2 c = occupancy_.CellCenter(gx, gy);
+      if ((c - x).squaredNorm() > r2 || !Sees(c, x)) continue;
+      found.push_back(idx);
+    }
+  }
+  std::unique_lock<std::shared_mutex> lock(cache.mutex);
+  if (cache.pixels.size() >= kObservationCacheSize) cache.pixels.clear();
+  cache.pixels.emplace(key, found);
+  return found;
+}
+
 void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
                             const std::vector<HeatSource>& targets,
                             const std::vector<double>& log_det_prior,
@@ -270,9 +329,6 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                           const std::pair<double, int>& b) {
     return a.first > b.first || (a.first == b.first && a.second > b.second);
   };
-  const int reach =
-      static_cast<int>(std::ceil(params_.observe_range / params_.cell));
-  const double r2 = params_.observe_range * params_.observe_range;
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
     if (wk <= 0.0) continue;
@@ -281,19 +337,10 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
     const std::size_t points = searched ? (*search)[k].size() : 1;
     for (std::size_t a = 0; a < points; ++a) {
       const Vec2& x = searched ? (*search)[k][a] : targets[k].mean;
-      int mx = 0, my = 0;
-      occupancy_.CellOf(x, &mx, &my);
-      for (int gy = std::max(0, my - reach); gy <= std::min(ny - 1, my + reach);
-           ++gy) {
-        for (int gx = std::max(0, mx - reach);
-             gx <= std::min(nx - 1, mx + reach); ++gx) {
-          const int idx = occupancy_.Index(gx, gy);
-          if (!moves_[idx] || c0 >= cost[idx]) continue;
-          const Vec2 c = occupancy_.CellCenter(gx, gy);
-          if ((c - x).squaredNorm() > r2 || !Sees(c, x)) continue;
-          cost[idx] = c0;
-          heap.emplace_back(c0, idx);
-        }
+      for (const int idx : ObservationPixels(x)) {
+        if (c0 >= cost[idx]) continue;
+        cost[idx] = c0;
+        heap.emplace_back(c0, idx);
       }
     }
   }
@@ -382,7 +429,6 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   const std::size_t n = static_cast<std::size_t>(h) * w;
   std::fill(out, out + n, 0.0f);
   const int reach = static_cast<int>(std::ceil(params_.observe_range / cell));
-  const double r2 = params_.observe_range * params_.observe_range;
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
     if (wk <= 0.0) continue;
@@ -401,21 +447,13 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
       heap.emplace_back(value, bv * w + bu);
       continue;
     }
-    for (int gy = my - reach; gy <= my + reach; ++gy) {
-      for (int gx = mx - reach; gx <= mx + reach; ++gx) {
-        if (!occupancy_.InBounds(gx, gy) || !moves_[occupancy_.Index(gx, gy)])
-          continue;
-        const Vec2 c = occupancy_.CellCenter(gx, gy);
-        if ((c - targets[k].mean).squaredNorm() > r2 ||
-            !Sees(c, targets[k].mean))
-          continue;
-        const int u = gx - x0, v = gy - y0;
-        const int bu = std::clamp(u, 0, w - 1), bv = std::clamp(v, 0, h - 1);
-        const float value = static_cast<float>(
-            wk * std::pow(decay, std::abs(u - bu) + std::abs(v - bv)));
-        if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
-        heap.emplace_back(value, bv * w + bu);
-      }
+    for (const int idx : ObservationPixels(targets[k].mean)) {
+      const int u = idx % occupancy_.nx() - x0, v = idx / occupancy_.nx() - y0;
+      const int bu = std::clamp(u, 0, w - 1), bv = std::clamp(v, 0, h - 1);
+      const float value = static_cast<float>(
+          wk * std::pow(decay, std::abs(u - bu) + std::abs(v - bv)));
+      if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
+      heap.emplace_back(value, bv * w + bu);
     }
   }
   std::make_heap(heap.begin(), heap.end());

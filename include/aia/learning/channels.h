@@ -35,6 +35,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -221,6 +222,14 @@ class ChannelRenderer {
   void Trail(const Vec2& self, const RobotMemory& memory, float* out) const;
   // No occupied cell of the map on the segment from a to b.
   bool Sees(const Vec2& a, const Vec2& b) const;
+  // The global pixels (row-major indices, in row order) a robot may stand
+  // on within the observe range of point x that see it: where the reach
+  // channel's values start. Every robot asks about every target's mean (and
+  // search points), mostly the same points in a step, so the answers are
+  // kept per point (cleared past kObservationCacheSize points); thread-safe.
+  const std::vector<int>& ObservationPixels(const Vec2& x) const;
+  struct ObservationCache;
+  static constexpr std::size_t kObservationCacheSize = 1 << 16;
 
   ChannelParams params_;
   Vec2 size_;
@@ -231,6 +240,8 @@ class ChannelRenderer {
   // move to the neighbouring pixel in direction m (reach channel only).
   std::vector<std::uint8_t> moves_;
   int height_ = 0, width_ = 0;
+  // Shared by copies (the same map and parameters).
+  std::shared_ptr<ObservationCache> observation_cache_;
 };
 
 }  // namespace aia
