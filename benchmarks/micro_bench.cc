@@ -90,14 +90,18 @@ BENCHMARK(BM_DecisionStep)->Arg(10)->Arg(80)->Unit(benchmark::kMillisecond);
 // worth of physics (50 steps, 0.25 s, for point robots; 300, 1.5 s, for
 // diff_drive robots), as decisions drive them (they touch). Arguments:
 // robots, driven, model (0 point, 1 diff_drive).
-std::shared_ptr<const Instance> PhysicsWorld(int n, bool wheeled) {
+Scenario GrowingScenario(int n, bool wheeled) {
   Scenario s = GeneratedScenario(n, n, 1);
   const double side = 20.0 * std::sqrt(std::max(n, 40) / 40.0);
   s.workspace.size = Vec2(side, side);
   s.workspace.obstacles.random->count =
       static_cast<int>(std::lround(0.075 * side * side));
   if (wheeled) s.robots.model = RobotModel::kDiffDrive;
-  return BuildInstance(s);
+  return s;
+}
+
+std::shared_ptr<const Instance> PhysicsWorld(int n, bool wheeled) {
+  return BuildInstance(GrowingScenario(n, wheeled));
 }
 
 void BM_PhysicsStep(benchmark::State& state) {
@@ -144,6 +148,32 @@ void BM_MjStepAlone(benchmark::State& state) {
 BENCHMARK(BM_MjStepAlone)
     ->ArgsProduct({{80, 1000}, {0}})
     ->ArgsProduct({{10, 80}, {1}})
+    ->Unit(benchmark::kMillisecond);
+
+// One decision step of the default policy (igbnet, its shipped model and
+// coordination) in the worlds of BM_PhysicsStep, one policy thread: what
+// regressed 10x at 1000 robots before any benchmark caught it (issue 36).
+// The counter policy_ms is the policy's share of a step.
+void BM_DefaultPolicyStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Scenario s = GrowingScenario(n, false);
+  s.policy.name = "igbnet";
+  s.mission.stop_at_success = false;
+  s.mission.max_steps = 1 << 30;
+  auto episode = MakeEpisode(s, AllPolicies());
+  episode->Step();  // past the first step's one-off work
+  const double before = episode->times().policy;
+  long steps = 0;
+  for (auto _ : state) {
+    episode->Step();
+    ++steps;
+  }
+  state.counters["policy_ms"] =
+      1e3 * (episode->times().policy - before) / std::max(1L, steps);
+}
+BENCHMARK(BM_DefaultPolicyStep)
+    ->Arg(80)
+    ->Arg(1000)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
