@@ -70,7 +70,7 @@ class BuildWithCMake(build_py):
             shutil.copy2(os.path.join(build, name), lib)
         share = os.path.join(pkg, "share", "aia")
         os.makedirs(os.path.join(share, "models"), exist_ok=True)
-        for name in ("igbnet.pt", "igbnet_10x10.pt"):
+        for name in ("igbnet.pt", "igbnet_10x10.pt", "igbnet_learned.pt"):
             shutil.copy2(os.path.join(HERE, "models", name),
                          os.path.join(share, "models"))
         shutil.copytree(os.path.join(HERE, "scenarios"),
