@@ -11,7 +11,7 @@
 #                           robots), kept so that its results can be repeated.
 # With MODELS=learned it also trains models/igbnet_learned.pt, the model
 # meant for policy.coordination=none (the network alone; DAgger rounds,
-# about 2 hours more). With MODELS=all it also trains the ablation's
+# about 1.5 hours more on 2 cores). With MODELS=all it also trains the ablation's
 # four-channel model on the randomized data and the 10-robot-only model
 # (the same inputs and worlds, teams of 10 only; the scalability check)
 # and the learned model.
