@@ -193,7 +193,8 @@ void Simulation::Grow() {
                   "the robots' contacts need more than %d in one physics "
                   "step, and MuJoCo 2.2 would need %.1f GiB for them (its "
                   "constraint arrays grow with the square of the contacts; "
-                  "the limit is %.0f GiB): fewer robots, or more room",
+                  "the limit is %.1f GiB, what one mjData holds): fewer robots, or "
+                  "more room",
                   m_->nconmax, bytes / (1L << 30),
                   kMaxPhysicsBytes / (1L << 30));
     throw std::runtime_error(what);

@@ -534,7 +534,8 @@ World World::Build(const Scenario& s) {
     std::snprintf(what, sizeof(what),
                   "%d %s robots need %.1f GiB of MuJoCo 2.2's constraint "
                   "arrays (dense in the contacts: %d resting and possible), "
-                  "more than the %.0f GiB aia allows; fewer robots%s",
+                  "more than the %.1f GiB MuJoCo 2.2 can hold in one mjData; fewer "
+                  "robots%s",
                   n, EnumNameOf(s.robots.model), bytes / (1L << 30),
                   mujoco.sizes.nconmax, kMaxPhysicsBytes / (1L << 30),
                   wheeled ? ", or robots.model: point" : "");

@@ -93,8 +93,12 @@ struct DiffDriveBody {
 };
 DiffDriveBody DiffDriveBodyOf(const DiffDriveConfig& config, double radius);
 // The most memory a simulation's MuJoCo arrays may take, as its contacts
-// grow and (World::Build refuses a world beyond it) at the start.
-inline constexpr double kMaxPhysicsBytes = 3.0 * (1L << 30);
+// grow and (World::Build refuses a world beyond it) at the start. MuJoCo
+// 2.2 holds them in one buffer whose size is an int (mjData::nbuffer): past
+// 2 GiB it cannot make the mjData at all (775 wheeled robots compile, 800
+// do not, where MujocoDataBytes says 1.95 and 2.08 GiB); 1.9 GiB leaves
+// room for the arrays it does not count.
+inline constexpr double kMaxPhysicsBytes = 1.9 * (1L << 30);
 // Bytes one mjData takes with these sizes (its arrays, the stack not
 // counted: the stack is mostly never touched).
 double MujocoDataBytes(const MujocoSizes& sizes, long nv, long nu);
