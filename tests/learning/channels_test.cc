@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <thread>
+#include <vector>
 
 #include "aia/world/map.h"
 
@@ -309,6 +312,58 @@ TEST(ChannelsTest, ReachLeadsToTheSearchPoints) {
           << x << ", " << y;
   for (int y = 0; y < 3; ++y)
     for (int x = 2; x < 4; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
+}
+
+// The observation pixels a renderer keeps per point change nothing: robots
+// rendered on a renderer that has seen their targets' points before (and
+// from two threads at once) get the images of a fresh renderer, with the
+// reach over the window and over the world, in a cluttered 12 m world.
+TEST(ChannelsTest, KeptObservationPixelsGiveAFreshRenderersImages) {
+  std::vector<Box> boxes;
+  for (int i = 0; i < 12; ++i)
+    boxes.push_back(Box::FromCenterSize(
+        Vec2(1.0 + (i * 7) % 10, 1.0 + (i * 5) % 10), Vec2(0.6, 1.2)));
+  const Map map({12.0, 12.0}, boxes, 0.1, 0.5, 0.15);
+  std::vector<HeatSource> targets;
+  for (int k = 0; k < 6; ++k)  // pairs on one x: points told apart by y
+    targets.push_back(WalledWorld::Target({0.7 + 3.8 * (k / 2), 11.3 - 1.7 * k},
+                                          0.5 + 0.1 * k));
+  const std::vector<double> prior(targets.size(), std::log(100.0));
+  const std::vector<Vec2> robots = {{0.75, 0.75}, {6.25, 5.75}, {11.25, 2.25}};
+  for (const bool world : {false, true}) {
+    ChannelParams params = Params(ChannelFrame::kCentred, 16);
+    params.cell = 0.5;
+    params.geodesic = true;
+    params.geodesic_length = 5.0;
+    params.observe_range = 2.0;
+    params.reach_world = world;
+    const ChannelRenderer warm(map.occupancy(), map.size(), params,
+                               &map.lattice());
+    const Grid<float> heat = MakeHeatmapGrid(map.size(), params.cell);
+    const auto render = [&](const ChannelRenderer& r, const Vec2& self) {
+      std::vector<float> img(r.ImageSize());
+      r.RenderWithHeat(self, {}, heat, &targets, &prior, 0.01, img.data());
+      return img;
+    };
+    for (const Vec2& self : robots) render(warm, self);  // the cache filled
+    std::vector<std::vector<float>> threaded(robots.size());
+    std::vector<std::thread> threads;
+    for (std::size_t i = 0; i < robots.size(); ++i)
+      threads.emplace_back([&, i] { threaded[i] = render(warm, robots[i]); });
+    for (std::thread& t : threads) t.join();
+    for (std::size_t i = 0; i < robots.size(); ++i) {
+      const ChannelRenderer fresh(map.occupancy(), map.size(), params,
+                                  &map.lattice());
+      const std::vector<float> expected = render(fresh, robots[i]);
+      EXPECT_EQ(render(warm, robots[i]), expected) << world << " " << i;
+      EXPECT_EQ(threaded[i], expected) << world << " " << i;
+      // The reach channel holds something: the test can tell a wrong one.
+      const std::size_t plane = expected.size() / params.num_channels();
+      EXPECT_GT(*std::max_element(expected.begin() + 4 * plane,
+                                  expected.begin() + 5 * plane),
+                0.0f);
+    }
+  }
 }
 
 // The trail channel (the last): in a centred 3 x 3 window of 1 m pixels at
