@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <mutex>
 #include <queue>
@@ -11,21 +10,13 @@
 #include <utility>
 
 #include "aia/core/check.h"
+#include "aia/core/geometry.h"
 
 namespace aia {
 
 struct ChannelRenderer::ObservationCache {
-  struct Hash {
-    std::size_t operator()(
-        const std::pair<std::uint64_t, std::uint64_t>& a) const {
-      return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^
-                                        a.second);
-    }
-  };
   std::shared_mutex mutex;
-  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::vector<int>,
-                     Hash>
-      pixels;
+  std::unordered_map<PointKey, std::vector<int>, PointKeyHash> pixels;
 };
 
 ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
@@ -236,9 +227,7 @@ bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
 
 const std::vector<int>& ChannelRenderer::ObservationPixels(
     const Vec2& x) const {
-  std::pair<std::uint64_t, std::uint64_t> key;
-  std::memcpy(&key.first, &x.x(), sizeof(double));
-  std::memcpy(&key.second, &x.y(), sizeof(double));
+  const PointKey key = KeyOf(x);
   thread_local std::vector<int> found;
   ObservationCache& cache = *observation_cache_;
   {

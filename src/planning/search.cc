@@ -307,10 +307,7 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor) {
 
 const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Field()");
-  std::pair<std::uint64_t, std::uint64_t> key;
-  std::memcpy(&key.first, &aim.x(), sizeof(double));
-  std::memcpy(&key.second, &aim.y(), sizeof(double));
-  auto [it, fresh] = index_.emplace(key, Slot{});
+  auto [it, fresh] = index_.emplace(KeyOf(aim), Slot{});
   it->second.step = step_;
   if (!fresh) return fields_[it->second.slot];
   if (free_.empty()) {

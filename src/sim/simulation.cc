@@ -189,14 +189,14 @@ void Simulation::Grow() {
   const double bytes = MujocoDataBytes(sizes, m_->nv, m_->nu);
   if (bytes > kMaxPhysicsBytes) {
     char what[400];
-    std::snprintf(what, sizeof(what),
-                  "the robots' contacts need more than %d in one physics "
-                  "step, and MuJoCo 2.2 would need %.1f GiB for them (its "
-                  "constraint arrays grow with the square of the contacts; "
-                  "the limit is %.1f GiB, what one mjData holds): fewer robots, or "
-                  "more room",
-                  m_->nconmax, bytes / (1L << 30),
-                  kMaxPhysicsBytes / (1L << 30));
+    std::snprintf(
+        what, sizeof(what),
+        "the robots' contacts need more than %d in one physics "
+        "step, and MuJoCo 2.2 would need %.1f GiB for them (its "
+        "constraint arrays grow with the square of the contacts; "
+        "the limit is %.1f GiB, what one mjData holds): fewer robots, or "
+        "more room",
+        m_->nconmax, bytes / (1L << 30), kMaxPhysicsBytes / (1L << 30));
     throw std::runtime_error(what);
   }
   MjModelPtr grown(mj_copyModel(nullptr, m_));

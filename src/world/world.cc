@@ -531,14 +531,15 @@ World World::Build(const Scenario& s) {
   const double bytes = MujocoDataBytes(mujoco.sizes, mujoco.nv, 0);
   if (bytes > kMaxPhysicsBytes) {
     char what[400];
-    std::snprintf(what, sizeof(what),
-                  "%d %s robots need %.1f GiB of MuJoCo 2.2's constraint "
-                  "arrays (dense in the contacts: %d resting and possible), "
-                  "more than the %.1f GiB MuJoCo 2.2 can hold in one mjData; fewer "
-                  "robots%s",
-                  n, EnumNameOf(s.robots.model), bytes / (1L << 30),
-                  mujoco.sizes.nconmax, kMaxPhysicsBytes / (1L << 30),
-                  wheeled ? ", or robots.model: point" : "");
+    std::snprintf(
+        what, sizeof(what),
+        "%d %s robots need %.1f GiB of MuJoCo 2.2's constraint "
+        "arrays (dense in the contacts: %d resting and possible), "
+        "more than the %.1f GiB MuJoCo 2.2 can hold in one mjData; fewer "
+        "robots%s",
+        n, EnumNameOf(s.robots.model), bytes / (1L << 30), mujoco.sizes.nconmax,
+        kMaxPhysicsBytes / (1L << 30),
+        wheeled ? ", or robots.model: point" : "");
     Fail(s, "robots.count", what);
   }
 

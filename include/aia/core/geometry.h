@@ -3,6 +3,10 @@
 #ifndef AIA_CORE_GEOMETRY_H_
 #define AIA_CORE_GEOMETRY_H_
 
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <utility>
 #include <vector>
 
 #include "aia/core/types.h"
@@ -37,6 +41,23 @@ bool SegmentIntersectsBox(const Vec2& a, const Vec2& b, const Box& box);
 // Whether the open segment (a, b) meets any box in the list.
 bool SegmentBlocked(const Vec2& a, const Vec2& b,
                     const std::vector<Box>& boxes);
+
+// A point by the bits of its coordinates, as the key of a table of
+// answers per exact point (the claims' fields per aim, the reach channel's
+// observation pixels per point).
+using PointKey = std::pair<std::uint64_t, std::uint64_t>;
+inline PointKey KeyOf(const Vec2& p) {
+  PointKey key;
+  std::memcpy(&key.first, &p.x(), sizeof(double));
+  std::memcpy(&key.second, &p.y(), sizeof(double));
+  return key;
+}
+struct PointKeyHash {
+  std::size_t operator()(const PointKey& a) const {
+    return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^
+                                      a.second);
+  }
+};
 
 }  // namespace aia
 

@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "aia/core/geometry.h"
 #include "aia/core/point_grid.h"
 #include "aia/core/types.h"
 #include "aia/planning/information.h"
@@ -352,19 +353,11 @@ class TargetClaims {
   TourPlanner planner_;
   // aim (its coordinates' bits) -> its field's slot in fields_ and the
   // step that last used it; free_ lists the unused slots.
-  struct AimHash {
-    std::size_t operator()(
-        const std::pair<std::uint64_t, std::uint64_t>& a) const {
-      return std::hash<std::uint64_t>()(a.first * 0x9E3779B97F4A7C15ull ^
-                                        a.second);
-    }
-  };
   struct Slot {
     int slot = -1;
     long step = 0;
   };
-  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, Slot, AimHash>
-      index_;
+  std::unordered_map<PointKey, Slot, PointKeyHash> index_;
   std::vector<std::vector<int>> fields_;
   std::vector<int> free_;
   long step_ = 0;
