@@ -78,6 +78,16 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   history_.Reset(n);
   made_.assign(n, Move::kStay);
   if (policy_) policy_->Reset(world.map, n, num_targets_, scenario.seed);
+  ready_.assign(n, 1);
+  from_ = robot_idx_;
+  decisions_.assign(n, 0);
+  if (async()) {
+    const double rate = scenario.sensor.rate.value_or(
+        DefaultSensorRate(scenario.robots.model));
+    tick_period_ = std::max(
+        1L, std::lround(1.0 / (rate * sim_.model()->opt.timestep)));
+    next_tick_ = tick_period_;
+  }
   Observe();  // step 0: measurements at the starts, fused with the prior
   times_ = PhaseTimes{};  // phase times are those of the decision steps
 }
@@ -151,6 +161,10 @@ DecisionContext Episode::Context() const {
 void Episode::Step() {
   AIA_CHECK_MSG(policy_ != nullptr, "an episode without a policy cannot step");
   if (done()) return;
+  if (async()) {
+    StepAsync();
+    return;
+  }
   const auto t_step = Clock::now();
   const int n = instance_->world.NumRobots();
   const Lattice& lattice = instance_->world.map.lattice();
@@ -216,6 +230,127 @@ void Episode::Step() {
     stopped_ |= o->OnStep(*this) == ObserverStatus::kStop;
 }
 
+void Episode::StepAsync() {
+  const auto t_step = Clock::now();
+  const int n = instance_->world.NumRobots();
+  const Lattice& lattice = instance_->world.map.lattice();
+
+  // The robots whose moves have ended decide; the others drive on, their
+  // destinations in the context as what they intend.
+  auto t0 = Clock::now();
+  DecisionContext ctx = Context();
+  ctx.ready = &ready_;
+  DecisionContext given = ctx;
+  if (!policy_->centralized()) given.central = nullptr;
+  const PolicyStatus status = policy_->Decide(given, &moves_);
+  ++stats_.statuses[static_cast<int>(status)];
+  for (int i = 0; i < n; ++i)
+    if (ready_[i]) Apply(i, lattice);
+  times_.policy += Since(t0);
+  const Decision decision{moves_, applied_, status, &ready_};
+  for (StepObserver* o : observers_)
+    stopped_ |= o->OnDecision(*this, ctx, decision) == ObserverStatus::kStop;
+  if (stopped_) return;
+  std::fill(ready_.begin(), ready_.end(), 0);
+
+  // Physics until some robot's move ends, sensing at every tick on the way.
+  if (!targets_drawn_) {
+    MoveTargets();
+    targets_drawn_ = true;
+  }
+  const double dt = sim_.model()->opt.timestep;
+  const double motion = std::min(kTargetMotionSeconds, tick_period_ * dt);
+  const double round_start = sim_.clock_seconds();
+  const double physics_before = sim_.physics_seconds();
+  while (true) {
+    const PhysicsStepStats physics = sim_.AdvanceMoves(
+        next_tick_, &ended_, &how_, [&](double seconds) {
+          const double f =
+              std::min(1.0, (seconds - tick_start_ * dt) / motion);
+          for (int k = 0; k < num_targets_; ++k)
+            sim_.SetTargetPosition(
+                k, target_prev_[k] + f * (target_pos_[k] - target_prev_[k]));
+          for (StepObserver* o : observers_)
+            o->OnSubstep(*this, seconds - round_start);
+        });
+    stats_.substeps += physics.substeps;
+    stats_.sim_seconds = sim_.clock_seconds();
+    if (physics.late > 0) ++stats_.physics_timeouts;
+    if (physics.stalled > 0) ++stats_.stalled_steps;
+    for (int i : ended_) EndMove(i, lattice);
+    if (!ended_.empty()) {
+      // The slowest active robot's decisions.
+      long fewest = -1;
+      for (int i = 0; i < n; ++i)
+        if (comm_.Active(i) && (fewest < 0 || decisions_[i] < fewest))
+          fewest = decisions_[i];
+      if (fewest >= 0) step_ = static_cast<int>(fewest);
+    }
+    if (sim_.clock() >= next_tick_) Tick();
+    if (!ended_.empty() || stopped_ || done()) break;
+  }
+  times_.physics += sim_.physics_seconds() - physics_before;
+  times_.total += Since(t_step);
+}
+
+// Robot i's next move starts now: a stay holds it at its point until the
+// next sensing tick; a failed robot stops where it is.
+void Episode::Apply(int i, const Lattice& lattice) {
+  if (!comm_.Active(i)) {
+    applied_[i] = Move::kStay;
+    sim_.SetWaypoint(i, robot_pos_[i]);
+    sim_.Park(i);
+    return;
+  }
+  bool replaced = false;
+  const Move m = ApplyWorldRule(lattice, robot_idx_[i], moves_[i],
+                                rule_rngs_[i], &replaced);
+  invalid_moves_ += replaced ? 1 : 0;
+  applied_[i] = m;
+  from_[i] = robot_idx_[i];
+  if (m == Move::kStay) {
+    sim_.SetWaypoint(i, lattice.Point(robot_idx_[i]));
+    sim_.Hold(i, next_tick_);
+    return;
+  }
+  robot_idx_[i] = lattice.Next(robot_idx_[i], m);
+  sim_.StartMove(i, lattice.Point(robot_idx_[i]));
+}
+
+// Robot i's move ended (arrived, stalled, timed out, or its stay is over):
+// where it is, the lattice move it made, and it decides next.
+void Episode::EndMove(int i, const Lattice& lattice) {
+  robot_pos_[i] = sim_.RobotPosition(i);
+  robot_heading_[i] = sim_.RobotHeading(i);
+  const int idx = lattice.NearestFree(robot_pos_[i]);
+  robot_idx_[i] = idx >= 0 ? idx : from_[i];
+  made_[i] = MoveBetween(lattice, from_[i], robot_idx_[i]);
+  history_.Record(i, made_[i]);
+  from_[i] = robot_idx_[i];
+  ++decisions_[i];
+  ready_[i] = comm_.Active(i) ? 1 : 0;
+}
+
+// A sensing tick: every robot senses from where it is (mid-move too), the
+// graph and the filter update, success is judged; targets take their next
+// step of dynamics, reached by interpolation before the next tick.
+void Episode::Tick() {
+  const int n = instance_->world.NumRobots();
+  for (int i = 0; i < n; ++i) {
+    robot_pos_[i] = sim_.RobotPosition(i);
+    robot_heading_[i] = sim_.RobotHeading(i);
+  }
+  for (int k = 0; k < num_targets_; ++k)
+    sim_.SetTargetPosition(k, target_pos_[k]);
+  ++tick_;
+  Observe();
+  for (StepObserver* o : observers_)
+    stopped_ |= o->OnStep(*this) == ObserverStatus::kStop;
+  MoveTargets();
+  tick_start_ = sim_.clock();
+  next_tick_ += tick_period_;
+}
+
 void Episode::Observe() {
   auto t0 = Clock::now();
   comm_.Update(step_, robot_pos_);
@@ -227,7 +362,7 @@ void Episode::Observe() {
   // Predict (not at step 0: the prior is the belief at time 0), exchange over
   // this step's graph, fuse with the robot's own measurements.
   try {
-    estimate_.Update(step_ > 0, comm_.AllNeighbors(),
+    estimate_.Update(filter_step() > 0, comm_.AllNeighbors(),
                      instance_->scenario.communication.kappa_self, z_,
                      robot_pos_, comm_.active());
   } catch (const EstimateDiverged& e) {
@@ -237,7 +372,7 @@ void Episode::Observe() {
     throw instance_->scenario.ErrorAt(
         k >= 0 ? "targets.list[" + std::to_string(k) + "].dynamics" : "targets",
         "the estimate of target " + std::to_string(k) + " diverges at step " +
-            std::to_string(step_) + ": " + e.what() +
+            std::to_string(filter_step()) + ": " + e.what() +
             " (the dynamics are unstable and no robot measures the target; "
             "a stable A, or robots that reach it sooner)");
   }

@@ -114,7 +114,8 @@ MissionSummary Summarize(const Episode& e, double wall_s) {
   s.flowtime = e.flowtime();
   s.steps = e.step();
   s.invalid_moves = e.invalid_moves();
-  s.localized_share = static_cast<double>(e.localized_steps()) / (e.step() + 1);
+  s.localized_share =
+      static_cast<double>(e.localized_steps()) / (e.filter_step() + 1);
   s.wall_s = wall_s;
   return s;
 }
@@ -182,7 +183,8 @@ std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
   d["physics"]["robot_seconds"] = {{"driving", use.driving},
                                    {"turning", use.turning},
                                    {"blocked", use.blocked},
-                                   {"arrived", use.arrived}};
+                                   {"arrived", use.arrived},
+                                   {"staying", use.staying}};
   // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
   // handled contact overflow means the physics went wrong somewhere.
   const PhysicsMemoryStats mem = e.sim().memory();
@@ -231,7 +233,8 @@ MissionRunner::MissionRunner(const PreparedMission& mission, std::string prefix,
       std::make_unique<Episode>(mission.instance, mission.policy->Create());
   const int n = episode_->world().NumRobots();
   trace_ = std::make_unique<TraceObserver>(prefix_ + "trace.csv", n,
-                                           TraceHasRobotColumns(trace, n));
+                                           TraceHasRobotColumns(trace, n),
+                                           episode_->async());
   estimate_ = std::make_unique<EstimateObserver>(prefix_ + "estimate.csv");
   progress_ = std::make_unique<ProgressObserver>(std::move(label), progress,
                                                  std::move(progress_extra));

@@ -17,6 +17,7 @@ struct TraceObserver::Impl {
   AtomicFile file;
   std::string row;
   bool robot_columns = true;
+  bool time_column = false;
   explicit Impl(const std::string& path) : file(path) {}
 };
 
@@ -35,10 +36,12 @@ void AppendScientific(double v, std::string* row) {
 }  // namespace
 
 TraceObserver::TraceObserver(const std::string& path, int num_robots,
-                             bool robot_columns)
+                             bool robot_columns, bool time_column)
     : impl_(std::make_unique<Impl>(path)) {
   impl_->robot_columns = robot_columns;
-  std::string header = "step,target,min_det";
+  impl_->time_column = time_column;
+  std::string header =
+      time_column ? "step,time,target,min_det" : "step,target,min_det";
   if (robot_columns)
     for (int i = 0; i < num_robots; ++i) header += ",det_r" + std::to_string(i);
   header += "\n";
@@ -52,7 +55,12 @@ void TraceObserver::Write(const Episode& e) {
   for (int k = 0; k < e.world().NumTargets(); ++k) {
     std::string& row = impl_->row;
     row.clear();
-    row += std::to_string(e.step());
+    row += std::to_string(e.filter_step());
+    if (impl_->time_column) {
+      char t[32];
+      std::snprintf(t, sizeof t, ",%.3f", e.clock_seconds());
+      row += t;
+    }
     row += ',';
     row += std::to_string(k);
     AppendScientific(e.MinDet(k), &row);
@@ -113,7 +121,7 @@ void EstimateObserver::Score(const Episode& e) {
     sum_sq_[k] += error * error;
     sum_nees_[k] += nees;
     if (impl_) {
-      std::fprintf(impl_->file.get(), "%d,%d,%d,%.6e,%.6e\n", e.step(), k,
+      std::fprintf(impl_->file.get(), "%d,%d,%d,%.6e,%.6e\n", e.filter_step(), k,
                    robot, error, nees);
     }
   }
@@ -190,24 +198,26 @@ void MoveObserver::OnStart(const Episode&) {
 ObserverStatus MoveObserver::OnDecision(const Episode&,
                                         const DecisionContext& ctx,
                                         const Decision& decision) {
-  for (std::size_t i = 0; i < decision.wanted.size(); ++i)
-    if (decision.wanted[i] == Move::kStay && ctx.comm->Active(static_cast<int>(i)))
-      ++stays_;
+  for (std::size_t i = 0; i < decision.wanted.size(); ++i) {
+    const int r = static_cast<int>(i);
+    if (decision.ready && !(*decision.ready)[i]) continue;  // on its way
+    if (decision.wanted[i] == Move::kStay && ctx.comm->Active(r)) ++stays_;
+  }
   return ObserverStatus::kContinue;
 }
 
 ObserverStatus MoveObserver::OnStep(const Episode& e) {
-  const std::vector<Move>& made = e.moves_made();
-  for (std::size_t i = 0; i < made.size(); ++i) {
-    if (made[i] == Move::kStay) continue;  // no lattice move this step
-    ++moves_;
-    // The episode's history has recorded this move: a run of r > 0 means
-    // it undid the one before (planning/policy.h, IsReversal).
-    const int run = e.history().reversals(static_cast<int>(i));
-    if (run > 0) ++reversals_;
-    longest_run_ = std::max(longest_run_, run);
-  }
+  Count(e);
   return ObserverStatus::kContinue;
+}
+
+// The episode's history counts every lattice move as it is made (in async,
+// moves end between sensing ticks).
+void MoveObserver::Count(const Episode& e) {
+  const MoveHistory& h = e.history();
+  moves_ = h.moves();
+  reversals_ = h.total_reversals();
+  longest_run_ = h.longest_run();
 }
 
 }  // namespace aia

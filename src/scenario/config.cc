@@ -340,6 +340,12 @@ void Scenario::Validate(const FieldChecker& check) {
   }
   if (workspace.obstacles.generator) CheckGenerator(*this, check);
   physics.Validate(check, robots.model);
+  if (sensor.rate && mission.decisions != Decisions::kAsync) {
+    check.Fail(sensor.rate,
+               "applies to mission.decisions async only (lockstep senses once "
+               "per decision step); remove it, or set mission.decisions: "
+               "async");
+  }
   // Obstacles are checked against positions when the world is built; here
   // only the workspace bounds [0, size] are.
   for (const Vec2& p : robots.start) {

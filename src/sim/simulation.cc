@@ -102,6 +102,10 @@ Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
   robot_stalls_.assign(waypoints_.size(), 0);
   robot_timeouts_.assign(waypoints_.size(), 0);
   turning_.assign(waypoints_.size(), 0);
+  state_.assign(waypoints_.size(), RobotState::kParked);
+  since_.assign(waypoints_.size(), 0);
+  progress_.assign(waypoints_.size(), 0.0);
+  stuck_.assign(waypoints_.size(), 0);
   mj_forward(m_, data_.get());
   IndexRayGeoms();
 }
@@ -171,6 +175,7 @@ void Simulation::StepPhysics() {
     d = data_.get();
   }
   ++mj_steps_;
+  ++clock_;
   contacts_summed_ += d->ncon;
   max_contacts_ = std::max(max_contacts_, d->ncon);
   max_constraints_ = std::max(max_constraints_, d->nefc);
@@ -275,6 +280,11 @@ void Simulation::SetTargetPosition(int k, const Vec2& p) {
   q[1] = p.y();
 }
 
+namespace {
+constexpr double kStallSpeed = 0.01;  // m/s: this slow and not there: blocked
+constexpr double kSettleTime = 0.05;  // s: a robot is never stalled before
+}  // namespace
+
 PhysicsStepStats Simulation::AdvanceToWaypoints(
     const std::function<void(double)>& on_substep) {
   PhysicsStepStats stats;
@@ -284,10 +294,8 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
       1, static_cast<int>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
   const double tol = physics.tolerance;
   const double tol2 = tol * tol;
-  const double stall_speed =
-      0.01;  // m/s: a robot this slow and not there is blocked
-  const double settle_time =
-      0.05;  // s: a robot is never called stalled before this
+  const double stall_speed = kStallSpeed;
+  const double settle_time = kSettleTime;
   // A robot in a sliding contact can creep on for seconds faster than
   // stall_speed: it is stuck too when what it has to go has not shrunk by
   // the driver's EnoughProgress over the last progress window.
@@ -352,6 +360,91 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
       ++robot_timeouts_[i];
     }
   }
+  return stats;
+}
+
+void Simulation::StartMove(int i, const Vec2& p) {
+  waypoints_[i] = p;
+  state_[i] = RobotState::kMoving;
+  since_[i] = clock_;
+  progress_[i] = ToGo(i);
+  stuck_[i] = 0;
+}
+
+void Simulation::Hold(int i, long until) {
+  state_[i] = RobotState::kHolding;
+  since_[i] = until;
+}
+
+void Simulation::Park(int i) {
+  state_[i] = RobotState::kParked;
+}
+
+PhysicsStepStats Simulation::AdvanceMoves(
+    long until, std::vector<int>* ended, std::vector<MoveEnd>* how,
+    const std::function<void(double)>& on_substep) {
+  PhysicsStepStats stats;
+  ended->clear();
+  how->clear();
+  const PhysicsConfig& physics = model_->physics();
+  const double dt = m_->opt.timestep;
+  const long timeout = std::max(
+      1L, static_cast<long>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
+  const double tol2 = physics.tolerance * physics.tolerance;
+  const long settle = static_cast<long>(std::ceil(kSettleTime / dt - 1e-9));
+  const long check_every = std::max(
+      1L, static_cast<long>(std::lround(driver_->progress_window() / dt)));
+  const int n = num_robots();
+  auto end = [&](int i, MoveEnd m) {
+    ended->push_back(i);
+    how->push_back(m);
+    state_[i] = RobotState::kParked;
+  };
+  while (clock_ < until) {
+    StepPhysics();
+    ++stats.substeps;
+    if (on_substep) on_substep(clock_seconds());
+    for (int i = 0; i < n; ++i) {
+      switch (state_[i]) {
+        case RobotState::kParked:
+          time_use_.arrived += dt;
+          break;
+        case RobotState::kHolding:
+          time_use_.staying += dt;
+          if (clock_ >= since_[i]) end(i, MoveEnd::kHeld);
+          break;
+        case RobotState::kMoving: {
+          const long elapsed = clock_ - since_[i];
+          if (elapsed % check_every == 0) {
+            const double d = ToGo(i);
+            stuck_[i] =
+                progress_[i] - d < driver_->EnoughProgress(progress_[i],
+                                                           physics.tolerance);
+            progress_[i] = d;
+          }
+          if ((RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2) {
+            end(i, MoveEnd::kArrived);
+          } else if (elapsed >= settle && (stuck_[i] || Slow(i, kStallSpeed))) {
+            time_use_.blocked += dt;
+            ++stats.stalled;
+            ++robot_stalls_[i];
+            end(i, MoveEnd::kStalled);
+          } else if (elapsed >= timeout) {
+            (turning_[i] ? time_use_.turning : time_use_.driving) += dt;
+            ++stats.late;
+            ++robot_timeouts_[i];
+            end(i, MoveEnd::kTimedOut);
+          } else {
+            (turning_[i] ? time_use_.turning : time_use_.driving) += dt;
+          }
+          break;
+        }
+      }
+    }
+    if (!ended->empty()) break;
+  }
+  stats.timed_out = stats.late > 0;
+  stats.all_arrived = false;
   return stats;
 }
 

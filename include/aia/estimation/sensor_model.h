@@ -3,6 +3,8 @@
 #ifndef AIA_ESTIMATION_SENSOR_MODEL_H_
 #define AIA_ESTIMATION_SENSOR_MODEL_H_
 
+#include <optional>
+
 #include "aia/core/fields.h"
 #include "aia/core/types.h"
 
@@ -15,6 +17,10 @@ struct SensorModel {
   double eta = 0.05;
   double sigma0 = 0.01;
   bool line_of_sight = true;
+  // mission.decisions async only: sensing, the graph and the filter update
+  // this often on the physics clock (Hz); none: the robot model's
+  // DefaultSensorRate.
+  std::optional<double> rate;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -32,6 +38,13 @@ struct SensorModel {
     a->Visit(AIA_FIELD(line_of_sight)
                  .Doc("obstacles block sensing (a ray against the obstacles, "
                       "mj_ray)"));
+    a->Visit(AIA_FIELD(rate)
+                 .In(Between(1e-3, 1e3))
+                 .Doc("Hz, mission.decisions async only: how often robots "
+                      "sense, the graph and the filter update (and targets "
+                      "take a step of their dynamics) on the physics clock; "
+                      "none: 5 for point robots, 0.6 for diff_drive, about "
+                      "one lattice move's time"));
   }
 
   // Noise standard deviation at distance `dist`.

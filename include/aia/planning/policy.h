@@ -5,6 +5,7 @@
 #ifndef AIA_PLANNING_POLICY_H_
 #define AIA_PLANNING_POLICY_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -45,6 +46,8 @@ class MoveHistory {
   void Reset(int num_robots) {
     last_.assign(num_robots, Move::kStay);
     reversals_.assign(num_robots, 0);
+    moves_ = total_reversals_ = 0;
+    longest_run_ = 0;
   }
   // Robot i moved by `applied` (a stay changes nothing).
   void Record(int robot, Move applied) {
@@ -52,14 +55,24 @@ class MoveHistory {
     reversals_[robot] =
         IsReversal(last_[robot], applied) ? reversals_[robot] + 1 : 0;
     last_[robot] = applied;
+    ++moves_;
+    if (reversals_[robot] > 0) ++total_reversals_;
+    longest_run_ = std::max(longest_run_, reversals_[robot]);
   }
   int num_robots() const { return static_cast<int>(last_.size()); }
   Move last(int robot) const { return last_[robot]; }
   int reversals(int robot) const { return reversals_[robot]; }
+  // Over every robot so far: lattice moves, reversals among them, and the
+  // longest run of back-to-back reversals of one robot.
+  long moves() const { return moves_; }
+  long total_reversals() const { return total_reversals_; }
+  int longest_run() const { return longest_run_; }
 
  private:
   std::vector<Move> last_;
   std::vector<int> reversals_;
+  long moves_ = 0, total_reversals_ = 0;
+  int longest_run_ = 0;
 };
 
 // What is known at one decision step, and nothing more: the map (no target
@@ -93,7 +106,18 @@ struct DecisionContext {
   // move and its reversals in a row); may be null for hand-made contexts
   // (then no robot has moved yet).
   const MoveHistory* history = nullptr;
+  // mission.decisions async: the robots whose moves are wanted now (1: its
+  // last move has ended); the others are on their way, and their
+  // robot_lattice entries are the points they are driving to (what a
+  // teammate intends). Null: every robot decides (lockstep). A policy may
+  // skip the others; what it writes for them is ignored.
+  const std::vector<std::uint8_t>* ready = nullptr;
 };
+
+// Whether robot i decides now (DecisionContext::ready).
+inline bool Deciding(const DecisionContext& ctx, int i) {
+  return ctx.ready == nullptr || (*ctx.ready)[i] != 0;
+}
 
 class Policy {
  public:

@@ -56,6 +56,9 @@ struct Decision {
   const std::vector<Move>& wanted;
   const std::vector<Move>& applied;
   PolicyStatus status;
+  // mission.decisions async: the robots that decided (the others' entries
+  // are their moves in progress); null: all of them (lockstep).
+  const std::vector<std::uint8_t>* ready = nullptr;
 };
 
 // What an observer tells the loop after a decision or a step (Drake's
@@ -85,9 +88,11 @@ class StepObserver {
                                     const Decision& /*decision*/) {
     return ObserverStatus::kContinue;
   }
-  // After each physics substep; `elapsed`: simulated seconds into the step.
+  // After each physics substep; `elapsed`: simulated seconds into the step
+  // (async: since the decision).
   virtual void OnSubstep(const Episode& /*episode*/, double /*elapsed*/) {}
-  // After each step's sensing, fusion and judging.
+  // After each step's sensing, fusion and judging (async: after each
+  // sensing tick, Episode::filter_step).
   virtual ObserverStatus OnStep(const Episode& /*episode*/) {
     return ObserverStatus::kContinue;
   }
@@ -126,7 +131,17 @@ class Episode {
   // Run() ended early on Ctrl-C (core/interrupt.h), steps left undone.
   bool interrupted() const { return interrupted_; }
 
+  // Decision steps: in lockstep the team's; in async the fewest decisions
+  // any active robot has completed (the slowest robot's).
   int step() const { return step_; }
+  bool async() const { return mission_.decisions == Decisions::kAsync; }
+  // The filter's steps (sensing, exchange, fusion), which the trace counts:
+  // step() in lockstep, sensing ticks in async.
+  int filter_step() const { return async() ? tick_ : step_; }
+  // The simulated clock, seconds.
+  double clock_seconds() const { return sim_.clock_seconds(); }
+  // Moves (a stay included) each robot has completed.
+  const std::vector<long>& decisions() const { return decisions_; }
   bool success() const { return flowtime_ >= 0; }
   int flowtime() const { return flowtime_; }  // -1 until success
   // Simulated seconds of the mission: until success, else so far.
@@ -192,6 +207,12 @@ class Episode {
  private:
   void Observe();  // sense, exchange, fuse, judge (the second half of a step)
   void MoveTargets();
+  // mission.decisions async: one round (the ready robots decide, physics
+  // runs until a robot's move ends, sensing ticks on the way) and one tick.
+  void StepAsync();
+  void Tick();
+  void Apply(int i, const Lattice& lattice);
+  void EndMove(int i, const Lattice& lattice);
 
   std::shared_ptr<const Instance> instance_;
   MissionConfig mission_;
@@ -221,6 +242,16 @@ class Episode {
   bool all_localized_ = false;
   int localized_steps_ = 0;
   long invalid_moves_ = 0;
+  // Async: who decides next, where each move started, moves completed, the
+  // moves that just ended, and the sensing clock (substeps).
+  std::vector<std::uint8_t> ready_;
+  std::vector<int> from_;
+  std::vector<long> decisions_;
+  std::vector<int> ended_;
+  std::vector<Simulation::MoveEnd> how_;
+  int tick_ = 0;
+  long tick_period_ = 1, next_tick_ = 0, tick_start_ = 0;
+  bool targets_drawn_ = false;
   PhaseTimes times_;
   EpisodeStats stats_;
 };

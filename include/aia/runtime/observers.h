@@ -13,15 +13,17 @@
 
 namespace aia {
 
-// Streams trace.csv, atomically (committed at the end): one row per step and
-// target: step, target, min over active robots of det Sigma, and each
-// robot's det Sigma.
+// Streams trace.csv, atomically (committed at the end): one row per filter
+// step and target: step, target, min over active robots of det Sigma, and
+// each robot's det Sigma.
 class TraceObserver : public StepObserver {
  public:
   // With robot_columns, each row also holds every robot's det Sigma_i^k
-  // (det_r0, det_r1, ...): N x M numbers a step.
+  // (det_r0, det_r1, ...): N x M numbers a step. With time_column (async
+  // decisions, whose sensing ticks are not decision steps) the simulated
+  // clock in seconds follows the step: step,time,target,...
   TraceObserver(const std::string& path, int num_robots,
-                bool robot_columns = true);
+                bool robot_columns = true, bool time_column = false);
   ~TraceObserver() override;
   void OnStart(const Episode& e) override { Write(e); }
   ObserverStatus OnStep(const Episode& e) override {
@@ -81,6 +83,7 @@ class MoveObserver : public StepObserver {
   ObserverStatus OnDecision(const Episode& e, const DecisionContext& ctx,
                             const Decision& decision) override;
   ObserverStatus OnStep(const Episode& e) override;
+  void OnEnd(const Episode& e) override { Count(e); }
 
   long moves() const { return moves_; }
   long reversals() const { return reversals_; }
@@ -88,6 +91,7 @@ class MoveObserver : public StepObserver {
   int longest_reversal_run() const { return longest_run_; }
 
  private:
+  void Count(const Episode& e);
   long moves_ = 0, reversals_ = 0, stays_ = 0;
   int longest_run_ = 0;
 };

@@ -422,10 +422,25 @@ struct TargetsConfig {
   void Validate(const FieldChecker& check);
 };
 
+// When robots decide (SPEC 14).
+enum class Decisions {
+  // The paper's: every robot decides at once, and a step ends when the
+  // team's slowest robot has arrived, stalled or timed out.
+  kLockstep,
+  // Each robot decides when its own move ends (arrived, stalled or timed
+  // out) while the others keep moving; sensing, the graph and the filter
+  // update on the physics clock at sensor.rate.
+  kAsync,
+};
+constexpr std::array<EnumName<Decisions>, 2> EnumNames(Decisions) {
+  return {{{Decisions::kLockstep, "lockstep"}, {Decisions::kAsync, "async"}}};
+}
+
 struct MissionConfig {
   double eps = 0.1;
   int max_steps = 400;
   bool stop_at_success = true;
+  Decisions decisions = Decisions::kLockstep;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -440,6 +455,11 @@ struct MissionConfig {
         AIA_FIELD(stop_at_success)
             .Doc("false: a tracking mission runs its whole horizon, scored by "
                  "localized_share"));
+    a->Visit(AIA_FIELD(decisions).Doc(
+        "lockstep (the paper's: the team decides together, a step lasts "
+        "until its slowest robot is done) or async (each robot decides when "
+        "its own move ends; sensing at sensor.rate; steps count the slowest "
+        "robot's decisions)"));
   }
 };
 
@@ -487,6 +507,13 @@ inline constexpr double kAutoNewtonBytes = 256.0 * (1 << 20);
 // and accelerates, so its steps take longer than a point robot's.
 inline constexpr double kPointStepTimeout = 1.0;
 inline constexpr double kDiffDriveStepTimeout = 4.0;
+
+// sensor.rate (Hz, async decisions) when the scenario gives none: about one
+// tick per lattice move (a point robot's takes 0.2 s, a wheeled one's
+// 1.5-1.8 s), so that targets move as far per robot move as in lockstep.
+inline constexpr double DefaultSensorRate(RobotModel model) {
+  return model == RobotModel::kDiffDrive ? 0.6 : 5.0;
+}
 
 struct PhysicsConfig {
   double timestep = 0.005;

@@ -166,6 +166,28 @@ class Simulation {
   // kMaxPhysicsBytes.
   void StepPhysics();
 
+  // Asynchronous decisions (mission.decisions: async): each robot's move
+  // runs on its own clock. StartMove sends robot i to `p` from now (its
+  // stall and timeout clocks start now); Hold keeps it at its waypoint (a
+  // stay) until the simulation clock reaches `until` substeps; Park keeps it
+  // there until its next move (a failed robot, for good).
+  void StartMove(int i, const Vec2& p);
+  void Hold(int i, long until);
+  void Park(int i);
+  // Runs mj_step until some robot's move or hold ends, or until the clock
+  // reaches `until` substeps. Robots whose moves ended go to `ended`
+  // (ascending), each with how: arrived within the tolerance, stalled
+  // (blocked, as AdvanceToWaypoints tells it, on the robot's own clock) or
+  // timed out; a robot then holds its place until it is given a new move.
+  // `on_substep` as in AdvanceToWaypoints, with the clock's seconds.
+  enum class MoveEnd : std::uint8_t { kArrived, kStalled, kTimedOut, kHeld };
+  PhysicsStepStats AdvanceMoves(long until, std::vector<int>* ended,
+                                std::vector<MoveEnd>* how,
+                                const std::function<void(double)>& on_substep);
+  // mj_step calls so far, and the clock in seconds (substeps x timestep).
+  long clock() const { return clock_; }
+  double clock_seconds() const { return clock_ * m_->opt.timestep; }
+
   // Per robot: decision steps that ended with it stalled short of its
   // waypoint, and those whose timeout found it still on its way.
   const std::vector<long>& robot_stalls() const { return robot_stalls_; }
@@ -174,8 +196,12 @@ class Simulation {
   // robots and the decision steps: on their way (driving; turning in place,
   // wheeled robots only), blocked (stalled short of the waypoint: no
   // progress, or slower than 1 cm/s) or arrived (waiting for the others).
+  // With asynchronous decisions a robot never waits for the others: its
+  // time is driving, turning, blocked, or staying (a stay the policy chose,
+  // held until the next sensing tick); arrived is then only failed robots'.
   struct TimeUse {
     double driving = 0.0, turning = 0.0, blocked = 0.0, arrived = 0.0;
+    double staying = 0.0;
   };
   const TimeUse& time_use() const { return time_use_; }
 
@@ -208,6 +234,12 @@ class Simulation {
   std::vector<std::uint8_t> stuck_;
   std::vector<long> robot_stalls_, robot_timeouts_;
   std::vector<std::uint8_t> turning_;  // per robot, its controller's last call
+  // Asynchronous moves: each robot's state, the substep its move started
+  // (or its hold ends), and the simulation clock in substeps.
+  enum class RobotState : std::uint8_t { kParked, kMoving, kHolding };
+  std::vector<RobotState> state_;
+  std::vector<long> since_;
+  long clock_ = 0;
   TimeUse time_use_;
   // RayClear's index: the geoms mj_ray would test (static primitives of the
   // obstacle group, not invisible), bucketed by their bounding circles.
