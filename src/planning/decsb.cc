@@ -47,6 +47,7 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
       plans_[i].clear();
       continue;
     }
+    if (!Deciding(ctx, i)) continue;  // on its way, on its plan
     // Neighbours' announced positions, evaluated on robot i's own means.
     extra_.assign(m, 0.0);
     for (int j : ctx.comm->Neighbors(i)) {

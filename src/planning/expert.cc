@@ -27,7 +27,7 @@ ExpertPolicy::ExpertPolicy(const ExpertParams& params) : params_(params) {}
 void ExpertPolicy::Reset(const Map&, int, int, std::uint64_t seed) {
   rng_ = Rng(seed, "policy.expert");
   plan_ = SamplingPlan{};
-  index_ = 0;
+  at_.clear();
   replans_ = 0;
   team_best_ = false;
   missed_.clear();
@@ -68,18 +68,22 @@ void ExpertPolicy::RecordMisses(const DecisionContext& ctx) {
 }
 
 bool ExpertPolicy::NeedsReplan(const DecisionContext& ctx) const {
-  if (plan_.configs.empty() ||
-      index_ + 1 >= static_cast<int>(plan_.configs.size()))
-    return true;
+  const int size = static_cast<int>(plan_.configs.size());
+  if (size == 0) return true;
+  const int n = static_cast<int>(ctx.robot_lattice->size());
+  for (int i = 0; i < n; ++i)
+    if (Deciding(ctx, i) && at_[i] + 1 >= size) return true;  // plan done
   if (!ctx.beliefs->layout().all_static()) return true;  // targets move
-  if (*ctx.robot_lattice != plan_.configs[index_])
-    return true;  // physics disagreed
+  for (int i = 0; i < n; ++i)
+    if ((*ctx.robot_lattice)[i] != plan_.configs[at_[i]][i])
+      return true;  // physics disagreed
   if (team_best_) return false;
   // A planned measurement that did not happen: the centralized belief is far
-  // less certain than the plan predicted for this step.
+  // less certain than the plan predicted for the team's least advanced robot.
+  const int at = *std::min_element(at_.begin(), at_.end());
   for (int k = 0; k < ctx.central->layout().num_targets(); ++k) {
     const double actual = ctx.central->DetCovariance(0, k);
-    if (actual > ctx.eps && actual > 2.0 * plan_.det[index_][k]) return true;
+    if (actual > ctx.eps && actual > 2.0 * plan_.det[at][k]) return true;
   }
   return false;
 }
@@ -87,6 +91,8 @@ bool ExpertPolicy::NeedsReplan(const DecisionContext& ctx) const {
 PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
                                   std::vector<Move>* moves) {
   const Lattice& lattice = ctx.map->lattice();
+  const int n = static_cast<int>(moves->size());
+  at_.resize(n, 0);
   RecordMisses(ctx);
   if (NeedsReplan(ctx)) {
     SamplingProblem problem = ExpertProblem(ctx);
@@ -107,20 +113,25 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
       TeamBestBelief(b, best_rows_, best_belief_.get());
       problem.belief = best_belief_.get();
     }
+    // Robots on their way (async decisions) plan from where they drive to.
     plan_ = tree_.Solve(problem, params_, rng_);
-    index_ = 0;
+    std::fill(at_.begin(), at_.end(), 0);
     ++replans_;
   }
   PolicyStatus status = plan_.status;
-  const bool has_next = index_ + 1 < static_cast<int>(plan_.configs.size());
-  last_useful_.assign(moves->size(), 0);
-  for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
+  const int size = static_cast<int>(plan_.configs.size());
+  last_useful_.assign(n, 0);
+  // Each deciding robot takes the next step of its own path in the plan
+  // (in lockstep the whole team, one configuration after the other).
+  for (int i = 0; i < n; ++i) {
+    if (!Deciding(ctx, i)) continue;
+    const int at = at_[i];
+    const bool has_next = at + 1 < size;
     Move m = Move::kStay;
     if (has_next) {
-      m = MoveBetween(lattice, plan_.configs[index_][i],
-                      plan_.configs[index_ + 1][i]);
+      m = MoveBetween(lattice, plan_.configs[at][i], plan_.configs[at + 1][i]);
       last_useful_[i] = i < static_cast<int>(plan_.useful_until.size()) &&
-                        index_ + 1 <= plan_.useful_until[i];
+                        at + 1 <= plan_.useful_until[i];
     }
     if (m == Move::kStay && ctx.comm->Active(i)) {
       // Nothing planned for this robot (depth-0 plan or no valid move): any
@@ -128,8 +139,8 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
       m = RandomValidMove(lattice, (*ctx.robot_lattice)[i], rng_);
     }
     (*moves)[i] = m;
+    if (has_next) ++at_[i];
   }
-  if (has_next) ++index_;
   return status;
 }
 

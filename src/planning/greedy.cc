@@ -24,7 +24,7 @@ PolicyStatus GreedyPolicy::Decide(const DecisionContext& ctx,
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
     (*moves)[i] = Move::kStay;
-    if (!ctx.comm->Active(i)) continue;
+    if (!ctx.comm->Active(i) || !Deciding(ctx, i)) continue;
     const int p = (*ctx.robot_lattice)[i];
     const Vec2 here = lattice.Point(p);
     for (int k = 0; k < num_targets; ++k)

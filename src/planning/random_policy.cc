@@ -13,6 +13,10 @@ PolicyStatus RandomPolicy::Decide(const DecisionContext& ctx,
   const Lattice& lattice = ctx.map->lattice();
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < static_cast<int>(moves->size()); ++i) {
+    if (!Deciding(ctx, i)) {  // on its way (async decisions)
+      (*moves)[i] = Move::kStay;
+      continue;
+    }
     (*moves)[i] = RandomValidMove(lattice, (*ctx.robot_lattice)[i], rngs_[i]);
     if ((*moves)[i] == Move::kStay && ctx.comm->Active(i))
       status = PolicyStatus::kNoValidMove;

@@ -87,6 +87,17 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
     tick_period_ = std::max(
         1L, std::lround(1.0 / (rate * sim_.model()->opt.timestep)));
     next_tick_ = tick_period_;
+    reserve_ = mission_.avoidance.value_or(Avoidance::kReserve) ==
+               Avoidance::kReserve;
+  }
+  if (reserve_) {
+    const double release = 2.0 * scenario.robots.radius;
+    release2_ = release * release;
+    held_.assign(world.map.lattice().size(), 0);
+    held_from_ = robot_idx_;
+    for (int p : robot_idx_) ++held_[p];
+    held_to_.assign(n, -1);
+    pending_.assign(n, -1);
   }
   Observe();  // step 0: measurements at the starts, fused with the prior
   times_ = PhaseTimes{};  // phase times are those of the decision steps
@@ -270,6 +281,7 @@ void Episode::StepAsync() {
           for (int k = 0; k < num_targets_; ++k)
             sim_.SetTargetPosition(
                 k, target_prev_[k] + f * (target_pos_[k] - target_prev_[k]));
+          if (reserve_) Reservations(lattice);
           for (StepObserver* o : observers_)
             o->OnSubstep(*this, seconds - round_start);
         });
@@ -313,8 +325,40 @@ void Episode::Apply(int i, const Lattice& lattice) {
     sim_.Hold(i, next_tick_);
     return;
   }
-  robot_idx_[i] = lattice.Next(robot_idx_[i], m);
-  sim_.StartMove(i, lattice.Point(robot_idx_[i]));
+  const int to = lattice.Next(robot_idx_[i], m);
+  if (reserve_ && held_[to] > 0) {  // taken: wait at its point for it
+    pending_[i] = to;
+    sim_.SetWaypoint(i, lattice.Point(robot_idx_[i]));
+    sim_.Hold(i, next_tick_, /*yielding=*/true);
+    return;
+  }
+  StartMove(i, to, lattice);
+}
+
+void Episode::StartMove(int i, int to, const Lattice& lattice) {
+  robot_idx_[i] = to;
+  if (reserve_) {
+    ++held_[to];
+    held_to_[i] = to;
+    pending_[i] = -1;
+  }
+  sim_.StartMove(i, lattice.Point(to));
+}
+
+void Episode::Reservations(const Lattice& lattice) {
+  const int n = static_cast<int>(held_to_.size());
+  for (int i = 0; i < n; ++i) {
+    const int from = held_from_[i];
+    if (held_to_[i] >= 0 && from >= 0 &&
+        (sim_.RobotPosition(i) - lattice.Point(from)).squaredNorm() >=
+            release2_) {
+      --held_[from];
+      held_from_[i] = -1;
+    }
+  }
+  for (int i = 0; i < n; ++i)
+    if (pending_[i] >= 0 && held_[pending_[i]] == 0)
+      StartMove(i, pending_[i], lattice);
 }
 
 // Robot i's move ended (arrived, stalled, timed out, or its stay is over):
@@ -326,6 +370,13 @@ void Episode::EndMove(int i, const Lattice& lattice) {
   robot_idx_[i] = idx >= 0 ? idx : from_[i];
   made_[i] = MoveBetween(lattice, from_[i], robot_idx_[i]);
   history_.Record(i, made_[i]);
+  if (reserve_) {
+    if (held_from_[i] >= 0) --held_[held_from_[i]];
+    if (held_to_[i] >= 0) --held_[held_to_[i]];
+    held_from_[i] = robot_idx_[i];
+    ++held_[robot_idx_[i]];
+    held_to_[i] = pending_[i] = -1;
+  }
   from_[i] = robot_idx_[i];
   ++decisions_[i];
   ready_[i] = comm_.Active(i) ? 1 : 0;

@@ -184,7 +184,8 @@ std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
                                    {"turning", use.turning},
                                    {"blocked", use.blocked},
                                    {"arrived", use.arrived},
-                                   {"staying", use.staying}};
+                                   {"staying", use.staying},
+                                   {"yielding", use.yielding}};
   // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
   // handled contact overflow means the physics went wrong somewhere.
   const PhysicsMemoryStats mem = e.sim().memory();

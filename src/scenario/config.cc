@@ -346,6 +346,11 @@ void Scenario::Validate(const FieldChecker& check) {
                "per decision step); remove it, or set mission.decisions: "
                "async");
   }
+  if (mission.avoidance && mission.decisions != Decisions::kAsync) {
+    check.Fail(mission.avoidance,
+               "applies to mission.decisions async only (in lockstep robots "
+               "move together); remove it, or set mission.decisions: async");
+  }
   // Obstacles are checked against positions when the world is built; here
   // only the workspace bounds [0, size] are.
   for (const Vec2& p : robots.start) {

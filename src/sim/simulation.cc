@@ -371,8 +371,8 @@ void Simulation::StartMove(int i, const Vec2& p) {
   stuck_[i] = 0;
 }
 
-void Simulation::Hold(int i, long until) {
-  state_[i] = RobotState::kHolding;
+void Simulation::Hold(int i, long until, bool yielding) {
+  state_[i] = yielding ? RobotState::kYielding : RobotState::kHolding;
   since_[i] = until;
 }
 
@@ -410,12 +410,14 @@ PhysicsStepStats Simulation::AdvanceMoves(
           time_use_.arrived += dt;
           break;
         case RobotState::kHolding:
-          time_use_.staying += dt;
+        case RobotState::kYielding:
+          (state_[i] == RobotState::kHolding ? time_use_.staying
+                                             : time_use_.yielding) += dt;
           if (clock_ >= since_[i]) end(i, MoveEnd::kHeld);
           break;
         case RobotState::kMoving: {
           const long elapsed = clock_ - since_[i];
-          if (elapsed % check_every == 0) {
+          if (elapsed > 0 && elapsed % check_every == 0) {
             const double d = ToGo(i);
             stuck_[i] =
                 progress_[i] - d < driver_->EnoughProgress(progress_[i],

@@ -62,7 +62,9 @@ class ExpertPolicy : public NamedPolicy<ExpertPolicy> {
   SamplingTree tree_;
   Rng rng_;
   SamplingPlan plan_;
-  int index_ = 0;           // position of the team in plan_.configs
+  // Per robot, the configuration of plan_ it is at or driving to (in
+  // lockstep the same for every robot).
+  std::vector<int> at_;
   bool team_best_ = false;  // plan_ was made on the team's best local beliefs
   int replans_ = 0;
   std::vector<int> best_rows_;

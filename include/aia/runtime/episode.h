@@ -212,7 +212,11 @@ class Episode {
   void StepAsync();
   void Tick();
   void Apply(int i, const Lattice& lattice);
+  void StartMove(int i, int to, const Lattice& lattice);
   void EndMove(int i, const Lattice& lattice);
+  // mission.avoidance reserve, after each substep: points let go, waiting
+  // robots started.
+  void Reservations(const Lattice& lattice);
 
   std::shared_ptr<const Instance> instance_;
   MissionConfig mission_;
@@ -252,6 +256,13 @@ class Episode {
   int tick_ = 0;
   long tick_period_ = 1, next_tick_ = 0, tick_start_ = 0;
   bool targets_drawn_ = false;
+  // mission.avoidance reserve: robots holding each lattice point; per robot
+  // the point it left (until it is 2 radii away), the point it drives to,
+  // and the point it waits for (-1: none).
+  bool reserve_ = false;
+  double release2_ = 0.0;
+  std::vector<int> held_;
+  std::vector<int> held_from_, held_to_, pending_;
   PhaseTimes times_;
   EpisodeStats stats_;
 };

@@ -436,11 +436,27 @@ constexpr std::array<EnumName<Decisions>, 2> EnumNames(Decisions) {
   return {{{Decisions::kLockstep, "lockstep"}, {Decisions::kAsync, "async"}}};
 }
 
+// How robots deciding asynchronously keep out of each other's way.
+enum class Avoidance {
+  // None: a robot drives to its next point whoever is there.
+  kNone,
+  // Each robot holds its lattice point and the point it drives to; a robot
+  // whose next point is held waits at its own (yielding) until that point
+  // is free, or until the next sensing tick, when it decides again. A
+  // point is let go once its robot is 2 radii away from it.
+  kReserve,
+};
+constexpr std::array<EnumName<Avoidance>, 2> EnumNames(Avoidance) {
+  return {{{Avoidance::kNone, "none"}, {Avoidance::kReserve, "reserve"}}};
+}
+
 struct MissionConfig {
   double eps = 0.1;
   int max_steps = 400;
   bool stop_at_success = true;
   Decisions decisions = Decisions::kLockstep;
+  // none given: reserve (async only).
+  std::optional<Avoidance> avoidance;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -460,6 +476,10 @@ struct MissionConfig {
         "until its slowest robot is done) or async (each robot decides when "
         "its own move ends; sensing at sensor.rate; steps count the slowest "
         "robot's decisions)"));
+    a->Visit(AIA_FIELD(avoidance).Doc(
+        "async only: reserve (a robot waits while its next lattice point is "
+        "held by another robot, there or driving to it, deciding again at "
+        "the next sensing tick if it stays held) or none"));
   }
 };
 

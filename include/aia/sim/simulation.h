@@ -172,7 +172,9 @@ class Simulation {
   // stay) until the simulation clock reaches `until` substeps; Park keeps it
   // there until its next move (a failed robot, for good).
   void StartMove(int i, const Vec2& p);
-  void Hold(int i, long until);
+  // `yielding`: it waits for a point another robot holds (its time counts
+  // as yielding, not staying).
+  void Hold(int i, long until, bool yielding = false);
   void Park(int i);
   // Runs mj_step until some robot's move or hold ends, or until the clock
   // reaches `until` substeps. Robots whose moves ended go to `ended`
@@ -201,7 +203,7 @@ class Simulation {
   // held until the next sensing tick); arrived is then only failed robots'.
   struct TimeUse {
     double driving = 0.0, turning = 0.0, blocked = 0.0, arrived = 0.0;
-    double staying = 0.0;
+    double staying = 0.0, yielding = 0.0;
   };
   const TimeUse& time_use() const { return time_use_; }
 
@@ -236,7 +238,12 @@ class Simulation {
   std::vector<std::uint8_t> turning_;  // per robot, its controller's last call
   // Asynchronous moves: each robot's state, the substep its move started
   // (or its hold ends), and the simulation clock in substeps.
-  enum class RobotState : std::uint8_t { kParked, kMoving, kHolding };
+  enum class RobotState : std::uint8_t {
+    kParked,
+    kMoving,
+    kHolding,
+    kYielding
+  };
   std::vector<RobotState> state_;
   std::vector<long> since_;
   long clock_ = 0;
