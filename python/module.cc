@@ -543,6 +543,18 @@ class Mission {
     return out;
   }
 
+  // (N,): which robots' moves the next step uses: all of them in lockstep;
+  // with mission.decisions async those whose last move has ended (the
+  // others drive on, whatever step() is given for them).
+  py::array_t<bool> Ready() const {
+    const DecisionContext ctx = Context();
+    const int n = num_robots();
+    auto out = Array<bool>({n});
+    auto v = out.mutable_unchecked<1>();
+    for (int i = 0; i < n; ++i) v(i) = Deciding(ctx, i);
+    return out;
+  }
+
   // (N, 4): which of each robot's moves stay on the lattice.
   py::array_t<bool> ValidMoves() const {
     const DecisionContext ctx = Context();
@@ -1260,6 +1272,11 @@ void BindMission(py::module_& m) {
       .def_property_readonly("flowtime", &Mission::flowtime,
                              "steps to success; -1 until then")
       .def_property_readonly("max_steps", &Mission::max_steps)
+      .def_property_readonly(
+          "ready", &Mission::Ready,
+          "(N,) bool: the robots whose moves the next step uses (all in "
+          "lockstep; with mission.decisions async, those whose move has "
+          "ended)")
       .def_property_readonly("seed", &Mission::seed)
       .def_property_readonly("owned", &Mission::owned,
                              "False for a view inside aia.evaluate");

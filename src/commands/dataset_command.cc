@@ -236,6 +236,11 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
         ov.path == "targets.count" || ov.path == "policy.name")
       throw InputError("command line", 0, "--set",
                        ov.path + " is given by --first-seed, --size, --policy");
+    if (ov.path == "mission.decisions" && ov.value != "lockstep")
+      throw InputError("command line", 0, "--set",
+                       "mission.decisions " + ov.value +
+                           ": datasets record lockstep decisions (the "
+                           "expert labels the whole team's step)");
     spec.overrides.push_back(ov);
   }
   if (!o.model.empty())

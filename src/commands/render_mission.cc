@@ -70,6 +70,7 @@ void EpisodePicture::AfterStep(const Episode& e) {
 
 const cv::Mat& EpisodePicture::Render(const Episode& e) {
   const Simulation& sim = e.sim();
+  overlay_.seconds = e.clock_seconds();
   overlay_.robots.resize(sim.num_robots());
   for (int i = 0; i < sim.num_robots(); ++i)
     overlay_.robots[i] = sim.RobotPosition(i);

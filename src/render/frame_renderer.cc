@@ -675,8 +675,9 @@ void FrameRenderer::DrawHeadsUp(const FrameOverlay& o, cv::Mat* image) const {
                 cv::Scalar(32, 32, 32), cv::FILLED);
   char text[256];
   int len = std::snprintf(
-      text, sizeof(text), "step %d/%d   localized %d/%zu   %s   seed %llu",
-      o.step, o.max_steps, o.localized, o.targets.size(), o.policy.c_str(),
+      text, sizeof(text),
+      "step %d/%d   %.1f s   localized %d/%zu   %s   seed %llu", o.step,
+      o.max_steps, o.seconds, o.localized, o.targets.size(), o.policy.c_str(),
       static_cast<unsigned long long>(o.seed));
   if (o.heatmap_robot >= 0 && len > 0 && len < static_cast<int>(sizeof(text)))
     std::snprintf(text + len, sizeof(text) - len, "   heatmap: robot %d",

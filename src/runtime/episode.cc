@@ -166,6 +166,7 @@ DecisionContext Episode::Context() const {
   ctx.central = &estimate_.central();
   ctx.log_det_prior = &estimate_.log_det_prior();
   ctx.history = &history_;
+  if (async()) ctx.ready = &ready_;
   return ctx;
 }
 
@@ -249,8 +250,7 @@ void Episode::StepAsync() {
   // The robots whose moves have ended decide; the others drive on, their
   // destinations in the context as what they intend.
   auto t0 = Clock::now();
-  DecisionContext ctx = Context();
-  ctx.ready = &ready_;
+  const DecisionContext ctx = Context();
   DecisionContext given = ctx;
   if (!policy_->centralized()) given.central = nullptr;
   const PolicyStatus status = policy_->Decide(given, &moves_);

@@ -93,6 +93,24 @@ TEST(EvalTest, SummaryCountsFailuresAsThreeFStar) {
       << csv;
 }
 
+TEST(EvalTest, AsyncRunsDoNotDependOnThreads) {
+  const std::string a = testing::MakeTempDir("aia_eval_"),
+                    b = testing::MakeTempDir("aia_eval_");
+  auto eval = [](const std::string& dir, const std::string& threads) {
+    return RunAia({"eval", "--sizes", "3x3", "--seeds", "3", "--seed-base",
+                   "11", "--policies", "greedy,expert", "--set",
+                   "mission.decisions=async", "--set",
+                   "robots.model=diff_drive", "--out", dir, "--threads",
+                   threads, "--quiet"});
+  };
+  const auto one = eval(a, "1");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  ASSERT_EQ(eval(b, "2").exit_code, 0);
+  EXPECT_EQ(WithoutWall(ReadFile(a + "/runs.csv")),
+            WithoutWall(ReadFile(b + "/runs.csv")));
+  EXPECT_EQ(ReadRuns(a + "/runs.csv").size(), 6u);
+}
+
 TEST(EvalTest, RunsResumeAndDoNotDependOnThreads) {
   const std::string a = testing::MakeTempDir("aia_eval_"),
                     b = testing::MakeTempDir("aia_eval_");

@@ -1,0 +1,184 @@
+// mission.decisions: async (SPEC 14): each robot decides when its own move
+// ends, sensing ticks on the physics clock, and reserved lattice points keep
+// robots apart.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "aia/runtime/episode.h"
+#include "aia/runtime/mission.h"
+#include "aia/runtime/observers.h"
+#include "support/test_support.h"
+
+namespace aia {
+namespace {
+
+using testing::ScenarioFromYaml;
+
+// A small open mission every policy must finish, deciding asynchronously.
+const char* kSmallAsync =
+    "seed: 1\nworkspace: {size: [8, 8], obstacles: {random: {count: 4}}}\n"
+    "robots: {count: 3}\ntargets: {count: 3}\n"
+    "mission: {max_steps: 400, decisions: async}\n";
+
+// A crowd: many robots on few lattice points, so that they meet.
+std::string Crowd(const std::string& model, const std::string& avoidance) {
+  return "seed: 4\nworkspace: {size: [5, 5], obstacles: {random: {count: "
+         "2}}}\nrobots: {count: 24, model: " +
+         model + "}\ntargets: {count: 6}\nmission: {max_steps: 12, "
+                 "stop_at_success: false, decisions: async, avoidance: " +
+         avoidance + "}\npolicy: {name: random}\n";
+}
+
+class AsyncContractTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(AsyncContractTest, ReachesSuccessOnASmallScenario) {
+  Scenario s = ScenarioFromYaml(kSmallAsync);
+  s.policy.name = GetParam();
+  auto e = MakeEpisode(s, AllPolicies());
+  while (!e->done()) {
+    e->Step();
+    for (int idx : e->robot_lattice())
+      EXPECT_TRUE(e->world().map.lattice().Free(idx));
+  }
+  EXPECT_TRUE(e->success()) << GetParam() << " after " << e->step() << " steps";
+  EXPECT_EQ(e->flowtime(), e->step());
+  for (int k = 0; k < e->world().NumTargets(); ++k)
+    EXPECT_LE(e->MinDet(k), s.mission.eps);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllPolicies, AsyncContractTest,
+                         ::testing::ValuesIn(AllPolicies().Names()),
+                         [](const auto& info) { return info.param; });
+
+// What the rounds looked like: who decided, and the clock at each tick.
+class RoundObserver : public StepObserver {
+ public:
+  ObserverStatus OnDecision(const Episode& e, const DecisionContext& ctx,
+                            const Decision& d) override {
+    EXPECT_NE(d.ready, nullptr);
+    EXPECT_EQ(ctx.ready, d.ready);
+    int ready = 0;
+    for (std::uint8_t r : *d.ready) ready += r;
+    if (ready < e.world().NumRobots()) ++partial_rounds;
+    ++rounds;
+    return ObserverStatus::kContinue;
+  }
+  ObserverStatus OnStep(const Episode& e) override {
+    ++ticks;
+    EXPECT_EQ(e.filter_step(), ticks);
+    tick_seconds.push_back(e.clock_seconds());
+    return ObserverStatus::kContinue;
+  }
+  int rounds = 0, partial_rounds = 0, ticks = 0;
+  std::vector<double> tick_seconds;
+};
+
+TEST(AsyncTest, WheeledRobotsDecideAloneAndNeverWait) {
+  Scenario s = ScenarioFromYaml(
+      "seed: 3\nworkspace: {size: [10, 10], obstacles: {random: {count: "
+      "6}}}\nrobots: {count: 4, model: diff_drive}\ntargets: {count: 4}\n"
+      "mission: {max_steps: 20, stop_at_success: false, decisions: async}\n"
+      "sensor: {rate: 2}\npolicy: {name: greedy}\n");
+  auto e = MakeEpisode(s, AllPolicies());
+  RoundObserver rounds;
+  e->AddObserver(&rounds);
+  e->Run();
+  // Robots turn and drive for different times: most rounds are some robots'.
+  EXPECT_GT(rounds.partial_rounds, rounds.rounds / 2);
+  // Steps are the slowest robot's decisions; the others made more.
+  const std::vector<long>& made = e->decisions();
+  EXPECT_EQ(*std::min_element(made.begin(), made.end()), e->step());
+  EXPECT_EQ(e->step(), 20);
+  EXPECT_GT(*std::max_element(made.begin(), made.end()), e->step())
+      << made[0] << " " << made[1] << " " << made[2] << " " << made[3];
+  // Nobody waits for anybody: no time is spent arrived (no robot failed).
+  EXPECT_EQ(e->sim().time_use().arrived, 0.0);
+  EXPECT_GT(e->sim().time_use().driving, 0.0);
+  // Ticks at 2 Hz on the physics clock: 0.5 s, 1.0 s, ...
+  ASSERT_GT(rounds.ticks, 4);
+  for (int t = 0; t < rounds.ticks; ++t)
+    EXPECT_NEAR(rounds.tick_seconds[t], 0.5 * (t + 1), 1e-9);
+  EXPECT_EQ(rounds.ticks, static_cast<int>(e->clock_seconds() / 0.5 + 1e-9));
+}
+
+TEST(AsyncTest, TheSameRunTwice) {
+  auto run = [] {
+    Scenario s = ScenarioFromYaml(Crowd("diff_drive", "reserve"));
+    s.policy.name = "greedy";
+    s.robots.count = 8;
+    auto e = MakeEpisode(s, AllPolicies());
+    e->Run();
+    std::vector<double> out = {static_cast<double>(e->step()),
+                               e->clock_seconds()};
+    for (const Vec2& p : e->robot_positions()) {
+      out.push_back(p.x());
+      out.push_back(p.y());
+    }
+    for (int k = 0; k < e->world().NumTargets(); ++k)
+      out.push_back(e->MinDet(k));
+    for (long d : e->decisions()) out.push_back(static_cast<double>(d));
+    return out;
+  };
+  EXPECT_EQ(run(), run());
+}
+
+// The smallest distance between two robots' centres over every substep.
+class Closest : public StepObserver {
+ public:
+  void OnSubstep(const Episode& e, double) override {
+    const Simulation& sim = e.sim();
+    for (int i = 0; i < sim.num_robots(); ++i)
+      for (int j = i + 1; j < sim.num_robots(); ++j)
+        closest = std::min(
+            closest, (sim.RobotPosition(i) - sim.RobotPosition(j)).norm());
+  }
+  double closest = 1e9;
+};
+
+TEST(AsyncTest, ReservedPointsKeepRobotsApart) {
+  for (const std::string model : {"point", "diff_drive"}) {
+    Scenario s = ScenarioFromYaml(Crowd(model, "reserve"));
+    auto e = MakeEpisode(s, AllPolicies());
+    Closest closest;
+    e->AddObserver(&closest);
+    e->Run();
+    // Two discs of radius 0.15 touch at 0.3 m: no robot through another,
+    // hardly a touch.
+    EXPECT_GT(closest.closest, 2 * s.robots.radius - 0.02) << model;
+    long stalls = 0;
+    for (long n : e->sim().robot_stalls()) stalls += n;
+    EXPECT_EQ(stalls, 0) << model;
+    EXPECT_GT(e->sim().time_use().yielding, 0.0) << model;
+
+    // Without reservations the same crowd pushes and stalls.
+    Scenario none = ScenarioFromYaml(Crowd(model, "none"));
+    auto f = MakeEpisode(none, AllPolicies());
+    Closest pushed;
+    f->AddObserver(&pushed);
+    f->Run();
+    long pushes = 0;
+    for (long n : f->sim().robot_stalls()) pushes += n;
+    EXPECT_LT(pushed.closest, closest.closest) << model;
+    EXPECT_GT(pushes, 0) << model << " " << pushed.closest;
+    EXPECT_EQ(f->sim().time_use().yielding, 0.0) << model;
+  }
+}
+
+TEST(AsyncTest, MovesAreCountedWhenTheyEnd) {
+  Scenario s = ScenarioFromYaml(Crowd("point", "reserve"));
+  auto e = MakeEpisode(s, AllPolicies());
+  MoveObserver moves;
+  e->AddObserver(&moves);
+  e->Run();
+  long decisions = 0;
+  for (long d : e->decisions()) decisions += d;
+  EXPECT_EQ(moves.moves(), e->history().moves());
+  EXPECT_GT(moves.moves(), 0);
+  // Stays and waits that ended at a tick are decisions without a move.
+  EXPECT_LE(moves.moves(), decisions);
+}
+
+}  // namespace
+}  // namespace aia
