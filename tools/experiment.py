@@ -711,12 +711,22 @@ def motion_conditions(quick):
     return conds
 
 
-def motion_run(args, name, scenario, model, policy, seed):
-    folder = os.path.join(args.out, "runs", slug(name), f"{model}.{policy}.{seed}")
+def motion_variant(model, decisions):
+    """A robot model with a decision mode: 'diff_drive' (lockstep, the
+    folder names of earlier runs) or 'diff_drive async'."""
+    return model if decisions == "lockstep" else f"{model} {decisions}"
+
+
+def motion_run(args, name, scenario, variant, policy, seed):
+    model, _, decisions = variant.partition(" ")
+    folder = os.path.join(args.out, "runs", slug(name),
+                          f"{model}{'.' + decisions if decisions else ''}.{policy}.{seed}")
     path = os.path.join(folder, "summary.json")
     if not os.path.isfile(path):
         cmd = [args.aia, "run", scenario, "--policy", policy, "--seed", str(seed),
                "--set", f"robots.model={model}", "--out", folder, "--quiet"]
+        if decisions:
+            cmd += ["--set", f"mission.decisions={decisions}"]
         for kv in args.set:
             cmd += ["--set", kv]
         run(cmd, quiet=True)
@@ -732,7 +742,7 @@ def motion_run(args, name, scenario, model, policy, seed):
             "stalls": s["robot_stalls"] / robot_steps,
             "timeouts": s["robot_timeouts"] / robot_steps,
             **{f"share_{k}": use.get(k, 0.0) / total
-               for k in ("driving", "turning", "blocked", "arrived")}}
+               for k in ("driving", "turning", "blocked", "arrived", "yielding", "staying")}}
 
 
 def plot_motion(table, path, title):
@@ -740,26 +750,30 @@ def plot_motion(table, path, title):
     s.e.); right: where the wheeled robots' time went."""
     conds = list(dict.fromkeys(r["condition"] for r in table))
     policies = list(dict.fromkeys(r["policy"] for r in table))
+    variants = list(dict.fromkeys(r["model"] for r in table))
     fig, (ax_s, ax_u) = plt.subplots(1, 2, figsize=(13, 0.9 * len(conds) * len(policies) / 2 + 2))
     labels, y = [], 0
     parts = [("share_driving", "driving", "C0"), ("share_turning", "turning in place", "C1"),
-             ("share_blocked", "blocked", "C3"), ("share_arrived", "arrived, waiting", "0.7")]
+             ("share_blocked", "blocked", "C3"), ("share_yielding", "yielding", "C4"),
+             ("share_staying", "staying", "C2"), ("share_arrived", "arrived, waiting", "0.7")]
     for c in conds:
         for p in policies:
             rows = {r["model"]: r for r in table if r["condition"] == c and r["policy"] == p}
-            for k, (model, hatch) in enumerate((("point", ""), ("diff_drive", "//"))):
-                r = rows.get(model)
+            hatches = ["", "//", "..", "xx"]
+            height = 0.8 / max(1, len(variants))
+            for k, variant in enumerate(variants):
+                r = rows.get(variant)
                 if r is None or r["seconds"] is None:
                     continue
-                ax_s.barh(y + 0.4 * k, r["seconds"], height=0.4, xerr=r["seconds_se"] or 0,
-                          color=policy_color(p), hatch=hatch, edgecolor="0.2", capsize=2)
-            wheeled = rows.get("diff_drive")
-            if wheeled is not None:
-                left = 0.0
-                for key, name, colour in parts:
-                    ax_u.barh(y + 0.2, wheeled[key], left=left, height=0.6, color=colour,
-                              label=name if y == 0 else None)
-                    left += wheeled[key]
+                ax_s.barh(y + height * k, r["seconds"], height=height,
+                          xerr=r["seconds_se"] or 0, color=policy_color(p),
+                          hatch=hatches[k % len(hatches)], edgecolor="0.2", capsize=2)
+                if variant.startswith("diff_drive"):
+                    left = 0.0
+                    for key, name, colour in parts:
+                        ax_u.barh(y + height * k, r[key], left=left, height=height,
+                                  color=colour, label=name if y == 0 and k == 1 else None)
+                        left += r[key]
             labels.append((y + 0.2, f"{c}\n{p}"))
             y += 1
     for ax in (ax_s, ax_u):
@@ -767,7 +781,7 @@ def plot_motion(table, path, title):
         ax.set_yticklabels([n for _, n in labels], fontsize=7)
         ax.invert_yaxis()
         ax.grid(axis="x", alpha=0.3)
-    ax_s.set_xlabel("mission seconds (simulated); plain: point, hatched: diff_drive")
+    ax_s.set_xlabel("mission seconds (simulated); bars from the top: " + ", ".join(variants))
     ax_u.set_xlabel("share of the wheeled robots' time")
     ax_u.set_xlim(0, 1)
     ax_u.legend(fontsize=7, loc="lower right")
@@ -783,22 +797,30 @@ def motion(args):
     step's slowest robot)."""
     policies = args.policies or (["igbnet", "greedy"] if args.quick else GEN_POLICIES)
     seeds = args.seeds or (2 if args.quick else 10)
+    for flag, values, known in (("--models", args.models, MOTION_MODELS),
+                                ("--decisions", args.decisions, ["lockstep", "async"])):
+        bad = [v for v in values if v not in known]
+        if bad or not values:
+            raise Usage(f"{flag}: {','.join(bad) or 'nothing'} is not one of "
+                        f"{', '.join(known)}")
     t0 = time.time()
     os.makedirs(os.path.join(args.out, "scenarios"), exist_ok=True)
     table = []
     keys = ["success", "steps", "seconds", "seconds_per_step", "stalls", "timeouts",
-            "share_driving", "share_turning", "share_blocked", "share_arrived"]
+            "share_driving", "share_turning", "share_blocked", "share_arrived",
+            "share_yielding", "share_staying"]
+    variants = [motion_variant(m, d) for m in args.models for d in args.decisions]
     for name, text in motion_conditions(args.quick):
         scenario = os.path.join(args.out, "scenarios", slug(name) + ".yaml")
         write_atomic(scenario, f"name: {slug(name)}\n{text}"
                                f"mission: {{max_steps: {args.max_steps}}}\n")
         print(f"[motion] {name} ...", flush=True)
-        jobs = [(m, p, args.seed_base + i) for m in MOTION_MODELS for p in policies
+        jobs = [(m, p, args.seed_base + i) for m in variants for p in policies
                 for i in range(seeds)]
         with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
             results = list(pool.map(
                 lambda j: (j, motion_run(args, name, scenario, *j)), jobs))
-        for model in MOTION_MODELS:
+        for model in variants:
             for policy in policies:
                 rs = [r for (m, p, _), r in results if m == model and p == policy]
                 row = {"condition": name, "model": model, "policy": policy, "n": len(rs)}
@@ -809,7 +831,8 @@ def motion(args):
     write_csv(os.path.join(args.out, "motion.csv"), header,
               [[r[h] for h in header] for r in table])
     lines = ["| condition | policy | model | success | steps | mission seconds | s / step "
-             "| stalls / robot-step | time: driving / turning / blocked / waiting |",
+             "| stalls / robot-step | time: driving / turning / blocked / yielding / "
+             "staying / waiting |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(table, key=lambda r: (r["condition"], r["policy"])):
         lines.append(
@@ -817,7 +840,8 @@ def motion(args):
             f"| {r['steps']:.1f} ± {r['steps_se']:.1f} | {r['seconds']:.1f} ± "
             f"{r['seconds_se']:.1f} | {r['seconds_per_step']:.2f} | {r['stalls']:.3f} "
             f"| {r['share_driving']:.2f} / {r['share_turning']:.2f} / "
-            f"{r['share_blocked']:.2f} / {r['share_arrived']:.2f} |")
+            f"{r['share_blocked']:.2f} / {r['share_yielding']:.2f} / "
+            f"{r['share_staying']:.2f} / {r['share_arrived']:.2f} |")
     write_atomic(os.path.join(args.out, "motion.md"), "\n".join(lines) + "\n")
     plot_motion(table, os.path.join(args.out, "motion.png"),
                 f"point against wheeled robots, {seeds} worlds per condition, "
@@ -881,6 +905,10 @@ def main(argv=None):
     mo.add_argument("--seed-base", type=int, default=GEN_SEED_BASE,
                     help=f"first seed (default {GEN_SEED_BASE})")
     mo.add_argument("--max-steps", type=int, default=200, help="mission.max_steps (200)")
+    mo.add_argument("--models", type=lambda t: t.split(","), default=MOTION_MODELS,
+                    help="robots.model values (default point,diff_drive)")
+    mo.add_argument("--decisions", type=lambda t: t.split(","), default=["lockstep"],
+                    help="mission.decisions values, e.g. lockstep,async (default lockstep)")
     mo.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="runs at once")
     args = parser.parse_args(argv)
     if not os.access(args.aia, os.X_OK):

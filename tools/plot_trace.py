@@ -58,14 +58,19 @@ class Trace:
 
 
 def load_trace(path):
-    """Reads step,target,min_det,det_r0..det_r{N-1} rows into a Trace."""
+    """Reads step,target,min_det,det_r0..det_r{N-1} rows into a Trace
+    (step,time,target,... with mission.decisions async: the time column is
+    dropped, steps are then the sensing ticks)."""
     with open(path, newline="") as f:
         reader = csv.reader(f)
         header = next(reader, None)
+        timed = header is not None and header[:2] == ["step", "time"]
+        if timed:
+            header = header[:1] + header[2:]
         if header is None or header[:3] != ["step", "target", "min_det"]:
             raise ValueError(f"{path}: not an aia trace (header {header})")
         robots = [h for h in header[3:] if h.startswith("det_r")]
-        rows = [r for r in reader if r]
+        rows = [r[:1] + r[2:] if timed else r for r in reader if r]
     if not rows:
         raise ValueError(f"{path}: no rows")
     steps = sorted({int(r[0]) for r in rows})

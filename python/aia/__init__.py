@@ -164,6 +164,14 @@ class Mission:
         stay on the lattice (the world rule replaces the others)."""
         return self._m.valid_moves()
 
+    @property
+    def ready(self):
+        """(N,) bool: the robots whose moves the next step() uses: all of
+        them in lockstep; with mission.decisions async, those whose last
+        move has ended (one step() is then one round: physics until the next
+        robot's move ends), the others driving on."""
+        return self._m.ready
+
     def step(self, moves):
         """Applies one move per robot: a list or numpy array of integers
         0..4 of shape (num_robots,) exactly (4 stays in place; the world

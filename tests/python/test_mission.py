@@ -202,3 +202,28 @@ def test_builtin_policies_decide_for_the_team():
         assert ((moves >= 0) & (moves <= 4)).all(), name
         assert p.centralized == (name == "expert")
         assert p.last_status in ("ok", "no_valid_move", "budget_exhausted")
+
+
+def test_async_steps_use_the_ready_robots_moves_only():
+    lock = aia.Mission(DEFAULT, seed=3, overrides={"robots.count": 4})
+    assert lock.ready.dtype == np.bool_ and lock.ready.all()
+    m = aia.Mission(DEFAULT, seed=3, overrides={
+        "robots.count": 4, "robots.model": "diff_drive",
+        "mission.decisions": "async"})
+    greedy = aia.builtin_policy("greedy")
+    assert m.ready.all()  # every robot decides at the start
+    partial = 0
+    for _ in range(30):
+        if m.done:
+            break
+        ready = m.ready.copy()
+        before = m.state()["lattice"].copy()
+        m.step(greedy.decide(m))
+        partial += int(not m.ready.all())
+        # A robot that did not decide kept the point it was driving to.
+        after = m.state()["lattice"]
+        for i in np.flatnonzero(~ready):
+            if not m.ready[i]:
+                assert after[i] == before[i]
+    # Wheeled robots turn and drive for different times.
+    assert partial > 0
