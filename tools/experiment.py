@@ -733,7 +733,9 @@ def motion_run(args, name, scenario, variant, policy, seed):
     s = json.load(open(path))
     physics = json.load(open(os.path.join(folder, "diagnostics.json")))["physics"]
     use = physics.get("robot_seconds", {})
-    robot_steps = max(1, s["steps"] * s["robots"])
+    # Robot-steps: every robot's completed decisions (async robots make
+    # more than the slowest one's steps).
+    robot_steps = max(1, sum(physics.get("robot_decisions", [])) or s["steps"] * s["robots"])
     total = sum(use.values()) or 1.0
     return {"success": 1.0 if s["success"] else 0.0,
             "steps": float(s["flowtime"] if s["success"] else s["steps"]),

@@ -271,7 +271,17 @@ void RulesLayer::Reset(int num_robots, int num_targets) {
 
 void RulesLayer::Shape(const DecisionContext& ctx,
                        const std::vector<int>& rows) {
-  memory_.Update(ctx, rows);
+  // Search memory is the deciding robots' (async decisions: a robot on its
+  // way has not reached the point it would record a miss at); claims are
+  // the whole team's.
+  const std::vector<int>* deciding = &rows;
+  if (ctx.ready) {
+    deciding_.clear();
+    for (int i : rows)
+      if (Deciding(ctx, i)) deciding_.push_back(i);
+    deciding = &deciding_;
+  }
+  memory_.Update(ctx, *deciding);
   claims_.Shape(ctx, rows, memory_.aims());
 }
 

@@ -96,6 +96,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
   for (int i = 0; i < n; ++i) (*moves)[i] = Move::kStay;
   for (int b = 0; b < team_.size(); ++b) {
     const int i = team_.rows[b];
+    if (!Deciding(ctx, i)) continue;  // on its way (async decisions)
     const int here = (*ctx.robot_lattice)[i];
     const float* l = batch_logits_.data() + b * kNumMoves;
     std::copy(l, l + kNumMoves, logits_.data() + i * kNumMoves);

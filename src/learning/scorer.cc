@@ -24,7 +24,14 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
   const Lattice& lattice = ctx.map->lattice();
   const std::vector<int>& rows = team.rows;
   const std::size_t size = renderer_->ImageSize();
-  images_.resize(rows.size() * size);
+  const bool passing = net_->config().message_hops > 0;
+  // With asynchronous decisions only the robots that decide are rendered
+  // and scored: without messages a robot's logits are its own image's (the
+  // others' stay 0); with messages every robot's features are needed.
+  order_.clear();
+  for (int b = 0; b < static_cast<int>(rows.size()); ++b)
+    if (passing || Deciding(ctx, rows[b])) order_.push_back(b);
+  images_.resize(order_.size() * size);
   const std::vector<double>* prior = ctx.log_det_prior;
   if (!prior) {  // a hand-made context: every prior counts as det 1
     no_prior_.assign(ctx.beliefs->layout().num_targets(), 0.0);
@@ -50,9 +57,12 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       renderer_->params().search && ctx.sensor &&
       search_.num_robots() == static_cast<int>(ctx.robot_lattice->size()) &&
       search_.num_targets() == ctx.beliefs->layout().num_targets();
-  if (searching_) {
-    for (int i : rows) search_.Update(ctx, i);
-    search_.Share(ctx, rows);
+  if (searching_) {  // the deciding robots' (see RulesLayer::Shape)
+    deciding_.clear();
+    for (int i : rows)
+      if (Deciding(ctx, i)) deciding_.push_back(i);
+    for (int i : deciding_) search_.Update(ctx, i);
+    search_.Share(ctx, deciding_);
   }
   static const std::vector<std::uint8_t> kAll;
   auto shown = [&](int b) -> const std::vector<std::uint8_t>& {
@@ -63,18 +73,19 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
   // Chunks of kForwardBatch robots: each rendered and run through the
   // network by one thread (libtorch runs single-threaded inside), so that a
   // robot's logits depend on its chunk, never on the number of threads.
-  const int count = static_cast<int>(rows.size());
+  const int count = static_cast<int>(order_.size());
   const int chunks = (count + kForwardBatch - 1) / kForwardBatch;
-  const bool passing = net_->config().message_hops > 0;
   const int hidden = net_->config().hidden;
   if (passing) features_.resize(rows.size() * hidden);
+  scored_.resize(order_.size() * kNumMoves);
   ParallelFor(chunks, 1, [&](int c0, int c1, int worker) {
     Grid<float>& heat = worker_heat_[worker];
     std::vector<Vec2>& neighbours = worker_neighbours_[worker];
     for (int c = c0; c < c1; ++c) {
       const int begin = c * kForwardBatch;
       const int end = std::min(count, begin + kForwardBatch);
-      for (int b = begin; b < end; ++b) {
+      for (int o = begin; o < end; ++o) {
+        const int b = order_[o];
         const int i = rows[b];
         const std::vector<std::uint8_t>& keep = shown(b);
         neighbours.clear();
@@ -111,7 +122,7 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
         renderer_->RenderWithHeat(
             lattice.Point(here), neighbours,
             keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
-            targets, prior, ctx.eps, images_.data() + b * size, memory);
+            targets, prior, ctx.eps, images_.data() + o * size, memory);
       }
       if (passing)
         net_->Embed(images_.data() + begin * size, end - begin,
@@ -120,14 +131,22 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       else
         net_->Forward(images_.data() + begin * size, end - begin,
                       renderer_->height(), renderer_->width(),
-                      logits + begin * kNumMoves);
+                      scored_.data() + begin * kNumMoves);
     }
   });
-  if (!passing) return;
+  if (!passing) {
+    if (count < static_cast<int>(rows.size()))
+      std::fill_n(logits, rows.size() * kNumMoves, 0.0f);
+    for (int o = 0; o < count; ++o)
+      std::copy_n(scored_.data() + o * kNumMoves, kNumMoves,
+                  logits + order_[o] * kNumMoves);
+    return;
+  }
+  const int count_all = static_cast<int>(rows.size());
   // The team's features over this step's graph among the active robots.
   graph_.offsets.assign(1, 0);
   graph_.neighbours.clear();
-  for (int b = 0; b < count; ++b) {
+  for (int b = 0; b < count_all; ++b) {
     for (int j : ctx.comm->Neighbors(rows[b]))
       if (j != rows[b] && team.row_of[j] >= 0)
         graph_.neighbours.push_back(team.row_of[j]);

@@ -235,6 +235,7 @@ void Episode::Step() {
     // short of the next point).
     made_[i] = MoveBetween(lattice, before, robot_idx_[i]);
     history_.Record(i, made_[i]);
+    if (comm_.Active(i)) ++decisions_[i];
   }
   Observe();
   times_.total += Since(t_step);

@@ -177,7 +177,10 @@ std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
                   // Per robot: steps it ended stalled short of its
                   // waypoint, and steps whose timeout found it on its way.
                   {"robot_stalls", e.sim().robot_stalls()},
-                  {"robot_timeouts", e.sim().robot_timeouts()}};
+                  {"robot_timeouts", e.sim().robot_timeouts()},
+                  // Per robot: moves (stays included) it completed; in
+                  // lockstep each active robot's are the steps.
+                  {"robot_decisions", e.decisions()}};
   // Where the robots' time went (robot-seconds): what real motion costs.
   const Simulation::TimeUse& use = e.sim().time_use();
   d["physics"]["robot_seconds"] = {{"driving", use.driving},

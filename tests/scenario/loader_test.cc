@@ -527,7 +527,7 @@ TEST(LoaderTest, UnknownKeySuggestsTheNearestValidKey) {
   EXPECT_EQ(e.message(),
             "unknown key (did you mean `range`?); valid keys under sensor: "
             "range, eta, "
-            "sigma0, line_of_sight");
+            "sigma0, line_of_sight, rate");
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "zzz: 1\n")
                 .message()
                 .find("did you mean"),

@@ -298,6 +298,7 @@ class RulesLayer {
  private:
   IgbNetParams params_;
   MissMemory memory_;
+  std::vector<int> deciding_;  // Shape's rows that decide now
   ClaimsShaper claims_;
   DeadlockWalk walk_;
   NoUndo no_undo_;

@@ -73,6 +73,10 @@ class NetworkScorer : public MoveScorer {
   std::shared_ptr<const IgbNet> net_;
   std::optional<ChannelRenderer> renderer_;
   std::vector<float> images_;
+  // The team rows rendered and scored (async: the deciding ones), and their
+  // logits in that order.
+  std::vector<int> order_, deciding_;
+  std::vector<float> scored_;
   // Message passing (a model with message_hops > 0): the rows' hidden
   // features and their graph in row indices.
   std::vector<float> features_;
