@@ -79,6 +79,7 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   made_.assign(n, Move::kStay);
   if (policy_) policy_->Reset(world.map, n, num_targets_, scenario.seed);
   ready_.assign(n, 1);
+  stopped_robot_.assign(n, 0);
   from_ = robot_idx_;
   decisions_.assign(n, 0);
   if (async()) {
@@ -309,8 +310,9 @@ void Episode::StepAsync() {
 // Robot i's next move starts now: a stay holds it at its point until the
 // next sensing tick; a failed robot stops where it is.
 void Episode::Apply(int i, const Lattice& lattice) {
-  if (!comm_.Active(i)) {
+  if (!comm_.Active(i)) {  // failed before it could decide
     applied_[i] = Move::kStay;
+    stopped_robot_[i] = 1;
     sim_.SetWaypoint(i, robot_pos_[i]);
     sim_.Park(i);
     return;
@@ -396,6 +398,23 @@ void Episode::Tick() {
     sim_.SetTargetPosition(k, target_pos_[k]);
   ++tick_;
   Observe();
+  // A robot that failed at this tick stops where it is, mid-move or not,
+  // and lets go of the points it held.
+  for (int i = 0; i < n; ++i) {
+    if (comm_.Active(i) || stopped_robot_[i]) continue;
+    stopped_robot_[i] = 1;
+    ready_[i] = 0;
+    sim_.SetWaypoint(i, robot_pos_[i]);
+    sim_.Park(i);
+    if (reserve_) {
+      if (held_from_[i] >= 0) --held_[held_from_[i]];
+      if (held_to_[i] >= 0) --held_[held_to_[i]];
+      held_to_[i] = pending_[i] = -1;
+      const int p = instance_->world.map.lattice().NearestFree(robot_pos_[i]);
+      held_from_[i] = p;
+      if (p >= 0) ++held_[p];
+    }
+  }
   for (StepObserver* o : observers_)
     stopped_ |= o->OnStep(*this) == ObserverStatus::kStop;
   MoveTargets();

@@ -166,6 +166,35 @@ TEST(AsyncTest, ReservedPointsKeepRobotsApart) {
   }
 }
 
+TEST(AsyncTest, AFailedRobotStopsMidMoveAndNeverDecidesAgain) {
+  Scenario s = ScenarioFromYaml(
+      "seed: 2\nrobots: {count: 3, model: diff_drive}\ntargets: {count: "
+      "4}\nmission: {max_steps: 12, stop_at_success: false, decisions: "
+      "async}\ncommunication: {failures: [{robot: 1, step: 3}]}\n"
+      "policy: {name: random}\n");
+  auto e = MakeEpisode(s, AllPolicies());
+  long decided = -1;
+  Vec2 at_failure;
+  while (!e->done()) {
+    e->Step();
+    if (!e->comm().Active(1)) {
+      const Vec2 p = e->sim().RobotPosition(1);
+      if (decided < 0) {
+        decided = e->decisions()[1];
+        at_failure = p;
+      }
+      // Stopped where it was at the tick (a wheeled robot brakes within a
+      // few centimetres), and never asked again.
+      EXPECT_LT((p - at_failure).norm(), 0.1);
+      EXPECT_EQ(e->decisions()[1], decided);
+      EXPECT_TRUE(e->measurements()[1].empty());
+    }
+  }
+  ASSERT_GE(decided, 0);
+  EXPECT_EQ(e->step(), 12);  // the others' decisions, the failed one aside
+  EXPECT_GT(std::min(e->decisions()[0], e->decisions()[2]), decided);
+}
+
 TEST(AsyncTest, MovesAreCountedWhenTheyEnd) {
   Scenario s = ScenarioFromYaml(Crowd("point", "reserve"));
   auto e = MakeEpisode(s, AllPolicies());

@@ -249,6 +249,7 @@ class Episode {
   // Async: who decides next, where each move started, moves completed, the
   // moves that just ended, and the sensing clock (substeps).
   std::vector<std::uint8_t> ready_;
+  std::vector<std::uint8_t> stopped_robot_;  // failed, stopped for good
   std::vector<int> from_;
   std::vector<long> decisions_;
   std::vector<int> ended_;
