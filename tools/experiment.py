@@ -740,6 +740,8 @@ def motion_run(args, name, scenario, variant, policy, seed):
     return {"success": 1.0 if s["success"] else 0.0,
             "steps": float(s["flowtime"] if s["success"] else s["steps"]),
             "seconds": s["mission_seconds"],
+            "decisions": (sum(physics["robot_decisions"]) / max(1, len(physics["robot_decisions"]))
+                          if physics.get("robot_decisions") else float(s["steps"])),
             "seconds_per_step": physics["sim_seconds"] / max(1, s["steps"]),
             "stalls": s["robot_stalls"] / robot_steps,
             "timeouts": s["robot_timeouts"] / robot_steps,
@@ -808,7 +810,7 @@ def motion(args):
     t0 = time.time()
     os.makedirs(os.path.join(args.out, "scenarios"), exist_ok=True)
     table = []
-    keys = ["success", "steps", "seconds", "seconds_per_step", "stalls", "timeouts",
+    keys = ["success", "steps", "decisions", "seconds", "seconds_per_step", "stalls", "timeouts",
             "share_driving", "share_turning", "share_blocked", "share_arrived",
             "share_yielding", "share_staying"]
     variants = [motion_variant(m, d) for m in args.models for d in args.decisions]
@@ -832,14 +834,16 @@ def motion(args):
     header = ["condition", "model", "policy", "n"] + [x for k in keys for x in (k, k + "_se")]
     write_csv(os.path.join(args.out, "motion.csv"), header,
               [[r[h] for h in header] for r in table])
-    lines = ["| condition | policy | model | success | steps | mission seconds | s / step "
+    lines = ["| condition | policy | model | success | steps | decisions / robot "
+             "| mission seconds | s / step "
              "| stalls / robot-step | time: driving / turning / blocked / yielding / "
              "staying / waiting |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(table, key=lambda r: (r["condition"], r["policy"])):
         lines.append(
             f"| {r['condition']} | {r['policy']} | {r['model']} | {r['success']:.2f} "
-            f"| {r['steps']:.1f} ± {r['steps_se']:.1f} | {r['seconds']:.1f} ± "
+            f"| {r['steps']:.1f} ± {r['steps_se']:.1f} | {r['decisions']:.1f} "
+            f"| {r['seconds']:.1f} ± "
             f"{r['seconds_se']:.1f} | {r['seconds_per_step']:.2f} | {r['stalls']:.3f} "
             f"| {r['share_driving']:.2f} / {r['share_turning']:.2f} / "
             f"{r['share_blocked']:.2f} / {r['share_yielding']:.2f} / "

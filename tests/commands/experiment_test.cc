@@ -145,8 +145,34 @@ TEST(ExperimentTest, MotionComparesPointAndWheeledRobots) {
     if (!wheeled) EXPECT_LT(per_step, 0.5) << line;
     EXPECT_EQ(column(row, "share_turning") > 0.0, wheeled) << line;
     EXPECT_NEAR(column(row, "share_driving") + column(row, "share_turning") +
-                    column(row, "share_blocked") + column(row, "share_arrived"),
+                    column(row, "share_blocked") + column(row, "share_arrived") +
+                    column(row, "share_yielding") +
+                    column(row, "share_staying"),
                 1.0, 1e-5);  // the CSV's six digits
+  }
+  EXPECT_EQ(rows, 2 * 2);
+
+  // Wheeled robots in both decision modes: deciding on arrival, nobody
+  // waits for the others.
+  const auto a = RunCommand(Experiment(
+      "motion --quick --policies greedy --seeds 1 --max-steps 12 --jobs 2 "
+      "--models diff_drive --decisions lockstep,async --out " +
+      dir + "/a"));
+  ASSERT_EQ(a.exit_code, 0) << a.out << a.err;
+  std::istringstream modes(ReadFile(dir + "/a/motion.csv"));
+  std::getline(modes, line);
+  rows = 0;
+  while (std::getline(modes, line)) {
+    std::vector<std::string> row;
+    for (std::istringstream r(line); std::getline(r, line, ',');)
+      row.push_back(line);
+    ++rows;
+    if (row.at(1) == "diff_drive async") {
+      EXPECT_EQ(column(row, "share_arrived"), 0.0) << line;
+    } else {
+      EXPECT_EQ(row.at(1), "diff_drive");
+      EXPECT_GT(column(row, "share_arrived"), 0.0) << line;
+    }
   }
   EXPECT_EQ(rows, 2 * 2);
   fs::remove_all(dir);
@@ -160,6 +186,9 @@ TEST(ExperimentTest, BadArgumentsExitWith2) {
   EXPECT_EQ(RunCommand(Experiment("bogus --out " + dir)).exit_code, 2);
   EXPECT_EQ(
       RunCommand(Experiment("motion --max-steps 0 --out " + dir)).exit_code, 2);
+  EXPECT_EQ(RunCommand(Experiment("motion --decisions sometimes --out " + dir))
+                .exit_code,
+            2);
   const auto bad = RunCommand(Experiment(
       "robustness --quick --no-video --set robots.count=-1 --out " + dir));
   EXPECT_EQ(bad.exit_code, 2) << bad.out << bad.err;
