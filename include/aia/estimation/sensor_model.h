@@ -43,8 +43,7 @@ struct SensorModel {
                  .Doc("Hz, mission.decisions async only: how often robots "
                       "sense, the graph and the filter update (and targets "
                       "take a step of their dynamics) on the physics clock; "
-                      "none: 5 for point robots, 0.6 for diff_drive, about "
-                      "one lattice move's time"));
+                      "none: 5 (a point robot's lattice move takes 0.2 s)"));
   }
 
   // Noise standard deviation at distance `dist`.
