@@ -73,7 +73,7 @@ bool ExpertPolicy::NeedsReplan(const DecisionContext& ctx) const {
   const int n = static_cast<int>(ctx.robot_lattice->size());
   for (int i = 0; i < n; ++i)
     if (Deciding(ctx, i) && at_[i] + 1 >= size) return true;  // plan done
-  if (!ctx.beliefs->layout().all_static()) return true;  // targets move
+  if (!ctx.beliefs->layout().all_static()) return true;       // targets move
   for (int i = 0; i < n; ++i)
     if ((*ctx.robot_lattice)[i] != plan_.configs[at_[i]][i])
       return true;  // physics disagreed

@@ -83,13 +83,13 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   from_ = robot_idx_;
   decisions_.assign(n, 0);
   if (async()) {
-    const double rate = scenario.sensor.rate.value_or(
-        DefaultSensorRate(scenario.robots.model));
-    tick_period_ = std::max(
-        1L, std::lround(1.0 / (rate * sim_.model()->opt.timestep)));
+    const double rate =
+        scenario.sensor.rate.value_or(DefaultSensorRate(scenario.robots.model));
+    tick_period_ =
+        std::max(1L, std::lround(1.0 / (rate * sim_.model()->opt.timestep)));
     next_tick_ = tick_period_;
-    reserve_ = mission_.avoidance.value_or(Avoidance::kReserve) ==
-               Avoidance::kReserve;
+    reserve_ =
+        mission_.avoidance.value_or(Avoidance::kReserve) == Avoidance::kReserve;
   }
   if (reserve_) {
     const double release = 2.0 * scenario.robots.radius;
@@ -276,10 +276,9 @@ void Episode::StepAsync() {
   const double round_start = sim_.clock_seconds();
   const double physics_before = sim_.physics_seconds();
   while (true) {
-    const PhysicsStepStats physics = sim_.AdvanceMoves(
-        next_tick_, &ended_, &how_, [&](double seconds) {
-          const double f =
-              std::min(1.0, (seconds - tick_start_ * dt) / motion);
+    const PhysicsStepStats physics =
+        sim_.AdvanceMoves(next_tick_, &ended_, &how_, [&](double seconds) {
+          const double f = std::min(1.0, (seconds - tick_start_ * dt) / motion);
           for (int k = 0; k < num_targets_; ++k)
             sim_.SetTargetPosition(
                 k, target_prev_[k] + f * (target_pos_[k] - target_prev_[k]));

@@ -183,12 +183,10 @@ std::string DiagnosticsJson(const Episode& e, const MoveObserver& moves,
                   {"robot_decisions", e.decisions()}};
   // Where the robots' time went (robot-seconds): what real motion costs.
   const Simulation::TimeUse& use = e.sim().time_use();
-  d["physics"]["robot_seconds"] = {{"driving", use.driving},
-                                   {"turning", use.turning},
-                                   {"blocked", use.blocked},
-                                   {"arrived", use.arrived},
-                                   {"staying", use.staying},
-                                   {"yielding", use.yielding}};
+  d["physics"]["robot_seconds"] = {
+      {"driving", use.driving}, {"turning", use.turning},
+      {"blocked", use.blocked}, {"arrived", use.arrived},
+      {"staying", use.staying}, {"yielding", use.yielding}};
   // MuJoCo's memory and warnings (sim/simulation.h): a warning other than a
   // handled contact overflow means the physics went wrong somewhere.
   const PhysicsMemoryStats mem = e.sim().memory();

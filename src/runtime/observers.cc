@@ -121,8 +121,8 @@ void EstimateObserver::Score(const Episode& e) {
     sum_sq_[k] += error * error;
     sum_nees_[k] += nees;
     if (impl_) {
-      std::fprintf(impl_->file.get(), "%d,%d,%d,%.6e,%.6e\n", e.filter_step(), k,
-                   robot, error, nees);
+      std::fprintf(impl_->file.get(), "%d,%d,%d,%.6e,%.6e\n", e.filter_step(),
+                   k, robot, error, nees);
     }
   }
   ++samples_;

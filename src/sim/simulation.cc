@@ -376,9 +376,7 @@ void Simulation::Hold(int i, long until, bool yielding) {
   since_[i] = until;
 }
 
-void Simulation::Park(int i) {
-  state_[i] = RobotState::kParked;
-}
+void Simulation::Park(int i) { state_[i] = RobotState::kParked; }
 
 PhysicsStepStats Simulation::AdvanceMoves(
     long until, std::vector<int>* ended, std::vector<MoveEnd>* how,
@@ -389,7 +387,8 @@ PhysicsStepStats Simulation::AdvanceMoves(
   const PhysicsConfig& physics = model_->physics();
   const double dt = m_->opt.timestep;
   const long timeout = std::max(
-      1L, static_cast<long>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
+      1L,
+      static_cast<long>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
   const double tol2 = physics.tolerance * physics.tolerance;
   const long settle = static_cast<long>(std::ceil(kSettleTime / dt - 1e-9));
   const long check_every = std::max(
@@ -419,9 +418,8 @@ PhysicsStepStats Simulation::AdvanceMoves(
           const long elapsed = clock_ - since_[i];
           if (elapsed > 0 && elapsed % check_every == 0) {
             const double d = ToGo(i);
-            stuck_[i] =
-                progress_[i] - d < driver_->EnoughProgress(progress_[i],
-                                                           physics.tolerance);
+            stuck_[i] = progress_[i] - d < driver_->EnoughProgress(
+                                               progress_[i], physics.tolerance);
             progress_[i] = d;
           }
           if ((RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2) {

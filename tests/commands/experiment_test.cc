@@ -144,11 +144,11 @@ TEST(ExperimentTest, MotionComparesPointAndWheeledRobots) {
     EXPECT_GT(per_step, wheeled ? 0.7 : 0.0) << line;
     if (!wheeled) EXPECT_LT(per_step, 0.5) << line;
     EXPECT_EQ(column(row, "share_turning") > 0.0, wheeled) << line;
-    EXPECT_NEAR(column(row, "share_driving") + column(row, "share_turning") +
-                    column(row, "share_blocked") + column(row, "share_arrived") +
-                    column(row, "share_yielding") +
-                    column(row, "share_staying"),
-                1.0, 1e-5);  // the CSV's six digits
+    EXPECT_NEAR(
+        column(row, "share_driving") + column(row, "share_turning") +
+            column(row, "share_blocked") + column(row, "share_arrived") +
+            column(row, "share_yielding") + column(row, "share_staying"),
+        1.0, 1e-5);  // the CSV's six digits
   }
   EXPECT_EQ(rows, 2 * 2);
 

@@ -26,8 +26,9 @@ const char* kSmallAsync =
 std::string Crowd(const std::string& model, const std::string& avoidance) {
   return "seed: 4\nworkspace: {size: [5, 5], obstacles: {random: {count: "
          "2}}}\nrobots: {count: 24, model: " +
-         model + "}\ntargets: {count: 6}\nmission: {max_steps: 12, "
-                 "stop_at_success: false, decisions: async, avoidance: " +
+         model +
+         "}\ntargets: {count: 6}\nmission: {max_steps: 12, "
+         "stop_at_success: false, decisions: async, avoidance: " +
          avoidance + "}\npolicy: {name: random}\n";
 }
 

@@ -48,7 +48,7 @@ struct FrameOverlay {
   int step = 0;
   int max_steps = 0;
   double seconds = 0.0;  // the simulated clock at this frame
-  int localized = 0;  // targets with min_i det Sigma_i^k <= eps
+  int localized = 0;     // targets with min_i det Sigma_i^k <= eps
   std::string policy;
   std::uint64_t seed = 0;
   double eps = 0.1;
