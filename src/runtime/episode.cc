@@ -171,6 +171,16 @@ DecisionContext Episode::Context() const {
   return ctx;
 }
 
+// The policy's moves into moves_: the team's context, without the
+// centralized belief unless the policy is centralized.
+PolicyStatus Episode::Decide(const DecisionContext& ctx) {
+  DecisionContext given = ctx;
+  if (!policy_->centralized()) given.central = nullptr;
+  const PolicyStatus status = policy_->Decide(given, &moves_);
+  ++stats_.statuses[static_cast<int>(status)];
+  return status;
+}
+
 void Episode::Step() {
   AIA_CHECK_MSG(policy_ != nullptr, "an episode without a policy cannot step");
   if (done()) return;
@@ -185,10 +195,7 @@ void Episode::Step() {
   // The policy decides on what the robots know now; the world rule applies.
   auto t0 = Clock::now();
   const DecisionContext ctx = Context();
-  DecisionContext given = ctx;
-  if (!policy_->centralized()) given.central = nullptr;
-  const PolicyStatus status = policy_->Decide(given, &moves_);
-  ++stats_.statuses[static_cast<int>(status)];
+  const PolicyStatus status = Decide(ctx);
   for (int i = 0; i < n; ++i) {
     if (!comm_.Active(i)) {
       applied_[i] = Move::kStay;
@@ -253,10 +260,7 @@ void Episode::StepAsync() {
   // destinations in the context as what they intend.
   auto t0 = Clock::now();
   const DecisionContext ctx = Context();
-  DecisionContext given = ctx;
-  if (!policy_->centralized()) given.central = nullptr;
-  const PolicyStatus status = policy_->Decide(given, &moves_);
-  ++stats_.statuses[static_cast<int>(status)];
+  const PolicyStatus status = Decide(ctx);
   for (int i = 0; i < n; ++i)
     if (ready_[i]) Apply(i, lattice);
   times_.policy += Since(t0);

@@ -16,12 +16,6 @@ namespace {
 
 using testing::ScenarioFromYaml;
 
-// A small open mission every policy must finish, deciding asynchronously.
-const char* kSmallAsync =
-    "seed: 1\nworkspace: {size: [8, 8], obstacles: {random: {count: 4}}}\n"
-    "robots: {count: 3}\ntargets: {count: 3}\n"
-    "mission: {max_steps: 400, decisions: async}\n";
-
 // A crowd: many robots on few lattice points, so that they meet.
 std::string Crowd(const std::string& model, const std::string& avoidance) {
   return "seed: 4\nworkspace: {size: [5, 5], obstacles: {random: {count: "
@@ -31,27 +25,6 @@ std::string Crowd(const std::string& model, const std::string& avoidance) {
          "stop_at_success: false, decisions: async, avoidance: " +
          avoidance + "}\npolicy: {name: random}\n";
 }
-
-class AsyncContractTest : public ::testing::TestWithParam<std::string> {};
-
-TEST_P(AsyncContractTest, ReachesSuccessOnASmallScenario) {
-  Scenario s = ScenarioFromYaml(kSmallAsync);
-  s.policy.name = GetParam();
-  auto e = MakeEpisode(s, AllPolicies());
-  while (!e->done()) {
-    e->Step();
-    for (int idx : e->robot_lattice())
-      EXPECT_TRUE(e->world().map.lattice().Free(idx));
-  }
-  EXPECT_TRUE(e->success()) << GetParam() << " after " << e->step() << " steps";
-  EXPECT_EQ(e->flowtime(), e->step());
-  for (int k = 0; k < e->world().NumTargets(); ++k)
-    EXPECT_LE(e->MinDet(k), s.mission.eps);
-}
-
-INSTANTIATE_TEST_SUITE_P(AllPolicies, AsyncContractTest,
-                         ::testing::ValuesIn(AllPolicies().Names()),
-                         [](const auto& info) { return info.param; });
 
 // What the rounds looked like: who decided, and the clock at each tick.
 class RoundObserver : public StepObserver {

@@ -23,20 +23,26 @@ const char* kSmall =
 
 class PolicyContractTest : public ::testing::TestWithParam<std::string> {};
 
+// In both decision modes (async: each robot decides when its move ends).
 TEST_P(PolicyContractTest, ReachesSuccessOnASmallScenario) {
-  Scenario s = ScenarioFromYaml(kSmall);
-  s.policy.name = GetParam();
-  auto e = MakeEpisode(s, AllPolicies());
-  while (!e->done()) {
-    e->Step();
-    // Every robot is always on a free lattice point.
-    for (int idx : e->robot_lattice())
-      EXPECT_TRUE(e->world().map.lattice().Free(idx));
+  for (const Decisions decisions : {Decisions::kLockstep, Decisions::kAsync}) {
+    Scenario s = ScenarioFromYaml(kSmall);
+    s.policy.name = GetParam();
+    s.mission.decisions = decisions;
+    auto e = MakeEpisode(s, AllPolicies());
+    while (!e->done()) {
+      e->Step();
+      // Every robot is always on a free lattice point.
+      for (int idx : e->robot_lattice())
+        EXPECT_TRUE(e->world().map.lattice().Free(idx));
+    }
+    EXPECT_TRUE(e->success())
+        << GetParam() << " after " << e->step() << " steps, async "
+        << e->async();
+    EXPECT_EQ(e->flowtime(), e->step());
+    for (int k = 0; k < e->world().NumTargets(); ++k)
+      EXPECT_LE(e->MinDet(k), s.mission.eps);
   }
-  EXPECT_TRUE(e->success()) << GetParam() << " after " << e->step() << " steps";
-  EXPECT_EQ(e->flowtime(), e->step());
-  for (int k = 0; k < e->world().NumTargets(); ++k)
-    EXPECT_LE(e->MinDet(k), s.mission.eps);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllPolicies, PolicyContractTest,

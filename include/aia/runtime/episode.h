@@ -209,6 +209,7 @@ class Episode {
   void MoveTargets();
   // mission.decisions async: one round (the ready robots decide, physics
   // runs until a robot's move ends, sensing ticks on the way) and one tick.
+  PolicyStatus Decide(const DecisionContext& ctx);
   void StepAsync();
   void Tick();
   void Apply(int i, const Lattice& lattice);
