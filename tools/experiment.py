@@ -850,7 +850,7 @@ def motion(args):
             f"{r['share_staying']:.2f} / {r['share_arrived']:.2f} |")
     write_atomic(os.path.join(args.out, "motion.md"), "\n".join(lines) + "\n")
     plot_motion(table, os.path.join(args.out, "motion.png"),
-                f"point against wheeled robots, {seeds} worlds per condition, "
+                f"{' against '.join(variants)}, {seeds} worlds per condition, "
                 f"seeds from {args.seed_base}")
     write_json(os.path.join(args.out, "summary.json"), {
         "experiment": "motion", "policies": policies, "seeds": seeds,
