@@ -385,6 +385,8 @@ class Mission {
     return static_cast<int>(Context().robot_lattice->size());
   }
   int num_targets() const { return Context().beliefs->layout().num_targets(); }
+  // mission.decisions async.
+  bool asynchronous() const { return Context().ready != nullptr; }
   int step() const { return Context().step; }
   bool done() const { return owned() && episode_->done(); }
   bool success() const { return owned() && episode_->success(); }
@@ -1272,6 +1274,8 @@ void BindMission(py::module_& m) {
       .def_property_readonly("flowtime", &Mission::flowtime,
                              "steps to success; -1 until then")
       .def_property_readonly("max_steps", &Mission::max_steps)
+      .def_property_readonly("asynchronous", &Mission::asynchronous,
+                             "mission.decisions is async")
       .def_property_readonly(
           "ready", &Mission::Ready,
           "(N,) bool: the robots whose moves the next step uses (all in "

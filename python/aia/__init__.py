@@ -165,6 +165,12 @@ class Mission:
         return self._m.valid_moves()
 
     @property
+    def asynchronous(self):
+        """True when mission.decisions is async (each robot decides when
+        its own move ends; see ready)."""
+        return self._m.asynchronous
+
+    @property
     def ready(self):
         """(N,) bool: the robots whose moves the next step() uses: all of
         them in lockstep; with mission.decisions async, those whose last

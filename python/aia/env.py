@@ -175,6 +175,11 @@ class ParallelEnv:
         self._channels = dict(channels or {})
         self._step_penalty = float(step_penalty)
         first = Mission(self._scenario, seed=seed, overrides=self._overrides)
+        if first.asynchronous:
+            raise InputError(f"{where}: mission.decisions: async is not "
+                             "an env's step (every agent acts at once); "
+                             "step an aia.Mission, whose ready says who "
+                             "decides")
         self._seed = first.seed
         self._next_seed = first.seed
         n, m = first.num_robots, first.num_targets

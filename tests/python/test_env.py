@@ -284,3 +284,8 @@ def test_pettingzoos_own_parallel_api_test():
                            overrides={"robots.count": 3, "targets.count": 2,
                                       "mission.max_steps": 30})
     test.parallel_api_test(env, num_cycles=40)
+
+
+def test_an_async_mission_is_not_an_env():
+    with pytest.raises(aia.InputError, match="mission.decisions: async"):
+        aia.parallel_env(DEFAULT, overrides={"mission.decisions": "async"})
