@@ -82,6 +82,9 @@ void ClaimsShaper::Shape(const DecisionContext& ctx,
   claims_.Begin(*ctx.map, *ctx.sensor);
   for (std::size_t b = 0; b < count; ++b) {
     const int i = rows[b];
+    // Each robot claims from its own view: a robot on its way (async
+    // decisions) needs none now.
+    if (!Deciding(ctx, i)) continue;
     others_.clear();
     for (int j : ctx.comm->Neighbors(i))
       if (j != i && ctx.comm->Active(j))
