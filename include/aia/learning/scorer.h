@@ -76,6 +76,9 @@ class NetworkScorer : public MoveScorer {
   // The team rows rendered and scored (async: the deciding ones), and their
   // logits in that order.
   std::vector<int> order_, deciding_;
+  std::vector<std::vector<float>> worker_pair_;  // ForwardAlone's batch
+  void ForwardAlone(const float* image, std::size_t size, float* logits,
+                    int worker);
   std::vector<float> scored_;
   // Message passing (a model with message_hops > 0): the rows' hidden
   // features and their graph in row indices.
