@@ -336,6 +336,7 @@ void Episode::Apply(int i, const Lattice& lattice) {
     pending_[i] = to;
     sim_.SetWaypoint(i, lattice.Point(robot_idx_[i]));
     sim_.Hold(i, next_tick_, /*yielding=*/true);
+    robot_idx_[i] = to;  // what it intends, as a robot on its way
     return;
   }
   StartMove(i, to, lattice);
@@ -409,13 +410,14 @@ void Episode::Tick() {
     ready_[i] = 0;
     sim_.SetWaypoint(i, robot_pos_[i]);
     sim_.Park(i);
+    const int at = instance_->world.map.lattice().NearestFree(robot_pos_[i]);
+    if (at >= 0) robot_idx_[i] = at;
     if (reserve_) {
       if (held_from_[i] >= 0) --held_[held_from_[i]];
       if (held_to_[i] >= 0) --held_[held_to_[i]];
       held_to_[i] = pending_[i] = -1;
-      const int p = instance_->world.map.lattice().NearestFree(robot_pos_[i]);
-      held_from_[i] = p;
-      if (p >= 0) ++held_[p];
+      held_from_[i] = at;
+      if (at >= 0) ++held_[at];
     }
   }
   for (StepObserver* o : observers_)
