@@ -36,9 +36,8 @@ TEST_P(PolicyContractTest, ReachesSuccessOnASmallScenario) {
       for (int idx : e->robot_lattice())
         EXPECT_TRUE(e->world().map.lattice().Free(idx));
     }
-    EXPECT_TRUE(e->success())
-        << GetParam() << " after " << e->step() << " steps, async "
-        << e->async();
+    EXPECT_TRUE(e->success()) << GetParam() << " after " << e->step()
+                              << " steps, async " << e->async();
     EXPECT_EQ(e->flowtime(), e->step());
     for (int k = 0; k < e->world().NumTargets(); ++k)
       EXPECT_LE(e->MinDet(k), s.mission.eps);

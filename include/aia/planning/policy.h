@@ -109,8 +109,9 @@ struct DecisionContext {
   // mission.decisions async: the robots whose moves are wanted now (1: its
   // last move has ended); the others are on their way (or waiting for the
   // point to be free), and their robot_lattice entries are the points they
-  // are driving to (what a teammate intends). Null: every robot decides (lockstep). A policy may
-  // skip the others; what it writes for them is ignored.
+  // are driving to (what a teammate intends). Null: every robot decides
+  // (lockstep). A policy may skip the others; what it writes for them is
+  // ignored.
   const std::vector<std::uint8_t>* ready = nullptr;
 };
 
