@@ -277,14 +277,8 @@ void RulesLayer::Shape(const DecisionContext& ctx,
   // Search memory is the deciding robots' (async decisions: a robot on its
   // way has not reached the point it would record a miss at); claims are
   // the whole team's.
-  const std::vector<int>* deciding = &rows;
-  if (ctx.ready) {
-    deciding_.clear();
-    for (int i : rows)
-      if (Deciding(ctx, i)) deciding_.push_back(i);
-    deciding = &deciding_;
-  }
-  memory_.Update(ctx, *deciding);
+  DecidingRows(ctx, rows, &deciding_);
+  memory_.Update(ctx, deciding_);
   claims_.Shape(ctx, rows, memory_.aims());
 }
 

@@ -59,9 +59,7 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       search_.num_robots() == static_cast<int>(ctx.robot_lattice->size()) &&
       search_.num_targets() == ctx.beliefs->layout().num_targets();
   if (searching_) {  // the deciding robots' (see RulesLayer::Shape)
-    deciding_.clear();
-    for (int i : rows)
-      if (Deciding(ctx, i)) deciding_.push_back(i);
+    DecidingRows(ctx, rows, &deciding_);
     for (int i : deciding_) search_.Update(ctx, i);
     search_.Share(ctx, deciding_);
   }

@@ -281,7 +281,7 @@ void Episode::StepAsync() {
   const double physics_before = sim_.physics_seconds();
   while (true) {
     const PhysicsStepStats physics =
-        sim_.AdvanceMoves(next_tick_, &ended_, &how_, [&](double seconds) {
+        sim_.AdvanceMoves(next_tick_, &ended_, [&](double seconds) {
           const double f = std::min(1.0, (seconds - tick_start_ * dt) / motion);
           for (int k = 0; k < num_targets_; ++k)
             sim_.SetTargetPosition(

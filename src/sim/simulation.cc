@@ -294,10 +294,8 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
       1, static_cast<int>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
   const double tol = physics.tolerance;
   const double tol2 = tol * tol;
-  const double stall_speed = kStallSpeed;
-  const double settle_time = kSettleTime;
   // A robot in a sliding contact can creep on for seconds faster than
-  // stall_speed: it is stuck too when what it has to go has not shrunk by
+  // kStallSpeed: it is stuck too when what it has to go has not shrunk by
   // the driver's EnoughProgress over the last progress window.
   const double progress_window = driver_->progress_window();  // s
   const int check_every =
@@ -310,7 +308,7 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
     return (RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2;
   };
   auto settled = [&](int i, double elapsed) {
-    return elapsed >= settle_time && (stuck_[i] || Slow(i, stall_speed));
+    return elapsed >= kSettleTime && (stuck_[i] || Slow(i, kStallSpeed));
   };
   double elapsed = 0.0;
   bool all_settled = false;
@@ -379,11 +377,10 @@ void Simulation::Hold(int i, long until, bool yielding) {
 void Simulation::Park(int i) { state_[i] = RobotState::kParked; }
 
 PhysicsStepStats Simulation::AdvanceMoves(
-    long until, std::vector<int>* ended, std::vector<MoveEnd>* how,
+    long until, std::vector<int>* ended,
     const std::function<void(double)>& on_substep) {
   PhysicsStepStats stats;
   ended->clear();
-  how->clear();
   const PhysicsConfig& physics = model_->physics();
   const double dt = m_->opt.timestep;
   const long timeout = std::max(
@@ -394,9 +391,8 @@ PhysicsStepStats Simulation::AdvanceMoves(
   const long check_every = std::max(
       1L, static_cast<long>(std::lround(driver_->progress_window() / dt)));
   const int n = num_robots();
-  auto end = [&](int i, MoveEnd m) {
+  auto end = [&](int i) {
     ended->push_back(i);
-    how->push_back(m);
     state_[i] = RobotState::kParked;
   };
   while (clock_ < until) {
@@ -412,7 +408,7 @@ PhysicsStepStats Simulation::AdvanceMoves(
         case RobotState::kYielding:
           (state_[i] == RobotState::kHolding ? time_use_.staying
                                              : time_use_.yielding) += dt;
-          if (clock_ >= since_[i]) end(i, MoveEnd::kHeld);
+          if (clock_ >= since_[i]) end(i);
           break;
         case RobotState::kMoving: {
           const long elapsed = clock_ - since_[i];
@@ -423,17 +419,17 @@ PhysicsStepStats Simulation::AdvanceMoves(
             progress_[i] = d;
           }
           if ((RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2) {
-            end(i, MoveEnd::kArrived);
+            end(i);
           } else if (elapsed >= settle && (stuck_[i] || Slow(i, kStallSpeed))) {
             time_use_.blocked += dt;
             ++stats.stalled;
             ++robot_stalls_[i];
-            end(i, MoveEnd::kStalled);
+            end(i);
           } else if (elapsed >= timeout) {
             (turning_[i] ? time_use_.turning : time_use_.driving) += dt;
             ++stats.late;
             ++robot_timeouts_[i];
-            end(i, MoveEnd::kTimedOut);
+            end(i);
           } else {
             (turning_[i] ? time_use_.turning : time_use_.driving) += dt;
           }

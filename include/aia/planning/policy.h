@@ -119,6 +119,13 @@ struct DecisionContext {
 inline bool Deciding(const DecisionContext& ctx, int i) {
   return ctx.ready == nullptr || (*ctx.ready)[i] != 0;
 }
+// The robots of `rows` that decide now, in order (all of them in lockstep).
+inline void DecidingRows(const DecisionContext& ctx,
+                         const std::vector<int>& rows, std::vector<int>* out) {
+  out->clear();
+  for (int i : rows)
+    if (Deciding(ctx, i)) out->push_back(i);
+}
 
 class Policy {
  public:

@@ -254,7 +254,6 @@ class Episode {
   std::vector<int> from_;
   std::vector<long> decisions_;
   std::vector<int> ended_;
-  std::vector<Simulation::MoveEnd> how_;
   int tick_ = 0;
   long tick_period_ = 1, next_tick_ = 0, tick_start_ = 0;
   bool targets_drawn_ = false;

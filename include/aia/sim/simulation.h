@@ -178,13 +178,12 @@ class Simulation {
   void Park(int i);
   // Runs mj_step until some robot's move or hold ends, or until the clock
   // reaches `until` substeps. Robots whose moves ended go to `ended`
-  // (ascending), each with how: arrived within the tolerance, stalled
-  // (blocked, as AdvanceToWaypoints tells it, on the robot's own clock) or
-  // timed out; a robot then holds its place until it is given a new move.
+  // (ascending): arrived within the tolerance, stalled (blocked, as
+  // AdvanceToWaypoints tells it, on the robot's own clock; counted in the
+  // stats and robot_stalls), timed out (likewise), or held to `until` of
+  // their Hold; a robot then stays parked until it is given a new move.
   // `on_substep` as in AdvanceToWaypoints, with the clock's seconds.
-  enum class MoveEnd : std::uint8_t { kArrived, kStalled, kTimedOut, kHeld };
   PhysicsStepStats AdvanceMoves(long until, std::vector<int>* ended,
-                                std::vector<MoveEnd>* how,
                                 const std::function<void(double)>& on_substep);
   // mj_step calls so far, and the clock in seconds (substeps x timestep).
   long clock() const { return clock_; }
