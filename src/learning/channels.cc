@@ -417,6 +417,20 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   };
   const std::size_t n = static_cast<std::size_t>(h) * w;
   std::fill(out, out + n, 0.0f);
+  // Each pixel's largest source value: a smaller one from the same pixel
+  // leads nowhere the larger does not lead higher (values only decay), so
+  // the heap starts with one entry per source pixel, not one per target
+  // (hundreds of far targets fold onto a few border pixels).
+  thread_local std::vector<float> source;
+  thread_local std::vector<int> sources;
+  source.assign(n, 0.0f);
+  sources.clear();
+  const auto add = [&](int u, int v, float value) {
+    const int idx = v * w + u;
+    if (free(u, v)) out[idx] = std::max(out[idx], value);
+    if (source[idx] == 0.0f) sources.push_back(idx);
+    source[idx] = std::max(source[idx], value);
+  };
   const int reach = static_cast<int>(std::ceil(params_.observe_range / cell));
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
@@ -432,8 +446,7 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
       const float value =
           static_cast<float>(wk * std::pow(decay, std::max(beyond, 0)));
       if (value < 1e-6f) continue;
-      if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
-      heap.emplace_back(value, bv * w + bu);
+      add(bu, bv, value);
       continue;
     }
     for (const int idx : ObservationPixels(targets[k].mean)) {
@@ -441,10 +454,10 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
       const int bu = std::clamp(u, 0, w - 1), bv = std::clamp(v, 0, h - 1);
       const float value = static_cast<float>(
           wk * std::pow(decay, std::abs(u - bu) + std::abs(v - bv)));
-      if (free(bu, bv)) out[bv * w + bu] = std::max(out[bv * w + bu], value);
-      heap.emplace_back(value, bv * w + bu);
+      add(bu, bv, value);
     }
   }
+  for (const int idx : sources) heap.emplace_back(source[idx], idx);
   std::make_heap(heap.begin(), heap.end());
   while (!heap.empty()) {
     std::pop_heap(heap.begin(), heap.end());

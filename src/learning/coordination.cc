@@ -79,7 +79,7 @@ void ClaimsShaper::Shape(const DecisionContext& ctx,
   for (auto& o : owned_) o.clear();
   narrowed_.assign(count, 0);
   if (mode_ == TargetClaimsMode::kNone || !ctx.sensor) return;
-  claims_.Begin(*ctx.map, *ctx.sensor);
+  claims_.Begin(*ctx.map, *ctx.sensor, ctx.beliefs->layout().num_targets());
   for (std::size_t b = 0; b < count; ++b) {
     const int i = rows[b];
     // Each robot claims from its own view: a robot on its way (async

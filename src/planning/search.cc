@@ -282,9 +282,23 @@ void TargetClaims::Reset() {
   sensor_ = nullptr;
 }
 
-void TargetClaims::Begin(const Map& map, const SensorModel& sensor) {
+int TargetClaims::Horizon(int num_targets, const Lattice& lattice, int span) {
+  const long points = lattice.size();
+  if (num_targets <= 0 || num_targets * points <= kFieldBudget) return -1;
+  const double side =
+      std::sqrt(static_cast<double>(kFieldBudget) / num_targets);
+  const int moves = static_cast<int>((side - 1.0) / 2.0) - span;
+  return std::max(moves, 2 * span);
+}
+
+void TargetClaims::Begin(const Map& map, const SensorModel& sensor,
+                         int num_targets) {
+  const Lattice& lattice = map.lattice();
+  const int span =
+      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  const int horizon = Horizon(num_targets, lattice, span);
   if (map_ != &map || sensor_ != &sensor ||
-      (sensor_ && sensor_->range != range_)) {
+      (sensor_ && sensor_->range != range_) || horizon != horizon_) {
     Reset();
   } else {
     // Keep the fields the last step used (most aims do not move between
@@ -301,11 +315,85 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor) {
   map_ = &map;
   sensor_ = &sensor;
   range_ = sensor.range;
+  horizon_ = horizon;
   ++step_;
   used_ = 0;
 }
 
-const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
+void TargetClaims::AimField::Compute(const Lattice& lattice,
+                                     const std::vector<int>& sources,
+                                     int horizon, std::vector<int>* queue) {
+  whole_ = horizon < 0;
+  if (whole_) {
+    x0_ = y0_ = 0;
+    nx_ = lattice.nx();
+    ny_ = lattice.ny();
+    BfsDistances(lattice, sources.data(), static_cast<int>(sources.size()),
+                 &dist_, queue);
+    return;
+  }
+  // A point within `horizon` moves of a source lies in the sources' box
+  // grown by `horizon`: the window, so that a move from a point nearer
+  // than the horizon never leaves it.
+  int x_lo = lattice.nx(), y_lo = lattice.ny(), x_hi = -1, y_hi = -1;
+  for (int q : sources) {
+    x_lo = std::min(x_lo, lattice.Ix(q));
+    x_hi = std::max(x_hi, lattice.Ix(q));
+    y_lo = std::min(y_lo, lattice.Iy(q));
+    y_hi = std::max(y_hi, lattice.Iy(q));
+  }
+  if (x_hi < 0) {  // no source: nothing is in reach
+    x0_ = y0_ = nx_ = ny_ = 0;
+    dist_.clear();
+    return;
+  }
+  x0_ = std::max(0, x_lo - horizon);
+  y0_ = std::max(0, y_lo - horizon);
+  nx_ = std::min(lattice.nx() - 1, x_hi + horizon) - x0_ + 1;
+  ny_ = std::min(lattice.ny() - 1, y_hi + horizon) - y0_ + 1;
+  dist_.assign(static_cast<std::size_t>(nx_) * ny_, -1);
+  const auto local = [&](int q) {
+    return (lattice.Iy(q) - y0_) * nx_ + (lattice.Ix(q) - x0_);
+  };
+  // The local offset of each move of kMoves (left, right, up, down; y up).
+  const std::array<int, kNumMoves> offset = {-1, 1, nx_, -nx_};
+  // (point, local index) pairs.
+  queue->resize(2 * dist_.size());
+  std::size_t head = 0, tail = 0;
+  for (int q : sources) {
+    const int l = local(q);
+    if (!lattice.Free(q) || dist_[l] == 0) continue;
+    dist_[l] = 0;
+    (*queue)[tail++] = q;
+    (*queue)[tail++] = l;
+  }
+  while (head < tail) {
+    const int u = (*queue)[head++], lu = (*queue)[head++];
+    const int du = dist_[lu];
+    if (du >= horizon) continue;
+    for (int a = 0; a < kNumMoves; ++a) {
+      const int v = lattice.Next(u, kMoves[a]);
+      if (v < 0) continue;
+      const int lv = lu + offset[a];
+      if (dist_[lv] >= 0) continue;
+      dist_[lv] = du + 1;
+      (*queue)[tail++] = v;
+      (*queue)[tail++] = lv;
+    }
+  }
+}
+
+Move TargetClaims::AimField::StepDown(const Lattice& lattice, int p) const {
+  const int d = At(lattice, p);
+  if (d <= 0) return Move::kStay;
+  for (Move m : kMoves) {
+    const int v = lattice.Next(p, m);
+    if (v >= 0 && At(lattice, v) == d - 1) return m;
+  }
+  return Move::kStay;
+}
+
+const TargetClaims::AimField& TargetClaims::Field(const Vec2& aim) {
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Field()");
   auto [it, fresh] = index_.emplace(KeyOf(aim), Slot{});
   it->second.step = step_;
@@ -332,12 +420,13 @@ const std::vector<int>& TargetClaims::Field(const Vec2& aim) {
           PredictedPrecision(*map_, *sensor_, lattice.Point(q), aim) > 0.0)
         sources_.push_back(q);
     }
-  BfsDistances(lattice, sources_.data(), static_cast<int>(sources_.size()),
-               &fields_[index], &queue_);
+  fields_[index].Compute(lattice, sources_, horizon_, &queue_);
   return fields_[index];
 }
 
-int TargetClaims::Distance(const Vec2& aim, int p) { return Field(aim)[p]; }
+int TargetClaims::Distance(const Vec2& aim, int p) {
+  return Field(aim).At(map_->lattice(), p);
+}
 
 bool TargetClaims::ByPosition(int a, int b) const {
   const Lattice& lattice = map_->lattice();
@@ -353,6 +442,7 @@ TargetClaims::Plan& TargetClaims::PlanFor(int self,
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim() or Route()");
   AIA_CHECK(aims.size() == open.size());
   const int m = static_cast<int>(aims.size());
+  const Lattice& lattice = map_->lattice();
   points_.assign(others.begin(), others.end());
   points_.push_back(self);
   const auto before = [this](int a, int b) { return ByPosition(a, b); };
@@ -385,11 +475,14 @@ TargetClaims::Plan& TargetClaims::PlanFor(int self,
   held_.assign(n, 0);
   for (int k = 0; k < m; ++k) {
     if (!open[k]) continue;
-    const std::vector<int>& f = Field(aims[k]);
-    int best = -1;
+    const AimField& f = Field(aims[k]);
+    int best = -1, best_d = -1;
     for (int r = 0; r < n; ++r) {
-      const int d = f[points_[r]];
-      if (d >= 0 && (best < 0 || d < f[points_[best]])) best = r;
+      const int d = f.At(lattice, points_[r]);
+      if (d >= 0 && (best < 0 || d < best_d)) {
+        best = r;
+        best_d = d;
+      }
     }
     plan.owner[k] = best;
     if (best >= 0) ++held_[best];
@@ -398,12 +491,15 @@ TargetClaims::Plan& TargetClaims::PlanFor(int self,
   // that owns none.
   for (int k = 0; k < m; ++k) {
     if (plan.owner[k] < 0 || held_[plan.owner[k]] < 2) continue;
-    const std::vector<int>& f = Field(aims[k]);
-    int best = -1;
+    const AimField& f = Field(aims[k]);
+    int best = -1, best_d = -1;
     for (int r = 0; r < n; ++r) {
-      const int d = f[points_[r]];
-      if (held_[r] == 0 && d >= 0 && (best < 0 || d < f[points_[best]]))
+      if (held_[r] != 0) continue;
+      const int d = f.At(lattice, points_[r]);
+      if (d >= 0 && (best < 0 || d < best_d)) {
         best = r;
+        best_d = d;
+      }
     }
     plan.helper[k] = best;
   }
@@ -417,6 +513,7 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Claim()");
   AIA_CHECK(aims.size() == open.size());
   const int m = static_cast<int>(aims.size());
+  const Lattice& lattice = map_->lattice();
   // Robot at point a, da moves away, comes before robot at b, db away.
   const auto before = [this](int a, int da, int b, int db) {
     return da != db ? da < db : ByPosition(a, b);
@@ -425,15 +522,17 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
   bool any = false;
   for (int k = 0; k < m; ++k) {
     if (!open[k]) continue;
-    const std::vector<int>& f = Field(aims[k]);
-    const int d = f[self];
+    const AimField& f = Field(aims[k]);
+    const int d = f.At(lattice, self);
     if (d < 0) continue;
     bool won = true;
-    for (int q : others)
-      if (f[q] >= 0 && before(q, f[q], self, d)) {
+    for (int q : others) {
+      const int dq = f.At(lattice, q);
+      if (dq >= 0 && before(q, dq, self, d)) {
         won = false;
         break;
       }
+    }
     (*mine)[k] = won;
     any = any || won;
   }
@@ -452,18 +551,18 @@ class TargetClaims::Legs : public LegOracle {
   Legs(TargetClaims* claims, const std::vector<Vec2>* aims)
       : claims_(claims), aims_(aims) {}
   Leg Compute(int from, int, int k) override {
-    const std::vector<int>& f = claims_->Field((*aims_)[k]);
-    Leg leg;
-    leg.steps = f[from];
-    if (leg.steps < 0) return leg;
+    const AimField& f = claims_->Field((*aims_)[k]);
     const Lattice& lattice = claims_->map_->lattice();
+    Leg leg;
+    leg.steps = f.At(lattice, from);
+    if (leg.steps < 0) return leg;
     int q = from;
-    while (f[q] > 0) q = lattice.Next(q, StepDownField(lattice, f, q));
+    while (f.At(lattice, q) > 0) q = lattice.Next(q, f.StepDown(lattice, q));
     leg.end = q;
     return leg;
   }
   int Distance(int from, int k) override {
-    return claims_->Field((*aims_)[k])[from];
+    return claims_->Field((*aims_)[k]).At(claims_->map_->lattice(), from);
   }
   bool TimeVarying(int) const override { return false; }
 

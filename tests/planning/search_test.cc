@@ -2,8 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "aia/core/rng.h"
 #include "aia/world/lattice.h"
 #include "support/team_fixture.h"
 
@@ -188,6 +193,81 @@ TEST(SearchPointsTest, NeighboursShareTheirMisses) {
   EXPECT_EQ(points.Points(0, 0).size(), 3u);
 }
 
+// NeighbourMisses against the rule read directly: robot i's list for target
+// k becomes its own list, then every point a neighbour's list (as it was
+// before the call) holds and its own does not, ascending; only where its
+// belief is open and the target static; then(i, k) once per (robot,
+// target) that took a point, in ascending order. Random lists on full and
+// range graphs with lost edges (so neighbourhoods repeat and differ).
+TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
+  struct Slot {
+    double log_det = 0.0;
+    std::vector<int> missed;
+  };
+  for (int trial = 0; trial < 24; ++trial) {
+    CommParams cp;
+    cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
+    cp.range = 3.0;
+    cp.packet_loss_lambda = trial % 3 == 0 ? 0.0 : 4.0 * (trial % 3);
+    Team team(
+        "workspace: {size: [10.0, 10.0]}\n"
+        "robots: {count: 9}\n"
+        "targets: {count: 5}\n"
+        "seed: " +
+            std::to_string(100 + trial) + "\n",
+        cp);
+    std::vector<Vec2> p;
+    for (int idx : team.positions)
+      p.push_back(team.world.map.lattice().Point(idx));
+    team.comm.Update(1, p);
+    const int n = 9, m = 5;
+    Rng rng(7, "neighbour_misses_test", static_cast<std::uint64_t>(trial));
+    std::vector<Slot> slots(n * m);
+    const double log_eps = std::log(team.scenario.mission.eps);
+    for (Slot& s : slots) {
+      s.log_det = rng.Uniform() < 0.2 ? log_eps - 1.0 : log_eps + 1.0;
+      const int count = static_cast<int>(rng.Uniform() * 4);
+      for (int c = 0; c < count; ++c) {
+        // Few distinct points, so that lists overlap.
+        const int q = static_cast<int>(rng.Uniform() * 6) * 7;
+        if (std::find(s.missed.begin(), s.missed.end(), q) == s.missed.end())
+          s.missed.push_back(q);
+      }
+    }
+    std::vector<int> robots;
+    for (int i = 0; i < n; ++i)
+      if (rng.Uniform() < 0.8) robots.push_back(i);
+    std::vector<Slot> expected = slots;
+    std::vector<std::pair<int, int>> expected_calls;
+    for (int i : robots)
+      for (int k = 0; k < m; ++k) {
+        const Slot& own = slots[i * m + k];
+        if (!(own.log_det > log_eps)) continue;
+        std::vector<int> taken;
+        for (int j : team.comm.Neighbors(i))
+          for (int q : slots[j * m + k].missed)
+            if (std::find(own.missed.begin(), own.missed.end(), q) ==
+                own.missed.end())
+              taken.push_back(q);
+        std::sort(taken.begin(), taken.end());
+        taken.erase(std::unique(taken.begin(), taken.end()), taken.end());
+        if (taken.empty()) continue;
+        for (int q : taken) expected[i * m + k].missed.push_back(q);
+        expected_calls.push_back({i, k});
+      }
+    NeighbourMisses sharing;
+    std::vector<std::pair<int, int>> calls;
+    std::vector<int> shuffled(robots.rbegin(), robots.rend());
+    sharing.Share(team.Context(), shuffled, m, &slots, [&](int i, int k) {
+      calls.push_back({i, k});
+    });
+    for (int s = 0; s < n * m; ++s)
+      EXPECT_EQ(slots[s].missed, expected[s].missed)
+          << "trial " << trial << ", robot " << s / m << ", target " << s % m;
+    EXPECT_EQ(calls, expected_calls) << "trial " << trial;
+  }
+}
+
 TEST(TargetClaimsTest, TheRobotFewestMovesFromMeasuringClaims) {
   Team team(kEmptyWorld);
   TargetClaims claims;
@@ -240,6 +320,64 @@ TEST(TargetClaimsTest, WallsCountWhereAStraightLineWouldNot) {
   claims.Claim(west, {south}, {aim}, {1}, &mine);
   EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
   claims.Claim(south, {west}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1}));
+}
+
+// Fields reach every point while targets x lattice points is at most 4e6;
+// beyond it, the horizon: (sqrt(4e6 / m) - 1) / 2 rounded down, less the
+// sensor's span (2 m / 0.5 m + 1 = 5), at least 2 spans.
+TEST(TargetClaimsTest, FieldsReachAHorizonOnlyBeyondTheBudget) {
+  Team team(
+      "workspace: {size: [100.0, 100.0], obstacles: {random: {count: 600}}}\n"
+      "robots: {count: 1}\n"
+      "targets: {count: 1}\n");
+  const Lattice& lattice = team.world.map.lattice();
+  ASSERT_EQ(lattice.size(), 40000);
+  EXPECT_EQ(TargetClaims::Horizon(10, lattice, 5), -1);
+  EXPECT_EQ(TargetClaims::Horizon(100, lattice, 5), -1);  // 4e6 exactly
+  // sqrt(4e6 / 101) = 199.0: 99 - 5.
+  EXPECT_EQ(TargetClaims::Horizon(101, lattice, 5), 94);
+  // sqrt(4000) = 63.2: 31 - 5.
+  EXPECT_EQ(TargetClaims::Horizon(1000, lattice, 5), 26);
+  EXPECT_EQ(TargetClaims::Horizon(1000000, lattice, 5), 10);
+  // Within the horizon, the windowed field is the whole one; beyond it,
+  // nothing is in reach. The same aims, near the middle and at the edges.
+  TargetClaims whole, near;
+  whole.Begin(team.world.map, team.sensor, 0);
+  near.Begin(team.world.map, team.sensor, 1000);
+  for (const Vec2 aim : {Vec2(50.1, 49.9), Vec2(0.3, 0.2), Vec2(99.8, 60.0)}) {
+    int inside = 0, beyond = 0;
+    for (int p = 0; p < lattice.size(); ++p) {
+      const int d = whole.Distance(aim, p);
+      if (d >= 0 && d <= 26) {
+        ASSERT_EQ(near.Distance(aim, p), d) << "point " << p;
+        ++inside;
+      } else {
+        ASSERT_EQ(near.Distance(aim, p), -1) << "point " << p;
+        beyond += d > 26;
+      }
+    }
+    EXPECT_GT(inside, 100);
+    EXPECT_GT(beyond, 10000);
+  }
+  // A robot beyond the horizon claims nothing; one within it claims.
+  const Vec2 aim(50.1, 49.9);
+  std::vector<std::uint8_t> mine;
+  int far = -1, close = -1;
+  for (int p = 0; p < lattice.size() && (far < 0 || close < 0); ++p) {
+    const int d = whole.Distance(aim, p);
+    if (d > 26 && d < 40 && far < 0) far = p;
+    if (d > 0 && d < 20 && close < 0) close = p;
+  }
+  ASSERT_GE(far, 0);
+  ASSERT_GE(close, 0);
+  near.Claim(far, {}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+  whole.Claim(far, {}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({1}));
+  near.Claim(far, {close}, {aim}, {1}, &mine);
+  EXPECT_EQ(mine, std::vector<std::uint8_t>({0}));
+  near.Claim(close, {far}, {aim}, {1}, &mine);
   EXPECT_EQ(mine, std::vector<std::uint8_t>({1}));
 }
 

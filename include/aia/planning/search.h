@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
@@ -59,13 +60,16 @@ bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
 // log eps) and not in its own list, read as Update left the lists (so the
 // order of the robots does not matter); then, per (robot, target) that took
 // any, in ascending order of both, `then(i, k)` after its points were
-// appended in ascending order. Only the targets a neighbour missed any
-// point of are visited (a list per robot, made in one pass over the slots);
-// a point is new to robot i when no stamp of this (i, k) marks it: its own
-// list is stamped once and each point taken is stamped too, so neighbours'
-// duplicates drop out. O(robots x targets) for the lists, then per robot
-// O(P log P) for the P (target, neighbour) pairs with misses plus the
-// points themselves; no list searched. Reuses its scratch.
+// appended in ascending order. Robots with the same closed neighbourhood
+// (itself and its neighbours) take from the same lists, so the union of
+// those lists per target is made once per neighbourhood: once for the whole
+// team in a full graph, once per robot in a sparse one. A union visits only
+// the targets its robots missed any point of (a list per robot, made in one
+// pass over the slots) and drops duplicates with stamps; a robot then takes
+// the union's points its own stamped list does not hold. O(robots x
+// targets) for the lists, O(edges) for the neighbourhoods, O(P log P) per
+// neighbourhood for the P points of its lists, then O(own list + union) per
+// (robot, target); no list searched. Reuses its scratch.
 class NeighbourMisses {
  public:
   template <typename Slot, typename Then>
@@ -82,7 +86,7 @@ class NeighbourMisses {
       return (*slots)[static_cast<std::size_t>(i) * num_targets + k];
     };
     // Per robot, the targets it missed any point of (CSR), in one pass over
-    // the slots: the pairs below visit only those, not every target.
+    // the slots: the unions below visit only those, not every target.
     const int num_robots =
         num_targets > 0 ? static_cast<int>(slots->size()) / num_targets : 0;
     missing_begin_.assign(static_cast<std::size_t>(num_robots) + 1, 0);
@@ -92,36 +96,30 @@ class NeighbourMisses {
         if (!at(j, k).missed.empty()) missing_.push_back(k);
       missing_begin_[j + 1] = static_cast<int>(missing_.size());
     }
-    for (int i : robots) {
-      // (target, neighbour) for each target a neighbour missed points of.
-      pairs_.clear();
-      for (int j : ctx.comm->Neighbors(i)) {
-        if (j == i) continue;
-        for (int e = missing_begin_[j]; e < missing_begin_[j + 1]; ++e)
-          pairs_.push_back({missing_[e], j});
-      }
-      std::sort(pairs_.begin(), pairs_.end());
-      for (std::size_t a = 0; a < pairs_.size();) {
-        const int k = pairs_[a].first;
-        std::size_t b = a;
-        while (b < pairs_.size() && pairs_[b].first == k) ++b;
+    groups_.clear();
+    group_index_.clear();
+    union_.clear();
+    order_.assign(robots.begin(), robots.end());
+    std::sort(order_.begin(), order_.end());
+    for (int i : order_) {
+      const Group& g = GroupOf(ctx, i, at);
+      for (int a = g.begin; a < g.end;) {
+        const int k = union_[a].first;
+        int b = a;
+        while (b < g.end && union_[b].first == k) ++b;
         const Slot& s = at(i, k);
         if (!std::isnan(s.log_det) && s.log_det > log_eps &&
             ctx.beliefs->layout().is_static(k)) {
           NextStamp();
           for (int q : s.missed) mark_[q] = stamp_;
-          for (std::size_t c = a; c < b; ++c) {
-            for (int q : at(pairs_[c].second, k).missed) {
-              if (mark_[q] == stamp_) continue;
-              mark_[q] = stamp_;
-              incoming_.push_back({i, k, q});
-            }
-          }
+          for (int c = a; c < b; ++c)
+            if (mark_[union_[c].second] != stamp_)
+              incoming_.push_back({i, k, union_[c].second});
         }
         a = b;
       }
     }
-    std::sort(incoming_.begin(), incoming_.end());
+    // In (robot, target, point) order, as made.
     for (std::size_t a = 0; a < incoming_.size();) {
       const int i = incoming_[a][0], k = incoming_[a][1];
       Slot& s = at(i, k);
@@ -134,6 +132,78 @@ class NeighbourMisses {
   }
 
  private:
+  // One closed neighbourhood's union: union_[begin, end), (target, point)
+  // ascending without duplicates.
+  struct Group {
+    int robot = 0;  // the first robot with this neighbourhood
+    int begin = 0, end = 0;
+    int next = -1;  // the next group whose neighbourhood hashes the same
+  };
+  // Calls visit(j) for robot i and its neighbours, ascending.
+  template <typename Visit>
+  static void ForClosed(const DecisionContext& ctx, int i, Visit&& visit) {
+    bool self = false;
+    for (int j : ctx.comm->Neighbors(i)) {
+      if (!self && i < j) {
+        visit(i);
+        self = true;
+      }
+      if (j != i) visit(j);
+    }
+    if (!self) visit(i);
+  }
+  bool SameClosed(const DecisionContext& ctx, int a, int b) {
+    if (ctx.comm->Neighbors(a).size() != ctx.comm->Neighbors(b).size())
+      return false;
+    closed_a_.clear();
+    ForClosed(ctx, a, [this](int j) { closed_a_.push_back(j); });
+    std::size_t n = 0;
+    bool same = true;
+    ForClosed(ctx, b, [&](int j) {
+      same = same && n < closed_a_.size() && closed_a_[n] == j;
+      ++n;
+    });
+    return same && n == closed_a_.size();
+  }
+  template <typename At>
+  const Group& GroupOf(const DecisionContext& ctx, int i, const At& at) {
+    std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the robots
+    ForClosed(ctx, i, [&](int j) {
+      hash = (hash ^ static_cast<std::uint64_t>(j)) * 1099511628211ull;
+    });
+    auto [it, fresh] = group_index_.emplace(hash, -1);
+    int* link = &it->second;
+    for (; *link >= 0; link = &groups_[*link].next)
+      if (SameClosed(ctx, groups_[*link].robot, i)) return groups_[*link];
+    *link = static_cast<int>(groups_.size());
+    Group g;
+    g.robot = i;
+    g.begin = static_cast<int>(union_.size());
+    // (target, robot) for each target a robot of the neighbourhood missed
+    // points of; then per target, its robots' points, each once.
+    pairs_.clear();
+    ForClosed(ctx, i, [&](int j) {
+      for (int e = missing_begin_[j]; e < missing_begin_[j + 1]; ++e)
+        pairs_.push_back({missing_[e], j});
+    });
+    std::sort(pairs_.begin(), pairs_.end());
+    for (std::size_t a = 0; a < pairs_.size();) {
+      const int k = pairs_[a].first;
+      NextStamp();
+      const auto first = union_.size();
+      for (; a < pairs_.size() && pairs_[a].first == k; ++a)
+        for (int q : at(pairs_[a].second, k).missed) {
+          if (mark_[q] == stamp_) continue;
+          mark_[q] = stamp_;
+          union_.push_back({k, q});
+        }
+      std::sort(union_.begin() + static_cast<std::ptrdiff_t>(first),
+                union_.end());
+    }
+    g.end = static_cast<int>(union_.size());
+    groups_.push_back(g);
+    return groups_.back();
+  }
   void NextStamp() {
     if (++stamp_ == 0) {  // wrapped: no stale mark may match
       std::fill(mark_.begin(), mark_.end(), 0u);
@@ -142,8 +212,13 @@ class NeighbourMisses {
   }
   std::vector<std::array<int, 3>> incoming_;  // (robot, target, point)
   std::vector<int> missing_begin_, missing_;  // per robot: targets missed
-  std::vector<std::pair<int, int>> pairs_;    // (target, neighbour)
-  std::vector<std::uint32_t> mark_;           // per lattice point
+  std::vector<std::pair<int, int>> pairs_;    // (target, robot)
+  std::vector<std::pair<int, int>> union_;    // (target, point) per group
+  std::vector<Group> groups_;
+  std::unordered_map<std::uint64_t, int> group_index_;  // hash -> group
+  std::vector<int> order_;
+  std::vector<int> closed_a_;        // SameClosed's scratch
+  std::vector<std::uint32_t> mark_;  // per lattice point
   std::uint32_t stamp_ = 0;
 };
 
@@ -281,7 +356,12 @@ class TowardNearestAim {
 // nearest robot that owns none. A robot works this out from its own belief
 // (the aims) and its neighbours' positions, as the DKF's graph gives them.
 // The fields are kept per aim until the next Begin: a team that holds the
-// same aims shares them (one BFS per target a step). Scratch reused.
+// same aims shares them (one BFS per target a step). A field reaches every
+// point while targets x lattice points is at most kFieldBudget; beyond it
+// (hundreds of targets in worlds of 60 m and more), each field reaches
+// Horizon() moves from where its aim can be measured, so that a step's
+// fields cost about kFieldBudget points however large the team, and a
+// robot farther than that is out of reach for the claim. Scratch reused.
 class TargetClaims {
  public:
   static constexpr long kRouteBudget = 2000;
@@ -292,14 +372,27 @@ class TargetClaims {
   // Idle robots help only where robots x open targets is at most this
   // (80 x 80: the owners cost robots x targets per robot that owns none).
   static constexpr long kHelpMaxPairs = 6400;
-  // A new step on this map. The fields of aims the last step used are
-  // kept (a field is a function of the map, the sensor and the aim only),
-  // the others dropped; all of them when the map or sensor is another.
-  void Begin(const Map& map, const SensorModel& sensor);
+  // Fields reach every lattice point while targets x points is at most
+  // this (100 targets in a 100 x 100 m world of 0.5 m steps); beyond it,
+  // Horizon() moves.
+  static constexpr long kFieldBudget = 4000000;
+  // How far a field reaches, in lattice moves from the points that measure
+  // its aim, for `num_targets` targets on `lattice` with the sensor's
+  // `span` (its range in lattice steps, rounded up, plus one): -1 (every
+  // point) within kFieldBudget; else the most moves whose windows, of side
+  // 2 (moves + span) + 1, cost kFieldBudget points for all the targets,
+  // and at least 2 span.
+  static int Horizon(int num_targets, const Lattice& lattice, int span);
+  // A new step on this map, for `num_targets` targets (their fields'
+  // horizon). The fields of aims the last step used are kept (a field is a
+  // function of the map, the sensor, the horizon and the aim only), the
+  // others dropped; all of them when the map, the sensor or the horizon is
+  // another.
+  void Begin(const Map& map, const SensorModel& sensor, int num_targets = 0);
   // Forgets every field (a new episode).
   void Reset();
   // Moves from lattice point p to the nearest point predicted to measure a
-  // target at `aim`; -1 where none can be reached.
+  // target at `aim`; -1 where none can be reached within the horizon.
   int Distance(const Vec2& aim, int p);
   // mine[k] (resized to aims.size()): `self` claims open target k, as
   // above, against `others` (lattice points). A target `self` cannot reach
@@ -322,7 +415,30 @@ class TargetClaims {
              std::vector<std::uint8_t>* mine);
 
  private:
-  const std::vector<int>& Field(const Vec2& aim);
+  // Lattice moves to the nearest point that measures an aim, in a window
+  // of lattice coordinates (the whole lattice, or the box the horizon can
+  // reach); -1 outside it, beyond the horizon or unreachable.
+  class AimField {
+   public:
+    int At(const Lattice& lattice, int p) const {
+      if (whole_) return dist_[p];
+      const int x = lattice.Ix(p) - x0_, y = lattice.Iy(p) - y0_;
+      if (x < 0 || y < 0 || x >= nx_ || y >= ny_) return -1;
+      return dist_[static_cast<std::size_t>(y) * nx_ + x];
+    }
+    // The first move (kMoves order) from p to a point one move nearer;
+    // kStay at 0 or where none is.
+    Move StepDown(const Lattice& lattice, int p) const;
+    // The field of `sources` within `horizon` moves (-1: every point).
+    void Compute(const Lattice& lattice, const std::vector<int>& sources,
+                 int horizon, std::vector<int>* queue);
+
+   private:
+    bool whole_ = true;
+    int x0_ = 0, y0_ = 0, nx_ = 0, ny_ = 0;
+    std::vector<int> dist_;
+  };
+  const AimField& Field(const Vec2& aim);
   // The robots' order wherever they tie: lattice point a's x, then y, below
   // b's.
   bool ByPosition(int a, int b) const;
@@ -358,7 +474,8 @@ class TargetClaims {
     long step = 0;
   };
   std::unordered_map<PointKey, Slot, PointKeyHash> index_;
-  std::vector<std::vector<int>> fields_;
+  std::vector<AimField> fields_;
+  int horizon_ = -1;
   std::vector<int> free_;
   long step_ = 0;
   double range_ = 0.0;
