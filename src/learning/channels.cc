@@ -395,10 +395,10 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
                                   const std::vector<double>& log_det_prior,
                                   double eps, float* out) const {
   // Dijkstra with the largest value first from every target's observation
-  // pixels; a pixel a robot cannot stand on (the border pixel a far
-  // observation pixel folds onto may be one) gives its value to the free
-  // pixels beside it but is given nothing. Scratch per thread: nothing is
-  // allocated once warm.
+  // pixels (a sorted list and a FIFO, below); a pixel a robot cannot stand on
+  // (the border pixel a far observation pixel folds onto may be one) gives its
+  // value to the free pixels beside it but is given nothing. Scratch per
+  // thread: nothing is allocated once warm.
   const double cell = params_.cell;
   const float decay =
       static_cast<float>(std::exp(-cell / params_.geodesic_length));
@@ -457,12 +457,26 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
       add(bu, bv, value);
     }
   }
+  // Largest value first without a heap: the sources sorted, and a FIFO of
+  // the values they lead to. A value pushed is the popped one times the
+  // decay, so the FIFO never rises, and taking the larger of the two heads
+  // pops in Dijkstra's order (ties in any order: each pixel's value is the
+  // largest over the ways to it, whichever is found first).
   for (const int idx : sources) heap.emplace_back(source[idx], idx);
-  std::make_heap(heap.begin(), heap.end());
-  while (!heap.empty()) {
-    std::pop_heap(heap.begin(), heap.end());
-    const auto [value, idx] = heap.back();
-    heap.pop_back();
+  std::sort(heap.begin(), heap.end(),
+            [](const std::pair<float, int>& a, const std::pair<float, int>& b) {
+              return a.first > b.first;
+            });
+  thread_local std::vector<std::pair<float, int>> fifo;
+  fifo.clear();
+  std::size_t next_source = 0, next_fifo = 0;
+  while (next_source < heap.size() || next_fifo < fifo.size()) {
+    const bool from_sources =
+        next_fifo == fifo.size() ||
+        (next_source < heap.size() &&
+         heap[next_source].first >= fifo[next_fifo].first);
+    const auto [value, idx] =
+        from_sources ? heap[next_source++] : fifo[next_fifo++];
     const int u = idx % w, v = idx / w;
     const bool from_free = free(u, v);
     if (from_free && value < out[idx]) continue;  // stale
@@ -477,8 +491,7 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
       const int j = jv * w + ju;
       if (next > out[j]) {
         out[j] = next;
-        heap.emplace_back(next, j);
-        std::push_heap(heap.begin(), heap.end());
+        fifo.emplace_back(next, j);
       }
     }
   }

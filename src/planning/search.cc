@@ -297,6 +297,7 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor,
   const int span =
       static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
   const int horizon = Horizon(num_targets, lattice, span);
+  span_ = span;
   if (map_ != &map || sensor_ != &sensor ||
       (sensor_ && sensor_->range != range_) || horizon != horizon_) {
     Reset();
@@ -520,8 +521,19 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
   };
   mine->assign(m, 0);
   bool any = false;
+  const int sx = lattice.Ix(self), sy = lattice.Iy(self);
   for (int k = 0; k < m; ++k) {
     if (!open[k]) continue;
+    if (horizon_ >= 0) {
+      // The field's sources lie within span_ of the aim's nearest point
+      // on each axis: a robot more than the horizon beyond is out of
+      // reach, without the field.
+      const int c = lattice.NearestPoint(aims[k]);
+      if (std::abs(lattice.Ix(c) - sx) + std::abs(lattice.Iy(c) - sy) -
+              2 * span_ >
+          horizon_)
+        continue;
+    }
     const AimField& f = Field(aims[k]);
     const int d = f.At(lattice, self);
     if (d < 0) continue;

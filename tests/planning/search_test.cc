@@ -360,9 +360,15 @@ TEST(TargetClaimsTest, FieldsReachAHorizonOnlyBeyondTheBudget) {
     EXPECT_GT(inside, 100);
     EXPECT_GT(beyond, 10000);
   }
-  // A robot beyond the horizon claims nothing; one within it claims.
+  // A robot alone claims the target exactly where it is within the horizon.
   const Vec2 aim(50.1, 49.9);
   std::vector<std::uint8_t> mine;
+  for (int p = 0; p < lattice.size(); ++p) {
+    const int d = whole.Distance(aim, p);
+    near.Claim(p, {}, {aim}, {1}, &mine);
+    ASSERT_EQ(mine[0], d >= 0 && d <= 26) << "point " << p << ", " << d;
+  }
+  // With another robot: the nearer one within the horizon.
   int far = -1, close = -1;
   for (int p = 0; p < lattice.size() && (far < 0 || close < 0); ++p) {
     const int d = whole.Distance(aim, p);

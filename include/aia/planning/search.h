@@ -475,7 +475,7 @@ class TargetClaims {
   };
   std::unordered_map<PointKey, Slot, PointKeyHash> index_;
   std::vector<AimField> fields_;
-  int horizon_ = -1;
+  int horizon_ = -1, span_ = 0;
   std::vector<int> free_;
   long step_ = 0;
   double range_ = 0.0;
