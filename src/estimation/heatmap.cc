@@ -246,13 +246,13 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
                           const std::vector<int>& rows,
                           const std::vector<double>& log_det_prior,
                           const HeatmapParams& params, const Grid<float>& grid,
-                          const HeatRunner& run, int workers) {
+                          const RangeRunner& run, int workers) {
   const int m = beliefs.layout().num_targets();
   AIA_CHECK(static_cast<int>(log_det_prior.size()) == m);
   AIA_CHECK(params.eps > 0.0 && params.blur >= 0.0 && params.cutoff > 0.0);
   AIA_CHECK(workers >= 1);
-  const HeatRunner serial = [](int n, const HeatTask& f) { f(0, n, 0); };
-  const HeatRunner& runner = run ? run : serial;
+  const RangeRunner serial = [](int n, const RangeTask& f) { f(0, n, 0); };
+  const RangeRunner& runner = run ? run : serial;
   if (!run) workers = 1;
   common_.resize(m);
   if (base_.nx() != grid.nx() || base_.ny() != grid.ny() ||

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "aia/learning/network.h"
 #include "aia/planning/information.h"
 
 namespace aia {
@@ -52,8 +53,13 @@ void MissMemory::Update(const DecisionContext& ctx,
   active_ = search_ && ctx.sensor && memory_.num_robots() == n &&
             memory_.num_targets() == ctx.beliefs->layout().num_targets();
   if (!active_) return;
-  for (int i : rows) memory_.Update(ctx, i);
-  if (share_) memory_.Share(ctx, rows);
+  // The robots split over the policy's threads (each writes its own
+  // memory only).
+  const RangeRunner run = [](int n, const RangeTask& f) {
+    ParallelFor(n, 16, f);
+  };
+  memory_.Update(ctx, rows, run, std::max(1, PolicyThreads()));
+  if (share_) memory_.Share(ctx, rows, run);
 }
 
 bool MissMemory::Moved(const DecisionContext& ctx, int robot) const {

@@ -41,7 +41,7 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
   heat_.Prepare(
       *ctx.beliefs, rows, *prior, renderer_->Heatmap(ctx.eps),
       renderer_->occupancy(),
-      [](int n, const HeatTask& f) { ParallelFor(n, 16, f); }, workers);
+      [](int n, const RangeTask& f) { ParallelFor(n, 16, f); }, workers);
   if (static_cast<int>(worker_heat_.size()) < workers) {
     worker_heat_.resize(workers, renderer_->occupancy());
     worker_neighbours_.resize(workers);
@@ -60,8 +60,11 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       search_.num_targets() == ctx.beliefs->layout().num_targets();
   if (searching_) {  // the deciding robots' (see RulesLayer::Shape)
     DecidingRows(ctx, rows, &deciding_);
-    for (int i : deciding_) search_.Update(ctx, i);
-    search_.Share(ctx, deciding_);
+    const RangeRunner run = [](int n, const RangeTask& f) {
+      ParallelFor(n, 16, f);
+    };
+    search_.Update(ctx, deciding_, run, workers);
+    search_.Share(ctx, deciding_, run);
   }
   static const std::vector<std::uint8_t> kAll;
   auto shown = [&](int b) -> const std::vector<std::uint8_t>& {

@@ -54,7 +54,22 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
 }
 
 void SearchMemory::Update(const DecisionContext& ctx, int robot) {
+  misses_ += Record(ctx, robot);
+}
+
+void SearchMemory::Update(const DecisionContext& ctx,
+                          const std::vector<int>& robots,
+                          const RangeRunner& run, int workers) {
+  added_.assign(std::max(1, workers), 0);
+  RunRange(run, static_cast<int>(robots.size()), [&](int b0, int b1, int w) {
+    for (int b = b0; b < b1; ++b) added_[w] += Record(ctx, robots[b]);
+  });
+  for (long a : added_) misses_ += a;
+}
+
+int SearchMemory::Record(const DecisionContext& ctx, int robot) {
   AIA_CHECK(robot >= 0 && robot < num_robots_);
+  int added = 0;
   const BeliefSet& beliefs = *ctx.beliefs;
   AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
   const Map& map = *ctx.map;
@@ -81,15 +96,18 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
         std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
       continue;
     s.missed.push_back(here);
-    ++misses_;
+    ++added;
     Reaim(ctx, robot, k);
   }
+  return added;
 }
 
 void SearchMemory::Share(const DecisionContext& ctx,
-                         const std::vector<int>& robots) {
-  sharing_.Share(ctx, robots, num_targets_, &slots_,
-                 [&](int i, int k) { Reaim(ctx, i, k); });
+                         const std::vector<int>& robots,
+                         const RangeRunner& run) {
+  sharing_.Share(
+      ctx, robots, num_targets_, &slots_,
+      [&](int i, int k) { Reaim(ctx, i, k); }, run);
 }
 
 void SearchPoints::Reset(int num_robots, int num_targets) {
@@ -146,7 +164,22 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
 }
 
 void SearchPoints::Update(const DecisionContext& ctx, int robot) {
+  misses_ += Record(ctx, robot);
+}
+
+void SearchPoints::Update(const DecisionContext& ctx,
+                          const std::vector<int>& robots,
+                          const RangeRunner& run, int workers) {
+  added_.assign(std::max(1, workers), 0);
+  RunRange(run, static_cast<int>(robots.size()), [&](int b0, int b1, int w) {
+    for (int b = b0; b < b1; ++b) added_[w] += Record(ctx, robots[b]);
+  });
+  for (long a : added_) misses_ += a;
+}
+
+int SearchPoints::Record(const DecisionContext& ctx, int robot) {
   AIA_CHECK(robot >= 0 && robot < num_robots_);
+  int added = 0;
   const BeliefSet& beliefs = *ctx.beliefs;
   AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
   const Map& map = *ctx.map;
@@ -184,15 +217,18 @@ void SearchPoints::Update(const DecisionContext& ctx, int robot) {
         std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
       continue;
     s.missed.push_back(here);
-    ++misses_;
+    ++added;
     Recompute(ctx, robot, k);
   }
+  return added;
 }
 
 void SearchPoints::Share(const DecisionContext& ctx,
-                         const std::vector<int>& robots) {
-  sharing_.Share(ctx, robots, num_targets_, &slots_,
-                 [&](int i, int k) { Recompute(ctx, i, k); });
+                         const std::vector<int>& robots,
+                         const RangeRunner& run) {
+  sharing_.Share(
+      ctx, robots, num_targets_, &slots_,
+      [&](int i, int k) { Recompute(ctx, i, k); }, run);
 }
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,

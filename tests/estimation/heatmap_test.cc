@@ -289,7 +289,7 @@ TEST(TeamHeatmapTest, ThreadsDoNotChangeTheHeatmaps) {
   TeamHeatmap serial, threaded;
   serial.Prepare(t.beliefs, rows, t.prior, params, shape);
   // Three workers, the work split unevenly between them.
-  const HeatRunner three = [](int n, const HeatTask& f) {
+  const RangeRunner three = [](int n, const RangeTask& f) {
     std::vector<std::thread> pool;
     const int cut[4] = {0, n / 5, n / 2, n};
     for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -266,6 +267,49 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
           << "trial " << trial << ", robot " << s / m << ", target " << s % m;
     EXPECT_EQ(calls, expected_calls) << "trial " << trial;
   }
+}
+
+// Update and Share split over threads (three, unevenly) leave every
+// robot's misses and aims as one thread does.
+TEST(SearchMemoryTest, ThreadsDoNotChangeTheMemory) {
+  Team team(
+      "workspace: {size: [12.0, 12.0]}\n"
+      "robots: {count: 7}\n"
+      "targets: {list: [{position: [1.0, 11.0], prior_mean: [6.1, 6.2]}, "
+      "{position: [11.0, 1.0], prior_mean: [4.3, 7.9]}, {position: [1.0, "
+      "1.0], prior_mean: [8.2, 4.4], prior_sigma: 2.0}]}\n");
+  const RangeRunner three = [](int n, const RangeTask& f) {
+    std::vector<std::thread> pool;
+    const int cut[4] = {0, n / 5, n / 2, n};
+    for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);
+    for (std::thread& th : pool) th.join();
+  };
+  SearchMemory serial, threaded;
+  serial.Reset(7, 3);
+  threaded.Reset(7, 3);
+  const std::vector<int> robots = {0, 1, 2, 3, 4, 5, 6};
+  const Lattice& lattice = team.world.map.lattice();
+  for (int step = 0; step < 6; ++step) {
+    // Each robot on a walk around the middle of the world.
+    for (int i = 0; i < 7; ++i) {
+      const double a = 0.9 * i + 0.7 * step;
+      team.positions[i] =
+          lattice.NearestPoint(Vec2(6.0 + (1.0 + 0.4 * i) * std::cos(a),
+                                    6.0 + (1.0 + 0.4 * i) * std::sin(a)));
+    }
+    const DecisionContext ctx = team.Context();
+    for (int i : robots) serial.Update(ctx, i);
+    serial.Share(ctx, robots);
+    threaded.Update(ctx, robots, three, 3);
+    threaded.Share(ctx, robots, three);
+  }
+  EXPECT_GT(serial.misses(), 5);
+  EXPECT_EQ(threaded.misses(), serial.misses());
+  for (int i = 0; i < 7; ++i)
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(threaded.Missed(i, k), serial.Missed(i, k));
+      EXPECT_EQ(threaded.Aim(i, k), serial.Aim(i, k));
+    }
 }
 
 TEST(TargetClaimsTest, TheRobotFewestMovesFromMeasuringClaims) {

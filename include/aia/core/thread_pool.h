@@ -24,6 +24,23 @@
 
 namespace aia {
 
+// A way to run f(begin, end, worker) over [0, n) on threads, workers
+// numbered from 0 (learning/network.h's ParallelFor is one); an empty
+// runner means f(0, n, 0). Work split so must write per index only, so that
+// the result does not depend on the split.
+using RangeTask = std::function<void(int begin, int end, int worker)>;
+using RangeRunner = std::function<void(int n, const RangeTask& f)>;
+
+// Runs f over [0, n) with `run`, or at once where it is empty.
+inline void RunRange(const RangeRunner& run, int n, const RangeTask& f) {
+  if (n <= 0) return;
+  if (run) {
+    run(n, f);
+  } else {
+    f(0, n, 0);
+  }
+}
+
 // What a batch does once one of its calls has thrown.
 enum class OnFailure {
   kStop,    // hands out no further index; the calls under way finish

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "aia/core/grid.h"
+#include "aia/core/thread_pool.h"
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 
@@ -100,10 +101,6 @@ void ProjectHeatmap(const BeliefSet& beliefs, int row,
 // them; it differs from its own ProjectHeatmap only in float rounding. Cost:
 // M stamps plus, per robot, the grid and its differing targets, instead of
 // N * M stamps.
-// A way to run f(begin, end, worker) over [0, n) on threads, workers
-// numbered from 0 (learning/network.h's ParallelFor is one).
-using HeatTask = std::function<void(int, int, int)>;
-using HeatRunner = std::function<void(int, const HeatTask&)>;
 
 class TeamHeatmap {
  public:
@@ -113,7 +110,7 @@ class TeamHeatmap {
   void Prepare(const BeliefSet& beliefs, const std::vector<int>& rows,
                const std::vector<double>& log_det_prior,
                const HeatmapParams& params, const Grid<float>& grid,
-               const HeatRunner& run = {}, int workers = 1);
+               const RangeRunner& run = {}, int workers = 1);
   // The heatmap of rows[b]: the base itself when the robot holds the
   // majority's belief of every target, else built in `scratch` (shaped like
   // the grid). Thread-safe for distinct scratches once prepared.

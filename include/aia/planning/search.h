@@ -24,6 +24,7 @@
 
 #include "aia/core/geometry.h"
 #include "aia/core/point_grid.h"
+#include "aia/core/thread_pool.h"
 #include "aia/core/types.h"
 #include "aia/planning/information.h"
 #include "aia/planning/policy.h"
@@ -69,12 +70,15 @@ bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
 // the union's points its own stamped list does not hold. O(robots x
 // targets) for the lists, O(edges) for the neighbourhoods, O(P log P) per
 // neighbourhood for the P points of its lists, then O(own list + union) per
-// (robot, target); no list searched. Reuses its scratch.
+// (robot, target); no list searched. The robots take their points and
+// call `then` split over `run` (each robot's calls on one thread, in
+// order). Reuses its scratch.
 class NeighbourMisses {
  public:
   template <typename Slot, typename Then>
   void Share(const DecisionContext& ctx, const std::vector<int>& robots,
-             int num_targets, std::vector<Slot>* slots, Then then) {
+             int num_targets, std::vector<Slot>* slots, Then then,
+             const RangeRunner& run = {}) {
     const double log_eps = std::log(ctx.eps);
     incoming_.clear();
     const auto points = static_cast<std::size_t>(ctx.map->lattice().size());
@@ -119,16 +123,24 @@ class NeighbourMisses {
         a = b;
       }
     }
-    // In (robot, target, point) order, as made.
-    for (std::size_t a = 0; a < incoming_.size();) {
-      const int i = incoming_[a][0], k = incoming_[a][1];
-      Slot& s = at(i, k);
-      for (;
-           a < incoming_.size() && incoming_[a][0] == i && incoming_[a][1] == k;
-           ++a)
-        s.missed.push_back(incoming_[a][2]);
-      then(i, k);
-    }
+    // In (robot, target, point) order, as made; each robot's run of
+    // incoming_ (taking_ holds where each begins) writes its own slots only.
+    taking_.clear();
+    for (std::size_t a = 0; a < incoming_.size(); ++a)
+      if (a == 0 || incoming_[a][0] != incoming_[a - 1][0])
+        taking_.push_back(static_cast<int>(a));
+    const int takers = static_cast<int>(taking_.size());
+    taking_.push_back(static_cast<int>(incoming_.size()));
+    RunRange(run, takers, [&](int r0, int r1, int) {
+      for (int a = taking_[r0]; a < taking_[r1];) {
+        const int i = incoming_[a][0], k = incoming_[a][1];
+        Slot& s = at(i, k);
+        for (; a < taking_[r1] && incoming_[a][0] == i && incoming_[a][1] == k;
+             ++a)
+          s.missed.push_back(incoming_[a][2]);
+        then(i, k);
+      }
+    });
   }
 
  private:
@@ -216,7 +228,7 @@ class NeighbourMisses {
   std::vector<std::pair<int, int>> union_;    // (target, point) per group
   std::vector<Group> groups_;
   std::unordered_map<std::uint64_t, int> group_index_;  // hash -> group
-  std::vector<int> order_;
+  std::vector<int> order_, taking_;
   std::vector<int> closed_a_;        // SameClosed's scratch
   std::vector<std::uint32_t> mark_;  // per lattice point
   std::uint32_t stamp_ = 0;
@@ -236,10 +248,15 @@ class SearchMemory {
   // robot missed (and moves the aim); one that shrank clears it (the mean
   // moved and the search is over). The first call only records the belief.
   void Update(const DecisionContext& ctx, int robot);
+  // Update for each robot of `robots`, split over `run`'s `workers`.
+  void Update(const DecisionContext& ctx, const std::vector<int>& robots,
+              const RangeRunner& run, int workers);
   // After every robot's Update: each robot among `robots` adds the points
   // its neighbours in this step's graph missed (for the static targets
-  // still open in its own belief) and moves its aims accordingly.
-  void Share(const DecisionContext& ctx, const std::vector<int>& robots);
+  // still open in its own belief) and moves its aims accordingly, the
+  // robots split over `run`.
+  void Share(const DecisionContext& ctx, const std::vector<int>& robots,
+             const RangeRunner& run = {});
   // Where robot i looks for target k (its belief's mean until it missed).
   const Vec2& Aim(int robot, int k) const { return slot(robot, k).aim; }
   const std::vector<int>& Missed(int robot, int k) const {
@@ -263,10 +280,13 @@ class SearchMemory {
   // SearchAim for robot's target k from its memory (forgets a prior
   // searched to 4 sigma); false then.
   bool Reaim(const DecisionContext& ctx, int robot, int k);
+  // Update's work; the points it added.
+  int Record(const DecisionContext& ctx, int robot);
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
   NeighbourMisses sharing_;
   std::vector<Slot> slots_;
+  std::vector<long> added_;  // per worker
 };
 
 // What each robot knows from its missed measurements of static targets, as
@@ -289,10 +309,15 @@ class SearchPoints {
   // point to the misses (and moves the search points); one that shrank
   // clears them. The first call only records the belief.
   void Update(const DecisionContext& ctx, int robot);
+  // Update for each robot of `robots`, split over `run`'s `workers`.
+  void Update(const DecisionContext& ctx, const std::vector<int>& robots,
+              const RangeRunner& run, int workers);
   // After every robot's Update: each robot among `robots` adds the points
   // its neighbours in this step's graph missed (for the static targets
-  // still open in its own belief), from their lists as Update left them.
-  void Share(const DecisionContext& ctx, const std::vector<int>& robots);
+  // still open in its own belief), from their lists as Update left them,
+  // the robots split over `run`.
+  void Share(const DecisionContext& ctx, const std::vector<int>& robots,
+             const RangeRunner& run = {});
   // Robot i's search points for target k; empty: its belief's mean.
   const std::vector<Vec2>& Points(int robot, int k) const {
     return slot(robot, k).points;
@@ -318,10 +343,13 @@ class SearchPoints {
   // The search points of robot i's target k from its misses (all forgotten
   // where the prior is searched to 4 sigma).
   void Recompute(const DecisionContext& ctx, int robot, int k);
+  // Update's work; the points it added.
+  int Record(const DecisionContext& ctx, int robot);
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
   NeighbourMisses sharing_;
   std::vector<Slot> slots_;
+  std::vector<long> added_;  // per worker
 };
 
 // The first move of a shortest lattice path from point p to the nearest
