@@ -162,6 +162,21 @@ void BeliefSet::CopyRow(int row, const BeliefSet& from, int from_row) {
   data_.row(row) = from.data_.row(from_row);
 }
 
+void BeliefDigest::Compute(const BeliefSet& beliefs, const RangeRunner& run) {
+  m_ = beliefs.layout().num_targets();
+  const std::size_t size = static_cast<std::size_t>(beliefs.rows()) * m_;
+  log_det_.resize(size);
+  mean_.resize(size);
+  RunRange(run, beliefs.rows(), [&](int r0, int r1, int) {
+    for (int r = r0; r < r1; ++r)
+      for (int k = 0; k < m_; ++k) {
+        const std::size_t at = static_cast<std::size_t>(r) * m_ + k;
+        log_det_[at] = beliefs.LogDetCovariance(r, k);
+        mean_[at] = beliefs.PositionMean(r, k);
+      }
+  });
+}
+
 void TeamBestRows(const std::vector<double>& det, int num_targets,
                   const std::vector<std::uint8_t>& active,
                   std::vector<int>* best) {

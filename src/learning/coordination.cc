@@ -29,9 +29,8 @@ void OpenAims::Of(const DecisionContext& ctx, int robot,
   aims_.resize(m);
   open_.assign(m, 0);
   for (int k = 0; k < m; ++k) {
-    if (ctx.beliefs->LogDetCovariance(robot, k) <= log_eps) continue;
-    aims_[k] =
-        memory ? memory->Aim(robot, k) : ctx.beliefs->PositionMean(robot, k);
+    if (LogDetOf(ctx, robot, k) <= log_eps) continue;
+    aims_[k] = memory ? memory->Aim(robot, k) : MeanOf(ctx, robot, k);
     open_[k] = 1;
   }
 }
@@ -67,8 +66,8 @@ bool MissMemory::Moved(const DecisionContext& ctx, int robot) const {
   const int m = ctx.beliefs->layout().num_targets();
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < m; ++k)
-    if (ctx.beliefs->LogDetCovariance(robot, k) > log_eps &&
-        memory_.Aim(robot, k) != ctx.beliefs->PositionMean(robot, k))
+    if (LogDetOf(ctx, robot, k) > log_eps &&
+        memory_.Aim(robot, k) != MeanOf(ctx, robot, k))
       return true;
   return false;
 }

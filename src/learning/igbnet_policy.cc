@@ -74,8 +74,14 @@ const SearchMemory& IgbNetPolicy::search() const {
   return rules_ ? rules_->memory() : kNone;
 }
 
-PolicyStatus IgbNetPolicy::Decide(const DecisionContext& ctx,
+PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
                                   std::vector<Move>* moves) {
+  // Every part reads the beliefs' log dets and means from one digest,
+  // worked out once per step over the policy's threads.
+  digest_.Compute(*given.beliefs,
+                  [](int n, const RangeTask& f) { ParallelFor(n, 16, f); });
+  DecisionContext ctx = given;
+  ctx.digest = &digest_;
   const Lattice& lattice = ctx.map->lattice();
   const int n = static_cast<int>(moves->size());
   team_.rows.clear();

@@ -97,7 +97,7 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
         std::vector<HeatSource>* targets = nullptr;
         if (geodesic) {
           targets = &worker_targets_[worker];
-          HeatSources(*ctx.beliefs, i, targets);
+          HeatSources(*ctx.beliefs, i, targets, ctx.digest);
           if (aims)
             for (std::size_t k = 0; k < targets->size(); ++k)
               (*targets)[k].mean = aims->Aim(i, static_cast<int>(k));

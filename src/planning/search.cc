@@ -80,11 +80,11 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
-    const double now = beliefs.LogDetCovariance(robot, k);
+    const double now = LogDetOf(ctx, robot, k);
     const bool first = std::isnan(s.log_det);
     const bool shrank = !first && now < s.log_det + std::log1p(-1e-9);
     s.log_det = now;
-    s.mean = beliefs.PositionMean(robot, k);
+    s.mean = MeanOf(ctx, robot, k);
     const bool searching =
         !first && !shrank && now > log_eps && beliefs.layout().is_static(k);
     if (!searching) s.missed.clear();
@@ -189,11 +189,11 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
-    const double now = beliefs.LogDetCovariance(robot, k);
+    const double now = LogDetOf(ctx, robot, k);
     const bool first = std::isnan(s.log_det);
     const bool shrank = !first && now < s.log_det + std::log1p(-1e-9);
     s.log_det = now;
-    s.mean = beliefs.PositionMean(robot, k);
+    s.mean = MeanOf(ctx, robot, k);
     const bool searching =
         !first && !shrank && now > log_eps && beliefs.layout().is_static(k);
     if (!searching) {

@@ -70,9 +70,10 @@ struct HeatSource {
 };
 
 // The heat sources of row `row` of `beliefs`, one per target, into `out`
-// (resized).
+// (resized); means and log dets from `digest` where given (of `beliefs`).
 void HeatSources(const BeliefSet& beliefs, int row,
-                 std::vector<HeatSource>* out);
+                 std::vector<HeatSource>* out,
+                 const BeliefDigest* digest = nullptr);
 
 // H of these sources into `out` (zeroed first, sized by the caller).
 // log_det_prior[k] is log det Sigma_0^k of target k's whole prior block.

@@ -113,7 +113,21 @@ struct DecisionContext {
   // (lockstep). A policy may skip the others; what it writes for them is
   // ignored.
   const std::vector<std::uint8_t>* ready = nullptr;
+  // `beliefs`' log dets and position means this step, worked out once (a
+  // policy may set it for its own parts); null: read from `beliefs`.
+  const BeliefDigest* digest = nullptr;
 };
+
+// Robot (row) i's log det Sigma and position mean of target k, from the
+// digest where there is one.
+inline double LogDetOf(const DecisionContext& ctx, int row, int k) {
+  return ctx.digest ? ctx.digest->LogDet(row, k)
+                    : ctx.beliefs->LogDetCovariance(row, k);
+}
+inline Vec2 MeanOf(const DecisionContext& ctx, int row, int k) {
+  return ctx.digest ? ctx.digest->Mean(row, k)
+                    : ctx.beliefs->PositionMean(row, k);
+}
 
 // Whether robot i decides now (DecisionContext::ready).
 inline bool Deciding(const DecisionContext& ctx, int i) {
