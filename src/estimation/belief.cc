@@ -46,6 +46,24 @@ double LogDetCovarianceOf(const double* block) {
   return -2.0 * llt.matrixLLT().diagonal().array().log().sum();
 }
 
+// LogDetCovarianceOf and the position part of MeanOf from one
+// factorization: the same values.
+template <int D>
+void LogDetAndMeanOf(const double* block, double* log_det, Vec2* mean) {
+  const Eigen::Map<const MatD<D>> omega(block);
+  const Eigen::Map<const VecD<D>> xi(block + D * D);
+  const Eigen::LLT<MatD<D>> llt(omega);
+  if (llt.info() == Eigen::Success) {
+    *log_det = -2.0 * llt.matrixLLT().diagonal().array().log().sum();
+    const VecD<D> x = llt.solve(xi);
+    *mean = x.template head<2>();
+  } else {
+    *log_det = std::numeric_limits<double>::infinity();
+    const VecD<D> x = internal::InverseSpd<D>(omega) * xi;
+    *mean = x.template head<2>();
+  }
+}
+
 }  // namespace
 
 BeliefLayout::BeliefLayout(std::vector<TargetModel> models)
@@ -171,8 +189,11 @@ void BeliefDigest::Compute(const BeliefSet& beliefs, const RangeRunner& run) {
     for (int r = r0; r < r1; ++r)
       for (int k = 0; k < m_; ++k) {
         const std::size_t at = static_cast<std::size_t>(r) * m_ + k;
-        log_det_[at] = beliefs.LogDetCovariance(r, k);
-        mean_[at] = beliefs.PositionMean(r, k);
+        const double* block = beliefs.Omega(r, k).data();
+        if (beliefs.layout().dim(k) == 2)
+          LogDetAndMeanOf<2>(block, &log_det_[at], &mean_[at]);
+        else
+          LogDetAndMeanOf<4>(block, &log_det_[at], &mean_[at]);
       }
   });
 }

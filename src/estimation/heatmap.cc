@@ -11,7 +11,10 @@
 namespace aia {
 
 double HeatWeight(double log_det, double log_det_prior, double eps) {
-  const double log_eps = std::log(eps);
+  return HeatWeightOfLog(log_det, log_det_prior, std::log(eps));
+}
+
+double HeatWeightOfLog(double log_det, double log_det_prior, double log_eps) {
   const double above = log_det - log_eps;  // log(det Sigma / eps)
   const double prior_above = log_det_prior - log_eps;
   if (!(prior_above > 0.0)) return above > 0.0 ? 1.0 : 0.0;

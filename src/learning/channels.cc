@@ -88,6 +88,14 @@ ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
   } else {
     height_ = width_ = params.window;
   }
+  if (params.geodesic) {  // as ReachRegion computes it
+    const double cell = params_.cell;
+    const float decay =
+        static_cast<float>(std::exp(-cell / params_.geodesic_length));
+    decay_pow_.resize(occupancy_.nx() + occupancy_.ny() + 1);
+    for (std::size_t d = 0; d < decay_pow_.size(); ++d)
+      decay_pow_[d] = std::pow(decay, static_cast<int>(d));
+  }
 }
 
 bool ChannelRenderer::ImagePixel(const Vec2& self, const Vec2& p, int* u,
@@ -432,8 +440,15 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
     source[idx] = std::max(source[idx], value);
   };
   const int reach = static_cast<int>(std::ceil(params_.observe_range / cell));
+  const double log_eps = std::log(eps);
+  // decay^d, as std::pow gives it, from a table.
+  const auto decayed = [&](int d) {
+    return d < static_cast<int>(decay_pow_.size()) ? decay_pow_[d]
+                                                   : std::pow(decay, d);
+  };
   for (std::size_t k = 0; k < targets.size(); ++k) {
-    const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
+    const double wk =
+        HeatWeightOfLog(targets[k].log_det, log_det_prior[k], log_eps);
     if (wk <= 0.0) continue;
     int mx = 0, my = 0;
     occupancy_.CellOf(targets[k].mean, &mx, &my);
@@ -443,8 +458,7 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
     if (mu < -reach || mv < -reach || mu >= w + reach || mv >= h + reach) {
       const int bu = std::clamp(mu, 0, w - 1), bv = std::clamp(mv, 0, h - 1);
       const int beyond = std::abs(mu - bu) + std::abs(mv - bv) - reach;
-      const float value =
-          static_cast<float>(wk * std::pow(decay, std::max(beyond, 0)));
+      const float value = static_cast<float>(wk * decayed(std::max(beyond, 0)));
       if (value < 1e-6f) continue;
       add(bu, bv, value);
       continue;
@@ -452,8 +466,8 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
     for (const int idx : ObservationPixels(targets[k].mean)) {
       const int u = idx % occupancy_.nx() - x0, v = idx / occupancy_.nx() - y0;
       const int bu = std::clamp(u, 0, w - 1), bv = std::clamp(v, 0, h - 1);
-      const float value = static_cast<float>(
-          wk * std::pow(decay, std::abs(u - bu) + std::abs(v - bv)));
+      const float value =
+          static_cast<float>(wk * decayed(std::abs(u - bu) + std::abs(v - bv)));
       add(bu, bv, value);
     }
   }

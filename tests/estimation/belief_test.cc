@@ -152,8 +152,12 @@ TEST(BeliefDigestTest, HoldsTheLogDetsAndMeansOfEveryBlock) {
       beliefs.Omega(r, k) = RandomSpd(layout.dim(k), &rng);
       beliefs.Xi(r, k) = RandomVector(layout.dim(k), &rng);
     }
+  // A block without a Cholesky factor (the filter's fallback path).
+  beliefs.Omega(4, 0) << 1.0, 0.0, 0.0, -2.0;
   BeliefDigest serial, split;
   serial.Compute(beliefs);
+  EXPECT_TRUE(std::isinf(serial.LogDet(4, 0)));
+  EXPECT_TRUE(serial.Mean(4, 0).allFinite());
   split.Compute(beliefs, [](int n, const RangeTask& f) {
     f(0, 2, 0);
     f(2, n, 1);

@@ -35,6 +35,8 @@ struct HeatmapParams {
 // det itself under- or overflows). If the prior is itself at or below eps,
 // the weight is 1 above eps and 0 at or below it.
 double HeatWeight(double log_det, double log_det_prior, double eps);
+// The same from log(eps), for loops over many targets.
+double HeatWeightOfLog(double log_det, double log_det_prior, double log_eps);
 
 // A grid of `cell`-metre cells covering a workspace of the given size
 // (ceil(size / cell) cells per axis), zero-filled.

@@ -239,6 +239,9 @@ class ChannelRenderer {
   // Per global pixel: bit m set when a robot at the pixel's lattice point may
   // move to the neighbouring pixel in direction m (reach channel only).
   std::vector<std::uint8_t> moves_;
+  // The reach channel's decay per move, exp(-cell / L) as a float, to the
+  // powers 0 .. nx + ny (std::pow's values).
+  std::vector<double> decay_pow_;
   int height_ = 0, width_ = 0;
   // Shared by copies (the same map and parameters).
   std::shared_ptr<ObservationCache> observation_cache_;
