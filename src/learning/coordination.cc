@@ -85,31 +85,39 @@ void ClaimsShaper::Shape(const DecisionContext& ctx,
   narrowed_.assign(count, 0);
   if (mode_ == TargetClaimsMode::kNone || !ctx.sensor) return;
   claims_.Begin(*ctx.map, *ctx.sensor, ctx.beliefs->layout().num_targets());
-  for (std::size_t b = 0; b < count; ++b) {
-    const int i = rows[b];
-    // Each robot claims from its own view: a robot on its way (async
-    // decisions) needs none now.
-    if (!Deciding(ctx, i)) continue;
-    others_.clear();
-    for (int j : ctx.comm->Neighbors(i))
-      if (j != i && ctx.comm->Active(j))
-        others_.push_back((*ctx.robot_lattice)[j]);
-    open_.Of(ctx, i, memory);
-    const int here = (*ctx.robot_lattice)[i];
-    if (mode_ == TargetClaimsMode::kRoute)
-      claims_.Route(here, others_, open_.aims(), open_.open(), &claimed_);
-    else
-      claims_.Claim(here, others_, open_.aims(), open_.open(), &claimed_);
-    if (std::find(claimed_.begin(), claimed_.end(), 1) != claimed_.end()) {
-      shown_[b] = claimed_;
-      narrowed_[b] = claimed_ != open_.open();
+  // The robots split over the policy's threads: each writes its own row.
+  const int workers = std::max(1, PolicyThreads());
+  if (static_cast<int>(scratch_.size()) < workers) scratch_.resize(workers);
+  ParallelFor(static_cast<int>(count), 16, [&](int b0, int b1, int worker) {
+    Scratch& w = scratch_[worker];
+    for (int b = b0; b < b1; ++b) {
+      const int i = rows[b];
+      // Each robot claims from its own view: a robot on its way (async
+      // decisions) needs none now.
+      if (!Deciding(ctx, i)) continue;
+      w.others.clear();
+      for (int j : ctx.comm->Neighbors(i))
+        if (j != i && ctx.comm->Active(j))
+          w.others.push_back((*ctx.robot_lattice)[j]);
+      w.open.Of(ctx, i, memory);
+      const int here = (*ctx.robot_lattice)[i];
+      const std::vector<Vec2>& aims = w.open.aims();
+      const std::vector<std::uint8_t>& open = w.open.open();
+      if (mode_ == TargetClaimsMode::kRoute)
+        claims_.Route(here, w.others, aims, open, &w.claimed);
+      else
+        claims_.Claim(here, w.others, aims, open, &w.claimed);
+      if (std::find(w.claimed.begin(), w.claimed.end(), 1) != w.claimed.end()) {
+        shown_[b] = w.claimed;
+        narrowed_[b] = w.claimed != open;
+      }
+      // What the walk heads for: the targets the robot owns.
+      if (mode_ == TargetClaimsMode::kRoute)
+        claims_.Claim(here, w.others, aims, open, &owned_[b]);
+      else
+        owned_[b] = w.claimed;
     }
-    // What the walk heads for: the targets the robot owns.
-    if (mode_ == TargetClaimsMode::kRoute)
-      claims_.Claim(here, others_, open_.aims(), open_.open(), &owned_[b]);
-    else
-      owned_[b] = claimed_;
-  }
+  });
 }
 
 const std::vector<std::uint8_t>* ClaimsShaper::Owned(int b) const {

@@ -341,8 +341,9 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor,
     // Keep the fields the last step used (most aims do not move between
     // steps); free the others.
     for (auto it = index_.begin(); it != index_.end();) {
-      if (it->second.step != step_) {
+      if (it->second.step.load(std::memory_order_relaxed) != step_) {
         free_.push_back(it->second.slot);
+        fields_[it->second.slot].reset();
         it = index_.erase(it);
       } else {
         ++it;
@@ -432,22 +433,25 @@ Move TargetClaims::AimField::StepDown(const Lattice& lattice, int p) const {
 
 const TargetClaims::AimField& TargetClaims::Field(const Vec2& aim) {
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Field()");
-  auto [it, fresh] = index_.emplace(KeyOf(aim), Slot{});
-  it->second.step = step_;
-  if (!fresh) return fields_[it->second.slot];
-  if (free_.empty()) {
-    free_.push_back(static_cast<int>(fields_.size()));
-    fields_.emplace_back();
+  const PointKey key = KeyOf(aim);
+  {
+    std::shared_lock<std::shared_mutex> lock(fields_mutex_);
+    const auto it = index_.find(key);
+    if (it != index_.end()) {
+      it->second.step.store(step_, std::memory_order_relaxed);
+      return *fields_[it->second.slot];
+    }
   }
-  const int index = free_.back();
-  free_.pop_back();
-  it->second.slot = index;
+  // Made outside the lock (another thread may make the same field: the
+  // first one kept, the same either way).
+  thread_local std::vector<int> sources, queue;
+  auto field = std::make_unique<AimField>();
   const Lattice& lattice = map_->lattice();
   const int span =
       static_cast<int>(std::ceil(sensor_->range / lattice.step())) + 1;
   const int c = lattice.NearestPoint(aim);
   const int cx = lattice.Ix(c), cy = lattice.Iy(c);
-  sources_.clear();
+  sources.clear();
   for (int iy = std::max(0, cy - span);
        iy <= std::min(lattice.ny() - 1, cy + span); ++iy)
     for (int ix = std::max(0, cx - span);
@@ -455,10 +459,21 @@ const TargetClaims::AimField& TargetClaims::Field(const Vec2& aim) {
       const int q = lattice.Index(ix, iy);
       if (lattice.Free(q) &&
           PredictedPrecision(*map_, *sensor_, lattice.Point(q), aim) > 0.0)
-        sources_.push_back(q);
+        sources.push_back(q);
     }
-  fields_[index].Compute(lattice, sources_, horizon_, &queue_);
-  return fields_[index];
+  field->Compute(lattice, sources, horizon_, &queue);
+  std::unique_lock<std::shared_mutex> lock(fields_mutex_);
+  auto [it, fresh] = index_.try_emplace(key);
+  it->second.step.store(step_, std::memory_order_relaxed);
+  if (!fresh) return *fields_[it->second.slot];
+  if (free_.empty()) {
+    free_.push_back(static_cast<int>(fields_.size()));
+    fields_.emplace_back();
+  }
+  it->second.slot = free_.back();
+  free_.pop_back();
+  fields_[it->second.slot] = std::move(field);
+  return *fields_[it->second.slot];
 }
 
 int TargetClaims::Distance(const Vec2& aim, int p) {
@@ -589,6 +604,7 @@ void TargetClaims::Claim(int self, const std::vector<int>& others,
   if (num_open * (static_cast<long>(others.size()) + 1) > kHelpMaxPairs) return;
   // Idle: the targets of owners of two or more where self is the nearest
   // robot that owns none (the team's owners, as every robot works them out).
+  std::lock_guard<std::mutex> lock(plans_mutex_);
   int at = 0;
   const Plan& plan = PlanFor(self, others, aims, open, &at);
   for (int k = 0; k < m; ++k) (*mine)[k] = plan.helper[k] == at;
@@ -628,6 +644,7 @@ void TargetClaims::Route(int self, const std::vector<int>& others,
     Claim(self, others, aims, open, mine);
     return;
   }
+  std::lock_guard<std::mutex> lock(plans_mutex_);
   int at = 0;
   Plan& plan = PlanFor(self, others, aims, open, &at);
   const int m = static_cast<int>(aims.size());

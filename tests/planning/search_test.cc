@@ -431,6 +431,60 @@ TEST(TargetClaimsTest, FieldsReachAHorizonOnlyBeyondTheBudget) {
   EXPECT_EQ(mine, std::vector<std::uint8_t>({1}));
 }
 
+// Claims and routes asked from three threads at once give what one thread
+// gets: the fields' cache and the plans are shared and locked.
+TEST(TargetClaimsTest, ThreadsAskingAtOnceGetTheSameAnswers) {
+  Team team(
+      "workspace: {size: [30.0, 30.0], obstacles: {random: {count: 40}}}\n"
+      "robots: {count: 1}\n"
+      "targets: {count: 1}\n");
+  const Lattice& lattice = team.world.map.lattice();
+  Rng rng(5, "claims_threads_test");
+  std::vector<int> points;
+  while (points.size() < 24) {
+    const int p =
+        lattice.NearestPoint(Vec2(30.0 * rng.Uniform(), 30.0 * rng.Uniform()));
+    if (lattice.Free(p)) points.push_back(p);
+  }
+  std::vector<Vec2> aims;
+  std::vector<std::uint8_t> open;
+  for (int k = 0; k < 12; ++k) {
+    aims.push_back(Vec2(30.0 * rng.Uniform(), 30.0 * rng.Uniform()));
+    open.push_back(k % 5 != 2);
+  }
+  // Groups of 4 neighbours: routes (4 x 10 pairs) and claims.
+  const auto others_of = [&](int i) {
+    std::vector<int> others;
+    for (int j = i / 4 * 4; j < i / 4 * 4 + 4; ++j)
+      if (j != i) others.push_back(points[j]);
+    return others;
+  };
+  const int n = static_cast<int>(points.size());
+  std::vector<std::vector<std::uint8_t>> serial(2 * n), threaded(2 * n);
+  TargetClaims one, shared;
+  one.Begin(team.world.map, team.sensor);
+  shared.Begin(team.world.map, team.sensor);
+  for (int i = 0; i < n; ++i) {
+    one.Route(points[i], others_of(i), aims, open, &serial[i]);
+    one.Claim(points[i], others_of(i), aims, open, &serial[n + i]);
+  }
+  std::vector<std::thread> pool;
+  for (int t = 0; t < 3; ++t)
+    pool.emplace_back([&, t] {
+      for (int i = t; i < n; i += 3) {
+        shared.Route(points[i], others_of(i), aims, open, &threaded[i]);
+        shared.Claim(points[i], others_of(i), aims, open, &threaded[n + i]);
+      }
+    });
+  for (std::thread& th : pool) th.join();
+  int claimed = 0;
+  for (int r = 0; r < 2 * n; ++r) {
+    EXPECT_EQ(threaded[r], serial[r]) << "robot " << r % n;
+    claimed += std::count(serial[r].begin(), serial[r].end(), 1);
+  }
+  EXPECT_GT(claimed, 10);
+}
+
 TEST(TargetClaimsTest, AnIdleRobotHelpsTheOwnerOfTwoWhereItIsTheNearestIdle) {
   Team team(kEmptyWorld);
   TargetClaims claims;

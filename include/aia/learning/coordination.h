@@ -198,10 +198,15 @@ class ClaimsShaper {
  private:
   TargetClaimsMode mode_;
   TargetClaims claims_;
-  OpenAims open_;
+  // Per policy thread.
+  struct Scratch {
+    OpenAims open;
+    std::vector<std::uint8_t> claimed;
+    std::vector<int> others;
+  };
+  std::vector<Scratch> scratch_;
   std::vector<std::vector<std::uint8_t>> shown_, owned_;
-  std::vector<std::uint8_t> narrowed_, claimed_;
-  std::vector<int> others_;
+  std::vector<std::uint8_t> narrowed_;
 };
 
 // Move arbiter: the deadlock walk. A robot whose last `max_reversals` moves

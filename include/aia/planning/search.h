@@ -14,10 +14,14 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -389,7 +393,10 @@ class TowardNearestAim {
 // (hundreds of targets in worlds of 60 m and more), each field reaches
 // Horizon() moves from where its aim can be measured, so that a step's
 // fields cost about kFieldBudget points however large the team, and a
-// robot farther than that is out of reach for the claim. Scratch reused.
+// robot farther than that is out of reach for the claim. Claim, Route and
+// Distance may be called from several threads at once between two Begins
+// (the fields' cache and the plans are locked; answers do not depend on
+// the order of the calls). Scratch reused.
 class TargetClaims {
  public:
   static constexpr long kRouteBudget = 2000;
@@ -466,6 +473,8 @@ class TargetClaims {
     int x0_ = 0, y0_ = 0, nx_ = 0, ny_ = 0;
     std::vector<int> dist_;
   };
+  // The field of `aim` (made if new; thread-safe): its address holds until
+  // the next Begin.
   const AimField& Field(const Vec2& aim);
   // The robots' order wherever they tie: lattice point a's x, then y, below
   // b's.
@@ -483,7 +492,7 @@ class TargetClaims {
     std::vector<std::vector<int>> order;
   };
   // This step's plan for `self` and `others` (made if new); *at is self's
-  // index in its points.
+  // index in its points. Under plans_mutex_, held while the plan is read.
   Plan& PlanFor(int self, const std::vector<int>& others,
                 const std::vector<Vec2>& aims,
                 const std::vector<std::uint8_t>& open, int* at);
@@ -496,18 +505,21 @@ class TargetClaims {
   std::vector<double> weight_;
   TourPlanner planner_;
   // aim (its coordinates' bits) -> its field's slot in fields_ and the
-  // step that last used it; free_ lists the unused slots.
+  // step that last used it; free_ lists the unused slots. Fields are read
+  // under a shared lock and added under an exclusive one; a field is made
+  // outside the lock.
   struct Slot {
     int slot = -1;
-    long step = 0;
+    std::atomic<long> step{0};
   };
+  std::shared_mutex fields_mutex_;
+  std::mutex plans_mutex_;
   std::unordered_map<PointKey, Slot, PointKeyHash> index_;
-  std::vector<AimField> fields_;
+  std::vector<std::unique_ptr<AimField>> fields_;
   int horizon_ = -1, span_ = 0;
   std::vector<int> free_;
   long step_ = 0;
   double range_ = 0.0;
-  std::vector<int> sources_, queue_;
 };
 
 // ---------------------------------------------------------------------------
