@@ -15,8 +15,8 @@ phase's growth order: the least-squares slope of log ms against log N from
 
 Usage:
   tools/bench_scale.py --out DIR [--sizes 10,80,200,500,1000] [--policy igbnet]
-                       [--steps 10] [--repeats 3] [--aia build/aia]
-                       [--set KEY=VALUE ...]
+                       [--steps 10] [--repeats 3] [--policy-threads 1]
+                       [--aia build/aia] [--set KEY=VALUE ...]
 """
 
 import argparse
@@ -49,6 +49,7 @@ def run_size(args, n):
     cmd = ["/usr/bin/time", "-f", "%M %e", args.aia, "bench", "--sizes", f"{n}x{n}",
            "--steps", str(args.steps), "--repeats", str(args.repeats),
            "--policy", args.policy, "--seed", str(args.seed),
+           "--policy-threads", str(args.policy_threads),
            "--set", f"workspace.size=[{side:g},{side:g}]",
            "--set", f"workspace.obstacles.random.count={boxes}"]
     for kv in args.set:
@@ -120,6 +121,9 @@ def main(argv=None):
     parser.add_argument("--steps", type=int, default=10, help="decision steps per run")
     parser.add_argument("--repeats", type=int, default=3, help="runs per size (medians)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the worlds")
+    parser.add_argument("--policy-threads", type=int, default=1,
+                        help="threads of a learned policy (aia bench's "
+                             "--policy-threads; physics has one)")
     parser.add_argument("--aia", default="build/aia", help="the aia binary")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="another scenario key for every size, e.g. "
@@ -136,8 +140,13 @@ def main(argv=None):
         return 2
     os.makedirs(args.out, exist_ok=True)
     # A folder holds one configuration: resuming with another would mix rows.
+    if args.policy_threads < 1:
+        print("error: --policy-threads: give at least 1", file=sys.stderr)
+        return 2
     settings = {"policy": args.policy, "set": args.set, "steps": args.steps,
                 "repeats": args.repeats, "seed": args.seed}
+    if args.policy_threads != 1:  # folders of one thread stay resumable
+        settings["policy_threads"] = args.policy_threads
     settings_path = os.path.join(args.out, "settings.json")
     if os.path.isfile(settings_path):
         with open(settings_path) as f:
