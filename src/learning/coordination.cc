@@ -57,8 +57,9 @@ void MissMemory::Update(const DecisionContext& ctx,
   const RangeRunner run = [](int n, const RangeTask& f) {
     ParallelFor(n, 16, f);
   };
-  memory_.Update(ctx, rows, run, std::max(1, PolicyThreads()));
-  if (share_) memory_.Share(ctx, rows, run);
+  const int workers = std::max(1, PolicyThreads());
+  memory_.Update(ctx, rows, run, workers);
+  if (share_) memory_.Share(ctx, rows, run, workers);
 }
 
 bool MissMemory::Moved(const DecisionContext& ctx, int robot) const {

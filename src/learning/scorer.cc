@@ -64,7 +64,7 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       ParallelFor(n, 16, f);
     };
     search_.Update(ctx, deciding_, run, workers);
-    search_.Share(ctx, deciding_, run);
+    search_.Share(ctx, deciding_, run, workers);
   }
   static const std::vector<std::uint8_t> kAll;
   auto shown = [&](int b) -> const std::vector<std::uint8_t>& {

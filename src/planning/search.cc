@@ -103,11 +103,11 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
 }
 
 void SearchMemory::Share(const DecisionContext& ctx,
-                         const std::vector<int>& robots,
-                         const RangeRunner& run) {
+                         const std::vector<int>& robots, const RangeRunner& run,
+                         int workers) {
   sharing_.Share(
       ctx, robots, num_targets_, &slots_,
-      [&](int i, int k) { Reaim(ctx, i, k); }, run);
+      [&](int i, int k) { Reaim(ctx, i, k); }, run, workers);
 }
 
 void SearchPoints::Reset(int num_robots, int num_targets) {
@@ -224,11 +224,11 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
 }
 
 void SearchPoints::Share(const DecisionContext& ctx,
-                         const std::vector<int>& robots,
-                         const RangeRunner& run) {
+                         const std::vector<int>& robots, const RangeRunner& run,
+                         int workers) {
   sharing_.Share(
       ctx, robots, num_targets_, &slots_,
-      [&](int i, int k) { Recompute(ctx, i, k); }, run);
+      [&](int i, int k) { Recompute(ctx, i, k); }, run, workers);
 }
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,

@@ -301,7 +301,7 @@ TEST(SearchMemoryTest, ThreadsDoNotChangeTheMemory) {
     for (int i : robots) serial.Update(ctx, i);
     serial.Share(ctx, robots);
     threaded.Update(ctx, robots, three, 3);
-    threaded.Share(ctx, robots, three);
+    threaded.Share(ctx, robots, three, 3);
   }
   EXPECT_GT(serial.misses(), 5);
   EXPECT_EQ(threaded.misses(), serial.misses());

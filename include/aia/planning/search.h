@@ -82,67 +82,70 @@ class NeighbourMisses {
   template <typename Slot, typename Then>
   void Share(const DecisionContext& ctx, const std::vector<int>& robots,
              int num_targets, std::vector<Slot>* slots, Then then,
-             const RangeRunner& run = {}) {
+             const RangeRunner& run = {}, int workers = 1) {
     const double log_eps = std::log(ctx.eps);
-    incoming_.clear();
     const auto points = static_cast<std::size_t>(ctx.map->lattice().size());
     if (mark_.size() != points) {
       mark_.assign(points, 0);
       stamp_ = 0;
     }
+    if (static_cast<int>(takers_.size()) < std::max(1, workers))
+      takers_.resize(std::max(1, workers));
     const auto at = [&](int i, int k) -> Slot& {
       return (*slots)[static_cast<std::size_t>(i) * num_targets + k];
     };
-    // Per robot, the targets it missed any point of (CSR), in one pass over
-    // the slots: the unions below visit only those, not every target.
+    // Per robot, the targets it missed any point of, in one pass over the
+    // slots (the robots split over `run`): the unions below visit only
+    // those, not every target.
     const int num_robots =
         num_targets > 0 ? static_cast<int>(slots->size()) / num_targets : 0;
-    missing_begin_.assign(static_cast<std::size_t>(num_robots) + 1, 0);
-    missing_.clear();
-    for (int j = 0; j < num_robots; ++j) {
-      for (int k = 0; k < num_targets; ++k)
-        if (!at(j, k).missed.empty()) missing_.push_back(k);
-      missing_begin_[j + 1] = static_cast<int>(missing_.size());
-    }
+    if (static_cast<int>(missing_.size()) < num_robots)
+      missing_.resize(num_robots);
+    RunRange(run, num_robots, [&](int j0, int j1, int) {
+      for (int j = j0; j < j1; ++j) {
+        missing_[j].clear();
+        for (int k = 0; k < num_targets; ++k)
+          if (!at(j, k).missed.empty()) missing_[j].push_back(k);
+      }
+    });
     groups_.clear();
     group_index_.clear();
     union_.clear();
     order_.assign(robots.begin(), robots.end());
     std::sort(order_.begin(), order_.end());
-    for (int i : order_) {
-      const Group& g = GroupOf(ctx, i, at);
-      for (int a = g.begin; a < g.end;) {
-        const int k = union_[a].first;
-        int b = a;
-        while (b < g.end && union_[b].first == k) ++b;
-        const Slot& s = at(i, k);
-        if (!std::isnan(s.log_det) && s.log_det > log_eps &&
-            ctx.beliefs->layout().is_static(k)) {
-          NextStamp();
-          for (int q : s.missed) mark_[q] = stamp_;
-          for (int c = a; c < b; ++c)
-            if (mark_[union_[c].second] != stamp_)
-              incoming_.push_back({i, k, union_[c].second});
-        }
-        a = b;
+    // Every robot's neighbourhood and its union first, from the lists as
+    // Update left them; then each robot takes what its own list lacks,
+    // appends it (ascending) and calls then(i, k), the robots split over
+    // `run`: a robot writes and reads its own lists only.
+    group_of_.resize(order_.size());
+    for (std::size_t o = 0; o < order_.size(); ++o)
+      group_of_[o] = GroupOf(ctx, order_[o], at);
+    RunRange(run, static_cast<int>(order_.size()), [&](int o0, int o1, int w) {
+      Taker& t = takers_[w];
+      if (t.mark.size() != points) {
+        t.mark.assign(points, 0);
+        t.stamp = 0;
       }
-    }
-    // In (robot, target, point) order, as made; each robot's run of
-    // incoming_ (taking_ holds where each begins) writes its own slots only.
-    taking_.clear();
-    for (std::size_t a = 0; a < incoming_.size(); ++a)
-      if (a == 0 || incoming_[a][0] != incoming_[a - 1][0])
-        taking_.push_back(static_cast<int>(a));
-    const int takers = static_cast<int>(taking_.size());
-    taking_.push_back(static_cast<int>(incoming_.size()));
-    RunRange(run, takers, [&](int r0, int r1, int) {
-      for (int a = taking_[r0]; a < taking_[r1];) {
-        const int i = incoming_[a][0], k = incoming_[a][1];
-        Slot& s = at(i, k);
-        for (; a < taking_[r1] && incoming_[a][0] == i && incoming_[a][1] == k;
-             ++a)
-          s.missed.push_back(incoming_[a][2]);
-        then(i, k);
+      for (int o = o0; o < o1; ++o) {
+        const int i = order_[o];
+        const Group& g = groups_[group_of_[o]];
+        for (int a = g.begin; a < g.end;) {
+          const int k = union_[a].first;
+          int b = a;
+          while (b < g.end && union_[b].first == k) ++b;
+          Slot& s = at(i, k);
+          if (!std::isnan(s.log_det) && s.log_det > log_eps &&
+              ctx.beliefs->layout().is_static(k)) {
+            t.stamp = NextStampOf(&t.mark, t.stamp);
+            for (int q : s.missed) t.mark[q] = t.stamp;
+            const std::size_t had = s.missed.size();
+            for (int c = a; c < b; ++c)
+              if (t.mark[union_[c].second] != t.stamp)
+                s.missed.push_back(union_[c].second);
+            if (s.missed.size() > had) then(i, k);
+          }
+          a = b;
+        }
       }
     });
   }
@@ -181,8 +184,9 @@ class NeighbourMisses {
     });
     return same && n == closed_a_.size();
   }
+  // The index of robot i's group in groups_ (made if new).
   template <typename At>
-  const Group& GroupOf(const DecisionContext& ctx, int i, const At& at) {
+  int GroupOf(const DecisionContext& ctx, int i, const At& at) {
     std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the robots
     ForClosed(ctx, i, [&](int j) {
       hash = (hash ^ static_cast<std::uint64_t>(j)) * 1099511628211ull;
@@ -190,7 +194,7 @@ class NeighbourMisses {
     auto [it, fresh] = group_index_.emplace(hash, -1);
     int* link = &it->second;
     for (; *link >= 0; link = &groups_[*link].next)
-      if (SameClosed(ctx, groups_[*link].robot, i)) return groups_[*link];
+      if (SameClosed(ctx, groups_[*link].robot, i)) return *link;
     *link = static_cast<int>(groups_.size());
     Group g;
     g.robot = i;
@@ -199,8 +203,7 @@ class NeighbourMisses {
     // points of; then per target, its robots' points, each once.
     pairs_.clear();
     ForClosed(ctx, i, [&](int j) {
-      for (int e = missing_begin_[j]; e < missing_begin_[j + 1]; ++e)
-        pairs_.push_back({missing_[e], j});
+      for (int k : missing_[j]) pairs_.push_back({k, j});
     });
     std::sort(pairs_.begin(), pairs_.end());
     for (std::size_t a = 0; a < pairs_.size();) {
@@ -218,21 +221,30 @@ class NeighbourMisses {
     }
     g.end = static_cast<int>(union_.size());
     groups_.push_back(g);
-    return groups_.back();
+    return static_cast<int>(groups_.size()) - 1;
   }
-  void NextStamp() {
-    if (++stamp_ == 0) {  // wrapped: no stale mark may match
-      std::fill(mark_.begin(), mark_.end(), 0u);
-      stamp_ = 1;
+  static std::uint32_t NextStampOf(std::vector<std::uint32_t>* marks,
+                                   std::uint32_t stamp) {
+    if (++stamp == 0) {  // wrapped: no stale mark may match
+      std::fill(marks->begin(), marks->end(), 0u);
+      stamp = 1;
     }
+    return stamp;
   }
-  std::vector<std::array<int, 3>> incoming_;  // (robot, target, point)
-  std::vector<int> missing_begin_, missing_;  // per robot: targets missed
-  std::vector<std::pair<int, int>> pairs_;    // (target, robot)
-  std::vector<std::pair<int, int>> union_;    // (target, point) per group
+  void NextStamp() { stamp_ = NextStampOf(&mark_, stamp_); }
+  // A thread's stamps over the lattice points (a robot's own list).
+  struct Taker {
+    std::vector<std::uint32_t> mark;
+    std::uint32_t stamp = 0;
+  };
+  std::vector<Taker> takers_;               // per worker
+  std::vector<int> group_of_;               // per robot of order_
+  std::vector<std::vector<int>> missing_;   // per robot: targets missed
+  std::vector<std::pair<int, int>> pairs_;  // (target, robot)
+  std::vector<std::pair<int, int>> union_;  // (target, point) per group
   std::vector<Group> groups_;
   std::unordered_map<std::uint64_t, int> group_index_;  // hash -> group
-  std::vector<int> order_, taking_;
+  std::vector<int> order_;
   std::vector<int> closed_a_;        // SameClosed's scratch
   std::vector<std::uint32_t> mark_;  // per lattice point
   std::uint32_t stamp_ = 0;
@@ -260,7 +272,7 @@ class SearchMemory {
   // still open in its own belief) and moves its aims accordingly, the
   // robots split over `run`.
   void Share(const DecisionContext& ctx, const std::vector<int>& robots,
-             const RangeRunner& run = {});
+             const RangeRunner& run = {}, int workers = 1);
   // Where robot i looks for target k (its belief's mean until it missed).
   const Vec2& Aim(int robot, int k) const { return slot(robot, k).aim; }
   const std::vector<int>& Missed(int robot, int k) const {
@@ -321,7 +333,7 @@ class SearchPoints {
   // still open in its own belief), from their lists as Update left them,
   // the robots split over `run`.
   void Share(const DecisionContext& ctx, const std::vector<int>& robots,
-             const RangeRunner& run = {});
+             const RangeRunner& run = {}, int workers = 1);
   // Robot i's search points for target k; empty: its belief's mean.
   const std::vector<Vec2>& Points(int robot, int k) const {
     return slot(robot, k).points;
