@@ -7,6 +7,23 @@
 #include "aia/core/check.h"
 
 namespace aia {
+namespace {
+
+// record(i) for each robot i of `robots`, split over `run`'s `workers`
+// (each robot's memory is its own); the points added, summed.
+template <typename Record>
+long RecordAll(const std::vector<int>& robots, const RangeRunner& run,
+               int workers, std::vector<long>* added, Record record) {
+  added->assign(std::max(1, workers), 0);
+  RunRange(run, static_cast<int>(robots.size()), [&](int b0, int b1, int w) {
+    for (int b = b0; b < b1; ++b) (*added)[w] += record(robots[b]);
+  });
+  long sum = 0;
+  for (long a : *added) sum += a;
+  return sum;
+}
+
+}  // namespace
 
 void SearchMemory::Reset(int num_robots, int num_targets) {
   AIA_CHECK(num_robots >= 0 && num_targets >= 0);
@@ -60,11 +77,8 @@ void SearchMemory::Update(const DecisionContext& ctx, int robot) {
 void SearchMemory::Update(const DecisionContext& ctx,
                           const std::vector<int>& robots,
                           const RangeRunner& run, int workers) {
-  added_.assign(std::max(1, workers), 0);
-  RunRange(run, static_cast<int>(robots.size()), [&](int b0, int b1, int w) {
-    for (int b = b0; b < b1; ++b) added_[w] += Record(ctx, robots[b]);
-  });
-  for (long a : added_) misses_ += a;
+  misses_ += RecordAll(robots, run, workers, &added_,
+                       [&](int i) { return Record(ctx, i); });
 }
 
 int SearchMemory::Record(const DecisionContext& ctx, int robot) {
@@ -170,11 +184,8 @@ void SearchPoints::Update(const DecisionContext& ctx, int robot) {
 void SearchPoints::Update(const DecisionContext& ctx,
                           const std::vector<int>& robots,
                           const RangeRunner& run, int workers) {
-  added_.assign(std::max(1, workers), 0);
-  RunRange(run, static_cast<int>(robots.size()), [&](int b0, int b1, int w) {
-    for (int b = b0; b < b1; ++b) added_[w] += Record(ctx, robots[b]);
-  });
-  for (long a : added_) misses_ += a;
+  misses_ += RecordAll(robots, run, workers, &added_,
+                       [&](int i) { return Record(ctx, i); });
 }
 
 int SearchPoints::Record(const DecisionContext& ctx, int robot) {
