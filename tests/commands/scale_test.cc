@@ -138,5 +138,33 @@ TEST(ScaleTest, TraceOfManyRobotsKeepsTheTeamColumnOnly) {
   fs::remove_all(dir);
 }
 
+// tools/bench_scale.py with the policy's threads: one row per size, the
+// threads kept in the folder's settings (a folder measured with one
+// thread is not resumed with two), and no threads refused.
+TEST(ScaleTest, BenchScaleKeepsItsPolicyThreads) {
+  if (RunCommand("/usr/bin/python3 -c 'import matplotlib'").exit_code != 0)
+    GTEST_SKIP() << "no python3-matplotlib";
+  const std::string dir = testing::MakeTempDir("aia_bench_scale_");
+  const std::string tool = "/usr/bin/python3 " +
+                           testing::SourcePath("tools/bench_scale.py") +
+                           " --aia '" + AIA_BINARY + "' --out " + dir +
+                           " --sizes 5 --steps 2 --repeats 1 --policy random";
+  const auto two = RunCommand(tool + " --policy-threads 2");
+  ASSERT_EQ(two.exit_code, 0) << two.out << two.err;
+  const std::string csv = ReadFile(dir + "/scale.csv");
+  EXPECT_NE(csv.find("\n5,20.0,30,"), std::string::npos) << csv;
+  EXPECT_NE(ReadFile(dir + "/settings.json").find("\"policy_threads\": 2"),
+            std::string::npos);
+  const auto one = RunCommand(tool + " --policy-threads 1");
+  EXPECT_EQ(one.exit_code, 2);
+  EXPECT_NE(one.err.find("this folder was measured with"), std::string::npos)
+      << one.err;
+  const auto none = RunCommand(tool + " --policy-threads 0");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("error: --policy-threads"), std::string::npos)
+      << none.err;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace aia
