@@ -410,8 +410,8 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   const double cell = params_.cell;
   const float decay =
       static_cast<float>(std::exp(-cell / params_.geodesic_length));
-  thread_local std::vector<std::pair<float, int>> heap;
-  heap.clear();
+  thread_local std::vector<std::pair<float, int>> ordered;  // the sources
+  ordered.clear();
   const auto mask = [&](int u, int v) -> unsigned {
     const int gx = x0 + u, gy = y0 + v;
     return occupancy_.InBounds(gx, gy) ? moves_[occupancy_.Index(gx, gy)] : 0u;
@@ -427,7 +427,7 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   std::fill(out, out + n, 0.0f);
   // Each pixel's largest source value: a smaller one from the same pixel
   // leads nowhere the larger does not lead higher (values only decay), so
-  // the heap starts with one entry per source pixel, not one per target
+  // the search starts with one entry per source pixel, not one per target
   // (hundreds of far targets fold onto a few border pixels).
   thread_local std::vector<float> source;
   thread_local std::vector<int> sources;
@@ -476,21 +476,21 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   // decay, so the FIFO never rises, and taking the larger of the two heads
   // pops in Dijkstra's order (ties in any order: each pixel's value is the
   // largest over the ways to it, whichever is found first).
-  for (const int idx : sources) heap.emplace_back(source[idx], idx);
-  std::sort(heap.begin(), heap.end(),
+  for (const int idx : sources) ordered.emplace_back(source[idx], idx);
+  std::sort(ordered.begin(), ordered.end(),
             [](const std::pair<float, int>& a, const std::pair<float, int>& b) {
               return a.first > b.first;
             });
   thread_local std::vector<std::pair<float, int>> fifo;
   fifo.clear();
   std::size_t next_source = 0, next_fifo = 0;
-  while (next_source < heap.size() || next_fifo < fifo.size()) {
+  while (next_source < ordered.size() || next_fifo < fifo.size()) {
     const bool from_sources =
         next_fifo == fifo.size() ||
-        (next_source < heap.size() &&
-         heap[next_source].first >= fifo[next_fifo].first);
+        (next_source < ordered.size() &&
+         ordered[next_source].first >= fifo[next_fifo].first);
     const auto [value, idx] =
-        from_sources ? heap[next_source++] : fifo[next_fifo++];
+        from_sources ? ordered[next_source++] : fifo[next_fifo++];
     const int u = idx % w, v = idx / w;
     const bool from_free = free(u, v);
     if (from_free && value < out[idx]) continue;  // stale

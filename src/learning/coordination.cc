@@ -54,12 +54,9 @@ void MissMemory::Update(const DecisionContext& ctx,
   if (!active_) return;
   // The robots split over the policy's threads (each writes its own
   // memory only).
-  const RangeRunner run = [](int n, const RangeTask& f) {
-    ParallelFor(n, 16, f);
-  };
   const int workers = std::max(1, PolicyThreads());
-  memory_.Update(ctx, rows, run, workers);
-  if (share_) memory_.Share(ctx, rows, run, workers);
+  memory_.Update(ctx, rows, PolicyRunner(), workers);
+  if (share_) memory_.Share(ctx, rows, PolicyRunner(), workers);
 }
 
 bool MissMemory::Moved(const DecisionContext& ctx, int robot) const {

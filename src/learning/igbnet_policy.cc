@@ -78,8 +78,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
                                   std::vector<Move>* moves) {
   // Every part reads the beliefs' log dets and means from one digest,
   // worked out once per step over the policy's threads.
-  digest_.Compute(*given.beliefs,
-                  [](int n, const RangeTask& f) { ParallelFor(n, 16, f); });
+  digest_.Compute(*given.beliefs, PolicyRunner());
   DecisionContext ctx = given;
   ctx.digest = &digest_;
   const Lattice& lattice = ctx.map->lattice();

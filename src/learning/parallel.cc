@@ -58,6 +58,13 @@ void SetPolicyThreads(int threads) {
 
 int PolicyThreads() { return policy_threads; }
 
+const RangeRunner& PolicyRunner() {
+  static const RangeRunner run = [](int n, const RangeTask& f) {
+    ParallelFor(n, 16, f);
+  };
+  return run;
+}
+
 void ParallelFor(int n, int grain,
                  const std::function<void(int, int, int)>& f) {
   if (n <= 0) return;

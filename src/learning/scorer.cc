@@ -38,10 +38,8 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
     prior = &no_prior_;
   }
   const int workers = std::max(1, PolicyThreads());
-  heat_.Prepare(
-      *ctx.beliefs, rows, *prior, renderer_->Heatmap(ctx.eps),
-      renderer_->occupancy(),
-      [](int n, const RangeTask& f) { ParallelFor(n, 16, f); }, workers);
+  heat_.Prepare(*ctx.beliefs, rows, *prior, renderer_->Heatmap(ctx.eps),
+                renderer_->occupancy(), PolicyRunner(), workers);
   if (static_cast<int>(worker_heat_.size()) < workers) {
     worker_heat_.resize(workers, renderer_->occupancy());
     worker_neighbours_.resize(workers);
@@ -60,11 +58,8 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       search_.num_targets() == ctx.beliefs->layout().num_targets();
   if (searching_) {  // the deciding robots' (see RulesLayer::Shape)
     DecidingRows(ctx, rows, &deciding_);
-    const RangeRunner run = [](int n, const RangeTask& f) {
-      ParallelFor(n, 16, f);
-    };
-    search_.Update(ctx, deciding_, run, workers);
-    search_.Share(ctx, deciding_, run, workers);
+    search_.Update(ctx, deciding_, PolicyRunner(), workers);
+    search_.Share(ctx, deciding_, PolicyRunner(), workers);
   }
   static const std::vector<std::uint8_t> kAll;
   auto shown = [&](int b) -> const std::vector<std::uint8_t>& {

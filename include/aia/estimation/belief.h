@@ -84,11 +84,6 @@ class BeliefSet {
   Storage data_;
 };
 
-// The team's best estimate of each target: for target k, the active row with
-// the smallest det Sigma_k (the lowest index among equals), or -1 when no row
-// is active. `det` holds det Sigma of every row and target, row-major
-// (rows x num_targets). One definition for the mission's success test, the
-// video's estimates and the expert's team-best root.
 // What readers of every robot's belief take from it each step, worked out
 // once instead of once per reader (at 1000 robots x 1000 targets the rules,
 // the search memory and the channels each read a million blocks): per row
@@ -110,6 +105,11 @@ class BeliefDigest {
   std::vector<Vec2> mean_;
 };
 
+// The team's best estimate of each target: for target k, the active row with
+// the smallest det Sigma_k (the lowest index among equals), or -1 when no row
+// is active. `det` holds det Sigma of every row and target, row-major
+// (rows x num_targets). One definition for the mission's success test, the
+// video's estimates and the expert's team-best root.
 void TeamBestRows(const std::vector<double>& det, int num_targets,
                   const std::vector<std::uint8_t>& active,
                   std::vector<int>* best);

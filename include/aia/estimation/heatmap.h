@@ -104,7 +104,6 @@ void ProjectHeatmap(const BeliefSet& beliefs, int row,
 // them; it differs from its own ProjectHeatmap only in float rounding. Cost:
 // M stamps plus, per robot, the grid and its differing targets, instead of
 // N * M stamps.
-
 class TeamHeatmap {
  public:
   // For rows `rows` of `beliefs`, on grids shaped like `grid`; targets, then

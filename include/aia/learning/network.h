@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "aia/core/hash.h"
+#include "aia/core/thread_pool.h"
 #include "aia/learning/channels.h"
 
 namespace aia {
@@ -140,6 +141,9 @@ int PolicyThreads();
 // two cores). Each index is visited once; what f writes per index must not
 // depend on the split.
 void ParallelFor(int n, int grain, const std::function<void(int, int, int)>& f);
+// ParallelFor in chunks of 16 as a RangeRunner (core/thread_pool.h), for
+// the parts of the learned policy that split the robots.
+const RangeRunner& PolicyRunner();
 
 }  // namespace aia
 
