@@ -17,6 +17,8 @@ std::string FirstRuleKeySet(const IgbNetParams& params) {
   if (params.share_search != d.share_search) return "policy.share_search";
   if (params.no_undo != d.no_undo) return "policy.no_undo";
   if (params.claims != d.claims) return "policy.claims";
+  if (params.open != d.open) return "policy.open";
+  if (params.refresh != d.refresh) return "policy.refresh";
   return "";
 }
 
@@ -28,8 +30,10 @@ void OpenAims::Of(const DecisionContext& ctx, int robot,
   const double log_eps = std::log(ctx.eps);
   aims_.resize(m);
   open_.assign(m, 0);
+  const bool hood = ctx.holds && ctx.holds->Has(robot);
   for (int k = 0; k < m; ++k) {
-    if (LogDetOf(ctx, robot, k) <= log_eps) continue;
+    if (hood ? !ctx.holds->Open(robot, k) : LogDetOf(ctx, robot, k) <= log_eps)
+      continue;
     aims_[k] = memory ? memory->Aim(robot, k) : MeanOf(ctx, robot, k);
     open_[k] = 1;
   }

@@ -88,6 +88,11 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
     if (ctx.comm->Active(i)) team_.rows.push_back(i);
   team_.row_of.assign(n, -1);
   for (int b = 0; b < team_.size(); ++b) team_.row_of[team_.rows[b]] = b;
+  // The rules' open targets by what each neighbourhood holds.
+  if (rules_ && params_.open == OpenRule::kNeighbours) {
+    holds_.Compute(ctx, team_.rows, params_.refresh, PolicyRunner());
+    ctx.holds = &holds_;
+  }
   ScorerView view;
   if (rules_) {
     rules_->Shape(ctx, team_.rows);

@@ -677,4 +677,93 @@ void TargetClaims::Route(int self, const std::vector<int>& others,
   if (!route.empty()) (*mine)[route.front()] = 1;
 }
 
+// --- ClosedNeighbourhoods ----------------------------------------------------
+
+int ClosedNeighbourhoods::Of(const DecisionContext& ctx, int i, bool* fresh) {
+  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the robots
+  ForClosed(ctx, i, [&](int j) {
+    hash = (hash ^ static_cast<std::uint64_t>(j)) * 1099511628211ull;
+  });
+  auto it = index_.emplace(hash, -1).first;
+  int* link = &it->second;
+  for (; *link >= 0; link = &next_[*link])
+    if (SameClosed(ctx, first_[*link], i)) {
+      *fresh = false;
+      return *link;
+    }
+  *link = static_cast<int>(first_.size());
+  first_.push_back(i);
+  next_.push_back(-1);
+  *fresh = true;
+  return *link;
+}
+
+bool ClosedNeighbourhoods::SameClosed(const DecisionContext& ctx, int a,
+                                      int b) {
+  if (ctx.comm->Neighbors(a).size() != ctx.comm->Neighbors(b).size())
+    return false;
+  closed_a_.clear();
+  ForClosed(ctx, a, [this](int j) { closed_a_.push_back(j); });
+  std::size_t n = 0;
+  bool same = true;
+  ForClosed(ctx, b, [&](int j) {
+    same = same && n < closed_a_.size() && closed_a_[n] == j;
+    ++n;
+  });
+  return same && n == closed_a_.size();
+}
+
+// --- NeighbourhoodHolds
+// -------------------------------------------------------
+
+void NeighbourhoodHolds::Compute(const DecisionContext& ctx,
+                                 const std::vector<int>& robots, double refresh,
+                                 const RangeRunner& run) {
+  AIA_CHECK(refresh > 0.0 && refresh <= 1.0);
+  const int n = static_cast<int>(ctx.robot_lattice->size());
+  m_ = ctx.beliefs->layout().num_targets();
+  group_of_.assign(n, -1);
+  hoods_.Clear();
+  for (int i : robots) {
+    bool fresh = false;
+    group_of_[i] = hoods_.Of(ctx, i, &fresh);
+  }
+  const int groups = hoods_.size();
+  const auto cells = static_cast<std::size_t>(groups) * m_;
+  best_.assign(cells, std::numeric_limits<double>::infinity());
+  pooled_.assign(cells, std::numeric_limits<double>::infinity());
+  open_.assign(cells, 1);
+  const double log_eps = std::log(ctx.eps);
+  const double log_fresh = log_eps + std::log(refresh);
+  // The targets split over `run`; per group, its robots in turn, targets
+  // innermost (the digest's rows are per robot). Pooled: the smallest log
+  // det first, so that every exp below is at most 1.
+  RunRange(run, m_, [&](int k0, int k1, int) {
+    for (int g = 0; g < groups; ++g) {
+      double* best = best_.data() + static_cast<std::size_t>(g) * m_;
+      double* pooled = pooled_.data() + static_cast<std::size_t>(g) * m_;
+      int count = 0;
+      ClosedNeighbourhoods::ForClosed(ctx, hoods_.robot(g), [&](int j) {
+        ++count;
+        for (int k = k0; k < k1; ++k)
+          best[k] = std::min(best[k], LogDetOf(ctx, j, k));
+      });
+      for (int k = k0; k < k1; ++k) pooled[k] = 0.0;
+      ClosedNeighbourhoods::ForClosed(ctx, hoods_.robot(g), [&](int j) {
+        for (int k = k0; k < k1; ++k)
+          pooled[k] += std::exp(-0.5 * (LogDetOf(ctx, j, k) - best[k]));
+      });
+      std::uint8_t* open = open_.data() + static_cast<std::size_t>(g) * m_;
+      for (int k = k0; k < k1; ++k) {
+        if (std::isfinite(best[k]))
+          pooled[k] = best[k] - 2.0 * std::log(pooled[k] / count);
+        else
+          pooled[k] = best[k];
+        open[k] =
+            best[k] > log_fresh && (best[k] > log_eps || pooled[k] > log_eps);
+      }
+    }
+  });
+}
+
 }  // namespace aia

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <thread>
 #include <utility>
@@ -266,6 +267,113 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
       EXPECT_EQ(slots[s].missed, expected[s].missed)
           << "trial " << trial << ", robot " << s / m << ", target " << s % m;
     EXPECT_EQ(calls, expected_calls) << "trial " << trial;
+  }
+}
+
+// Each robot's block of the first target: det Sigma = d (Omega = I / sqrt(d)).
+void SetDet(Team* team, int robot, int k, double d) {
+  team->beliefs.Omega(robot, k) =
+      Eigen::MatrixXd::Identity(2, 2) / std::sqrt(d);
+}
+
+// Known answers, three robots in a full graph (eps 0.1, refresh 0.003). A
+// robot holding the target at det 1e-4 (below 3e-4) closes it for all. At
+// det 0.05 with the others at the prior (det 1), the pooled level is
+// -2 log((sqrt(20) + 2) / 3) = log 0.215: above eps, so the lone holder's
+// share would ebb away and the target stays open. At det 1e-3 it is
+// log(1 / ((sqrt(1000) + 2) / 3)^2) = log 0.008: below eps, closed.
+TEST(NeighbourhoodHoldsTest, KnownAnswersInAFullGraph) {
+  Team team(
+      "workspace: {size: [10.0, 10.0]}\n"
+      "robots: {count: 3}\n"
+      "targets: {count: 1}\n"
+      "mission: {eps: 0.1}\n");
+  SetCovariance(&team, 1.0);
+  NeighbourhoodHolds holds;
+  const std::vector<int> robots = {0, 1, 2};
+  const auto open_for_all = [&](bool expected) {
+    holds.Compute(team.Context(), robots, 0.003);
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(holds.Open(i, 0), expected) << i;
+  };
+  open_for_all(true);  // nobody holds it
+  SetDet(&team, 1, 0, 1e-4);
+  open_for_all(false);
+  EXPECT_NEAR(holds.Best(2, 0), std::log(1e-4), 1e-12);
+  SetDet(&team, 1, 0, 0.05);
+  open_for_all(true);
+  EXPECT_NEAR(holds.Pooled(0, 0),
+              -2.0 * std::log((std::sqrt(20.0) + 2.0) / 3.0), 1e-12);
+  SetDet(&team, 1, 0, 1e-3);
+  open_for_all(false);
+  // Refresh 1: held below eps is closed, whatever the pooled level.
+  SetDet(&team, 1, 0, 0.05);
+  holds.Compute(team.Context(), robots, 1.0);
+  EXPECT_FALSE(holds.Open(0, 0));
+  EXPECT_FALSE(holds.Has(-1));
+}
+
+// NeighbourhoodHolds against the rule read directly, robot by robot: random
+// beliefs on full and range graphs with lost edges (neighbourhoods repeat
+// and differ), some robots left out, the targets split over three threads.
+TEST(NeighbourhoodHoldsTest, EachRobotReadsItsClosedNeighbourhood) {
+  const RangeRunner three = [](int n, const RangeTask& f) {
+    std::vector<std::thread> pool;
+    const int cut[4] = {0, n / 5, n / 2, n};
+    for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);
+    for (std::thread& th : pool) th.join();
+  };
+  for (int trial = 0; trial < 12; ++trial) {
+    CommParams cp;
+    cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
+    cp.range = 3.0;
+    cp.packet_loss_lambda = trial % 3 == 0 ? 0.0 : 4.0 * (trial % 3);
+    Team team(
+        "workspace: {size: [10.0, 10.0]}\n"
+        "robots: {count: 9}\n"
+        "targets: {count: 7}\n"
+        "seed: " +
+            std::to_string(300 + trial) + "\n",
+        cp);
+    std::vector<Vec2> p;
+    for (int idx : team.positions)
+      p.push_back(team.world.map.lattice().Point(idx));
+    team.comm.Update(1, p);
+    const int n = 9, m = 7;
+    Rng rng(7, "neighbourhood_holds_test", static_cast<std::uint64_t>(trial));
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < m; ++k)
+        SetDet(&team, i, k, std::exp(-12.0 * rng.Uniform() + 1.0));
+    std::vector<int> robots;
+    for (int i = 0; i < n; ++i)
+      if (rng.Uniform() < 0.8) robots.push_back(i);
+    const DecisionContext ctx = team.Context();
+    const double refresh = 0.01;
+    NeighbourhoodHolds holds;
+    holds.Compute(ctx, robots, refresh, trial % 4 == 0 ? RangeRunner{} : three);
+    const double log_eps = std::log(ctx.eps);
+    for (int i = 0; i < n; ++i) {
+      const bool in =
+          std::find(robots.begin(), robots.end(), i) != robots.end();
+      ASSERT_EQ(holds.Has(i), in) << i;
+      if (!in) continue;
+      std::vector<int> closed = {i};
+      for (int j : team.comm.Neighbors(i))
+        if (j != i) closed.push_back(j);
+      for (int k = 0; k < m; ++k) {
+        double best = std::numeric_limits<double>::infinity(), sum = 0.0;
+        for (int j : closed)
+          best = std::min(best, team.beliefs.LogDetCovariance(j, k));
+        for (int j : closed)
+          sum += std::exp(-0.5 * team.beliefs.LogDetCovariance(j, k));
+        const double pooled = -2.0 * std::log(sum / closed.size());
+        const bool open = best > log_eps + std::log(refresh) &&
+                          (best > log_eps || pooled > log_eps);
+        EXPECT_EQ(holds.Best(i, k), best) << trial << " " << i << " " << k;
+        EXPECT_NEAR(holds.Pooled(i, k), pooled, 1e-9)
+            << trial << " " << i << " " << k;
+        EXPECT_EQ(holds.Open(i, k), open) << trial << " " << i << " " << k;
+      }
+    }
   }
 }
 

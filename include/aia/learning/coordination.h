@@ -51,6 +51,16 @@ constexpr std::array<EnumName<TargetClaimsMode>, 3> EnumNames(
            {TargetClaimsMode::kRoute, "route"}}};
 }
 
+// When a target is open for a robot (what claims, the walk and no undo work
+// with): while its own det Sigma is above eps; or by what its closed
+// neighbourhood holds (planning/search.h, NeighbourhoodHolds): unless a
+// robot of it holds the target below refresh x eps, or below eps with the
+// neighbourhood's pooled level below eps too.
+enum class OpenRule { kOwn, kNeighbours };
+constexpr std::array<EnumName<OpenRule>, 2> EnumNames(OpenRule) {
+  return {{{OpenRule::kOwn, "own"}, {OpenRule::kNeighbours, "neighbours"}}};
+}
+
 // The igbnet policy's parameters (policy.* keys; the model is
 // policy.model): which coordination, and the rules' parameters (used only
 // with coordination rules; with none a rule's key away from its default is
@@ -83,6 +93,12 @@ struct IgbNetParams {
   bool no_undo = true;
   // ClaimsShaper: which open targets each robot shows the network (above).
   TargetClaimsMode claims = TargetClaimsMode::kRoute;
+  // Which targets are open (above).
+  OpenRule open = OpenRule::kNeighbours;
+  // With open neighbours: a target held below refresh x eps is closed
+  // whatever the pooled level (so it opens again some log(1 / refresh) /
+  // log(1 / kappa_ii^2) steps before its holder, alone, loses it).
+  double refresh = 0.003;
 
   template <typename Archive>
   void Serialize(Archive* a) {
@@ -117,7 +133,7 @@ struct IgbNetParams {
         "rules, no undo: a network move that would undo the robot's last "
         "move is replaced by the deadlock walk, or a stay where the robot "
         "can measure an open target or has nowhere to walk, or, where no "
-        "target is open in its own belief, the network's best move that does "
+        "target is open, the network's best move that does "
         "not undo it (false: the network's move)"));
     a->Visit(AIA_FIELD(claims).Doc(
         "rules, claims: which open targets each robot's heat and reach "
@@ -128,6 +144,18 @@ struct IgbNetParams {
         "an owner of two or more it is the nearest idle robot to); none, all "
         "of them (the network's training input). All of them where it "
         "claims none"));
+    a->Visit(AIA_FIELD(open).Doc(
+        "rules: when a target is open for a robot (what claims, the walk and "
+        "no undo work with): own, while its own det Sigma is above eps; "
+        "neighbours, unless a robot of its closed neighbourhood in this "
+        "step's graph holds it below refresh x eps, or below eps while the "
+        "neighbourhood's pooled level is below eps too (at scale a lone "
+        "holder's share ebbs into the team: the target opens again before "
+        "it is lost)"));
+    a->Visit(AIA_FIELD(refresh)
+                 .In(Between(1e-12, 1.0))
+                 .Doc("rules, open neighbours: a target held below refresh x "
+                      "eps is closed whatever the pooled level"));
   }
 };
 
@@ -136,8 +164,10 @@ struct IgbNetParams {
 // nothing.
 std::string FirstRuleKeySet(const IgbNetParams& params);
 
-// Robot i's open targets (above eps in its own belief) and where it aims
-// for them: the memory's aims where given, else its belief's means.
+// Robot i's open targets (above eps in its own belief, or by what its
+// neighbourhood holds where the context has NeighbourhoodHolds for it; see
+// OpenRule) and where it aims for them: the memory's aims where given, else
+// its belief's means.
 class OpenAims {
  public:
   void Of(const DecisionContext& ctx, int robot, const SearchMemory* memory);

@@ -73,7 +73,8 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   std::unique_ptr<RulesLayer> rules_;  // null with coordination none
   ScoringRows team_;
   std::vector<float> batch_logits_, logits_;
-  BeliefDigest digest_;  // this step's, for every part
+  BeliefDigest digest_;       // this step's, for every part
+  NeighbourhoodHolds holds_;  // this step's, with policy.open neighbours
   long decisions_ = 0, shaped_moves_ = 0, handwritten_moves_ = 0;
 };
 

@@ -75,6 +75,8 @@ class MoveHistory {
   int longest_run_ = 0;
 };
 
+class NeighbourhoodHolds;  // planning/search.h
+
 // What is known at one decision step, and nothing more: the map (no target
 // truth, no failure schedule: those are not in it), the sensor model, the
 // robots' lattice points, this step's graph and the fused beliefs.
@@ -116,6 +118,10 @@ struct DecisionContext {
   // `beliefs`' log dets and position means this step, worked out once (a
   // policy may set it for its own parts); null: read from `beliefs`.
   const BeliefDigest* digest = nullptr;
+  // What each robot's closed neighbourhood holds of each target this step
+  // (planning/search.h; a policy may set it for its own parts); null where
+  // none was worked out.
+  const NeighbourhoodHolds* holds = nullptr;
 };
 
 // Robot (row) i's log det Sigma and position mean of target k, from the

@@ -59,6 +59,45 @@ bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
                const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
                Vec2* aim);
 
+// Robots grouped by closed neighbourhood (the robot and its neighbours in
+// this step's graph): robots whose neighbourhoods hold the same robots share
+// a group. Neighbourhoods are hashed (FNV-1a over the robots, ascending),
+// then compared exactly. O(edges) a step.
+class ClosedNeighbourhoods {
+ public:
+  // Forgets every group (the start of a step).
+  void Clear() {
+    first_.clear();
+    next_.clear();
+    index_.clear();
+  }
+  // Robot i's group: an index in order of making; *fresh says whether this
+  // call made it.
+  int Of(const DecisionContext& ctx, int i, bool* fresh);
+  int size() const { return static_cast<int>(first_.size()); }
+  // The first robot put in group g.
+  int robot(int g) const { return first_[g]; }
+  // Calls visit(j) for robot i and its neighbours, ascending.
+  template <typename Visit>
+  static void ForClosed(const DecisionContext& ctx, int i, Visit&& visit) {
+    bool self = false;
+    for (int j : ctx.comm->Neighbors(i)) {
+      if (!self && i < j) {
+        visit(i);
+        self = true;
+      }
+      if (j != i) visit(j);
+    }
+    if (!self) visit(i);
+  }
+
+ private:
+  bool SameClosed(const DecisionContext& ctx, int a, int b);
+  std::vector<int> first_, next_;  // per group: first robot, next same hash
+  std::unordered_map<std::uint64_t, int> index_;  // hash -> first group
+  std::vector<int> closed_a_;                     // SameClosed's scratch
+};
+
 // Share's work, one definition for SearchMemory and SearchPoints: each
 // robot among `robots` takes the points its neighbours in this step's graph
 // missed for a static target still open in its own belief (log det above
@@ -109,7 +148,7 @@ class NeighbourMisses {
       }
     });
     groups_.clear();
-    group_index_.clear();
+    hoods_.Clear();
     union_.clear();
     order_.assign(robots.begin(), robots.end());
     std::sort(order_.begin(), order_.end());
@@ -152,57 +191,22 @@ class NeighbourMisses {
 
  private:
   // One closed neighbourhood's union: union_[begin, end), (target, point)
-  // ascending without duplicates.
+  // ascending without duplicates; groups_[g] is hoods_' group g.
   struct Group {
-    int robot = 0;  // the first robot with this neighbourhood
     int begin = 0, end = 0;
-    int next = -1;  // the next group whose neighbourhood hashes the same
   };
-  // Calls visit(j) for robot i and its neighbours, ascending.
-  template <typename Visit>
-  static void ForClosed(const DecisionContext& ctx, int i, Visit&& visit) {
-    bool self = false;
-    for (int j : ctx.comm->Neighbors(i)) {
-      if (!self && i < j) {
-        visit(i);
-        self = true;
-      }
-      if (j != i) visit(j);
-    }
-    if (!self) visit(i);
-  }
-  bool SameClosed(const DecisionContext& ctx, int a, int b) {
-    if (ctx.comm->Neighbors(a).size() != ctx.comm->Neighbors(b).size())
-      return false;
-    closed_a_.clear();
-    ForClosed(ctx, a, [this](int j) { closed_a_.push_back(j); });
-    std::size_t n = 0;
-    bool same = true;
-    ForClosed(ctx, b, [&](int j) {
-      same = same && n < closed_a_.size() && closed_a_[n] == j;
-      ++n;
-    });
-    return same && n == closed_a_.size();
-  }
   // The index of robot i's group in groups_ (made if new).
   template <typename At>
   int GroupOf(const DecisionContext& ctx, int i, const At& at) {
-    std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the robots
-    ForClosed(ctx, i, [&](int j) {
-      hash = (hash ^ static_cast<std::uint64_t>(j)) * 1099511628211ull;
-    });
-    auto [it, fresh] = group_index_.emplace(hash, -1);
-    int* link = &it->second;
-    for (; *link >= 0; link = &groups_[*link].next)
-      if (SameClosed(ctx, groups_[*link].robot, i)) return *link;
-    *link = static_cast<int>(groups_.size());
+    bool fresh = false;
+    const int group = hoods_.Of(ctx, i, &fresh);
+    if (!fresh) return group;
     Group g;
-    g.robot = i;
     g.begin = static_cast<int>(union_.size());
     // (target, robot) for each target a robot of the neighbourhood missed
     // points of; then per target, its robots' points, each once.
     pairs_.clear();
-    ForClosed(ctx, i, [&](int j) {
+    ClosedNeighbourhoods::ForClosed(ctx, i, [&](int j) {
       for (int k : missing_[j]) pairs_.push_back({k, j});
     });
     std::sort(pairs_.begin(), pairs_.end());
@@ -221,7 +225,7 @@ class NeighbourMisses {
     }
     g.end = static_cast<int>(union_.size());
     groups_.push_back(g);
-    return static_cast<int>(groups_.size()) - 1;
+    return group;
   }
   static std::uint32_t NextStampOf(std::vector<std::uint32_t>* marks,
                                    std::uint32_t stamp) {
@@ -243,11 +247,48 @@ class NeighbourMisses {
   std::vector<std::pair<int, int>> pairs_;  // (target, robot)
   std::vector<std::pair<int, int>> union_;  // (target, point) per group
   std::vector<Group> groups_;
-  std::unordered_map<std::uint64_t, int> group_index_;  // hash -> group
+  ClosedNeighbourhoods hoods_;
   std::vector<int> order_;
-  std::vector<int> closed_a_;        // SameClosed's scratch
   std::vector<std::uint32_t> mark_;  // per lattice point
   std::uint32_t stamp_ = 0;
+};
+
+// What each robot's closed neighbourhood (the robot and its neighbours in
+// this step's graph: what their messages carry) holds of each target, and
+// which targets are open for the robot by it (IgbNetParams::open
+// neighbours, learning/coordination.h). Per target: the smallest log det
+// Sigma (`Best`), and the pooled level -2 log(mean_j exp(-log det_j / 2))
+// (`Pooled`), which is at least log det of the neighbourhood's mean
+// information for 2-D blocks (Minkowski's determinant inequality): what the
+// consensus settles to without new measurements. A target is open unless
+// a robot of the neighbourhood holds it below refresh x eps, or below eps
+// while the pooled level is below eps too: one whose only holder's share is
+// ebbing into the team opens again before it is lost. Robots with the same
+// closed neighbourhood share one row (a full graph: one for the team), so a
+// step costs O(groups x neighbourhood size x targets), the targets split
+// over `run`.
+class NeighbourhoodHolds {
+ public:
+  // For robots `robots` (Has is false for the others).
+  void Compute(const DecisionContext& ctx, const std::vector<int>& robots,
+               double refresh, const RangeRunner& run = {});
+  bool Has(int robot) const {
+    return robot >= 0 && robot < static_cast<int>(group_of_.size()) &&
+           group_of_[robot] >= 0;
+  }
+  double Best(int robot, int k) const { return best_[Cell(robot, k)]; }
+  double Pooled(int robot, int k) const { return pooled_[Cell(robot, k)]; }
+  bool Open(int robot, int k) const { return open_[Cell(robot, k)] != 0; }
+
+ private:
+  std::size_t Cell(int robot, int k) const {
+    return static_cast<std::size_t>(group_of_[robot]) * m_ + k;
+  }
+  int m_ = 0;
+  ClosedNeighbourhoods hoods_;
+  std::vector<int> group_of_;  // per robot; -1: not computed
+  std::vector<double> best_, pooled_;
+  std::vector<std::uint8_t> open_;
 };
 
 // What one team's robots learned from their own missed measurements of
