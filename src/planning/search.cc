@@ -23,6 +23,21 @@ long RecordAll(const std::vector<int>& robots, const RangeRunner& run,
   return sum;
 }
 
+// Whether robot i measured target k this step: its own measurements where
+// the context has them; else (a hand-made context) whether its belief shrank
+// from `before` to `now`. At scale the belief also shrinks as a neighbour's
+// measurement spreads through the consensus: that is no measurement of the
+// robot's own and must not clear its misses.
+bool Measured(const DecisionContext& ctx, int i, int k, double before,
+              double now) {
+  if (ctx.measurements) {
+    for (const Measurement& z : (*ctx.measurements)[i])
+      if (z.target == k) return true;
+    return false;
+  }
+  return now < before + std::log1p(-1e-9);
+}
+
 }  // namespace
 
 void SearchMemory::Reset(int num_robots, int num_targets) {
@@ -96,7 +111,7 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
     const double now = LogDetOf(ctx, robot, k);
     const bool first = std::isnan(s.log_det);
-    const bool shrank = !first && now < s.log_det + std::log1p(-1e-9);
+    const bool shrank = !first && Measured(ctx, robot, k, s.log_det, now);
     s.log_det = now;
     s.mean = MeanOf(ctx, robot, k);
     const bool searching =
@@ -202,7 +217,7 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
     const double now = LogDetOf(ctx, robot, k);
     const bool first = std::isnan(s.log_det);
-    const bool shrank = !first && now < s.log_det + std::log1p(-1e-9);
+    const bool shrank = !first && Measured(ctx, robot, k, s.log_det, now);
     s.log_det = now;
     s.mean = MeanOf(ctx, robot, k);
     const bool searching =

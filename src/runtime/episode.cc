@@ -167,6 +167,7 @@ DecisionContext Episode::Context() const {
   ctx.central = &estimate_.central();
   ctx.log_det_prior = &estimate_.log_det_prior();
   ctx.history = &history_;
+  ctx.measurements = &z_;
   if (async()) ctx.ready = &ready_;
   return ctx;
 }

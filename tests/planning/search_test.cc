@@ -68,6 +68,41 @@ TEST(SearchMemoryTest, AMissMovesTheAimToTheNearestRingNotRuledOut) {
   EXPECT_NEAR((memory.Aim(0, 0) - Vec2(6.1, 5.25)).norm(), 0.0, 1e-12);
 }
 
+// With the robots' own measurements in the context, a belief that shrank
+// because a neighbour's measurement spread through the consensus is no
+// measurement of the robot's own: the miss stays, and the point is missed
+// again. Its own measurement of the target ends the search.
+TEST(SearchMemoryTest, OnlyTheRobotsOwnMeasurementEndsTheSearch) {
+  Team team(kOneRobot);
+  SearchMemory memory;
+  memory.Reset(1, 1);
+  std::vector<std::vector<Measurement>> z(1);
+  DecisionContext ctx = team.Context();
+  ctx.measurements = &z;
+  memory.Update(ctx, 0);
+  memory.Update(ctx, 0);
+  ASSERT_EQ(memory.Missed(0, 0).size(), 1u);
+  SetCovariance(&team, 0.9);  // shrank, nothing measured
+  memory.Update(ctx, 0);
+  EXPECT_EQ(memory.Missed(0, 0).size(), 1u);
+  EXPECT_NEAR(memory.Aim(0, 0).x(), 6.35, 1e-12);
+  Measurement seen;
+  seen.target = 0;
+  z[0].push_back(seen);
+  memory.Update(ctx, 0);
+  EXPECT_TRUE(memory.Missed(0, 0).empty());
+  // Without measurements in the context (a hand-made one) a shrink is
+  // taken for one.
+  z[0].clear();
+  memory.Update(ctx, 0);
+  memory.Update(ctx, 0);
+  ASSERT_EQ(memory.Missed(0, 0).size(), 1u);
+  ctx.measurements = nullptr;
+  SetCovariance(&team, 0.8);
+  memory.Update(ctx, 0);
+  EXPECT_TRUE(memory.Missed(0, 0).empty());
+}
+
 TEST(SearchMemoryTest, APointThatDoesNotSeeTheAimMissesNothing) {
   Team team(
       "workspace: {size: [10.0, 10.0]}\n"

@@ -115,6 +115,9 @@ struct DecisionContext {
   // (lockstep). A policy may skip the others; what it writes for them is
   // ignored.
   const std::vector<std::uint8_t>* ready = nullptr;
+  // Each robot's own measurements fused this step (what its sensor gave,
+  // row i robot i's); may be null for hand-made contexts.
+  const std::vector<std::vector<Measurement>>* measurements = nullptr;
   // `beliefs`' log dets and position means this step, worked out once (a
   // policy may set it for its own parts); null: read from `beliefs`.
   const BeliefDigest* digest = nullptr;
