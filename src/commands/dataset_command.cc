@@ -94,8 +94,13 @@ class DatasetObserver : public StepObserver {
     active_.clear();
     for (int i = 0; i < n; ++i)
       if (ctx.comm->Active(i)) active_.push_back(i);
-    for (int i : active_) search_.Update(ctx, i);
-    search_.Share(ctx, active_);
+    // Read as the shipped models' data were recorded: a belief that shrank
+    // ends a search (no measurements in the context), so that their recipes
+    // reproduce them; the policies read the robots' own measurements.
+    DecisionContext recorded = ctx;
+    recorded.measurements = nullptr;
+    for (int i : active_) search_.Update(recorded, i);
+    search_.Share(recorded, active_);
     const std::vector<Move>* labels = &d.wanted;
     if (shadow_) {
       if (ctx.step > 0 && !std::binary_search(label_steps_.begin(),

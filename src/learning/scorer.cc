@@ -58,8 +58,12 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       search_.num_targets() == ctx.beliefs->layout().num_targets();
   if (searching_) {  // the deciding robots' (see RulesLayer::Shape)
     DecidingRows(ctx, rows, &deciding_);
-    search_.Update(ctx, deciding_, PolicyRunner(), workers);
-    search_.Share(ctx, deciding_, PolicyRunner(), workers);
+    // As the model's data were recorded (aia dataset): a belief that shrank
+    // ends a search, so that its input is what it was trained on.
+    DecisionContext recorded = ctx;
+    recorded.measurements = nullptr;
+    search_.Update(recorded, deciding_, PolicyRunner(), workers);
+    search_.Share(recorded, deciding_, PolicyRunner(), workers);
   }
   static const std::vector<std::uint8_t> kAll;
   auto shown = [&](int b) -> const std::vector<std::uint8_t>& {
