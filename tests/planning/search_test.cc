@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <thread>
 #include <utility>
@@ -35,6 +36,37 @@ void SetCovariance(Team* team, double sigma) {
     covs.push_back(sigma * sigma * Eigen::MatrixXd::Identity(2, 2));
   }
   team->beliefs.SetPrior(means, covs);
+}
+
+// Three threads over [0, n), split unevenly.
+RangeRunner ThreeThreads() {
+  return [](int n, const RangeTask& f) {
+    std::vector<std::thread> pool;
+    const int cut[4] = {0, n / 5, n / 2, n};
+    for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);
+    for (std::thread& th : pool) th.join();
+  };
+}
+
+// Nine robots and `targets` targets at random in a 10 m world for trial t
+// (seed seed_base + t): a full graph on even trials, a 3 m range graph on
+// odd ones, packet loss lambda 0, 4 or 8 by t; the graph of step 1.
+std::unique_ptr<Team> GraphTrial(int trial, int targets, int seed_base) {
+  CommParams cp;
+  cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
+  cp.range = 3.0;
+  cp.packet_loss_lambda = trial % 3 == 0 ? 0.0 : 4.0 * (trial % 3);
+  auto team = std::make_unique<Team>(
+      "workspace: {size: [10.0, 10.0]}\nrobots: {count: 9}\ntargets: "
+      "{count: " +
+          std::to_string(targets) +
+          "}\nseed: " + std::to_string(seed_base + trial) + "\n",
+      cp);
+  std::vector<Vec2> p;
+  for (int idx : team->positions)
+    p.push_back(team->world.map.lattice().Point(idx));
+  team->comm.Update(1, p);
+  return team;
 }
 
 TEST(SearchMemoryTest, AMissMovesTheAimToTheNearestRingNotRuledOut) {
@@ -242,21 +274,8 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
     std::vector<int> missed;
   };
   for (int trial = 0; trial < 24; ++trial) {
-    CommParams cp;
-    cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
-    cp.range = 3.0;
-    cp.packet_loss_lambda = trial % 3 == 0 ? 0.0 : 4.0 * (trial % 3);
-    Team team(
-        "workspace: {size: [10.0, 10.0]}\n"
-        "robots: {count: 9}\n"
-        "targets: {count: 5}\n"
-        "seed: " +
-            std::to_string(100 + trial) + "\n",
-        cp);
-    std::vector<Vec2> p;
-    for (int idx : team.positions)
-      p.push_back(team.world.map.lattice().Point(idx));
-    team.comm.Update(1, p);
+    const std::unique_ptr<Team> made = GraphTrial(trial, 5, 100);
+    Team& team = *made;
     const int n = 9, m = 5;
     Rng rng(7, "neighbour_misses_test", static_cast<std::uint64_t>(trial));
     std::vector<Slot> slots(n * m);
@@ -351,28 +370,10 @@ TEST(NeighbourhoodHoldsTest, KnownAnswersInAFullGraph) {
 // beliefs on full and range graphs with lost edges (neighbourhoods repeat
 // and differ), some robots left out, the targets split over three threads.
 TEST(NeighbourhoodHoldsTest, EachRobotReadsItsClosedNeighbourhood) {
-  const RangeRunner three = [](int n, const RangeTask& f) {
-    std::vector<std::thread> pool;
-    const int cut[4] = {0, n / 5, n / 2, n};
-    for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);
-    for (std::thread& th : pool) th.join();
-  };
+  const RangeRunner three = ThreeThreads();
   for (int trial = 0; trial < 12; ++trial) {
-    CommParams cp;
-    cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
-    cp.range = 3.0;
-    cp.packet_loss_lambda = trial % 3 == 0 ? 0.0 : 4.0 * (trial % 3);
-    Team team(
-        "workspace: {size: [10.0, 10.0]}\n"
-        "robots: {count: 9}\n"
-        "targets: {count: 7}\n"
-        "seed: " +
-            std::to_string(300 + trial) + "\n",
-        cp);
-    std::vector<Vec2> p;
-    for (int idx : team.positions)
-      p.push_back(team.world.map.lattice().Point(idx));
-    team.comm.Update(1, p);
+    const std::unique_ptr<Team> made = GraphTrial(trial, 7, 300);
+    Team& team = *made;
     const int n = 9, m = 7;
     Rng rng(7, "neighbourhood_holds_test", static_cast<std::uint64_t>(trial));
     for (int i = 0; i < n; ++i)
@@ -421,12 +422,7 @@ TEST(SearchMemoryTest, ThreadsDoNotChangeTheMemory) {
       "targets: {list: [{position: [1.0, 11.0], prior_mean: [6.1, 6.2]}, "
       "{position: [11.0, 1.0], prior_mean: [4.3, 7.9]}, {position: [1.0, "
       "1.0], prior_mean: [8.2, 4.4], prior_sigma: 2.0}]}\n");
-  const RangeRunner three = [](int n, const RangeTask& f) {
-    std::vector<std::thread> pool;
-    const int cut[4] = {0, n / 5, n / 2, n};
-    for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);
-    for (std::thread& th : pool) th.join();
-  };
+  const RangeRunner three = ThreeThreads();
   SearchMemory serial, threaded;
   serial.Reset(7, 3);
   threaded.Reset(7, 3);
