@@ -111,11 +111,11 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
     const double now = LogDetOf(ctx, robot, k);
     const bool first = std::isnan(s.log_det);
-    const bool shrank = !first && Measured(ctx, robot, k, s.log_det, now);
+    const bool measured = !first && Measured(ctx, robot, k, s.log_det, now);
     s.log_det = now;
     s.mean = MeanOf(ctx, robot, k);
     const bool searching =
-        !first && !shrank && now > log_eps && beliefs.layout().is_static(k);
+        !first && !measured && now > log_eps && beliefs.layout().is_static(k);
     if (!searching) s.missed.clear();
     if (s.missed.empty()) s.aim = s.mean;
     if (!searching) continue;
@@ -217,11 +217,11 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
     const double now = LogDetOf(ctx, robot, k);
     const bool first = std::isnan(s.log_det);
-    const bool shrank = !first && Measured(ctx, robot, k, s.log_det, now);
+    const bool measured = !first && Measured(ctx, robot, k, s.log_det, now);
     s.log_det = now;
     s.mean = MeanOf(ctx, robot, k);
     const bool searching =
-        !first && !shrank && now > log_eps && beliefs.layout().is_static(k);
+        !first && !measured && now > log_eps && beliefs.layout().is_static(k);
     if (!searching) {
       s.missed.clear();
       s.points.clear();
@@ -728,8 +728,7 @@ bool ClosedNeighbourhoods::SameClosed(const DecisionContext& ctx, int a,
   return same && n == closed_a_.size();
 }
 
-// --- NeighbourhoodHolds
-// -------------------------------------------------------
+// --- NeighbourhoodHolds ------------------------------------------------------
 
 void NeighbourhoodHolds::Compute(const DecisionContext& ctx,
                                  const std::vector<int>& robots, double refresh,
