@@ -1,7 +1,7 @@
 // Searching a static target's prior after missed measurements
 // (docs/design.md, Policies; docs/learning.md, Search memory). A robot whose
-// lattice point sees where a target is believed to be, and whose belief did
-// not shrink, learned that the target is not anywhere that point would have
+// lattice point sees where a target is believed to be, and that measured
+// nothing of it, learned that the target is not anywhere that point would have
 // measured: the Kalman filter cannot say so (it has no measurement to fuse),
 // so a policy that only reads the belief would return to the same points
 // forever. The aim is then moved to the nearest part of the prior that no
@@ -293,17 +293,19 @@ class NeighbourhoodHolds {
 
 // What one team's robots learned from their own missed measurements of
 // static targets, per robot and target: the lattice points from which the
-// robot saw its aim without its belief shrinking, and the aim that follows
+// robot saw its aim without measuring the target, and the aim that follows
 // (SearchAim; the mean while nothing is missed). Moving targets are not
 // searched (their aim is the mean). Nothing in it depends on the step
 // number; robot i's memory depends on robot i's belief row and points only.
 class SearchMemory {
  public:
   void Reset(int num_robots, int num_targets);
-  // Robot i after this step's fusion, at its lattice point: a belief that
-  // did not shrink while the point saw the aim adds the point to what the
-  // robot missed (and moves the aim); one that shrank clears it (the mean
-  // moved and the search is over). The first call only records the belief.
+  // Robot i after this step's fusion, at its lattice point: no measurement
+  // of the target while the point saw the aim adds the point to what the
+  // robot missed (and moves the aim); a measurement clears it (the mean
+  // moved and the search is over). Measured: the robot's own measurements
+  // where the context has them, else a belief that shrank. The first call
+  // only records the belief.
   void Update(const DecisionContext& ctx, int robot);
   // Update for each robot of `robots`, split over `run`'s `workers`.
   void Update(const DecisionContext& ctx, const std::vector<int>& robots,
@@ -351,7 +353,7 @@ class SearchMemory {
 // ChannelParams::search), where SearchMemory above picks one aim for the
 // hand-written rules. Per robot and target: the lattice points from which
 // the robot (or, through Share, a neighbour) saw one of the target's search
-// points without its belief shrinking, and the search points that follow:
+// points without measuring the target, and the search points that follow:
 // the mean while no missed point would have measured a target there, else
 // every point of the first ring of the prior (WalkPriorRings) that is free,
 // that no missed point would have measured, and that some free point of the
@@ -361,10 +363,11 @@ class SearchMemory {
 class SearchPoints {
  public:
   void Reset(int num_robots, int num_targets);
-  // Robot i after this step's fusion, at its lattice point: a belief that
-  // did not shrink while the point saw one of its search points adds the
-  // point to the misses (and moves the search points); one that shrank
-  // clears them. The first call only records the belief.
+  // Robot i after this step's fusion, at its lattice point: no measurement
+  // of the target (as SearchMemory::Update reads it) while the point saw one
+  // of its search points adds the point to the misses (and moves the search
+  // points); a measurement clears them. The first call only records the
+  // belief.
   void Update(const DecisionContext& ctx, int robot);
   // Update for each robot of `robots`, split over `run`'s `workers`.
   void Update(const DecisionContext& ctx, const std::vector<int>& robots,
