@@ -77,10 +77,10 @@ double ResidentNodeBytes(int n, int stride) {
   return 4.0 * n + 8.0 * stride + 36.0 + 16.0;
 }
 
-// Solves whose arena stays below this take no part of the budget (the
-// ordinary ones: Dec-SB's 300 iterations, the expert's default budget on
-// small teams); their memory is kept for the next solve.
-constexpr double kSmallTreeBytes = 32.0 * (1 << 20);
+// Solves whose arena stays below kSmallTreeBytes (planning/node_arena.h)
+// take no part of the budget (the ordinary ones: Dec-SB's 300 iterations,
+// the expert's default budget on small teams); their memory is kept for the
+// next solve.
 
 // The process's budget of tree memory (TreeBudgetBytes()) for all the
 // large solves running at once. A solve takes all it may need before it starts
@@ -134,8 +134,9 @@ void SetTreeBudgetBytes(double bytes) {
 class TreeMemoryLease {
  public:
   explicit TreeMemoryLease(double bytes)
-      : bytes_(bytes > kSmallTreeBytes ? std::min(bytes, TreeBudgetBytes())
-                                       : 0.0) {
+      : bytes_(bytes > static_cast<double>(kSmallTreeBytes)
+                   ? std::min(bytes, TreeBudgetBytes())
+                   : 0.0) {
     if (bytes_ > 0.0) TreeMemory::Get().Take(bytes_);
   }
   ~TreeMemoryLease() {

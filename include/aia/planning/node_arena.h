@@ -7,6 +7,8 @@
 #define AIA_PLANNING_NODE_ARENA_H_
 
 #include <cstddef>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace aia {
@@ -15,6 +17,12 @@ namespace aia {
 // returned to it when freed, so that a finished large solve gives its
 // memory back whatever the process's malloc keeps (jemalloc in build/aia
 // keeps freed pages), and only the pages a tree fills are resident.
+// A tree whose arena may hold at most this many bytes is small: its solve
+// takes no share of the process's tree budget (sampling_tree.cc), and its
+// blocks come from malloc, whose freed pages the next solve reuses. Larger
+// blocks are mapped from the kernel (ArenaAllocator).
+inline constexpr std::size_t kSmallTreeBytes = std::size_t{32} << 20;
+
 template <typename T>
 struct ArenaAllocator {
   using value_type = T;
@@ -23,6 +31,17 @@ struct ArenaAllocator {
   ArenaAllocator(const ArenaAllocator<U>&) {}  // NOLINT: allocator rebind
   T* allocate(std::size_t n);
   void deallocate(T* p, std::size_t n);
+  // resize() leaves new numbers uninitialized (default-initialized): each
+  // row is written whole before it is read (NodeArena::Open's caller), and
+  // zeroing it first cost a tenth of a small solve.
+  template <typename U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   template <typename U>
   bool operator==(const ArenaAllocator<U>&) const {
     return true;
