@@ -96,7 +96,7 @@ bool AimTable::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,
   // Among candidates of one ring, the one whose region is nearest to a robot.
   const bool found = SearchAim(
       *map_, *sensor_, mean, cov, missed,
-      [&](const Vec2& x) {
+      [&](const Vec2& x, int /*bound*/) {
         RegionOf(x, &trial_region_);
         if (trial_region_.empty()) return -1;
         int near = std::numeric_limits<int>::max();

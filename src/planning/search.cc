@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "aia/core/check.h"
 
@@ -40,6 +41,44 @@ bool Measured(const DecisionContext& ctx, int i, int k, double before,
 
 }  // namespace
 
+int NearestObserverDistance(const Map& map, const SensorModel& sensor, int here,
+                            const Vec2& x, int span, int bound) {
+  const Lattice& lattice = map.lattice();
+  const int c = lattice.NearestPoint(x);
+  const int component = lattice.components()[here];
+  const int hx = lattice.Ix(here), hy = lattice.Iy(here);
+  const int x0 = std::max(0, lattice.Ix(c) - span);
+  const int x1 = std::min(lattice.nx() - 1, lattice.Ix(c) + span);
+  const int y0 = std::max(0, lattice.Iy(c) - span);
+  const int y1 = std::min(lattice.ny() - 1, lattice.Iy(c) + span);
+  // The distance from v to [lo, hi], and to its far end.
+  const auto near = [](int v, int lo, int hi) {
+    return v < lo ? lo - v : v > hi ? v - hi : 0;
+  };
+  const auto far = [](int v, int lo, int hi) {
+    return std::max(std::abs(v - lo), std::abs(v - hi));
+  };
+  const int d_lo = near(hx, x0, x1) + near(hy, y0, y1);
+  const int d_hi = far(hx, x0, x1) + far(hy, y0, y1);
+  for (int d = d_lo; d <= d_hi; ++d) {
+    if (d >= bound) return bound;
+    for (int ix = x0; ix <= x1; ++ix) {
+      const int rest = d - std::abs(ix - hx);
+      if (rest < 0) continue;
+      for (const int iy : {hy - rest, hy + rest}) {
+        if (iy >= y0 && iy <= y1) {
+          const int q = lattice.Index(ix, iy);
+          if (lattice.Free(q) && lattice.components()[q] == component &&
+              PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
+            return d;
+        }
+        if (rest == 0) break;  // one point, not two
+      }
+    }
+  }
+  return -1;
+}
+
 void SearchMemory::Reset(int num_robots, int num_targets) {
   AIA_CHECK(num_robots >= 0 && num_targets >= 0);
   num_robots_ = num_robots;
@@ -57,24 +96,8 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
       static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
   // Near: the lattice distance (|dx| + |dy|) from the robot to the nearest
   // point of its own component that would measure a target at x.
-  const auto cost = [&](const Vec2& x) {
-    const int c = lattice.NearestPoint(x);
-    const int component = lattice.components()[here];
-    int best = -1;
-    for (int iy = std::max(0, lattice.Iy(c) - span);
-         iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy) {
-      for (int ix = std::max(0, lattice.Ix(c) - span);
-           ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
-        const int q = lattice.Index(ix, iy);
-        if (!lattice.Free(q) || lattice.components()[q] != component) continue;
-        const int d =
-            std::abs(ix - lattice.Ix(here)) + std::abs(iy - lattice.Iy(here));
-        if (best >= 0 && d >= best) continue;
-        if (PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
-          best = d;
-      }
-    }
-    return best;
+  const auto cost = [&](const Vec2& x, int bound) {
+    return NearestObserverDistance(map, sensor, here, x, span, bound);
   };
   Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
@@ -151,25 +174,16 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   const Map& map = *ctx.map;
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
-  const int component = lattice.components()[(*ctx.robot_lattice)[robot]];
+  const int here = (*ctx.robot_lattice)[robot];
   const int span =
       static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
   // Some free point of the robot's component would measure a target at x.
   const auto observable = [&](const Vec2& x) {
-    const int c = lattice.NearestPoint(x);
-    for (int iy = std::max(0, lattice.Iy(c) - span);
-         iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy)
-      for (int ix = std::max(0, lattice.Ix(c) - span);
-           ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
-        const int q = lattice.Index(ix, iy);
-        if (lattice.Free(q) && lattice.components()[q] == component &&
-            PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0)
-          return true;
-      }
-    return false;
+    return NearestObserverDistance(map, sensor, here, x, span) >= 0;
   };
   Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
+  const std::vector<Vec2>& ruled = MissedPoints(lattice, &s.missed);
   s.points.clear();
   bool mean_viable = false;
   int index = 0;
@@ -177,7 +191,7 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
       s.mean, cov, lattice.step(),
       [&](const Vec2& x) {
         const bool first = index++ == 0;
-        if (!map.PointFree(x) || RuledOut(map, sensor, &s.missed, x) ||
+        if (!map.PointFree(x) || RuledOut(map, sensor, ruled, x) ||
             !observable(x))
           return;
         if (first) mean_viable = true;

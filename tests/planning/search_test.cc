@@ -69,6 +69,61 @@ std::unique_ptr<Team> GraphTrial(int trial, int targets, int seed_base) {
   return team;
 }
 
+// The nearest observer of x read in order of distance is the one a scan of
+// the whole window finds: the same distance, on random points of worlds
+// with boxes and walls, sensors with and without line of sight, robots in
+// other components; with a bound, the distance where it is below the bound.
+TEST(SearchMemoryTest, NearestObserverDistanceIsTheWindowsNearest) {
+  int found = 0, bounded = 0;
+  for (int trial = 0; trial < 8; ++trial) {
+    Team team("workspace: {size: [14.0, 11.0], obstacles: {random: {count: " +
+              std::to_string(6 + 3 * trial) +
+              "}}}\nseed: " + std::to_string(50 + trial) +
+              "\nsensor: {range: " + std::to_string(1.0 + 0.5 * (trial % 4)) +
+              ", line_of_sight: " + (trial % 3 ? "true" : "false") +
+              "}\nrobots: {count: 2}\ntargets: {count: 2}\n");
+    const Map& map = team.world.map;
+    const Lattice& lattice = map.lattice();
+    const int span =
+        static_cast<int>(std::ceil(team.sensor.range / lattice.step())) + 1;
+    Rng rng(7, "nearest_observer", trial);
+    for (int probe = 0; probe < 300; ++probe) {
+      const int here = static_cast<int>(rng.UniformInt(lattice.size()));
+      const Vec2 x(rng.Uniform(0.0, 14.0), rng.Uniform(0.0, 11.0));
+      // The reference: every point of the window.
+      const int c = lattice.NearestPoint(x);
+      int want = -1;
+      for (int iy = std::max(0, lattice.Iy(c) - span);
+           iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy)
+        for (int ix = std::max(0, lattice.Ix(c) - span);
+             ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
+          const int q = lattice.Index(ix, iy);
+          if (!lattice.Free(q) ||
+              lattice.components()[q] != lattice.components()[here] ||
+              PredictedPrecision(map, team.sensor, lattice.Point(q), x) <= 0.0)
+            continue;
+          const int d =
+              std::abs(ix - lattice.Ix(here)) + std::abs(iy - lattice.Iy(here));
+          if (want < 0 || d < want) want = d;
+        }
+      EXPECT_EQ(NearestObserverDistance(map, team.sensor, here, x, span), want)
+          << "trial " << trial << " probe " << probe;
+      found += want >= 0;
+      const int bound = static_cast<int>(rng.UniformInt(40));
+      const int got =
+          NearestObserverDistance(map, team.sensor, here, x, span, bound);
+      if (want >= 0 && want < bound) {
+        EXPECT_EQ(got, want);
+      } else {
+        EXPECT_TRUE(got == -1 || got == bound) << got;
+        bounded += got == bound;
+      }
+    }
+  }
+  EXPECT_GT(found, 500);  // most points are seen from somewhere
+  EXPECT_GT(bounded, 50);
+}
+
 TEST(SearchMemoryTest, AMissMovesTheAimToTheNearestRingNotRuledOut) {
   Team team(kOneRobot);
   ASSERT_TRUE(team.world.map.lattice().Free(team.positions[0]));

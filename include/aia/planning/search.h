@@ -49,8 +49,10 @@ int WalkPriorRings(const Vec2& mean, const Mat2& cov, double step,
 // `missed` (may be null) did not measure. x is ruled out when a point of
 // `missed` would have measured a target at x. Tried in order: the mean, then
 // rings of the prior at Mahalanobis radius 0.25, 0.5, ..., 4 (8 to 64 points
-// each); a free point that is not ruled out is a candidate when cost(x) >= 0
-// (an int; the caller says what is near, -1: x cannot be observed). The
+// each); a free point that is not ruled out is a candidate when cost(x,
+// bound) >= 0 (an int; the caller says what is near, -1: x cannot be
+// observed; where the cost is not below `bound`, the best so far, any value
+// from `bound` on may be returned instead, as such x is passed over). The
 // first ring (the mean alone being the first) with a candidate decides: its
 // candidate of least cost, ties to the first in angle order. Returns false,
 // aim = mean, when no ring has one.
@@ -58,6 +60,16 @@ template <typename Cost>
 bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
                const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
                Vec2* aim);
+
+// The lattice distance (|dx| + |dy|) from `here` to the nearest free point
+// of its component, within `span` points of x's nearest lattice point (per
+// axis), that would measure a target at x; -1 where none would, and `bound`
+// where none nearer than `bound` would. The window is read in order of that
+// distance, so the line of sight is tested only up to the first point that
+// sees x (most of a window is farther than it).
+int NearestObserverDistance(const Map& map, const SensorModel& sensor, int here,
+                            const Vec2& x, int span,
+                            int bound = std::numeric_limits<int>::max());
 
 // Robots grouped by closed neighbourhood (the robot and its neighbours in
 // this step's graph): robots whose neighbourhoods hold the same robots share
@@ -580,6 +592,21 @@ class TargetClaims {
 
 // ---------------------------------------------------------------------------
 
+// (cos, sin) of 2 pi a / count for a in [0, count), count in [1, 64]: the
+// rings' directions, worked out once (the same numbers as computing each).
+inline const Vec2* RingDirections(int count) {
+  static const std::vector<std::vector<Vec2>> table = [] {
+    std::vector<std::vector<Vec2>> t(65);
+    for (int c = 1; c <= 64; ++c)
+      for (int a = 0; a < c; ++a) {
+        const double theta = 2.0 * M_PI * a / c;
+        t[c].emplace_back(std::cos(theta), std::sin(theta));
+      }
+    return t;
+  }();
+  return table[count].data();
+}
+
 template <typename Visit, typename Done>
 int WalkPriorRings(const Vec2& mean, const Mat2& cov, double step,
                    Visit&& visit, Done&& done) {
@@ -597,23 +624,33 @@ int WalkPriorRings(const Vec2& mean, const Mat2& cov, double step,
             : std::clamp(
                   static_cast<int>(std::ceil(2.0 * M_PI * rho * sigma / step)),
                   8, 64);
-    for (int a = 0; a < count; ++a) {
-      const double theta = 2.0 * M_PI * a / count;
-      visit(
-          Vec2(mean + l * Vec2(rho * std::cos(theta), rho * std::sin(theta))));
-    }
+    const Vec2* direction = RingDirections(count);
+    for (int a = 0; a < count; ++a)
+      visit(Vec2(mean +
+                 l * Vec2(rho * direction[a].x(), rho * direction[a].y())));
     if (done()) return ring;
   }
   return -1;
 }
 
-// Whether a lattice point of `missed` would have measured a target at x.
+// The positions of the lattice points `missed` (may be null: none), in a
+// scratch list of the calling thread, so that a walk over the rings reads
+// them without working each out again.
+inline const std::vector<Vec2>& MissedPoints(const Lattice& lattice,
+                                             const std::vector<int>* missed) {
+  thread_local std::vector<Vec2> points;
+  points.clear();
+  if (missed)
+    for (int q : *missed) points.push_back(lattice.Point(q));
+  return points;
+}
+
+// Whether a point of `missed` (MissedPoints) would have measured a target
+// at x.
 inline bool RuledOut(const Map& map, const SensorModel& sensor,
-                     const std::vector<int>* missed, const Vec2& x) {
-  if (!missed) return false;
-  const Lattice& lattice = map.lattice();
-  for (int q : *missed)
-    if (PredictedPrecision(map, sensor, lattice.Point(q), x) > 0.0) return true;
+                     const std::vector<Vec2>& missed, const Vec2& x) {
+  for (const Vec2& p : missed)
+    if (PredictedPrecision(map, sensor, p, x) > 0.0) return true;
   return false;
 }
 
@@ -622,11 +659,12 @@ bool SearchAim(const Map& map, const SensorModel& sensor, const Vec2& mean,
                const Mat2& cov, const std::vector<int>* missed, Cost&& cost,
                Vec2* aim) {
   int best = std::numeric_limits<int>::max();
+  const std::vector<Vec2>& ruled = MissedPoints(map.lattice(), missed);
   const int ring = WalkPriorRings(
       mean, cov, map.lattice().step(),
       [&](const Vec2& x) {
-        if (!map.PointFree(x) || RuledOut(map, sensor, missed, x)) return;
-        const int c = cost(x);
+        if (!map.PointFree(x) || RuledOut(map, sensor, ruled, x)) return;
+        const int c = cost(x, best);
         if (c < 0 || c >= best) return;
         best = c;
         *aim = x;

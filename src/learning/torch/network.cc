@@ -148,6 +148,17 @@ FoldedNet Fold(IgbNetModule& module) {
     const auto [w2, b2] = FoldInto(block->conv2, block->bn2);
     f.blocks.push_back({w1, b1, w2, b2});
   }
+  // fc1 as a convolution whose kernel covers the pooled grid: oneDNN's
+  // kernels instead of the reference BLAS that Linear's matrix product
+  // calls (the pooled C x P x P features flatten in the kernel's order).
+  const auto& w = module->fc1->weight;
+  const int pool = static_cast<int>(std::lround(std::sqrt(
+      static_cast<double>(w.size(1)) / module->stem->options.out_channels())));
+  f.fc1_w = w.detach()
+                .reshape({w.size(0), module->stem->options.out_channels(), pool,
+                          pool})
+                .contiguous();
+  f.fc1_b = module->fc1->bias.detach();
   return f;
 }
 
@@ -161,8 +172,8 @@ torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
     y = torch::conv2d(y, b[2], b[3], 1, 1);
     x = torch::relu(y + x);
   }
-  x = module->pool(x).flatten(1);
-  return torch::relu(module->fc1(x));
+  x = module->pool(x);
+  return torch::relu(torch::conv2d(x, f.fc1_w, f.fc1_b).flatten(1));
 }
 
 torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,

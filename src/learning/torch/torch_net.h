@@ -67,6 +67,7 @@ void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
 struct FoldedNet {
   torch::Tensor stem_w, stem_b;
   std::vector<std::array<torch::Tensor, 4>> blocks;  // w1, b1, w2, b2
+  torch::Tensor fc1_w, fc1_b;  // fc1 as a hidden x C x P x P convolution
 };
 FoldedNet Fold(IgbNetModule& module);
 torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
