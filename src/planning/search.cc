@@ -154,12 +154,121 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
   return added;
 }
 
+bool SearchMemory::ReaimShared(const DecisionContext& ctx, int robot, int k,
+                               int group, WalkCache* cache) {
+  const Map& map = *ctx.map;
+  const SensorModel& sensor = *ctx.sensor;
+  const Lattice& lattice = map.lattice();
+  const int span =
+      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
+  std::vector<int>& same =
+      cache->index[(static_cast<std::uint64_t>(group) << 32) |
+                   static_cast<std::uint32_t>(k)];
+  int w = -1;
+  for (int v : same)
+    if (cache->walks[v].mean == s.mean && cache->walks[v].cov == cov) w = v;
+  if (w < 0) {
+    if (cache->used == static_cast<int>(cache->walks.size()))
+      cache->walks.emplace_back();
+    w = cache->used++;
+    same.push_back(w);
+    SharedWalk& fresh = cache->walks[w];
+    fresh.mean = s.mean;
+    fresh.cov = cov;
+    fresh.ring_end.clear();
+    fresh.points.clear();
+  }
+  SharedWalk& walk = cache->walks[w];
+  const int here = (*ctx.robot_lattice)[robot];
+  const int component = lattice.components()[here];
+  const int hx = lattice.Ix(here), hy = lattice.Iy(here);
+  // NearestObserverDistance from the point's summary: where the robot lies
+  // beyond a corner of the observers' box, every observer is nearer along
+  // both axes the same way, and the corner sum gives the least distance.
+  const auto cost = [&](const RingPoint& p, int bound) {
+    if (p.component == -1) return -1;
+    if (p.component >= 0 && p.component != component) return -1;
+    if (p.component >= 0) {
+      if (hx <= p.x0 && hy <= p.y0) return p.corner[0] - hx - hy;
+      if (hx >= p.x1 && hy <= p.y0) return p.corner[1] + hx - hy;
+      if (hx <= p.x0 && hy >= p.y1) return p.corner[2] - hx + hy;
+      if (hx >= p.x1 && hy >= p.y1) return p.corner[3] + hx + hy;
+    }
+    return NearestObserverDistance(map, sensor, here, p.x, span, bound);
+  };
+  int best = std::numeric_limits<int>::max();
+  for (int r = 0; r <= PriorRings::kLast; ++r) {
+    if (r == static_cast<int>(walk.ring_end.size())) {
+      // Ring r's candidates: free, and not ruled out by the missed points
+      // (the neighbourhood's union, which this robot now holds).
+      const std::vector<Vec2>& ruled = MissedPoints(lattice, &s.missed);
+      PriorRings(walk.mean, walk.cov, lattice.step())
+          .Visit(r, [&](const Vec2& x) {
+            if (!map.PointFree(x) || RuledOut(map, sensor, ruled, x)) return;
+            RingPoint p;
+            p.x = x;
+            const int c = lattice.NearestPoint(x);
+            for (int iy = std::max(0, lattice.Iy(c) - span);
+                 iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy)
+              for (int ix = std::max(0, lattice.Ix(c) - span);
+                   ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span);
+                   ++ix) {
+                const int q = lattice.Index(ix, iy);
+                if (!lattice.Free(q) ||
+                    PredictedPrecision(map, sensor, lattice.Point(q), x) <= 0.0)
+                  continue;
+                const std::array<int, 4> sums = {ix + iy, -ix + iy, ix - iy,
+                                                 -ix - iy};
+                if (p.component == -1) {
+                  p.component = lattice.components()[q];
+                  p.x0 = p.x1 = ix;
+                  p.y0 = p.y1 = iy;
+                  p.corner = sums;
+                  continue;
+                }
+                if (p.component != lattice.components()[q]) p.component = -2;
+                p.x0 = std::min(p.x0, ix);
+                p.x1 = std::max(p.x1, ix);
+                p.y0 = std::min(p.y0, iy);
+                p.y1 = std::max(p.y1, iy);
+                for (int e = 0; e < 4; ++e)
+                  p.corner[e] = std::min(p.corner[e], sums[e]);
+              }
+            walk.points.push_back(p);
+          });
+      walk.ring_end.push_back(static_cast<int>(walk.points.size()));
+    }
+    for (int a = r == 0 ? 0 : walk.ring_end[r - 1]; a < walk.ring_end[r]; ++a) {
+      const int c = cost(walk.points[a], best);
+      if (c < 0 || c >= best) continue;
+      best = c;
+      s.aim = walk.points[a].x;
+    }
+    if (best != std::numeric_limits<int>::max()) return true;
+  }
+  // The prior is searched to 4 sigma: forget, and search it again.
+  s.missed.clear();
+  s.aim = s.mean;
+  return false;
+}
+
 void SearchMemory::Share(const DecisionContext& ctx,
                          const std::vector<int>& robots, const RangeRunner& run,
                          int workers) {
+  if (static_cast<int>(caches_.size()) < std::max(1, workers))
+    caches_.resize(std::max(1, workers));
+  for (WalkCache& cache : caches_) {
+    cache.index.clear();
+    cache.used = 0;
+  }
   sharing_.Share(
       ctx, robots, num_targets_, &slots_,
-      [&](int i, int k) { Reaim(ctx, i, k); }, run, workers);
+      [&](int i, int k, int group, int worker) {
+        ReaimShared(ctx, i, k, group, &caches_[worker]);
+      },
+      run, workers);
 }
 
 void SearchPoints::Reset(int num_robots, int num_targets) {
@@ -268,7 +377,7 @@ void SearchPoints::Share(const DecisionContext& ctx,
                          int workers) {
   sharing_.Share(
       ctx, robots, num_targets_, &slots_,
-      [&](int i, int k) { Recompute(ctx, i, k); }, run, workers);
+      [&](int i, int k, int, int) { Recompute(ctx, i, k); }, run, workers);
 }
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,

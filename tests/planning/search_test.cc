@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
@@ -369,13 +370,27 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
     NeighbourMisses sharing;
     std::vector<std::pair<int, int>> calls;
     std::vector<int> shuffled(robots.rbegin(), robots.rend());
-    sharing.Share(team.Context(), shuffled, m, &slots, [&](int i, int k) {
-      calls.push_back({i, k});
-    });
+    // What SearchMemory::ReaimShared relies on: the robots of a group that
+    // took points of a target hold the same set of them.
+    std::map<std::pair<int, int>, std::vector<int>> held;
+    int shared = 0;
+    sharing.Share(team.Context(), shuffled, m, &slots,
+                  [&](int i, int k, int group, int worker) {
+                    calls.push_back({i, k});
+                    EXPECT_EQ(worker, 0);
+                    std::vector<int> set = slots[i * m + k].missed;
+                    std::sort(set.begin(), set.end());
+                    const auto [it, fresh] = held.insert({{group, k}, set});
+                    if (!fresh) {
+                      EXPECT_EQ(set, it->second) << "robot " << i;
+                      ++shared;
+                    }
+                  });
     for (int s = 0; s < n * m; ++s)
       EXPECT_EQ(slots[s].missed, expected[s].missed)
           << "trial " << trial << ", robot " << s / m << ", target " << s % m;
     EXPECT_EQ(calls, expected_calls) << "trial " << trial;
+    if (trial % 2 == 0) EXPECT_GT(shared, 0) << "trial " << trial;
   }
 }
 

@@ -45,6 +45,22 @@ template <typename Visit, typename Done>
 int WalkPriorRings(const Vec2& mean, const Mat2& cov, double step,
                    Visit&& visit, Done&& done);
 
+// The rings of WalkPriorRings one at a time: Visit(ring, visit) calls
+// visit(x) for ring `ring`'s points (0: the mean; kLast: 4 sigma).
+class PriorRings {
+ public:
+  static constexpr int kLast = 16;
+  PriorRings(const Vec2& mean, const Mat2& cov, double step);
+  template <typename F>
+  void Visit(int ring, F&& visit) const;
+
+ private:
+  Vec2 mean_;
+  double step_;
+  Mat2 l_;
+  double sigma_ = 0.0;
+};
+
 // Where to look for a target believed at N(mean, cov) that the lattice points
 // `missed` (may be null) did not measure. x is ruled out when a point of
 // `missed` would have measured a target at x. Tried in order: the mean, then
@@ -115,8 +131,11 @@ class ClosedNeighbourhoods {
 // missed for a static target still open in its own belief (log det above
 // log eps) and not in its own list, read as Update left the lists (so the
 // order of the robots does not matter); then, per (robot, target) that took
-// any, in ascending order of both, `then(i, k)` after its points were
-// appended in ascending order. Robots with the same closed neighbourhood
+// any, in ascending order of both, `then(i, k, group, worker)` after its
+// points were appended in ascending order (`group`: the neighbourhood's
+// index in this call; every robot of a group that took points of k now
+// holds the same set of them, its union; `worker`: the thread's index).
+// Robots with the same closed neighbourhood
 // (itself and its neighbours) take from the same lists, so the union of
 // those lists per target is made once per neighbourhood: once for the whole
 // team in a full graph, once per robot in a sparse one. A union visits only
@@ -193,7 +212,7 @@ class NeighbourMisses {
             for (int c = a; c < b; ++c)
               if (t.mark[union_[c].second] != t.stamp)
                 s.missed.push_back(union_[c].second);
-            if (s.missed.size() > had) then(i, k);
+            if (s.missed.size() > had) then(i, k, group_of_[o], w);
           }
           a = b;
         }
@@ -351,13 +370,45 @@ class SearchMemory {
   // SearchAim for robot's target k from its memory (forgets a prior
   // searched to 4 sigma); false then.
   bool Reaim(const DecisionContext& ctx, int robot, int k);
+
+  // Share's walks over the rings, made once per neighbourhood, target and
+  // belief: after Share the robots of a closed neighbourhood that search a
+  // target hold the same missed points, and in a full graph most of them
+  // hold the same belief too (bit for bit), so they walk the same rings and
+  // differ only in where they stand. A ring point keeps what its cost needs
+  // from any robot: the component, bounding box and corner sums of the
+  // lattice points that would measure a target there. Per worker, made as
+  // robots ask, cleared by each Share.
+  struct RingPoint {
+    Vec2 x{0.0, 0.0};
+    int component = -1;                  // its observers': -1 none, -2 several
+    int x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // their bounding box (lattice)
+    // min over them of ix + iy, -ix + iy, ix - iy, -ix - iy
+    std::array<int, 4> corner{};
+  };
+  struct SharedWalk {
+    Vec2 mean{0.0, 0.0};
+    Mat2 cov = Mat2::Zero();
+    std::vector<int> ring_end;  // ring r: points[ring_end[r - 1], ring_end[r])
+    std::vector<RingPoint> points;
+  };
+  struct WalkCache {
+    std::unordered_map<std::uint64_t, std::vector<int>> index;  // (group, k)
+    std::vector<SharedWalk> walks;  // [0, used) this Share
+    int used = 0;
+  };
+  // Reaim after Share, from the walk robot's neighbourhood `group` shares:
+  // the same aim, the same return.
+  bool ReaimShared(const DecisionContext& ctx, int robot, int k, int group,
+                   WalkCache* cache);
   // Update's work; the points it added.
   int Record(const DecisionContext& ctx, int robot);
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
   NeighbourMisses sharing_;
   std::vector<Slot> slots_;
-  std::vector<long> added_;  // per worker
+  std::vector<long> added_;        // per worker
+  std::vector<WalkCache> caches_;  // per worker
 };
 
 // What each robot knows from its missed measurements of static targets, as
@@ -607,27 +658,35 @@ inline const Vec2* RingDirections(int count) {
   return table[count].data();
 }
 
+inline PriorRings::PriorRings(const Vec2& mean, const Mat2& cov, double step)
+    : mean_(mean), step_(step) {
+  Eigen::LLT<Mat2> llt(cov);
+  l_ = llt.info() == Eigen::Success ? Mat2(llt.matrixL()) : Mat2::Identity();
+  sigma_ = std::sqrt(std::max(cov(0, 0), cov(1, 1)));
+}
+
+template <typename F>
+void PriorRings::Visit(int ring, F&& visit) const {
+  constexpr double kRingStep = 0.25;
+  const double rho = ring * kRingStep;
+  const int count =
+      ring == 0
+          ? 1
+          : std::clamp(
+                static_cast<int>(std::ceil(2.0 * M_PI * rho * sigma_ / step_)),
+                8, 64);
+  const Vec2* direction = RingDirections(count);
+  for (int a = 0; a < count; ++a)
+    visit(Vec2(mean_ +
+               l_ * Vec2(rho * direction[a].x(), rho * direction[a].y())));
+}
+
 template <typename Visit, typename Done>
 int WalkPriorRings(const Vec2& mean, const Mat2& cov, double step,
                    Visit&& visit, Done&& done) {
-  Eigen::LLT<Mat2> llt(cov);
-  const Mat2 l =
-      llt.info() == Eigen::Success ? Mat2(llt.matrixL()) : Mat2::Identity();
-  const double sigma = std::sqrt(std::max(cov(0, 0), cov(1, 1)));
-  constexpr int kRings = 16;  // to 4 sigma
-  constexpr double kRingStep = 0.25;
-  for (int ring = 0; ring <= kRings; ++ring) {
-    const double rho = ring * kRingStep;
-    const int count =
-        ring == 0
-            ? 1
-            : std::clamp(
-                  static_cast<int>(std::ceil(2.0 * M_PI * rho * sigma / step)),
-                  8, 64);
-    const Vec2* direction = RingDirections(count);
-    for (int a = 0; a < count; ++a)
-      visit(Vec2(mean +
-                 l * Vec2(rho * direction[a].x(), rho * direction[a].y())));
+  const PriorRings rings(mean, cov, step);
+  for (int ring = 0; ring <= PriorRings::kLast; ++ring) {
+    rings.Visit(ring, visit);
     if (done()) return ring;
   }
   return -1;
