@@ -521,6 +521,78 @@ TEST(SearchMemoryTest, ThreadsDoNotChangeTheMemory) {
     }
 }
 
+// Share's walks, made once per neighbourhood, target and belief, give each
+// robot the aim its own walk would: wherever a robot's misses changed in a
+// step, its aim is SearchAim's from its point, belief and misses, with the
+// nearest observer as the cost. A full graph (robots share walks) and a
+// range graph (they mostly do not), boxes, two sensor ranges.
+TEST(SearchMemoryTest, SharedWalksGiveEachRobotItsOwnAim) {
+  int checked = 0;
+  for (int trial = 0; trial < 4; ++trial) {
+    CommParams cp;
+    cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
+    cp.range = 4.0;
+    Team team(
+        "workspace: {size: [12.0, 12.0], obstacles: {random: {count: 8}}}\n"
+        "seed: " +
+            std::to_string(30 + trial) +
+            "\nsensor: {range: " + (trial < 2 ? "2.0" : "1.5") +
+            "}\nrobots: {count: 9}\n"
+            "targets: {list: [{position: [1.0, 11.0], prior_mean: [6.1, "
+            "6.2], prior_sigma: 2.0}, {position: [11.0, 1.0], prior_mean: "
+            "[4.3, 7.9], prior_sigma: 1.5}, {position: [1.0, 1.0], "
+            "prior_mean: [8.2, 4.4], prior_sigma: 2.5}]}\n",
+        cp);
+    const Map& map = team.world.map;
+    const Lattice& lattice = map.lattice();
+    const int span =
+        static_cast<int>(std::ceil(team.sensor.range / lattice.step())) + 1;
+    SearchMemory memory;
+    memory.Reset(9, 3);
+    std::vector<int> robots(9);
+    for (int i = 0; i < 9; ++i) robots[i] = i;
+    for (int step = 0; step < 8; ++step) {
+      // Each robot on a walk around the middle of the world, on free points.
+      for (int i = 0; i < 9; ++i) {
+        const double a = 0.9 * i + 0.7 * step;
+        const int q =
+            lattice.NearestPoint(Vec2(6.0 + (1.0 + 0.4 * i) * std::cos(a),
+                                      6.0 + (1.0 + 0.4 * i) * std::sin(a)));
+        if (lattice.Free(q)) team.positions[i] = q;
+      }
+      std::vector<Vec2> p;
+      for (int idx : team.positions) p.push_back(lattice.Point(idx));
+      team.comm.Update(step, p);
+      const DecisionContext ctx = team.Context();
+      std::vector<std::vector<int>> before;
+      for (int i = 0; i < 9; ++i)
+        for (int k = 0; k < 3; ++k) before.push_back(memory.Missed(i, k));
+      memory.Update(ctx, robots, ThreeThreads(), 3);
+      memory.Share(ctx, robots, ThreeThreads(), 3);
+      for (int i = 0; i < 9; ++i)
+        for (int k = 0; k < 3; ++k) {
+          const std::vector<int>& missed = memory.Missed(i, k);
+          if (missed.empty() || missed == before[i * 3 + k]) continue;
+          Vec2 want;
+          const int here = team.positions[i];
+          SearchAim(
+              map, team.sensor, MeanOf(ctx, i, k),
+              ctx.beliefs->PositionCovariance(i, k), &missed,
+              [&](const Vec2& x, int bound) {
+                return NearestObserverDistance(map, team.sensor, here, x, span,
+                                               bound);
+              },
+              &want);
+          EXPECT_EQ(memory.Aim(i, k), want)
+              << "trial " << trial << " step " << step << " robot " << i
+              << " target " << k;
+          ++checked;
+        }
+    }
+  }
+  EXPECT_GT(checked, 40);
+}
+
 TEST(TargetClaimsTest, TheRobotFewestMovesFromMeasuringClaims) {
   Team team(kEmptyWorld);
   TargetClaims claims;
