@@ -148,14 +148,15 @@ void AddTargetHeat(const Vec2& mean, const Mat2& cov, double log_det,
 }  // namespace
 
 void HeatSources(const BeliefSet& beliefs, int row,
-                 std::vector<HeatSource>* out, const BeliefDigest* digest) {
+                 std::vector<HeatSource>* out, const BeliefDigest* digest,
+                 bool covariance) {
   const int m = beliefs.layout().num_targets();
   AIA_CHECK(row >= 0 && row < beliefs.rows());
   out->resize(m);
   for (int k = 0; k < m; ++k) {
     HeatSource& s = (*out)[k];
     s.mean = digest ? digest->Mean(row, k) : beliefs.PositionMean(row, k);
-    s.cov = beliefs.PositionCovariance(row, k);
+    if (covariance) s.cov = beliefs.PositionCovariance(row, k);
     s.log_det =
         digest ? digest->LogDet(row, k) : beliefs.LogDetCovariance(row, k);
   }

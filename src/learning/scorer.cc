@@ -96,7 +96,9 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
         std::vector<HeatSource>* targets = nullptr;
         if (geodesic) {
           targets = &worker_targets_[worker];
-          HeatSources(*ctx.beliefs, i, targets, ctx.digest);
+          // The reach channel reads the means and log dets only.
+          HeatSources(*ctx.beliefs, i, targets, ctx.digest,
+                      /*covariance=*/false);
           if (aims)
             for (std::size_t k = 0; k < targets->size(); ++k)
               (*targets)[k].mean = aims->Aim(i, static_cast<int>(k));

@@ -73,9 +73,11 @@ struct HeatSource {
 
 // The heat sources of row `row` of `beliefs`, one per target, into `out`
 // (resized); means and log dets from `digest` where given (of `beliefs`).
+// Without `covariance` the covariances are left as they were (for readers
+// of the means and log dets only: a 2 x 2 inverse per robot and target).
 void HeatSources(const BeliefSet& beliefs, int row,
                  std::vector<HeatSource>* out,
-                 const BeliefDigest* digest = nullptr);
+                 const BeliefDigest* digest = nullptr, bool covariance = true);
 
 // H of these sources into `out` (zeroed first, sized by the caller).
 // log_det_prior[k] is log det Sigma_0^k of target k's whole prior block.
