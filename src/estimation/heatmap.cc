@@ -5,6 +5,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #include "aia/core/check.h"
 
@@ -283,8 +284,18 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
       const int d = layout.dim(k);
       const int len = d * d + d + 2;
       w.keys.resize(static_cast<std::size_t>(n) * len);
-      for (int b = 0; b < n; ++b)
-        Quantize(beliefs.Omega(rows[b], k).data(), d, &w.keys[b * len]);
+      // A block equal bit for bit to the row before's has its key (common
+      // in a full graph, where most rows hold one belief).
+      const std::size_t bytes = sizeof(double) * (d * d + d);
+      for (int b = 0; b < n; ++b) {
+        const double* block = beliefs.Omega(rows[b], k).data();
+        if (b > 0 && std::memcmp(block, beliefs.Omega(rows[b - 1], k).data(),
+                                 bytes) == 0) {
+          std::copy(&w.keys[(b - 1) * len], &w.keys[b * len], &w.keys[b * len]);
+        } else {
+          Quantize(block, d, &w.keys[b * len]);
+        }
+      }
       const auto same = [&](int a, int b) {
         return std::equal(&w.keys[a * len], &w.keys[a * len] + len,
                           &w.keys[b * len]);
