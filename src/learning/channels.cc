@@ -1,7 +1,10 @@
 #include "aia/learning/channels.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <queue>
@@ -398,6 +401,39 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
     }
 }
 
+namespace internal {
+
+void SortByValueDescending(std::vector<std::pair<float, int>>* items) {
+  const std::size_t n = items->size();
+  if (n < 64) {
+    std::sort(items->begin(), items->end(),
+              [](const std::pair<float, int>& a,
+                 const std::pair<float, int>& b) { return a.first > b.first; });
+    return;
+  }
+  thread_local std::vector<std::pair<float, int>> other;
+  other.resize(n);
+  std::vector<std::pair<float, int>>* from = items;
+  std::vector<std::pair<float, int>>* to = &other;
+  const auto key = [](float value) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &value, sizeof bits);
+    return ~bits;  // ascending keys, descending values
+  };
+  for (int shift = 0; shift < 32; shift += 11) {
+    std::array<std::uint32_t, 2049> start{};
+    for (const auto& item : *from)
+      ++start[((key(item.first) >> shift) & 2047) + 1];
+    for (int b = 0; b < 2048; ++b) start[b + 1] += start[b];
+    for (const auto& item : *from)
+      (*to)[start[(key(item.first) >> shift) & 2047]++] = item;
+    std::swap(from, to);
+  }
+  if (from != items) items->swap(*from);
+}
+
+}  // namespace internal
+
 void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
                                   const std::vector<HeatSource>& targets,
                                   const std::vector<double>& log_det_prior,
@@ -477,10 +513,7 @@ void ChannelRenderer::ReachRegion(int x0, int y0, int w, int h,
   // pops in Dijkstra's order (ties in any order: each pixel's value is the
   // largest over the ways to it, whichever is found first).
   for (const int idx : sources) ordered.emplace_back(source[idx], idx);
-  std::sort(ordered.begin(), ordered.end(),
-            [](const std::pair<float, int>& a, const std::pair<float, int>& b) {
-              return a.first > b.first;
-            });
+  internal::SortByValueDescending(&ordered);
   thread_local std::vector<std::pair<float, int>> fifo;
   fifo.clear();
   std::size_t next_source = 0, next_fifo = 0;

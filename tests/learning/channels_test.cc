@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <thread>
 #include <vector>
 
@@ -55,6 +56,43 @@ ChannelParams Params(ChannelFrame frame, int window = 3) {
 // Channel c at (x, y) of an image `w` pixels wide and `h` high.
 float At(const std::vector<float>& img, int h, int w, int c, int x, int y) {
   return img[(static_cast<std::size_t>(c) * h + y) * w + x];
+}
+
+// The reach channel's sort of its sources: the values in std::sort's order
+// (largest first), each pair kept whole, for short and long lists with
+// ties, zeros, tiny and large values.
+TEST(ChannelsTest, SourcesSortLargestFirst) {
+  std::uint64_t state = 12345;
+  const auto next = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<std::uint32_t>(state >> 33);
+  };
+  for (const int n : {0, 1, 5, 63, 64, 65, 1000, 5000}) {
+    std::vector<std::pair<float, int>> items;
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t r = next() % 6;
+      const float value = r == 0   ? 0.0f
+                          : r == 1 ? 1.0f
+                          : r == 2 ? 1e-7f * (next() % 5)
+                          : r == 3 ? 3e4f
+                                   : static_cast<float>(next()) / 4294967296.0f;
+      items.push_back({value, i});
+    }
+    std::vector<std::pair<float, int>> sorted = items;
+    internal::SortByValueDescending(&sorted);
+    ASSERT_EQ(sorted.size(), items.size());
+    std::vector<std::pair<float, int>> want = items;
+    std::sort(want.begin(), want.end(),
+              [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (int i = 0; i < n; ++i) {
+      EXPECT_EQ(sorted[i].first, want[i].first) << "n " << n << " at " << i;
+      EXPECT_EQ(sorted[i].first, items[sorted[i].second].first);
+    }
+    // Each index once.
+    std::vector<int> seen(n, 0);
+    for (const auto& item : sorted) ++seen[item.second];
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), n);
+  }
 }
 
 TEST(ChannelsTest, GlobalFrameMatchesHandComputedValues) {

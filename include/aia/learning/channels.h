@@ -38,6 +38,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "aia/core/fields.h"
@@ -246,6 +247,15 @@ class ChannelRenderer {
   // Shared by copies (the same map and parameters).
   std::shared_ptr<ObservationCache> observation_cache_;
 };
+
+namespace internal {
+// Sorts (value, index) pairs by value, largest first (ties in any order),
+// for values >= 0: a radix sort on the values' bits (whose order as
+// unsigned integers is theirs), in three passes of 11 bits; O(n) for the
+// thousands of observation pixels a window holds in a crowded world (the
+// reach channel's sources).
+void SortByValueDescending(std::vector<std::pair<float, int>>* items);
+}  // namespace internal
 
 }  // namespace aia
 
