@@ -77,11 +77,6 @@ double ResidentNodeBytes(int n, int stride) {
   return 4.0 * n + 8.0 * stride + 36.0 + 16.0;
 }
 
-// Solves whose arena stays below kSmallTreeBytes (planning/node_arena.h)
-// take no part of the budget (the ordinary ones: Dec-SB's 300 iterations,
-// the expert's default budget on small teams); their memory is kept for the
-// next solve.
-
 // The process's budget of tree memory (TreeBudgetBytes()) for all the
 // large solves running at once. A solve takes all it may need before it starts
 // and holds nothing else meanwhile, and one solve never needs more than the
@@ -131,6 +126,10 @@ void SetTreeBudgetBytes(double bytes) {
   TreeMemory::Get().SetBudget(bytes);
 }
 
+// A solve's share of the budget. Solves whose arena stays below
+// kSmallTreeBytes (planning/node_arena.h) take none (the ordinary ones:
+// Dec-SB's 300 iterations, the expert's default budget on small teams);
+// their memory is kept for the next solve.
 class TreeMemoryLease {
  public:
   explicit TreeMemoryLease(double bytes)

@@ -13,16 +13,16 @@
 
 namespace aia {
 
-// The arena's allocator: large blocks are mapped from the kernel and
-// returned to it when freed, so that a finished large solve gives its
-// memory back whatever the process's malloc keeps (jemalloc in build/aia
-// keeps freed pages), and only the pages a tree fills are resident.
 // A tree whose arena may hold at most this many bytes is small: its solve
 // takes no share of the process's tree budget (sampling_tree.cc), and its
-// blocks come from malloc, whose freed pages the next solve reuses. Larger
-// blocks are mapped from the kernel (ArenaAllocator).
+// blocks come from malloc, whose freed pages the next solve reuses.
 inline constexpr std::size_t kSmallTreeBytes = std::size_t{32} << 20;
 
+// The arena's allocator: blocks larger than kSmallTreeBytes are mapped from
+// the kernel (on 2 MiB boundaries, for transparent huge pages) and returned
+// to it when freed, so that a finished large solve gives its memory back
+// whatever the process's malloc keeps (jemalloc in build/aia keeps freed
+// pages), and only the pages a tree fills are resident.
 template <typename T>
 struct ArenaAllocator {
   using value_type = T;

@@ -135,10 +135,10 @@ class ClosedNeighbourhoods {
 // points were appended in ascending order (`group`: the neighbourhood's
 // index in this call; every robot of a group that took points of k now
 // holds the same set of them, its union; `worker`: the thread's index).
-// Robots with the same closed neighbourhood
-// (itself and its neighbours) take from the same lists, so the union of
-// those lists per target is made once per neighbourhood: once for the whole
-// team in a full graph, once per robot in a sparse one. A union visits only
+// Robots with the same closed neighbourhood (itself and its neighbours)
+// take from the same lists, so the union of those lists per target is made
+// once per neighbourhood: once for the whole team in a full graph, once per
+// robot in a sparse one. A union visits only
 // the targets its robots missed any point of (a list per robot, made in one
 // pass over the slots) and drops duplicates with stamps; a robot then takes
 // the union's points its own stamped list does not hold. O(robots x
@@ -397,8 +397,9 @@ class SearchMemory {
     std::vector<SharedWalk> walks;  // [0, used) this Share
     int used = 0;
   };
-  // Reaim after Share, from the walk robot's neighbourhood `group` shares:
-  // the same aim, the same return.
+  // Reaim after Share, from the walk that robot shares with the others of
+  // its neighbourhood `group` holding the same belief: the same aim and
+  // return as Reaim.
   bool ReaimShared(const DecisionContext& ctx, int robot, int k, int group,
                    WalkCache* cache);
   // Update's work; the points it added.
