@@ -9,12 +9,17 @@
 #   models/igbnet_10x10.pt  the paper's configuration: four channels, the
 #                           paper's dataset alone (1500 open worlds of 10
 #                           robots), kept so that its results can be repeated.
-# With MODELS=learned it also trains models/igbnet_learned.pt, the model
-# meant for policy.coordination=none (the network alone; DAgger rounds,
-# about 1.5 hours more on 2 cores). With MODELS=all it also trains the ablation's
-# four-channel model on the randomized data and the 10-robot-only model
-# (the same inputs and worlds, teams of 10 only; the scalability check)
-# and the learned model.
+# MODELS selects what is trained:
+#   default    the two above;
+#   learned    also models/igbnet_learned.pt, the model meant for
+#              policy.coordination=none (the network alone; DAgger rounds,
+#              about 1.5 hours more on 2 cores);
+#   learned10  only models/igbnet_learned_10only.pt: the learned recipe on
+#              teams of 10 alone (its data, its five-channel start and its
+#              DAgger worlds), the scalability check of the network alone;
+#              the datasets of other team sizes are not made;
+#   all        everything: the above, the ablation's four-channel model on
+#              the randomized data and the five-channel 10-robot model.
 #
 # Every step resumes: run it again after an interruption and it goes on
 # where it stopped. On 2 cores: the data about 20 minutes (two processes),
@@ -26,6 +31,13 @@ cd "$(dirname "$0")/.."
 work=${1:-data/igbnet}
 aia=${AIA:-build/aia}
 models=${MODELS:-default}
+case $models in
+  default | learned | learned10 | all) ;;
+  *)
+    echo "error: MODELS=$models: must be default, learned, learned10 or all" >&2
+    exit 2
+    ;;
+esac
 mkdir -p "$work"
 
 ds() {
@@ -42,14 +54,16 @@ ds d0 --episodes 1500 &
 (
   # Small and large teams; every seed range is disjoint from aia eval's
   # (0.., selection 5000.., the generalization suite's 931000..) and from
-  # each other.
-  ds small5 --size 5x5 --keep 20 --episodes 400 --first-seed 21200000 \
-    --set "workspace.size=[30,30]" --set workspace.obstacles.random.count=68
-  ds small3r --size 3x3 --keep 30 --episodes 300 --first-seed 21300000 \
-    --set workspace.obstacles.generator.type=rooms --set "workspace.size=[20,20]"
-  ds small3m --size 3x3 --keep 30 --episodes 300 --first-seed 21400000 \
-    --set workspace.obstacles.generator.type=maze --set "workspace.size=[20,20]"
-  ds small2 --size 2x2 --keep 30 --episodes 300 --first-seed 21500000
+  # each other. Teams of other sizes than 10 are not made for learned10.
+  if [[ $models != learned10 ]]; then
+    ds small5 --size 5x5 --keep 20 --episodes 400 --first-seed 21200000 \
+      --set "workspace.size=[30,30]" --set workspace.obstacles.random.count=68
+    ds small3r --size 3x3 --keep 30 --episodes 300 --first-seed 21300000 \
+      --set workspace.obstacles.generator.type=rooms --set "workspace.size=[20,20]"
+    ds small3m --size 3x3 --keep 30 --episodes 300 --first-seed 21400000 \
+      --set workspace.obstacles.generator.type=maze --set "workspace.size=[20,20]"
+    ds small2 --size 2x2 --keep 30 --episodes 300 --first-seed 21500000
+  fi
   ds comm --episodes 300 --first-seed 21600000 --set communication.mode=range \
     --set communication.range=4 --set communication.packet_loss_lambda=1
   ds sens15 --episodes 150 --first-seed 21700000 --set sensor.range=1.5
@@ -58,8 +72,10 @@ ds d0 --episodes 1500 &
     --set workspace.obstacles.random.count=0
   ds clutter60 --episodes 150 --first-seed 22000000 \
     --set workspace.obstacles.random.count=60
-  ds t40 --size 40x40 --episodes 200 --first-seed 22100000 --max-steps 60
-  ds t80 --size 80x80 --episodes 200 --first-seed 22200000 --max-steps 40
+  if [[ $models != learned10 ]]; then
+    ds t40 --size 40x40 --episodes 200 --first-seed 22100000 --max-steps 60
+    ds t80 --size 80x80 --episodes 200 --first-seed 22200000 --max-steps 40
+  fi
 ) &
 wait
 # Generated structured worlds of 10 robots, and larger workspaces at the
@@ -86,54 +102,61 @@ paths() { for d in "$@"; do printf '%s\n' "$work/$d"; done; }
 mapfile -t ten_paths < <(paths "${ten[@]}")
 mapfile -t all_paths < <(paths "${all[@]}")
 
-# The default: the reach channel (--geodesic), centred frame, weak labels
-# masked, cosine 1e-3 -> 1e-5 over 3 epochs, two libtorch threads (about 30
-# minutes alone on 2 cores; the thread count is part of the recipe: a
-# reduction over two threads does not add in the same order as over one).
-"$aia" train --data "${all_paths[@]}" --geodesic --epochs 3 --threads 2 \
-  --out "$work/igbnet.pt" --weak-weight 0 --lr 1e-3 --lr-min 1e-5 --resume --quiet
-# The paper's configuration (four channels, its dataset alone), as before.
-"$aia" train --data "$work/d0" --out "$work/igbnet_10x10.pt" --weak-weight 0 \
-  --epochs 8 --lr 1e-3 --lr-min 1e-5 --resume --quiet
+shipped=()
+if [[ $models != learned10 ]]; then
+  # The default: the reach channel (--geodesic), centred frame, weak labels
+  # masked, cosine 1e-3 -> 1e-5 over 3 epochs, two libtorch threads (about 30
+  # minutes alone on 2 cores; the thread count is part of the recipe: a
+  # reduction over two threads does not add in the same order as over one).
+  "$aia" train --data "${all_paths[@]}" --geodesic --epochs 3 --threads 2 \
+    --out "$work/igbnet.pt" --weak-weight 0 --lr 1e-3 --lr-min 1e-5 --resume --quiet
+  # The paper's configuration (four channels, its dataset alone), as before.
+  "$aia" train --data "$work/d0" --out "$work/igbnet_10x10.pt" --weak-weight 0 \
+    --epochs 8 --lr 1e-3 --lr-min 1e-5 --resume --quiet
+  shipped+=(igbnet igbnet_10x10)
+fi
 if [[ $models == all ]]; then
-  # The ablation's four-channel model on the same data, and the 10-robot
-  # model (the same inputs and worlds, teams of 10 only).
+  # The ablation's four-channel model on the same data.
   "$aia" train --data "${all_paths[@]}" --epochs 3 --threads 2 \
     --out "$work/ablation_4ch.pt" --weak-weight 0 --lr 1e-3 --lr-min 1e-5 --resume --quiet
+fi
+if [[ $models == all || $models == learned10 ]]; then
+  # The 10-robot model: the default's inputs and recipe on teams of 10 only.
   "$aia" train --data "${ten_paths[@]}" --geodesic --epochs 3 --threads 2 \
     --out "$work/igbnet_10only.pt" --weak-weight 0 --lr 1e-3 --lr-min 1e-5 --resume --quiet
 fi
-shipped=(igbnet igbnet_10x10)
-if [[ $models == all || $models == learned ]]; then
-  # The learned-coordination model (docs/learning.md, Learned coordination):
-  # the default model's weights, its reach channel over the whole workspace
-  # toward each target's search points and a trail channel (the pixel the
-  # robot came from) added, one epoch on the data above; then DAgger rounds:
-  # the model alone (policy.coordination=none) acts in 15 kinds of world,
-  # the expert labels the states it visits, and the next model is trained on
-  # the data above and every round so far. About 25 minutes a round.
-  learn() {  # learn OUT INIT DATA...
-    local out=$1 init=$2
-    shift 2
-    "$aia" train --data "$@" --init "$init" --epochs 1 --lr 3e-4 --lr-min 1e-5 \
-      --weak-weight 0 --threads 2 --out "$out" --resume --quiet
-  }
-  "$aia" train --data "${all_paths[@]}" --init "$work/igbnet.pt" --reach-world 1 \
+
+# The learned-coordination recipe (docs/learning.md, Learned coordination):
+# a five-channel model's weights, its reach channel over the whole workspace
+# toward each target's search points and a trail channel (the pixel the
+# robot came from) added, one epoch on its data; then DAgger rounds: the
+# model alone (policy.coordination=none) acts in kinds of world of its
+# team sizes, the expert labels the states it visits, and the next model is
+# trained on the data and every round so far. About 25 minutes a round.
+#   learned PREFIX INIT TEAMS SEED_BASE SEED_STRIDE DATA...
+# writes $work/PREFIX0.pt .. PREFIX$ROUNDS.pt; TEAMS is "all" (the 15 worlds
+# of the shipped model) or "ten" (its 9 worlds of 10 robots); round r's
+# worlds start at SEED_BASE + r SEED_STRIDE.
+learned() {
+  local prefix=$1 init=$2 teams=$3 seed_base=$4 seed_stride=$5
+  shift 5
+  local data=("$@")
+  "$aia" train --data "${data[@]}" --init "$init" --reach-world 1 \
     --search 1 --trail 1 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
-    --threads 2 --out "$work/learned0.pt" --resume --quiet
-  dagger_paths=()
-  rounds=${ROUNDS:-3}
+    --threads 2 --out "$work/${prefix}0.pt" --resume --quiet
+  local dagger_paths=() r rounds=${ROUNDS:-3}
+  local g=workspace.obstacles.generator.type
   for ((r = 1; r <= rounds; r++)); do
-    actor="$work/learned$((r - 1)).pt"
-    base=$((30000000 + r * 1000000))
+    local actor="$work/$prefix$((r - 1)).pt" base=$((seed_base + r * seed_stride))
+    local dir="dag$r"
+    [[ $prefix == learned ]] || dir="${prefix}dag$r"
     dag() {  # dag NAME SEED STEPS ARGS...: the actor alone acts
       local name=$1 seed=$2 steps=$3
       shift 3
-      ds "dag$r/$name" --policy igbnet --model "$actor" \
+      ds "$dir/$name" --policy igbnet --model "$actor" \
         --set policy.coordination=none --keep 20 --max-steps "$steps" \
         --first-seed "$seed" "$@"
     }
-    g=workspace.obstacles.generator.type
     (
       dag maze30 $((base + 100000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=maze
       dag rooms30 $((base + 200000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=rooms
@@ -144,27 +167,47 @@ if [[ $models == all || $models == learned ]]; then
       dag rooms40 $((base + 1500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=rooms
     ) &
     (
-      dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
-      dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
-      dag corr20_5 $((base + 900000)) 200 --episodes 100 --size 5x5 --set $g=corridors
-      dag cave20_5 $((base + 1000000)) 200 --episodes 100 --size 5x5 --set $g=cave
-      dag open2x20 $((base + 1100000)) 200 --episodes 100 --size 2x20
+      if [[ $teams == all ]]; then
+        dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
+        dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
+        dag corr20_5 $((base + 900000)) 200 --episodes 100 --size 5x5 --set $g=corridors
+        dag cave20_5 $((base + 1000000)) 200 --episodes 100 --size 5x5 --set $g=cave
+        dag open2x20 $((base + 1100000)) 200 --episodes 100 --size 2x20
+      fi
       dag range $((base + 1200000)) 200 --episodes 100 --set communication.mode=range \
         --set communication.range=4 --set communication.packet_loss_lambda=1
       dag dens40 $((base + 1300000)) 150 --episodes 50 --set "workspace.size=[40,40]" \
         --set workspace.obstacles.random.count=120
-      dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
+      if [[ $teams == all ]]; then
+        dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
+      fi
     ) &
     wait
-    for name in maze30 rooms30 corr30 cave30 maze40 open10 rooms40 rooms20_3 \
-      maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40; do
-      dagger_paths+=("$work/dag$r/$name")
-    done
-    learn "$work/learned$r.pt" "$actor" "${all_paths[@]}" "${dagger_paths[@]}"
+    local names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 range dens40)
+    if [[ $teams == all ]]; then
+      names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 rooms20_3 \
+        maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40)
+    fi
+    local name
+    for name in "${names[@]}"; do dagger_paths+=("$work/$dir/$name"); done
+    "$aia" train --data "${data[@]}" "${dagger_paths[@]}" --init "$actor" --epochs 1 \
+      --lr 3e-4 --lr-min 1e-5 --weak-weight 0 --threads 2 \
+      --out "$work/$prefix$r.pt" --resume --quiet
   done
-  cp "$work/learned$rounds.pt" "$work/igbnet_learned.pt"
-  cp "$work/learned$rounds.train.csv" "$work/igbnet_learned.train.csv"
+  cp "$work/$prefix$rounds.pt" "$work/$prefix.pt"
+  cp "$work/$prefix$rounds.train.csv" "$work/$prefix.train.csv"
+}
+if [[ $models == all || $models == learned ]]; then
+  learned learned "$work/igbnet.pt" all 30000000 1000000 "${all_paths[@]}"
+  cp "$work/learned.pt" "$work/igbnet_learned.pt"
+  cp "$work/learned.train.csv" "$work/igbnet_learned.train.csv"
   shipped+=(igbnet_learned)
+fi
+if [[ $models == all || $models == learned10 ]]; then
+  learned learned10_ "$work/igbnet_10only.pt" ten 40000000 2000000 "${ten_paths[@]}"
+  cp "$work/learned10_.pt" "$work/igbnet_learned_10only.pt"
+  cp "$work/learned10_.train.csv" "$work/igbnet_learned_10only.train.csv"
+  shipped+=(igbnet_learned_10only)
 fi
 for m in "${shipped[@]}"; do
   cp "$work/$m.pt" "models/$m.pt"
