@@ -16,8 +16,9 @@
 #              about 1.5 hours more on 2 cores);
 #   learned10  only models/igbnet_learned_10only.pt: the learned recipe on
 #              teams of 10 alone (its data, its five-channel start and its
-#              DAgger worlds), the scalability check of the network alone;
-#              the datasets of other team sizes are not made;
+#              DAgger worlds, and narrow perfect mazes among those), the
+#              scalability check of the network alone; the datasets of
+#              other team sizes are not made;
 #   all        everything: the above, the ablation's four-channel model on
 #              the randomized data and the five-channel 10-robot model.
 #
@@ -135,7 +136,8 @@ fi
 # trained on the data and every round so far. About 25 minutes a round.
 #   learned PREFIX INIT TEAMS SEED_BASE SEED_STRIDE DATA...
 # writes $work/PREFIX0.pt .. PREFIX$ROUNDS.pt; TEAMS is "all" (the 15 worlds
-# of the shipped model) or "ten" (its 9 worlds of 10 robots); round r's
+# of the shipped model) or "ten" (its 9 worlds of 10 robots and two of narrow
+# perfect mazes: passages of 3 lattice points, no loops); round r's
 # worlds start at SEED_BASE + r SEED_STRIDE.
 learned() {
   local prefix=$1 init=$2 teams=$3 seed_base=$4 seed_stride=$5
@@ -145,7 +147,7 @@ learned() {
     --search 1 --trail 1 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
     --threads 2 --out "$work/${prefix}0.pt" --resume --quiet
   local dagger_paths=() r rounds=${ROUNDS:-3}
-  local g=workspace.obstacles.generator.type
+  local gen=workspace.obstacles.generator g=workspace.obstacles.generator.type
   for ((r = 1; r <= rounds; r++)); do
     local actor="$work/$prefix$((r - 1)).pt" base=$((seed_base + r * seed_stride))
     local dir="dag$r"
@@ -165,6 +167,10 @@ learned() {
       dag maze40 $((base + 500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=maze
       dag open10 $((base + 600000)) 200 --episodes 100
       dag rooms40 $((base + 1500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=rooms
+      if [[ $teams == ten ]]; then
+        dag narrow20 $((base + 1600000)) 300 --episodes 60 --set $g=maze \
+          --set $gen.corridor=1.5 --set $gen.wall=0.15 --set $gen.loops=0
+      fi
     ) &
     (
       if [[ $teams == all ]]; then
@@ -180,10 +186,13 @@ learned() {
         --set workspace.obstacles.random.count=120
       if [[ $teams == all ]]; then
         dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
+      else
+        dag narrow30 $((base + 1700000)) 400 --episodes 30 --set "workspace.size=[30,30]" \
+          --set $g=maze --set $gen.corridor=1.5 --set $gen.wall=0.15 --set $gen.loops=0.05
       fi
     ) &
     wait
-    local names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 range dens40)
+    local names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 narrow20 range dens40 narrow30)
     if [[ $teams == all ]]; then
       names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 rooms20_3 \
         maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40)
