@@ -504,6 +504,14 @@ def gen_conditions(quick):
                      ("5x5", "cave")]):
         c.append((f"{g} 20 m, {size.split('x')[0]} robots", "generated structured",
                   "eval", (size, [f"workspace.obstacles.generator.type={g}"])))
+    if not quick:
+        # Narrow perfect mazes (passages of 3 lattice points, no loops), the
+        # generated kin of the mazes of scenarios/long.
+        c.append(("narrow maze 20 m, 4 robots", "generated structured", "eval",
+                  ("4x6", ["workspace.obstacles.generator.type=maze",
+                           "workspace.obstacles.generator.corridor=1.5",
+                           "workspace.obstacles.generator.wall=0.15",
+                           "workspace.obstacles.generator.loops=0"])))
     c.append(("range graph 4 m, packet loss 1", "communication", "eval",
               ("10x10", ["communication.mode=range", "communication.range=4",
                          "communication.packet_loss_lambda=1"])))

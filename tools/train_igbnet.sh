@@ -14,13 +14,14 @@
 #   learned    also models/igbnet_learned.pt, the model meant for
 #              policy.coordination=none (the network alone; DAgger rounds,
 #              about 1.5 hours more on 2 cores);
-#   learned10  only models/igbnet_learned_10only.pt: the learned recipe on
-#              teams of 10 alone (its data, its five-channel start and its
-#              DAgger worlds, and narrow perfect mazes among those), the
-#              scalability check of the network alone; the datasets of
-#              other team sizes are not made;
+#   learned10  only WORK_DIR/igbnet_learned_10only.pt (not shipped): the
+#              learned recipe on teams of 10 alone (its data, its
+#              five-channel start and its DAgger worlds, and narrow perfect
+#              mazes among those), the scalability check of the network
+#              alone; the datasets of other team sizes are not made;
 #   all        everything: the above, the ablation's four-channel model on
-#              the randomized data and the five-channel 10-robot model.
+#              the randomized data and the five-channel 10-robot model
+#              (the last three stay in WORK_DIR).
 #
 # Every step resumes: run it again after an interruption and it goes on
 # where it stopped. On 2 cores: the data about 20 minutes (two processes),
@@ -216,10 +217,13 @@ if [[ $models == all || $models == learned10 ]]; then
   learned learned10_ "$work/igbnet_10only.pt" ten 40000000 2000000 "${ten_paths[@]}"
   cp "$work/learned10_.pt" "$work/igbnet_learned_10only.pt"
   cp "$work/learned10_.train.csv" "$work/igbnet_learned_10only.train.csv"
-  shipped+=(igbnet_learned_10only)
 fi
-for m in "${shipped[@]}"; do
+for m in ${shipped[@]+"${shipped[@]}"}; do
   cp "$work/$m.pt" "models/$m.pt"
   cp "$work/$m.train.csv" "models/$m.train.csv"
 done
-echo "models/{$(IFS=,; echo "${shipped[*]}")}.pt <- $work"
+if ((${#shipped[@]} > 0)); then
+  echo "models/{$(IFS=,; echo "${shipped[*]}")}.pt <- $work"
+else
+  echo "$work/igbnet_learned_10only.pt (not copied into models/)"
+fi
