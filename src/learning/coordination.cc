@@ -17,6 +17,7 @@ std::string FirstRuleKeySet(const IgbNetParams& params) {
   if (params.share_search != d.share_search) return "policy.share_search";
   if (params.no_undo != d.no_undo) return "policy.no_undo";
   if (params.claims != d.claims) return "policy.claims";
+  if (params.approach != d.approach) return "policy.approach";
   if (params.open != d.open) return "policy.open";
   if (params.refresh != d.refresh) return "policy.refresh";
   return "";
@@ -85,6 +86,7 @@ void ClaimsShaper::Shape(const DecisionContext& ctx,
   for (auto& s : shown_) s.clear();
   for (auto& o : owned_) o.clear();
   narrowed_.assign(count, 0);
+  unplanned_.assign(count, 0);
   if (mode_ == TargetClaimsMode::kNone || !ctx.sensor) return;
   claims_.Begin(*ctx.map, *ctx.sensor, ctx.beliefs->layout().num_targets());
   // The robots split over the policy's threads: each writes its own row.
@@ -114,10 +116,15 @@ void ClaimsShaper::Shape(const DecisionContext& ctx,
         narrowed_[b] = w.claimed != open;
       }
       // What the walk heads for: the targets the robot owns.
-      if (mode_ == TargetClaimsMode::kRoute)
+      const bool planned =
+          mode_ == TargetClaimsMode::kRoute &&
+          TargetClaims::Plans(std::count(open.begin(), open.end(), 1),
+                              static_cast<long>(w.others.size()));
+      if (planned)
         claims_.Claim(here, w.others, aims, open, &owned_[b]);
       else
-        owned_[b] = w.claimed;
+        owned_[b] = w.claimed;  // Claim's answer
+      unplanned_[b] = !planned;
     }
   });
 }
@@ -271,6 +278,36 @@ Move NoUndo::Replace(const DecisionContext& ctx, int robot, Move best,
   return Move::kStay;
 }
 
+// --- Approach -----------------------------------------------------------------
+
+bool Approach::Replace(const DecisionContext& ctx, int robot, Move best,
+                       const std::vector<std::uint8_t>& owned,
+                       const SearchMemory* memory, ClaimsShaper* claims,
+                       DeadlockWalk* walk, Move* move) {
+  if (!ctx.sensor) return false;
+  const Lattice& lattice = ctx.map->lattice();
+  const int here = (*ctx.robot_lattice)[robot];
+  const int next = lattice.Next(here, best);
+  open_.Of(ctx, robot, memory);
+  const std::vector<std::uint8_t>& open = open_.open();
+  const int m = static_cast<int>(std::min(owned.size(), open.size()));
+  int at_here = -1, at_next = -1;  // moves to the nearest; -1: none
+  for (int k = 0; k < m; ++k) {
+    if (!owned[k] || !open[k]) continue;
+    const int a = claims->Distance(open_.aims()[k], here);
+    if (a >= 0 && (at_here < 0 || a < at_here)) at_here = a;
+    if (next < 0) continue;
+    const int b = claims->Distance(open_.aims()[k], next);
+    if (b >= 0 && (at_next < 0 || b < at_next)) at_next = b;
+  }
+  if (at_here <= 0 || (at_next >= 0 && at_next < at_here)) return false;
+  const Move out = walk->Start(ctx, robot, &owned, memory);
+  if (out == Move::kStay) return false;
+  ++walks_;
+  *move = out;
+  return true;
+}
+
 // --- RulesLayer
 // ----------------------------------------------------------------
 
@@ -285,6 +322,7 @@ void RulesLayer::Reset(int num_robots, int num_targets) {
   claims_.Reset();
   walk_.Reset(num_robots);
   no_undo_.Reset();
+  approach_.Reset();
 }
 
 void RulesLayer::Shape(const DecisionContext& ctx,
@@ -316,6 +354,14 @@ bool RulesLayer::Walk(const DecisionContext& ctx, int b, int robot,
 Move RulesLayer::Arbitrate(const DecisionContext& ctx, int b, int robot,
                            Move best, const float* logits, bool* replaced) {
   *replaced = false;
+  const std::vector<std::uint8_t>* owned = claims_.Owned(b);
+  Move walk = Move::kStay;
+  if (params_.approach && owned && claims_.Unplanned(b) &&
+      approach_.Replace(ctx, robot, best, *owned, memory_.aims(), &claims_,
+                        &walk_, &walk)) {
+    *replaced = true;
+    return walk;
+  }
   const Move last = ctx.history ? ctx.history->last(robot) : Move::kStay;
   if (!params_.no_undo || !IsReversal(last, best)) return best;
   *replaced = true;
@@ -326,6 +372,7 @@ Move RulesLayer::Arbitrate(const DecisionContext& ctx, int b, int robot,
 std::vector<std::pair<std::string, long>> RulesLayer::Counters() const {
   std::vector<std::pair<std::string, long>> c = walk_.Counters();
   for (auto& p : no_undo_.Counters()) c.push_back(p);
+  for (auto& p : approach_.Counters()) c.push_back(p);
   for (auto& p : memory_.Counters()) c.push_back(p);
   return c;
 }

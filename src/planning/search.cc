@@ -789,7 +789,7 @@ void TargetClaims::Route(int self, const std::vector<int>& others,
                          const std::vector<std::uint8_t>& open,
                          std::vector<std::uint8_t>* mine) {
   const long num_open = std::count(open.begin(), open.end(), 1);
-  if (num_open * (static_cast<long>(others.size()) + 1) > kRouteMaxPairs) {
+  if (!Plans(num_open, static_cast<long>(others.size()))) {
     Claim(self, others, aims, open, mine);
     return;
   }

@@ -240,6 +240,45 @@ sensor: {range: 2.0}
   }
 }
 
+// Approach: robot 0 at (3.25, 1.25) owns the target (robot 1 is farther):
+// ten moves to (8.25, 1.25) or, from (3.25, 1.75), ten to (8.25, 1.75),
+// which measures it too (1.82 m off). Its network's up keeps the ten, so
+// with nearest claims (no route plan) the robot walks: right. Its
+// network's right (nine) is taken. With route claims (a plan for 2 robots
+// x 1 target) or approach false the network's up is taken. Robot 1 owns
+// nothing: its network's move (up) in every case.
+TEST(CoordinationTest, ApproachWalksWhereTheNetworkDoesNotNearItsTarget) {
+  struct Case {
+    TargetClaimsMode claims;
+    bool approach;
+    Logits logits;
+    Move expected;
+    long walks;
+  };
+  for (const Case& c : {Case{TargetClaimsMode::kNearest, true, {0, 0, 5, 0},
+                             Move::kRight, 1},
+                        Case{TargetClaimsMode::kNearest, true, {0, 5, 0, 0},
+                             Move::kRight, 0},
+                        Case{TargetClaimsMode::kRoute, true, {0, 0, 5, 0},
+                             Move::kUp, 0},
+                        Case{TargetClaimsMode::kNearest, false, {0, 0, 5, 0},
+                             Move::kUp, 0}}) {
+    Step s(kCorridor, {{3.25, 1.25}, {1.25, 0.75}}, {});
+    IgbNetParams params = Rules(0, true);
+    params.claims = c.claims;
+    params.approach = c.approach;
+    IgbNetPolicy policy(std::make_unique<FixedScorer>(
+                            std::vector<Logits>{c.logits, {0, 0, 5, 0}}),
+                        params);
+    const std::vector<Move> moves = s.Decide(&policy);
+    EXPECT_EQ(moves[0], c.expected) << static_cast<int>(c.claims) << " "
+                                    << c.approach << " " << c.logits[2];
+    EXPECT_EQ(moves[1], Move::kUp);
+    EXPECT_EQ(Counter(policy, "approach_walks"), c.walks);
+    EXPECT_EQ(Counter(policy, "walk_moves"), c.walks);
+  }
+}
+
 // A rule's key away from its default with coordination none would do
 // nothing: FirstRuleKeySet names it (the policy's loader refuses it).
 TEST(CoordinationTest, NoneNamesARuleKeyThatWouldDoNothing) {
@@ -249,6 +288,9 @@ TEST(CoordinationTest, NoneNamesARuleKeyThatWouldDoNothing) {
   EXPECT_EQ(FirstRuleKeySet(p), "policy.no_undo");
   p.max_reversals = 3;
   EXPECT_EQ(FirstRuleKeySet(p), "policy.max_reversals");
+  p = None();
+  p.approach = false;
+  EXPECT_EQ(FirstRuleKeySet(p), "policy.approach");
 }
 
 }  // namespace

@@ -13,7 +13,10 @@
 //                   undid its last move walks a shortest path to where it
 //                   can measure;
 //     NoUndo        (policy.no_undo) the network's move that would undo the
-//                   last one is replaced.
+//                   last one is replaced;
+//     Approach      (policy.approach) where claims have no route plan, a
+//                   network move that does not near the robot's owned
+//                   targets is replaced by the walk toward them.
 // Every part reads what the robot knows (its own belief, its neighbours'
 // points in this step's graph, the map, its applied moves) and nothing else.
 #ifndef AIA_LEARNING_COORDINATION_H_
@@ -93,6 +96,13 @@ struct IgbNetParams {
   bool no_undo = true;
   // ClaimsShaper: which open targets each robot shows the network (above).
   TargetClaimsMode claims = TargetClaimsMode::kRoute;
+  // Approach: where a robot's claims have no route plan (claims nearest, or
+  // more robots x open targets than TargetClaims plans routes for) and it
+  // owns open targets, a network move that does not bring it nearer, in
+  // lattice moves, to a point that measures one of them starts the walk
+  // toward the nearest (at scale the network, shown one target a step away,
+  // can walk past it for tens of steps).
+  bool approach = true;
   // Which targets are open (above).
   OpenRule open = OpenRule::kNeighbours;
   // With open neighbours: a target held below refresh x eps is closed
@@ -144,6 +154,13 @@ struct IgbNetParams {
         "an owner of two or more it is the nearest idle robot to); none, all "
         "of them (the network's training input). All of them where it "
         "claims none"));
+    a->Visit(AIA_FIELD(approach).Doc(
+        "rules, approach: where claims have no route plan for a robot "
+        "(claims nearest, or more robots x open targets than route plans are "
+        "made for, 40 x 40) and it owns open targets, a network move that "
+        "does not bring it nearer, in lattice moves, to a point that "
+        "measures one of them is replaced by the deadlock walk toward the "
+        "nearest (false: the network's move)"));
     a->Visit(AIA_FIELD(open).Doc(
         "rules: when a target is open for a robot (what claims, the walk and "
         "no undo work with): own, while its own det Sigma is above eps; "
@@ -224,6 +241,12 @@ class ClaimsShaper {
   // Row b's owned open targets (one flag per target); null where none were
   // worked out (mode none, no sensor).
   const std::vector<std::uint8_t>* Owned(int b) const;
+  // Whether row b is shown the targets it owns, with no route plan (mode
+  // nearest, or route beyond TargetClaims::Plans).
+  bool Unplanned(int b) const { return unplanned_[b] != 0; }
+  // Lattice moves from point p to the nearest point that measures `aim`
+  // (-1: out of reach); the fields this step's claims used.
+  int Distance(const Vec2& aim, int p) { return claims_.Distance(aim, p); }
 
  private:
   TargetClaimsMode mode_;
@@ -236,7 +259,7 @@ class ClaimsShaper {
   };
   std::vector<Scratch> scratch_;
   std::vector<std::vector<std::uint8_t>> shown_, owned_;
-  std::vector<std::uint8_t> narrowed_;
+  std::vector<std::uint8_t> narrowed_, unplanned_;
 };
 
 // Move arbiter: the deadlock walk. A robot whose last `max_reversals` moves
@@ -305,7 +328,30 @@ class NoUndo {
   long stays_ = 0, idle_moves_ = 0;
 };
 
-// The layer: the four parts in their order for one step.
+// Move arbiter: approach. Where row b has no route plan (ClaimsShaper::
+// Unplanned) and owns open targets, a network move that does not bring the
+// robot nearer, in lattice moves, to a point that measures one of them
+// (nor leaves it on such a point) starts the deadlock walk toward the
+// nearest of them.
+class Approach {
+ public:
+  // Whether robot i walks instead of the network's `best` (then its move
+  // in *move).
+  bool Replace(const DecisionContext& ctx, int robot, Move best,
+               const std::vector<std::uint8_t>& owned,
+               const SearchMemory* memory, ClaimsShaper* claims,
+               DeadlockWalk* walk, Move* move);
+  std::vector<std::pair<std::string, long>> Counters() const {
+    return {{"approach_walks", walks_}};
+  }
+  void Reset() { walks_ = 0; }
+
+ private:
+  long walks_ = 0;
+  OpenAims open_;
+};
+
+// The layer: the five parts in their order for one step.
 class RulesLayer {
  public:
   explicit RulesLayer(const IgbNetParams& params);
@@ -337,6 +383,7 @@ class RulesLayer {
   ClaimsShaper claims_;
   DeadlockWalk walk_;
   NoUndo no_undo_;
+  Approach approach_;
 };
 
 }  // namespace aia

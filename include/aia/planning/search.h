@@ -524,6 +524,11 @@ class TargetClaims {
   // tours' regret insertion grows as robots x targets^2): 40 x 40; beyond
   // it, Claim's answer.
   static constexpr long kRouteMaxPairs = 1600;
+  // Whether Route plans for a robot with `num_others` neighbours and
+  // `num_open` open targets (else it gives Claim's answer).
+  static bool Plans(long num_open, long num_others) {
+    return num_open * (num_others + 1) <= kRouteMaxPairs;
+  }
   // Idle robots help only where robots x open targets is at most this
   // (80 x 80: the owners cost robots x targets per robot that owns none).
   static constexpr long kHelpMaxPairs = 6400;
