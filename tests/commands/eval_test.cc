@@ -654,8 +654,8 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
   ASSERT_NE(igbnet, nullptr) << effective;
   EXPECT_EQ(ShowNode(*igbnet, 100000),
             "{coordination: rules, max_reversals: 1, max_walk: 0, search: "
-            "true, share_search: true, no_undo: true, claims: route, open: "
-            "neighbours, refresh: 0.003, model: " +
+            "true, share_search: true, no_undo: true, claims: route, "
+            "approach: true, open: neighbours, refresh: 0.003, model: " +
                 model + ", model_sha256: " + sha.out.substr(0, 64) + "}")
       << effective;
   EXPECT_EQ(eval().exit_code, 0);  // the same model resumes
@@ -719,8 +719,8 @@ TEST(EvalTest, AnOlderFolderStillResumes) {
       testing::RunCommand("sha256sum '" + model + "'").out.substr(0, 64);
   const std::string igbnet_line =
       "igbnet: {coordination: rules, max_reversals: 1, max_walk: 0, search: "
-      "true, share_search: true, no_undo: true, claims: route, open: "
-      "neighbours, refresh: 0.003}; model " +
+      "true, share_search: true, no_undo: true, claims: route, approach: "
+      "true, open: neighbours, refresh: 0.003}; model " +
       model + " sha256 " + sha;
   const std::string older =
       OlderForm(effective, {"greedy: {}", igbnet_line, "random: {}"});
@@ -755,7 +755,7 @@ TEST(EvalTest, AnOlderFolderStillResumes) {
       OlderForm(effective,
                 {"igbnet: {coordination: rules, max_reversals: 1, max_walk: 0, "
                  "search: true, share_search: true, no_undo: true, claims: "
-                 "route, open: neighbours, refresh: 0.003}"}));
+                 "route, approach: true, open: neighbours, refresh: 0.003}"}));
   r = eval("igbnet");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("igbnet's model file differs: the folder does not "
