@@ -35,9 +35,14 @@ void OpenAims::Of(const DecisionContext& ctx, int robot,
   for (int k = 0; k < m; ++k) {
     if (hood ? !ctx.holds->Open(robot, k) : LogDetOf(ctx, robot, k) <= log_eps)
       continue;
-    aims_[k] = memory ? memory->Aim(robot, k) : MeanOf(ctx, robot, k);
+    aims_[k] = AimOf(ctx, robot, k, memory);
     open_[k] = 1;
   }
+}
+
+Vec2 OpenAims::AimOf(const DecisionContext& ctx, int robot, int k,
+                     const SearchMemory* memory) {
+  return memory ? memory->Aim(robot, k) : MeanOf(ctx, robot, k);
 }
 
 bool OpenAims::any() const {
@@ -288,16 +293,16 @@ bool Approach::Replace(const DecisionContext& ctx, int robot, Move best,
   const Lattice& lattice = ctx.map->lattice();
   const int here = (*ctx.robot_lattice)[robot];
   const int next = lattice.Next(here, best);
-  open_.Of(ctx, robot, memory);
-  const std::vector<std::uint8_t>& open = open_.open();
-  const int m = static_cast<int>(std::min(owned.size(), open.size()));
+  // The claims of this step own open targets only, at these aims.
+  const int m = static_cast<int>(owned.size());
   int at_here = -1, at_next = -1;  // moves to the nearest; -1: none
   for (int k = 0; k < m; ++k) {
-    if (!owned[k] || !open[k]) continue;
-    const int a = claims->Distance(open_.aims()[k], here);
+    if (!owned[k]) continue;
+    const Vec2 aim = OpenAims::AimOf(ctx, robot, k, memory);
+    const int a = claims->Distance(aim, here);
     if (a >= 0 && (at_here < 0 || a < at_here)) at_here = a;
     if (next < 0) continue;
-    const int b = claims->Distance(open_.aims()[k], next);
+    const int b = claims->Distance(aim, next);
     if (b >= 0 && (at_next < 0 || b < at_next)) at_next = b;
   }
   if (at_here <= 0 || (at_next >= 0 && at_next < at_here)) return false;

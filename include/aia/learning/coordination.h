@@ -188,6 +188,9 @@ std::string FirstRuleKeySet(const IgbNetParams& params);
 class OpenAims {
  public:
   void Of(const DecisionContext& ctx, int robot, const SearchMemory* memory);
+  // Where robot i aims for target k: the memory's aim, else its mean.
+  static Vec2 AimOf(const DecisionContext& ctx, int robot, int k,
+                    const SearchMemory* memory);
   const std::vector<std::uint8_t>& open() const { return open_; }
   const std::vector<Vec2>& aims() const { return aims_; }
   bool any() const;
@@ -348,7 +351,6 @@ class Approach {
 
  private:
   long walks_ = 0;
-  OpenAims open_;
 };
 
 // The layer: the five parts in their order for one step.
