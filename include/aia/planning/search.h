@@ -524,10 +524,16 @@ class TargetClaims {
   // tours' regret insertion grows as robots x targets^2): 40 x 40; beyond
   // it, Claim's answer.
   static constexpr long kRouteMaxPairs = 1600;
+  // ... and over this many open targets at most: a robot with few
+  // neighbours among hundreds of open targets (a range graph at scale)
+  // would otherwise plan tours over all of them, each robot its own every
+  // step (30 s a step at 200 robots).
+  static constexpr long kRouteMaxTargets = 40;
   // Whether Route plans for a robot with `num_others` neighbours and
   // `num_open` open targets (else it gives Claim's answer).
   static bool Plans(long num_open, long num_others) {
-    return num_open * (num_others + 1) <= kRouteMaxPairs;
+    return num_open <= kRouteMaxTargets &&
+           num_open * (num_others + 1) <= kRouteMaxPairs;
   }
   // Idle robots help only where robots x open targets is at most this
   // (80 x 80: the owners cost robots x targets per robot that owns none).
@@ -568,7 +574,7 @@ class TargetClaims {
   // evaluations of local search; the robots ordered by position, so that
   // their labels do not matter. Robots given the same points and aims share
   // one plan per step. None where the route is empty. Claim's answer where
-  // the robots times the open targets exceed kRouteMaxPairs.
+  // Plans() is false.
   void Route(int self, const std::vector<int>& others,
              const std::vector<Vec2>& aims,
              const std::vector<std::uint8_t>& open,
