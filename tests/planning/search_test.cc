@@ -593,6 +593,18 @@ TEST(SearchMemoryTest, SharedWalksGiveEachRobotItsOwnAim) {
   EXPECT_GT(checked, 40);
 }
 
+// Route plans while robots x open targets is at most 40 x 40 and the
+// open targets at most 40; else Claim's answer.
+TEST(TargetClaimsTest, RoutesArePlannedUpTo40By40And40Targets) {
+  EXPECT_TRUE(TargetClaims::Plans(40, 39));   // 40 x 40
+  EXPECT_FALSE(TargetClaims::Plans(40, 40));  // 41 x 40
+  EXPECT_TRUE(TargetClaims::Plans(10, 9));
+  EXPECT_TRUE(TargetClaims::Plans(40, 0));    // a robot alone, 40 targets
+  EXPECT_FALSE(TargetClaims::Plans(41, 0));   // 41 targets
+  EXPECT_FALSE(TargetClaims::Plans(200, 3));  // a range graph at scale
+  EXPECT_TRUE(TargetClaims::Plans(0, 100));
+}
+
 TEST(TargetClaimsTest, TheRobotFewestMovesFromMeasuringClaims) {
   Team team(kEmptyWorld);
   TargetClaims claims;
