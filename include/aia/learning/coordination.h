@@ -97,7 +97,7 @@ struct IgbNetParams {
   // ClaimsShaper: which open targets each robot shows the network (above).
   TargetClaimsMode claims = TargetClaimsMode::kRoute;
   // Approach: where a robot's claims have no route plan (claims nearest, or
-  // more robots x open targets than TargetClaims plans routes for) and it
+  // beyond what TargetClaims::Plans allows) and it
   // owns open targets, a network move that does not bring it nearer, in
   // lattice moves, to a point that measures one of them starts the walk
   // toward the nearest (at scale the network, shown one target a step away,
@@ -156,8 +156,9 @@ struct IgbNetParams {
         "claims none"));
     a->Visit(AIA_FIELD(approach).Doc(
         "rules, approach: where claims have no route plan for a robot "
-        "(claims nearest, or more robots x open targets than route plans are "
-        "made for, 40 x 40) and it owns open targets, a network move that "
+        "(claims nearest, or beyond the 40 x 40 robots x open targets or the "
+        "40 open targets route plans are made for) and it owns open targets, "
+        "a network move that "
         "does not bring it nearer, in lattice moves, to a point that "
         "measures one of them is replaced by the deadlock walk toward the "
         "nearest (false: the network's move)"));
