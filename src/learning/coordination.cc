@@ -283,7 +283,7 @@ Move NoUndo::Replace(const DecisionContext& ctx, int robot, Move best,
   return Move::kStay;
 }
 
-// --- Approach -----------------------------------------------------------------
+// --- Approach ----------------------------------------------------------------
 
 bool Approach::Replace(const DecisionContext& ctx, int robot, Move best,
                        const std::vector<std::uint8_t>& owned,

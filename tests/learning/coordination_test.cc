@@ -255,14 +255,11 @@ TEST(CoordinationTest, ApproachWalksWhereTheNetworkDoesNotNearItsTarget) {
     Move expected;
     long walks;
   };
-  for (const Case& c : {Case{TargetClaimsMode::kNearest, true, {0, 0, 5, 0},
-                             Move::kRight, 1},
-                        Case{TargetClaimsMode::kNearest, true, {0, 5, 0, 0},
-                             Move::kRight, 0},
-                        Case{TargetClaimsMode::kRoute, true, {0, 0, 5, 0},
-                             Move::kUp, 0},
-                        Case{TargetClaimsMode::kNearest, false, {0, 0, 5, 0},
-                             Move::kUp, 0}}) {
+  for (const Case& c :
+       {Case{TargetClaimsMode::kNearest, true, {0, 0, 5, 0}, Move::kRight, 1},
+        Case{TargetClaimsMode::kNearest, true, {0, 5, 0, 0}, Move::kRight, 0},
+        Case{TargetClaimsMode::kRoute, true, {0, 0, 5, 0}, Move::kUp, 0},
+        Case{TargetClaimsMode::kNearest, false, {0, 0, 5, 0}, Move::kUp, 0}}) {
     Step s(kCorridor, {{3.25, 1.25}, {1.25, 0.75}}, {});
     IgbNetParams params = Rules(0, true);
     params.claims = c.claims;
