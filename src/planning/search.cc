@@ -101,7 +101,8 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   };
   Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
-  if (SearchAim(map, sensor, s.mean, cov, &s.missed, cost, &s.aim)) return true;
+  if (SearchAim(map, sensor, s.mean, cov, &s.missed.points(), cost, &s.aim))
+    return true;
   // The prior is searched to 4 sigma: forget, and search it again.
   s.missed.clear();
   s.aim = s.mean;
@@ -203,7 +204,8 @@ bool SearchMemory::ReaimShared(const DecisionContext& ctx, int robot, int k,
     if (r == static_cast<int>(walk.ring_end.size())) {
       // Ring r's candidates: free, and not ruled out by the missed points
       // (the neighbourhood's union, which this robot now holds).
-      const std::vector<Vec2>& ruled = MissedPoints(lattice, &s.missed);
+      const std::vector<Vec2>& ruled =
+          MissedPoints(lattice, &s.missed.points());
       PriorRings(walk.mean, walk.cov, lattice.step())
           .Visit(r, [&](const Vec2& x) {
             if (!map.PointFree(x) || RuledOut(map, sensor, ruled, x)) return;
@@ -292,7 +294,7 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   };
   Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
-  const std::vector<Vec2>& ruled = MissedPoints(lattice, &s.missed);
+  const std::vector<Vec2>& ruled = MissedPoints(lattice, &s.missed.points());
   s.points.clear();
   bool mean_viable = false;
   int index = 0;

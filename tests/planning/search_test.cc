@@ -324,49 +324,68 @@ TEST(SearchPointsTest, NeighboursShareTheirMisses) {
 // belief is open and the target static; then(i, k) once per (robot,
 // target) that took a point, in ascending order. Random lists on full and
 // range graphs with lost edges (so neighbourhoods repeat and differ).
+struct MissSlot {
+  double log_det = 0.0;
+  MissList missed;
+};
+
+// The rule read directly (above): robot i's expected lists and the
+// expected then(i, k) calls of one Share over `robots`.
+void ShareByTheRule(const Team& team, const std::vector<MissSlot>& slots,
+                    const std::vector<int>& robots, int m, double log_eps,
+                    std::vector<MissSlot>* expected,
+                    std::vector<std::pair<int, int>>* calls) {
+  *expected = slots;
+  calls->clear();
+  std::vector<int> sorted = robots;
+  std::sort(sorted.begin(), sorted.end());
+  for (int i : sorted)
+    for (int k = 0; k < m; ++k) {
+      const MissSlot& own = slots[i * m + k];
+      if (!(own.log_det > log_eps)) continue;
+      std::vector<int> taken;
+      for (int j : team.comm.Neighbors(i))
+        for (int q : slots[j * m + k].missed)
+          if (std::find(own.missed.begin(), own.missed.end(), q) ==
+              own.missed.end())
+            taken.push_back(q);
+      std::sort(taken.begin(), taken.end());
+      taken.erase(std::unique(taken.begin(), taken.end()), taken.end());
+      if (taken.empty()) continue;
+      for (int q : taken) (*expected)[i * m + k].missed.push_back(q);
+      calls->push_back({i, k});
+    }
+}
+
+// A point in 0, 7, ..., 35 not in the list yet, or -1 (few distinct points,
+// so that lists overlap).
+int NewPoint(const MissList& list, Rng* rng) {
+  const int q = static_cast<int>(rng->Uniform() * 6) * 7;
+  return std::find(list.begin(), list.end(), q) == list.end() ? q : -1;
+}
+
 TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
-  struct Slot {
-    double log_det = 0.0;
-    std::vector<int> missed;
-  };
   for (int trial = 0; trial < 24; ++trial) {
     const std::unique_ptr<Team> made = GraphTrial(trial, 5, 100);
     Team& team = *made;
     const int n = 9, m = 5;
     Rng rng(7, "neighbour_misses_test", static_cast<std::uint64_t>(trial));
-    std::vector<Slot> slots(n * m);
+    std::vector<MissSlot> slots(n * m);
     const double log_eps = std::log(team.scenario.mission.eps);
-    for (Slot& s : slots) {
+    for (MissSlot& s : slots) {
       s.log_det = rng.Uniform() < 0.2 ? log_eps - 1.0 : log_eps + 1.0;
       const int count = static_cast<int>(rng.Uniform() * 4);
       for (int c = 0; c < count; ++c) {
-        // Few distinct points, so that lists overlap.
-        const int q = static_cast<int>(rng.Uniform() * 6) * 7;
-        if (std::find(s.missed.begin(), s.missed.end(), q) == s.missed.end())
-          s.missed.push_back(q);
+        const int q = NewPoint(s.missed, &rng);
+        if (q >= 0) s.missed.push_back(q);
       }
     }
     std::vector<int> robots;
     for (int i = 0; i < n; ++i)
       if (rng.Uniform() < 0.8) robots.push_back(i);
-    std::vector<Slot> expected = slots;
+    std::vector<MissSlot> expected;
     std::vector<std::pair<int, int>> expected_calls;
-    for (int i : robots)
-      for (int k = 0; k < m; ++k) {
-        const Slot& own = slots[i * m + k];
-        if (!(own.log_det > log_eps)) continue;
-        std::vector<int> taken;
-        for (int j : team.comm.Neighbors(i))
-          for (int q : slots[j * m + k].missed)
-            if (std::find(own.missed.begin(), own.missed.end(), q) ==
-                own.missed.end())
-              taken.push_back(q);
-        std::sort(taken.begin(), taken.end());
-        taken.erase(std::unique(taken.begin(), taken.end()), taken.end());
-        if (taken.empty()) continue;
-        for (int q : taken) expected[i * m + k].missed.push_back(q);
-        expected_calls.push_back({i, k});
-      }
+    ShareByTheRule(team, slots, robots, m, log_eps, &expected, &expected_calls);
     NeighbourMisses sharing;
     std::vector<std::pair<int, int>> calls;
     std::vector<int> shuffled(robots.rbegin(), robots.rend());
@@ -378,7 +397,7 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
                   [&](int i, int k, int group, int worker) {
                     calls.push_back({i, k});
                     EXPECT_EQ(worker, 0);
-                    std::vector<int> set = slots[i * m + k].missed;
+                    std::vector<int> set = slots[i * m + k].missed.points();
                     std::sort(set.begin(), set.end());
                     const auto [it, fresh] = held.insert({{group, k}, set});
                     if (!fresh) {
@@ -387,11 +406,69 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
                     }
                   });
     for (int s = 0; s < n * m; ++s)
-      EXPECT_EQ(slots[s].missed, expected[s].missed)
+      EXPECT_EQ(slots[s].missed.points(), expected[s].missed.points())
           << "trial " << trial << ", robot " << s / m << ", target " << s % m;
     EXPECT_EQ(calls, expected_calls) << "trial " << trial;
     if (trial % 2 == 0) EXPECT_GT(shared, 0) << "trial " << trial;
   }
+}
+
+// The unions a call makes from what the last call shared (a list that call
+// made equal to a union reads that union once) match the rule call after
+// call: lists appended to and cleared between calls, robots that skip a
+// call, open and closed beliefs, and a graph that loses other edges every
+// step (so a robot's neighbourhood changes under its shared list).
+TEST(NeighbourMissesTest, CallAfterCallMatchesTheRule) {
+  long reused = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const std::unique_ptr<Team> made = GraphTrial(trial, 4, 300);
+    Team& team = *made;
+    const int n = 9, m = 4;
+    Rng rng(7, "neighbour_misses_calls", static_cast<std::uint64_t>(trial));
+    std::vector<MissSlot> slots(n * m);
+    const double log_eps = std::log(team.scenario.mission.eps);
+    NeighbourMisses sharing;
+    std::vector<Vec2> p;
+    for (int idx : team.positions)
+      p.push_back(team.world.map.lattice().Point(idx));
+    for (int call = 0; call < 8; ++call) {
+      team.comm.Update(call + 2, p);
+      for (MissSlot& s : slots) {
+        s.log_det = rng.Uniform() < 0.15 ? log_eps - 1.0 : log_eps + 1.0;
+        const double u = rng.Uniform();
+        if (u < 0.1) s.missed.clear();
+        if (u > 0.7) {
+          const int q = NewPoint(s.missed, &rng);
+          if (q >= 0) s.missed.push_back(q);
+        }
+      }
+      for (const MissSlot& s : slots)
+        reused += s.missed.SharedGroup(call) >= 0 ? 1 : 0;
+      std::vector<int> robots;
+      for (int i = 0; i < n; ++i)
+        if (rng.Uniform() < 0.85) robots.push_back(i);
+      std::vector<MissSlot> expected;
+      std::vector<std::pair<int, int>> expected_calls;
+      ShareByTheRule(team, slots, robots, m, log_eps, &expected,
+                     &expected_calls);
+      std::vector<std::pair<int, int>> calls;
+      sharing.Share(team.Context(), robots, m, &slots,
+                    [&](int i, int k, int, int) {
+                      calls.push_back({i, k});
+                    });
+      for (int s = 0; s < n * m; ++s) {
+        std::vector<int> got = slots[s].missed.points();
+        std::vector<int> want = expected[s].missed.points();
+        // The rule's order: the own list, then what it took, ascending.
+        EXPECT_EQ(got, want) << "trial " << trial << ", call " << call
+                             << ", robot " << s / m << ", target " << s % m;
+      }
+      EXPECT_EQ(calls, expected_calls)
+          << "trial " << trial << ", call " << call;
+    }
+  }
+  // The shortcut was taken (lists shared by the call before).
+  EXPECT_GT(reused, 100);
 }
 
 // Each robot's block of the first target: det Sigma = d (Omega = I / sqrt(d)).

@@ -126,6 +126,45 @@ class ClosedNeighbourhoods {
   std::vector<int> closed_a_;                     // SameClosed's scratch
 };
 
+// A robot's missed lattice points of one target, in the order they were
+// added, each once: appended to or cleared, nothing else. It also keeps
+// what NeighbourMisses::Share last made of it: its first shared() points
+// are, as a set, the union that Share's call `call` made for neighbourhood
+// `group`, until the list is cleared.
+class MissList {
+ public:
+  const std::vector<int>& points() const { return points_; }
+  std::vector<int>::const_iterator begin() const { return points_.begin(); }
+  std::vector<int>::const_iterator end() const { return points_.end(); }
+  std::size_t size() const { return points_.size(); }
+  bool empty() const { return points_.empty(); }
+  int operator[](std::size_t c) const { return points_[c]; }
+  void push_back(int q) { points_.push_back(q); }
+  void clear() {
+    points_.clear();
+    shared_ = 0;
+    group_ = -1;
+  }
+  // The whole list is union `group` of Share's call `call`.
+  void MarkShared(int group, std::uint64_t call) {
+    shared_ = points_.size();
+    group_ = group;
+    call_ = call;
+  }
+  // The neighbourhood whose union of Share's call `call` the first
+  // shared() points are; -1 if none.
+  int SharedGroup(std::uint64_t call) const {
+    return call_ == call && shared_ > 0 ? group_ : -1;
+  }
+  std::size_t shared() const { return shared_; }
+
+ private:
+  std::vector<int> points_;
+  std::size_t shared_ = 0;
+  int group_ = -1;
+  std::uint64_t call_ = 0;
+};
+
 // Share's work, one definition for SearchMemory and SearchPoints: each
 // robot among `robots` takes the points its neighbours in this step's graph
 // missed for a static target still open in its own belief (log det above
@@ -138,15 +177,20 @@ class ClosedNeighbourhoods {
 // Robots with the same closed neighbourhood (itself and its neighbours)
 // take from the same lists, so the union of those lists per target is made
 // once per neighbourhood: once for the whole team in a full graph, once per
-// robot in a sparse one. A union visits only
-// the targets its robots missed any point of (a list per robot, made in one
-// pass over the slots) and drops duplicates with stamps; a robot then takes
-// the union's points its own stamped list does not hold. O(robots x
-// targets) for the lists, O(edges) for the neighbourhoods, O(P log P) per
-// neighbourhood for the P points of its lists, then O(own list + union) per
-// (robot, target); no list searched. The robots take their points and
-// call `then` split over `run` (each robot's calls on one thread, in
-// order). Reuses its scratch.
+// robot in a sparse one. A union visits only the targets its robots missed
+// any point of (a list per robot, made in one pass over the slots) and
+// drops duplicates with stamps. A list that the last call made equal to a
+// union (MissList::SharedGroup) adds that union once per new union and then
+// only the points appended since, so that a full graph, where every robot
+// holds the same union, reads it once instead of once per robot. A robot's
+// own list is part of its union, so a list as long as the union is the
+// union and takes nothing; else the robot takes the union's points its own
+// stamped list does not hold. O(robots x targets) for the lists, O(edges)
+// for the neighbourhoods, O(P log P) per neighbourhood for the P points
+// new to its unions, then O(1) per (robot, target) of its union, plus
+// O(own list + union) where a robot takes; no list searched. The robots
+// take their points and call `then` split over `run` (each robot's calls on
+// one thread, in order). Reuses its scratch.
 class NeighbourMisses {
  public:
   template <typename Slot, typename Then>
@@ -178,6 +222,11 @@ class NeighbourMisses {
           if (!at(j, k).missed.empty()) missing_[j].push_back(k);
       }
     });
+    // The last call's unions, which the lists it shared refer to.
+    ++call_;
+    last_union_.swap(union_);
+    last_groups_.swap(groups_);
+    last_added_.assign(last_groups_.size(), 0);
     groups_.clear();
     hoods_.Clear();
     union_.clear();
@@ -189,7 +238,7 @@ class NeighbourMisses {
     // `run`: a robot writes and reads its own lists only.
     group_of_.resize(order_.size());
     for (std::size_t o = 0; o < order_.size(); ++o)
-      group_of_[o] = GroupOf(ctx, order_[o], at);
+      group_of_[o] = GroupOf(ctx, order_[o], num_targets, at);
     RunRange(run, static_cast<int>(order_.size()), [&](int o0, int o1, int w) {
       Taker& t = takers_[w];
       if (t.mark.size() != points) {
@@ -198,7 +247,8 @@ class NeighbourMisses {
       }
       for (int o = o0; o < o1; ++o) {
         const int i = order_[o];
-        const Group& g = groups_[group_of_[o]];
+        const int group = group_of_[o];
+        const Group& g = groups_[group];
         for (int a = g.begin; a < g.end;) {
           const int k = union_[a].first;
           int b = a;
@@ -206,13 +256,17 @@ class NeighbourMisses {
           Slot& s = at(i, k);
           if (!std::isnan(s.log_det) && s.log_det > log_eps &&
               ctx.beliefs->layout().is_static(k)) {
-            t.stamp = NextStampOf(&t.mark, t.stamp);
-            for (int q : s.missed) t.mark[q] = t.stamp;
-            const std::size_t had = s.missed.size();
-            for (int c = a; c < b; ++c)
-              if (t.mark[union_[c].second] != t.stamp)
-                s.missed.push_back(union_[c].second);
-            if (s.missed.size() > had) then(i, k, group_of_[o], w);
+            MissList& own = s.missed;
+            const std::size_t had = own.size();
+            if (had != static_cast<std::size_t>(b - a)) {
+              t.stamp = NextStampOf(&t.mark, t.stamp);
+              for (int q : own) t.mark[q] = t.stamp;
+              for (int c = a; c < b; ++c)
+                if (t.mark[union_[c].second] != t.stamp)
+                  own.push_back(union_[c].second);
+            }
+            own.MarkShared(group, call_);
+            if (own.size() > had) then(i, k, group, w);
           }
           a = b;
         }
@@ -228,35 +282,71 @@ class NeighbourMisses {
   };
   // The index of robot i's group in groups_ (made if new).
   template <typename At>
-  int GroupOf(const DecisionContext& ctx, int i, const At& at) {
+  int GroupOf(const DecisionContext& ctx, int i, int num_targets,
+              const At& at) {
     bool fresh = false;
     const int group = hoods_.Of(ctx, i, &fresh);
     if (!fresh) return group;
     Group g;
     g.begin = static_cast<int>(union_.size());
     // (target, robot) for each target a robot of the neighbourhood missed
-    // points of; then per target, its robots' points, each once.
+    // points of, by target (robots ascending, as ForClosed visits them);
+    // then per target, its robots' points, each once.
     pairs_.clear();
     ClosedNeighbourhoods::ForClosed(ctx, i, [&](int j) {
       for (int k : missing_[j]) pairs_.push_back({k, j});
     });
-    std::sort(pairs_.begin(), pairs_.end());
+    SortByTarget(num_targets);
+    const auto add = [this](int k, int q) {
+      if (mark_[q] == stamp_) return;
+      mark_[q] = stamp_;
+      union_.push_back({k, q});
+    };
     for (std::size_t a = 0; a < pairs_.size();) {
       const int k = pairs_[a].first;
       NextStamp();
+      ++block_;
       const auto first = union_.size();
-      for (; a < pairs_.size() && pairs_[a].first == k; ++a)
-        for (int q : at(pairs_[a].second, k).missed) {
-          if (mark_[q] == stamp_) continue;
-          mark_[q] = stamp_;
-          union_.push_back({k, q});
+      for (; a < pairs_.size() && pairs_[a].first == k; ++a) {
+        const MissList& list = at(pairs_[a].second, k).missed;
+        std::size_t from = 0;
+        const int last = list.SharedGroup(call_ - 1);
+        if (last >= 0) {  // its first points: that union, added once
+          from = list.shared();
+          if (last_added_[last] != block_) {
+            last_added_[last] = block_;
+            const Group& lg = last_groups_[last];
+            const auto lo = std::lower_bound(
+                last_union_.begin() + lg.begin, last_union_.begin() + lg.end,
+                std::pair<int, int>{k, std::numeric_limits<int>::min()});
+            for (auto p = lo;
+                 p != last_union_.begin() + lg.end && p->first == k; ++p)
+              add(k, p->second);
+          }
         }
+        for (std::size_t c = from; c < list.size(); ++c) add(k, list[c]);
+      }
       std::sort(union_.begin() + static_cast<std::ptrdiff_t>(first),
                 union_.end());
     }
     g.end = static_cast<int>(union_.size());
     groups_.push_back(g);
     return group;
+  }
+  // pairs_ in ascending (target, robot) order: a counting sort by target
+  // where the pairs outnumber the targets (each target's robots are already
+  // ascending), else a sort.
+  void SortByTarget(int num_targets) {
+    if (pairs_.size() < static_cast<std::size_t>(num_targets)) {
+      std::sort(pairs_.begin(), pairs_.end());
+      return;
+    }
+    counts_.assign(static_cast<std::size_t>(num_targets) + 1, 0);
+    for (const auto& p : pairs_) ++counts_[p.first + 1];
+    for (int k = 0; k < num_targets; ++k) counts_[k + 1] += counts_[k];
+    sorted_.resize(pairs_.size());
+    for (const auto& p : pairs_) sorted_[counts_[p.first]++] = p;
+    pairs_.swap(sorted_);
   }
   static std::uint32_t NextStampOf(std::vector<std::uint32_t>* marks,
                                    std::uint32_t stamp) {
@@ -272,12 +362,20 @@ class NeighbourMisses {
     std::vector<std::uint32_t> mark;
     std::uint32_t stamp = 0;
   };
-  std::vector<Taker> takers_;               // per worker
-  std::vector<int> group_of_;               // per robot of order_
-  std::vector<std::vector<int>> missing_;   // per robot: targets missed
-  std::vector<std::pair<int, int>> pairs_;  // (target, robot)
-  std::vector<std::pair<int, int>> union_;  // (target, point) per group
+  std::vector<Taker> takers_;                // per worker
+  std::vector<int> group_of_;                // per robot of order_
+  std::vector<std::vector<int>> missing_;    // per robot: targets missed
+  std::vector<std::pair<int, int>> pairs_;   // (target, robot)
+  std::vector<std::pair<int, int>> sorted_;  // SortByTarget's scratch
+  std::vector<int> counts_;                  // SortByTarget's scratch
+  std::vector<std::pair<int, int>> union_;   // (target, point) per group
   std::vector<Group> groups_;
+  // The last call's union_ and groups_, and per group of it the union block
+  // (block_) that last added its points.
+  std::vector<std::pair<int, int>> last_union_;
+  std::vector<Group> last_groups_;
+  std::vector<std::uint64_t> last_added_;
+  std::uint64_t call_ = 0, block_ = 0;
   ClosedNeighbourhoods hoods_;
   std::vector<int> order_;
   std::vector<std::uint32_t> mark_;  // per lattice point
@@ -350,7 +448,7 @@ class SearchMemory {
   // Where robot i looks for target k (its belief's mean until it missed).
   const Vec2& Aim(int robot, int k) const { return slot(robot, k).aim; }
   const std::vector<int>& Missed(int robot, int k) const {
-    return slot(robot, k).missed;
+    return slot(robot, k).missed.points();
   }
   int num_robots() const { return num_robots_; }
   int num_targets() const { return num_targets_; }
@@ -362,7 +460,7 @@ class SearchMemory {
     double log_det = std::numeric_limits<double>::quiet_NaN();  // last seen
     Vec2 mean{0.0, 0.0};
     Vec2 aim{0.0, 0.0};
-    std::vector<int> missed;
+    MissList missed;
   };
   const Slot& slot(int i, int k) const {
     return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
@@ -447,7 +545,7 @@ class SearchPoints {
     return slot(robot, k).points;
   }
   const std::vector<int>& Missed(int robot, int k) const {
-    return slot(robot, k).missed;
+    return slot(robot, k).missed.points();
   }
   int num_robots() const { return num_robots_; }
   int num_targets() const { return num_targets_; }
@@ -458,7 +556,7 @@ class SearchPoints {
   struct Slot {
     double log_det = std::numeric_limits<double>::quiet_NaN();
     Vec2 mean{0.0, 0.0};
-    std::vector<int> missed;
+    MissList missed;
     std::vector<Vec2> points;
   };
   const Slot& slot(int i, int k) const {
