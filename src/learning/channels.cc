@@ -135,13 +135,103 @@ void ChannelRenderer::Render(const Vec2& self,
                  memory);
 }
 
-void ChannelRenderer::RenderWithHeat(const Vec2& self,
-                                     const std::vector<Vec2>& neighbours,
-                                     const Grid<float>& field,
-                                     const std::vector<HeatSource>* targets,
-                                     const std::vector<double>* log_det_prior,
-                                     double eps, float* out,
-                                     const RobotMemory& memory) const {
+void HeatFold::Build(const Grid<float>& heat) {
+  heat_ = &heat;
+  nx_ = heat.nx();
+  ny_ = heat.ny();
+  const std::size_t wide = static_cast<std::size_t>(nx_ + 1) * ny_;
+  const std::size_t cells = static_cast<std::size_t>(nx_) * ny_;
+  row_before_.resize(wide);
+  row_from_.resize(wide);
+  top_before_.resize(wide);
+  top_from_.resize(wide);
+  bottom_before_.resize(wide);
+  bottom_from_.resize(wide);
+  top_.resize(cells);
+  bottom_.resize(cells);
+  const float* data = heat.data().data();
+  const int w = nx_ + 1;
+  for (int y = 0; y < ny_; ++y) {
+    const float* row = data + static_cast<std::size_t>(y) * nx_;
+    float* before = row_before_.data() + static_cast<std::size_t>(y) * w;
+    float* from = row_from_.data() + static_cast<std::size_t>(y) * w;
+    before[0] = 0.0f;
+    for (int x = 0; x < nx_; ++x) before[x + 1] = std::max(before[x], row[x]);
+    from[nx_] = 0.0f;
+    for (int x = nx_ - 1; x >= 0; --x) from[x] = std::max(from[x + 1], row[x]);
+  }
+  // Rows [0, y] and [y, ny): each row's maxima with the row before's.
+  const auto down = [&](int y, int prev) {
+    const std::size_t r = static_cast<std::size_t>(y);
+    const float* row = data + r * nx_;
+    for (int x = 0; x < nx_; ++x)
+      top_[r * nx_ + x] =
+          prev < 0 ? row[x] : std::max(top_[prev * nx_ + x], row[x]);
+    for (int x = 0; x <= nx_; ++x) {
+      top_before_[r * w + x] = prev < 0 ? row_before_[r * w + x]
+                                        : std::max(top_before_[prev * w + x],
+                                                   row_before_[r * w + x]);
+      top_from_[r * w + x] =
+          prev < 0 ? row_from_[r * w + x]
+                   : std::max(top_from_[prev * w + x], row_from_[r * w + x]);
+    }
+  };
+  const auto up = [&](int y, int prev) {
+    const std::size_t r = static_cast<std::size_t>(y);
+    const float* row = data + r * nx_;
+    for (int x = 0; x < nx_; ++x)
+      bottom_[r * nx_ + x] =
+          prev < 0 ? row[x] : std::max(bottom_[prev * nx_ + x], row[x]);
+    for (int x = 0; x <= nx_; ++x) {
+      bottom_before_[r * w + x] =
+          prev < 0
+              ? row_before_[r * w + x]
+              : std::max(bottom_before_[prev * w + x], row_before_[r * w + x]);
+      bottom_from_[r * w + x] =
+          prev < 0 ? row_from_[r * w + x]
+                   : std::max(bottom_from_[prev * w + x], row_from_[r * w + x]);
+    }
+  };
+  for (int y = 0; y < ny_; ++y) down(y, y - 1);
+  for (int y = ny_ - 1; y >= 0; --y) up(y, y + 1 < ny_ ? y + 1 : -1);
+}
+
+void HeatFold::Fold(int x0, int y0, int w, float* out) const {
+  AIA_CHECK(heat_ != nullptr && w > 0);
+  const int mid0 = std::clamp(x0, 0, nx_), mid1 = std::clamp(x0 + w, 0, nx_);
+  const int stride = nx_ + 1;
+  for (int r = 0; r < w; ++r) {
+    // The map rows that fold onto window row r.
+    const int lo = std::max(0, r == 0 ? 0 : y0 + r);
+    const int hi = std::min(ny_ - 1, r == w - 1 ? ny_ - 1 : y0 + r);
+    if (lo > hi) continue;
+    const float *before = nullptr, *from = nullptr, *cols = nullptr;
+    if (lo == 0) {  // rows [0, hi]
+      before = top_before_.data() + static_cast<std::size_t>(hi) * stride;
+      from = top_from_.data() + static_cast<std::size_t>(hi) * stride;
+      cols = top_.data() + static_cast<std::size_t>(hi) * nx_;
+    } else if (hi == ny_ - 1) {  // rows [lo, ny)
+      before = bottom_before_.data() + static_cast<std::size_t>(lo) * stride;
+      from = bottom_from_.data() + static_cast<std::size_t>(lo) * stride;
+      cols = bottom_.data() + static_cast<std::size_t>(lo) * nx_;
+    } else {  // row lo alone
+      before = row_before_.data() + static_cast<std::size_t>(lo) * stride;
+      from = row_from_.data() + static_cast<std::size_t>(lo) * stride;
+      cols = heat_->data().data() + static_cast<std::size_t>(lo) * nx_;
+    }
+    float* h = out + static_cast<std::size_t>(r) * w;
+    h[0] = std::max(h[0], before[mid0]);
+    h[w - 1] = std::max(h[w - 1], from[mid1]);
+    for (int gx = mid0; gx < mid1; ++gx)
+      h[gx - x0] = std::max(h[gx - x0], cols[gx]);
+  }
+}
+
+void ChannelRenderer::RenderWithHeat(
+    const Vec2& self, const std::vector<Vec2>& neighbours,
+    const Grid<float>& field, const std::vector<HeatSource>* targets,
+    const std::vector<double>* log_det_prior, double eps, float* out,
+    const RobotMemory& memory, const HeatFold* heat_fold) const {
   AIA_CHECK(field.nx() == occupancy_.nx() && field.ny() == occupancy_.ny());
   AIA_CHECK_MSG(!params_.geodesic || (targets && log_det_prior),
                 "channel 4 needs the robot's belief");
@@ -193,16 +283,20 @@ void ChannelRenderer::RenderWithHeat(const Vec2& self,
   // Row by row: the cells left of the window fold onto its first column,
   // those right of it onto its last, the rest onto their own column.
   const int mid0 = std::clamp(x0, 0, nx), mid1 = std::clamp(x0 + w, 0, nx);
-  for (int gy = 0; gy < ny; ++gy) {
-    float* h = heat + fold(gy, y0) * w;
-    const float* row = field.data().data() + field.Index(0, gy);
-    float left = 0.0f, right = 0.0f;
-    for (int gx = 0; gx < mid0; ++gx) left = std::max(left, row[gx]);
-    for (int gx = mid1; gx < nx; ++gx) right = std::max(right, row[gx]);
-    h[0] = std::max(h[0], left);
-    h[w - 1] = std::max(h[w - 1], right);
-    for (int gx = mid0; gx < mid1; ++gx)
-      h[gx - x0] = std::max(h[gx - x0], row[gx]);
+  if (heat_fold && heat_fold->heat() == &field) {
+    heat_fold->Fold(x0, y0, w, heat);
+  } else {
+    for (int gy = 0; gy < ny; ++gy) {
+      float* h = heat + fold(gy, y0) * w;
+      const float* row = field.data().data() + field.Index(0, gy);
+      float left = 0.0f, right = 0.0f;
+      for (int gx = 0; gx < mid0; ++gx) left = std::max(left, row[gx]);
+      for (int gx = mid1; gx < nx; ++gx) right = std::max(right, row[gx]);
+      h[0] = std::max(h[0], left);
+      h[w - 1] = std::max(h[w - 1], right);
+      for (int gx = mid0; gx < mid1; ++gx)
+        h[gx - x0] = std::max(h[gx - x0], row[gx]);
+    }
   }
   if (params_.geodesic)
     Reach(x0, y0, self, *targets, *log_det_prior, eps, out + 4 * plane,

@@ -40,6 +40,9 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
   const int workers = std::max(1, PolicyThreads());
   heat_.Prepare(*ctx.beliefs, rows, *prior, renderer_->Heatmap(ctx.eps),
                 renderer_->occupancy(), PolicyRunner(), workers);
+  // The common heatmap's fold, once for every robot that holds it.
+  const bool folding = renderer_->params().frame == ChannelFrame::kCentred;
+  if (folding) fold_.Build(heat_.base());
   if (static_cast<int>(worker_heat_.size()) < workers) {
     worker_heat_.resize(workers, renderer_->occupancy());
     worker_neighbours_.resize(workers);
@@ -125,7 +128,8 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
         renderer_->RenderWithHeat(
             lattice.Point(here), neighbours,
             keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
-            targets, prior, ctx.eps, images_.data() + o * size, memory);
+            targets, prior, ctx.eps, images_.data() + o * size, memory,
+            folding ? &fold_ : nullptr);
       }
       if (passing)
         net_->Embed(images_.data() + begin * size, end - begin,

@@ -157,6 +157,52 @@ TEST(ChannelsTest, CentredFrameFoldsWhatLiesBeyondTheWindowOntoItsBorder) {
   EXPECT_NEAR(img[3], kH0, 1e-6);
 }
 
+// HeatFold folds a heatmap for any window exactly as the direct fold does:
+// random heat (ties and zeros included) on a 9 x 7 map, windows of 1 to 12
+// pixels (wider than the map too) around every pixel, so that a window
+// reaches beyond every side and corner of the map.
+TEST(ChannelsTest, HeatFoldFoldsAsTheWholeMapDoes) {
+  Grid<std::uint8_t> occupancy(9, 7, 1.0, 0);
+  occupancy(4, 3) = 1;
+  Grid<float> heat(9, 7, 1.0, 0.0f);
+  std::uint64_t state = 12345;
+  for (float& h : heat.data()) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const int draw = static_cast<int>((state >> 33) % 7);
+    h = draw < 2 ? 0.0f : 0.125f * static_cast<float>(draw);  // ties
+  }
+  heat(0, 0) = 2.0f;  // a corner's own peak
+  HeatFold fold;
+  fold.Build(heat);
+  ASSERT_EQ(fold.heat(), &heat);
+  int windows = 0;
+  for (int w : {1, 2, 3, 4, 5, 12}) {
+    ChannelRenderer r(occupancy, {9.0, 7.0}, Params(ChannelFrame::kCentred, w));
+    std::vector<float> direct(r.ImageSize()), folded(r.ImageSize());
+    for (int y = 0; y < 7; ++y)
+      for (int x = 0; x < 9; ++x) {
+        const Vec2 self(x + 0.5, y + 0.5);
+        r.RenderWithHeat(self, {}, heat, nullptr, nullptr, 0.01, direct.data());
+        r.RenderWithHeat(self, {}, heat, nullptr, nullptr, 0.01, folded.data(),
+                         {}, &fold);
+        EXPECT_EQ(folded, direct) << "window " << w << " at " << x << "," << y;
+        ++windows;
+      }
+  }
+  EXPECT_EQ(windows, 6 * 63);
+  // A fold built from another heatmap is not used.
+  Grid<float> other = heat;
+  other(8, 6) = 9.0f;
+  ChannelRenderer r(occupancy, {9.0, 7.0}, Params(ChannelFrame::kCentred, 3));
+  std::vector<float> direct(r.ImageSize()), folded(r.ImageSize());
+  r.RenderWithHeat({0.5, 0.5}, {}, other, nullptr, nullptr, 0.01,
+                   direct.data());
+  r.RenderWithHeat({0.5, 0.5}, {}, other, nullptr, nullptr, 0.01, folded.data(),
+                   {}, &fold);
+  EXPECT_EQ(folded, direct);
+  EXPECT_FLOAT_EQ(direct[3 * 9 + 8], 9.0f);  // heat's top-right corner pixel
+}
+
 TEST(ChannelsTest, LocalizedTargetsLeaveNoHeat) {
   TinyWorld t;
   t.targets[0].log_det = std::log(t.eps);  // det Sigma = eps

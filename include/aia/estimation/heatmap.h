@@ -123,6 +123,9 @@ class TeamHeatmap {
   // in `scratch` (the same stamps as Robot's, added to zero).
   const Grid<float>& Robot(int b, const std::vector<std::uint8_t>& keep,
                            Grid<float>* scratch) const;
+  // The common heatmap: what Robot returns for a robot that holds the
+  // majority's belief of every target.
+  const Grid<float>& base() const { return base_; }
   // Robot-target pairs whose heat was not the common one (a measure of the
   // work saved).
   long own_stamps() const { return static_cast<long>(own_used_); }

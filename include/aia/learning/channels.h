@@ -153,6 +153,33 @@ struct RobotMemory {
   Vec2 came_from{0.0, 0.0};
 };
 
+// The heat channel's fold of one heatmap (the centred frame's border,
+// above) for any window at once: running maxima along each row, down and
+// up each column, and over the four corners of the map, made in O(cells),
+// so that a window's fold reads O(window^2) of them instead of every cell
+// of the map. Its values must be >= 0 (a heatmap's sums of stamps are);
+// the fold is then exactly the fold of the heatmap itself (a max is a max).
+class HeatFold {
+ public:
+  void Build(const Grid<float>& heat);
+  // The heatmap it was built from (null before Build).
+  const Grid<float>* heat() const { return heat_; }
+  // Adds to the w x w plane `out` (row-major; pixel (0, 0) is map cell (x0,
+  // y0)) the largest heat folding onto each pixel, as RenderWithHeat folds
+  // the heatmap.
+  void Fold(int x0, int y0, int w, float* out) const;
+
+ private:
+  const Grid<float>* heat_ = nullptr;
+  int nx_ = 0, ny_ = 0;
+  // (nx + 1) per row: the max of row y over columns [0, x) and [x, nx),
+  // of rows [0, y] and of rows [y, ny) over the same columns.
+  std::vector<float> row_before_, row_from_, top_before_, top_from_,
+      bottom_before_, bottom_from_;
+  // nx per row: the max of column x over rows [0, y] and over [y, ny).
+  std::vector<float> top_, bottom_;
+};
+
 // Renders the channels of the robots of one map. Owns scratch memory: one
 // renderer per thread.
 class ChannelRenderer {
@@ -191,11 +218,14 @@ class ChannelRenderer {
   // channel 4 needs the belief too (`targets`, `log_det_prior`, `eps`;
   // may be null without it).
   // Thread-safe.
+  // `heat_fold`, when given and built from `heat` as it is now, folds the
+  // heat channel in O(window^2) (the same image).
   void RenderWithHeat(const Vec2& self, const std::vector<Vec2>& neighbours,
                       const Grid<float>& heat,
                       const std::vector<HeatSource>* targets,
                       const std::vector<double>* log_det_prior, double eps,
-                      float* out, const RobotMemory& memory = {}) const;
+                      float* out, const RobotMemory& memory = {},
+                      const HeatFold* heat_fold = nullptr) const;
   // The pixel (u, v) of point p in the image of a robot at `self`; false
   // when p lies outside it.
   bool ImagePixel(const Vec2& self, const Vec2& p, int* u, int* v) const;

@@ -85,6 +85,7 @@ class NetworkScorer : public MoveScorer {
   std::vector<float> features_;
   TeamGraph graph_;
   TeamHeatmap heat_;
+  HeatFold fold_;  // heat_.base()'s, for the centred frame
   // Per worker thread (ParallelFor): a heatmap, the neighbours' points and
   // the targets of channel 4.
   std::vector<Grid<float>> worker_heat_;
