@@ -2,13 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <mutex>
 #include <queue>
-#include <shared_mutex>
 #include <unordered_map>
 #include <utility>
 
@@ -17,17 +16,16 @@
 
 namespace aia {
 
-struct ChannelRenderer::ObservationCache {
-  std::shared_mutex mutex;
-  std::unordered_map<PointKey, std::vector<int>, PointKeyHash> pixels;
-};
+namespace {
+
+std::atomic<std::uint64_t> renderers_made{0};
+
+}  // namespace
 
 ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
                                  const Vec2& size, const ChannelParams& params,
                                  const Lattice* lattice)
-    : params_(params),
-      size_(size),
-      observation_cache_(std::make_shared<ObservationCache>()) {
+    : params_(params), size_(size), observation_owner_(++renderers_made) {
   AIA_CHECK(params.cell > 0.0 && params.window > 0 && params.blur >= 0.0 &&
             params.cutoff > 0.0);
   AIA_CHECK_MSG(!params.geodesic || (lattice && params.geodesic_length > 0.0),
@@ -333,16 +331,18 @@ bool ChannelRenderer::Sees(const Vec2& a, const Vec2& b) const {
 const std::vector<int>& ChannelRenderer::ObservationPixels(
     const Vec2& x) const {
   const PointKey key = KeyOf(x);
-  thread_local std::vector<int> found;
-  ObservationCache& cache = *observation_cache_;
-  {
-    std::shared_lock<std::shared_mutex> lock(cache.mutex);
-    const auto it = cache.pixels.find(key);
-    if (it != cache.pixels.end()) {
-      found = it->second;  // copied: another thread may clear the cache
-      return found;
-    }
+  struct Kept {
+    std::uint64_t owner = 0;
+    std::unordered_map<PointKey, std::vector<int>, PointKeyHash> pixels;
+  };
+  thread_local Kept kept;
+  if (kept.owner != observation_owner_) {
+    kept.pixels.clear();
+    kept.owner = observation_owner_;
   }
+  const auto it = kept.pixels.find(key);
+  if (it != kept.pixels.end()) return it->second;
+  thread_local std::vector<int> found;
   found.clear();
   const int nx = occupancy_.nx(), ny = occupancy_.ny();
   const int reach =
@@ -361,10 +361,8 @@ const std::vector<int>& ChannelRenderer::ObservationPixels(
       found.push_back(idx);
     }
   }
-  std::unique_lock<std::shared_mutex> lock(cache.mutex);
-  if (cache.pixels.size() >= kObservationCacheSize) cache.pixels.clear();
-  cache.pixels.emplace(key, found);
-  return found;
+  if (kept.pixels.size() >= kObservationCacheSize) kept.pixels.clear();
+  return kept.pixels.emplace(key, found).first->second;
 }
 
 void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,

@@ -257,9 +257,11 @@ class ChannelRenderer {
   // on within the observe range of point x that see it: where the reach
   // channel's values start. Every robot asks about every target's mean (and
   // search points), mostly the same points in a step, so the answers are
-  // kept per point (cleared past kObservationCacheSize points); thread-safe.
+  // kept per point and per thread, with no lock on the way (cleared past
+  // kObservationCacheSize points, or when the thread turns to a renderer of
+  // another map); thread-safe. The answer stays valid until the thread's
+  // next call.
   const std::vector<int>& ObservationPixels(const Vec2& x) const;
-  struct ObservationCache;
   static constexpr std::size_t kObservationCacheSize = 1 << 16;
 
   ChannelParams params_;
@@ -274,8 +276,9 @@ class ChannelRenderer {
   // powers 0 .. nx + ny (std::pow's values).
   std::vector<double> decay_pow_;
   int height_ = 0, width_ = 0;
-  // Shared by copies (the same map and parameters).
-  std::shared_ptr<ObservationCache> observation_cache_;
+  // Which renderer's points a thread's kept answers are: shared by copies
+  // (the same map and parameters), new for each renderer made.
+  std::uint64_t observation_owner_ = 0;
 };
 
 namespace internal {

@@ -146,23 +146,24 @@ class MissList {
     group_ = -1;
   }
   // The whole list is union `group` of Share's call `call`.
-  void MarkShared(int group, std::uint64_t call) {
-    shared_ = points_.size();
+  void MarkShared(int group, std::uint32_t call) {
+    shared_ = static_cast<std::uint32_t>(points_.size());
     group_ = group;
     call_ = call;
   }
   // The neighbourhood whose union of Share's call `call` the first
   // shared() points are; -1 if none.
-  int SharedGroup(std::uint64_t call) const {
+  int SharedGroup(std::uint32_t call) const {
     return call_ == call && shared_ > 0 ? group_ : -1;
   }
   std::size_t shared() const { return shared_; }
 
  private:
   std::vector<int> points_;
-  std::size_t shared_ = 0;
-  int group_ = -1;
-  std::uint64_t call_ = 0;
+  // 12 bytes: one list per robot and target (N x M of them).
+  std::uint32_t shared_ = 0;
+  std::int32_t group_ = -1;
+  std::uint32_t call_ = 0;
 };
 
 // Share's work, one definition for SearchMemory and SearchPoints: each
@@ -375,7 +376,8 @@ class NeighbourMisses {
   std::vector<std::pair<int, int>> last_union_;
   std::vector<Group> last_groups_;
   std::vector<std::uint64_t> last_added_;
-  std::uint64_t call_ = 0, block_ = 0;
+  std::uint32_t call_ = 0;  // MissList's (it wraps after 2^32 calls)
+  std::uint64_t block_ = 0;
   ClosedNeighbourhoods hoods_;
   std::vector<int> order_;
   std::vector<std::uint32_t> mark_;  // per lattice point
