@@ -158,40 +158,31 @@ void HeatFold::Build(const Grid<float>& heat) {
     from[nx_] = 0.0f;
     for (int x = nx_ - 1; x >= 0; --x) from[x] = std::max(from[x + 1], row[x]);
   }
-  // Rows [0, y] and [y, ny): each row's maxima with the row before's.
-  const auto down = [&](int y, int prev) {
+  // Rows [0, y] (down, from the top) and [y, ny) (up, from the bottom): row
+  // y's maxima with those of the row before it that way (prev < 0: none).
+  const auto running = [&](int y, int prev, std::vector<float>* cols,
+                           std::vector<float>* before,
+                           std::vector<float>* from) {
     const std::size_t r = static_cast<std::size_t>(y);
+    const std::size_t p = static_cast<std::size_t>(std::max(prev, 0));
     const float* row = data + r * nx_;
     for (int x = 0; x < nx_; ++x)
-      top_[r * nx_ + x] =
-          prev < 0 ? row[x] : std::max(top_[prev * nx_ + x], row[x]);
+      (*cols)[r * nx_ + x] =
+          prev < 0 ? row[x] : std::max((*cols)[p * nx_ + x], row[x]);
     for (int x = 0; x <= nx_; ++x) {
-      top_before_[r * w + x] = prev < 0 ? row_before_[r * w + x]
-                                        : std::max(top_before_[prev * w + x],
-                                                   row_before_[r * w + x]);
-      top_from_[r * w + x] =
+      (*before)[r * w + x] =
+          prev < 0 ? row_before_[r * w + x]
+                   : std::max((*before)[p * w + x], row_before_[r * w + x]);
+      (*from)[r * w + x] =
           prev < 0 ? row_from_[r * w + x]
-                   : std::max(top_from_[prev * w + x], row_from_[r * w + x]);
+                   : std::max((*from)[p * w + x], row_from_[r * w + x]);
     }
   };
-  const auto up = [&](int y, int prev) {
-    const std::size_t r = static_cast<std::size_t>(y);
-    const float* row = data + r * nx_;
-    for (int x = 0; x < nx_; ++x)
-      bottom_[r * nx_ + x] =
-          prev < 0 ? row[x] : std::max(bottom_[prev * nx_ + x], row[x]);
-    for (int x = 0; x <= nx_; ++x) {
-      bottom_before_[r * w + x] =
-          prev < 0
-              ? row_before_[r * w + x]
-              : std::max(bottom_before_[prev * w + x], row_before_[r * w + x]);
-      bottom_from_[r * w + x] =
-          prev < 0 ? row_from_[r * w + x]
-                   : std::max(bottom_from_[prev * w + x], row_from_[r * w + x]);
-    }
-  };
-  for (int y = 0; y < ny_; ++y) down(y, y - 1);
-  for (int y = ny_ - 1; y >= 0; --y) up(y, y + 1 < ny_ ? y + 1 : -1);
+  for (int y = 0; y < ny_; ++y)
+    running(y, y - 1, &top_, &top_before_, &top_from_);
+  for (int y = ny_ - 1; y >= 0; --y)
+    running(y, y + 1 < ny_ ? y + 1 : -1, &bottom_, &bottom_before_,
+            &bottom_from_);
 }
 
 void HeatFold::Fold(int x0, int y0, int w, float* out) const {
