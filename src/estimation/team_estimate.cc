@@ -36,8 +36,10 @@ void TeamEstimate::Update(bool predict,
                           const std::vector<Vec2>& positions,
                           const std::vector<std::uint8_t>& active) {
   // Predict, exchange over this step's graph, fuse with the robot's own
-  // measurements.
-  predicted_.data() = fused_.data();
+  // measurements. The step before's fused beliefs become the ones to
+  // predict by a swap of the storage, not a copy of the N x M blocks (Fuse
+  // writes every row of fused_).
+  predicted_.data().swap(fused_.data());
   if (predict) {
     Predict(&predicted_);
     Predict(&central_);
