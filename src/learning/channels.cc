@@ -333,8 +333,7 @@ const std::vector<int>& ChannelRenderer::ObservationPixels(
   }
   const auto it = kept.pixels.find(key);
   if (it != kept.pixels.end()) return it->second;
-  thread_local std::vector<int> found;
-  found.clear();
+  std::vector<int> found;
   const int nx = occupancy_.nx(), ny = occupancy_.ny();
   const int reach =
       static_cast<int>(std::ceil(params_.observe_range / params_.cell));
@@ -353,7 +352,7 @@ const std::vector<int>& ChannelRenderer::ObservationPixels(
     }
   }
   if (kept.pixels.size() >= kObservationCacheSize) kept.pixels.clear();
-  return kept.pixels.emplace(key, found).first->second;
+  return kept.pixels.emplace(key, std::move(found)).first->second;
 }
 
 void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
