@@ -94,29 +94,39 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
     ctx.holds = &holds_;
   }
   ScorerView view;
+  PolicyStatus status = PolicyStatus::kOk;
+  for (int i = 0; i < n; ++i) (*moves)[i] = Move::kStay;
+  walking_.assign(team_.rows.size(), 0);
   if (rules_) {
     rules_->Shape(ctx, team_.rows);
     view.shown = rules_->shown();
     view.aims = rules_->aims();
+    // A robot on a deadlock walk moves without the network, so its image is
+    // not made (a walk reads and changes only its own robot's state, so
+    // walking first gives the moves the loop below would).
+    for (int b = 0; b < team_.size(); ++b) {
+      const int i = team_.rows[b];
+      Move walk = Move::kStay;
+      if (!Deciding(ctx, i) || !rules_->Walk(ctx, b, i, &walk)) continue;
+      walking_[b] = 1;
+      (*moves)[i] = walk;
+    }
+    view.unread = &walking_;
   }
   batch_logits_.resize(team_.rows.size() * kNumMoves);
   scorer_->Score(ctx, team_, view, batch_logits_.data());
   logits_.assign(static_cast<std::size_t>(n) * kNumMoves, 0.0f);
-  PolicyStatus status = PolicyStatus::kOk;
-  for (int i = 0; i < n; ++i) (*moves)[i] = Move::kStay;
   for (int b = 0; b < team_.size(); ++b) {
     const int i = team_.rows[b];
     if (!Deciding(ctx, i)) continue;  // on its way (async decisions)
+    ++decisions_;
+    if (walking_[b]) {
+      ++handwritten_moves_;
+      continue;
+    }
     const int here = (*ctx.robot_lattice)[i];
     const float* l = batch_logits_.data() + b * kNumMoves;
     std::copy(l, l + kNumMoves, logits_.data() + i * kNumMoves);
-    ++decisions_;
-    Move walk = Move::kStay;
-    if (rules_ && rules_->Walk(ctx, b, i, &walk)) {
-      ++handwritten_moves_;
-      (*moves)[i] = walk;
-      continue;
-    }
     // The network's most probable valid move (ties to the lower index).
     int best = -1;
     for (int a = 0; a < kNumMoves; ++a) {

@@ -26,8 +26,17 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
   const std::size_t size = renderer_->ImageSize();
   const bool passing = net_->config().message_hops > 0;
   // With asynchronous decisions only the robots that decide are rendered
-  // and scored: without messages a robot's logits are its own image's (the
-  // others' stay 0); with messages every robot's features are needed.
+  // and scored, and of those only the ones whose logits are read (the
+  // view's unread rows are skipped inside their chunk, below): without
+  // messages a robot's logits are its own image's (the others' stay 0);
+  // with messages every robot's features are needed.
+  const bool skipping =
+      !passing && view.unread && !view.unread->empty() &&
+      std::find(view.unread->begin(), view.unread->end(), 1) !=
+          view.unread->end();
+  AIA_CHECK(!view.unread || view.unread->empty() ||
+            view.unread->size() == rows.size());
+  const auto unread = [&](int b) { return skipping && (*view.unread)[b]; };
   order_.clear();
   for (int b = 0; b < static_cast<int>(rows.size()); ++b)
     if (passing || Deciding(ctx, rows[b])) order_.push_back(b);
@@ -76,7 +85,10 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
   };
   // Chunks of kForwardBatch robots: each rendered and run through the
   // network by one thread (libtorch runs single-threaded inside), so that a
-  // robot's logits depend on its chunk, never on the number of threads.
+  // robot's logits depend on its chunk, never on the number of threads. An
+  // unread row leaves its chunk's batch smaller: an image's logits are the
+  // same in a batch of any size from two on, so a robot left alone in its
+  // chunk goes as a batch of two copies (a chunk of one, as before, as one).
   const int count = static_cast<int>(order_.size());
   const int chunks = (count + kForwardBatch - 1) / kForwardBatch;
   const int hidden = net_->config().hidden;
@@ -88,8 +100,10 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
     for (int c = c0; c < c1; ++c) {
       const int begin = c * kForwardBatch;
       const int end = std::min(count, begin + kForwardBatch);
+      int made = 0;  // this chunk's images, packed from `begin` on
       for (int o = begin; o < end; ++o) {
         const int b = order_[o];
+        if (unread(b)) continue;
         const int i = rows[b];
         const std::vector<std::uint8_t>& keep = shown(b);
         neighbours.clear();
@@ -128,20 +142,33 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
         renderer_->RenderWithHeat(
             lattice.Point(here), neighbours,
             keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
-            targets, prior, ctx.eps, images_.data() + o * size, memory,
-            folding ? &fold_ : nullptr);
+            targets, prior, ctx.eps, images_.data() + (begin + made) * size,
+            memory, folding ? &fold_ : nullptr);
+        ++made;
       }
+      float* scored = scored_.data() + begin * kNumMoves;
       if (passing)
         net_->Embed(images_.data() + begin * size, end - begin,
                     renderer_->height(), renderer_->width(),
                     features_.data() + begin * hidden);
-      else if (end - begin == 1 && ctx.ready)
-        ForwardAlone(images_.data() + begin * size, size,
-                     scored_.data() + begin * kNumMoves, worker);
-      else
-        net_->Forward(images_.data() + begin * size, end - begin,
-                      renderer_->height(), renderer_->width(),
-                      scored_.data() + begin * kNumMoves);
+      else if (made == 1 && (ctx.ready || end - begin > 1))
+        ForwardAlone(images_.data() + begin * size, size, scored, worker);
+      else if (made > 0)
+        net_->Forward(images_.data() + begin * size, made, renderer_->height(),
+                      renderer_->width(), scored);
+      if (made == end - begin) continue;
+      // Unpacked to the chunk's rows, from the last (a row's packed place is
+      // never after its own).
+      for (int o = end - 1, j = made - 1; o >= begin; --o) {
+        float* row = scored_.data() + o * kNumMoves;
+        if (unread(order_[o])) {
+          std::fill_n(row, kNumMoves, 0.0f);
+        } else {
+          const float* packed = scored + j * kNumMoves;
+          if (packed != row) std::copy_n(packed, kNumMoves, row);
+          --j;
+        }
+      }
     }
   });
   if (!passing) {

@@ -36,11 +36,13 @@ class FixedScorer : public MoveScorer {
     shown_given = view.shown != nullptr;
     shown = view.shown ? *view.shown : std::vector<std::vector<std::uint8_t>>();
     aims_given = view.aims != nullptr;
+    unread = view.unread ? *view.unread : std::vector<std::uint8_t>();
   }
   bool ShowsAims() const override { return shows_aims_; }
 
   bool shown_given = false, aims_given = false;
   std::vector<std::vector<std::uint8_t>> shown;
+  std::vector<std::uint8_t> unread;
 
  private:
   std::vector<Logits> logits_;
@@ -184,22 +186,35 @@ TEST(CoordinationTest, NoUndoMovesOnWhereNothingIsOpen) {
 // The deadlock walk: robot 0 went right, then left (one reversal): with
 // max_reversals 1 it walks east (right) before its network (left) is asked.
 // Having walked one move (to (3.75, 1.25), another reversal), with max_walk
-// 1 it hands back: the network's left; with max_walk 0 it walks on.
+// 1 it hands back: the network's left; with max_walk 0 it walks on. A
+// walking robot's logits are read by nothing: the scorer is told so (its
+// row unread) and the policy's logits for it are 0.
 TEST(CoordinationTest, DeadlockWalkAfterAReversalForAtMostMaxWalkMoves) {
+  const std::vector<std::uint8_t> walking = {1, 0}, none = {0, 0};
+  const std::vector<float> robot1 = {0, 0, 5, 0};
   for (const int max_walk : {0, 1}) {
     IgbNetParams params = Rules(1, false);
     params.max_walk = max_walk;
-    IgbNetPolicy policy(std::make_unique<FixedScorer>(
-                            std::vector<Logits>{{5, 0, 0, 0}, {0, 0, 5, 0}}),
-                        params);
+    auto scorer = std::make_unique<FixedScorer>(
+        std::vector<Logits>{{5, 0, 0, 0}, {0, 0, 5, 0}});
+    FixedScorer* seen = scorer.get();
+    IgbNetPolicy policy(std::move(scorer), params);
     Step first(kCorridor, {{3.25, 1.25}, {1.25, 0.75}},
                {{Move::kRight, Move::kLeft}, {}});
     EXPECT_EQ(first.Decide(&policy)[0], Move::kRight);
+    EXPECT_EQ(seen->unread, walking);
+    EXPECT_EQ(std::vector<float>(policy.logits().begin(),
+                                 policy.logits().begin() + kNumMoves),
+              std::vector<float>(kNumMoves, 0.0f));
+    EXPECT_EQ(std::vector<float>(policy.logits().begin() + kNumMoves,
+                                 policy.logits().end()),
+              robot1);
     Step second(kCorridor, {{3.75, 1.25}, {1.25, 0.75}},
                 {{Move::kRight, Move::kLeft, Move::kRight}, {}});
     EXPECT_EQ(second.Decide(&policy, false)[0],
               max_walk == 1 ? Move::kLeft : Move::kRight)
         << "max_walk " << max_walk;
+    EXPECT_EQ(seen->unread, max_walk == 1 ? none : walking);
     EXPECT_EQ(Counter(policy, "walk_moves"), max_walk == 1 ? 1 : 2);
   }
 }

@@ -17,6 +17,7 @@
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/igbnet_policy.h"
 #include "aia/learning/network.h"
+#include "aia/learning/scorer.h"
 #include "aia/planning/information.h"
 #include "support/team_fixture.h"
 #include "support/test_support.h"
@@ -424,6 +425,45 @@ TEST(IgbNetPolicyTest, RelabellingTheRobotsPermutesTheActions) {
     // Not a degenerate network: the robots do not all agree.
     EXPECT_NE(std::vector<float>(logits.begin(), logits.begin() + 4),
               std::vector<float>(logits.begin() + 4, logits.begin() + 8));
+  }
+}
+
+// The scorer skips the rows the view marks unread (robots the rules' walk
+// moves): their logits are 0 and every other row's are, bit for bit, those
+// of scoring the whole team, in a smaller batch or alone (robot 1 alone in
+// its chunk of four goes as a batch of two copies). A model that passes
+// messages needs every robot's features, so it scores every row.
+TEST(IgbNetPolicyTest, UnreadRowsAreSkippedAndTheOthersScoreAsInTheWholeTeam) {
+  for (const int hops : {0, 1}) {
+    testing::TeamFixture f(kTeam);
+    Personalize(&f);
+    const std::vector<double> prior(3, std::log(1.0));
+    DecisionContext ctx = f.Context();
+    ctx.central = nullptr;
+    ctx.log_det_prior = &prior;
+    NetworkScorer scorer(TestNet(ChannelFrame::kCentred, true, hops));
+    scorer.Reset(f.world.map, 4, f.world.NumTargets());
+    ScoringRows team;
+    team.rows = {0, 1, 2, 3};
+    team.row_of = {0, 1, 2, 3};
+    std::vector<float> whole(4 * kNumMoves, -1.0f);
+    scorer.Score(ctx, team, ScorerView{}, whole.data());
+    for (const std::vector<std::uint8_t>& unread :
+         {std::vector<std::uint8_t>{0, 1, 0, 0},
+          std::vector<std::uint8_t>{1, 0, 1, 1},
+          std::vector<std::uint8_t>{1, 1, 1, 1}}) {
+      ScorerView view;
+      view.unread = &unread;
+      std::vector<float> got(4 * kNumMoves, -1.0f);
+      scorer.Score(ctx, team, view, got.data());
+      for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < kNumMoves; ++a) {
+          const float want =
+              hops == 0 && unread[b] ? 0.0f : whole[b * kNumMoves + a];
+          EXPECT_EQ(got[b * kNumMoves + a], want)
+              << "hops " << hops << ", row " << b << ", move " << a;
+        }
+    }
   }
 }
 

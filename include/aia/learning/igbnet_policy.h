@@ -8,6 +8,7 @@
 #define AIA_LEARNING_IGBNET_POLICY_H_
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,10 +36,11 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
                                             const std::string& key);
 
 // The policy: each step, the coordination layer's shapers (with
-// coordination rules) change what the network is shown, the scorer gives
-// every active robot's logits, each robot takes its most probable valid
-// move (ties to the lower move index), and the layer's arbiters may choose
-// or change it. With coordination none nothing but the network decides.
+// coordination rules) change what the network is shown, a robot on the
+// rules' deadlock walk takes its walk's move, the scorer gives every other
+// active robot's logits, each takes its most probable valid move (ties to
+// the lower move index), and the layer's arbiters may choose or change it.
+// With coordination none nothing but the network decides.
 class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
  public:
   explicit IgbNetPolicy(std::shared_ptr<const IgbNet> net,
@@ -64,7 +66,8 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   // coordination none). Every key with either coordination.
   std::vector<std::pair<std::string, long>> Counters() const override;
   // The last step's logits, robot-major (4 per robot; zero for inactive
-  // robots), for tools and tests.
+  // robots and for those the walk moved, which the network did not score),
+  // for tools and tests.
   const std::vector<float>& logits() const { return logits_; }
 
  private:
@@ -73,6 +76,7 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   std::unique_ptr<RulesLayer> rules_;  // null with coordination none
   ScoringRows team_;
   std::vector<float> batch_logits_, logits_;
+  std::vector<std::uint8_t> walking_;  // per row: moved by the walk this step
   BeliefDigest digest_;       // this step's, for every part
   NeighbourhoodHolds holds_;  // this step's, with policy.open neighbours
   long decisions_ = 0, shaped_moves_ = 0, handwritten_moves_ = 0;

@@ -35,6 +35,11 @@ struct ScorerView {
   // Where each robot aims for each target in the reach channel; null: its
   // belief's means.
   const SearchMemory* aims = nullptr;
+  // Per row: 1 where no part reads the row's logits this step (a robot the
+  // rules' walk moves); such a row is neither rendered nor scored, and its
+  // logits are 0, unless the model passes messages (its features are its
+  // neighbours' input). Null or empty: every row is scored.
+  const std::vector<std::uint8_t>* unread = nullptr;
 };
 
 class MoveScorer {
@@ -43,7 +48,8 @@ class MoveScorer {
   // A new episode on `map`.
   virtual void Reset(const Map& map, int num_robots, int num_targets) = 0;
   // The logits of every row's four moves (core/types.h order), row-major,
-  // into logits[0, rows.size() * kNumMoves).
+  // into logits[0, rows.size() * kNumMoves); a row the view marks unread
+  // may be left at 0.
   virtual void Score(const DecisionContext& ctx, const ScoringRows& rows,
                      const ScorerView& view, float* logits) = 0;
   // Whether the input shows ScorerView::aims (a reach channel).
