@@ -30,10 +30,9 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
   // view's unread rows are skipped inside their chunk, below): without
   // messages a robot's logits are its own image's (the others' stay 0);
   // with messages every robot's features are needed.
-  const bool skipping =
-      !passing && view.unread && !view.unread->empty() &&
-      std::find(view.unread->begin(), view.unread->end(), 1) !=
-          view.unread->end();
+  const bool skipping = !passing && view.unread && !view.unread->empty() &&
+                        std::find(view.unread->begin(), view.unread->end(),
+                                  1) != view.unread->end();
   AIA_CHECK(!view.unread || view.unread->empty() ||
             view.unread->size() == rows.size());
   const auto unread = [&](int b) { return skipping && (*view.unread)[b]; };
