@@ -219,7 +219,7 @@ FrameRenderer::FrameRenderer(const Simulation& sim, const Map& map,
   const double robot_px = robot_radius_ * view_.Scale(2 * kRobotHalfHeight);
   compact_ = robot_px < kMinBodyPixels ||
              sim.num_robots() + sim.num_targets() > kMaxSceneBodies;
-  if (compact_) scene_.SetGeomGroupVisible(kGroupAgent, false);
+  if (compact_) scene_.SetGroupVisible(kGroupAgent, false);
   wheeled_ = sim.robot_model() == RobotModel::kDiffDrive;
   legend_key_.messages =
       settings_.edges == EdgeMode::kAll || settings_.edges == EdgeMode::kAuto;

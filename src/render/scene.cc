@@ -66,7 +66,8 @@ SceneRenderer::SceneRenderer(const mjModel* model,
 
   scene_ = MjvScenePtr(new mjvScene);
   mjv_defaultScene(scene_.get());
-  mjv_makeScene(model_.get(), scene_.get(), model_->ngeom + 100);
+  mjv_makeScene(model_.get(), scene_.get(),
+                model_->ngeom + model_->nsite + 100);
   scene_->flags[mjRND_SHADOW] = settings.shadows ? 1 : 0;
   scene_->flags[mjRND_REFLECTION] = 0;
   scene_->flags[mjRND_SKYBOX] = 0;
@@ -113,9 +114,9 @@ void SceneRenderer::Render(const mjData* data, const mjvCamera& camera,
   cv::cvtColor(flipped_, *bgr, cv::COLOR_RGB2BGR);
 }
 
-void SceneRenderer::SetGeomGroupVisible(int group, bool visible) {
+void SceneRenderer::SetGroupVisible(int group, bool visible) {
   AIA_CHECK(group >= 0 && group < mjNGROUP);
-  option_.geomgroup[group] = visible ? 1 : 0;
+  option_.geomgroup[group] = option_.sitegroup[group] = visible ? 1 : 0;
 }
 
 }  // namespace aia

@@ -351,14 +351,16 @@ std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
   } else {
     for (int i = 0; i < n; ++i) WritePointRobot(world, s, i, &x);
   }
+  // A target's sphere is a site: a body with a geom, whatever its contype,
+  // enters MuJoCo's broad phase (as sites, 1000 targets make mj_step about
+  // 3 % faster at 1000 robots).
   for (int k = 0; k < world.NumTargets(); ++k) {
     const Vec2 p = world.TargetStart(k);
     x << "    <body name=\"target" << k << "\" mocap=\"true\" pos=\""
       << Num(p.x()) << " " << Num(p.y())
-      << " 0.08\"><geom type=\"sphere\" size=\"0.1\" rgba=\""
+      << " 0.08\"><site type=\"sphere\" size=\"0.1\" rgba=\""
       << Num(kTargetRgb[0]) << " " << Num(kTargetRgb[1]) << " "
-      << Num(kTargetRgb[2]) << " 1\" "
-      << "contype=\"0\" conaffinity=\"0\" group=\"" << kGroupAgent
+      << Num(kTargetRgb[2]) << " 1\" group=\"" << kGroupAgent
       << "\"/></body>\n";
   }
   x << "  </worldbody>\n";

@@ -57,9 +57,9 @@ class SceneRenderer {
   // Renders `data` (a state of the model given at construction) seen by
   // `camera` into `bgr` (CV_8UC3, width x height, top row first).
   void Render(const mjData* data, const mjvCamera& camera, cv::Mat* bgr);
-  // Whether geoms of `group` (0 to mjNGROUP - 1) are drawn; by default
-  // MuJoCo's: groups 0, 1 and 2.
-  void SetGeomGroupVisible(int group, bool visible);
+  // Whether geoms and sites of `group` (0 to mjNGROUP - 1) are drawn; by
+  // default MuJoCo's: groups 0, 1 and 2.
+  void SetGroupVisible(int group, bool visible);
 
   const mjModel* model() const { return model_.get(); }
   int width() const { return settings_.width; }
