@@ -15,7 +15,11 @@ NetworkScorer::NetworkScorer(std::shared_ptr<const IgbNet> net)
 void NetworkScorer::Reset(const Map& map, int num_robots, int num_targets) {
   renderer_.emplace(map.occupancy(), map.size(), net_->config().channels,
                     &map.lattice());
-  search_.Reset(num_robots, num_targets);
+  // Only a model that reads search points keeps them (N x M slots).
+  if (net_->config().channels.search)
+    search_.Reset(num_robots, num_targets);
+  else
+    search_.Reset(0, 0);
 }
 
 void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
