@@ -116,17 +116,19 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
         std::vector<HeatSource>* targets = nullptr;
         if (geodesic) {
           targets = &worker_targets_[worker];
-          // The reach channel reads the means and log dets only.
-          HeatSources(*ctx.beliefs, i, targets, ctx.digest,
-                      /*covariance=*/false);
-          if (aims)
-            for (std::size_t k = 0; k < targets->size(); ++k)
-              (*targets)[k].mean = aims->Aim(i, static_cast<int>(k));
-          if (!keep.empty())
-            for (std::size_t k = 0; k < targets->size(); ++k)
-              if (!keep[k])
-                (*targets)[k].log_det =
-                    -std::numeric_limits<double>::infinity();
+          // The reach channel reads the means and log dets only, and a
+          // target the robot is not shown (log det -inf) by neither.
+          const int m = ctx.beliefs->layout().num_targets();
+          targets->resize(m);
+          for (int k = 0; k < m; ++k) {
+            HeatSource& t = (*targets)[k];
+            if (!keep.empty() && !keep[k]) {
+              t.log_det = -std::numeric_limits<double>::infinity();
+              continue;
+            }
+            t.mean = aims ? aims->Aim(i, k) : MeanOf(ctx, i, k);
+            t.log_det = LogDetOf(ctx, i, k);
+          }
         }
         RobotMemory memory;
         if (searching_) {
