@@ -35,6 +35,7 @@
 #include "aia/learning/channels.h"
 #include "aia/learning/dataset.h"
 #include "aia/learning/igbnet_policy.h"
+#include "aia/learning/scorer.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/registry.h"
 #include "aia/runtime/episode.h"
@@ -345,6 +346,8 @@ class Mission {
     picture_added_ = false;
     picture_width_ = picture_height_ = 0;
     episode_.reset();
+    search_points_.reset();
+    search_step_ = -1;
     instance_ = std::move(instance);
     auto policy = std::make_unique<ExternalPolicy>();
     external_ = policy.get();
@@ -475,10 +478,31 @@ class Mission {
 
   // I-GBNet's input of every robot, (N, C, H, W) float32, from the C++
   // renderer (learning/channels.h) with these channel settings; the heat of
-  // each robot's own fused belief, its neighbours from this step's graph.
-  py::array_t<float> Channels(const KeyValues& params) const {
+  // each robot's own fused belief, its neighbours from this step's graph,
+  // the trail from its last applied move, and the search points (made of
+  // every step's misses, so kept from step 0 on once asked for) as the
+  // igbnet policy makes them.
+  py::array_t<float> Channels(const KeyValues& params) {
     const ChannelParams settings =
         ChannelSettings(params, "aia.Mission.channels");
+    if (settings.search && !search_points_) {
+      if (!owned())
+        Refuse("aia.Mission.channels", "search",
+               "a mission seen by a policy inside aia.evaluate keeps no "
+               "search points (they are made of every step's misses)");
+      if (step() != 0)
+        Refuse("aia.Mission.channels", "search",
+               "the search points are made of every step's misses since "
+               "the start: ask for them first at step 0 of a mission (this "
+               "one is at step " +
+                   std::to_string(step()) + ")");
+      search_points_.emplace();
+      search_points_->Reset(num_robots(), num_targets());
+    }
+    if (settings.search) {
+      py::gil_scoped_release release;
+      SyncSearchPoints();
+    }
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
@@ -494,6 +518,7 @@ class Mission {
     const std::vector<double> no_prior(num_targets(), 0.0);
     const std::vector<double>& prior =
         ctx.log_det_prior ? *ctx.log_det_prior : no_prior;
+    SearchPointSets points;
     py::gil_scoped_release release;
     for (int i = 0; i < n; ++i) {
       neighbours.clear();
@@ -501,10 +526,31 @@ class Mission {
         if (j != i)
           neighbours.push_back(lattice.Point((*ctx.robot_lattice)[j]));
       HeatSources(*ctx.beliefs, i, &targets);
-      renderer.Render(lattice.Point((*ctx.robot_lattice)[i]), neighbours,
-                      targets, prior, ctx.eps, data + i * renderer.ImageSize());
+      const int here = (*ctx.robot_lattice)[i];
+      RobotMemory memory;
+      SetTrail(lattice, here, ctx.history ? ctx.history->last(i) : Move::kStay,
+               &memory);
+      if (settings.search) {
+        points.resize(num_targets());
+        for (int k = 0; k < num_targets(); ++k)
+          points[k] = search_points_->Points(i, k);
+        memory.search = &points;
+      }
+      renderer.Render(lattice.Point(here), neighbours, targets, prior, ctx.eps,
+                      data + i * renderer.ImageSize(), memory);
     }
     return out;
+  }
+  // The search points brought to this step (once per step, in order, as the
+  // policy records them); owned missions that asked for them.
+  void SyncSearchPoints() {
+    if (!search_points_ || search_step_ == step()) return;
+    const DecisionContext ctx = episode_->Context();
+    search_rows_.clear();
+    for (int i = 0; i < num_robots(); ++i)
+      if (ctx.comm->Active(i)) search_rows_.push_back(i);
+    RecordSearchPoints(ctx, search_rows_, &*search_points_, &search_deciding_);
+    search_step_ = step();
   }
 
   // An RGB frame (H, W, 3) of the physics now with aia render's overlays.
@@ -586,6 +632,7 @@ class Mission {
   // One step with these moves (owned missions, not done; no Python object
   // touched).
   void StepWith(std::vector<Move> moves) {
+    SyncSearchPoints();  // the state these moves were decided at
     external_->next = std::move(moves);
     episode_->Step();
     if (episode_->done()) {
@@ -632,6 +679,11 @@ class Mission {
   std::unique_ptr<Episode> episode_;
   std::unique_ptr<MoveObserver> moves_;
   std::unique_ptr<EstimateObserver> estimate_;
+  // channels(search=True): the robots' search points, brought to step
+  // search_step_ (-1: none yet).
+  std::optional<SearchPoints> search_points_;
+  int search_step_ = -1;
+  std::vector<int> search_rows_, search_deciding_;
   // render(): the picture kept in step with the episode once made.
   struct PictureObserver {
     PictureObserver(const Episode& e, FrameRenderer* renderer)

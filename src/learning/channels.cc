@@ -293,6 +293,15 @@ void ChannelRenderer::RenderWithHeat(
   Trail(self, memory, out + (channels() - 1) * plane);
 }
 
+void SetTrail(const Lattice& lattice, int here, Move last,
+              RobotMemory* memory) {
+  memory->moved = false;
+  if (last == Move::kStay) return;
+  const int from = lattice.Next(here, Opposite(last));
+  memory->moved = from >= 0;
+  if (from >= 0) memory->came_from = lattice.Point(from);
+}
+
 void ChannelRenderer::Trail(const Vec2& self, const RobotMemory& memory,
                             float* out) const {
   if (!params_.trail || !memory.moved) return;

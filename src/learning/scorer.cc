@@ -71,15 +71,9 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       renderer_->params().search && ctx.sensor &&
       search_.num_robots() == static_cast<int>(ctx.robot_lattice->size()) &&
       search_.num_targets() == ctx.beliefs->layout().num_targets();
-  if (searching_) {  // the deciding robots' (see RulesLayer::Shape)
-    DecidingRows(ctx, rows, &deciding_);
-    // As the model's data were recorded (aia dataset): a belief that shrank
-    // ends a search, so that its input is what it was trained on.
-    DecisionContext recorded = ctx;
-    recorded.measurements = nullptr;
-    search_.Update(recorded, deciding_, PolicyRunner(), workers);
-    search_.Share(recorded, deciding_, PolicyRunner(), workers);
-  }
+  if (searching_)  // the deciding robots' (see RulesLayer::Shape)
+    RecordSearchPoints(ctx, rows, &search_, &deciding_, PolicyRunner(),
+                       workers);
   static const std::vector<std::uint8_t> kAll;
   auto shown = [&](int b) -> const std::vector<std::uint8_t>& {
     return view.shown && b < static_cast<int>(view.shown->size())
@@ -139,11 +133,8 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
           memory.search = &own;
         }
         const int here = (*ctx.robot_lattice)[i];
-        if (ctx.history && ctx.history->last(i) != Move::kStay) {
-          const int from = lattice.Next(here, Opposite(ctx.history->last(i)));
-          memory.moved = from >= 0;
-          if (from >= 0) memory.came_from = lattice.Point(from);
-        }
+        SetTrail(lattice, here,
+                 ctx.history ? ctx.history->last(i) : Move::kStay, &memory);
         renderer_->RenderWithHeat(
             lattice.Point(here), neighbours,
             keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
@@ -195,6 +186,19 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
     graph_.offsets.push_back(static_cast<int>(graph_.neighbours.size()));
   }
   net_->Head(features_.data(), graph_, logits);
+}
+
+void RecordSearchPoints(const DecisionContext& ctx,
+                        const std::vector<int>& rows, SearchPoints* points,
+                        std::vector<int>* deciding, const RangeRunner& run,
+                        int workers) {
+  DecidingRows(ctx, rows, deciding);
+  // As the model's data were recorded (aia dataset): a belief that shrank
+  // ends a search, so that its input is what it was trained on.
+  DecisionContext recorded = ctx;
+  recorded.measurements = nullptr;
+  points->Update(recorded, *deciding, run, workers);
+  points->Share(recorded, *deciding, run, workers);
 }
 
 // One image through the network as a batch of two copies: libtorch 1.13's

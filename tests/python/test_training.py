@@ -72,11 +72,11 @@ def python_moves(net, meta, mission):
     return logits
 
 
-def check_same_moves(net, meta, model_path, seed):
-    m = aia.Mission(DEFAULT, seed=seed)
+def check_same_moves(net, meta, model_path, seed, steps=4, scenario=DEFAULT):
+    m = aia.Mission(scenario, seed=seed)
     cpp = aia.builtin_policy("igbnet", model=str(model_path), **ARGMAX)
     checked = 0
-    for _ in range(4):
+    for _ in range(steps):
         logits = python_moves(net, meta, m)
         moves = cpp.decide(m)
         for i in range(m.num_robots):
@@ -120,3 +120,28 @@ def test_the_cpp_model_runs_in_python():
     net, meta = network.load_model(path)
     assert meta["channels"] == 5
     assert check_same_moves(net, meta, path, seed=6) == 40
+
+
+def test_the_learned_model_runs_in_python():
+    """The model for coordination none reads the trail (the point each robot
+    came from) and its search points (where it and its neighbours missed):
+    Mission.channels renders both, as the policy does, step after step."""
+    path = SOURCE / "models" / "igbnet_learned.pt"
+    net, meta = network.load_model(path)
+    assert meta["channels"] == 6 and meta["trail"] and meta["search"]
+    # Seed 2: a robot misses a target from step 1 on, so the search points
+    # change the reach channel.
+    assert check_same_moves(net, meta, path, seed=2, steps=12) == 120
+    params = network.channel_params(meta)
+    m = aia.Mission(DEFAULT, seed=2)
+    m.channels(**params)
+    m.step(aia.builtin_policy("igbnet", model=str(path), **ARGMAX).decide(m))
+    assert not np.array_equal(m.channels(**params),
+                              m.channels(**{**params, "search": False}))
+    assert m.channels(**params)[:, 5].sum() > 0  # the trail
+    # Made of every step's misses: asked for late, refused.
+    late = aia.Mission(DEFAULT, seed=2)
+    late.step([0] * late.num_robots)
+    with pytest.raises(aia.InputError, match=r"aia.Mission.channels: search: "
+                       r"the search points are made of every step's misses"):
+        late.channels(**params)

@@ -153,6 +153,11 @@ struct RobotMemory {
   Vec2 came_from{0.0, 0.0};
 };
 
+// The trail of a robot at lattice point `here` whose last applied move was
+// `last` (kStay: none): the point it came from, into memory->moved and
+// memory->came_from.
+void SetTrail(const Lattice& lattice, int here, Move last, RobotMemory* memory);
+
 // The heat channel's fold of one heatmap (the centred frame's border,
 // above) for any window at once: running maxima along each row, down and
 // up each column, and over the four corners of the map, made in O(cells),

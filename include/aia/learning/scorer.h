@@ -56,6 +56,16 @@ class MoveScorer {
   virtual bool ShowsAims() const = 0;
 };
 
+// One decision step of a model's own search points (ChannelParams::search),
+// as the igbnet policy and `aia dataset` record them: the misses of the
+// robots of `rows` that decide (into `deciding`), shared over this step's
+// graph. The context's measurements are not read: a belief that shrank
+// ends a search. Call it once for every decision step, in order.
+void RecordSearchPoints(const DecisionContext& ctx,
+                        const std::vector<int>& rows, SearchPoints* points,
+                        std::vector<int>* deciding, const RangeRunner& run = {},
+                        int workers = 1);
+
 // I-GBNet: the channels of learning/channels.h, one batched forward per
 // chunk of robots (learning/network.h), message passing over this step's
 // graph where the model has it.
