@@ -12,8 +12,8 @@
 # MODELS selects what is trained:
 #   default    the two above;
 #   learned    also models/igbnet_learned.pt, the model meant for
-#              policy.coordination=none (the network alone; DAgger rounds,
-#              about 1.5 hours more on 2 cores);
+#              policy.coordination=none (the network alone; four DAgger rounds,
+#              about 1 hour 50 minutes more on 2 cores);
 #   learned10  only WORK_DIR/igbnet_learned_10only.pt (not shipped): the
 #              learned recipe on teams of 10 alone (its data, its
 #              five-channel start and its DAgger worlds, and narrow perfect
@@ -135,11 +135,78 @@ fi
 # model alone (policy.coordination=none) acts in kinds of world of its
 # team sizes, the expert labels the states it visits, and the next model is
 # trained on the data and every round so far. About 25 minutes a round.
+#   dagger_worlds DIR ACTOR BASE TEAMS NARROW: one round's data, the actor
+# alone acting, into $work/DIR/NAME; the names, in the order training reads
+# them, into the array dagger_names. TEAMS is "all" (the 15 worlds of the
+# shipped model's rounds 1 to 3) or "ten" (its 9 worlds of 10 robots and two
+# of narrow perfect mazes: passages of 3 lattice points, no loops); NARROW
+# "narrow" adds narrow perfect mazes of 10 and 4 robots and of 30 m (the
+# shipped model's round 4). Seeds from BASE.
+dagger_worlds() {
+  local dir=$1 actor=$2 base=$3 teams=$4 narrow=$5
+  local gen=workspace.obstacles.generator g=workspace.obstacles.generator.type
+  local nar=(--set $g=maze --set $gen.corridor=1.5 --set $gen.wall=0.15)
+  dag() {  # dag NAME SEED STEPS ARGS...: the actor alone acts
+    local name=$1 seed=$2 steps=$3
+    shift 3
+    ds "$dir/$name" --policy igbnet --model "$actor" \
+      --set policy.coordination=none --keep 20 --max-steps "$steps" \
+      --first-seed "$seed" "$@"
+  }
+  (
+    dag maze30 $((base + 100000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=maze
+    dag rooms30 $((base + 200000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=rooms
+    dag corr30 $((base + 300000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=corridors
+    dag cave30 $((base + 400000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=cave
+    dag maze40 $((base + 500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=maze
+    dag open10 $((base + 600000)) 200 --episodes 100
+    dag rooms40 $((base + 1500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=rooms
+    if [[ $teams == ten ]]; then
+      dag narrow20 $((base + 1600000)) 300 --episodes 60 "${nar[@]}" --set $gen.loops=0
+    fi
+    if [[ $narrow == narrow ]]; then
+      dag narrow20 $((base + 1610000)) 300 --episodes 60 "${nar[@]}" --set $gen.loops=0 \
+        --set workspace.obstacles.random.count=0
+    fi
+  ) &
+  (
+    if [[ $teams == all ]]; then
+      dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
+      dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
+      dag corr20_5 $((base + 900000)) 200 --episodes 100 --size 5x5 --set $g=corridors
+      dag cave20_5 $((base + 1000000)) 200 --episodes 100 --size 5x5 --set $g=cave
+      dag open2x20 $((base + 1100000)) 200 --episodes 100 --size 2x20
+    fi
+    dag range $((base + 1200000)) 200 --episodes 100 --set communication.mode=range \
+      --set communication.range=4 --set communication.packet_loss_lambda=1
+    dag dens40 $((base + 1300000)) 150 --episodes 50 --set "workspace.size=[40,40]" \
+      --set workspace.obstacles.random.count=120
+    if [[ $teams == all ]]; then
+      dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
+    else
+      dag narrow30 $((base + 1700000)) 400 --episodes 30 --set "workspace.size=[30,30]" \
+        "${nar[@]}" --set $gen.loops=0.05
+    fi
+    if [[ $narrow == narrow ]]; then
+      dag narrow20_4 $((base + 1830000)) 300 --episodes 100 --size 4x6 "${nar[@]}" \
+        --set $gen.loops=0 --set workspace.obstacles.random.count=0
+      dag narrow30 $((base + 1710000)) 400 --episodes 30 --set "workspace.size=[30,30]" \
+        "${nar[@]}" --set $gen.loops=0.05 --set workspace.obstacles.random.count=0
+    fi
+  ) &
+  wait
+  dagger_names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 narrow20 range dens40 narrow30)
+  if [[ $teams == all && $narrow == narrow ]]; then
+    dagger_names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 narrow20 rooms20_3 \
+      maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40 narrow20_4 narrow30)
+  elif [[ $teams == all ]]; then
+    dagger_names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 rooms20_3 \
+      maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40)
+  fi
+}
 #   learned PREFIX INIT TEAMS SEED_BASE SEED_STRIDE DATA...
-# writes $work/PREFIX0.pt .. PREFIX$ROUNDS.pt; TEAMS is "all" (the 15 worlds
-# of the shipped model) or "ten" (its 9 worlds of 10 robots and two of narrow
-# perfect mazes: passages of 3 lattice points, no loops); round r's
-# worlds start at SEED_BASE + r SEED_STRIDE.
+# writes $work/PREFIX0.pt .. PREFIX$ROUNDS.pt; round r's worlds start at
+# SEED_BASE + r SEED_STRIDE.
 learned() {
   local prefix=$1 init=$2 teams=$3 seed_base=$4 seed_stride=$5
   shift 5
@@ -148,58 +215,13 @@ learned() {
     --search 1 --trail 1 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
     --threads 2 --out "$work/${prefix}0.pt" --resume --quiet
   local dagger_paths=() r rounds=${ROUNDS:-3}
-  local gen=workspace.obstacles.generator g=workspace.obstacles.generator.type
   for ((r = 1; r <= rounds; r++)); do
     local actor="$work/$prefix$((r - 1)).pt" base=$((seed_base + r * seed_stride))
     local dir="dag$r"
     [[ $prefix == learned ]] || dir="${prefix}dag$r"
-    dag() {  # dag NAME SEED STEPS ARGS...: the actor alone acts
-      local name=$1 seed=$2 steps=$3
-      shift 3
-      ds "$dir/$name" --policy igbnet --model "$actor" \
-        --set policy.coordination=none --keep 20 --max-steps "$steps" \
-        --first-seed "$seed" "$@"
-    }
-    (
-      dag maze30 $((base + 100000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=maze
-      dag rooms30 $((base + 200000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=rooms
-      dag corr30 $((base + 300000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=corridors
-      dag cave30 $((base + 400000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=cave
-      dag maze40 $((base + 500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=maze
-      dag open10 $((base + 600000)) 200 --episodes 100
-      dag rooms40 $((base + 1500000)) 300 --episodes 50 --set "workspace.size=[40,40]" --set $g=rooms
-      if [[ $teams == ten ]]; then
-        dag narrow20 $((base + 1600000)) 300 --episodes 60 --set $g=maze \
-          --set $gen.corridor=1.5 --set $gen.wall=0.15 --set $gen.loops=0
-      fi
-    ) &
-    (
-      if [[ $teams == all ]]; then
-        dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
-        dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
-        dag corr20_5 $((base + 900000)) 200 --episodes 100 --size 5x5 --set $g=corridors
-        dag cave20_5 $((base + 1000000)) 200 --episodes 100 --size 5x5 --set $g=cave
-        dag open2x20 $((base + 1100000)) 200 --episodes 100 --size 2x20
-      fi
-      dag range $((base + 1200000)) 200 --episodes 100 --set communication.mode=range \
-        --set communication.range=4 --set communication.packet_loss_lambda=1
-      dag dens40 $((base + 1300000)) 150 --episodes 50 --set "workspace.size=[40,40]" \
-        --set workspace.obstacles.random.count=120
-      if [[ $teams == all ]]; then
-        dag t40 $((base + 1400000)) 40 --episodes 50 --size 40x40
-      else
-        dag narrow30 $((base + 1700000)) 400 --episodes 30 --set "workspace.size=[30,30]" \
-          --set $g=maze --set $gen.corridor=1.5 --set $gen.wall=0.15 --set $gen.loops=0.05
-      fi
-    ) &
-    wait
-    local names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 narrow20 range dens40 narrow30)
-    if [[ $teams == all ]]; then
-      names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 rooms20_3 \
-        maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40)
-    fi
+    dagger_worlds "$dir" "$actor" "$base" "$teams" ""
     local name
-    for name in "${names[@]}"; do dagger_paths+=("$work/$dir/$name"); done
+    for name in "${dagger_names[@]}"; do dagger_paths+=("$work/$dir/$name"); done
     "$aia" train --data "${data[@]}" "${dagger_paths[@]}" --init "$actor" --epochs 1 \
       --lr 3e-4 --lr-min 1e-5 --weak-weight 0 --threads 2 \
       --out "$work/$prefix$r.pt" --resume --quiet
@@ -209,8 +231,17 @@ learned() {
 }
 if [[ $models == all || $models == learned ]]; then
   learned learned "$work/igbnet.pt" all 30000000 1000000 "${all_paths[@]}"
-  cp "$work/learned.pt" "$work/igbnet_learned.pt"
-  cp "$work/learned.train.csv" "$work/igbnet_learned.train.csv"
+  # Round 4 (2026-12-05): the model of round 3 alone acts in the same kinds
+  # of world and in narrow perfect mazes (where it shuttled: docs/learning.md,
+  # Learned coordination); one epoch on the base data and this round's.
+  dagger_worlds dag4 "$work/learned.pt" 36000000 all narrow
+  narrow_paths=()
+  for name in "${dagger_names[@]}"; do narrow_paths+=("$work/dag4/$name"); done
+  "$aia" train --data "${all_paths[@]}" "${narrow_paths[@]}" --init "$work/learned.pt" \
+    --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 --threads 2 \
+    --out "$work/learned4.pt" --resume --quiet
+  cp "$work/learned4.pt" "$work/igbnet_learned.pt"
+  cp "$work/learned4.train.csv" "$work/igbnet_learned.train.csv"
   shipped+=(igbnet_learned)
 fi
 if [[ $models == all || $models == learned10 ]]; then
