@@ -77,7 +77,7 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   ScoringRows team_;
   std::vector<float> batch_logits_, logits_;
   std::vector<std::uint8_t> walking_;  // per row: moved by the walk this step
-  BeliefDigest digest_;       // this step's, for every part
+  BeliefDigest digest_;                // this step's, for every part
   NeighbourhoodHolds holds_;  // this step's, with policy.open neighbours
   long decisions_ = 0, shaped_moves_ = 0, handwritten_moves_ = 0;
 };
