@@ -474,6 +474,27 @@ TEST(ChannelsTest, TrailMarksWhereTheRobotCameFrom) {
   EXPECT_EQ(trail(RobotMemory{}), std::vector<float>(9, 0.0f));
 }
 
+// SetTrail, as the policy and aia.Mission.channels fill the trail: on a
+// 4 x 2 lattice of 1 m steps, a robot at (2.5, 1.5) whose last move was
+// right came from (1.5, 1.5), one that moved up from (2.5, 0.5); no move,
+// or a move the lattice could not have made into this point (down into the
+// top row from beyond it), leaves no trail.
+TEST(ChannelsTest, SetTrailIsThePointTheLastMoveCameFrom) {
+  const Lattice lattice(Vec2(4.0, 2.0), 1.0, 0.1, {});
+  const int here = lattice.Index(2, 1);
+  RobotMemory m;
+  SetTrail(lattice, here, Move::kRight, &m);
+  EXPECT_TRUE(m.moved);
+  EXPECT_EQ(m.came_from, Vec2(1.5, 1.5));
+  SetTrail(lattice, here, Move::kUp, &m);
+  EXPECT_TRUE(m.moved);
+  EXPECT_EQ(m.came_from, Vec2(2.5, 0.5));
+  SetTrail(lattice, here, Move::kStay, &m);
+  EXPECT_FALSE(m.moved);
+  SetTrail(lattice, here, Move::kDown, &m);
+  EXPECT_FALSE(m.moved);
+}
+
 // Declared names (core/fields.h): "centered" reads as "centred", which is
 // the name written.
 TEST(ChannelsTest, FrameNamesParse) {
