@@ -530,12 +530,8 @@ class Mission {
       RobotMemory memory;
       SetTrail(lattice, here, ctx.history ? ctx.history->last(i) : Move::kStay,
                &memory);
-      if (settings.search) {
-        points.resize(num_targets());
-        for (int k = 0; k < num_targets(); ++k)
-          points[k] = search_points_->Points(i, k);
-        memory.search = &points;
-      }
+      if (settings.search)
+        SetSearchPoints(*search_points_, i, &points, &memory);
       renderer.Render(lattice.Point(here), neighbours, targets, prior, ctx.eps,
                       data + i * renderer.ImageSize(), memory);
     }

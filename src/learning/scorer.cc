@@ -125,13 +125,8 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
           }
         }
         RobotMemory memory;
-        if (searching_) {
-          SearchPointSets& own = worker_search_[worker];
-          own.resize(search_.num_targets());
-          for (int k = 0; k < search_.num_targets(); ++k)
-            own[k] = search_.Points(i, k);
-          memory.search = &own;
-        }
+        if (searching_)
+          SetSearchPoints(search_, i, &worker_search_[worker], &memory);
         const int here = (*ctx.robot_lattice)[i];
         SetTrail(lattice, here,
                  ctx.history ? ctx.history->last(i) : Move::kStay, &memory);
@@ -199,6 +194,14 @@ void RecordSearchPoints(const DecisionContext& ctx,
   recorded.measurements = nullptr;
   points->Update(recorded, *deciding, run, workers);
   points->Share(recorded, *deciding, run, workers);
+}
+
+void SetSearchPoints(const SearchPoints& points, int robot,
+                     SearchPointSets* sets, RobotMemory* memory) {
+  sets->resize(points.num_targets());
+  for (int k = 0; k < points.num_targets(); ++k)
+    (*sets)[k] = points.Points(robot, k);
+  memory->search = sets;
 }
 
 // One image through the network as a batch of two copies: libtorch 1.13's

@@ -66,6 +66,11 @@ void RecordSearchPoints(const DecisionContext& ctx,
                         std::vector<int>* deciding, const RangeRunner& run = {},
                         int workers = 1);
 
+// Robot `robot`'s search points of every target, copied into `sets` (kept
+// by the caller), as memory->search.
+void SetSearchPoints(const SearchPoints& points, int robot,
+                     SearchPointSets* sets, RobotMemory* memory);
+
 // I-GBNet: the channels of learning/channels.h, one batched forward per
 // chunk of robots (learning/network.h), message passing over this step's
 // graph where the model has it.
