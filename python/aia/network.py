@@ -6,8 +6,8 @@ GPU when one is there); `import aia` does not import it.
 
 The file is a TorchScript archive whose attributes are the network's
 parameters and buffers, plus the buffer `aia_meta`: the network
-configuration as JSON (width, hidden, pool, stem_stride, message_hops and
-the channel settings: frame, cell, window, blur, cutoff, geodesic, ...).
+configuration as JSON (width, hidden, pool, stem_stride, message_hops,
+centre and the channel settings: frame, cell, window, blur, cutoff, geodesic, ...).
 """
 import json
 
@@ -16,7 +16,7 @@ from torch import nn
 
 FORMAT = "aia-igbnet"
 # The metadata keys of a model without message passing (format version 2);
-# with it, version 3 adds message_hops.
+# with it, version 3 adds message_hops; version 5 adds centre.
 NETWORK_KEYS = ("width", "hidden", "pool", "stem_stride")
 CHANNEL_KEYS = ("frame", "cell", "window", "blur", "cutoff", "geodesic",
                 "geodesic_length", "observe_range")
@@ -33,7 +33,8 @@ def default_meta(**changes):
             "cutoff": 4.0, "geodesic": False, "geodesic_length": 5.0,
             "observe_range": 2.0}
     for k, v in changes.items():
-        if k not in meta and k not in OPTIONAL_KEYS and k != "message_hops":
+        if (k not in meta and k not in OPTIONAL_KEYS
+                and k not in ("message_hops", "centre")):
             raise KeyError(f"{k}: not a network or channel setting")
         meta[k] = v
     return meta
@@ -51,6 +52,13 @@ def channel_params(meta):
 
 def num_channels(meta):
     return 4 + (1 if meta.get("geodesic") else 0) + (1 if meta.get("trail") else 0)
+
+
+def centre_start(meta):
+    """The first row and column of the centre (NetworkConfig::CentreStart):
+    the robot's cell of the blocks' output minus centre // 2."""
+    s = meta["stem_stride"]
+    return (meta["window"] // 2 + s // 2) // s - meta.get("centre", 0) // 2
 
 
 class Block(nn.Module):
@@ -78,7 +86,10 @@ class IgbNet(nn.Module):
         self.stem_bn = nn.BatchNorm2d(w)
         self.blocks = nn.ModuleList([Block(w) for _ in range(3)])
         self.pool = nn.AdaptiveAvgPool2d(p)
-        self.fc1 = nn.Linear(w * p * p, hidden)
+        # The centre: fc1 also reads the C x C cells around the robot.
+        self.centre = meta.get("centre", 0)
+        self.centre_start = centre_start(meta)
+        self.fc1 = nn.Linear(w * (p * p + self.centre ** 2), hidden)
         self.fc2 = nn.Linear(hidden, 4)
         self.hops = meta.get("message_hops", 0)
         for k in range(1, self.hops + 1):  # message passing: M_1..M_K
@@ -91,7 +102,12 @@ class IgbNet(nn.Module):
         x = torch.relu(self.stem_bn(self.stem(x)))
         for b in self.blocks:
             x = b(x)
-        z = torch.relu(self.fc1(self.pool(x).flatten(1)))
+        features = self.pool(x).flatten(1)
+        if self.centre:
+            c, s = self.centre, self.centre_start
+            features = torch.cat(
+                [features, x[:, :, s:s + c, s:s + c].flatten(1)], 1)
+        z = torch.relu(self.fc1(features))
         if self.hops == 0 or neighbours is None:
             return self.fc2(z)
         h, hop = z, z
@@ -134,14 +150,17 @@ def save_model(net, path):
     (`policy.model=PATH`)."""
     meta = {k: v for k, v in net.meta.items() if k != "channels"}
     hops = meta.pop("message_hops", 0)
+    centre = meta.pop("centre", 0)
     out = {k: meta[k] for k in NETWORK_KEYS + CHANNEL_KEYS}
     for k, default in OPTIONAL_KEYS.items():
         if meta.get(k, default) != default:
             out[k] = meta[k]
     out["format"] = FORMAT
-    out["version"] = 3 if hops else 2
+    out["version"] = 5 if centre else 3 if hops else 2
     if hops:
         out["message_hops"] = hops
+    if centre:
+        out["centre"] = centre
     for k in ("cell", "blur", "cutoff", "geodesic_length", "observe_range"):
         out[k] = float(out[k])
     text = json.dumps(out, sort_keys=True, separators=(",", ":"))

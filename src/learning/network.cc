@@ -2,6 +2,7 @@
 // both sides of the plugin seam (src/learning/torch_backend.h): no torch.
 #include "aia/learning/network.h"
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -16,8 +17,9 @@ namespace {
 constexpr const char* kFormat = "aia-igbnet";
 // Version 2: the optional geodesic channel; version 3: message passing
 // (each written only when it is on, so that a model without it stays
-// readable by older builds).
-constexpr int kVersion = 4;
+// readable by older builds); version 4: the reach channel over the world,
+// search points and the trail; version 5: the centre.
+constexpr int kVersion = 5;
 
 // Writes declared fields into a JSON object with their own types (an
 // integer stays an integer, an enumeration is its name).
@@ -70,10 +72,11 @@ std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
   const bool world = channels.geodesic && channels.reach_world;
-  j["version"] = world || channels.trail ? 4
-                 : message_hops > 0      ? 3
-                 : channels.geodesic     ? 2
-                                         : 1;
+  j["version"] = centre > 0                ? 5
+                 : world || channels.trail ? 4
+                 : message_hops > 0        ? 3
+                 : channels.geodesic       ? 2
+                                           : 1;
   JsonFieldWriter writer(&j);
   const_cast<NetworkConfig*>(this)->Serialize(&writer);
   // A feature that is off is not written, so that a model without it keeps
@@ -87,6 +90,7 @@ std::string NetworkConfig::ToJson() const {
   if (!world || !channels.search) j.erase("search");
   if (!channels.trail) j.erase("trail");
   if (message_hops == 0) j.erase("message_hops");
+  if (centre == 0) j.erase("centre");
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
@@ -123,7 +127,36 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     throw std::runtime_error("metadata: reach_world: needs geodesic");
   if (c.channels.search && !c.channels.reach_world)
     throw std::runtime_error("metadata: search: needs reach_world");
+  if (const std::string problem = c.CentreProblem(); !problem.empty())
+    throw std::runtime_error("metadata: centre: " + problem);
   return c;
+}
+
+int NetworkConfig::FeatureSide() const {
+  return (channels.window - 1) / stem_stride + 1;
+}
+
+int NetworkConfig::CentreStart() const {
+  // The robot's pixel is window / 2; output cell j is centred on input
+  // pixel stem_stride j.
+  const int robot = (channels.window / 2 + stem_stride / 2) / stem_stride;
+  return robot - centre / 2;
+}
+
+std::string NetworkConfig::CentreProblem() const {
+  if (centre == 0) return "";
+  if (centre % 2 == 0) return "must be odd (the robot's cell in the middle)";
+  if (channels.frame != ChannelFrame::kCentred)
+    return "needs the centred frame (frame: centred)";
+  if (CentreStart() < 0 || CentreStart() + centre > FeatureSide())
+    return "must be at most " +
+           std::to_string(
+               2 * std::min(CentreStart() + centre / 2,
+                            FeatureSide() - 1 - (CentreStart() + centre / 2)) +
+               1) +
+           ": the blocks' output is " + std::to_string(FeatureSide()) +
+           " cells per side";
+  return "";
 }
 
 }  // namespace aia

@@ -434,6 +434,59 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   fs::remove_all(dir);
 }
 
+// The centre (fc1 reads the cells around the robot's): a model without one
+// is extended by it (--init, --centre 3: window 16, 8 cells of the blocks'
+// output) and trains on, and Python reproduces its logits; an even centre,
+// one in the global frame, one beyond the blocks' output and a change of
+// an --init model's centre are refused.
+TEST(TrainTest, AModelIsExtendedByTheCellsAroundTheRobot) {
+  const std::string dir = testing::MakeTempDir("aia_train_");
+  RunDataset(Tiny(dir + "/data"));
+  TrainOptions plain = TinyTraining(dir + "/data", dir + "/plain.pt");
+  plain.epochs = 1;
+  Train(plain);
+  TrainOptions ext = TinyTraining(dir + "/data", dir + "/ext.pt");
+  ext.init = dir + "/plain.pt";
+  ext.centre = 3;
+  ext.epochs = 1;
+  ASSERT_EQ(Train(ext).size(), 1u);
+  const auto net = IgbNet::Load(dir + "/ext.pt", "m", 0, "k");
+  EXPECT_EQ(net->config().centre, 3);
+  const auto refused = [&](TrainOptions t, const std::string& message) {
+    try {
+      Train(t);
+      ADD_FAILURE() << message;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.Format(), "command line: --centre: " + message);
+    }
+  };
+  TrainOptions even = TinyTraining(dir + "/data", dir + "/even.pt");
+  even.centre = 4;
+  refused(even, "must be odd (the robot's cell in the middle)");
+  TrainOptions global = TinyTraining(dir + "/data", dir + "/global.pt");
+  global.centre = 3;
+  global.network.channels.frame = ChannelFrame::kGlobal;
+  refused(global, "needs the centred frame (frame: centred)");
+  TrainOptions wide = TinyTraining(dir + "/data", dir + "/wide.pt");
+  wide.centre = 9;
+  refused(wide, "must be at most 7: the blocks' output is 8 cells per side");
+  TrainOptions change = TinyTraining(dir + "/data", dir + "/change.pt");
+  change.init = dir + "/ext.pt";
+  change.centre = 5;
+  refused(change,
+          "the --init model reads a centre of 3 cells; it can be added to a "
+          "model without one, not changed");
+  if (!PythonHasTorch()) {
+    fs::remove_all(dir);
+    GTEST_SKIP() << "python3-torch is not installed";
+  }
+  std::vector<float> x(2 * kNumChannels * 16 * 16, 0.3f), logits(8);
+  for (std::size_t i = 0; i < x.size(); i += 7) x[i] = 0.8f;
+  net->Forward(x.data(), 2, 16, 16, logits.data());
+  ExpectPythonReproduces(dir, dir + "/ext.pt", x, logits, 2);
+  fs::remove_all(dir);
+}
+
 TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
   const std::string dir = testing::MakeTempDir("aia_cli_");
   const std::pair<std::vector<std::string>, std::string> cases[] = {
@@ -459,6 +512,8 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
       {{"train", "--data", dir}, "--out: is required"},
       {{"train", "--data", dir, "--message-hops", "9"},
        "--message-hops: must be an integer in [-1, 8], got 9"},
+      {{"train", "--data", dir, "--centre", "33"},
+       "--centre: must be an integer in [-1, 31], got 33"},
       {{"train", "--data", dir, "--init", dir + "/none.pt", "--out",
         dir + "/m.pt"},
        "--init: '" + dir + "/none.pt': no such model file"},

@@ -68,6 +68,32 @@ TEST(IgbNetTest, SaveAndLoadGiveIdenticalOutputs) {
   fs::remove_all(dir);
 }
 
+// A network with a centre (fc1 also reads the 3 x 3 cells around the
+// robot's) saves and loads to the same logits, batched or one at a time.
+TEST(IgbNetTest, ACentreNetworkSavesAndLoadsToTheSameLogits) {
+  const std::string dir = testing::MakeTempDir("aia_net_");
+  NetworkConfig c = SmallConfig();
+  c.centre = 3;
+  IgbNet net(c, 7);
+  const int side = c.channels.window;
+  const std::vector<float> x = RandomImages(3, side, side, 5);
+  std::vector<float> a(3 * kNumMoves), b(3 * kNumMoves), one(kNumMoves);
+  net.Forward(x.data(), 3, side, side, a.data());
+  net.Save(dir + "/m.pt");
+  const auto loaded = IgbNet::Load(dir + "/m.pt", "f", 0, "k");
+  EXPECT_EQ(loaded->config().centre, 3);
+  loaded->Forward(x.data(), 3, side, side, b.data());
+  EXPECT_EQ(a, b);
+  const std::size_t image =
+      static_cast<std::size_t>(kNumChannels) * side * side;
+  for (int i = 0; i < 3; ++i) {
+    loaded->Forward(x.data() + i * image, 1, side, side, one.data());
+    for (int m = 0; m < kNumMoves; ++m)
+      EXPECT_NEAR(one[m], a[i * kNumMoves + m], 1e-5);
+  }
+  fs::remove_all(dir);
+}
+
 TEST(IgbNetTest, MissingOrCorruptModelIsBadInput) {
   const std::string dir = testing::MakeTempDir("aia_net_");
   try {
@@ -147,13 +173,46 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "metadata: search: needs reach_world");
   }
+  // The centre: version 5, odd, in the centred frame, within the blocks'
+  // output (window 16, stride 2: 8 cells, the robot's cell 4).
+  NetworkConfig centre = g;
+  centre.centre = 3;
+  EXPECT_NE(centre.ToJson().find("\"version\":5"), std::string::npos);
+  EXPECT_EQ(NetworkConfig::FromJson(centre.ToJson()).centre, 3);
+  EXPECT_EQ(g.ToJson().find("\"centre\""), std::string::npos);
+  EXPECT_EQ(centre.FeatureSide(), 8);
+  EXPECT_EQ(centre.CentreStart(), 3);
+  const auto problem = [&](int cells, ChannelFrame frame) {
+    NetworkConfig c = centre;
+    c.centre = cells;
+    c.channels.frame = frame;
+    std::string json = centre.ToJson();
+    json.replace(json.find("\"centre\":3"), 10,
+                 "\"centre\":" + std::to_string(cells));
+    if (frame == ChannelFrame::kGlobal)
+      json.replace(json.find("\"centred\""), 9, "\"global\"");
+    try {
+      NetworkConfig::FromJson(json);
+      ADD_FAILURE() << json << " read";
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(e.what(), "metadata: centre: " + c.CentreProblem());
+    }
+    return c.CentreProblem();
+  };
+  EXPECT_EQ(problem(4, ChannelFrame::kCentred),
+            "must be odd (the robot's cell in the middle)");
+  EXPECT_EQ(problem(3, ChannelFrame::kGlobal),
+            "needs the centred frame (frame: centred)");
+  // Cells 4 - 4 .. 4 + 4 would reach row 8 of rows 0..7: at most 7.
+  EXPECT_EQ(problem(9, ChannelFrame::kCentred),
+            "must be at most 7: the blocks' output is 8 cells per side");
   std::string future = mp.ToJson();
-  future.replace(future.find("\"version\":3"), 11, "\"version\":5");
+  future.replace(future.find("\"version\":3"), 11, "\"version\":6");
   try {
     NetworkConfig::FromJson(future);
-    ADD_FAILURE() << "version 5 read";
+    ADD_FAILURE() << "version 6 read";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model format version 5, this build reads 1 to 4");
+    EXPECT_STREQ(e.what(), "model format version 6, this build reads 1 to 5");
   }
 }
 
@@ -182,7 +241,7 @@ TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
             "metadata: depth: unknown key; valid top-level keys: frame, "
             "cell, window, blur, cutoff, geodesic, geodesic_length, "
             "observe_range, reach_margin, reach_world, search, trail, "
-            "width, stem_stride, pool, hidden, message_hops");
+            "width, stem_stride, pool, hidden, centre, message_hops");
 }
 
 // Each shipped model written again is the same file, byte for byte: the

@@ -115,6 +115,45 @@ def test_a_model_trained_in_python_runs_in_the_cpp_policy(data, tmp_path):
     assert r.returncode == 0, r.stderr
 
 
+def test_a_centre_network_reads_the_cells_around_the_robot(tmp_path):
+    """The centre: fc1 also reads the 3 x 3 cells of the blocks' output
+    around the robot's. In the 40-pixel window the robot is pixel 20, which
+    the stride-2 stem centres in cell 10: the centre is cells 9..11. With
+    its weights at zero the network is the one without it; the C++ policy
+    reads a centre model written here and makes its moves."""
+    assert network.centre_start(network.default_meta(centre=3)) == 9
+    assert network.centre_start(network.default_meta(centre=1, stem_stride=1)) == 20
+    torch.manual_seed(1)
+    plain = network.IgbNet(network.default_meta(width=8, hidden=16)).eval()
+    meta = network.default_meta(width=8, hidden=16, centre=3)
+    net = network.IgbNet(meta).eval()
+    state = plain.state_dict()
+    w = torch.zeros_like(net.fc1.weight)
+    w[:, :state["fc1.weight"].shape[1]] = state["fc1.weight"]
+    state["fc1.weight"] = w
+    net.load_state_dict(state)
+    x = torch.rand(3, 4, 40, 40)
+    with torch.no_grad():
+        assert torch.equal(net(x), plain(x))
+        net.fc1.weight.normal_(0, 0.3)
+        # A pixel beside the robot reaches the logits through the centre
+        # alone when the pooled grid's weights are zero.
+        net.fc1.weight[:, :8 * 25] = 0
+        beside = x.clone()
+        beside[:, 0, 20, 22] += 1
+        far = x.clone()
+        far[:, 0, 2, 2] += 1
+        assert not torch.equal(net(beside), net(x))
+        assert torch.equal(net(far), net(x))
+        net.fc1.weight.normal_(0, 0.3)
+    path = tmp_path / "centre.pt"
+    network.save_model(net, path)
+    back, meta_back = network.load_model(path)
+    assert meta_back["centre"] == 3
+    assert torch.equal(back(x), net(x))
+    assert check_same_moves(net, meta, path, seed=4) == 40
+
+
 def test_the_cpp_model_runs_in_python():
     path = SOURCE / "models" / "igbnet.pt"
     net, meta = network.load_model(path)

@@ -33,6 +33,10 @@ struct NetworkConfig {
   int stem_stride = 2;  // the stem's stride (docs/learning.md, Network)
   int pool = 5;         // P: adaptive pooling to P x P
   int hidden = 128;     // the MLP's hidden units
+  // C: the C x C cells of the blocks' output around the robot's own cell,
+  // read by the MLP beside the pooled grid (odd; 0: none; the centred frame
+  // only): the detail next to the robot that the pooling averages away.
+  int centre = 0;
   // K: hops of learned message passing over the communication graph (0:
   // none, each robot alone; the paper's network).
   int message_hops = 0;
@@ -52,6 +56,11 @@ struct NetworkConfig {
         AIA_FIELD(pool).In(Between(1, 32)).Doc("P: adaptive pooling to P x P"));
     a->Visit(
         AIA_FIELD(hidden).In(Between(1, 4096)).Doc("the MLP's hidden units"));
+    a->Visit(AIA_FIELD(centre)
+                 .In(Between(0, 31))
+                 .Doc("C: the C x C cells of the blocks' output around the "
+                      "robot, read by the MLP beside the pooled grid (odd; 0: "
+                      "none; centred frame)"));
     a->Visit(AIA_FIELD(message_hops)
                  .In(Between(0, kMaxMessageHops))
                  .Doc("K: hops of learned message passing over the "
@@ -63,6 +72,15 @@ struct NetworkConfig {
   // above).
   std::string ToJson() const;
   static NetworkConfig FromJson(const std::string& json);
+
+  // The blocks' output is FeatureSide() x FeatureSide() cells (the stem's
+  // padded 3 x 3 convolution of stride stem_stride over the window); the
+  // centre's first row and column (the robot's cell minus centre / 2).
+  int FeatureSide() const;
+  int CentreStart() const;
+  // Why `centre` cannot be read with these channels (even, the global
+  // frame, or beyond the blocks' output); empty when it can.
+  std::string CentreProblem() const;
 };
 
 // A team's communication graph for message passing: the neighbours of row b

@@ -37,6 +37,10 @@ struct TrainOptions {
   // model without it, the stem's weights for it start at zero (the same
   // function).
   int trail = -1;
+  // The centre (NetworkConfig::centre), likewise: -1 the network's or
+  // --init's; from an --init model without one, fc1's weights for it start
+  // at zero (the same function).
+  int centre = -1;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -103,6 +107,12 @@ struct TrainOptions {
                  .Doc("1: a last channel, the pixel the robot came from "
                       "(with --init the new input starts at zero weight); "
                       "-1, the default: --init's, else 0"));
+    a->Visit(AIA_FIELD(centre)
+                 .In(Between(-1, 31))
+                 .Doc("C: the C x C cells of the blocks' output around the "
+                      "robot, read beside the pooled grid (odd; 0: none; "
+                      "with --init the new inputs start at zero weight); -1, "
+                      "the default: --init's, else 0"));
   }
   // lr_min <= lr.
   void Validate(const FieldChecker& check) const {

@@ -54,7 +54,11 @@ IgbNetModuleImpl::IgbNetModuleImpl(const NetworkConfig& c) {
   for (int i = 0; i < 3; ++i) blocks->push_back(ResidualBlock(c.width));
   pool = register_module(
       "pool", nn::AdaptiveAvgPool2d(nn::AdaptiveAvgPool2dOptions(c.pool)));
-  fc1 = register_module("fc1", nn::Linear(c.width * c.pool * c.pool, c.hidden));
+  centre = c.centre;
+  centre_start = c.CentreStart();
+  fc1 = register_module(
+      "fc1",
+      nn::Linear(c.width * (c.pool * c.pool + c.centre * c.centre), c.hidden));
   fc2 = register_module("fc2", nn::Linear(c.hidden, kNumMoves));
   for (int k = 1; k <= c.message_hops; ++k) {
     messages.push_back(register_module(
@@ -66,8 +70,14 @@ IgbNetModuleImpl::IgbNetModuleImpl(const NetworkConfig& c) {
 torch::Tensor IgbNetModuleImpl::embed(const torch::Tensor& input) {
   torch::Tensor x = torch::relu(stem_bn(stem(input)));
   for (const auto& block : *blocks) x = block->as<ResidualBlock>()->forward(x);
-  x = pool(x).flatten(1);
-  return torch::relu(fc1(x));
+  torch::Tensor features = pool(x).flatten(1);
+  if (centre > 0) {
+    features = torch::cat({features, x.narrow(2, centre_start, centre)
+                                         .narrow(3, centre_start, centre)
+                                         .flatten(1)},
+                          1);
+  }
+  return torch::relu(fc1(features));
 }
 
 torch::Tensor IgbNetModuleImpl::head(const torch::Tensor& z,
@@ -138,7 +148,29 @@ std::pair<torch::Tensor, torch::Tensor> FoldInto(
 
 }  // namespace
 
-FoldedNet Fold(IgbNetModule& module) {
+void Transplant(IgbNetModule& from, IgbNetModule& to) {
+  torch::NoGradGuard no_grad;
+  auto params = to->named_parameters();
+  auto buffers = to->named_buffers();
+  for (const auto& p : from->named_parameters()) {
+    torch::Tensor* t = params.find(p.key());
+    if (!t) continue;
+    if (t->sizes() == p.value().sizes()) {
+      t->copy_(p.value());
+    } else {  // the stem [width, channels, 3, 3] or fc1 [hidden, inputs]
+      AIA_CHECK(t->dim() == p.value().dim() && t->dim() >= 2);
+      const int64_t common = std::min(t->size(1), p.value().size(1));
+      t->zero_();
+      t->narrow(1, 0, common).copy_(p.value().narrow(1, 0, common));
+    }
+  }
+  for (std::size_t k = from->messages.size(); k < to->messages.size(); ++k)
+    to->messages[k]->weight.zero_();
+  for (const auto& b : from->named_buffers())
+    if (torch::Tensor* t = buffers.find(b.key())) t->copy_(b.value());
+}
+
+FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
   torch::NoGradGuard no_grad;
   FoldedNet f;
   std::tie(f.stem_w, f.stem_b) = FoldInto(module->stem, module->stem_bn);
@@ -150,14 +182,19 @@ FoldedNet Fold(IgbNetModule& module) {
   }
   // fc1 as a convolution whose kernel covers the pooled grid: oneDNN's
   // kernels instead of the reference BLAS that Linear's matrix product
-  // calls (the pooled C x P x P features flatten in the kernel's order).
-  const auto& w = module->fc1->weight;
-  const int pool = static_cast<int>(std::lround(std::sqrt(
-      static_cast<double>(w.size(1)) / module->stem->options.out_channels())));
-  f.fc1_w = w.detach()
-                .reshape({w.size(0), module->stem->options.out_channels(), pool,
-                          pool})
+  // calls (the pooled C x P x P features flatten in the kernel's order),
+  // and one over the centre.
+  const torch::Tensor w = module->fc1->weight.detach();
+  const int64_t pooled = int64_t{config.width} * config.pool * config.pool;
+  f.fc1_w = w.narrow(1, 0, pooled)
+                .reshape({w.size(0), config.width, config.pool, config.pool})
                 .contiguous();
+  if (config.centre > 0) {
+    f.fc1_centre_w =
+        w.narrow(1, pooled, w.size(1) - pooled)
+            .reshape({w.size(0), config.width, config.centre, config.centre})
+            .contiguous();
+  }
   f.fc1_b = module->fc1->bias.detach();
   return f;
 }
@@ -172,8 +209,13 @@ torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
     y = torch::conv2d(y, b[2], b[3], 1, 1);
     x = torch::relu(y + x);
   }
-  x = module->pool(x);
-  return torch::relu(torch::conv2d(x, f.fc1_w, f.fc1_b).flatten(1));
+  torch::Tensor z = torch::conv2d(module->pool(x), f.fc1_w, f.fc1_b);
+  if (config.centre > 0) {
+    const int c = config.centre, start = config.CentreStart();
+    z = z + torch::conv2d(x.narrow(2, start, c).narrow(3, start, c),
+                          f.fc1_centre_w);
+  }
+  return torch::relu(z.flatten(1));
 }
 
 torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
@@ -300,13 +342,19 @@ void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
 std::shared_ptr<const FoldedNet> TorchNet::Folded() const {
   std::lock_guard<std::mutex> lock(impl_->folded_mutex);
   if (!impl_->folded)
-    impl_->folded = std::make_shared<const FoldedNet>(Fold(impl_->module));
+    impl_->folded =
+        std::make_shared<const FoldedNet>(Fold(impl_->module, impl_->config));
   return impl_->folded;
 }
 
 void TorchNet::Infer(const float* images, int batch, int height, int width,
                      bool embed, float* out) const {
   AIA_CHECK(batch >= 0 && height > 0 && width > 0);
+  // The centre is the robot's surroundings only in the window it was made
+  // for (the centred frame's).
+  AIA_CHECK(impl_->config.centre == 0 ||
+            (height == impl_->config.channels.window &&
+             width == impl_->config.channels.window));
   if (batch == 0) return;
   torch::NoGradGuard no_grad;
   const torch::Tensor x = torch::from_blob(

@@ -49,12 +49,22 @@ struct IgbNetModuleImpl : torch::nn::Module {
   torch::nn::ModuleList blocks;
   torch::nn::AdaptiveAvgPool2d pool{nullptr};
   torch::nn::Linear fc1{nullptr}, fc2{nullptr};
+  // The centre (NetworkConfig::centre): fc1 reads the pooled grid, then
+  // the centre x centre cells from centre_start on (0: none).
+  int centre = 0, centre_start = 0;
   // M_1..M_K (hidden x hidden, no bias; `aia train --init` zeroes the hops
   // it adds, so that the extended network starts as the same function);
   // registered only when K > 0, so older model files keep their names.
   std::vector<torch::nn::Linear> messages;
 };
 TORCH_MODULE(IgbNetModule);
+
+// `to` as the same function as `from`, where it reads more: tensors of the
+// same shape are copied; a wider one (the stem with a new last input
+// channel, fc1 with the centre's inputs) gets `from`'s part and zeros
+// (narrower: `from`'s first part); message layers `from` lacks start at
+// zero; batch-norm statistics are copied.
+void Transplant(IgbNetModule& from, IgbNetModule& to);
 
 // Writes the archive to a temporary file beside `path`, then renames it.
 void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
@@ -68,8 +78,9 @@ struct FoldedNet {
   torch::Tensor stem_w, stem_b;
   std::vector<std::array<torch::Tensor, 4>> blocks;  // w1, b1, w2, b2
   torch::Tensor fc1_w, fc1_b;  // fc1 as a hidden x C x P x P convolution
+  torch::Tensor fc1_centre_w;  // its centre's part, hidden x C x c x c
 };
-FoldedNet Fold(IgbNetModule& module);
+FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config);
 torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
                             const NetworkConfig& config,
                             const torch::Tensor& x);
