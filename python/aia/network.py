@@ -7,7 +7,8 @@ GPU when one is there); `import aia` does not import it.
 The file is a TorchScript archive whose attributes are the network's
 parameters and buffers, plus the buffer `aia_meta`: the network
 configuration as JSON (width, hidden, pool, stem_stride, message_hops,
-centre and the channel settings: frame, cell, window, blur, cutoff, geodesic, ...).
+centre and the channel settings: frame, cell, window, blur, cutoff,
+geodesic, ...).
 """
 import json
 

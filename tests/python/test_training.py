@@ -122,7 +122,8 @@ def test_a_centre_network_reads_the_cells_around_the_robot(tmp_path):
     its weights at zero the network is the one without it; the C++ policy
     reads a centre model written here and makes its moves."""
     assert network.centre_start(network.default_meta(centre=3)) == 9
-    assert network.centre_start(network.default_meta(centre=1, stem_stride=1)) == 20
+    one = network.default_meta(centre=1, stem_stride=1)
+    assert network.centre_start(one) == 20
     torch.manual_seed(1)
     plain = network.IgbNet(network.default_meta(width=8, hidden=16)).eval()
     meta = network.default_meta(width=8, hidden=16, centre=3)
