@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 
 #include "aia/commands/dataset_command.h"
 #include "aia/learning/dataset.h"
@@ -314,6 +315,21 @@ TEST(TrainTest, AGeodesicModelTrainsAndPythonReproducesIt) {
   fs::remove_all(dir);
 }
 
+// One epoch of a model on DIR/data (DIR/plain.pt), then one epoch of the
+// model `extend` makes of it (--init DIR/plain.pt; DIR/ext.pt), loaded.
+std::unique_ptr<IgbNet> TrainExtended(
+    const std::string& dir, const std::function<void(TrainOptions*)>& extend) {
+  TrainOptions plain = TinyTraining(dir + "/data", dir + "/plain.pt");
+  plain.epochs = 1;
+  Train(plain);
+  TrainOptions ext = TinyTraining(dir + "/data", dir + "/ext.pt");
+  ext.init = dir + "/plain.pt";
+  ext.epochs = 1;
+  extend(&ext);
+  EXPECT_EQ(Train(ext).size(), 1u);
+  return IgbNet::Load(dir + "/ext.pt", "m", 0, "k");
+}
+
 // Message passing: a fresh model with two hops trains (its batches whole
 // steps) and a stopped run resumes to the same model; a model without hops
 // extends to one hop (--init, --message-hops 1) and trains on; cutting hops
@@ -338,15 +354,9 @@ TEST(TrainTest, AMessagePassingModelTrainsResumesAndExtends) {
   r.resume = true;
   EXPECT_EQ(Train(r).back().train_loss, logs.back().train_loss);
 
-  TrainOptions plain = TinyTraining(dir + "/data", dir + "/plain.pt");
-  plain.epochs = 1;
-  Train(plain);
-  TrainOptions ext = TinyTraining(dir + "/data", dir + "/ext.pt");
-  ext.init = dir + "/plain.pt";
-  ext.message_hops = 1;
-  ext.epochs = 1;
-  ASSERT_EQ(Train(ext).size(), 1u);
-  EXPECT_EQ(IgbNet::Load(dir + "/ext.pt", "m", 0, "k")->config().message_hops,
+  EXPECT_EQ(TrainExtended(dir, [](TrainOptions* t) { t->message_hops = 1; })
+                ->config()
+                .message_hops,
             1);
   TrainOptions cut = TinyTraining(dir + "/data", dir + "/cut.pt");
   cut.init = dir + "/mp.pt";
@@ -442,15 +452,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
 TEST(TrainTest, AModelIsExtendedByTheCellsAroundTheRobot) {
   const std::string dir = testing::MakeTempDir("aia_train_");
   RunDataset(Tiny(dir + "/data"));
-  TrainOptions plain = TinyTraining(dir + "/data", dir + "/plain.pt");
-  plain.epochs = 1;
-  Train(plain);
-  TrainOptions ext = TinyTraining(dir + "/data", dir + "/ext.pt");
-  ext.init = dir + "/plain.pt";
-  ext.centre = 3;
-  ext.epochs = 1;
-  ASSERT_EQ(Train(ext).size(), 1u);
-  const auto net = IgbNet::Load(dir + "/ext.pt", "m", 0, "k");
+  const auto net = TrainExtended(dir, [](TrainOptions* t) { t->centre = 3; });
   EXPECT_EQ(net->config().centre, 3);
   const auto refused = [&](TrainOptions t, const std::string& message) {
     try {
