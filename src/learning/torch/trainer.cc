@@ -342,7 +342,8 @@ namespace {
 // --message-hops ask for more), or a fresh one. o->network becomes its
 // configuration.
 std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
-  // --reach-world and --search redefine channel 4 (ChannelParams).
+  // What the flags change in the network (--reach-world and --search
+  // redefine channel 4, ChannelParams), checked.
   const auto redefine = [o](NetworkConfig* n) {
     ChannelParams* c = &n->channels;
     if (o->reach_world >= 0) c->reach_world = o->reach_world == 1;
