@@ -39,6 +39,22 @@ bool Measured(const DecisionContext& ctx, int i, int k, double before,
   return now < before + std::log1p(-1e-9);
 }
 
+// One slot (robot i's target k) of either memory at this step: records its
+// belief's log det and mean, and says whether the robot is still searching
+// the target (static, open in its belief, not measured since the last call;
+// never at the first call).
+template <typename Slot>
+bool StillSearching(const DecisionContext& ctx, int robot, int k,
+                    double log_eps, Slot* s) {
+  const double now = LogDetOf(ctx, robot, k);
+  const bool first = std::isnan(s->log_det);
+  const bool measured = !first && Measured(ctx, robot, k, s->log_det, now);
+  s->log_det = now;
+  s->mean = MeanOf(ctx, robot, k);
+  return !first && !measured && now > log_eps &&
+         ctx.beliefs->layout().is_static(k);
+}
+
 }  // namespace
 
 int NearestObserverDistance(const Map& map, const SensorModel& sensor, int here,
@@ -133,13 +149,7 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
-    const double now = LogDetOf(ctx, robot, k);
-    const bool first = std::isnan(s.log_det);
-    const bool measured = !first && Measured(ctx, robot, k, s.log_det, now);
-    s.log_det = now;
-    s.mean = MeanOf(ctx, robot, k);
-    const bool searching =
-        !first && !measured && now > log_eps && beliefs.layout().is_static(k);
+    const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
     if (!searching) s.missed.clear();
     if (s.missed.empty()) s.aim = s.mean;
     if (!searching) continue;
@@ -340,13 +350,7 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {
     Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
-    const double now = LogDetOf(ctx, robot, k);
-    const bool first = std::isnan(s.log_det);
-    const bool measured = !first && Measured(ctx, robot, k, s.log_det, now);
-    s.log_det = now;
-    s.mean = MeanOf(ctx, robot, k);
-    const bool searching =
-        !first && !measured && now > log_eps && beliefs.layout().is_static(k);
+    const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
     if (!searching) {
       s.missed.clear();
       s.points.clear();
