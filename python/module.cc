@@ -908,25 +908,34 @@ class PyDataset {
     data_ = ReadDataset(paths, "paths");
     if (data_.samples.empty())
       throw InputError("Dataset", 0, "paths", "holds no samples");
-    for (const DatasetWorld& w : data_.worlds) {
+    const std::vector<std::vector<int>> of_world = SamplesByWorld(data_);
+    valid_.resize(data_.samples.size());
+    for (std::size_t wi = 0; wi < data_.worlds.size(); ++wi) {
+      const DatasetWorld& w = data_.worlds[wi];
       const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
                     w.robot_radius);
       renderers_.emplace_back(map.occupancy(), w.size, channels_,
                               &map.lattice());
+      for (int i : of_world[wi])
+        valid_[i] = ValidMoveBits(map.lattice(), data_.samples[i].position);
     }
   }
 
   int size() const { return static_cast<int>(data_.samples.size()); }
   int num_worlds() const { return static_cast<int>(data_.worlds.size()); }
 
-  // Per sample: label, useful, acted, world index, episode, step, robot.
+  // Per sample: label, useful, acted, world index, episode, step, robot,
+  // and the valid moves (n, 4; ValidMoveBits).
   py::dict Samples() const {
     const py::ssize_t n = size();
     py::array_t<long long> label(n), acted(n), world(n), episode(n), step(n),
         robot(n);
     py::array_t<bool> useful(n);
+    py::array_t<bool> valid({n, static_cast<py::ssize_t>(kNumMoves)});
     for (py::ssize_t i = 0; i < n; ++i) {
       const DatasetSample& s = data_.samples[i];
+      for (int m = 0; m < kNumMoves; ++m)
+        valid.mutable_at(i, m) = (valid_[i] >> m) & 1u;
       label.mutable_at(i) = static_cast<long long>(s.label);
       acted.mutable_at(i) = static_cast<long long>(s.acted);
       world.mutable_at(i) = s.world;
@@ -943,6 +952,7 @@ class PyDataset {
     d["episode"] = episode;
     d["step"] = step;
     d["robot"] = robot;
+    d["valid"] = valid;
     return d;
   }
 
@@ -1012,6 +1022,7 @@ class PyDataset {
   ChannelParams channels_;
   Dataset data_;
   std::vector<ChannelRenderer> renderers_;
+  std::vector<std::uint8_t> valid_;  // per sample, ValidMoveBits
 };
 
 // A Python callable as a policy of aia's own loop (evaluate): each decision
@@ -1402,7 +1413,8 @@ void BindDataset(py::module_& m) {
       .def("__len__", &PyDataset::size)
       .def_property_readonly("num_worlds", &PyDataset::num_worlds)
       .def("samples", &PyDataset::Samples,
-           "Per sample: label, useful, acted, world, episode, step, robot.")
+           "Per sample: label, useful, acted, world, episode, step, robot, "
+           "valid (the moves that stay on the lattice).")
       .def("validation_worlds", &PyDataset::ValidationWorlds, py::arg("share"),
            py::arg("seed"),
            "Whether each world is held out, as aia train splits.")

@@ -333,7 +333,10 @@ class Dataset:
 
     labels, useful, acted, world, episode, step, robot: (n,) arrays per
     sample (label: the expert's move; useful: the robot still had useful
-    work in the expert's plan)."""
+    work in the expert's plan); valid: (n, 4) bool, the moves that stay on
+    the lattice from the robot's lattice point (Mission.valid_moves() of
+    that state), e.g. to train the network's choice among the moves the
+    igbnet policy chooses from."""
 
     def __init__(self, paths, **channels):
         if isinstance(paths, (str, os.PathLike)):
@@ -352,6 +355,7 @@ class Dataset:
         self.episode = samples["episode"]
         self.step = samples["step"]
         self.robot = samples["robot"]
+        self.valid = samples["valid"]
 
     def __len__(self):
         return len(self._d)

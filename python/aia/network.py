@@ -43,8 +43,10 @@ def default_meta(**changes):
 
 def channel_params(meta):
     """The channel settings of `meta`, as Mission.channels and Dataset take
-    them."""
-    out = {k: meta[k] for k in CHANNEL_KEYS}
+    them. A model file leaves out the settings of a channel it does not
+    have (the geodesic ones of a four-channel model): their defaults."""
+    defaults = default_meta()
+    out = {k: meta.get(k, defaults[k]) for k in CHANNEL_KEYS}
     for k, default in OPTIONAL_KEYS.items():
         if meta.get(k, default) != default:
             out[k] = meta[k]

@@ -12,6 +12,7 @@
 
 #include "aia/core/error.h"
 #include "aia/core/io.h"
+#include "aia/world/lattice.h"
 
 namespace aia {
 namespace {
@@ -543,6 +544,21 @@ Dataset ReadDataset(const std::vector<std::string>& paths,
     }
   }
   return out;
+}
+
+std::vector<std::vector<int>> SamplesByWorld(const Dataset& d) {
+  std::vector<std::vector<int>> out(d.worlds.size());
+  for (int i = 0; i < static_cast<int>(d.samples.size()); ++i)
+    out[d.samples[i].world].push_back(i);
+  return out;
+}
+
+std::uint8_t ValidMoveBits(const Lattice& lattice, const Vec2& position) {
+  const int here = lattice.NearestPoint(position);
+  std::uint8_t bits = 0;
+  for (int m = 0; m < kNumMoves; ++m)
+    if (lattice.Valid(here, static_cast<Move>(m))) bits |= 1u << m;
+  return bits;
 }
 
 }  // namespace aia

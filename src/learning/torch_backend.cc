@@ -93,8 +93,9 @@ std::vector<EpochLog> Train(const TrainOptions& options) {
 
 ValidationResult Validate(const std::string& model,
                           const std::vector<std::string>& data,
-                          double val_share, std::uint64_t seed) {
-  return Torch().validate(model, data, val_share, seed);
+                          double val_share, std::uint64_t seed,
+                          bool valid_moves) {
+  return Torch().validate(model, data, val_share, seed, valid_moves);
 }
 
 double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,

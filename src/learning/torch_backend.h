@@ -45,7 +45,8 @@ struct TorchBackend {
   std::vector<EpochLog> (*train)(const TrainOptions& options);
   ValidationResult (*validate)(const std::string& model,
                                const std::vector<std::string>& data,
-                               double val_share, std::uint64_t seed);
+                               double val_share, std::uint64_t seed,
+                               bool valid_moves);
   double (*network_speed)(const NetworkConfig& config, int height, int width,
                           int batch, bool train, int iterations, int repeats);
   // torch::set_num_threads (on the calling thread's OpenMP team too) and

@@ -185,3 +185,56 @@ def test_the_learned_model_runs_in_python():
     with pytest.raises(aia.InputError, match=r"aia.Mission.channels: search: "
                        r"the search points are made of every step's misses"):
         late.channels(**params)
+
+
+def test_a_four_channel_model_file_gives_its_channel_settings(data):
+    """A model without the reach channel (version 1: models/igbnet_10x10.pt,
+    or `aia train` without --geodesic) leaves its settings out of the file;
+    its channel settings are still whole and render its four channels."""
+    net, meta = network.load_model(SOURCE / "models" / "igbnet_10x10.pt")
+    assert "geodesic" not in meta
+    params = network.channel_params(meta)
+    assert params["geodesic"] is False
+    images, _ = aia.Dataset(data, **params).batch([0, 1])
+    assert images.shape == (2, 4, 40, 40)
+    assert net(torch.from_numpy(images)).shape == (2, 4)
+
+
+def test_aia_train_scores_the_choice_among_the_valid_moves(data, tmp_path):
+    """`aia train --valid-moves 1`: the loss is the cross-entropy among the
+    moves valid from the robot's lattice point (Dataset.valid), the moves
+    the policy chooses among. Its validation loss is the one computed here
+    from the model's logits with the invalid moves left out, and below the
+    loss over all four moves (`--validate` without the flag)."""
+    d = aia.Dataset(data)
+    assert d.valid.shape == (len(d), 4) and d.valid.dtype == bool
+    # The expert moves along the lattice; a robot by a box, a wall or the
+    # border has fewer than four moves.
+    assert d.valid[np.arange(len(d)), d.labels].all()
+    assert (d.valid.sum(1) < 4).any()
+    out = tmp_path / "v.pt"
+    common = ["--data", str(data), "--val-share", "0.5", "--seed", "3",
+              "--valid-moves", "1"]
+    r = subprocess.run([BINARY, "train", *common, "--epochs", "1", "--width",
+                        "8", "--hidden", "16", "--out", str(out), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    log = (tmp_path / "v.train.csv").read_text().splitlines()
+    row = dict(zip(log[0].split(","), log[-1].split(",")))
+    net, meta = network.load_model(out)
+    d = aia.Dataset(data, **network.channel_params(meta))
+    _, val = d.split(val_share=0.5, seed=3)
+    images, labels = d.batch(val)
+    with torch.no_grad():
+        logits = net(torch.from_numpy(images))
+    mask = torch.from_numpy(d.valid[val])
+    among = torch.nn.functional.cross_entropy(
+        logits.masked_fill(~mask, -1e9), torch.from_numpy(labels)).item()
+    every = torch.nn.functional.cross_entropy(
+        logits, torch.from_numpy(labels)).item()
+    assert float(row["val_loss"]) == pytest.approx(among, rel=1e-4)
+    assert every > among
+    r = subprocess.run([BINARY, "train", "--validate", str(out),
+                        *common[:-2]], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert f"loss {every:.4f}" in r.stdout, (r.stdout, every)

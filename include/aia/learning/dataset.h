@@ -19,6 +19,8 @@
 
 namespace aia {
 
+class Lattice;
+
 // Version 2 adds each sample's search points, version 3 the robot's last
 // lattice move (older files read with none).
 inline constexpr int kDatasetFormatVersion = 3;
@@ -112,6 +114,14 @@ std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
 // shard sets of two counts), is an InputError naming `key`.
 Dataset ReadDataset(const std::vector<std::string>& paths,
                     const std::string& key);
+
+// The indices of each world's samples: result[w] holds worlds[w]'s, in
+// sample order.
+std::vector<std::vector<int>> SamplesByWorld(const Dataset& d);
+
+// The moves valid from the lattice point nearest `position` (bit m: Move
+// m), the moves the igbnet policy chooses among there (Lattice::Valid).
+std::uint8_t ValidMoveBits(const Lattice& lattice, const Vec2& position);
 
 }  // namespace aia
 

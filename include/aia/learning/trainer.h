@@ -49,6 +49,10 @@ struct TrainOptions {
   // Weight of the samples whose robot had no useful work left in the
   // expert's plan (weak labels): 1 keeps them as they are, 0 masks them.
   double weak_weight = 1.0;
+  // 1: the loss is the cross-entropy among the moves valid from the robot's
+  // lattice point (the moves the igbnet policy chooses among; validation
+  // likewise); 0: among all four moves.
+  int valid_moves = 0;
   double val_share = 0.1;  // of the worlds, held out for validation
   std::uint64_t seed = 1;
   int threads = 0;  // libtorch intra-op threads; 0: all cores
@@ -77,6 +81,11 @@ struct TrainOptions {
                  .In(kUnit)
                  .Doc("weight of samples whose robot had no useful work left "
                       "(0 masks them)"));
+    a->Visit(AIA_FIELD(valid_moves)
+                 .In(Between(0, 1))
+                 .Doc("1: the loss is the choice among the moves valid from "
+                      "the robot's lattice point, as the policy chooses; 0: "
+                      "among all four"));
     a->Visit(AIA_FIELD(val_share)
                  .In({0.0, 1.0, false, true})
                  .Doc("share of the worlds held out for validation"));
@@ -161,7 +170,9 @@ std::string TrainLogPath(const std::string& out);
 std::vector<EpochLog> Train(const TrainOptions& options);
 
 // The validation accuracy of a saved model on a dataset's held-out worlds
-// (the same split as Train with `val_share` and `seed`), for comparisons.
+// (the same split as Train with `val_share` and `seed`), for comparisons;
+// with `valid_moves`, loss and accuracy of the choice among the valid moves
+// (TrainOptions::valid_moves).
 struct ValidationResult {
   // NaN without held-out samples (acc_useful: without useful ones).
   double loss = std::numeric_limits<double>::quiet_NaN();
@@ -171,7 +182,8 @@ struct ValidationResult {
 };
 ValidationResult Validate(const std::string& model,
                           const std::vector<std::string>& data,
-                          double val_share, std::uint64_t seed);
+                          double val_share, std::uint64_t seed,
+                          bool valid_moves = false);
 
 // Samples per second of the network on random images of height x width:
 // inference (evaluation mode, no gradients) at `batch`, or training steps

@@ -138,7 +138,8 @@ struct TorchNet::Impl {
 std::vector<EpochLog> TorchTrain(const TrainOptions& options);
 ValidationResult TorchValidate(const std::string& model,
                                const std::vector<std::string>& data,
-                               double val_share, std::uint64_t seed);
+                               double val_share, std::uint64_t seed,
+                               bool valid_moves);
 double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
                          int batch, bool train, int iterations, int repeats);
 

@@ -43,6 +43,9 @@ struct Corpus {
   std::vector<ChannelRenderer> renderers;
   std::vector<char> val_world;
   std::vector<int> train, val;  // sample indices
+  // Per sample, ValidMoveBits (dataset.h): filled for a loss among the
+  // valid moves (TrainOptions::valid_moves), else empty.
+  std::vector<std::uint8_t> valid;
   // For message passing: each sample's neighbours among the samples of its
   // world and step (matched by position; a neighbour the dataset holds no
   // sample of, one the expert kept still, is left out).
@@ -127,16 +130,25 @@ std::vector<std::vector<int>> StepBatches(const Corpus& c,
 
 Corpus LoadCorpus(const std::vector<std::string>& paths,
                   const ChannelParams& channels, double val_share,
-                  std::uint64_t seed, double weak_weight) {
+                  std::uint64_t seed, double weak_weight, bool valid_moves) {
   Corpus c;
   c.data = ReadDataset(paths, "--data");
   if (c.data.samples.empty())
     throw InputError("command line", 0, "--data", "holds no samples");
   c.renderers.reserve(c.data.worlds.size());
-  for (const DatasetWorld& w : c.data.worlds) {
+  std::vector<std::vector<int>> of_world;
+  if (valid_moves) {
+    of_world = SamplesByWorld(c.data);
+    c.valid.resize(c.data.samples.size());
+  }
+  for (std::size_t wi = 0; wi < c.data.worlds.size(); ++wi) {
+    const DatasetWorld& w = c.data.worlds[wi];
     const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
                   w.robot_radius);
     c.renderers.emplace_back(map.occupancy(), w.size, channels, &map.lattice());
+    if (valid_moves)
+      for (int i : of_world[wi])
+        c.valid[i] = ValidMoveBits(map.lattice(), c.data.samples[i].position);
     // The split is by world: a world's samples all go one way.
     Rng rng(seed, "train/split", static_cast<std::uint64_t>(w.seed));
     c.val_world.push_back(rng.Uniform() < val_share ? 1 : 0);
@@ -152,11 +164,15 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
   return c;
 }
 
-// Renders samples idx[0, n) into `images`, labels and weights.
+// Renders samples idx[0, n) into `images`, labels and weights; with
+// c->valid, `offsets` (n x 4) gets 0 for a valid move and -1e9 for another
+// (the label's move always counts, should the nearest lattice point differ
+// from the robot's), added to the logits so the loss is the choice among the
+// valid moves.
 void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
                int* height, int* width, std::vector<float>* images,
                std::vector<int64_t>* labels, std::vector<float>* weights,
-               std::vector<char>* useful) {
+               std::vector<char>* useful, std::vector<float>* offsets) {
   const ChannelRenderer& r0 = c->renderers[c->data.samples[idx[0]].world];
   *height = r0.height();
   *width = r0.width();
@@ -179,6 +195,25 @@ void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
     (*weights)[b] = s.useful ? 1.0f : static_cast<float>(weak_weight);
     (*useful)[b] = s.useful;
   }
+  offsets->clear();
+  if (c->valid.empty()) return;
+  offsets->resize(static_cast<std::size_t>(n) * kNumMoves);
+  for (int b = 0; b < n; ++b) {
+    const std::uint8_t bits = c->valid[idx[b]] |
+                              (1u << static_cast<int>((*labels)[b]));
+    for (int m = 0; m < kNumMoves; ++m)
+      (*offsets)[static_cast<std::size_t>(b) * kNumMoves + m] =
+          (bits >> m) & 1u ? 0.0f : -1e9f;
+  }
+}
+
+// The logits the loss reads: among the valid moves when `offsets` is given
+// (MakeBatch), else as they are.
+torch::Tensor LossLogits(const torch::Tensor& logits,
+                         std::vector<float>* offsets) {
+  if (offsets->empty()) return logits;
+  return logits + torch::from_blob(offsets->data(),
+                                   {logits.size(0), kNumMoves});
 }
 
 ValidationResult Evaluate(IgbNetModule& module, Corpus* c, int hops) {
@@ -187,7 +222,7 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c, int hops) {
   module->eval();
   torch::NoGradGuard no_grad;
   const int channels = c->renderers.front().channels();
-  std::vector<float> images, weights;
+  std::vector<float> images, weights, offsets;
   std::vector<int64_t> labels;
   std::vector<char> useful;
   long useful_n = 0, useful_right = 0, right = 0;
@@ -214,13 +249,14 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c, int hops) {
     const int m = static_cast<int>(rows.size());
     int h = 0, w = 0;
     MakeBatch(c, rows.data(), m, 1.0, &h, &w, &images, &labels, &weights,
-              &useful);
+              &useful, &offsets);
     const torch::Tensor x =
         torch::from_blob(images.data(), {m, channels, h, w});
     const torch::Tensor y = torch::from_blob(labels.data(), {n}, torch::kInt64);
-    const torch::Tensor logits =
+    const torch::Tensor logits = LossLogits(
         hops > 0 ? module->forward(x, ToTensors(graph)).narrow(0, 0, n)
-                 : module->forward(x);
+                 : module->forward(x),
+        &offsets);
     loss += torch::nn::functional::cross_entropy(
                 logits, y,
                 torch::nn::functional::CrossEntropyFuncOptions().reduction(
@@ -499,7 +535,7 @@ std::vector<std::vector<int>> EpochBatches(const Corpus& corpus,
 
 // Scratch memory of the batches, kept across epochs.
 struct BatchScratch {
-  std::vector<float> images, weights;
+  std::vector<float> images, weights, offsets;
   std::vector<int64_t> labels;
   std::vector<char> useful;
   std::vector<int> rows;
@@ -533,7 +569,7 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
     if (m < 2) break;  // batch norm needs two samples
     int h = 0, w = 0;
     MakeBatch(corpus, b->rows.data(), m, o.weak_weight, &h, &w, &b->images,
-              &b->labels, &b->weights, &b->useful);
+              &b->labels, &b->weights, &b->useful, &b->offsets);
     lr = schedule.At(static_cast<double>(epoch * steps_per_epoch) +
                      (hops > 0 ? static_cast<double>(consumed) / o.batch
                                : static_cast<double>(s)));
@@ -545,9 +581,10 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
     const torch::Tensor y =
         torch::from_blob(b->labels.data(), {n}, torch::kInt64);
     const torch::Tensor wt = torch::from_blob(b->weights.data(), {n});
-    const torch::Tensor logits =
+    const torch::Tensor logits = LossLogits(
         hops > 0 ? module->forward(x, ToTensors(b->graph)).narrow(0, 0, n)
-                 : module->forward(x);
+                 : module->forward(x),
+        &b->offsets);
     const torch::Tensor per = torch::nn::functional::cross_entropy(
         logits, y,
         torch::nn::functional::CrossEntropyFuncOptions().reduction(
@@ -661,7 +698,7 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
   if (start >= o.epochs) return logs;
 
   Corpus corpus = LoadCorpus(o.data, o.network.channels, o.val_share, o.seed,
-                             o.weak_weight);
+                             o.weak_weight, o.valid_moves != 0);
   if (corpus.train.empty())
     throw InputError("command line", 0, "--data",
                      "leaves no training samples after the split");
@@ -708,11 +745,13 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
 
 ValidationResult TorchValidate(const std::string& model,
                                const std::vector<std::string>& data,
-                               double val_share, std::uint64_t seed) {
+                               double val_share, std::uint64_t seed,
+                               bool valid_moves) {
   std::unique_ptr<TorchNet> net =
       TorchNet::Load(model, "command line", 0, "--validate");
   Corpus corpus =
-      LoadCorpus(data, net->config().channels, val_share, seed, 1.0);
+      LoadCorpus(data, net->config().channels, val_share, seed, 1.0,
+                 valid_moves);
   if (corpus.val.empty())
     throw InputError("command line", 0, "--val-share",
                      "holds out none of the " +
