@@ -53,13 +53,25 @@ class ActorCritic(nn.Module):
         self.net = net
         self.value = nn.Linear(net.fc1.out_features, 1)
 
-    def forward(self, x):
+    def features(self, x):
+        """The trunk's output that fc1 reads (pooled grid, and the centre
+        where the network has one)."""
         n = self.net
         h = torch.relu(n.stem_bn(n.stem(x)))
         for b in n.blocks:
             h = b(h)
-        z = torch.relu(n.fc1(n.pool(h).flatten(1)))
-        return n.fc2(z), self.value(z).squeeze(1)
+        f = n.pool(h).flatten(1)
+        if n.centre:
+            c, s = n.centre, n.centre_start
+            f = torch.cat([f, h[:, :, s:s + c, s:s + c].flatten(1)], 1)
+        return f
+
+    def head(self, f):
+        z = torch.relu(self.net.fc1(f))
+        return self.net.fc2(z), self.value(z).squeeze(1)
+
+    def forward(self, x):
+        return self.head(self.features(x))
 
 
 def masked(logits, mask):
@@ -163,6 +175,11 @@ def main():
                    help="also score the test missions with the C++ policy "
                         "on this model (coordination none and rules), the "
                         "shipped model and greedy")
+    p.add_argument("--freeze-trunk", action="store_true",
+                   help="with --init: train only the MLP and the value head; "
+                        "the convolutions' features are computed once per "
+                        "rollout step and reused by every epoch (an update "
+                        "of the shipped model about 7x faster)")
     p.add_argument("--quick", action="store_true",
                    help="a smoke run: 2 small updates, a tiny network")
     args = p.parse_args()
@@ -172,6 +189,8 @@ def main():
         args.validate_every, args.validation_seeds, args.test_seeds = 0, 2, 2
         args.epochs = 1
 
+    if args.freeze_trunk and not args.init:
+        sys.exit("--freeze-trunk: needs --init (a trained trunk to keep)")
     if args.lr is None:
         args.lr = 1e-4 if args.init else 5e-4
     torch.manual_seed(args.seed)
@@ -195,7 +214,22 @@ def main():
     # Batch norm as the C++ policy runs it (its running statistics, not
     # the batch's): the moves trained are the moves played.
     model.eval()
-    opt = torch.optim.Adam(model.parameters(), lr=args.lr)
+    trained = model.parameters()
+    if args.freeze_trunk:
+        trained = [q for m in (net.fc1, net.fc2, model.value)
+                   for q in m.parameters()]
+    opt = torch.optim.Adam(trained, lr=args.lr)
+
+    def inputs(x):
+        """What the update reads: the images, or the frozen trunk's
+        features of them."""
+        if not args.freeze_trunk:
+            return x
+        with torch.no_grad():
+            return model.features(x)
+
+    def act(x):
+        return model.head(x) if args.freeze_trunk else model(x)
     gen = torch.Generator().manual_seed(args.seed)
 
     vector = aia.VectorMissions(args.missions, args.scenario,
@@ -227,8 +261,9 @@ def main():
         ended = []
         for _ in range(args.rollout):
             x, mask = observe(vector, params)
+            x = inputs(x)
             with torch.no_grad():
-                logits, value = model(x)
+                logits, value = act(x)
                 dist = torch.distributions.Categorical(
                     logits=masked(logits, mask))
                 a = torch.multinomial(dist.probs, 1, generator=gen)[:, 0]
@@ -254,7 +289,7 @@ def main():
             dones.append(torch.from_numpy(
                 np.repeat(done, vector.num_robots)).float())
         with torch.no_grad():
-            _, last = model(observe(vector, params)[0])
+            _, last = act(inputs(observe(vector, params)[0]))
         values.append(last)
         # GAE over the rollout, per robot.
         adv = torch.zeros(args.rollout, n)
@@ -277,7 +312,7 @@ def main():
             order = torch.randperm(total, generator=gen)
             for b in range(0, total, args.minibatch):
                 idx = order[b:b + args.minibatch]
-                logits, value = model(flat["obs"][idx])
+                logits, value = act(flat["obs"][idx])
                 dist = torch.distributions.Categorical(
                     logits=masked(logits, flat["mask"][idx]))
                 logp = dist.log_prob(flat["action"][idx])

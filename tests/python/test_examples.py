@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 SOURCE = Path(os.environ.get("AIA_SOURCE_DIR", Path(__file__).parents[2]))
 
 
@@ -98,6 +100,32 @@ def test_train_rl_quick(tmp_path):
                         "--quiet"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert str(model) in (tmp_path / "run" / "effective.yaml").read_text()
+
+
+def test_train_rl_fine_tunes_the_heads_alone(tmp_path):
+    """--freeze-trunk: PPO changes the MLP and leaves the convolutions as
+    --init had them; without --init it is refused."""
+    torch = pytest.importorskip("torch")
+    from aia import network
+    init = SOURCE / "models" / "igbnet_learned.pt"
+    model = tmp_path / "heads.pt"
+    out = run("train_rl.py", "--quick", "--freeze-trunk", "--init",
+              str(init), "--lr", "1e-2", "--out", str(model))
+    assert "update 2 " in out, out
+    before, _ = network.load_model(init)
+    after, meta = network.load_model(model)
+    assert meta["trail"] and meta["reach_world"]  # --init's network
+    b, a = before.state_dict(), after.state_dict()
+    for name in b:
+        if name.startswith(("fc1.", "fc2.")):
+            continue
+        assert torch.equal(a[name], b[name]), name
+    assert not torch.equal(a["fc2.weight"], b["fc2.weight"])
+    r = subprocess.run([sys.executable, str(SOURCE / "examples" / "python" /
+                                            "train_rl.py"), "--quick",
+                        "--freeze-trunk", "--out", str(tmp_path / "x.pt")],
+                       cwd=SOURCE, capture_output=True, text=True, timeout=60)
+    assert r.returncode != 0 and "--freeze-trunk: needs --init" in r.stderr
 
 
 def test_video(tmp_path):
