@@ -499,9 +499,8 @@ Action AddTrainCommand(CLI::App& app) {
                 " model; drop the flag (or --init, for a new network)");
     }
     if (!validate->empty()) {
-      const aia::ValidationResult v =
-          aia::Validate(*validate, o->data, o->val_share, o->seed,
-                        o->valid_moves != 0);
+      const aia::ValidationResult v = aia::Validate(
+          *validate, o->data, o->val_share, o->seed, o->valid_moves != 0);
       char useful[64] = "none of them with useful work";
       if (!std::isnan(v.acc_useful))
         std::snprintf(useful, sizeof useful,

@@ -1,8 +1,9 @@
 // What a dataset sample tells the loss about the moves: the valid moves of
 // the lattice point nearest the robot (ValidMoveBits), worked out by hand.
+#include "aia/learning/dataset.h"
+
 #include <gtest/gtest.h>
 
-#include "aia/learning/dataset.h"
 #include "aia/world/lattice.h"
 
 namespace aia {
@@ -15,7 +16,8 @@ TEST(DatasetTest, ValidMoveBitsAreTheMovesOfTheNearestLatticePoint) {
   // and 2: both sides are free, but no move crosses it.
   const Lattice lat({2.0, 2.0}, 0.5, 0.15, {Box{{0.98, 0.0}, {1.02, 2.0}}});
   // The corner (0, 0): right and up.
-  EXPECT_EQ(ValidMoveBits(lat, {0.25, 0.25}), Bit(Move::kRight) | Bit(Move::kUp));
+  EXPECT_EQ(ValidMoveBits(lat, {0.25, 0.25}),
+            Bit(Move::kRight) | Bit(Move::kUp));
   // Beside the wall at (1, 1): everything but right; from a position that
   // physics left 0.2 m off the point, the same.
   const std::uint8_t beside =

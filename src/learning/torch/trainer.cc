@@ -199,8 +199,8 @@ void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
   if (c->valid.empty()) return;
   offsets->resize(static_cast<std::size_t>(n) * kNumMoves);
   for (int b = 0; b < n; ++b) {
-    const std::uint8_t bits = c->valid[idx[b]] |
-                              (1u << static_cast<int>((*labels)[b]));
+    const std::uint8_t bits =
+        c->valid[idx[b]] | (1u << static_cast<int>((*labels)[b]));
     for (int m = 0; m < kNumMoves; ++m)
       (*offsets)[static_cast<std::size_t>(b) * kNumMoves + m] =
           (bits >> m) & 1u ? 0.0f : -1e9f;
@@ -212,8 +212,8 @@ void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
 torch::Tensor LossLogits(const torch::Tensor& logits,
                          std::vector<float>* offsets) {
   if (offsets->empty()) return logits;
-  return logits + torch::from_blob(offsets->data(),
-                                   {logits.size(0), kNumMoves});
+  return logits +
+         torch::from_blob(offsets->data(), {logits.size(0), kNumMoves});
 }
 
 ValidationResult Evaluate(IgbNetModule& module, Corpus* c, int hops) {
@@ -749,9 +749,8 @@ ValidationResult TorchValidate(const std::string& model,
                                bool valid_moves) {
   std::unique_ptr<TorchNet> net =
       TorchNet::Load(model, "command line", 0, "--validate");
-  Corpus corpus =
-      LoadCorpus(data, net->config().channels, val_share, seed, 1.0,
-                 valid_moves);
+  Corpus corpus = LoadCorpus(data, net->config().channels, val_share, seed, 1.0,
+                             valid_moves);
   if (corpus.val.empty())
     throw InputError("command line", 0, "--val-share",
                      "holds out none of the " +
