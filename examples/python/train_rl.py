@@ -54,17 +54,7 @@ class ActorCritic(nn.Module):
         self.value = nn.Linear(net.fc1.out_features, 1)
 
     def features(self, x):
-        """The trunk's output that fc1 reads (pooled grid, and the centre
-        where the network has one)."""
-        n = self.net
-        h = torch.relu(n.stem_bn(n.stem(x)))
-        for b in n.blocks:
-            h = b(h)
-        f = n.pool(h).flatten(1)
-        if n.centre:
-            c, s = n.centre, n.centre_start
-            f = torch.cat([f, h[:, :, s:s + c, s:s + c].flatten(1)], 1)
-        return f
+        return self.net.features(x)
 
     def head(self, f):
         z = torch.relu(self.net.fc1(f))

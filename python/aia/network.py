@@ -99,9 +99,9 @@ class IgbNet(nn.Module):
             setattr(self, "message%d" % k, nn.Linear(hidden, hidden,
                                                      bias=False))
 
-    def forward(self, x, neighbours=None):
-        """Logits of a batch of robots; `neighbours[b]` lists the rows
-        robot b hears (message passing; None: each robot alone)."""
+    def features(self, x):
+        """What fc1 reads from a batch of images: the blocks' output pooled
+        to a grid, and the centre's cells where the network has one."""
         x = torch.relu(self.stem_bn(self.stem(x)))
         for b in self.blocks:
             x = b(x)
@@ -110,7 +110,12 @@ class IgbNet(nn.Module):
             c, s = self.centre, self.centre_start
             features = torch.cat(
                 [features, x[:, :, s:s + c, s:s + c].flatten(1)], 1)
-        z = torch.relu(self.fc1(features))
+        return features
+
+    def forward(self, x, neighbours=None):
+        """Logits of a batch of robots; `neighbours[b]` lists the rows
+        robot b hears (message passing; None: each robot alone)."""
+        z = torch.relu(self.fc1(self.features(x)))
         if self.hops == 0 or neighbours is None:
             return self.fc2(z)
         h, hop = z, z
