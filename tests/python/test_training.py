@@ -238,3 +238,41 @@ def test_aia_train_scores_the_choice_among_the_valid_moves(data, tmp_path):
                         *common[:-2]], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert f"loss {every:.4f}" in r.stdout, (r.stdout, every)
+
+
+def test_aia_train_weighs_the_acting_policys_mistakes(tmp_path):
+    """`aia train --mistake-weight W` multiplies the weight of the samples
+    whose acting policy's move differs from the expert's label (Dataset.acted
+    against Dataset.labels). At a learning rate too small to move the
+    weights, an epoch's training loss is the weighted mean of the same
+    per-sample losses: the means at W = 0 (the other samples) and W = 1 (all)
+    give the mean at W = 3."""
+    data = tmp_path / "greedy"
+    r = subprocess.run([BINARY, "dataset", "--episodes", "12", "--size", "3x3",
+                        "--keep", "5", "--policy", "greedy", "--out",
+                        str(data), "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = aia.Dataset(data)
+    mistakes = int((d.acted != d.labels).sum())
+    others = len(d) - mistakes
+    assert 0 < mistakes < len(d)
+
+    def train_loss(weight):
+        out = tmp_path / f"w{weight}.pt"
+        r = subprocess.run([BINARY, "train", "--data", str(data), "--val-share",
+                            "0", "--weak-weight", "1", "--lr", "1e-9",
+                            "--lr-min", "1e-9", "--epochs", "1", "--width", "8",
+                            "--hidden", "16", "--mistake-weight", str(weight),
+                            "--out", str(out), "--quiet"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        log = (tmp_path / f"w{weight}.train.csv").read_text().splitlines()
+        return float(dict(zip(log[0].split(","),
+                              log[-1].split(",")))["train_loss"])
+
+    l0, l1, l3 = train_loss(0), train_loss(1), train_loss(3)
+    s_others = l0 * others
+    s_mistakes = l1 * len(d) - s_others
+    assert l3 == pytest.approx((s_others + 3 * s_mistakes)
+                               / (others + 3 * mistakes), rel=1e-3)
+    assert abs(l3 - l1) > 1e-3 * l1

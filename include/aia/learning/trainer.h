@@ -49,6 +49,10 @@ struct TrainOptions {
   // Weight of the samples whose robot had no useful work left in the
   // expert's plan (weak labels): 1 keeps them as they are, 0 masks them.
   double weak_weight = 1.0;
+  // Factor on the weight of the samples where the acting policy's move
+  // differs from the label (DAgger's states of the network's own mistakes;
+  // the expert's own data has none): 1 keeps them as they are.
+  double mistake_weight = 1.0;
   // 1: the loss is the cross-entropy among the moves valid from the robot's
   // lattice point (the moves the igbnet policy chooses among; validation
   // likewise); 0: among all four moves.
@@ -81,6 +85,11 @@ struct TrainOptions {
                  .In(kUnit)
                  .Doc("weight of samples whose robot had no useful work left "
                       "(0 masks them)"));
+    a->Visit(AIA_FIELD(mistake_weight)
+                 .In({0.0, 100.0, false, false})
+                 .Doc("factor on the weight of samples where the acting "
+                      "policy's move differs from the label (the acting "
+                      "network's mistakes in DAgger data; 1: as the others)"));
     a->Visit(AIA_FIELD(valid_moves)
                  .In(Between(0, 1))
                  .Doc("1: the loss is the choice among the moves valid from "
