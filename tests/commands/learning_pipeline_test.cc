@@ -240,9 +240,15 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
   nb->Forward(x.data(), 3, 16, 16, lb.data());
   EXPECT_EQ(la, lb);
 
-  // Resuming with other options is refused.
-  b.lr = 1e-2;
-  EXPECT_THROW(Train(b), InputError);
+  // Resuming with other options is refused, the loss's options included.
+  for (const auto& change : std::vector<void (*)(TrainOptions*)>{
+           [](TrainOptions* o) { o->lr = 1e-2; },
+           [](TrainOptions* o) { o->valid_moves = 1; },
+           [](TrainOptions* o) { o->mistake_weight = 2.0; }}) {
+    TrainOptions c = b;
+    change(&c);
+    EXPECT_THROW(Train(c), InputError);
+  }
 
   // Python (Debian's python3-torch) loads the model and reproduces the C++
   // logits on the same input.
