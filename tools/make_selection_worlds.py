@@ -7,7 +7,9 @@ trained on and never reported as test results; the test worlds of the
 generalization suite are scenarios/long/ and the suite's generated worlds
 of seeds 931000 on (docs/RESULTS.md). Their shapes differ from both: a comb
 of dead-end alleys, two halls joined by one door, a wide serpentine, shelf
-columns with a middle cross-aisle, and a room behind a room.
+columns with a middle cross-aisle, a room behind a room, and two perfect
+mazes of other sizes and random streams than scenarios/long/'s (the family
+where the network alone fails most; one maze is too few to select on).
 
 Same conventions and drawing as tools/make_long_worlds.py (0.5 m lattice
 cells, a wall cell drawn as a 0.3 m line through the cell centre, binary PGM
@@ -20,7 +22,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from make_long_worlds import Grid, pgm_bytes, scenario_text  # noqa: E402
+from make_long_worlds import (Grid, Rng, maze, pgm_bytes,  # noqa: E402
+                              scenario_text)
 
 
 def comb30():
@@ -100,6 +103,10 @@ WORLDS = [
      "six shelf columns that block sensing, a middle cross-aisle"),
     ("nested30", nested30, 5, 8, 1, 1000,
      "a room inside a room, the doors on opposite sides"),
+    ("maze24", lambda: maze(48, 48, 4, Rng(0x5E1E0001)), 5, 7, 1, 1200,
+     "a 24 x 24 m perfect maze of 12 x 12 cells, 1.7 m corridors"),
+    ("maze32", lambda: maze(64, 64, 4, Rng(0x5E1E0002)), 6, 8, 1, 1500,
+     "a 32 x 32 m perfect maze of 16 x 16 cells, 1.7 m corridors"),
 ]
 
 
