@@ -167,10 +167,9 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
 // Renders samples idx[0, n) into `images`, labels and weights (a weak label
 // weighs weak_weight, a sample whose acting policy's move differs from the
 // label mistake_weight times as much); with c->valid, `offsets` (n x 4) gets
-// 0 for a valid move and -1e9 for another
-// (the label's move always counts, should the nearest lattice point differ
-// from the robot's), added to the logits so the loss is the choice among the
-// valid moves.
+// 0 for a valid move and -1e9 for another (the label's move always counts,
+// should the nearest lattice point differ from the robot's), added to the
+// logits so the loss is the choice among the valid moves.
 void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
                double mistake_weight, int* height, int* width,
                std::vector<float>* images, std::vector<int64_t>* labels,
