@@ -19,6 +19,11 @@
 #              five-channel start and its DAgger worlds, and narrow perfect
 #              mazes among those), the scalability check of the network
 #              alone; the datasets of other team sizes are not made;
+#   masked     only WORK_DIR/masked7.pt (a candidate, not shipped): three
+#              more DAgger rounds after models/igbnet_learned.pt with the
+#              loss among the valid moves (--valid-moves 1), in worlds
+#              weighted to narrow perfect mazes, the last also with the team
+#              starting in one corner; uses the base data (made here);
 #   all        everything: the above, the ablation's four-channel model on
 #              the randomized data and the five-channel 10-robot model
 #              (the last three stay in WORK_DIR).
@@ -34,9 +39,9 @@ work=${1:-data/igbnet}
 aia=${AIA:-build/aia}
 models=${MODELS:-default}
 case $models in
-  default | learned | learned10 | all) ;;
+  default | learned | learned10 | masked | all) ;;
   *)
-    echo "error: MODELS=$models: must be default, learned, learned10 or all" >&2
+    echo "error: MODELS=$models: must be default, learned, learned10, masked or all" >&2
     exit 2
     ;;
 esac
@@ -105,7 +110,7 @@ mapfile -t ten_paths < <(paths "${ten[@]}")
 mapfile -t all_paths < <(paths "${all[@]}")
 
 shipped=()
-if [[ $models != learned10 ]]; then
+if [[ $models != learned10 && $models != masked ]]; then
   # The default: the reach channel (--geodesic), centred frame, weak labels
   # masked, cosine 1e-3 -> 1e-5 over 3 epochs, two libtorch threads (about 30
   # minutes alone on 2 cores; the thread count is part of the recipe: a
@@ -249,12 +254,79 @@ if [[ $models == all || $models == learned10 ]]; then
   cp "$work/learned10_.pt" "$work/igbnet_learned_10only.pt"
   cp "$work/learned10_.train.csv" "$work/igbnet_learned_10only.train.csv"
 fi
+# The masked rounds (2026-12-05, a candidate: docs/notes/2026-12-05-narrow-
+# mazes-and-10-robot-model.md, "Forty worlds"): from the shipped round-4
+# model, each round the model before alone acts in 11 kinds of world (8 of
+# them narrow or generated mazes and rooms of 3 to 10 robots; 40 to 150
+# episodes, each capped at 60 s), the expert labels, and the next model is
+# one epoch on the base data and every masked round so far, the loss among
+# the valid moves. Round 7 adds perfect mazes with the team starting in the
+# bottom-left corner (as in scenarios/long/).
+#   masked_worlds DIR ACTOR BASE CORNER: one round's data into $work/DIR.
+masked_worlds() {
+  local dir=$1 actor=$2 base=$3 corner=$4
+  local gen=workspace.obstacles.generator g=workspace.obstacles.generator.type
+  local nar=(--set $g=maze --set $gen.corridor=1.5 --set $gen.wall=0.15)
+  local open=(--set workspace.obstacles.random.count=0)
+  dag() {  # dag NAME SEED STEPS ARGS...: the actor alone acts
+    local name=$1 seed=$2 steps=$3
+    shift 3
+    ds "$dir/$name" --policy igbnet --model "$actor" \
+      --set policy.coordination=none --keep 20 --max-steps "$steps" \
+      --first-seed "$seed" --max-seconds 60 "$@"
+  }
+  (
+    dag narrow20_4 $((base + 100000)) 300 --episodes 100 --size 4x6 "${nar[@]}" --set $gen.loops=0 "${open[@]}"
+    dag maze30 $((base + 200000)) 200 --episodes 30 --set "workspace.size=[30,30]" --set $g=maze "${open[@]}"
+    dag open10 $((base + 300000)) 200 --episodes 40
+    dag rooms30 $((base + 400000)) 200 --episodes 30 --set "workspace.size=[30,30]" --set $g=rooms "${open[@]}"
+    dag narrow30 $((base + 1000000)) 400 --episodes 30 --set "workspace.size=[30,30]" "${nar[@]}" --set $gen.loops=0.05 "${open[@]}"
+  ) &
+  (
+    dag narrow20 $((base + 500000)) 300 --episodes 40 "${nar[@]}" --set $gen.loops=0 "${open[@]}"
+    dag maze20_3 $((base + 600000)) 200 --episodes 40 --size 3x3 --set $g=maze "${open[@]}"
+    dag corr20_5 $((base + 700000)) 200 --episodes 30 --size 5x5 --set $g=corridors "${open[@]}"
+    dag cave30 $((base + 800000)) 200 --episodes 30 --set "workspace.size=[30,30]" --set $g=cave "${open[@]}"
+    dag narrow20_4b $((base + 900000)) 300 --episodes 150 --size 4x6 "${nar[@]}" --set $gen.loops=0 "${open[@]}"
+    dag rooms20_3 $((base + 1100000)) 200 --episodes 40 --size 3x3 --set $g=rooms "${open[@]}"
+  ) &
+  wait
+  masked_names=(cave30 corr20_5 maze20_3 maze30 narrow20 narrow20_4 narrow20_4b narrow30 open10 rooms20_3 rooms30)
+  if [[ $corner == corner ]]; then
+    local per=("${open[@]}" --set $g=maze --set $gen.loops=0 --set $gen.corridor=1.5 --set $gen.wall=0.15)
+    local c4='[[0.25,0.25],[0.75,0.25],[0.25,0.75],[1.25,0.25]]'
+    dag corner24 $((base + 2100000)) 500 --episodes 40 --size 5x7 --set "workspace.size=[24,24]" "${per[@]}" \
+      --set "robots.start=[[0.25,0.25],[0.75,0.25],[0.25,0.75],[1.25,0.25],[0.75,0.75]]"
+    dag corner20n $((base + 2200000)) 400 --episodes 80 --size 4x6 "${per[@]}" --set "robots.start=$c4"
+    dag corner30 $((base + 2300000)) 600 --episodes 30 --size 6x8 --set "workspace.size=[30,30]" "${per[@]}" \
+      --set "robots.start=[[0.25,0.25],[0.75,0.25],[0.25,0.75],[1.25,0.25],[0.75,0.75],[0.25,1.25]]"
+    masked_names+=(corner24 corner20n corner30)
+  fi
+}
+if [[ $models == masked ]]; then
+  masked_paths=()
+  actor=models/igbnet_learned.pt
+  for r in 5 6 7; do
+    corner=""
+    ((r < 7)) || corner=corner
+    # Round 5's seeds from 50 000 000, round 6's 54 000 000, round 7's 55 000 000.
+    base=$((r == 5 ? 50000000 : 48000000 + r * 1000000))
+    masked_worlds "mdag$r" "$actor" "$base" "$corner"
+    for name in "${masked_names[@]}"; do masked_paths+=("$work/mdag$r/$name"); done
+    "$aia" train --data "${all_paths[@]}" "${masked_paths[@]}" --init "$actor" --epochs 1 \
+      --lr 3e-4 --lr-min 1e-5 --weak-weight 0 --valid-moves 1 --threads 2 \
+      --out "$work/masked$r.pt" --resume --quiet
+    actor="$work/masked$r.pt"
+  done
+fi
 for m in ${shipped[@]+"${shipped[@]}"}; do
   cp "$work/$m.pt" "models/$m.pt"
   cp "$work/$m.train.csv" "models/$m.train.csv"
 done
 if ((${#shipped[@]} > 0)); then
   echo "models/{$(IFS=,; echo "${shipped[*]}")}.pt <- $work"
+elif [[ $models == masked ]]; then
+  echo "$work/masked7.pt (not copied into models/)"
 else
   echo "$work/igbnet_learned_10only.pt (not copied into models/)"
 fi
