@@ -140,6 +140,16 @@ fi
 # model alone (policy.coordination=none) acts in kinds of world of its
 # team sizes, the expert labels the states it visits, and the next model is
 # trained on the data and every round so far. About 25 minutes a round.
+#   alone DIR ACTOR NAME SEED STEPS ARGS...: DAgger data into $work/DIR/NAME,
+# ACTOR alone acting (policy.coordination=none) and the expert labelling,
+# 20 steps kept per episode of at most STEPS, seeds from SEED.
+alone() {
+  local dir=$1 actor=$2 name=$3 seed=$4 steps=$5
+  shift 5
+  ds "$dir/$name" --policy igbnet --model "$actor" \
+    --set policy.coordination=none --keep 20 --max-steps "$steps" \
+    --first-seed "$seed" "$@"
+}
 #   dagger_worlds DIR ACTOR BASE TEAMS NARROW: one round's data, the actor
 # alone acting, into $work/DIR/NAME; the names, in the order training reads
 # them, into the array dagger_names. TEAMS is "all" (the 15 worlds of the
@@ -151,13 +161,7 @@ dagger_worlds() {
   local dir=$1 actor=$2 base=$3 teams=$4 narrow=$5
   local gen=workspace.obstacles.generator g=workspace.obstacles.generator.type
   local nar=(--set $g=maze --set $gen.corridor=1.5 --set $gen.wall=0.15)
-  dag() {  # dag NAME SEED STEPS ARGS...: the actor alone acts
-    local name=$1 seed=$2 steps=$3
-    shift 3
-    ds "$dir/$name" --policy igbnet --model "$actor" \
-      --set policy.coordination=none --keep 20 --max-steps "$steps" \
-      --first-seed "$seed" "$@"
-  }
+  dag() { alone "$dir" "$actor" "$@"; }  # dag NAME SEED STEPS ARGS...
   (
     dag maze30 $((base + 100000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=maze
     dag rooms30 $((base + 200000)) 200 --episodes 100 --set "workspace.size=[30,30]" --set $g=rooms
@@ -268,12 +272,8 @@ masked_worlds() {
   local gen=workspace.obstacles.generator g=workspace.obstacles.generator.type
   local nar=(--set $g=maze --set $gen.corridor=1.5 --set $gen.wall=0.15)
   local open=(--set workspace.obstacles.random.count=0)
-  dag() {  # dag NAME SEED STEPS ARGS...: the actor alone acts
-    local name=$1 seed=$2 steps=$3
-    shift 3
-    ds "$dir/$name" --policy igbnet --model "$actor" \
-      --set policy.coordination=none --keep 20 --max-steps "$steps" \
-      --first-seed "$seed" --max-seconds 60 "$@"
+  dag() {  # dag NAME SEED STEPS ARGS...: each episode capped at 60 s
+    alone "$dir" "$actor" "$1" "$2" "$3" --max-seconds 60 "${@:4}"
   }
   (
     dag narrow20_4 $((base + 100000)) 300 --episodes 100 --size 4x6 "${nar[@]}" --set $gen.loops=0 "${open[@]}"
