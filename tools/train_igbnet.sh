@@ -12,18 +12,17 @@
 # MODELS selects what is trained:
 #   default    the two above;
 #   learned    also models/igbnet_learned.pt, the model meant for
-#              policy.coordination=none (the network alone; four DAgger rounds,
-#              about 1 hour 50 minutes more on 2 cores);
+#              policy.coordination=none (the network alone; four DAgger
+#              rounds, then three with the loss among the valid moves in
+#              worlds weighted to narrow perfect mazes, the last also with
+#              the team starting in one corner; about 2 hours 30 minutes
+#              more on 2 cores);
 #   learned10  only WORK_DIR/igbnet_learned_10only.pt (not shipped): the
-#              learned recipe on teams of 10 alone (its data, its
-#              five-channel start and its DAgger worlds, and narrow perfect
-#              mazes among those), the scalability check of the network
-#              alone; the datasets of other team sizes are not made;
-#   masked     only WORK_DIR/masked7.pt (a candidate, not shipped): three
-#              more DAgger rounds after models/igbnet_learned.pt with the
-#              loss among the valid moves (--valid-moves 1), in worlds
-#              weighted to narrow perfect mazes, the last also with the team
-#              starting in one corner; uses the base data (made here);
+#              learned recipe's first four rounds on teams of 10 alone (its
+#              data, its five-channel start and its DAgger worlds, and
+#              narrow perfect mazes among those), the scalability check of
+#              the network alone; the datasets of other team sizes are not
+#              made;
 #   all        everything: the above, the ablation's four-channel model on
 #              the randomized data and the five-channel 10-robot model
 #              (the last three stay in WORK_DIR).
@@ -39,9 +38,9 @@ work=${1:-data/igbnet}
 aia=${AIA:-build/aia}
 models=${MODELS:-default}
 case $models in
-  default | learned | learned10 | masked | all) ;;
+  default | learned | learned10 | all) ;;
   *)
-    echo "error: MODELS=$models: must be default, learned, learned10, masked or all" >&2
+    echo "error: MODELS=$models: must be default, learned, learned10 or all" >&2
     exit 2
     ;;
 esac
@@ -110,7 +109,7 @@ mapfile -t ten_paths < <(paths "${ten[@]}")
 mapfile -t all_paths < <(paths "${all[@]}")
 
 shipped=()
-if [[ $models != learned10 && $models != masked ]]; then
+if [[ $models != learned10 ]]; then
   # The default: the reach channel (--geodesic), centred frame, weak labels
   # masked, cosine 1e-3 -> 1e-5 over 3 epochs, two libtorch threads (about 30
   # minutes alone on 2 cores; the thread count is part of the recipe: a
@@ -249,23 +248,20 @@ if [[ $models == all || $models == learned ]]; then
   "$aia" train --data "${all_paths[@]}" "${narrow_paths[@]}" --init "$work/learned.pt" \
     --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 --threads 2 \
     --out "$work/learned4.pt" --resume --quiet
-  cp "$work/learned4.pt" "$work/igbnet_learned.pt"
-  cp "$work/learned4.train.csv" "$work/igbnet_learned.train.csv"
-  shipped+=(igbnet_learned)
 fi
 if [[ $models == all || $models == learned10 ]]; then
   learned learned10_ "$work/igbnet_10only.pt" ten 40000000 2000000 "${ten_paths[@]}"
   cp "$work/learned10_.pt" "$work/igbnet_learned_10only.pt"
   cp "$work/learned10_.train.csv" "$work/igbnet_learned_10only.train.csv"
 fi
-# The masked rounds (2026-12-05, a candidate: docs/notes/2026-12-05-narrow-
-# mazes-and-10-robot-model.md, "Forty worlds"): from the shipped round-4
-# model, each round the model before alone acts in 11 kinds of world (8 of
+# Rounds 5 to 7, the masked rounds (2026-12-05: docs/notes/2026-12-05-narrow-
+# mazes-and-10-robot-model.md, "Forty worlds"): from the model of round 4
+# (shipped before them), each round the model before alone acts in 11 kinds of world (8 of
 # them narrow or generated mazes and rooms of 3 to 10 robots; 40 to 150
 # episodes, each capped at 60 s), the expert labels, and the next model is
 # one epoch on the base data and every masked round so far, the loss among
 # the valid moves. Round 7 adds perfect mazes with the team starting in the
-# bottom-left corner (as in scenarios/long/).
+# bottom-left corner (as in scenarios/long/). Its model is the one shipped.
 #   masked_worlds DIR ACTOR BASE CORNER: one round's data into $work/DIR.
 masked_worlds() {
   local dir=$1 actor=$2 base=$3 corner=$4
@@ -303,9 +299,9 @@ masked_worlds() {
     masked_names+=(corner24 corner20n corner30)
   fi
 }
-if [[ $models == masked ]]; then
+if [[ $models == all || $models == learned ]]; then
   masked_paths=()
-  actor=models/igbnet_learned.pt
+  actor="$work/learned4.pt"
   for r in 5 6 7; do
     corner=""
     ((r < 7)) || corner=corner
@@ -318,6 +314,9 @@ if [[ $models == masked ]]; then
       --out "$work/masked$r.pt" --resume --quiet
     actor="$work/masked$r.pt"
   done
+  cp "$work/masked7.pt" "$work/igbnet_learned.pt"
+  cp "$work/masked7.train.csv" "$work/igbnet_learned.train.csv"
+  shipped+=(igbnet_learned)
 fi
 for m in ${shipped[@]+"${shipped[@]}"}; do
   cp "$work/$m.pt" "models/$m.pt"
@@ -325,8 +324,6 @@ for m in ${shipped[@]+"${shipped[@]}"}; do
 done
 if ((${#shipped[@]} > 0)); then
   echo "models/{$(IFS=,; echo "${shipped[*]}")}.pt <- $work"
-elif [[ $models == masked ]]; then
-  echo "$work/masked7.pt (not copied into models/)"
 else
   echo "$work/igbnet_learned_10only.pt (not copied into models/)"
 fi
