@@ -392,8 +392,9 @@ TEST(TrainTest, AMessagePassingModelTrainsResumesAndExtends) {
 // samples carry their search points (SearchPoints) and last moves, which
 // read back as written. A model with the reach channel is redefined to read
 // them over the whole workspace with a trail channel (--init, --reach-world
-// 1, --search 1, --trail 1) and trains on; --search without --reach-world
-// is refused.
+// 1, --search 1, --trail 1, and a sharper reach channel: --geodesic-length
+// 2) and trains on; --search without --reach-world, and a length for a
+// model without the reach channel, are refused.
 TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   const std::string dir = testing::MakeTempDir("aia_train_");
   DatasetOptions d = Tiny(dir + "/data");
@@ -430,12 +431,18 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   world.reach_world = 1;
   world.search = 1;
   world.trail = 1;
+  world.geodesic_length = 2.0;
   world.epochs = 1;
   ASSERT_EQ(Train(world).size(), 1u);
   const auto net = IgbNet::Load(dir + "/world.pt", "w", 0, "k");
   EXPECT_TRUE(net->config().channels.reach_world);
   EXPECT_TRUE(net->config().channels.search);
   EXPECT_EQ(net->config().channels.num_channels(), 6);
+  EXPECT_EQ(IgbNet::Load(dir + "/plain.pt", "p", 0, "k")
+                ->config()
+                .channels.geodesic_length,
+            5.0);
+  EXPECT_EQ(net->config().channels.geodesic_length, 2.0);
   TrainOptions lone = TinyTraining(dir + "/data", dir + "/lone.pt");
   lone.init = dir + "/plain.pt";
   lone.search = 1;
@@ -446,6 +453,16 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
     EXPECT_NE(e.Format().find("--search: needs --reach-world 1"),
               std::string::npos)
         << e.Format();
+  }
+  TrainOptions blind = TinyTraining(dir + "/data", dir + "/blind.pt");
+  blind.geodesic_length = 2.0;
+  try {
+    Train(blind);
+    ADD_FAILURE() << "--geodesic-length without the reach channel";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "command line: --geodesic-length: needs the reach channel "
+              "(--geodesic, or an --init model with it)");
   }
   fs::remove_all(dir);
 }
@@ -522,6 +539,8 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
        "--message-hops: must be an integer in [-1, 8], got 9"},
       {{"train", "--data", dir, "--centre", "33"},
        "--centre: must be an integer in [-1, 31], got 33"},
+      {{"train", "--data", dir, "--geodesic-length", "0"},
+       "--geodesic-length: must be -1 (the default) or above 0"},
       {{"train", "--data", dir, "--init", dir + "/none.pt", "--out",
         dir + "/m.pt"},
        "--init: '" + dir + "/none.pt': no such model file"},

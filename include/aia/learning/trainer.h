@@ -41,6 +41,11 @@ struct TrainOptions {
   // --init's; from an --init model without one, fc1's weights for it start
   // at zero (the same function).
   int centre = -1;
+  // The reach channel's decay length L in metres
+  // (ChannelParams::geodesic_length): -1 the network's (5), or --init's; a
+  // length sets it (from an --init model the weights are kept: the same
+  // network reads the channel with the new contrast).
+  double geodesic_length = -1.0;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -131,10 +136,17 @@ struct TrainOptions {
                       "robot, read beside the pooled grid (odd; 0: none; "
                       "with --init the new inputs start at zero weight); -1, "
                       "the default: --init's, else 0"));
+    a->Visit(AIA_FIELD(geodesic_length)
+                 .In({-1.0, 1000.0, false, false})
+                 .Doc("the reach channel's decay length L in metres (with "
+                      "--init the weights are kept); -1, the default: "
+                      "--init's, else 5"));
   }
-  // lr_min <= lr.
+  // lr_min <= lr; a length is -1 or above 0.
   void Validate(const FieldChecker& check) const {
     if (lr_min > lr) check.Fail(lr_min, "must be at most --lr");
+    if (geodesic_length != -1.0 && geodesic_length <= 0.0)
+      check.Fail(geodesic_length, "must be -1 (the default) or above 0");
   }
 };
 
