@@ -256,13 +256,14 @@ if [[ $models == all || $models == learned10 ]]; then
   cp "$work/learned10_.train.csv" "$work/igbnet_learned_10only.train.csv"
 fi
 # Rounds 5 to 7, the masked rounds (2026-12-05: docs/notes/2026-12-05-narrow-
-# mazes-and-10-robot-model.md, "Forty worlds"): from the model of round 4
-# (shipped before them), each round the model before alone acts in 11 kinds of world (8 of
-# them narrow or generated mazes and rooms of 3 to 10 robots; 40 to 150
+# mazes-and-10-robot-model.md, "Forty worlds"): from the model of round 4,
+# each round the model before alone acts in 11 kinds of world (8 of them
+# narrow or generated mazes and rooms of 3 to 10 robots; 40 to 150
 # episodes, each capped at 60 s), the expert labels, and the next model is
 # one epoch on the base data and every masked round so far, the loss among
 # the valid moves. Round 7 adds perfect mazes with the team starting in the
-# bottom-left corner (as in scenarios/long/). Its model is the one shipped.
+# bottom-left corner (as in scenarios/long/). Round 8 (below) starts from
+# round 7's model, and its model is the one shipped.
 #   masked_worlds DIR ACTOR BASE CORNER: one round's data into $work/DIR.
 masked_worlds() {
   local dir=$1 actor=$2 base=$3 corner=$4
