@@ -246,7 +246,7 @@ if [[ $models == all || $models == learned10 ]]; then
   # paper's box density (8 m: 0.16 robots per square metre, 80 robots in 20
   # m are 0.2; 11 m: 0.08), where robots stand as close together as in a
   # large team. Without those worlds the same epoch gave 0.85 success at 80
-  # x 80 (selection seeds), with them 0.95.
+  # x 80 (40 selection worlds), with them 0.925.
   ds dense8 --episodes 1000 --first-seed 23000000 --set "workspace.size=[8,8]" \
     --set workspace.obstacles.random.count=5 &
   ds dense11 --episodes 1000 --first-seed 23100000 --set "workspace.size=[11,11]" \
