@@ -17,13 +17,14 @@ from torch import nn
 
 FORMAT = "aia-igbnet"
 # The metadata keys of a model without message passing (format version 2);
-# with it, version 3 adds message_hops; version 5 adds centre.
+# with it, version 3 adds message_hops; version 5 adds centre; version 6
+# reach_detour.
 NETWORK_KEYS = ("width", "hidden", "pool", "stem_stride")
 CHANNEL_KEYS = ("frame", "cell", "window", "blur", "cutoff", "geodesic",
                 "geodesic_length", "observe_range")
 # Channel settings written only when they differ from the default.
 OPTIONAL_KEYS = {"reach_margin": 0, "reach_world": False, "search": False,
-                 "trail": False}
+                 "reach_detour": 0.0, "trail": False}
 
 
 def default_meta(**changes):
@@ -164,13 +165,16 @@ def save_model(net, path):
         if meta.get(k, default) != default:
             out[k] = meta[k]
     out["format"] = FORMAT
-    out["version"] = 5 if centre else 3 if hops else 2
+    detour = float(out.get("reach_detour", 0.0)) > 0.0
+    out["version"] = 6 if detour else 5 if centre else 3 if hops else 2
     if hops:
         out["message_hops"] = hops
     if centre:
         out["centre"] = centre
     for k in ("cell", "blur", "cutoff", "geodesic_length", "observe_range"):
         out[k] = float(out[k])
+    if detour:
+        out["reach_detour"] = float(out["reach_detour"])
     text = json.dumps(out, sort_keys=True, separators=(",", ":"))
     archive = _Archive(net.cpu().eval(), text)
     torch.jit.save(torch.jit.script(archive), str(path))

@@ -471,10 +471,10 @@ Action AddTrainCommand(CLI::App& app) {
   auto declared = std::make_shared<DeclaredFlags>(cmd);
   declared->Add(o.get());
   auto network = std::make_shared<DeclaredFlags>(cmd);
-  // set by --message-hops, --reach-world, --search, --trail, --centre and
-  // --geodesic-length, which may change an --init model
+  // set by --message-hops, --reach-world, --search, --trail, --centre,
+  // --geodesic-length and --reach-detour, which may change an --init model
   network->Add(&o->network, {"message_hops", "reach_world", "search", "trail",
-                             "centre", "geodesic_length"});
+                             "centre", "geodesic_length", "reach_detour"});
   cmd->add_flag("--resume", o->resume,
                 "continue from OUT.ckpt (same options) if it is there");
   auto validate = std::make_shared<std::string>();

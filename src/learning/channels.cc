@@ -490,6 +490,52 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
       }
       out[v * w + u] = value;
     }
+  if (params_.reach_detour > 0.0 && self_free)
+    DimByDetour(x0, y0, w, h, sx, sy, out);
+}
+
+void ChannelRenderer::DimByDetour(int x0, int y0, int w, int h, int sx, int sy,
+                                  float* out) const {
+  // Breadth-first from the robot's pixel over the valid moves inside the
+  // window: m(p) moves; a pixel never reached reads 0. Scratch per thread.
+  const int nx = occupancy_.nx(), ny = occupancy_.ny();
+  const int su = sx - x0, sv = sy - y0;
+  if (su < 0 || sv < 0 || su >= w || sv >= h) return;
+  thread_local std::vector<int> moves_to;
+  thread_local std::vector<int> queue;
+  moves_to.assign(static_cast<std::size_t>(w) * h, -1);
+  queue.clear();
+  moves_to[sv * w + su] = 0;
+  queue.push_back(sv * w + su);
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const int at = queue[head];
+    const int u = at % w, v = at / w;
+    const unsigned m = moves_[occupancy_.Index(x0 + u, y0 + v)];
+    for (Move move : kMoves) {
+      if (!(m & (1u << static_cast<int>(move)))) continue;
+      const auto d = MoveDelta(move);
+      const int nu = u + d[0], nv = v + d[1];
+      if (nu < 0 || nv < 0 || nu >= w || nv >= h) continue;
+      const int next = nv * w + nu;
+      if (moves_to[next] >= 0) continue;
+      moves_to[next] = moves_to[at] + 1;
+      queue.push_back(next);
+    }
+  }
+  // exp(-k cell / reach_detour) for a detour of k moves, k < w + h.
+  const double per_move = params_.cell / params_.reach_detour;
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const int gx = x0 + u, gy = y0 + v;
+      const int i = v * w + u;
+      if (gx < 0 || gy < 0 || gx >= nx || gy >= ny || moves_to[i] < 0) {
+        out[i] = 0.0f;
+        continue;
+      }
+      const int detour = moves_to[i] - std::abs(u - su) - std::abs(v - sv);
+      if (detour > 0)
+        out[i] *= static_cast<float>(std::exp(-detour * per_move));
+    }
 }
 
 namespace internal {

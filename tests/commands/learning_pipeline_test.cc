@@ -392,9 +392,10 @@ TEST(TrainTest, AMessagePassingModelTrainsResumesAndExtends) {
 // samples carry their search points (SearchPoints) and last moves, which
 // read back as written. A model with the reach channel is redefined to read
 // them over the whole workspace with a trail channel (--init, --reach-world
-// 1, --search 1, --trail 1, and a sharper reach channel: --geodesic-length
-// 2) and trains on; --search without --reach-world, and a length for a
-// model without the reach channel, are refused.
+// 1, --search 1, --trail 1, and a sharper reach channel dimmed by the detour:
+// --geodesic-length 2 --reach-detour 0.75) and trains on; --search or
+// --reach-detour without --reach-world, and a length for a model without
+// the reach channel, are refused.
 TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   const std::string dir = testing::MakeTempDir("aia_train_");
   DatasetOptions d = Tiny(dir + "/data");
@@ -432,6 +433,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   world.search = 1;
   world.trail = 1;
   world.geodesic_length = 2.0;
+  world.reach_detour = 0.75;
   world.epochs = 1;
   ASSERT_EQ(Train(world).size(), 1u);
   const auto net = IgbNet::Load(dir + "/world.pt", "w", 0, "k");
@@ -443,6 +445,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
                 .channels.geodesic_length,
             5.0);
   EXPECT_EQ(net->config().channels.geodesic_length, 2.0);
+  EXPECT_EQ(net->config().channels.reach_detour, 0.75);
   TrainOptions lone = TinyTraining(dir + "/data", dir + "/lone.pt");
   lone.init = dir + "/plain.pt";
   lone.search = 1;
@@ -463,6 +466,16 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
     EXPECT_EQ(e.Format(),
               "command line: --geodesic-length: needs the reach channel "
               "(--geodesic, or an --init model with it)");
+  }
+  TrainOptions windowed = TinyTraining(dir + "/data", dir + "/windowed.pt");
+  windowed.network.channels.geodesic = true;
+  windowed.reach_detour = 1.0;
+  try {
+    Train(windowed);
+    ADD_FAILURE() << "--reach-detour without --reach-world";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "command line: --reach-detour: needs --reach-world 1");
   }
   fs::remove_all(dir);
 }
@@ -541,6 +554,8 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
        "--centre: must be an integer in [-1, 31], got 33"},
       {{"train", "--data", dir, "--geodesic-length", "0"},
        "--geodesic-length: must be -1 (the default) or above 0"},
+      {{"train", "--data", dir, "--reach-detour", "-0.5"},
+       "--reach-detour: must be -1 (the default), 0 or above"},
       {{"train", "--data", dir, "--init", dir + "/none.pt", "--out",
         dir + "/m.pt"},
        "--init: '" + dir + "/none.pt': no such model file"},

@@ -398,6 +398,56 @@ TEST(ChannelsTest, ReachLeadsToTheSearchPoints) {
     for (int x = 2; x < 4; ++x) EXPECT_EQ(At(img, 3, 4, 4, x, y), 0.0f);
 }
 
+// The reach channel as the robot sees it (ChannelParams::reach_detour): in
+// the walled world (wall at x = 2 up to y = 2, the door in the top row) a
+// robot at pixel (1, 0) reaches the pixels right of the wall only round
+// through the door. Pixel (2, 0) is 5 moves away against 1 straight on: a
+// detour of 4; (2, 1) and (3, 1) detours of 2, (3, 0) of 4; the door's
+// row and the left side none. Each pixel keeps its value times exp(-detour
+// cell / D). Behind a closed wall, where the way leads only there (the
+// search points of the target are beyond it), nothing is reachable: 0.
+TEST(ChannelsTest, ReachDimmedByTheDetourFromTheRobot) {
+  WalledWorld t;
+  t.params.reach_world = true;
+  t.log_det_prior.resize(1);
+  const std::vector<HeatSource> targets = {
+      WalledWorld::Target({3.5, 0.5}, 1.0)};
+  const auto render = [&](double detour, const SearchPointSets* search) {
+    ChannelParams p = t.params;
+    p.reach_detour = detour;
+    p.search = search != nullptr;
+    ChannelRenderer r(t.map.occupancy(), t.map.size(), p, &t.map.lattice());
+    std::vector<float> img(r.ImageSize());
+    r.RenderWithHeat({1.5, 0.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                     img.data(), RobotMemory{search});
+    return img;
+  };
+  const std::vector<float> plain = render(0.0, nullptr);
+  const std::vector<float> seen = render(2.0, nullptr);
+  const int detour[3][4] = {{0, 0, 4, 4}, {0, 0, 2, 2}, {0, 0, 0, 0}};
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) {
+      ASSERT_GT(At(plain, 3, 4, 4, x, y), 0.0f) << x << ", " << y;
+      EXPECT_NEAR(At(seen, 3, 4, 4, x, y),
+                  At(plain, 3, 4, 4, x, y) * std::exp(-detour[y][x] * 0.5),
+                  1e-6)
+          << x << ", " << y;
+    }
+  // The other channels are the same.
+  for (int i = 0; i < 4 * 12; ++i) EXPECT_EQ(seen[i], plain[i]) << i;
+  t.map = Map({4.0, 3.0}, {Box{{1.95, 0.0}, {2.05, 3.0}}}, 0.1, 1.0, 0.1);
+  const SearchPointSets beyond = {{Vec2(3.5, 2.5)}};
+  const std::vector<float> closed_plain = render(0.0, &beyond);
+  const std::vector<float> closed = render(2.0, &beyond);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) {
+      if (x >= 2) EXPECT_GT(At(closed_plain, 3, 4, 4, x, y), 0.0f);
+      EXPECT_EQ(At(closed, 3, 4, 4, x, y),
+                x < 2 ? At(closed_plain, 3, 4, 4, x, y) : 0.0f)
+          << x << ", " << y;
+    }
+}
+
 // The observation pixels a renderer keeps per point change nothing: robots
 // rendered on a renderer that has seen their targets' points before (and
 // from two threads at once) get the images of a fresh renderer, with the

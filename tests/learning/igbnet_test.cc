@@ -173,6 +173,24 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "metadata: search: needs reach_world");
   }
+  // The reach channel's detour: version 6, needs reach_world.
+  NetworkConfig detour = world;
+  detour.channels.reach_detour = 0.5;
+  EXPECT_NE(detour.ToJson().find("\"version\":6"), std::string::npos);
+  EXPECT_EQ(NetworkConfig::FromJson(detour.ToJson()).channels.reach_detour,
+            0.5);
+  EXPECT_EQ(world.ToJson().find("reach_detour"), std::string::npos);
+  std::string no_world_detour = detour.ToJson();
+  no_world_detour.replace(no_world_detour.find("\"reach_world\":true"), 18,
+                          "\"reach_world\":false");
+  no_world_detour.replace(no_world_detour.find("\"search\":true"), 13,
+                          "\"search\":false");
+  try {
+    NetworkConfig::FromJson(no_world_detour);
+    ADD_FAILURE() << "reach_detour without reach_world read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "metadata: reach_detour: needs reach_world");
+  }
   // The centre: version 5, odd, in the centred frame, within the blocks'
   // output (window 16, stride 2: 8 cells, the robot's cell 4).
   NetworkConfig centre = g;
@@ -207,12 +225,12 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   EXPECT_EQ(problem(9, ChannelFrame::kCentred),
             "must be at most 7: the blocks' output is 8 cells per side");
   std::string future = mp.ToJson();
-  future.replace(future.find("\"version\":3"), 11, "\"version\":6");
+  future.replace(future.find("\"version\":3"), 11, "\"version\":7");
   try {
     NetworkConfig::FromJson(future);
-    ADD_FAILURE() << "version 6 read";
+    ADD_FAILURE() << "version 7 read";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model format version 6, this build reads 1 to 5");
+    EXPECT_STREQ(e.what(), "model format version 7, this build reads 1 to 6");
   }
 }
 
@@ -240,7 +258,8 @@ TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
   EXPECT_EQ(error(j, "\"width\":8", "\"width\":8,\"depth\":2"),
             "metadata: depth: unknown key; valid top-level keys: frame, "
             "cell, window, blur, cutoff, geodesic, geodesic_length, "
-            "observe_range, reach_margin, reach_world, search, trail, "
+            "observe_range, reach_margin, reach_world, search, "
+            "reach_detour, trail, "
             "width, stem_stride, pool, hidden, centre, message_hops");
 }
 

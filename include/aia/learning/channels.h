@@ -85,6 +85,15 @@ struct ChannelParams {
   // where the robot's and its neighbours' misses leave the target), not of
   // its mean alone.
   bool search = false;
+  // With reach_world, above 0: channel 4 as the robot sees it from where it
+  // stands. A window pixel p keeps its value times exp(-(m(p) - |p - r|_1)
+  // cell / reach_detour), m(p) the number of valid moves from the robot's
+  // pixel r to p inside the window and |p - r|_1 the fewest any lattice
+  // allows: a way the robot can take straight on keeps its brightness, the
+  // far side of a wall (nearer the goal, but a detour away) goes dark, and
+  // a pixel the robot cannot reach inside the window reads 0. In metres
+  // (0: off).
+  double reach_detour = 0.0;
   // A last channel, trail: the pixel of the lattice point the robot came
   // from (its last lattice move; none before its first) holds 1.
   bool trail = false;
@@ -134,6 +143,12 @@ struct ChannelParams {
         "with reach_world: the reach channel leads to each target's search "
         "points (where the robot's and its neighbours' missed measurements "
         "leave it), not to its mean alone"));
+    a->Visit(AIA_FIELD(reach_detour)
+                 .In(Between(0.0, 1000.0))
+                 .Doc("with reach_world: the reach channel dimmed by the "
+                      "detour from the robot, exp(-detour / reach_detour) "
+                      "with the detour in metres (moves inside the window "
+                      "beyond the Manhattan distance); 0: off"));
     a->Visit(AIA_FIELD(trail).Doc(
         "a last channel, trail: the pixel the robot came from (its last "
         "lattice move) at 1"));
@@ -253,6 +268,11 @@ class ChannelRenderer {
   void ReachRegion(int x0, int y0, int w, int h,
                    const std::vector<HeatSource>& targets,
                    const std::vector<double>& log_det_prior, double eps,
+                   float* out) const;
+  // ChannelParams::reach_detour: the w x h window `out` (pixel (0, 0) the
+  // global pixel (x0, y0)) dimmed by each pixel's detour from the robot's
+  // pixel (sx, sy).
+  void DimByDetour(int x0, int y0, int w, int h, int sx, int sy,
                    float* out) const;
   // The trail channel: the pixel `memory` came from.
   void Trail(const Vec2& self, const RobotMemory& memory, float* out) const;

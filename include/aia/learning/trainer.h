@@ -46,6 +46,10 @@ struct TrainOptions {
   // length sets it (from an --init model the weights are kept: the same
   // network reads the channel with the new contrast).
   double geodesic_length = -1.0;
+  // The reach channel's detour length (ChannelParams::reach_detour), in
+  // metres: -1 the network's (0, off), or --init's; 0 turns it off; above 0
+  // sets it (from an --init model the weights are kept).
+  double reach_detour = -1.0;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -141,12 +145,20 @@ struct TrainOptions {
                  .Doc("the reach channel's decay length L in metres (with "
                       "--init the weights are kept); -1, the default: "
                       "--init's, else 5"));
+    a->Visit(AIA_FIELD(reach_detour)
+                 .In({-1.0, 1000.0, false, false})
+                 .Doc("with --reach-world 1: the reach channel dimmed by "
+                      "each pixel's detour from the robot, exp(-detour / "
+                      "this) in metres (0: off; with --init the weights are "
+                      "kept); -1, the default: --init's, else 0"));
   }
   // lr_min <= lr; a length is -1 or above 0.
   void Validate(const FieldChecker& check) const {
     if (lr_min > lr) check.Fail(lr_min, "must be at most --lr");
     if (geodesic_length != -1.0 && geodesic_length <= 0.0)
       check.Fail(geodesic_length, "must be -1 (the default) or above 0");
+    if (reach_detour != -1.0 && reach_detour < 0.0)
+      check.Fail(reach_detour, "must be -1 (the default), 0 or above");
   }
 };
 

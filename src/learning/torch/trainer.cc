@@ -384,7 +384,7 @@ namespace {
 // The network to train: --init's (its architecture and channels; extended,
 // as the same function, where --reach-world, --search, --trail, --centre or
 // --message-hops ask for more; its reach channel's contrast changed by
-// --geodesic-length), or a fresh one. o->network becomes its
+// --geodesic-length and --reach-detour), or a fresh one. o->network becomes its
 // configuration.
 std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
   // What the flags change in the network (--reach-world and --search
@@ -397,12 +397,16 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
     if (o->centre >= 0) n->centre = o->centre;
     if (o->message_hops >= 0) n->message_hops = o->message_hops;
     if (o->geodesic_length > 0.0) c->geodesic_length = o->geodesic_length;
+    if (o->reach_detour >= 0.0) c->reach_detour = o->reach_detour;
     if (c->reach_world && !c->geodesic)
       throw InputError("command line", 0, "--reach-world",
                        "needs the reach channel (--geodesic, or an --init "
                        "model with it)");
     if (c->search && !c->reach_world)
       throw InputError("command line", 0, "--search", "needs --reach-world 1");
+    if (c->reach_detour > 0.0 && !c->reach_world)
+      throw InputError("command line", 0, "--reach-detour",
+                       "needs --reach-world 1");
     if (o->geodesic_length > 0.0 && !c->geodesic)
       throw InputError("command line", 0, "--geodesic-length",
                        "needs the reach channel (--geodesic, or an --init "
