@@ -164,8 +164,9 @@ def test_the_cpp_model_runs_in_python():
 
 def test_the_learned_model_runs_in_python():
     """The model for coordination none reads the trail (the point each robot
-    came from) and its search points (where it and its neighbours missed):
-    Mission.channels renders both, as the policy does, step after step."""
+    came from), its search points (where it and its neighbours missed) and
+    the reach channel dimmed by the detour: Mission.channels renders them,
+    as the policy does, step after step."""
     path = SOURCE / "models" / "igbnet_learned.pt"
     net, meta = network.load_model(path)
     assert meta["channels"] == 6 and meta["trail"] and meta["search"]
@@ -179,6 +180,12 @@ def test_the_learned_model_runs_in_python():
     assert not np.array_equal(m.channels(**params),
                               m.channels(**{**params, "search": False}))
     assert m.channels(**params)[:, 5].sum() > 0  # the trail
+    # The reach channel dimmed by the detour from each robot: darker
+    # behind the boxes, nowhere brighter.
+    assert meta["reach_detour"] > 0
+    dimmed = m.channels(**params)[:, 4]
+    plain = m.channels(**{**params, "reach_detour": 0.0})[:, 4]
+    assert (dimmed <= plain).all() and (dimmed < plain).any()
     # Made of every step's misses: asked for late, refused.
     late = aia.Mission(DEFAULT, seed=2)
     late.step([0] * late.num_robots)
