@@ -8,6 +8,12 @@ standard library, load aia's models with Debian's python3-torch.
       runs the model on N images of 4 x H x W float32 (little-endian,
       channel-major) and compares with the logits the C++ side wrote;
       exit 0 when they agree to 1e-4.
+  tools/igbnet.py set MODEL OUT KEY=VALUE...
+      writes MODEL's weights to OUT with channel parameters changed, and
+      nothing else: KEY is reach_detour (metres, 0 off; the model must read
+      the reach channel over the workspace) or geodesic_length (metres,
+      above 0). The learned recipe's round 9 actor is made this way
+      (tools/train_igbnet.sh).
 
 The dataset is SQLite (one file per shard): tables meta(key, value),
 worlds(episode, seed, width, height, map_cell, lattice_step, robot_radius,
@@ -73,18 +79,23 @@ def info(paths):
     print("labels: " + ", ".join("%s %d" % (m, n) for m, n in zip(MOVES, labels)))
 
 
-def load_model(path):
-    """The saved model as a torch.nn.Module in evaluation mode, and its
-    metadata (the channels' frame, cell, window, ...): the Python package's
-    network (python/aia/network.py), loaded from the source tree."""
+def network():
+    """The Python package's network module (python/aia/network.py), loaded
+    from the source tree (without the compiled part of the package)."""
     import importlib.util
 
     here = os.path.dirname(os.path.abspath(__file__))
     spec = importlib.util.spec_from_file_location(
         "aia_network", os.path.join(here, "..", "python", "aia", "network.py"))
-    network = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(network)
-    return network.load_model(path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def load_model(path):
+    """The saved model as a torch.nn.Module in evaluation mode, and its
+    metadata (the channels' frame, cell, window, ...)."""
+    return network().load_model(path)
 
 
 def check(model, images, n, h, w, logits):
@@ -103,6 +114,60 @@ def check(model, images, n, h, w, logits):
     return 0 if diff <= 1e-4 else 1
 
 
+# The channel parameters `set` may change: they shape what a channel reads,
+# not the network's inputs or weights. KEY -> (check, what a bad value is).
+SETTABLE = {
+    "reach_detour": (lambda v: v >= 0.0, "must be 0 (off) or above"),
+    "geodesic_length": (lambda v: v > 0.0, "must be above 0"),
+}
+
+
+def set_channels(model, out, assignments):
+    changes = {}
+    for a in assignments:
+        key, eq, text = a.partition("=")
+        if key not in SETTABLE:
+            print("error: command line: %s: not a settable channel parameter (%s)"
+                  % (key, ", ".join(sorted(SETTABLE))), file=sys.stderr)
+            return 2
+        try:
+            value = float(text) if eq else None
+        except ValueError:
+            value = None
+        ok, why = SETTABLE[key]
+        if value is None or value != value or abs(value) == float("inf") or not ok(value):
+            print("error: command line: %s: %s; got '%s'" % (key, why, text),
+                  file=sys.stderr)
+            return 2
+        changes[key] = value
+    if not os.path.isfile(model):
+        print("error: command line: MODEL: no such file: %s" % model, file=sys.stderr)
+        return 2
+    nw = network()
+    net, _ = nw.load_model(model)
+    net.meta.update(changes)
+    if net.meta.get("reach_detour", 0.0) > 0.0 and not net.meta.get("reach_world"):
+        print("error: command line: reach_detour: needs a model whose reach channel "
+              "covers the workspace (reach_world)", file=sys.stderr)
+        return 2
+    # Atomically, through a file of OUT's own name (torch names the archive's
+    # folder after the file, so the bytes depend on OUT's name alone).
+    import tempfile
+
+    folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(out)))
+    tmp = os.path.join(folder, os.path.basename(out))
+    try:
+        nw.save_model(net, tmp)
+        os.replace(tmp, out)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        os.rmdir(folder)
+    print("%s <- %s with %s" % (out, model, ", ".join(
+        "%s=%g" % kv for kv in sorted(changes.items()))))
+    return 0
+
+
 def main(argv):
     if len(argv) >= 2 and argv[0] == "info":
         info(argv[1:])
@@ -110,6 +175,13 @@ def main(argv):
     if len(argv) == 7 and argv[0] == "check":
         return check(argv[1], argv[2], int(argv[3]), int(argv[4]), int(argv[5]),
                      argv[6])
+    if len(argv) >= 4 and argv[0] == "set":
+        # TorchScript writes a module's constants in the order of a Python
+        # set: a fixed hash seed makes OUT the same bytes on every run.
+        if os.environ.get("PYTHONHASHSEED") != "0":
+            os.execve(sys.executable, [sys.executable, os.path.abspath(__file__)] + argv,
+                      dict(os.environ, PYTHONHASHSEED="0"))
+        return set_channels(argv[1], argv[2], argv[3:])
     print(__doc__, file=sys.stderr)
     return 2
 

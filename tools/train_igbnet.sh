@@ -11,13 +11,15 @@
 #                           robots), kept so that its results can be repeated.
 # MODELS selects what is trained:
 #   default    the two above;
-#   learned    also models/igbnet_learned.pt, the model meant for
+#   learned    models/igbnet.pt (the default, where it starts) and
+#              models/igbnet_learned.pt, the model meant for
 #              policy.coordination=none (the network alone; four DAgger
 #              rounds, then three with the loss among the valid moves in
 #              worlds weighted to narrow perfect mazes, the last also with
 #              the team starting in one corner, then an epoch with a
-#              sharper reach channel and one with it dimmed by the detour
-#              from the robot; about 2 hours 50 minutes more on 2 cores);
+#              sharper reach channel, then one with it dimmed by the detour
+#              from the robot on all that data and mazes of 1 m passages;
+#              about 2 hours 50 minutes more on 2 cores);
 #   learned10  only WORK_DIR/igbnet_learned_10only.pt (not shipped): the
 #              scalability check of the network alone, a model that never
 #              saw more than 10 robots: the default's inputs on teams of 10
@@ -120,10 +122,14 @@ if [[ $models != learned10 ]]; then
   # reduction over two threads does not add in the same order as over one).
   "$aia" train --data "${all_paths[@]}" --geodesic --epochs 3 --threads 2 \
     --out "$work/igbnet.pt" --weak-weight 0 --lr 1e-3 --lr-min 1e-5 --resume --quiet
-  # The paper's configuration (four channels, its dataset alone), as before.
+  shipped+=(igbnet)
+fi
+if [[ $models == default || $models == all ]]; then
+  # The paper's configuration (four channels, its dataset alone), as before
+  # (MODELS=learned leaves it: the learned model starts from the default).
   "$aia" train --data "$work/d0" --out "$work/igbnet_10x10.pt" --weak-weight 0 \
     --epochs 8 --lr 1e-3 --lr-min 1e-5 --resume --quiet
-  shipped+=(igbnet igbnet_10x10)
+  shipped+=(igbnet_10x10)
 fi
 if [[ $models == all ]]; then
   # The ablation's four-channel model on the same data.
@@ -326,14 +332,36 @@ if [[ $models == all || $models == learned ]]; then
   "$aia" train --data "${all_paths[@]}" "${masked_paths[@]}" --init "$work/masked7.pt" \
     --geodesic-length 0.25 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
     --valid-moves 1 --threads 2 --out "$work/sharp8q.pt" --resume --quiet
-  # Round 9: the same data, the reach channel as the robot sees it (dimmed
-  # by each pixel's detour from the robot, D = 0.5 m: the far side of a
-  # thin wall goes dark), the weights of round 8 kept.
-  "$aia" train --data "${all_paths[@]}" "${masked_paths[@]}" --init "$work/sharp8q.pt" \
+  # Round 9 (2026-12-06, docs/notes/2026-12-06-detour-and-1m-passages.md):
+  # the reach channel as the robot sees it (dimmed by each pixel's detour
+  # from the robot, D = 0.5 m: the far side of a thin wall goes dark), and
+  # mazes of 1 m passages. The actor is round 8's weights read through the
+  # dimmed channel, untrained (tools/igbnet.py set); it acts alone in 20 m
+  # mazes of 1 m passages (4 and 8 robots) and 30 m ones with the team in a
+  # corner (about 4 minutes), the expert labels; then one epoch from round
+  # 8's weights with the dimmed channel on all the data (about 7 minutes).
+  actor="$work/detour9a.pt"
+  /usr/bin/python3 tools/igbnet.py set "$work/sharp8q.pt" "$actor" reach_detour=0.5 >/dev/null
+  one=(--set workspace.obstacles.generator.type=maze --set workspace.obstacles.generator.corridor=1.0
+    --set workspace.obstacles.generator.wall=0.15 --set workspace.obstacles.random.count=0)
+  loops=workspace.obstacles.generator.loops
+  one9() { alone ddag9 "$actor" "$1" "$2" 300 --max-seconds 60 "${@:3}"; }  # one9 NAME SEED ARGS...
+  (
+    one9 narrow1_20l 58200000 --episodes 60 --size 8x8 "${one[@]}" --set $loops=0.1
+    one9 corner1_30 58300000 --episodes 30 --size 6x8 "${one[@]}" --set "workspace.size=[30,30]" \
+      --set $loops=0 --set "robots.start=[[0.25,0.25],[0.75,0.25],[0.25,0.75],[1.25,0.25],[0.75,0.75],[0.25,1.25]]"
+  ) &
+  (
+    one9 narrow1_20 58100000 --episodes 100 --size 4x6 "${one[@]}" --set $loops=0
+    one9 narrow1_20b 58400000 --episodes 100 --size 4x6 "${one[@]}" --set $loops=0.05
+  ) &
+  wait
+  "$aia" train --data "${all_paths[@]}" "${masked_paths[@]}" \
+    "$work"/ddag9/{narrow1_20,narrow1_20l,narrow1_20b,corner1_30} --init "$work/sharp8q.pt" \
     --reach-detour 0.5 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
-    --valid-moves 1 --threads 2 --out "$work/detour9.pt" --resume --quiet
-  cp "$work/detour9.pt" "$work/igbnet_learned.pt"
-  cp "$work/detour9.train.csv" "$work/igbnet_learned.train.csv"
+    --valid-moves 1 --threads 2 --out "$work/detour9n.pt" --resume --quiet
+  cp "$work/detour9n.pt" "$work/igbnet_learned.pt"
+  cp "$work/detour9n.train.csv" "$work/igbnet_learned.train.csv"
   shipped+=(igbnet_learned)
 fi
 for m in ${shipped[@]+"${shipped[@]}"}; do

@@ -477,6 +477,47 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
     EXPECT_EQ(e.Format(),
               "command line: --reach-detour: needs --reach-world 1");
   }
+
+  // tools/igbnet.py set: the same weights, channel parameters changed (how
+  // the learned recipe's round 9 actor is made); bad input is one line and
+  // exit 2, and writes nothing.
+  if (!PythonHasTorch()) {
+    fs::remove_all(dir);
+    GTEST_SKIP() << "python3-torch is not installed";
+  }
+  const std::string set =
+      "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " set ";
+  const auto ok = testing::RunCommand(set + dir + "/world.pt " + dir +
+                                      "/set.pt reach_detour=0.25 "
+                                      "geodesic_length=3");
+  ASSERT_EQ(ok.exit_code, 0) << ok.out << ok.err;
+  const auto changed = IgbNet::Load(dir + "/set.pt", "s", 0, "k");
+  EXPECT_EQ(changed->config().channels.reach_detour, 0.25);
+  EXPECT_EQ(changed->config().channels.geodesic_length, 3.0);
+  EXPECT_TRUE(changed->config().channels.search);
+  const int c = net->config().channels.num_channels();
+  std::vector<float> x(2 * c * 16 * 16, 0.2f), want(8), got(8);
+  for (std::size_t i = 0; i < x.size(); i += 3) x[i] = 0.7f;
+  net->Forward(x.data(), 2, 16, 16, want.data());
+  changed->Forward(x.data(), 2, 16, 16, got.data());
+  EXPECT_EQ(got, want);
+  for (const auto& [args, error] : std::vector<std::pair<std::string, std::string>>{
+           {"/world.pt " + dir + "/bad.pt reach=1",
+            "error: command line: reach: not a settable channel parameter "
+            "(geodesic_length, reach_detour)\n"},
+           {"/world.pt " + dir + "/bad.pt reach_detour=-1",
+            "error: command line: reach_detour: must be 0 (off) or above; got "
+            "'-1'\n"},
+           {"/world.pt " + dir + "/bad.pt geodesic_length=0",
+            "error: command line: geodesic_length: must be above 0; got '0'\n"},
+           {"/plain.pt " + dir + "/bad.pt reach_detour=0.5",
+            "error: command line: reach_detour: needs a model whose reach "
+            "channel covers the workspace (reach_world)\n"}}) {
+    const auto bad = testing::RunCommand(set + dir + args);
+    EXPECT_EQ(bad.exit_code, 2) << args;
+    EXPECT_EQ(bad.err, error) << args;
+  }
+  EXPECT_FALSE(fs::exists(dir + "/bad.pt"));
   fs::remove_all(dir);
 }
 
