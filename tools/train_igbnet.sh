@@ -19,7 +19,7 @@
 #              the team starting in one corner, then an epoch with a
 #              sharper reach channel, then one with it dimmed by the detour
 #              from the robot on all that data and mazes of 1 m passages;
-#              about 2 hours 50 minutes more on 2 cores);
+#              about 2 hours 55 minutes more on 2 cores);
 #   learned10  only WORK_DIR/igbnet_learned_10only.pt (not shipped): the
 #              scalability check of the network alone, a model that never
 #              saw more than 10 robots: the default's inputs on teams of 10
