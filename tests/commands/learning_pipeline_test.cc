@@ -501,7 +501,8 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   net->Forward(x.data(), 2, 16, 16, want.data());
   changed->Forward(x.data(), 2, 16, 16, got.data());
   EXPECT_EQ(got, want);
-  for (const auto& [args, error] : std::vector<std::pair<std::string, std::string>>{
+  for (const auto& [args, error] :
+       std::vector<std::pair<std::string, std::string>>{
            {"/world.pt " + dir + "/bad.pt reach=1",
             "error: command line: reach: not a settable channel parameter "
             "(geodesic_length, reach_detour)\n"},
