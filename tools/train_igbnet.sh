@@ -51,6 +51,15 @@ case $models in
     ;;
 esac
 mkdir -p "$work"
+# Jobs started with `&` record their pids; wait_all waits for them and
+# fails (stopping the script) if any failed, which a bare `wait` would not.
+pids=()
+wait_all() {
+  local pid rc=0
+  for pid in "${pids[@]}"; do wait "$pid" || rc=$?; done
+  pids=()
+  return "$rc"
+}
 
 ds() {
   local out=$1
@@ -62,7 +71,7 @@ ds() {
 # boxes, 10 steps each (also the randomized data's open worlds).
 ten=(d0)
 all=(d0)
-ds d0 --episodes 1500 &
+ds d0 --episodes 1500 & pids+=($!)
 (
   # Small and large teams; every seed range is disjoint from aia eval's
   # (0.., selection 5000.., the generalization suite's 931000..) and from
@@ -88,8 +97,8 @@ ds d0 --episodes 1500 &
     ds t40 --size 40x40 --episodes 200 --first-seed 22100000 --max-steps 60
     ds t80 --size 80x80 --episodes 200 --first-seed 22200000 --max-steps 40
   fi
-) &
-wait
+) & pids+=($!)
+wait_all
 # Generated structured worlds of 10 robots, and larger workspaces at the
 # paper's box density (0.075 per square metre).
 k=0
@@ -98,16 +107,16 @@ for g in maze rooms corridors cave; do
     k=$((k + 1))
     ds "g_${g}_$side" --episodes 150 --first-seed $((20000000 + k * 100000)) \
       --set "workspace.obstacles.generator.type=$g" \
-      --set "workspace.size=[$side,$side]" &
+      --set "workspace.size=[$side,$side]" & pids+=($!)
     ten+=("g_${g}_$side")
-    if ((k % 2 == 0)); then wait; fi
+    if ((k % 2 == 0)); then wait_all; fi
   done
 done
 ds dens30 --episodes 300 --first-seed 21000000 --set "workspace.size=[30,30]" \
-  --set workspace.obstacles.random.count=68 &
+  --set workspace.obstacles.random.count=68 & pids+=($!)
 ds dens40 --episodes 200 --first-seed 21100000 --set "workspace.size=[40,40]" \
-  --set workspace.obstacles.random.count=120 &
-wait
+  --set workspace.obstacles.random.count=120 & pids+=($!)
+wait_all
 ten+=(dens30 dens40 comm sens15 sens3 clutter0 clutter60)
 all=("${ten[@]}" small5 small3r small3m small2 t40 t80)
 paths() { for d in "$@"; do printf '%s\n' "$work/$d"; done; }
@@ -182,7 +191,7 @@ dagger_worlds() {
       dag narrow20 $((base + 1610000)) 300 --episodes 60 "${nar[@]}" --set $gen.loops=0 \
         --set workspace.obstacles.random.count=0
     fi
-  ) &
+  ) & pids+=($!)
   (
     dag rooms20_3 $((base + 700000)) 200 --episodes 100 --size 3x3 --set $g=rooms
     dag maze20_3 $((base + 800000)) 200 --episodes 100 --size 3x3 --set $g=maze
@@ -200,8 +209,8 @@ dagger_worlds() {
       dag narrow30 $((base + 1710000)) 400 --episodes 30 --set "workspace.size=[30,30]" \
         "${nar[@]}" --set $gen.loops=0.05 --set workspace.obstacles.random.count=0
     fi
-  ) &
-  wait
+  ) & pids+=($!)
+  wait_all
   dagger_names=(maze30 rooms30 corr30 cave30 maze40 open10 rooms40 rooms20_3 \
     maze20_3 corr20_5 cave20_5 open2x20 range dens40 t40)
   if [[ $narrow == narrow ]]; then
@@ -254,10 +263,10 @@ if [[ $models == all || $models == learned10 ]]; then
   # large team. Without those worlds the same epoch gave 0.85 success at 80
   # x 80 (40 selection worlds), with them 0.925.
   ds dense8 --episodes 1000 --first-seed 23000000 --set "workspace.size=[8,8]" \
-    --set workspace.obstacles.random.count=5 &
+    --set workspace.obstacles.random.count=5 & pids+=($!)
   ds dense11 --episodes 1000 --first-seed 23100000 --set "workspace.size=[11,11]" \
-    --set workspace.obstacles.random.count=9 &
-  wait
+    --set workspace.obstacles.random.count=9 & pids+=($!)
+  wait_all
   "$aia" train --data "${ten_paths[@]}" "$work/dense8" "$work/dense11" \
     --init "$work/igbnet_10only.pt" --reach-world 1 --search 1 --trail 1 \
     --geodesic-length 0.5 --valid-moves 1 --epochs 1 --lr 3e-4 --lr-min 1e-5 \
@@ -287,7 +296,7 @@ masked_worlds() {
     dag open10 $((base + 300000)) 200 --episodes 40
     dag rooms30 $((base + 400000)) 200 --episodes 30 --set "workspace.size=[30,30]" --set $g=rooms "${open[@]}"
     dag narrow30 $((base + 1000000)) 400 --episodes 30 --set "workspace.size=[30,30]" "${nar[@]}" --set $gen.loops=0.05 "${open[@]}"
-  ) &
+  ) & pids+=($!)
   (
     dag narrow20 $((base + 500000)) 300 --episodes 40 "${nar[@]}" --set $gen.loops=0 "${open[@]}"
     dag maze20_3 $((base + 600000)) 200 --episodes 40 --size 3x3 --set $g=maze "${open[@]}"
@@ -295,8 +304,8 @@ masked_worlds() {
     dag cave30 $((base + 800000)) 200 --episodes 30 --set "workspace.size=[30,30]" --set $g=cave "${open[@]}"
     dag narrow20_4b $((base + 900000)) 300 --episodes 150 --size 4x6 "${nar[@]}" --set $gen.loops=0 "${open[@]}"
     dag rooms20_3 $((base + 1100000)) 200 --episodes 40 --size 3x3 --set $g=rooms "${open[@]}"
-  ) &
-  wait
+  ) & pids+=($!)
+  wait_all
   masked_names=(cave30 corr20_5 maze20_3 maze30 narrow20 narrow20_4 narrow20_4b narrow30 open10 rooms20_3 rooms30)
   if [[ $corner == corner ]]; then
     local per=("${open[@]}" --set $g=maze --set $gen.loops=0 --set $gen.corridor=1.5 --set $gen.wall=0.15)
@@ -350,12 +359,12 @@ if [[ $models == all || $models == learned ]]; then
     one9 narrow1_20l 58200000 --episodes 60 --size 8x8 "${one[@]}" --set $loops=0.1
     one9 corner1_30 58300000 --episodes 30 --size 6x8 "${one[@]}" --set "workspace.size=[30,30]" \
       --set $loops=0 --set "robots.start=[[0.25,0.25],[0.75,0.25],[0.25,0.75],[1.25,0.25],[0.75,0.75],[0.25,1.25]]"
-  ) &
+  ) & pids+=($!)
   (
     one9 narrow1_20 58100000 --episodes 100 --size 4x6 "${one[@]}" --set $loops=0
     one9 narrow1_20b 58400000 --episodes 100 --size 4x6 "${one[@]}" --set $loops=0.05
-  ) &
-  wait
+  ) & pids+=($!)
+  wait_all
   "$aia" train --data "${all_paths[@]}" "${masked_paths[@]}" \
     "$work"/ddag9/{narrow1_20,narrow1_20l,narrow1_20b,corner1_30} --init "$work/sharp8q.pt" \
     --reach-detour 0.5 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
