@@ -26,6 +26,7 @@ cov yy, log det Sigma of the whole block). Labels: 0 left, 1 right, 2 up,
 3 down.
 """
 import glob
+import math
 import os
 import sqlite3
 import struct
@@ -135,7 +136,7 @@ def set_channels(model, out, assignments):
         except ValueError:
             value = None
         ok, why = SETTABLE[key]
-        if value is None or value != value or abs(value) == float("inf") or not ok(value):
+        if value is None or not math.isfinite(value) or not ok(value):
             print("error: command line: %s: %s; got '%s'" % (key, why, text),
                   file=sys.stderr)
             return 2
