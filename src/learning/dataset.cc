@@ -12,12 +12,58 @@
 
 #include "aia/core/error.h"
 #include "aia/core/io.h"
+#include "aia/scenario/config.h"
 #include "aia/world/lattice.h"
 
 namespace aia {
 namespace {
 
 namespace fs = std::filesystem;
+
+bool AllFinite(const std::vector<double>& v) {
+  return std::all_of(v.begin(), v.end(),
+                     [](double x) { return std::isfinite(x); });
+}
+
+// Within the workspace, or a lattice step off its edge at most (a robot
+// pushed against a wall); finite.
+bool Inside(const DatasetWorld& w, const Vec2& p) {
+  const double m = w.lattice_step;
+  return p.allFinite() && p.x() >= -m && p.y() >= -m &&
+         p.x() <= w.size.x() + m && p.y() <= w.size.y() + m;
+}
+
+// What is wrong with a world row, against the scenario's own ranges
+// (docs/scenarios.md), so that a damaged or edited file is refused before
+// a map, lattice or image is made from it; empty when nothing is.
+std::string WorldRowProblem(const DatasetWorld& w) {
+  const auto in = [](double x, double lo, double hi) {
+    return std::isfinite(x) && x >= lo && x <= hi;
+  };
+  if (!in(w.size.x(), 0.1, 1e4) || !in(w.size.y(), 0.1, 1e4))
+    return "width and height must be in [0.1, 10000]";
+  if (!in(w.map_cell, 0.001, 1e4) ||
+      (w.size.x() / w.map_cell) * (w.size.y() / w.map_cell) >
+          limits::kMaxGridCells)
+    return "map_cell must be in [0.001, 10000], at most 5e7 cells";
+  if (!in(w.lattice_step, 0.001, 1e4) ||
+      (w.size.x() / w.lattice_step) * (w.size.y() / w.lattice_step) >
+          limits::kMaxLatticePoints)
+    return "lattice_step must be in [0.001, 10000], at most 1e6 points";
+  if (!in(w.robot_radius, 0.001, 1e4) || w.robot_radius >= w.lattice_step / 2)
+    return "robot_radius must be in [0.001, 10000] and below lattice_step / 2";
+  if (!(std::isfinite(w.eps) && w.eps > 0.0)) return "eps must be above 0";
+  if (w.robots <= 0 || w.targets < 0 || w.steps < 0)
+    return "robots must be above 0, targets and steps not negative";
+  if (static_cast<int>(w.log_det_prior.size()) != w.targets ||
+      !AllFinite(w.log_det_prior))
+    return "log_det_prior must hold one finite value per target";
+  for (const Box& b : w.obstacles)
+    if (!b.lo.allFinite() || !b.hi.allFinite() || !(b.lo.x() <= b.hi.x()) ||
+        !(b.lo.y() <= b.hi.y()))
+      return "an obstacle box is not finite or not ordered";
+  return "";
+}
 
 constexpr const char* kSchema = R"(
 CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -201,11 +247,9 @@ std::string ReadFile(const std::string& file, Dataset* out) {
         w.obstacles.push_back(
             {{boxes[i], boxes[i + 1]}, {boxes[i + 2], boxes[i + 3]}});
       w.log_det_prior = Doubles(s, 13);
-      if (static_cast<int>(w.log_det_prior.size()) != w.targets ||
-          w.robots <= 0 || !(w.size.x() > 0.0 && w.size.y() > 0.0) ||
-          !(w.map_cell > 0.0) || !(w.eps > 0.0))
+      if (const std::string problem = WorldRowProblem(w); !problem.empty())
         throw std::runtime_error("episode " + std::to_string(w.episode) +
-                                 ": world row is inconsistent");
+                                 ": world row is inconsistent: " + problem);
       episodes.push_back(w.episode);
       out->worlds.push_back(std::move(w));
     }
@@ -248,6 +292,10 @@ std::string ReadFile(const std::string& file, Dataset* out) {
     const std::vector<double> tg = Doubles(s, 9);
     if (nb.size() % 2 != 0 || tg.size() != 6u * w.targets)
       throw std::runtime_error(where + ": neighbours or targets blob size");
+    if (!Inside(w, d.position) || !AllFinite(nb) || !AllFinite(tg))
+      throw std::runtime_error(where +
+                               ": position outside the workspace, or a "
+                               "neighbour or belief not finite");
     for (std::size_t i = 0; i < nb.size(); i += 2)
       d.neighbours.emplace_back(nb[i], nb[i + 1]);
     d.targets.resize(w.targets);
@@ -271,8 +319,11 @@ std::string ReadFile(const std::string& file, Dataset* out) {
           throw std::runtime_error(where + ": search blob is inconsistent");
         if (d.search.empty()) d.search.resize(w.targets);
         std::vector<Vec2>& points = d.search[static_cast<int>(k)];
-        for (int a = 0; a < static_cast<int>(count); ++a)
+        for (int a = 0; a < static_cast<int>(count); ++a) {
           points.emplace_back(sp[i + 2 + 2 * a], sp[i + 3 + 2 * a]);
+          if (!points.back().allFinite())
+            throw std::runtime_error(where + ": search point not finite");
+        }
         i += 2 + 2 * static_cast<std::size_t>(count);
       }
     }

@@ -232,3 +232,57 @@ def test_builtin_policy_arguments(mission):
     refused(lambda: aia.builtin_policy(3), "aia.builtin_policy: name: ")
     refused(lambda: aia.builtin_policy("nope"), "aia.builtin_policy: name: "
             "unknown policy 'nope'")
+
+
+BINARY = os.environ.get("AIA_BINARY", str(SOURCE / "build" / "aia"))
+
+
+@pytest.fixture(scope="module")
+def shard(tmp_path_factory):
+    """One small dataset shard made by `aia dataset`."""
+    import subprocess
+    out = tmp_path_factory.mktemp("shard")
+    r = subprocess.run([BINARY, "dataset", "--episodes", "1", "--size", "2x2",
+                        "--max-steps", "3", "--out", str(out), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    (path,) = out.glob("*.sqlite")
+    return path
+
+
+@pytest.mark.parametrize("sql,match", [
+    ("UPDATE worlds SET width = 1e12", "width and height must be in"),
+    ("UPDATE worlds SET height = 1e999", "width and height must be in"),
+    ("UPDATE worlds SET width = 1e4, height = 1e4", "at most 5e7 cells"),
+    ("UPDATE worlds SET lattice_step = 0", "lattice_step must be in"),
+    ("UPDATE worlds SET map_cell = 1e-9", "map_cell must be in"),
+    ("UPDATE worlds SET robot_radius = 1e300", "robot_radius must be in"),
+    ("UPDATE worlds SET eps = -1", "eps must be above 0"),
+    ("UPDATE samples SET x = 1e999 WHERE rowid = 1",
+     "position outside the workspace"),
+    ("UPDATE samples SET y = -50 WHERE rowid = 1",
+     "position outside the workspace"),
+])
+def test_a_damaged_dataset_is_refused(shard, tmp_path, sql, match):
+    """A shard edited to nonsense (a world 1e12 m wide, a lattice step of 0,
+    a robot at infinity) gets one error line and exit 2 from `aia train`
+    and an aia.InputError from aia.Dataset, never a crash, a hang or a map
+    the size of the memory (found by fuzzing, 2026-12-06)."""
+    import shutil
+    import sqlite3
+    import subprocess
+    folder = tmp_path / "d"
+    folder.mkdir()
+    damaged = folder / shard.name
+    shutil.copy(shard, damaged)
+    with sqlite3.connect(damaged) as db:
+        db.execute(sql)
+    r = subprocess.run([BINARY, "train", "--data", str(folder), "--epochs", "1",
+                        "--out", str(tmp_path / "m.pt"), "--quiet"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert r.stderr.startswith(f"error: {damaged}: --data: episode "), r.stderr
+    assert r.stderr.count("\n") == 1 and match in r.stderr, r.stderr
+    with pytest.raises(aia.InputError) as e:
+        aia.Dataset(folder)
+    assert match in str(e.value)
