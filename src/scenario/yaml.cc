@@ -42,6 +42,16 @@ class DocumentStarts : public YAML::EventHandler {
   struct TooManyValues {
     YAML::Mark mark;
   };
+  // Thrown at a quoted scalar that does not end on the line it starts on.
+  // YAML lets a quoted value run over lines, so a missing closing quote
+  // takes every line after it, keys and all, into one string (yaml-cpp
+  // complains only where the text has no last newline); a scenario's
+  // values are short, so one that runs over lines is refused instead.
+  struct OpenQuote {
+    YAML::Mark mark;
+  };
+
+  explicit DocumentStarts(const std::string& text) : text_(text) {}
 
   YAML::Mark start;
   void OnDocumentStart(const YAML::Mark& mark) override {
@@ -54,6 +64,7 @@ class DocumentStarts : public YAML::EventHandler {
   void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
                 const std::string&) override {
     Count(mark);
+    CheckQuoteEnds(mark);
   }
   void OnSequenceStart(const YAML::Mark& mark, const std::string&,
                        YAML::anchor_t, YAML::EmitterStyle::value) override {
@@ -70,8 +81,36 @@ class DocumentStarts : public YAML::EventHandler {
   void Count(const YAML::Mark& mark) {
     if (++values_ > kMaxNodes) throw TooManyValues{mark};
   }
+  // A scalar starting with a quote must have its closing quote before the
+  // end of its line (a double-quoted one skips backslash escapes; in a
+  // single-quoted one '' is a quote).
+  void CheckQuoteEnds(const YAML::Mark& mark) const {
+    if (mark.pos < 0) return;
+    std::size_t i = static_cast<std::size_t>(mark.pos);
+    if (i >= text_.size() || (text_[i] != '"' && text_[i] != '\'')) return;
+    const char quote = text_[i];
+    for (++i; i < text_.size() && text_[i] != '\n' && text_[i] != '\r'; ++i) {
+      if (quote == '"' && text_[i] == '\\') {
+        ++i;
+      } else if (text_[i] == quote) {
+        if (quote == '\'' && i + 1 < text_.size() && text_[i + 1] == '\'') {
+          ++i;
+        } else {
+          return;
+        }
+      }
+    }
+    throw OpenQuote{mark};
+  }
+  const std::string& text_;
   long values_ = 0;
 };
+
+std::string OpenQuoteMessage(const YAML::Mark& mark) {
+  return "the quoted value at column " + std::to_string(mark.column + 1) +
+         " does not end on its line (a missing closing quote?); a quoted "
+         "value must end on the line it starts on";
+}
 
 struct Documents {
   int count = 0;
@@ -82,7 +121,7 @@ struct Documents {
 Documents CountDocuments(const std::string& text) {
   std::istringstream in(text);
   YAML::Parser parser(in);
-  DocumentStarts handler;
+  DocumentStarts handler(text);
   Documents docs;
   int last = -1;
   while (parser.HandleNextDocument(handler)) {
@@ -440,6 +479,8 @@ ConfigNode ParseYaml(const std::string& text, const std::string& file) {
     doc = YAML::Load(text);
   } catch (const DocumentStarts::TooManyValues& e) {
     throw InputError(file, e.mark.line + 1, "(yaml)", TooManyValuesMessage());
+  } catch (const DocumentStarts::OpenQuote& e) {
+    throw InputError(file, e.mark.line + 1, "(yaml)", OpenQuoteMessage(e.mark));
   } catch (const YAML::DeepRecursion& e) {
     throw InputError(file, e.mark.line >= 0 ? e.mark.line + 1 : 0, "(yaml)",
                      TooDeepMessage(e.mark));
@@ -468,6 +509,8 @@ ConfigNode ParseYamlValue(const std::string& text, const std::string& flag,
     node = YAML::Load(text);
   } catch (const DocumentStarts::TooManyValues&) {
     throw InputError("command line", 0, named, TooManyValuesMessage());
+  } catch (const DocumentStarts::OpenQuote& e) {
+    throw InputError("command line", 0, named, OpenQuoteMessage(e.mark));
   } catch (const YAML::DeepRecursion& e) {
     throw InputError("command line", 0, named, TooDeepMessage(e.mark));
   } catch (const YAML::Exception& e) {

@@ -706,6 +706,31 @@ TEST(OverrideTest, SetValueIsOneDocumentInUtf8) {
   EXPECT_TRUE(ParseYamlValue("", "--set").IsNull());
 }
 
+// A quoted value ends on the line it starts on: YAML would let a missing
+// closing quote take the lines after it (keys and all) into one string,
+// which yaml-cpp accepts wherever the text ends with a newline.
+TEST(YamlTest, AQuotedValueEndsOnItsLine) {
+  const std::string open = "a: 1\nname: \"abc\nb: {c: -5}\n";
+  try {
+    ParseYaml(open, "f.yaml");
+    FAIL() << "read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "f.yaml:2: (yaml): the quoted value at column 7 does not end on "
+              "its line (a missing closing quote?); a quoted value must end on "
+              "the line it starts on");
+  }
+  EXPECT_EQ(OverrideError({ParseSetFlag("name='abc\nx\n")}).Format(),
+            "command line: --set name: the quoted value at column 1 does not "
+            "end on its line (a missing closing quote?); a quoted value must "
+            "end on the line it starts on");
+  // Escapes and doubled quotes do not end a value; quoted keys are values.
+  const ConfigNode ok =
+      ParseYaml("\"a\": \"x \\\" y\"\nb: 'it''s'\nc: [\"p\", 'q']\n", "f.yaml");
+  EXPECT_EQ(ok.Find("a")->scalar, "x \" y");
+  EXPECT_EQ(ok.Find("b")->scalar, "it's");
+}
+
 // Two documents hold the same value whatever their layout and key order; a
 // scalar's text, style and the order of a list count.
 TEST(YamlTest, SameValueIgnoresLayoutAndKeyOrderOnly) {
