@@ -245,7 +245,7 @@ void ChannelRenderer::RenderWithHeat(
     if (params_.geodesic)
       Reach(0, 0, self, *targets, *log_det_prior, eps, out + 4 * plane,
             memory.search);
-    Trail(self, memory, out + (channels() - 1) * plane);
+    Trail(self, memory, out + params_.trail_channel() * plane);
     return;
   }
 
@@ -290,7 +290,7 @@ void ChannelRenderer::RenderWithHeat(
   if (params_.geodesic)
     Reach(x0, y0, self, *targets, *log_det_prior, eps, out + 4 * plane,
           memory.search);
-  Trail(self, memory, out + (channels() - 1) * plane);
+  Trail(self, memory, out + params_.trail_channel() * plane);
 }
 
 void SetTrail(const Lattice& lattice, int here, Move last,
@@ -372,8 +372,15 @@ void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
   if (params_.reach_world) {
     int sx = 0, sy = 0;
     occupancy_.CellOf(self, &sx, &sy);
+    const SearchPointSets* points = params_.search ? search : nullptr;
     ReachWorld(x0, y0, width_, height_, sx, sy, targets, log_det_prior, eps,
-               out, params_.search ? search : nullptr);
+               out, points, params_.geodesic_length, true);
+    if (params_.reach_broad > 0.0) {
+      const std::size_t plane = static_cast<std::size_t>(height_) * width_;
+      float* broad = out + (params_.broad_channel() - 4) * plane;
+      ReachWorld(x0, y0, width_, height_, sx, sy, targets, log_det_prior, eps,
+                 broad, points, params_.reach_broad, false);
+    }
     return;
   }
   const int margin =
@@ -404,14 +411,15 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                                  const std::vector<HeatSource>& targets,
                                  const std::vector<double>& log_det_prior,
                                  double eps, float* out,
-                                 const SearchPointSets* search) const {
+                                 const SearchPointSets* search, double length,
+                                 bool detour) const {
   // cost(p) = min over observation pixels q of d(p, q) - (L / cell) ln w(q),
   // d in valid moves: the log of G(p) = max_q w(q) exp(-d(p, q) cell / L) up
   // to the factor -cell / L. Dijkstra with the least cost first; each pixel
   // settles once. Scratch per thread: nothing is allocated once warm.
   const int nx = occupancy_.nx(), ny = occupancy_.ny();
   const std::size_t total = static_cast<std::size_t>(nx) * ny;
-  const double moves_per_e = params_.geodesic_length / params_.cell;
+  const double moves_per_e = length / params_.cell;
   thread_local std::vector<double> cost;
   thread_local std::vector<std::pair<double, int>> heap;
   cost.assign(total, std::numeric_limits<double>::infinity());
@@ -490,7 +498,7 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
       }
       out[v * w + u] = value;
     }
-  if (params_.reach_detour > 0.0 && self_free)
+  if (detour && params_.reach_detour > 0.0 && self_free)
     DimByDetour(x0, y0, w, h, sx, sy, out);
 }
 

@@ -448,6 +448,52 @@ TEST(ChannelsTest, ReachDimmedByTheDetourFromTheRobot) {
     }
 }
 
+// The broad reach channel (ChannelParams::reach_broad) is the last one,
+// after the trail: channel 4 again at decay length reach_broad and without
+// the detour, from the same sources. So it equals channel 4 of a renderer
+// whose L is reach_broad and whose detour is off, pixel for pixel, and the
+// channels before it are those of a renderer without it. In the walled
+// world the way to the target behind the wall goes round through the door.
+TEST(ChannelsTest, BroadReachIsReachAtItsLengthWithoutTheDetour) {
+  WalledWorld t;
+  t.params.reach_world = true;
+  t.params.trail = true;
+  t.log_det_prior.resize(1);
+  const std::vector<HeatSource> targets = {
+      WalledWorld::Target({3.5, 0.5}, 1.0)};
+  RobotMemory memory;
+  memory.moved = true;
+  memory.came_from = {0.5, 0.5};
+  const auto render = [&](double length, double detour, double broad) {
+    ChannelParams p = t.params;
+    p.geodesic_length = length;
+    p.reach_detour = detour;
+    p.reach_broad = broad;
+    ChannelRenderer r(t.map.occupancy(), t.map.size(), p, &t.map.lattice());
+    std::vector<float> img(r.ImageSize());
+    r.RenderWithHeat({1.5, 0.5}, {}, t.heat, &targets, &t.log_det_prior, t.eps,
+                     img.data(), memory);
+    return img;
+  };
+  const std::size_t plane = 12;
+  const std::vector<float> with = render(0.25, 0.5, 5.0);
+  const std::vector<float> without = render(0.25, 0.5, 0.0);
+  const std::vector<float> at_five = render(5.0, 0.0, 0.0);
+  ASSERT_EQ(with.size(), 7 * plane);
+  ASSERT_EQ(without.size(), 6 * plane);
+  for (std::size_t i = 0; i < 6 * plane; ++i) EXPECT_EQ(with[i], without[i]);
+  EXPECT_EQ(with[5 * plane + 0], 1.0f);  // the trail stays channel 5
+  int lit = 0;
+  for (std::size_t i = 0; i < plane; ++i) {
+    EXPECT_EQ(with[6 * plane + i], at_five[4 * plane + i]) << i;
+    lit += with[6 * plane + i] > 0.0f;
+  }
+  // Every pixel is on a way to the target (the door is open): none is 0,
+  // and the broad channel differs from the sharp one.
+  EXPECT_EQ(lit, 12);
+  EXPECT_NE(with[6 * plane + 8], with[4 * plane + 8]);
+}
+
 // The observation pixels a renderer keeps per point change nothing: robots
 // rendered on a renderer that has seen their targets' points before (and
 // from two threads at once) get the images of a fresh renderer, with the

@@ -191,6 +191,26 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "metadata: reach_detour: needs reach_world");
   }
+  // The broad reach channel: version 7, one more channel, needs reach_world.
+  NetworkConfig broad = detour;
+  broad.channels.reach_broad = 5.0;
+  EXPECT_NE(broad.ToJson().find("\"version\":7"), std::string::npos);
+  EXPECT_EQ(NetworkConfig::FromJson(broad.ToJson()).channels.reach_broad, 5.0);
+  EXPECT_EQ(broad.channels.num_channels(), detour.channels.num_channels() + 1);
+  EXPECT_EQ(detour.ToJson().find("reach_broad"), std::string::npos);
+  std::string no_world_broad = broad.ToJson();
+  no_world_broad.replace(no_world_broad.find("\"reach_world\":true"), 18,
+                         "\"reach_world\":false");
+  no_world_broad.replace(no_world_broad.find("\"search\":true"), 13,
+                         "\"search\":false");
+  no_world_broad.replace(no_world_broad.find("\"reach_detour\":0.5"), 18,
+                         "\"reach_detour\":0.0");
+  try {
+    NetworkConfig::FromJson(no_world_broad);
+    ADD_FAILURE() << "reach_broad without reach_world read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "metadata: reach_broad: needs reach_world");
+  }
   // The centre: version 5, odd, in the centred frame, within the blocks'
   // output (window 16, stride 2: 8 cells, the robot's cell 4).
   NetworkConfig centre = g;
@@ -225,12 +245,12 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   EXPECT_EQ(problem(9, ChannelFrame::kCentred),
             "must be at most 7: the blocks' output is 8 cells per side");
   std::string future = mp.ToJson();
-  future.replace(future.find("\"version\":3"), 11, "\"version\":7");
+  future.replace(future.find("\"version\":3"), 11, "\"version\":8");
   try {
     NetworkConfig::FromJson(future);
-    ADD_FAILURE() << "version 7 read";
+    ADD_FAILURE() << "version 8 read";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model format version 7, this build reads 1 to 6");
+    EXPECT_STREQ(e.what(), "model format version 8, this build reads 1 to 7");
   }
 }
 
@@ -259,7 +279,7 @@ TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
             "metadata: depth: unknown key; valid top-level keys: frame, "
             "cell, window, blur, cutoff, geodesic, geodesic_length, "
             "observe_range, reach_margin, reach_world, search, "
-            "reach_detour, trail, "
+            "reach_detour, trail, reach_broad, "
             "width, stem_stride, pool, hidden, centre, message_hops");
 }
 

@@ -97,10 +97,21 @@ struct ChannelParams {
   // A last channel, trail: the pixel of the lattice point the robot came
   // from (its last lattice move; none before its first) holds 1.
   bool trail = false;
+  // With reach_world, above 0: a last channel (after the trail), broad
+  // reach: channel 4 again, from the same sources, at decay length
+  // reach_broad metres and without the detour, so that the way to a
+  // target other than the nearest still shows (at a short L the branch
+  // toward a farther target reads like any step off the way). In metres
+  // (0: off).
+  double reach_broad = 0.0;
 
   int num_channels() const {
-    return kNumChannels + (geodesic ? 1 : 0) + (trail ? 1 : 0);
+    return kNumChannels + (geodesic ? 1 : 0) + (trail ? 1 : 0) +
+           (reach_broad > 0.0 ? 1 : 0);
   }
+  // The index of the trail channel (when on) and of the broad reach.
+  int trail_channel() const { return kNumChannels + (geodesic ? 1 : 0); }
+  int broad_channel() const { return trail_channel() + (trail ? 1 : 0); }
 
   // Declared once (core/fields.h) for the model file's metadata and for
   // `aia train`'s flags (each key is the flag with '-' for '_').
@@ -150,8 +161,14 @@ struct ChannelParams {
                       "with the detour in metres (moves inside the window "
                       "beyond the Manhattan distance); 0: off"));
     a->Visit(AIA_FIELD(trail).Doc(
-        "a last channel, trail: the pixel the robot came from (its last "
-        "lattice move) at 1"));
+        "a channel after reach, trail: the pixel the robot came from (its "
+        "last lattice move) at 1"));
+    a->Visit(AIA_FIELD(reach_broad)
+                 .In(Between(0.0, 1000.0))
+                 .Doc("with reach_world, above 0: a last channel, the reach "
+                      "channel again at this decay length in metres and "
+                      "without the detour (the ways to targets beyond the "
+                      "nearest); 0: off"));
   }
 };
 
@@ -260,10 +277,13 @@ class ChannelRenderer {
              const SearchPointSets* search) const;
   // Channel 4 over the whole workspace in log space, cropped to the w x h
   // pixels from global pixel (x0, y0), scaled at the robot's pixel (sx, sy).
+  // `length`: its L in metres; `detour`: dimmed by ChannelParams::
+  // reach_detour where that is on.
   void ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                   const std::vector<HeatSource>& targets,
                   const std::vector<double>& log_det_prior, double eps,
-                  float* out, const SearchPointSets* search) const;
+                  float* out, const SearchPointSets* search, double length,
+                  bool detour) const;
   // Channel 4 over the w x h pixels from global pixel (x0, y0), scaled to 1.
   void ReachRegion(int x0, int y0, int w, int h,
                    const std::vector<HeatSource>& targets,

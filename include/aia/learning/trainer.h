@@ -50,6 +50,11 @@ struct TrainOptions {
   // metres: -1 the network's (0, off), or --init's; 0 turns it off; above 0
   // sets it (from an --init model the weights are kept).
   double reach_detour = -1.0;
+  // The broad reach channel's decay length (ChannelParams::reach_broad), in
+  // metres: -1 the network's (0, off), or --init's; 0 turns it off; above 0
+  // sets it (from an --init model without it, the stem's weights for the
+  // new channel start at zero: the same function).
+  double reach_broad = -1.0;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -151,6 +156,12 @@ struct TrainOptions {
                       "each pixel's detour from the robot, exp(-detour / "
                       "this) in metres (0: off; with --init the weights are "
                       "kept); -1, the default: --init's, else 0"));
+    a->Visit(AIA_FIELD(reach_broad)
+                 .In({-1.0, 1000.0, false, false})
+                 .Doc("with --reach-world 1: a last channel, the reach "
+                      "channel again at this decay length in metres, without "
+                      "the detour (0: off; with --init the new input starts "
+                      "at zero weight); -1, the default: --init's, else 0"));
   }
   // lr_min <= lr; a length is -1 or above 0.
   void Validate(const FieldChecker& check) const {
@@ -159,6 +170,8 @@ struct TrainOptions {
       check.Fail(geodesic_length, "must be -1 (the default) or above 0");
     if (reach_detour != -1.0 && reach_detour < 0.0)
       check.Fail(reach_detour, "must be -1 (the default), 0 or above");
+    if (reach_broad != -1.0 && reach_broad < 0.0)
+      check.Fail(reach_broad, "must be -1 (the default), 0 or above");
   }
 };
 

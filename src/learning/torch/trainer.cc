@@ -398,6 +398,7 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
     if (o->message_hops >= 0) n->message_hops = o->message_hops;
     if (o->geodesic_length > 0.0) c->geodesic_length = o->geodesic_length;
     if (o->reach_detour >= 0.0) c->reach_detour = o->reach_detour;
+    if (o->reach_broad >= 0.0) c->reach_broad = o->reach_broad;
     if (c->reach_world && !c->geodesic)
       throw InputError("command line", 0, "--reach-world",
                        "needs the reach channel (--geodesic, or an --init "
@@ -406,6 +407,9 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
       throw InputError("command line", 0, "--search", "needs --reach-world 1");
     if (c->reach_detour > 0.0 && !c->reach_world)
       throw InputError("command line", 0, "--reach-detour",
+                       "needs --reach-world 1");
+    if (c->reach_broad > 0.0 && !c->reach_world)
+      throw InputError("command line", 0, "--reach-broad",
                        "needs --reach-world 1");
     if (o->geodesic_length > 0.0 && !c->geodesic)
       throw InputError("command line", 0, "--geodesic-length",
