@@ -66,14 +66,41 @@ void CheckGenerator(const Scenario& s, const FieldChecker& check) {
                                   FormatPair(g.room_size.x(), g.room_size.y()));
     }
   }
+  const int nx = StepsIn(s.workspace.size.x(), step),
+            ny = StepsIn(s.workspace.size.y(), step);
+  const std::string workspace =
+      "the workspace " + FormatPair(s.workspace.size.x(), s.workspace.size.y());
+  if (g.type == GeneratorType::kMaze) {
+    // Maze cells of `corridor`: with one cell across, the spanning tree
+    // opens every wall, and the world comes out empty.
+    const int p = StepsIn(g.corridor, step);
+    if (p >= 1 && (nx / p < 2 || ny / p < 2)) {
+      check.Fail(g.corridor, workspace +
+                                 " holds fewer than two maze cells of it in "
+                                 "one direction (" +
+                                 FormatNumber(2 * p * step) +
+                                 " m needed in both), so the maze would have "
+                                 "no wall; got " +
+                                 FormatNumber(g.corridor));
+    }
+  }
+  if (g.type == GeneratorType::kRooms) {
+    // Every room is at least min across (a region is split only where both
+    // halves keep it), the workspace itself being the first room: one
+    // narrower than min holds no room of the size asked for (it came out
+    // as one room and no wall).
+    const int m = std::max(1, StepsIn(g.room_size.x(), step));
+    if (std::min(nx, ny) < m) {
+      check.Fail(g.room_size,
+                 workspace + " is narrower than the rooms' min side (" +
+                     FormatNumber(m * step) + " m), so it holds no room; got " +
+                     FormatPair(g.room_size.x(), g.room_size.y()));
+    }
+  }
   if (g.type == GeneratorType::kCorridors) {
-    const int nx = StepsIn(s.workspace.size.x(), step),
-              ny = StepsIn(s.workspace.size.y(), step);
     const int need = StepsIn(g.corridor, step) + StepsIn(g.room_size.x(), step);
     if (std::min(nx, ny) < need) {
-      check.Fail(g, "the workspace " +
-                        FormatPair(s.workspace.size.x(), s.workspace.size.y()) +
-                        " is too small for a corridor of " +
+      check.Fail(g, workspace + " is too small for a corridor of " +
                         FormatNumber(g.corridor) + " m with rooms of " +
                         FormatNumber(g.room_size.x()) + " m beside it (" +
                         FormatNumber(need * step) +
@@ -240,7 +267,33 @@ void TargetsConfig::Validate(const FieldChecker& check) {
   if (has_list) count = static_cast<int>(list.size());
 }
 
-void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model) {
+double PhysicsConfig::PointArrivalSeconds(double step) const {
+  // The waypoint spring is critically damped: from rest `step` away, the
+  // distance left after t is step (1 + w t) e^(-w t), w = sqrt(kp / mass),
+  // which falls monotonically; bisection on x = w t for the tolerance.
+  const double omega = std::sqrt(kp / robot_mass);
+  const double ratio = tolerance / step;
+  if (ratio >= 1.0) return 0.0;
+  double lo = 0.0, hi = 1.0;
+  while ((1.0 + hi) * std::exp(-hi) > ratio) hi *= 2.0;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    ((1.0 + mid) * std::exp(-mid) > ratio ? lo : hi) = mid;
+  }
+  return hi / omega;
+}
+
+void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model,
+                             double step) {
+  // A robot has arrived within tolerance of its waypoint: beyond half a
+  // lattice step it would arrive nearer the point it left than the one it
+  // goes to.
+  if (tolerance >= 0.5 * step) {
+    check.Fail(tolerance, "must be below half of robots.step (" +
+                              FormatNumber(0.5 * step) + "), got " +
+                              FormatNumber(tolerance));
+    return;
+  }
   // A point robot's waypoint actuator is a critically damped spring:
   // explicit integration is stable while timestep * omega stays well below
   // 1. (A wheeled robot's motors are damped implicitly.)
@@ -255,6 +308,30 @@ void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model) {
                        "or the timestep)");
   }
   const double timeout = StepTimeout(model);
+  // A point robot's move takes the spring's time to come within tolerance
+  // of a waypoint one lattice step away: a decision step shorter than that
+  // times every robot out, and none ever moves.
+  // (The timesteps' explicit integration arrives a few per cent sooner
+  // than the continuous spring: a quarter of slack.)
+  const double move = std::round(PointArrivalSeconds(step) * 1e3) / 1e3;
+  if (model == RobotModel::kPoint && 0.75 * move > timeout) {
+    const std::string why =
+        "a point robot's move takes about " + FormatNumber(move) +
+        " s (the waypoint spring, kp " + FormatNumber(kp) + " and robot_mass " +
+        FormatNumber(robot_mass) + ", from robots.step " + FormatNumber(step) +
+        " to within tolerance " + FormatNumber(tolerance) + ")";
+    if (step_timeout) {
+      check.Fail(step_timeout, "must be at least " + FormatNumber(0.75 * move) +
+                                   ": " + why + ", got " +
+                                   FormatNumber(timeout));
+    } else {
+      check.Fail(kp, "is too soft: " + why +
+                         ", longer than the step_timeout "
+                         "of " +
+                         FormatNumber(timeout) +
+                         " s (raise kp or physics.step_timeout)");
+    }
+  }
   const double steps = timeout / timestep;
   if (steps > limits::kMaxPhysicsStepsPerDecision) {
     check.Fail(timestep, "makes " + FormatNumber(steps) +
@@ -339,7 +416,7 @@ void Scenario::Validate(const FieldChecker& check) {
                    FormatPair(random->max_size.x(), random->max_size.y()));
   }
   if (workspace.obstacles.generator) CheckGenerator(*this, check);
-  physics.Validate(check, robots.model);
+  physics.Validate(check, robots.model, robots.step);
   if (sensor.rate && mission.decisions != Decisions::kAsync) {
     check.Fail(sensor.rate,
                "applies to mission.decisions async only (lockstep senses once "

@@ -150,7 +150,8 @@ struct GeneratorConfig {
         "2 robots.radius (walls stand between lattice points)"));
     a->Visit(AIA_FIELD(corridor).In(kLength).Doc(
         "maze: passage width; corridors: corridor width; metres, rounded "
-        "down to whole robots.step, at least one"));
+        "down to whole robots.step, at least one; maze: two cells of it fit "
+        "across the workspace each way"));
     a->Visit(AIA_FIELD(door).In(kLength).Doc(
         "rooms, corridors: door width, metres, rounded down to whole "
         "robots.step, at least one"));
@@ -159,7 +160,8 @@ struct GeneratorConfig {
                  .Shape("[min, max]")
                  .Doc("rooms, corridors: side of a room, metres, rounded down "
                       "to whole robots.step; max at least twice min, min at "
-                      "least door"));
+                      "least door; rooms: min at most the workspace's shorter "
+                      "side"));
     a->Visit(AIA_FIELD(loops).In(kUnit).Doc(
         "maze: share of the walls left by the spanning tree that are opened "
         "too (0: a perfect maze, one path between any two points)"));
@@ -552,19 +554,22 @@ struct PhysicsConfig {
                  .In(Between(1e-3, 1e6))
                  .Doc("point robots: waypoint spring stiffness, N/m "
                       "(critically damped); timestep * sqrt(kp / robot_mass) "
-                      "at most 0.5"));
+                      "at most 0.5, and a move (one step to within "
+                      "tolerance) within about step_timeout"));
     a->Visit(AIA_FIELD(robot_mass)
                  .In(Between(1e-3, 1e3))
                  .Doc("point robots: kg (diff_drive: robots.diff_drive.mass)"));
     a->Visit(AIA_FIELD(tolerance)
                  .In(Between(1e-6, 1.0))
                  .Doc("a robot has arrived within this distance of its "
-                      "waypoint, metres"));
+                      "waypoint, metres; below robots.step / 2"));
     a->Visit(AIA_FIELD(step_timeout)
                  .In(Between(1e-3, 1e3))
                  .Doc("simulated seconds a decision step may last; at most "
-                      "1e6 timesteps; none: 1 for point robots, 4 for "
-                      "diff_drive"));
+                      "1e6 timesteps; point robots: at least 3/4 of a move "
+                      "(the spring's time from one lattice point to within "
+                      "tolerance of the next); none: 1 for point robots, 4 "
+                      "for diff_drive"));
     a->Visit(AIA_FIELD(solver).Doc(
         "MuJoCo's constraint solver: newton, cg, or auto (Newton while its "
         "dense nv x nv work arrays fit in 256 MiB, about 400 diff_drive "
@@ -576,10 +581,14 @@ struct PhysicsConfig {
     return model == RobotModel::kDiffDrive ? kDiffDriveStepTimeout
                                            : kPointStepTimeout;
   }
-  // A point robot's spring is stable at this timestep; a decision step is
-  // at most 1e6 timesteps. Called by Scenario::Validate, which knows the
-  // robot model.
-  void Validate(const FieldChecker& check, RobotModel model);
+  // Seconds a point robot's waypoint spring takes from rest to within
+  // tolerance of a waypoint `step` metres away.
+  double PointArrivalSeconds(double step) const;
+  // The tolerance is below half a lattice step; a point robot's spring is
+  // stable at this timestep and its move fits in a decision step; a
+  // decision step is at most 1e6 timesteps. Called by Scenario::Validate,
+  // which knows the robot model and robots.step.
+  void Validate(const FieldChecker& check, RobotModel model, double step);
 };
 
 struct RenderConfig {
