@@ -45,7 +45,8 @@ using Action = std::function<int()>;
 
 constexpr char kSetHelp[] =
     "override a scenario key, e.g. --set mission.eps=0.05 or --set "
-    "policy.p_v=0.8 (repeatable; see aia schema and aia policies)";
+    "policy.p_v=0.8 (repeatable; see aia schema and aia policies; not a "
+    "key that --policy, --seed or --max-steps gives too)";
 
 // Paths given to a flag: an empty one is a mistake (an unset variable in a
 // script), not the flag's default.

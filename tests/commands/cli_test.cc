@@ -584,6 +584,18 @@ TEST(CliTest, BadSetIsBadInputOnEveryCommand) {
       {{"run", scenario, "--set", "sensor.sigma0=1e-400", "--out", out},
        "error: command line: --set sensor.sigma0: must be a number in [1e-06, "
        "10000], got 1e-400, which is too small: it underflows to 0"},
+      // A key given by its own flag too: --set won silently.
+      {{"run", scenario, "--seed", "6", "--set", "seed=5", "--out", out},
+       "error: command line: --set seed: is also given by --seed; give one "
+       "of them\n"},
+      {{"run", scenario, "--max-steps", "4", "--set", "mission.max_steps=2",
+        "--out", out},
+       "error: command line: --set mission.max_steps: is also given by "
+       "--max-steps; give one of them\n"},
+      {{"render", scenario, "--out", out + "/v.mp4", "--policy", "greedy",
+        "--set", "policy.name=random"},
+       "error: command line: --set policy.name: is also given by --policy; "
+       "give one of them\n"},
   };
   for (const auto& [args, prefix] : cases) {
     std::vector<std::string> a = args;

@@ -41,7 +41,9 @@ struct CommandOverrides {
   // {"--seed", "seed", "12"}): read by the scenario's reader, so an error is
   // the key's, naming the flag. Applied after the three above.
   std::vector<Override> flags;
-  std::vector<std::string> sets;  // "key.path=value", applied last
+  // "key.path=value", applied last; a key one of the flags above gives is
+  // refused (InputError naming both).
+  std::vector<std::string> sets;
 
   // As scenario overrides; InputError (naming the flag) for an unknown
   // policy or a malformed --set.
