@@ -583,6 +583,23 @@ int aia::CliMain(int argc, char** argv) {
       AddWorldCommand(app),   AddEvalCommand(app),   AddBenchCommand(app),
       AddDatasetCommand(app), AddTrainCommand(app),  AddPoliciesCommand(app),
       AddSchemaCommand(app)};
+  // A first word that names no command: CLI11 would say only that a
+  // command is required.
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::string names;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::fprintf(stderr,
+                   "error: command line: '%s' is not a command; the commands "
+                   "are %s (aia --help lists them)\n",
+                   aia::OneLine(argv[1]).c_str(), names.c_str());
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -106,6 +106,14 @@ TEST(CliTest, UnknownFlagAndMissingArgumentExitWith2) {
   EXPECT_EQ(RunAia({"run"}).exit_code, 2);
   EXPECT_EQ(RunAia({}).exit_code, 2);
   EXPECT_EQ(RunAia({"bench", "--sizes", "10by10"}).exit_code, 2);
+  // A word that is no command is named (CLI11 said "A subcommand is
+  // required").
+  const auto unknown = RunAia({"RUN", SourcePath("scenarios/default.yaml")});
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_EQ(unknown.err,
+            "error: command line: 'RUN' is not a command; the commands are "
+            "run, render, plan, world, eval, bench, dataset, train, policies, "
+            "schema (aia --help lists them)\n");
 }
 
 // aia bench's row: every column a number, mujoco-testspeed's rate and
