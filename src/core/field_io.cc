@@ -375,10 +375,18 @@ void FieldReader::FailUnknownKey(const ConfigNode::Entry& entry,
             (names.empty() ? std::string("none") : field_text::Join(names)) +
             ")";
   } else {
-    const std::string::size_type dot = key.find_last_of('.');
-    what += dot == std::string::npos
-                ? "; valid top-level keys: "
-                : "; valid keys under " + key.substr(0, dot) + ": ";
+    // The parent is the path before this entry's own key (which may hold
+    // a dot itself: a YAML key "sensor.range" is one key, not a path).
+    const std::string parent =
+        key.size() > entry.key.size() + 1
+            ? key.substr(0, key.size() - entry.key.size() - 1)
+            : "";
+    if (entry.key.find('.') != std::string::npos)
+      what +=
+          " (a key with a dot is one key, not a path: nest it as a "
+          "mapping)";
+    what += parent.empty() ? "; valid top-level keys: "
+                           : "; valid keys under " + parent + ": ";
     what += field_text::Join(names);
   }
   ConfigNode at = entry.value;  // blamed at the key's line
