@@ -155,6 +155,34 @@ def test_a_centre_network_reads_the_cells_around_the_robot(tmp_path):
     assert check_same_moves(net, meta, path, seed=4) == 40
 
 
+def test_a_broad_reach_model_written_here_runs_in_the_cpp_policy(tmp_path):
+    """The broad reach channel (reach_broad, format 7): the seventh input
+    after reach, search points and trail; the C++ policy reads a model
+    written here, renders the same channels and makes its moves."""
+    meta = network.default_meta(width=8, hidden=16, geodesic=True,
+                                 geodesic_length=0.25, reach_world=True,
+                                 search=True, trail=True, reach_detour=0.5,
+                                 reach_broad=5.0)
+    assert network.num_channels(meta) == 7
+    torch.manual_seed(2)
+    net = network.IgbNet(meta).eval()
+    path = tmp_path / "broad.pt"
+    network.save_model(net, path)
+    back, meta_back = network.load_model(path)
+    assert meta_back["reach_broad"] == 5.0
+    x = torch.rand(2, 7, 40, 40)
+    with torch.no_grad():
+        assert torch.equal(back(x), net(x))
+    m = aia.Mission(DEFAULT, seed=5)
+    images = m.channels(**network.channel_params(meta))
+    assert images.shape[1] == 7
+    plain = m.channels(**{**network.channel_params(meta), "geodesic_length": 5.0,
+                          "reach_detour": 0.0, "reach_broad": 0.0})
+    # The last channel is channel 4 at L = 5 m, the robots' own images.
+    assert np.array_equal(images[:, 6], plain[:, 4])
+    assert check_same_moves(net, meta, path, seed=5) == 40
+
+
 def test_the_cpp_model_runs_in_python():
     path = SOURCE / "models" / "igbnet.pt"
     net, meta = network.load_model(path)
