@@ -26,6 +26,11 @@ int RunWorldCommand(const WorldOptions& o) {
   const PolicyRegistry registry = AllPolicies();
   const Scenario scenario =
       LoadScenario(o.scenario_path, o.overrides.ToOverrides(registry));
+  // The world needs no policy, but a scenario `aia run` refuses is not
+  // one to write a world from either.
+  if (!registry.Has(scenario.policy.name))
+    throw scenario.ErrorAt("policy.name",
+                           registry.UnknownPolicy(scenario.policy.name));
   CheckNotAnInput(o.out, "--out", MissionInputs(scenario, nullptr));
   const std::shared_ptr<const Instance> instance = BuildInstance(scenario);
   const World& world = instance->world;

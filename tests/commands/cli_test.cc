@@ -466,6 +466,22 @@ std::string WithoutFileAndWallTime(const std::string& json) {
                             "\"scenario_file\": X");
 }
 
+// A scenario `aia run` refuses for its policy's name is refused by `aia
+// world` too, though the world needs no policy (it wrote the world).
+TEST(CliTest, WorldRefusesAnUnknownPolicyAsRunDoes) {
+  const std::string dir = testing::MakeTempDir("aia_world_policy_");
+  const std::string file =
+      SourcePath("tests/data/bad_world/unknown_policy.yaml");
+  const auto run = RunAia({"run", file, "--out", dir, "--quiet"});
+  const auto world = RunAia({"world", file, "--out", dir + "/w.xml"});
+  EXPECT_EQ(world.exit_code, 2);
+  EXPECT_EQ(world.err, run.err);
+  EXPECT_NE(world.err.find("policy.name: unknown policy"), std::string::npos)
+      << world.err;
+  EXPECT_FALSE(fs::exists(dir + "/w.xml"));
+  fs::remove_all(dir);
+}
+
 TEST(CliTest, EffectiveYamlRepeatsTheMission) {
   const std::string a = testing::MakeTempDir("aia_eff_"),
                     b = testing::MakeTempDir("aia_eff_");
