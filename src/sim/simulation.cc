@@ -51,6 +51,21 @@ const char* MujocoWarningName(int warning) {
   return warning >= 0 && warning < mjNWARNING ? kNames[warning] : "unknown";
 }
 
+std::string UnstableStateReport(const std::array<long, mjNWARNING>& warnings) {
+  long total = 0;
+  std::string types;
+  for (const int w :
+       {mjWARN_BADQPOS, mjWARN_BADQVEL, mjWARN_BADQACC, mjWARN_BADCTRL}) {
+    if (warnings[w] == 0) continue;
+    total += warnings[w];
+    types += std::string(types.empty() ? "" : ", ") + MujocoWarningName(w) +
+             " " + std::to_string(warnings[w]);
+  }
+  if (total == 0) return "";
+  return "MuJoCo reset an unstable state " + std::to_string(total) +
+         (total == 1 ? " time (" : " times (") + types + ")";
+}
+
 MjModelPtr CompileMjcf(const std::string& xml) {
   InstallMujocoHandlers();
   auto vfs = std::make_unique<mjVFS>();

@@ -315,6 +315,40 @@ TEST(CliTest, SameScenarioAndSeedGiveByteIdenticalResults) {
   fs::remove_all(b);
 }
 
+// Wheeled robots with absurd motors (10 g, 1000 N m): MuJoCo resets their
+// unstable state. The run writes its files and exits 0, but says so on
+// stderr, naming the counts that diagnostics.json holds and what to change.
+TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
+  const std::string dir = testing::MakeTempDir("aia_qacc_");
+  const std::string file = dir + "/motors.yaml";
+  std::ofstream(file) << "name: motors\n"
+                         "seed: 2\n"
+                         "workspace: {size: [12, 12]}\n"
+                         "robots:\n"
+                         "  count: 3\n"
+                         "  model: diff_drive\n"
+                         "  diff_drive: {mass: 0.01, max_torque: 1000, "
+                         "max_speed: 100}\n"
+                         "targets: {count: 2}\n"
+                         "policy: {name: greedy}\n"
+                         "mission: {max_steps: 4}\n"
+                         "physics: {timestep: 0.02, kp: 1}\n";
+  const auto r = RunAia({"run", file, "--out", dir + "/out", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string diagnostics = ReadFile(dir + "/out/diagnostics.json");
+  std::smatch count;
+  ASSERT_TRUE(std::regex_search(diagnostics, count,
+                                std::regex("\"bad_qacc\": ([0-9]+)")))
+      << diagnostics;
+  EXPECT_EQ(r.err, "warning: motors, seed 2: MuJoCo reset an unstable state " +
+                       count[1].str() + " time" + (count[1] == "1" ? "" : "s") +
+                       " (bad_qacc " + count[1].str() +
+                       "): the robots' motion after it is not physical (too "
+                       "strong a motor for its mass and time step: lower "
+                       "robots.diff_drive.max_torque or physics.kp, raise "
+                       "robots.diff_drive.mass or lower physics.timestep)\n");
+}
+
 // Wheeled robots: the same mission twice gives the same files, which report
 // robot_model, the simulated seconds it took (each decision step at least a
 // 0.5 m drive at 0.7 m/s) and each robot's stalls and timeouts; eval takes the
@@ -327,6 +361,7 @@ TEST(CliTest, DiffDriveRunsRepeatAndCountSeconds) {
                            "--set", "robots.model=diff_drive", "--max-steps",
                            "12", "--out", dir, "--quiet"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err, "");  // no warning: the motors are sane
   }
   EXPECT_EQ(ReadFile(a + "/trace.csv"), ReadFile(b + "/trace.csv"));
   const std::string summary = ReadFile(a + "/summary.json");

@@ -203,6 +203,24 @@ TEST(MujocoHandlersTest, ErrorsAreExceptionsAndWarningsAreKept) {
   EXPECT_EQ(std::filesystem::exists("MUJOCO_LOG.TXT"), had_log);
 }
 
+// The resets of an unstable state are the bad_* warnings alone (a contact
+// overflow is handled and says nothing of the motion), counted by type.
+TEST(MujocoHandlersTest, UnstableStateReportNamesTheResets) {
+  std::array<long, mjNWARNING> w{};
+  EXPECT_EQ(UnstableStateReport(w), "");
+  w[mjWARN_CONTACTFULL] = 3;
+  w[mjWARN_INERTIA] = 1;
+  EXPECT_EQ(UnstableStateReport(w), "");
+  w[mjWARN_BADQACC] = 1;
+  EXPECT_EQ(UnstableStateReport(w),
+            "MuJoCo reset an unstable state 1 time (bad_qacc 1)");
+  w[mjWARN_BADQPOS] = 2;
+  w[mjWARN_BADCTRL] = 4;
+  EXPECT_EQ(UnstableStateReport(w),
+            "MuJoCo reset an unstable state 7 times (bad_qpos 2, bad_qacc 1, "
+            "bad_ctrl 4)");
+}
+
 TEST(MujocoHandlersTest, AStackOverflowInsideMjStepIsAPhysicsError) {
   // 40 bodies whose broad phase needs 780 pairs of stack: 100 is too few
   // (set after compiling: the compiler steps the model once itself).

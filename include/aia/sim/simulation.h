@@ -55,6 +55,12 @@ void InstallMujocoHandlers();
 const char* MujocoWarningName(int warning);
 // This thread's last MuJoCo warning message ("" if none).
 const std::string& LastMujocoWarning();
+// Where MuJoCo found the state unstable and reset it (the bad_qpos,
+// bad_qvel, bad_qacc and bad_ctrl warnings among `warnings`, counted by
+// type): "" if never, else one sentence naming the counts, e.g. "MuJoCo
+// reset an unstable state 2 times (bad_qacc 2)". The motion after such a
+// reset is not physical, so a command warns with it.
+std::string UnstableStateReport(const std::array<long, mjNWARNING>& warnings);
 
 // Compiles MJCF text (through MuJoCo's virtual file system); throws
 // std::runtime_error with MuJoCo's message if it does not compile.
