@@ -18,13 +18,14 @@ from torch import nn
 FORMAT = "aia-igbnet"
 # The metadata keys of a model without message passing (format version 2);
 # with it, version 3 adds message_hops; version 5 adds centre; version 6
-# reach_detour; version 7 reach_broad.
+# reach_detour; version 7 reach_broad; version 8 reach_second.
 NETWORK_KEYS = ("width", "hidden", "pool", "stem_stride")
 CHANNEL_KEYS = ("frame", "cell", "window", "blur", "cutoff", "geodesic",
                 "geodesic_length", "observe_range")
 # Channel settings written only when they differ from the default.
 OPTIONAL_KEYS = {"reach_margin": 0, "reach_world": False, "search": False,
-                 "reach_detour": 0.0, "trail": False, "reach_broad": 0.0}
+                 "reach_detour": 0.0, "trail": False, "reach_broad": 0.0,
+                 "reach_second": False}
 
 
 def default_meta(**changes):
@@ -56,7 +57,8 @@ def channel_params(meta):
 
 def num_channels(meta):
     return (4 + (1 if meta.get("geodesic") else 0) + (1 if meta.get("trail") else 0)
-            + (1 if float(meta.get("reach_broad", 0.0)) > 0.0 else 0))
+            + (1 if float(meta.get("reach_broad", 0.0)) > 0.0 else 0)
+            + (1 if meta.get("reach_second") else 0))
 
 
 def centre_start(meta):
@@ -168,8 +170,9 @@ def save_model(net, path):
     out["format"] = FORMAT
     detour = float(out.get("reach_detour", 0.0)) > 0.0
     broad = float(out.get("reach_broad", 0.0)) > 0.0
-    out["version"] = (7 if broad else 6 if detour else 5 if centre else 3 if hops
-                      else 2)
+    second = bool(out.get("reach_second", False))
+    out["version"] = (8 if second else 7 if broad else 6 if detour else 5
+                      if centre else 3 if hops else 2)
     if hops:
         out["message_hops"] = hops
     if centre:

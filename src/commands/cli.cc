@@ -473,11 +473,11 @@ Action AddTrainCommand(CLI::App& app) {
   declared->Add(o.get());
   auto network = std::make_shared<DeclaredFlags>(cmd);
   // set by --message-hops, --reach-world, --search, --trail, --centre,
-  // --geodesic-length, --reach-detour and --reach-broad, which may change an
-  // --init model
-  network->Add(&o->network,
-               {"message_hops", "reach_world", "search", "trail", "centre",
-                "geodesic_length", "reach_detour", "reach_broad"});
+  // --geodesic-length, --reach-detour, --reach-broad and --reach-second,
+  // which may change an --init model
+  network->Add(&o->network, {"message_hops", "reach_world", "search", "trail",
+                             "centre", "geodesic_length", "reach_detour",
+                             "reach_broad", "reach_second"});
   cmd->add_flag("--resume", o->resume,
                 "continue from OUT.ckpt (same options) if it is there");
   auto validate = std::make_shared<std::string>();

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <queue>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -373,14 +374,17 @@ void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
     int sx = 0, sy = 0;
     occupancy_.CellOf(self, &sx, &sy);
     const SearchPointSets* points = params_.search ? search : nullptr;
+    // `out` is channel 4; the optional channels after it follow.
+    const std::size_t plane = static_cast<std::size_t>(height_) * width_;
+    float* second = params_.reach_second
+                        ? out + (params_.second_channel() - 4) * plane
+                        : nullptr;
     ReachWorld(x0, y0, width_, height_, sx, sy, targets, log_det_prior, eps,
-               out, points, params_.geodesic_length, true);
-    if (params_.reach_broad > 0.0) {
-      const std::size_t plane = static_cast<std::size_t>(height_) * width_;
-      float* broad = out + (params_.broad_channel() - 4) * plane;
+               out, points, params_.geodesic_length, true, second);
+    if (params_.reach_broad > 0.0)
       ReachWorld(x0, y0, width_, height_, sx, sy, targets, log_det_prior, eps,
-                 broad, points, params_.reach_broad, false);
-    }
+                 out + (params_.broad_channel() - 4) * plane, points,
+                 params_.reach_broad, false, nullptr);
     return;
   }
   const int margin =
@@ -412,21 +416,52 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                                  const std::vector<double>& log_det_prior,
                                  double eps, float* out,
                                  const SearchPointSets* search, double length,
-                                 bool detour) const {
+                                 bool detour, float* second) const {
   // cost(p) = min over observation pixels q of d(p, q) - (L / cell) ln w(q),
   // d in valid moves: the log of G(p) = max_q w(q) exp(-d(p, q) cell / L) up
   // to the factor -cell / L. Dijkstra with the least cost first; each pixel
-  // settles once. Scratch per thread: nothing is allocated once warm.
+  // settles once (with `second`, once per each of its two best targets).
+  // Scratch per thread: nothing is allocated once warm.
   const int nx = occupancy_.nx(), ny = occupancy_.ny();
   const std::size_t total = static_cast<std::size_t>(nx) * ny;
   const double moves_per_e = length / params_.cell;
-  thread_local std::vector<double> cost;
-  thread_local std::vector<std::pair<double, int>> heap;
-  cost.assign(total, std::numeric_limits<double>::infinity());
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  thread_local std::vector<double> cost, cost2;
+  thread_local std::vector<int> label, label2;
+  // (cost, pixel, target): ordered by cost, then pixel and target, so that
+  // ties pop in one order on every machine.
+  using Entry = std::tuple<double, int, int>;
+  thread_local std::vector<Entry> heap;
+  const auto later = [](const Entry& a, const Entry& b) { return a > b; };
+  cost.assign(total, kInf);
   heap.clear();
-  const auto greater = [](const std::pair<double, int>& a,
-                          const std::pair<double, int>& b) {
-    return a.first > b.first || (a.first == b.first && a.second > b.second);
+  if (second) {
+    cost2.assign(total, kInf);
+    label.assign(total, -1);
+    label2.assign(total, -1);
+  }
+  // A way of cost c from target k reaches pixel j. Without `second`: kept if
+  // it is j's least. With it: kept if it is j's least or its least from any
+  // other target than the least's (each pixel holds its two best targets,
+  // never one twice).
+  const auto improve = [&](int j, double c, int k) {
+    if (!second || k == label[j]) {
+      if (c >= cost[j]) return false;
+      cost[j] = c;
+      if (second) label[j] = k;
+    } else if (c < cost[j]) {
+      cost2[j] = cost[j];
+      label2[j] = label[j];
+      cost[j] = c;
+      label[j] = k;
+    } else if (c < cost2[j]) {
+      cost2[j] = c;
+      label2[j] = k;
+    } else {
+      return false;
+    }
+    heap.emplace_back(c, j, k);
+    return true;
   };
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
@@ -436,11 +471,8 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
     const std::size_t points = searched ? (*search)[k].size() : 1;
     for (std::size_t a = 0; a < points; ++a) {
       const Vec2& x = searched ? (*search)[k][a] : targets[k].mean;
-      for (const int idx : ObservationPixels(x)) {
-        if (c0 >= cost[idx]) continue;
-        cost[idx] = c0;
-        heap.emplace_back(c0, idx);
-      }
+      for (const int idx : ObservationPixels(x))
+        improve(idx, c0, static_cast<int>(k));
     }
   }
   // The scale is the robot's own pixel: a pixel whose way is d moves
@@ -454,52 +486,59 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
   const bool self_free = sx >= 0 && sy >= 0 && sx < nx && sy < ny &&
                          moves_[occupancy_.Index(sx, sy)] != 0;
   const int self_idx = self_free ? occupancy_.Index(sx, sy) : -1;
-  double self_cost = std::numeric_limits<double>::infinity();
-  std::make_heap(heap.begin(), heap.end(), greater);
+  // The robot's own costs, once settled; the search stops past the last one
+  // the channels need.
+  double self_cost = kInf, self_cost2 = kInf;
+  std::make_heap(heap.begin(), heap.end(), later);
   while (!heap.empty()) {
-    std::pop_heap(heap.begin(), heap.end(), greater);
-    const auto [c, idx] = heap.back();
+    std::pop_heap(heap.begin(), heap.end(), later);
+    const auto [c, idx, k] = heap.back();
     heap.pop_back();
-    if (c > cost[idx]) continue;  // stale
-    if (c > self_cost + cap) break;
-    if (idx == self_idx) self_cost = c;
+    const bool best = c == cost[idx] && (!second || k == label[idx]);
+    if (!best && !(second && c == cost2[idx] && k == label2[idx]))
+      continue;  // stale
+    if (c > (second ? self_cost2 : self_cost) + cap) break;
+    if (idx == self_idx) (best ? self_cost : self_cost2) = c;
     const unsigned m = moves_[idx];
     const int gx = idx % nx, gy = idx / nx;
     for (Move move : kMoves) {
       if (!(m & (1u << static_cast<int>(move)))) continue;
       const auto d = MoveDelta(move);
       const int j = occupancy_.Index(gx + d[0], gy + d[1]);
-      if (!moves_[j] || c + 1.0 >= cost[j]) continue;
-      cost[j] = c + 1.0;
-      heap.emplace_back(c + 1.0, j);
-      std::push_heap(heap.begin(), heap.end(), greater);
+      if (moves_[j] && improve(j, c + 1.0, k))
+        std::push_heap(heap.begin(), heap.end(), later);
     }
   }
-  // Where no way leads to the robot: scaled to the window's least cost.
-  double ref = self_cost, offset = kReachSelf;
-  if (!std::isfinite(ref)) {
-    offset = 0.0;
+  const auto image = [&](const std::vector<double>& costs, double self,
+                         float* image_out) {
+    // Where no way leads to the robot: scaled to the window's least cost.
+    double ref = self, offset = kReachSelf;
+    if (!std::isfinite(ref)) {
+      offset = 0.0;
+      for (int v = 0; v < h; ++v)
+        for (int u = 0; u < w; ++u) {
+          const int gx = x0 + u, gy = y0 + v;
+          if (gx < 0 || gy < 0 || gx >= nx || gy >= ny) continue;
+          ref = std::min(ref, costs[occupancy_.Index(gx, gy)]);
+        }
+    }
     for (int v = 0; v < h; ++v)
       for (int u = 0; u < w; ++u) {
         const int gx = x0 + u, gy = y0 + v;
-        if (gx < 0 || gy < 0 || gx >= nx || gy >= ny) continue;
-        ref = std::min(ref, cost[occupancy_.Index(gx, gy)]);
+        float value = 0.0f;
+        if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(ref)) {
+          const double c = costs[occupancy_.Index(gx, gy)];
+          if (c <= ref + cap)  // settled (an unsettled pixel: below 1e-6)
+            value = static_cast<float>(
+                std::min(1.0, std::exp((ref - c) / moves_per_e - offset)));
+        }
+        image_out[v * w + u] = value;
       }
-  }
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u) {
-      const int gx = x0 + u, gy = y0 + v;
-      float value = 0.0f;
-      if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(ref)) {
-        const double c = cost[occupancy_.Index(gx, gy)];
-        if (c <= ref + cap)  // settled (an unsettled pixel: below 1e-6)
-          value = static_cast<float>(
-              std::min(1.0, std::exp((ref - c) / moves_per_e - offset)));
-      }
-      out[v * w + u] = value;
-    }
-  if (detour && params_.reach_detour > 0.0 && self_free)
-    DimByDetour(x0, y0, w, h, sx, sy, out);
+    if (detour && params_.reach_detour > 0.0 && self_free)
+      DimByDetour(x0, y0, w, h, sx, sy, image_out);
+  };
+  image(cost, self_cost, out);
+  if (second) image(cost2, self_cost2, second);
 }
 
 void ChannelRenderer::DimByDetour(int x0, int y0, int w, int h, int sx, int sy,

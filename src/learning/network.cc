@@ -20,8 +20,9 @@ constexpr const char* kFormat = "aia-igbnet";
 // readable by older builds); version 4: the reach channel over the world,
 // search points and the trail; version 5: the centre; version 6: the reach
 // channel's detour (ChannelParams::reach_detour); version 7: the broad reach
-// channel (ChannelParams::reach_broad).
-constexpr int kVersion = 7;
+// channel (ChannelParams::reach_broad); version 8: the second reach channel
+// (ChannelParams::reach_second).
+constexpr int kVersion = 8;
 
 // Writes declared fields into a JSON object with their own types (an
 // integer stays an integer, an enumeration is its name).
@@ -74,7 +75,8 @@ std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
   const bool world = channels.geodesic && channels.reach_world;
-  j["version"] = world && channels.reach_broad > 0.0    ? 7
+  j["version"] = world && channels.reach_second         ? 8
+                 : world && channels.reach_broad > 0.0  ? 7
                  : world && channels.reach_detour > 0.0 ? 6
                  : centre > 0                           ? 5
                  : world || channels.trail              ? 4
@@ -94,6 +96,7 @@ std::string NetworkConfig::ToJson() const {
   if (!world || !channels.search) j.erase("search");
   if (!world || channels.reach_detour == 0.0) j.erase("reach_detour");
   if (!world || channels.reach_broad == 0.0) j.erase("reach_broad");
+  if (!world || !channels.reach_second) j.erase("reach_second");
   if (!channels.trail) j.erase("trail");
   if (message_hops == 0) j.erase("message_hops");
   if (centre == 0) j.erase("centre");
@@ -137,6 +140,8 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     throw std::runtime_error("metadata: reach_detour: needs reach_world");
   if (c.channels.reach_broad > 0.0 && !c.channels.reach_world)
     throw std::runtime_error("metadata: reach_broad: needs reach_world");
+  if (c.channels.reach_second && !c.channels.reach_world)
+    throw std::runtime_error("metadata: reach_second: needs reach_world");
   if (const std::string problem = c.CentreProblem(); !problem.empty())
     throw std::runtime_error("metadata: centre: " + problem);
   return c;

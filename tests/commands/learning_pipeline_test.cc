@@ -446,6 +446,31 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
             5.0);
   EXPECT_EQ(net->config().channels.geodesic_length, 2.0);
   EXPECT_EQ(net->config().channels.reach_detour, 0.75);
+  // A second reach channel is added after the trail; a broad reach channel
+  // would then go in between, where the second's weights are: refused.
+  TrainOptions second = TinyTraining(dir + "/data", dir + "/second.pt");
+  second.init = dir + "/world.pt";
+  second.reach_second = 1;
+  second.epochs = 1;
+  Train(second);
+  EXPECT_EQ(IgbNet::Load(dir + "/second.pt", "s", 0, "k")
+                ->config()
+                .channels.second_channel(),
+            6);
+  TrainOptions between = TinyTraining(dir + "/data", dir + "/between.pt");
+  between.init = dir + "/second.pt";
+  between.reach_broad = 5.0;
+  try {
+    Train(between);
+    ADD_FAILURE() << "a broad channel put before the second";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "command line: --init: the model's input channels (occupancy, "
+              "own, neighbours, heat, reach, trail, second) would not keep "
+              "their places among those asked for (occupancy, own, "
+              "neighbours, heat, reach, trail, broad, second): a channel can "
+              "be added after the last, or the last ones removed");
+  }
   TrainOptions lone = TinyTraining(dir + "/data", dir + "/lone.pt");
   lone.init = dir + "/plain.pt";
   lone.search = 1;

@@ -494,6 +494,65 @@ TEST(ChannelsTest, BroadReachIsReachAtItsLengthWithoutTheDetour) {
   EXPECT_NE(with[6 * plane + 8], with[4 * plane + 8]);
 }
 
+// The second reach channel (ChannelParams::reach_second), worked by hand in
+// a corridor of 8 pixels, 1 m each, targets of equal weight at pixels 0 and
+// 7 (observation range 0.5 m: each target's own pixel alone), L = 1 m, the
+// robot at pixel 2. Channel 4 is exp(2 - min(x, 7 - x) - 2) capped at 1;
+// the second channel holds the farther target's cost, max(x, 7 - x), so it
+// reads exp(5 - max(x, 7 - x) - 2): rising from the robot toward pixel 7
+// up to the middle, where pixel 7's target becomes the nearer. Channel 4
+// and the channels before it are those of a renderer without it. With one
+// target, or two search points of one target, there is no second target:
+// the channel is 0.
+TEST(ChannelsTest, SecondReachLeadsToEachPixelsSecondTarget) {
+  const Map corridor({8.0, 1.0}, {}, 0.1, 1.0, 0.1);
+  ChannelParams params = Params(ChannelFrame::kGlobal);
+  params.geodesic = true;
+  params.geodesic_length = 1.0;
+  params.observe_range = 0.5;
+  params.reach_world = true;
+  params.search = true;
+  Grid<float> heat(8, 1, 1.0, 0.0f);
+  const std::vector<HeatSource> two = {WalledWorld::Target({0.5, 0.5}, 1.0),
+                                       WalledWorld::Target({7.5, 0.5}, 1.0)};
+  const std::vector<double> prior(2, std::log(100.0));
+  const auto render = [&](bool second, const std::vector<HeatSource>& targets,
+                          const SearchPointSets* search) {
+    ChannelParams p = params;
+    p.reach_second = second;
+    ChannelRenderer r(corridor.occupancy(), corridor.size(), p,
+                      &corridor.lattice());
+    std::vector<float> img(r.ImageSize(), -1.0f);
+    r.RenderWithHeat({2.5, 0.5}, {}, heat, &targets, &prior, 0.01, img.data(),
+                     RobotMemory{search});
+    return img;
+  };
+  const std::vector<float> with = render(true, two, nullptr);
+  const std::vector<float> without = render(false, two, nullptr);
+  ASSERT_EQ(with.size(), 6u * 8);
+  ASSERT_EQ(without.size(), 5u * 8);
+  for (std::size_t i = 0; i < without.size(); ++i)
+    EXPECT_EQ(with[i], without[i]) << i;
+  for (int x = 0; x < 8; ++x) {
+    EXPECT_NEAR(At(with, 1, 8, 4, x, 0),
+                std::min(1.0, std::exp(-std::min(x, 7 - x))), 1e-6)
+        << x;
+    EXPECT_NEAR(At(with, 1, 8, 5, x, 0), std::exp(3.0 - std::max(x, 7 - x)),
+                1e-6)
+        << x;
+  }
+  // One target, then one target's two search points (pixels 0 and 7): no
+  // second target anywhere.
+  const std::vector<HeatSource> one = {two[0]};
+  const SearchPointSets ends = {{Vec2(0.5, 0.5), Vec2(7.5, 0.5)}};
+  for (const SearchPointSets* search :
+       {static_cast<const SearchPointSets*>(nullptr), &ends}) {
+    const std::vector<float> alone = render(true, one, search);
+    for (int x = 0; x < 8; ++x) EXPECT_EQ(At(alone, 1, 8, 5, x, 0), 0.0f) << x;
+    EXPECT_GT(At(alone, 1, 8, 4, 7, 0), 0.0f);
+  }
+}
+
 // The observation pixels a renderer keeps per point change nothing: robots
 // rendered on a renderer that has seen their targets' points before (and
 // from two threads at once) get the images of a fresh renderer, with the

@@ -211,6 +211,29 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "metadata: reach_broad: needs reach_world");
   }
+  // The second reach channel: version 8, one more channel, needs reach_world.
+  NetworkConfig second = broad;
+  second.channels.reach_second = true;
+  EXPECT_NE(second.ToJson().find("\"version\":8"), std::string::npos);
+  EXPECT_TRUE(NetworkConfig::FromJson(second.ToJson()).channels.reach_second);
+  EXPECT_EQ(second.channels.num_channels(), broad.channels.num_channels() + 1);
+  EXPECT_EQ(second.channels.second_channel(),
+            broad.channels.broad_channel() + 1);
+  EXPECT_EQ(broad.ToJson().find("reach_second"), std::string::npos);
+  std::string no_world_second = second.ToJson();
+  for (const auto& [from, to] :
+       std::vector<std::pair<std::string, std::string>>{
+           {"\"reach_world\":true", "\"reach_world\":false"},
+           {"\"search\":true", "\"search\":false"},
+           {"\"reach_detour\":0.5", "\"reach_detour\":0.0"},
+           {"\"reach_broad\":5.0", "\"reach_broad\":0.0"}})
+    no_world_second.replace(no_world_second.find(from), from.size(), to);
+  try {
+    NetworkConfig::FromJson(no_world_second);
+    ADD_FAILURE() << "reach_second without reach_world read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "metadata: reach_second: needs reach_world");
+  }
   // The centre: version 5, odd, in the centred frame, within the blocks'
   // output (window 16, stride 2: 8 cells, the robot's cell 4).
   NetworkConfig centre = g;
@@ -245,12 +268,12 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   EXPECT_EQ(problem(9, ChannelFrame::kCentred),
             "must be at most 7: the blocks' output is 8 cells per side");
   std::string future = mp.ToJson();
-  future.replace(future.find("\"version\":3"), 11, "\"version\":8");
+  future.replace(future.find("\"version\":3"), 11, "\"version\":9");
   try {
     NetworkConfig::FromJson(future);
-    ADD_FAILURE() << "version 8 read";
+    ADD_FAILURE() << "version 9 read";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model format version 8, this build reads 1 to 7");
+    EXPECT_STREQ(e.what(), "model format version 9, this build reads 1 to 8");
   }
 }
 
@@ -279,7 +302,7 @@ TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
             "metadata: depth: unknown key; valid top-level keys: frame, "
             "cell, window, blur, cutoff, geodesic, geodesic_length, "
             "observe_range, reach_margin, reach_world, search, "
-            "reach_detour, trail, reach_broad, "
+            "reach_detour, trail, reach_broad, reach_second, "
             "width, stem_stride, pool, hidden, centre, message_hops");
 }
 

@@ -183,6 +183,33 @@ def test_a_broad_reach_model_written_here_runs_in_the_cpp_policy(tmp_path):
     assert check_same_moves(net, meta, path, seed=5) == 40
 
 
+def test_a_second_reach_model_written_here_runs_in_the_cpp_policy(tmp_path):
+    """The second reach channel (reach_second, format 8): the seventh input
+    after reach, search points and trail; the C++ policy reads a model
+    written here, renders the same channels and makes its moves."""
+    meta = network.default_meta(width=8, hidden=16, geodesic=True,
+                                 geodesic_length=0.25, reach_world=True,
+                                 search=True, trail=True, reach_detour=0.5,
+                                 reach_second=True)
+    assert network.num_channels(meta) == 7
+    torch.manual_seed(3)
+    net = network.IgbNet(meta).eval()
+    path = tmp_path / "second.pt"
+    network.save_model(net, path)
+    back, meta_back = network.load_model(path)
+    assert meta_back["reach_second"] is True and meta_back["version"] == 8
+    m = aia.Mission(DEFAULT, seed=6)
+    images = m.channels(**network.channel_params(meta))
+    plain = m.channels(**{**network.channel_params(meta),
+                          "reach_second": False})
+    assert images.shape[1] == 7
+    assert np.array_equal(images[:, :6], plain)
+    # Another target's way: lit somewhere, and not channel 4 everywhere.
+    assert images[:, 6].max() > 0.0
+    assert not np.array_equal(images[:, 6], images[:, 4])
+    assert check_same_moves(net, meta, path, seed=6) == 40
+
+
 def test_the_cpp_model_runs_in_python():
     path = SOURCE / "models" / "igbnet.pt"
     net, meta = network.load_model(path)

@@ -1,6 +1,6 @@
 // I-GBNet's input (docs/learning.md, Channels): per robot, four images over
-// the workspace and up to two optional ones (4 reach; a last one, trail:
-// ChannelParams::trail), one definition shared by the dataset reader, the
+// the workspace and up to four optional ones (4 reach, then trail, broad
+// reach and second reach), one definition shared by the dataset reader, the
 // trainer, the igbnet policy (Python reads the states: tools/igbnet.py). No
 // torch here.
 //   0 occupancy: the share of the pixel covered by obstacles (1 outside the
@@ -21,7 +21,9 @@
 //     border with the moves beyond it; 0 where a robot cannot stand; divided
 //     by its largest value in the image. ChannelParams' reach_world and
 //     search change where it is computed and from which sources;
-//   last, trail (ChannelParams::trail): 1 at the pixel the robot came from.
+//   then, each when on: trail (ChannelParams::trail), 1 at the pixel the
+//     robot came from; broad reach (reach_broad); second reach
+//     (reach_second).
 // Two frames. Global (the paper's): the whole workspace, pixel (ix, iy)
 // covering [ix, ix + 1) x [iy, iy + 1) cells of `cell` metres. Centred: a
 // window of `window` x `window` pixels of the same global pixel grid, the
@@ -49,9 +51,9 @@
 
 namespace aia {
 
-// Channels of the paper's network; reach and trail make up to six.
+// Channels of the paper's network (ChannelParams::num_channels() adds the
+// optional ones).
 inline constexpr int kNumChannels = 4;
-inline constexpr int kMaxChannels = 6;
 
 enum class ChannelFrame { kGlobal = 0, kCentred = 1 };
 // Read by name ("centered" too); written as the first name of the value.
@@ -104,14 +106,35 @@ struct ChannelParams {
   // toward a farther target reads like any step off the way). In metres
   // (0: off).
   double reach_broad = 0.0;
+  // With reach_world: a last channel (after the trail and the broad reach),
+  // second reach: channel 4 from each pixel's second target, the least cost
+  // over the sources of every target but the one of least cost there (same
+  // L, same detour). Where the ways to two targets part, the branch toward
+  // the farther one leads on here, however far it is, up to the pixels
+  // nearer that target, where channel 4 leads on to it.
+  bool reach_second = false;
 
   int num_channels() const {
     return kNumChannels + (geodesic ? 1 : 0) + (trail ? 1 : 0) +
-           (reach_broad > 0.0 ? 1 : 0);
+           (reach_broad > 0.0 ? 1 : 0) + (reach_second ? 1 : 0);
   }
-  // The index of the trail channel (when on) and of the broad reach.
+  // The index of the trail channel (when on), of the broad reach and of the
+  // second reach.
   int trail_channel() const { return kNumChannels + (geodesic ? 1 : 0); }
   int broad_channel() const { return trail_channel() + (trail ? 1 : 0); }
+  int second_channel() const {
+    return broad_channel() + (reach_broad > 0.0 ? 1 : 0);
+  }
+  // The channels' names in order: occupancy, own, neighbours, heat, then
+  // those of reach, trail, broad and second that are on.
+  std::vector<std::string> names() const {
+    std::vector<std::string> n = {"occupancy", "own", "neighbours", "heat"};
+    if (geodesic) n.push_back("reach");
+    if (trail) n.push_back("trail");
+    if (reach_broad > 0.0) n.push_back("broad");
+    if (reach_second) n.push_back("second");
+    return n;
+  }
 
   // Declared once (core/fields.h) for the model file's metadata and for
   // `aia train`'s flags (each key is the flag with '-' for '_').
@@ -169,6 +192,11 @@ struct ChannelParams {
                       "channel again at this decay length in metres and "
                       "without the detour (the ways to targets beyond the "
                       "nearest); 0: off"));
+    a->Visit(AIA_FIELD(reach_second)
+                 .Doc("with reach_world: a last channel, the reach channel "
+                      "from each pixel's second target (the least cost over "
+                      "every target but the one of least cost there), same "
+                      "L and detour"));
   }
 };
 
@@ -278,12 +306,13 @@ class ChannelRenderer {
   // Channel 4 over the whole workspace in log space, cropped to the w x h
   // pixels from global pixel (x0, y0), scaled at the robot's pixel (sx, sy).
   // `length`: its L in metres; `detour`: dimmed by ChannelParams::
-  // reach_detour where that is on.
+  // reach_detour where that is on; `second` (may be null): the same image
+  // from each pixel's second target (ChannelParams::reach_second).
   void ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                   const std::vector<HeatSource>& targets,
                   const std::vector<double>& log_det_prior, double eps,
                   float* out, const SearchPointSets* search, double length,
-                  bool detour) const;
+                  bool detour, float* second) const;
   // Channel 4 over the w x h pixels from global pixel (x0, y0), scaled to 1.
   void ReachRegion(int x0, int y0, int w, int h,
                    const std::vector<HeatSource>& targets,

@@ -55,6 +55,10 @@ struct TrainOptions {
   // sets it (from an --init model without it, the stem's weights for the
   // new channel start at zero: the same function).
   double reach_broad = -1.0;
+  // The second reach channel (ChannelParams::reach_second): -1 the
+  // network's (off), or --init's; 0 or 1 sets it (from an --init model
+  // without it, the stem's weights for the new channel start at zero).
+  int reach_second = -1;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -162,6 +166,12 @@ struct TrainOptions {
                       "channel again at this decay length in metres, without "
                       "the detour (0: off; with --init the new input starts "
                       "at zero weight); -1, the default: --init's, else 0"));
+    a->Visit(AIA_FIELD(reach_second)
+                 .In(Between(-1, 1))
+                 .Doc("1: with --reach-world 1, a last channel, the reach "
+                      "channel from each pixel's second target (same L and "
+                      "detour; with --init the new input starts at zero "
+                      "weight); -1, the default: --init's, else 0"));
   }
   // lr_min <= lr; a length is -1 or above 0.
   void Validate(const FieldChecker& check) const {

@@ -399,6 +399,7 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
     if (o->geodesic_length > 0.0) c->geodesic_length = o->geodesic_length;
     if (o->reach_detour >= 0.0) c->reach_detour = o->reach_detour;
     if (o->reach_broad >= 0.0) c->reach_broad = o->reach_broad;
+    if (o->reach_second >= 0) c->reach_second = o->reach_second == 1;
     if (c->reach_world && !c->geodesic)
       throw InputError("command line", 0, "--reach-world",
                        "needs the reach channel (--geodesic, or an --init "
@@ -410,6 +411,9 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
                        "needs --reach-world 1");
     if (c->reach_broad > 0.0 && !c->reach_world)
       throw InputError("command line", 0, "--reach-broad",
+                       "needs --reach-world 1");
+    if (c->reach_second && !c->reach_world)
+      throw InputError("command line", 0, "--reach-second",
                        "needs --reach-world 1");
     if (o->geodesic_length > 0.0 && !c->geodesic)
       throw InputError("command line", 0, "--geodesic-length",
@@ -439,6 +443,27 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
                          " cells; it can be added to a model without one, "
                          "not changed");
   if (o->network.ToJson() == before.ToJson()) return net;
+  // The stem's weights are kept by input channel index, so the channels
+  // both models have must keep their places: one added after the last, or
+  // the last ones removed, not one put in between.
+  const std::vector<std::string> had = before.channels.names(),
+                                 has = o->network.channels.names();
+  if (!std::equal(had.begin(), had.begin() + std::min(had.size(), has.size()),
+                  has.begin())) {
+    const auto list = [](const std::vector<std::string>& names) {
+      std::string text;
+      for (const std::string& name : names)
+        text += (text.empty() ? "" : ", ") + name;
+      return text;
+    };
+    throw InputError("command line", 0, "--init",
+                     "the model's input channels (" + list(had) +
+                         ") would not keep their places among those asked "
+                         "for (" +
+                         list(has) +
+                         "): a channel can be added after the last, or the "
+                         "last ones removed");
+  }
   // The same weights: a new channel 4 is read by the same stem, and what
   // is added (a trail channel, the centre, message hops) starts at zero
   // weight; a trail channel removed is dropped.
