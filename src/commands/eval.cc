@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <memory>
 #include <set>
 #include <string>
@@ -14,6 +15,7 @@
 #include "aia/runtime/episode.h"
 #include "aia/runtime/instance.h"
 #include "aia/runtime/observers.h"
+#include "aia/sim/simulation.h"
 
 namespace aia {
 namespace {
@@ -186,6 +188,14 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
       row.mission_seconds = episode.mission_seconds();
       for (const long c : episode.sim().robot_stalls()) row.stalls += c;
       for (const long c : episode.sim().robot_timeouts()) row.timeouts += c;
+      // The row is kept (diagnostics are not written per run here), and
+      // said: a line per run whose state MuJoCo reset.
+      std::fputs(UnstableStateWarning(episode.sim().warnings(),
+                                      "aia eval: " + inst.size + ", seed " +
+                                          std::to_string(inst.seed) + ", " +
+                                          row.policy)
+                     .c_str(),
+                 stderr);
       row.wall_s = SecondsSince(t0);
     }
     rows.push_back(row);

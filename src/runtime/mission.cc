@@ -267,16 +267,11 @@ MissionSummary MissionRunner::Run() {
   // Exits 0 all the same: the files are written and diagnostics.json counts
   // the warnings (physics.mujoco_warnings); no setting can be refused ahead,
   // since whether a motor is too strong depends on the contacts it meets.
-  const std::string unstable = UnstableStateReport(e.sim().warnings());
-  if (!unstable.empty())
-    std::fprintf(
-        stderr,
-        "warning: %s, seed %llu: %s: the robots' motion after it is not "
-        "physical (too strong a motor for its mass and time step: "
-        "lower robots.diff_drive.max_torque or physics.kp, raise "
-        "robots.diff_drive.mass or lower physics.timestep)\n",
-        e.scenario().name.c_str(),
-        static_cast<unsigned long long>(e.scenario().seed), unstable.c_str());
+  std::fputs(UnstableStateWarning(e.sim().warnings(),
+                                  e.scenario().name + ", seed " +
+                                      std::to_string(e.scenario().seed))
+                 .c_str(),
+             stderr);
 
   WriteFileAtomic(prefix_ + "effective.yaml",
                   EffectiveYaml(EffectiveScenario(mission_), kEffectiveHeader));

@@ -66,6 +66,17 @@ std::string UnstableStateReport(const std::array<long, mjNWARNING>& warnings) {
          (total == 1 ? " time (" : " times (") + types + ")";
 }
 
+std::string UnstableStateWarning(const std::array<long, mjNWARNING>& warnings,
+                                 const std::string& what) {
+  const std::string report = UnstableStateReport(warnings);
+  if (report.empty()) return "";
+  return "warning: " + what + ": " + report +
+         ": the robots' motion after it is not physical (too strong a motor "
+         "for its mass and time step: lower robots.diff_drive.max_torque or "
+         "physics.kp, raise robots.diff_drive.mass or lower "
+         "physics.timestep)\n";
+}
+
 MjModelPtr CompileMjcf(const std::string& xml) {
   InstallMujocoHandlers();
   auto vfs = std::make_unique<mjVFS>();

@@ -347,6 +347,25 @@ TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
                        "strong a motor for its mass and time step: lower "
                        "robots.diff_drive.max_torque or physics.kp, raise "
                        "robots.diff_drive.mass or lower physics.timestep)\n");
+  // aia eval writes no diagnostics per run: it says it per run.
+  const auto e = RunAia({"eval",        "--sizes",
+                         "3x2",         "--seeds",
+                         "1",           "--policies",
+                         "greedy",      "--out",
+                         dir + "/eval", "--quiet",
+                         "--set",       "robots.model=diff_drive",
+                         "--set",       "robots.diff_drive.mass=0.01",
+                         "--set",       "robots.diff_drive.max_torque=1000",
+                         "--set",       "robots.diff_drive.max_speed=100",
+                         "--set",       "physics.timestep=0.02",
+                         "--set",       "physics.kp=1"});
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_TRUE(std::regex_search(
+      e.err, std::regex("^warning: aia eval: 3x2, seed 0, greedy: MuJoCo "
+                        "reset an unstable state [0-9]+ times \\(bad_qacc "
+                        "[0-9]+\\): the robots' motion after it is not "
+                        "physical")))
+      << e.err;
 }
 
 // Wheeled robots: the same mission twice gives the same files, which report

@@ -219,6 +219,15 @@ TEST(MujocoHandlersTest, UnstableStateReportNamesTheResets) {
   EXPECT_EQ(UnstableStateReport(w),
             "MuJoCo reset an unstable state 7 times (bad_qpos 2, bad_qacc 1, "
             "bad_ctrl 4)");
+  // The line the commands print: the mission named, the report, what to
+  // change; nothing when no state was reset.
+  EXPECT_EQ(UnstableStateWarning(w, "m, seed 3"),
+            "warning: m, seed 3: " + UnstableStateReport(w) +
+                ": the robots' motion after it is not physical (too strong a "
+                "motor for its mass and time step: lower "
+                "robots.diff_drive.max_torque or physics.kp, raise "
+                "robots.diff_drive.mass or lower physics.timestep)\n");
+  EXPECT_EQ(UnstableStateWarning({}, "m, seed 3"), "");
 }
 
 TEST(MujocoHandlersTest, AStackOverflowInsideMjStepIsAPhysicsError) {

@@ -61,6 +61,11 @@ const std::string& LastMujocoWarning();
 // reset an unstable state 2 times (bad_qacc 2)". The motion after such a
 // reset is not physical, so a command warns with it.
 std::string UnstableStateReport(const std::array<long, mjNWARNING>& warnings);
+// The line a command prints on stderr after a mission whose state MuJoCo
+// reset, "warning: WHAT: REPORT: the robots' motion after it is not
+// physical (...what to change)\n" (`what` names the mission); "" if none.
+std::string UnstableStateWarning(const std::array<long, mjNWARNING>& warnings,
+                                 const std::string& what);
 
 // Compiles MJCF text (through MuJoCo's virtual file system); throws
 // std::runtime_error with MuJoCo's message if it does not compile.
