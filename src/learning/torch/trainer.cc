@@ -449,21 +449,14 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
   const std::vector<std::string> had = before.channels.names(),
                                  has = o->network.channels.names();
   if (!std::equal(had.begin(), had.begin() + std::min(had.size(), has.size()),
-                  has.begin())) {
-    const auto list = [](const std::vector<std::string>& names) {
-      std::string text;
-      for (const std::string& name : names)
-        text += (text.empty() ? "" : ", ") + name;
-      return text;
-    };
+                  has.begin()))
     throw InputError("command line", 0, "--init",
-                     "the model's input channels (" + list(had) +
+                     "the model's input channels (" + field_text::Join(had) +
                          ") would not keep their places among those asked "
                          "for (" +
-                         list(has) +
+                         field_text::Join(has) +
                          "): a channel can be added after the last, or the "
                          "last ones removed");
-  }
   // The same weights: a new channel 4 is read by the same stem, and what
   // is added (a trail channel, the centre, message hops) starts at zero
   // weight; a trail channel removed is dropped.
