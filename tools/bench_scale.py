@@ -11,7 +11,8 @@ the time inside mj_step; mj_step/s and contacts per mj_step inside episodes
 and mujoco-testspeed's on the same model; peak RSS), OUT/scale.png
 (ms per phase against N on log axes) and OUT/scale.md (the table, with each
 phase's growth order: the least-squares slope of log ms against log N from
-80 robots on). Every finished size is kept; a second call goes on.
+80 robots on, and physics split into ms per mj_step call and calls per
+decision step, each with its growth). Every finished size is kept; a second call goes on.
 
 Usage:
   tools/bench_scale.py --out DIR [--sizes 10,80,200,500,1000] [--policy igbnet]
@@ -96,14 +97,30 @@ def write_rows(path, rows):
     os.replace(tmp, path)
 
 
+def ms_per_mj_step(r):
+    """Milliseconds per mj_step call inside the episodes."""
+    rate = float(r["mj_step_per_s"])
+    return 1000.0 / rate if rate > 0 else 0.0
+
+
+def mj_steps_per_decision(r):
+    """mj_step calls per decision step: physics time over time per call.
+    A lockstep decision step lasts until the team's last robot arrives, so
+    this grows where some robots take longer (blocked, stalled)."""
+    per = ms_per_mj_step(r)
+    return float(r["physics"]) / per if per > 0 else 0.0
+
+
 def slope(rows, key):
     """Growth order: least-squares slope of log ms against log N over the
-    sizes from 80 robots on (all sizes when fewer than two reach 80)."""
+    sizes from 80 robots on (all sizes when fewer than two reach 80). `key`
+    is a column or a function of a row."""
+    value = key if callable(key) else (lambda r: float(r[key]))
     ns = [n for n in sorted(rows) if n >= 80]
     if len(ns) < 2:
         ns = sorted(rows)
-    pts = [(math.log(n), math.log(float(rows[n][key]))) for n in ns
-           if float(rows[n][key]) > 0]
+    pts = [(math.log(n), math.log(value(rows[n]))) for n in ns
+           if value(rows[n]) > 0]
     if len(pts) < 2:
         return float("nan")
     mx = sum(x for x, _ in pts) / len(pts)
@@ -211,6 +228,13 @@ def main(argv=None):
         f.write("| growth (fitted from N = 80) | | " +
                 " | ".join(f"N^{slope(rows, k):.2f}" for k in ["ms_step"] + PHASES) +
                 " | | | | |\n")
+        # Physics per decision step = (ms per mj_step) x (mj_step calls per
+        # decision step): MuJoCo's own cost and how long the step lasts.
+        f.write("\nphysics = ms per mj_step x mj_step calls per decision step: " +
+                ", ".join(f"{n}: {ms_per_mj_step(rows[n]):.3f} x "
+                          f"{mj_steps_per_decision(rows[n]):.1f}" for n in ns) +
+                f"; growth N^{slope(rows, ms_per_mj_step):.2f} x "
+                f"N^{slope(rows, mj_steps_per_decision):.2f}\n")
     os.replace(f"{md}.tmp.{os.getpid()}", md)
     print(md)
     return 0

@@ -166,5 +166,39 @@ TEST(ScaleTest, BenchScaleKeepsItsPolicyThreads) {
   fs::remove_all(dir);
 }
 
+// bench_scale.py splits physics into MuJoCo's time per mj_step call and the
+// calls per decision step, from rows already measured (none is run again).
+// By hand: 10 ms at 10000 calls/s is 0.1 ms x 100 calls; 40 ms at 4000/s
+// is 0.25 ms x 160 calls; from N = 80 to 160 the growths are log 2.5 / log
+// 2 = 1.32 and log 1.6 / log 2 = 0.68, which add to physics' N^2.00.
+TEST(ScaleTest, BenchScaleSplitsPhysicsIntoCallsAndTheirCost) {
+  if (RunCommand("/usr/bin/python3 -c 'import matplotlib'").exit_code != 0)
+    GTEST_SKIP() << "no python3-matplotlib";
+  const std::string dir = testing::MakeTempDir("aia_bench_scale_split_");
+  std::ofstream(dir + "/settings.json")
+      << R"({"policy": "random", "set": [], "steps": 2, "repeats": 1, )"
+      << R"("seed": 1})";
+  std::ofstream(dir + "/scale.csv")
+      << "robots,side_m,boxes,steps_per_s,ms_step,physics,sensing,fusion,"
+         "policy,rest,mj_step_pct,mj_step_per_s,testspeed_per_s,contacts,"
+         "testspeed_contacts,peak_rss_mib,wall_s\n"
+      << "80,28.3,60,50,20,10,1,1,7,1,50,10000,12000,1,0,250,1\n"
+      << "160,40.0,120,20,50,40,2,2,5,1,80,4000,5000,2,0,260,2\n";
+  const auto r = RunCommand("/usr/bin/python3 " +
+                            testing::SourcePath("tools/bench_scale.py") +
+                            " --aia /nonexistent --out " + dir +
+                            " --sizes 80,160 --steps 2 --repeats 1 "
+                            "--policy random");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string md = ReadFile(dir + "/scale.md");
+  EXPECT_NE(md.find("physics = ms per mj_step x mj_step calls per decision "
+                    "step: 80: 0.100 x 100.0, 160: 0.250 x 160.0; growth "
+                    "N^1.32 x N^0.68\n"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("N^2.00"), std::string::npos) << md;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace aia
