@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -86,6 +87,47 @@ class ExternalPolicy : public NamedPolicy<ExternalPolicy> {
 [[noreturn]] void Refuse(const std::string& where, const std::string& arg,
                          const std::string& what) {
   throw InputError(where, 0, arg, what);
+}
+
+// One call at a time on an object whose calls release the GIL (Mission,
+// VectorMissions, Dataset): a call from a second thread while one is inside
+// is refused, as a gymnasium env is used from one thread at a time, instead
+// of racing the first (which crashed the process). `*busy` names the call
+// inside (null: none); it is set and cleared with the GIL held, so the GIL
+// orders it.
+class CallGuard {
+ public:
+  CallGuard(const char** busy, const char* where) : busy_(busy) {
+    if (*busy != nullptr)
+      Refuse(where, "",
+             std::string("another thread is inside ") + *busy +
+                 " on this object, which takes one call at a time (as a "
+                 "gymnasium env does): give each thread its own, or take "
+                 "turns with a lock");
+    *busy = where;
+  }
+  ~CallGuard() { *busy_ = nullptr; }
+  CallGuard(const CallGuard&) = delete;
+  CallGuard& operator=(const CallGuard&) = delete;
+
+ private:
+  const char** busy_;
+};
+
+// A method of C as a binding that holds C's CallGuard for the call.
+template <typename C, typename R, typename... A>
+auto OneCall(R (C::*f)(A...), const char* where) {
+  return [f, where](C& self, A... a) -> R {
+    CallGuard guard(self.busy(), where);
+    return (self.*f)(std::forward<A>(a)...);
+  };
+}
+template <typename C, typename R, typename... A>
+auto OneCall(R (C::*f)(A...) const, const char* where) {
+  return [f, where](const C& self, A... a) -> R {
+    CallGuard guard(self.busy(), where);
+    return (self.*f)(std::forward<A>(a)...);
+  };
 }
 
 // A Python value as an error shows it: its repr (cut short) and its type.
@@ -274,7 +316,30 @@ InputError Renamed(const InputError& e, const std::string& where) {
       key = name + key.substr(flag.size());
       break;
     }
-  return InputError(where, 0, key, e.message());
+  // The flags the message names, as the arguments they are in Python.
+  static const std::vector<std::pair<std::string, std::string>> kWords = {
+      {"--seed-base", "seed_base"},
+      {"--sizes", "sizes"},
+      {"--seeds", "seeds"},
+      {"--threads", "threads"},
+      {"--out", "out"},
+      {"--set", "overrides"},
+      {"--policies", "name"}};
+  std::string message = e.message();
+  for (const auto& [flag, name] : kWords)
+    for (std::size_t at = message.find(flag); at != std::string::npos;
+         at = message.find(flag, at)) {
+      const std::size_t end = at + flag.size();
+      if (end < message.size() &&
+          (std::isalnum(static_cast<unsigned char>(message[end])) ||
+           message[end] == '-')) {
+        at = end;  // a longer flag
+        continue;
+      }
+      message.replace(at, flag.size(), name);
+      at += name.size();
+    }
+  return InputError(where, 0, key, message);
 }
 
 template <typename T>
@@ -299,6 +364,11 @@ ChannelParams ChannelSettings(const KeyValues& params,
         e.key().rfind("channels: ", 0) == 0 ? e.key() : "channels: " + e.key(),
         e.message());
   }
+  // As a model's metadata: a setting without the one it needs is refused,
+  // not ignored.
+  if (const auto [key, needs] = settings.MissingPrerequisite(); !key.empty())
+    Refuse(where, "channels: " + std::string(key),
+           "needs " + std::string(needs) + " (as in a model's metadata)");
   return settings;
 }
 
@@ -365,23 +435,33 @@ class Mission {
 
   bool owned() const { return episode_ != nullptr; }
   void Invalidate() { view_ = nullptr; }
+  const char** busy() const { return &busy_; }
   std::uint64_t id() const { return id_; }
   std::uint64_t seed() const { return seed_; }
-  int max_steps() const { return max_steps_; }
+  int max_steps() const {
+    if (!owned())
+      Refuse("aia.Mission.max_steps", "",
+             "a mission seen by a policy inside aia.evaluate has none of "
+             "its own: aia.evaluate ends each run at its horizon (3 F*, or "
+             "the scenario's mission.max_steps where there is no F*)");
+    return max_steps_;
+  }
   // What a policy is given now (the team's belief included).
   DecisionContext Context() const {
     if (owned()) return episode_->Context();
     if (view_ == nullptr)
-      Refuse("aia.Mission", "state",
+      Refuse("aia.Mission", "",
              "this mission is a view of one decision of aia.evaluate: it is "
              "valid only inside the policy's call");
     return *view_;
   }
-  const Episode& episode() const {
+  // The owned episode; `where` is the call that needs it.
+  const Episode& episode(const char* where = "aia.Mission") const {
     if (!owned())
-      Refuse("aia.Mission", "step",
+      Refuse(where, "",
              "a mission seen by a policy inside aia.evaluate can only be "
-             "read (state(), num_robots, ...); aia steps it");
+             "read (state(), num_robots, ...): aia steps it, and its "
+             "summary, diagnostics and frames are aia.evaluate's");
     return *episode_;
   }
   int num_robots() const {
@@ -554,7 +634,7 @@ class Mission {
   // the trails start there.
   py::array_t<std::uint8_t> Render(py::handle width_arg,
                                    py::handle height_arg) {
-    const Episode& e = episode();  // owned only
+    const Episode& e = episode("aia.Mission.render");  // owned only
     const int width = static_cast<int>(
         IntegerArg(width_arg, "aia.Mission.render", "width", 16, 8192));
     const int height = static_cast<int>(
@@ -615,7 +695,7 @@ class Mission {
   StepResult Step(py::handle moves) {
     std::vector<Move> next =
         MovesFrom(moves, {num_robots()}, "aia.Mission.step");
-    if (episode().done())
+    if (episode("aia.Mission.step").done())
       Refuse("aia.Mission.step", "moves",
              "the mission is done (done is True): start another Mission");
     const long invalid_before = episode_->invalid_moves();
@@ -657,10 +737,12 @@ class Mission {
   }
 
   std::string SummaryText() const {
-    return SummaryJson(Summarize(episode(), 0.0), episode());
+    const Episode& e = episode("aia.Mission.summary");
+    return SummaryJson(Summarize(e, 0.0), e);
   }
   std::string DiagnosticsText() const {
-    return DiagnosticsJson(episode(), *moves_, *estimate_, 0.0);
+    return DiagnosticsJson(episode("aia.Mission.diagnostics"), *moves_,
+                           *estimate_, 0.0);
   }
 
  private:
@@ -701,6 +783,7 @@ class Mission {
   PictureForward picture_forward_{this};
   bool picture_added_ = false;
   int picture_width_ = 0, picture_height_ = 0;
+  mutable const char* busy_ = nullptr;  // CallGuard
 };
 
 // A registered policy deciding on a mission's current state.
@@ -731,6 +814,7 @@ class BuiltinPolicy {
   // every step repeats `aia run`, also with missions on several threads
   // (evaluate). Called with the GIL held; the decision runs without it.
   py::array_t<long long> Decide(const Mission& mission) {
+    CallGuard guard(mission.busy(), "aia.builtin_policy.decide");
     DecisionContext ctx = mission.Context();
     const std::shared_ptr<PolicyStates::Entry> state =
         states_.For(mission.id(), ctx.step, [&] {
@@ -798,6 +882,20 @@ class VectorMissions {
   }
   int size() const { return static_cast<int>(missions_.size()); }
   int num_robots() const { return missions_[0]->num_robots(); }
+  const char** busy() const { return &busy_; }
+  // The vector and each of its missions (missions[i] reach Python) held
+  // for one call (CallGuard).
+  class Busy {
+   public:
+    Busy(const VectorMissions& v, const char* where) {
+      guards_.push_back(std::make_unique<CallGuard>(v.busy(), where));
+      for (const auto& mission : v.missions_)
+        guards_.push_back(std::make_unique<CallGuard>(mission->busy(), where));
+    }
+
+   private:
+    std::vector<std::unique_ptr<CallGuard>> guards_;
+  };
   bool autoreset() const { return autoreset_; }
   std::uint64_t next_seed() const { return next_seed_; }
   Mission& at(int i) { return *missions_.at(i); }
@@ -899,13 +997,18 @@ class VectorMissions {
   bool autoreset_;
   std::uint64_t next_seed_ = 0;
   std::vector<std::unique_ptr<Mission>> missions_;
+  mutable const char* busy_ = nullptr;  // Busy
 };
 
 class PyDataset {
  public:
   PyDataset(const std::vector<std::string>& paths, const KeyValues& params) {
     channels_ = ChannelSettings(params, "aia.Dataset");
-    data_ = ReadDataset(paths, "paths");
+    try {
+      data_ = ReadDataset(paths, "paths");
+    } catch (const InputError& e) {
+      throw Renamed(e, "aia.Dataset");  // "command line" is not Python's
+    }
     if (data_.samples.empty())
       throw InputError("Dataset", 0, "paths", "holds no samples");
     const std::vector<std::vector<int>> of_world = SamplesByWorld(data_);
@@ -922,6 +1025,7 @@ class PyDataset {
   }
 
   int size() const { return static_cast<int>(data_.samples.size()); }
+  const char** busy() const { return &busy_; }
   int num_worlds() const { return static_cast<int>(data_.worlds.size()); }
 
   // Per sample: label, useful, acted, world index, episode, step, robot,
@@ -1022,7 +1126,9 @@ class PyDataset {
   ChannelParams channels_;
   Dataset data_;
   std::vector<ChannelRenderer> renderers_;
-  std::vector<std::uint8_t> valid_;  // per sample, ValidMoveBits
+  std::vector<std::uint8_t> valid_;     // per sample, ValidMoveBits
+  mutable const char* busy_ = nullptr;  // CallGuard (batch renders without
+                                        // the GIL)
 };
 
 // A Python callable as a policy of aia's own loop (evaluate): each decision
@@ -1311,37 +1417,55 @@ void BindMission(py::module_& m) {
            }),
            py::arg("scenario"), py::arg("seed") = py::none(),
            py::arg("overrides") = KeyValues{})
-      .def("state", &Mission::State,
+      .def("state", OneCall(&Mission::State, "aia.Mission.state"),
            "What the robots know now (numpy arrays), the truth apart.")
-      .def("step", &Mission::Step, py::arg("moves"),
+      .def("step", OneCall(&Mission::Step, "aia.Mission.step"),
+           py::arg("moves"),
            "One decision step: one integer move 0..4 per robot.")
-      .def("valid_moves", &Mission::ValidMoves,
+      .def("valid_moves",
+           OneCall(&Mission::ValidMoves, "aia.Mission.valid_moves"),
            "(N, 4) bool: the moves that stay on the lattice.")
-      .def("render", &Mission::Render, py::arg("width") = 640,
-           py::arg("height") = 480,
+      .def("render", OneCall(&Mission::Render, "aia.Mission.render"),
+           py::arg("width") = 640, py::arg("height") = 480,
            "An RGB frame (H, W, 3) uint8 with aia render's overlays.")
-      .def("channels", &Mission::Channels, py::arg("params") = KeyValues{},
+      .def("channels", OneCall(&Mission::Channels, "aia.Mission.channels"),
+           py::arg("params") = KeyValues{},
            "I-GBNet's input of every robot, (N, C, H, W) float32.")
-      .def("summary_json", &Mission::SummaryText, "summary.json's text.")
-      .def("diagnostics_json", &Mission::DiagnosticsText,
+      .def("summary_json",
+           OneCall(&Mission::SummaryText, "aia.Mission.summary"),
+           "summary.json's text.")
+      .def("diagnostics_json",
+           OneCall(&Mission::DiagnosticsText, "aia.Mission.diagnostics"),
            "diagnostics.json's text.")
-      .def_property_readonly("num_robots", &Mission::num_robots)
-      .def_property_readonly("num_targets", &Mission::num_targets)
-      .def_property_readonly("steps", &Mission::step, "decision steps taken")
-      .def_property_readonly("done", &Mission::done)
-      .def_property_readonly("success", &Mission::success)
-      .def_property_readonly("flowtime", &Mission::flowtime,
-                             "steps to success; -1 until then")
-      .def_property_readonly("max_steps", &Mission::max_steps)
-      .def_property_readonly("asynchronous", &Mission::asynchronous,
-                             "mission.decisions is async")
       .def_property_readonly(
-          "ready", &Mission::Ready,
+          "num_robots", OneCall(&Mission::num_robots, "aia.Mission.num_robots"))
+      .def_property_readonly("num_targets", OneCall(&Mission::num_targets,
+                                                    "aia.Mission.num_targets"))
+      .def_property_readonly("steps",
+                             OneCall(&Mission::step, "aia.Mission.steps"),
+                             "decision steps taken")
+      .def_property_readonly("done",
+                             OneCall(&Mission::done, "aia.Mission.done"))
+      .def_property_readonly("success",
+                             OneCall(&Mission::success, "aia.Mission.success"))
+      .def_property_readonly(
+          "flowtime", OneCall(&Mission::flowtime, "aia.Mission.flowtime"),
+          "steps to success; -1 until then")
+      .def_property_readonly(
+          "max_steps", OneCall(&Mission::max_steps, "aia.Mission.max_steps"))
+      .def_property_readonly(
+          "asynchronous",
+          OneCall(&Mission::asynchronous, "aia.Mission.asynchronous"),
+          "mission.decisions is async")
+      .def_property_readonly(
+          "ready", OneCall(&Mission::Ready, "aia.Mission.ready"),
           "(N,) bool: the robots whose moves the next step uses (all in "
           "lockstep; with mission.decisions async, those whose move has "
           "ended)")
-      .def_property_readonly("seed", &Mission::seed)
-      .def_property_readonly("owned", &Mission::owned,
+      .def_property_readonly("seed",
+                             OneCall(&Mission::seed, "aia.Mission.seed"))
+      .def_property_readonly("owned",
+                             OneCall(&Mission::owned, "aia.Mission.owned"),
                              "False for a view inside aia.evaluate");
 }
 
@@ -1393,12 +1517,21 @@ void BindVectorMissions(py::module_& m) {
             for (py::handle seed : seeds)
               s.push_back(
                   *SeedArg(seed, "aia.VectorMissions.reset", "seed", false));
+            const VectorMissions::Busy busy(v, "aia.VectorMissions.reset");
             v.Reset(s);
           },
           py::arg("seeds"), "Every mission restarted, one seed each.")
-      .def("step", &VectorMissions::Step, py::arg("moves"),
-           "One step of every mission: (n, robots) integer moves 0..4.")
-      .def_property_readonly("num_robots", &VectorMissions::num_robots)
+      .def(
+          "step",
+          [](VectorMissions& v, py::handle moves) {
+            const VectorMissions::Busy busy(v, "aia.VectorMissions.step");
+            return v.Step(moves);
+          },
+          py::arg("moves"),
+          "One step of every mission: (n, robots) integer moves 0..4.")
+      .def_property_readonly(
+          "num_robots",
+          OneCall(&VectorMissions::num_robots, "aia.VectorMissions.num_robots"))
       .def_property_readonly("autoreset", &VectorMissions::autoreset)
       .def_property_readonly("next_seed", &VectorMissions::next_seed,
                              "the seed the next restart takes");
@@ -1418,7 +1551,8 @@ void BindDataset(py::module_& m) {
       .def("validation_worlds", &PyDataset::ValidationWorlds, py::arg("share"),
            py::arg("seed"),
            "Whether each world is held out, as aia train splits.")
-      .def("batch", &PyDataset::Batch, py::arg("indices"),
+      .def("batch", OneCall(&PyDataset::Batch, "aia.Dataset.batch"),
+           py::arg("indices"),
            "(images (B, C, H, W) float32, labels (B,) int64).");
 }
 

@@ -61,11 +61,18 @@ def _integer(value, where, arg, low=0, high=None):
     a bool or a float) in [low, high]; else aia.InputError."""
     expect = f"an integer >= {low}" if high is None else \
         f"an integer in [{low}, {high}]"
+    # An array (numpy's, torch's) only as a single integer of no shape:
+    # one of shape (1,) is not converted silently.
     if isinstance(value, (bool, _np.bool_)) or \
-            not hasattr(type(value), "__index__"):
+            not hasattr(type(value), "__index__") or \
+            getattr(value, "ndim", 0) != 0:
         raise InputError(f"{where}: {arg}: must be {expect}, got "
                          f"{_shown(value)}")
-    v = _operator.index(value)
+    try:
+        v = _operator.index(value)
+    except TypeError:  # e.g. a float array of no shape
+        raise InputError(f"{where}: {arg}: must be {expect}, got "
+                         f"{_shown(value)}") from None
     if v < low or (high is not None and v > high):
         raise InputError(f"{where}: {arg}: must be {expect}, got {v}")
     return v
@@ -74,8 +81,21 @@ def _integer(value, where, arg, low=0, high=None):
 _SEED_MAX = 2 ** 64 - 1
 
 
+_PLAIN_WORD = re.compile(r"[A-Za-z_/.][A-Za-z0-9_./-]*")
+_YAML_WORDS = {"true", "false", "yes", "no", "on", "off", "y", "n", "null",
+               ".nan", ".inf", "-.inf", ".na"}
+
+
 def _yaml_text(key, value):
-    """A Python value as the YAML text of a scenario key's override."""
+    """A Python value as the YAML text of a scenario key's override. A str
+    is a YAML string (quoted: "run # 2" stays that, "3" is not a number);
+    numpy's scalars count as the Python numbers and bools they hold."""
+    if isinstance(value, _np.bool_):
+        value = bool(value)
+    elif isinstance(value, _np.integer):
+        value = int(value)
+    elif isinstance(value, _np.floating):
+        value = float(value)
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
@@ -87,7 +107,14 @@ def _yaml_text(key, value):
             return ".inf" if value > 0 else "-.inf"
         return repr(value)
     if isinstance(value, str):
-        return value
+        # A word (a name, an enum's value, a path) as itself; anything YAML
+        # would read as another type or cut ("3", "true", "run # 2", "a: b",
+        # "[1, 2]") quoted, so that it stays the string it is (a JSON
+        # string is a YAML quoted one).
+        if _PLAIN_WORD.fullmatch(value) and \
+                value.lower() not in _YAML_WORDS:
+            return value
+        return _json.dumps(value)
     if isinstance(value, (list, tuple, dict)):
         return _json.dumps(value)
     raise InputError(f"{key}: a value of type {type(value).__name__} is not "
@@ -240,7 +267,11 @@ def _path(value, where, arg):
     if not isinstance(value, (str, os.PathLike)):
         raise InputError(f"{where}: {arg}: must be a path (str or "
                          f"os.PathLike), got {_shown(value)}")
-    return os.fspath(value)
+    path = os.fspath(value)
+    if (b"\0" if isinstance(path, bytes) else "\0") in path:
+        raise InputError(f"{where}: {arg}: a path cannot hold a NUL byte, "
+                         f"got {_shown(value)}")
+    return path
 
 
 class VectorMissions:

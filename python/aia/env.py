@@ -19,7 +19,7 @@ stand-ins below, with shape, dtype, n, sample(), contains() and seed().
 
 import numpy as np
 
-from . import InputError, Mission, _integer, _shown
+from . import InputError, Mission, _integer, _pairs, _shown
 
 try:  # pragma: no cover - gymnasium is not packaged in Debian 12
     from gymnasium import spaces as _spaces
@@ -38,9 +38,27 @@ class Discrete:
 
     def seed(self, seed=None):
         self._rng = np.random.default_rng(seed)
+        return [seed]
 
-    def sample(self):
-        return int(self._rng.integers(self.n))
+    def sample(self, mask=None):
+        """A uniform draw, among the actions whose mask entry is 1 when a
+        mask (int8, shape (n,)) is given; 0 when the mask allows none, as
+        gymnasium's Discrete.sample(mask) does."""
+        if mask is None:
+            return int(self._rng.integers(self.n))
+        mask = np.asarray(mask)
+        if mask.shape != (self.n,) or mask.dtype != np.int8 or \
+                not np.all((mask == 0) | (mask == 1)):
+            raise InputError(f"Discrete.sample: mask: must be an int8 array "
+                             f"of shape ({self.n},) of 0 and 1, got "
+                             f"{_shown(mask)}")
+        allowed = np.flatnonzero(mask)
+        if allowed.size == 0:
+            return 0
+        return int(self._rng.choice(allowed))
+
+    def __contains__(self, x):
+        return self.contains(x)
 
     def contains(self, x):
         """Integers only (an int or numpy integer, not a bool or a float),
@@ -73,8 +91,12 @@ class Box:
 
     def seed(self, seed=None):
         self._rng = np.random.default_rng(seed)
+        return [seed]
 
-    def sample(self):
+    def sample(self, mask=None):
+        if mask is not None:
+            raise InputError("Box.sample: mask: a Box takes no mask, as "
+                             "gymnasium's Box")
         lo = np.where(np.isfinite(self.low), self.low, -1.0)
         hi = np.where(np.isfinite(self.high), self.high, lo + 1.0)
         return self._rng.uniform(lo, hi).astype(self.dtype)
@@ -83,6 +105,9 @@ class Box:
         x = np.asarray(x)
         return (x.shape == self.shape and np.can_cast(x.dtype, self.dtype)
                 and bool(np.all(x >= self.low)) and bool(np.all(x <= self.high)))
+
+    def __contains__(self, x):
+        return self.contains(x)
 
     def __eq__(self, other):
         return (isinstance(other, Box) and other.shape == self.shape and
@@ -106,11 +131,19 @@ class Dict:
         return self.spaces[key]
 
     def seed(self, seed=None):
+        seeds = []
         for i, s in enumerate(self.spaces.values()):
-            s.seed(None if seed is None else seed + i)
+            seeds += s.seed(None if seed is None else seed + i)
+        return seeds
 
-    def sample(self):
+    def sample(self, mask=None):
+        if mask is not None:
+            raise InputError("Dict.sample: mask: the stand-in Dict takes no "
+                             "mask")
         return {k: s.sample() for k, s in self.spaces.items()}
+
+    def __contains__(self, x):
+        return self.contains(x)
 
     def contains(self, x):
         return (isinstance(x, dict) and set(x) == set(self.spaces) and
@@ -165,12 +198,14 @@ class ParallelEnv:
             raise InputError(f"{where}: channels: must be a dict of channel "
                              f"settings, got {_shown(channels)}")
         if isinstance(step_penalty, (bool, np.bool_)) or \
-                not isinstance(step_penalty, (int, float, np.number)) or \
+                not isinstance(step_penalty,
+                               (int, float, np.integer, np.floating)) or \
                 not np.isfinite(step_penalty):
             raise InputError(f"{where}: step_penalty: must be a finite "
                              f"number, got {_shown(step_penalty)}")
         self.render_mode = render_mode
         self._scenario = scenario
+        _pairs(overrides, "overrides", where)  # a dict, or InputError
         self._overrides = dict(overrides or {})
         self._channels = dict(channels or {})
         self._step_penalty = float(step_penalty)
@@ -225,21 +260,30 @@ class ParallelEnv:
                            f"robot_{len(self.possible_agents) - 1}")
         return agent
 
-    def _open(self, what):
+    def _open(self, what, api="ParallelEnv"):
         if self._closed:
-            raise InputError(f"aia.ParallelEnv.{what}: the env is closed "
+            raise InputError(f"aia.{api}.{what}: the env is closed "
                              "(close() was called): make another one")
 
-    def _started(self, what):
-        self._open(what)
+    def _started(self, what, api="ParallelEnv"):
+        self._open(what, api)
         if self._mission is None:
-            raise InputError(f"aia.ParallelEnv.{what}: call reset() before "
+            raise InputError(f"aia.{api}.{what}: call reset() before "
                              f"{what}()")
 
     def reset(self, seed=None, options=None):
         """A new mission: at `seed`, else the constructor's seed at the first
-        reset and the previous one + 1 after."""
+        reset and the previous one + 1 after. A mission already over at
+        step 0 (every target localized by the prior and the first
+        measurements, or no robot active) has no agents: `agents` is empty
+        and both dicts are empty; reset again for the next seed. `options`
+        must be None or an empty dict: this env takes no options."""
         self._open("reset")
+        if options is not None and (not isinstance(options, dict) or
+                                    options):
+            raise InputError(f"aia.ParallelEnv.reset: options: this env "
+                             f"takes no options (None or {{}}), got "
+                             f"{_shown(options)}")
         if seed is not None:
             self._next_seed = _integer(seed, "aia.ParallelEnv.reset", "seed",
                                        0, 2 ** 64 - 1)
@@ -248,8 +292,10 @@ class ParallelEnv:
         self._next_seed = (self._next_seed + 1) % 2 ** 64
         state = self._mission.state()
         self._log_det = self._own_log_det(state)
-        self.agents = [a for i, a in enumerate(self.possible_agents)
-                       if state["active"][i]]
+        # Over already (success at step 0): no agent to step.
+        self.agents = [] if self._mission.done else [
+            a for i, a in enumerate(self.possible_agents)
+            if state["active"][i]]
         self._left = {}
         observations = self._observations(state)
         masks = self._mission.valid_moves().astype(np.int8)
@@ -370,6 +416,7 @@ class ParallelEnv:
 
     def render(self, width=640, height=480):
         """With render_mode "rgb_array": the mission's frame (H, W, 3)."""
+        self._open("render")
         if self.render_mode is None:
             return None
         self._started("render")
@@ -410,8 +457,25 @@ class AECEnv:
         return self._env
 
     @property
+    def render_mode(self):
+        return self._env.render_mode
+
+    @property
+    def state_space(self):
+        return self._env.state_space
+
+    @property
     def num_agents(self):
         return len(self.agents)
+
+    def agent_iter(self, max_iter=2 ** 63):
+        """The agents in turn, agent_selection each time, until none is
+        left or max_iter have been given (PettingZoo's loop:
+        `for agent in env.agent_iter(): ... env.step(action)`)."""
+        for _ in range(max_iter):
+            if not self.agents or self.agent_selection is None:
+                return
+            yield self.agent_selection
 
     @property
     def max_num_agents(self):
@@ -434,10 +498,24 @@ class AECEnv:
         self.agent_selection = self.agents[0] if self.agents else None
 
     def observe(self, agent):
+        """`agent`'s last observation (None if it has had none: it was not
+        active at reset)."""
+        self._env._open("observe", "AECEnv")
+        if agent not in self._env._robot:
+            raise InputError(f"aia.AECEnv.observe: agent: unknown agent "
+                             f"{agent!r}; agents are robot_0 .. "
+                             f"robot_{len(self.possible_agents) - 1}")
         return self._observations.get(agent)
 
     def last(self, observe=True):
+        """The selected agent's observation, cumulative reward,
+        termination, truncation and info."""
+        self._env._open("last", "AECEnv")
         a = self.agent_selection
+        if a is None:
+            raise InputError("aia.AECEnv.last: no agent is selected (before "
+                             "reset(), or every agent has left): call "
+                             "reset()")
         return (self.observe(a) if observe else None,
                 self._cumulative_rewards[a], self.terminations[a],
                 self.truncations[a], self.infos[a])
@@ -446,6 +524,10 @@ class AECEnv:
         return self.terminations[agent] or self.truncations[agent]
 
     def step(self, action):
+        """The selected agent's move (0 left, 1 right, 2 up, 3 down), or
+        None for an agent that has ended. A bad action is refused at once
+        and changes nothing."""
+        self._env._open("step", "AECEnv")
         a = self.agent_selection
         if a is None:
             raise InputError("aia.AECEnv.step: no agent left: call reset()")
@@ -459,6 +541,11 @@ class AECEnv:
                 d.pop(a, None)
             self.agent_selection = self._next(None)
             return
+        if action is None:
+            raise InputError(f"aia.AECEnv.step: action: {a} is live: give "
+                             "it a move 0 (left), 1 (right), 2 (up) or 3 "
+                             "(down); None is for an agent that has ended")
+        action = _integer(action, "aia.AECEnv.step", "action", 0, 3)
         self._cumulative_rewards[a] = 0.0
         self._actions[a] = action
         live = [b for b in self.agents if not self._ended(b)]

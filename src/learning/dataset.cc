@@ -580,6 +580,10 @@ Dataset ReadDataset(const std::vector<std::string>& paths,
       recipe = RecipeWithoutShards(ReadFile(f, &out));
     } catch (const InputError&) {
       throw;
+    } catch (const SqliteError& e) {
+      throw InputError(
+          f, 0, key,
+          std::string("not an aia dataset shard (SQLite: ") + e.what() + ")");
     } catch (const std::exception& e) {
       throw InputError(f, 0, key, e.what());
     }

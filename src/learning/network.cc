@@ -132,16 +132,9 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
   } catch (const InputError& e) {
     throw std::runtime_error("metadata: " + e.key() + ": " + e.message());
   }
-  if (c.channels.reach_world && !c.channels.geodesic)
-    throw std::runtime_error("metadata: reach_world: needs geodesic");
-  if (c.channels.search && !c.channels.reach_world)
-    throw std::runtime_error("metadata: search: needs reach_world");
-  if (c.channels.reach_detour > 0.0 && !c.channels.reach_world)
-    throw std::runtime_error("metadata: reach_detour: needs reach_world");
-  if (c.channels.reach_broad > 0.0 && !c.channels.reach_world)
-    throw std::runtime_error("metadata: reach_broad: needs reach_world");
-  if (c.channels.reach_second && !c.channels.reach_world)
-    throw std::runtime_error("metadata: reach_second: needs reach_world");
+  if (const auto [key, needs] = c.channels.MissingPrerequisite(); !key.empty())
+    throw std::runtime_error("metadata: " + std::string(key) + ": needs " +
+                             std::string(needs));
   if (const std::string problem = c.CentreProblem(); !problem.empty())
     throw std::runtime_error("metadata: centre: " + problem);
   return c;

@@ -286,3 +286,177 @@ def test_a_damaged_dataset_is_refused(shard, tmp_path, sql, match):
     with pytest.raises(aia.InputError) as e:
         aia.Dataset(folder)
     assert match in str(e.value)
+
+
+# --- A second pass over the Python API (2026-12-06), each case a finding.
+
+def test_a_mission_takes_one_call_at_a_time():
+    """Two threads stepping one mission: before, the process crashed
+    (SIGSEGV, or an internal check in the filter). Now a call made while
+    the other thread's is inside is refused, and every step taken counts."""
+    import threading
+    m = aia.Mission(DEFAULT, seed=2, overrides={"robots.count": 20,
+                                                "targets.count": 20,
+                                                "mission.max_steps": 100000})
+    taken, errors, other = [0, 0], [], []
+
+    def run(k):
+        for _ in range(40):
+            try:
+                m.step([4] * m.num_robots)
+                taken[k] += 1
+            except aia.InputError as e:
+                errors.append(str(e))
+            except Exception as e:  # noqa: BLE001 - any other is a finding
+                other.append(repr(e))
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not other, other
+    assert m.steps == sum(taken)
+    assert sum(taken) + len(errors) == 80
+    for e in errors:
+        assert "another thread is inside aia.Mission.step on this object" \
+            in e, e
+
+
+def test_string_overrides_stay_strings_and_numpy_scalars_are_values():
+    m = aia.Mission(DEFAULT, seed=1, overrides={**SMALL, "name": "run # 2"})
+    assert m.summary()["scenario"] == "run # 2"  # not cut at the '#'
+    refused(lambda: aia.Mission(DEFAULT, overrides={"robots.count": "3"}),
+            "robots.count: must be an integer", 'got "3"')
+    refused(lambda: aia.Mission(DEFAULT, overrides={"workspace.size":
+                                                    "[30, 30]"}),
+            "workspace.size")
+    m = aia.Mission(DEFAULT, seed=1, overrides={
+        "robots.count": np.int64(3), "sensor.range": np.float32(2.5),
+        "sensor.line_of_sight": np.bool_(False), "targets.count": 2})
+    assert m.num_robots == 3
+    assert aia.Mission(DEFAULT, seed=1, overrides={
+        **SMALL, "mission.decisions": "async"}).asynchronous
+
+
+def test_array_shaped_actions_and_seeds_are_refused():
+    env = aia.parallel_env(DEFAULT, overrides=SMALL)
+    env.reset(seed=1)
+    ok = {a: 0 for a in env.agents}
+    for bad in (np.array([1]), np.array(1.0), np.array([[1]])):
+        refused(lambda: env.step({**ok, "robot_1": bad}),
+                "actions['robot_1']: must be an integer in [0, 3]", "ndarray")
+    env.step({**ok, "robot_1": np.array(1)})  # no shape: an integer
+    refused(lambda: env.reset(seed=np.array([5])), "seed: must be an integer")
+
+
+def test_env_checks_overrides_options_penalty_and_render_after_close():
+    for bad in ("", 0, [("robots.count", 3)], "ab"):
+        refused(lambda: aia.parallel_env(DEFAULT, overrides=bad),
+                "aia.parallel_env: overrides: must be a dict")
+    refused(lambda: aia.parallel_env(DEFAULT, overrides=SMALL,
+                                     step_penalty=np.complex128(1 + 2j)),
+            "step_penalty: must be a finite number")
+    env = aia.parallel_env(DEFAULT, overrides=SMALL)
+    for bad in ("x", 42, {"foo": 1}):
+        refused(lambda: env.reset(seed=1, options=bad),
+                "aia.ParallelEnv.reset: options: this env takes no options")
+    env.reset(seed=1, options={})
+    env.close()
+    refused(lambda: env.render(), "aia.ParallelEnv.render: the env is closed")
+
+
+def test_a_mission_over_at_reset_has_no_agents():
+    """A prior already within eps: success at step 0. reset lists no agent
+    (before, it listed them all and their first step was refused)."""
+    over = {**SMALL, "mission.eps": 1e30}
+    env = aia.parallel_env(DEFAULT, overrides=over)
+    observations, infos = env.reset(seed=1)
+    assert env.mission.done and env.mission.success
+    assert env.agents == [] and observations == {} and infos == {}
+    aec = aia.aec_env(DEFAULT, overrides=over)
+    aec.reset(seed=1)
+    assert aec.agents == [] and aec.agent_selection is None
+    assert list(aec.agent_iter()) == []
+    refused(lambda: aec.last(), "aia.AECEnv.last: no agent is selected")
+
+
+def test_the_aec_env_refuses_a_bad_action_at_once_and_goes_on():
+    aec = aia.aec_env(DEFAULT, overrides=SMALL)
+    aec.reset(seed=3)
+    refused(lambda: aec.step(7), "aia.AECEnv.step: action: must be an "
+            "integer in [0, 3], got 7")
+    refused(lambda: aec.step(None), "aia.AECEnv.step: action: robot_0 is "
+            "live")
+    refused(lambda: aec.observe("robot_99"), "unknown agent 'robot_99'")
+    assert aec.render_mode is None and aec.state_space is not None
+    # PettingZoo's loop, to the end of the mission.
+    rng = np.random.default_rng(0)
+    for agent in aec.agent_iter(max_iter=3000):
+        _, _, term, trunc, info = aec.last()
+        aec.step(None if term or trunc else
+                 aec.action_space(agent).sample(info["action_mask"]))
+    assert aec.agents == [] and aec.unwrapped.mission.done
+    aec.close()
+    for call in (lambda: aec.last(), lambda: aec.observe("robot_0"),
+                 lambda: aec.step(0)):
+        refused(call, "the env is closed")
+    del rng
+
+
+def test_channel_settings_need_what_they_need(mission):
+    for settings, key, needs in (({"search": True}, "search", "reach_world"),
+                                 ({"reach_world": True}, "reach_world",
+                                  "geodesic"),
+                                 ({"geodesic": True, "reach_detour": 0.5},
+                                  "reach_detour", "reach_world"),
+                                 ({"geodesic": True, "reach_second": True},
+                                  "reach_second", "reach_world")):
+        refused(lambda: mission.channels(**settings), "aia.Mission.channels: "
+                f"channels: {key}: needs {needs}")
+
+
+def test_stand_in_spaces_take_a_mask():
+    from aia import env as env_module
+    d = env_module.Discrete(4, seed=0)
+    mask = np.array([0, 0, 1, 0], dtype=np.int8)
+    assert all(d.sample(mask) == 2 for _ in range(20))
+    assert d.sample(np.zeros(4, dtype=np.int8)) == 0
+    assert 3 in d and 4 not in d
+    assert d.seed(5) == [5]
+    refused(lambda: d.sample(np.array([1, 1])), "Discrete.sample: mask")
+
+
+def test_paths_with_a_nul_byte_are_refused():
+    refused(lambda: aia.Mission(DEFAULT + "\0x.yaml"), "aia.Mission: "
+            "scenario: a path cannot hold a NUL byte")
+
+
+def test_a_view_inside_evaluate_names_the_call(tmp_path):
+    seen = []
+
+    def decide(m):
+        for call in (lambda: m.max_steps, lambda: m.summary()):
+            try:
+                call()
+            except aia.InputError as e:
+                seen.append(str(e))
+        return [4] * m.num_robots
+
+    aia.evaluate(decide, sizes=["2x1"], seeds=1, out=str(tmp_path),
+                 name="idle", progress=False)
+    assert seen[0].startswith("aia.Mission.max_steps: a mission seen by a "
+                              "policy inside aia.evaluate has none"), seen
+    assert seen[1].startswith("aia.Mission.summary: a mission seen by a "
+                              "policy inside aia.evaluate"), seen
+
+
+def test_a_file_that_is_not_a_shard(tmp_path):
+    import sqlite3
+    other = tmp_path / "other.sqlite"
+    sqlite3.connect(other).execute("CREATE TABLE t (x)").connection.close()
+    text = tmp_path / "text.sqlite"
+    text.write_text("not a database\n" * 100)
+    refused(lambda: aia.Dataset([str(other)]), "paths: not an aia dataset "
+            "shard (SQLite: no such table: meta)")
+    refused(lambda: aia.Dataset([str(text)]), "not an aia dataset shard")

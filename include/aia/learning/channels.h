@@ -125,6 +125,21 @@ struct ChannelParams {
   int second_channel() const {
     return broad_channel() + (reach_broad > 0.0 ? 1 : 0);
   }
+  // The first setting given without the one it needs, as {setting, the one
+  // it needs} (metadata keys), or {"", ""} when none: reach_world needs
+  // geodesic; search, reach_detour, reach_broad and reach_second need
+  // reach_world. The model's metadata, aia train's flags and Python's
+  // channel settings are all refused by it.
+  std::pair<std::string_view, std::string_view> MissingPrerequisite() const {
+    if (reach_world && !geodesic) return {"reach_world", "geodesic"};
+    if (search && !reach_world) return {"search", "reach_world"};
+    if (reach_detour > 0.0 && !reach_world)
+      return {"reach_detour", "reach_world"};
+    if (reach_broad > 0.0 && !reach_world)
+      return {"reach_broad", "reach_world"};
+    if (reach_second && !reach_world) return {"reach_second", "reach_world"};
+    return {"", ""};
+  }
   // The channels' names in order: occupancy, own, neighbours, heat, then
   // those of reach, trail, broad and second that are on.
   std::vector<std::string> names() const {

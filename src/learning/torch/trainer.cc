@@ -400,21 +400,15 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
     if (o->reach_detour >= 0.0) c->reach_detour = o->reach_detour;
     if (o->reach_broad >= 0.0) c->reach_broad = o->reach_broad;
     if (o->reach_second >= 0) c->reach_second = o->reach_second == 1;
-    if (c->reach_world && !c->geodesic)
-      throw InputError("command line", 0, "--reach-world",
-                       "needs the reach channel (--geodesic, or an --init "
-                       "model with it)");
-    if (c->search && !c->reach_world)
-      throw InputError("command line", 0, "--search", "needs --reach-world 1");
-    if (c->reach_detour > 0.0 && !c->reach_world)
-      throw InputError("command line", 0, "--reach-detour",
-                       "needs --reach-world 1");
-    if (c->reach_broad > 0.0 && !c->reach_world)
-      throw InputError("command line", 0, "--reach-broad",
-                       "needs --reach-world 1");
-    if (c->reach_second && !c->reach_world)
-      throw InputError("command line", 0, "--reach-second",
-                       "needs --reach-world 1");
+    if (const auto [key, needs] = c->MissingPrerequisite(); !key.empty()) {
+      std::string flag = "--" + std::string(key);
+      std::replace(flag.begin(), flag.end(), '_', '-');
+      throw InputError("command line", 0, flag,
+                       needs == "geodesic"
+                           ? "needs the reach channel (--geodesic, or an "
+                             "--init model with it)"
+                           : "needs --reach-world 1");
+    }
     if (o->geodesic_length > 0.0 && !c->geodesic)
       throw InputError("command line", 0, "--geodesic-length",
                        "needs the reach channel (--geodesic, or an --init "
