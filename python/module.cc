@@ -586,6 +586,9 @@ class Mission {
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
+    if (const std::string why = ChannelGridProblem(map.size(), settings);
+        !why.empty())
+      Refuse("aia.Mission.channels", "", why);
     ChannelRenderer renderer(map.occupancy(), map.size(), settings, &lattice);
     const int n = num_robots();
     py::array_t<float> out({static_cast<py::ssize_t>(n),
@@ -1010,11 +1013,15 @@ class PyDataset {
       throw Renamed(e, "aia.Dataset");  // "command line" is not Python's
     }
     if (data_.samples.empty())
-      throw InputError("Dataset", 0, "paths", "holds no samples");
+      Refuse("aia.Dataset", "paths", "holds no samples");
     const std::vector<std::vector<int>> of_world = SamplesByWorld(data_);
     valid_.resize(data_.samples.size());
     for (std::size_t wi = 0; wi < data_.worlds.size(); ++wi) {
       const DatasetWorld& w = data_.worlds[wi];
+      if (const std::string why = ChannelGridProblem(w.size, channels_);
+          !why.empty())
+        Refuse("aia.Dataset", "channels",
+               "world of episode " + std::to_string(w.episode) + ": " + why);
       const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
                     w.robot_radius);
       renderers_.emplace_back(map.occupancy(), w.size, channels_,

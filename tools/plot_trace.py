@@ -80,7 +80,7 @@ def load_trace(path):
     det = np.full((len(steps), len(robots), len(targets)), np.nan)
     for r in rows:
         t, k = index[int(r[0])], int(r[1])
-        min_det[t, k] = float(r[2])
+        min_det[t, k] = float(r[2]) if r[2] else np.nan  # no robot active
         det[t, :, k] = [float(x) for x in r[3:3 + len(robots)]]
     return Trace(np.array(steps), min_det, det)
 

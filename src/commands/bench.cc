@@ -193,6 +193,11 @@ int RunBench(const BenchOptions& o) {
       episode->Run();
       const PhaseTimes& t = episode->times();
       const int steps = episode->step();
+      if (steps == 0)
+        throw InputError("command line", 0, "--sizes " + size_text,
+                         "the mission ended before its first decision step "
+                         "(no robot active: every robot fails at step 0?), "
+                         "so there is nothing to time");
       rate.push_back(steps / t.total);
       ms.push_back(1e3 * t.total / steps);
       phys.push_back(1e3 * t.physics / steps);

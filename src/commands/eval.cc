@@ -69,6 +69,11 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
     if (o.path == "policy.name")
       throw InputError("command line", 0, key,
                        "the evaluated policies are given by --policies");
+    if (o.path == "mission.max_steps")
+      throw InputError("command line", 0, key,
+                       "is set by the command, not by --set: aia eval runs "
+                       "each mission to 3 F* of the expert's plan, aia bench "
+                       "for --steps decision steps");
     if (o.path.rfind("policy.", 0) == 0 && o.path != "policy.model" &&
         o.path != "policy.model_sha256") {
       policy_sets.push_back(o);
@@ -190,12 +195,15 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
       for (const long c : episode.sim().robot_timeouts()) row.timeouts += c;
       // The row is kept (diagnostics are not written per run here), and
       // said: a line per run whose state MuJoCo reset.
-      std::fputs(UnstableStateWarning(episode.sim().warnings(),
-                                      "aia eval: " + inst.size + ", seed " +
-                                          std::to_string(inst.seed) + ", " +
-                                          row.policy)
-                     .c_str(),
+      const std::string what = "aia eval: " + inst.size + ", seed " +
+                               std::to_string(inst.seed) + ", " + row.policy;
+      std::fputs(UnstableStateWarning(episode.sim().warnings(), what).c_str(),
                  stderr);
+      std::fputs(
+          NoArrivalWarning(episode.decisions(), episode.sim().robot_timeouts(),
+                           episode.sim().robot_stalls(), moves.moves(), what)
+              .c_str(),
+          stderr);
       row.wall_s = SecondsSince(t0);
     }
     rows.push_back(row);

@@ -23,6 +23,22 @@ std::atomic<std::uint64_t> renderers_made{0};
 
 }  // namespace
 
+std::string ChannelGridProblem(const Vec2& size, const ChannelParams& params) {
+  // As MakeHeatmapGrid sizes its grids.
+  const double nx = std::ceil(size.x() / params.cell - 1e-9),
+               ny = std::ceil(size.y() / params.cell - 1e-9);
+  if (nx * ny <= kMaxChannelPixels) return "";
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "the channels' grids cover the workspace [%g, %g] at their "
+                "%g m cell: %.0f x %.0f pixels, beyond the %g (about %.0f "
+                "GB) a renderer may keep; a smaller workspace, or a model "
+                "(or channel settings) with a larger cell",
+                size.x(), size.y(), params.cell, nx, ny, kMaxChannelPixels,
+                kMaxChannelPixels * 70.0 / 1e9);
+  return text;
+}
+
 ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
                                  const Vec2& size, const ChannelParams& params,
                                  const Lattice* lattice)
@@ -31,6 +47,8 @@ ChannelRenderer::ChannelRenderer(const Grid<std::uint8_t>& occupancy,
             params.cutoff > 0.0);
   AIA_CHECK_MSG(!params.geodesic || (lattice && params.geodesic_length > 0.0),
                 "the geodesic channel needs the map's lattice");
+  AIA_CHECK_MSG(ChannelGridProblem(size, params).empty(),
+                "callers refuse such a workspace first (ChannelGridProblem)");
   occupancy_ = MakeHeatmapGrid(size, params.cell);
   heat_ = occupancy_;
   // Share of the fine cells (by their centres) inside each pixel that are

@@ -205,6 +205,13 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
                   "...: it was retrained or replaced since; restore that "
                   "model, or delete the policy.model_sha256 line to run with "
                   "this one");
+        // Its renderers' grids cover the workspace: refused before a 10 km
+        // world asks for gigabytes.
+        if (const std::string why =
+                ChannelGridProblem(s.workspace.size, net->config().channels);
+            !why.empty())
+          throw s.ErrorAt("workspace.size", "policy " + s.policy.name + " (" +
+                                                net->file().path + "): " + why);
         return net;
       },
       [](const IgbNetParams& params, std::shared_ptr<const IgbNet> net) {

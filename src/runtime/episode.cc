@@ -89,7 +89,7 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
         std::max(1L, std::lround(1.0 / (rate * sim_.model()->opt.timestep)));
     next_tick_ = tick_period_;
     reserve_ =
-        mission_.avoidance.value_or(Avoidance::kReserve) == Avoidance::kReserve;
+        mission_.avoidance.value_or(kDefaultAvoidance) == Avoidance::kReserve;
   }
   if (reserve_) {
     const double release = 2.0 * scenario.robots.radius;

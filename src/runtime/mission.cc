@@ -86,6 +86,12 @@ PreparedMission PrepareMission(Scenario scenario,
 Scenario EffectiveScenario(const PreparedMission& mission) {
   Scenario s = mission.scenario;
   s.policy.params = mission.policy->Params();
+  // The async-only keys as the episode takes them where none is given, so
+  // that every key is written with the value it ran with.
+  if (s.mission.decisions == Decisions::kAsync) {
+    if (!s.mission.avoidance) s.mission.avoidance = kDefaultAvoidance;
+    if (!s.sensor.rate) s.sensor.rate = DefaultSensorRate(s.robots.model);
+  }
   // The model as loaded: where it was (the default resolved) and its
   // content, so that a repeat refuses a retrained file.
   if (const FileIdentity* model = mission.policy->model_file()) {
@@ -267,9 +273,11 @@ MissionSummary MissionRunner::Run() {
   // Exits 0 all the same: the files are written and diagnostics.json counts
   // the warnings (physics.mujoco_warnings); no setting can be refused ahead,
   // since whether a motor is too strong depends on the contacts it meets.
-  std::fputs(UnstableStateWarning(e.sim().warnings(),
-                                  e.scenario().name + ", seed " +
-                                      std::to_string(e.scenario().seed))
+  const std::string what =
+      e.scenario().name + ", seed " + std::to_string(e.scenario().seed);
+  std::fputs(UnstableStateWarning(e.sim().warnings(), what).c_str(), stderr);
+  std::fputs(NoArrivalWarning(e.decisions(), e.sim().robot_timeouts(),
+                              e.sim().robot_stalls(), moves_->moves(), what)
                  .c_str(),
              stderr);
 

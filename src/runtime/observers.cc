@@ -63,7 +63,14 @@ void TraceObserver::Write(const Episode& e) {
     }
     row += ',';
     row += std::to_string(k);
-    AppendScientific(e.MinDet(k), &row);
+    // With no robot active there is no minimum: the field is empty (as
+    // summary.json's final_min_det is null), never "inf".
+    const double min_det = e.MinDet(k);
+    if (std::isfinite(min_det)) {
+      AppendScientific(min_det, &row);
+    } else {
+      row += ',';
+    }
     for (int i = 0; i < n; ++i) AppendScientific(e.Det(i, k), &row);
     row += '\n';
     std::fwrite(row.data(), 1, row.size(), impl_->file.get());

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <system_error>
 
@@ -94,6 +95,22 @@ void CheckGenerator(const Scenario& s, const FieldChecker& check) {
       check.Fail(g.room_size,
                  workspace + " is narrower than the rooms' min side (" +
                      FormatNumber(m * step) + " m), so it holds no room; got " +
+                     FormatPair(g.room_size.x(), g.room_size.y()));
+    }
+    // The generator's first split (world/generator.cc, Rooms): a side is
+    // split only where it is longer than max and holds two rooms of min;
+    // with neither side so, the workspace is one room and no wall.
+    const int big = std::max(m, StepsIn(g.room_size.y(), step));
+    const auto splits = [&](int l) { return l > big && l >= 2 * m; };
+    if (!splits(nx) && !splits(ny)) {
+      check.Fail(g.room_size,
+                 workspace +
+                     " would be one room and no wall: a side is split only "
+                     "where it is longer than the rooms' max side (" +
+                     FormatNumber(big * step) +
+                     " m) and holds two of their "
+                     "min side (" +
+                     FormatNumber(2 * m * step) + " m); got " +
                      FormatPair(g.room_size.x(), g.room_size.y()));
     }
   }
@@ -408,8 +425,11 @@ void Scenario::Validate(const FieldChecker& check) {
                                " lies outside the workspace " + bounds);
     }
   }
+  // A block that draws no box (count 0, the way to swap random boxes for a
+  // generator or a map) holds no world back.
   if (const auto& random = workspace.obstacles.random;
-      random && (random->max_size.array() > size.array()).any()) {
+      random && random->count > 0 &&
+      (random->max_size.array() > size.array()).any()) {
     check.Fail(random->max_size,
                "must not be larger than the workspace " +
                    FormatPair(size.x(), size.y()) + ", got " +
@@ -442,12 +462,29 @@ void Scenario::Validate(const FieldChecker& check) {
                                  ", got " + check.Shown(t.position));
     }
   }
+  std::set<int> named;
+  int random_failures = 0;
   for (const RobotFailure& f : communication.failures) {
     if (f.robot >= robots.count) {
       check.Fail(f.robot, "must be a robot index in " +
                               RobotIndexText(robots.count) +
                               " or random, got " + check.Shown(f.robot));
     }
+    if (f.robot == RobotFailure::kRandomRobot) {
+      ++random_failures;
+    } else {
+      named.insert(f.robot);
+    }
+  }
+  // Each random entry fails a robot of its own (world.cc).
+  if (const int free = robots.count - static_cast<int>(named.size());
+      random_failures > free) {
+    check.Fail(communication.failures,
+               std::to_string(random_failures) + " random entries, but " +
+                   std::to_string(free) +
+                   (free == 1 ? " robot is" : " robots are") +
+                   " not named by another entry: each random entry fails a "
+                   "robot of its own");
   }
   if (render.follow_robot >= robots.count) {
     check.Fail(render.follow_robot,

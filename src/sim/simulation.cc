@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 
 #include "aia/core/check.h"
@@ -75,6 +76,25 @@ std::string UnstableStateWarning(const std::array<long, mjNWARNING>& warnings,
          "for its mass and time step: lower robots.diff_drive.max_torque or "
          "physics.kp, raise robots.diff_drive.mass or lower "
          "physics.timestep)\n";
+}
+
+std::string NoArrivalWarning(const std::vector<long>& decisions,
+                             const std::vector<long>& timeouts,
+                             const std::vector<long>& stalls, long moves,
+                             const std::string& what) {
+  const auto sum = [](const std::vector<long>& v) {
+    return std::accumulate(v.begin(), v.end(), 0L);
+  };
+  const long asked = sum(decisions), short_of = sum(timeouts) + sum(stalls);
+  if (moves > 0 || asked == 0 || short_of < asked) return "";
+  return "warning: " + what + ": no robot reached the lattice point it drove " +
+         "to in " + std::to_string(asked) + " move" + (asked == 1 ? "" : "s") +
+         " (" + std::to_string(sum(timeouts)) + " ended at " +
+         "physics.step_timeout, " + std::to_string(sum(stalls)) +
+         " stalled): the robots cannot move with these settings (raise "
+         "physics.step_timeout, or for wheeled robots "
+         "robots.diff_drive.max_speed, max_turn_rate or the gains, or lower "
+         "robots.diff_drive.mass)\n";
 }
 
 MjModelPtr CompileMjcf(const std::string& xml) {
@@ -475,9 +495,12 @@ bool Simulation::RayClear(const Vec2& from, const Vec2& to) const {
   const mjtNum vec[3] = {to.x() - from.x(), to.y() - from.y(), 0.0};
   mjtByte groups[mjNGROUP] = {0};
   groups[kGroupObstacle] = 1;
+  // Nothing lies between a point and itself: a target exactly at the robot
+  // (a listed target on its start, a moving target onto a resting robot)
+  // is in sight. mj_ray refuses so short a ray with an error.
+  if (mju_norm3(vec) < mjMINVAL) return true;
   // The ray length is |vec|, so a hit before 1 lies between the two points.
-  // (A ray too short for mj_ray goes to it, for its error.)
-  if (ray_indexed_ && mju_norm3(vec) >= mjMINVAL) {
+  if (ray_indexed_) {
     return !ray_buckets_.Any(from.cwiseMin(to), from.cwiseMax(to), [&](int i) {
       const int g = ray_geoms_[i];
       const mjtNum x =

@@ -543,12 +543,22 @@ World World::Build(const Scenario& s) {
     Fail(s, "robots.count", what);
   }
 
-  // Failures: "random" picks a robot from the seed's own stream.
+  // Failures: "random" picks a robot from the seed's own stream, one that
+  // no entry names and no random entry drew before (redrawn: the first
+  // draw is kept where it is free, so a lone random entry fails the robot
+  // it always did); Scenario::Validate leaves one free for each.
   Rng fail_rng(s.seed, "failures");
+  std::vector<std::uint8_t> taken(n, 0);
+  for (const RobotFailure& f : s.communication.failures)
+    if (f.robot != RobotFailure::kRandomRobot) taken[f.robot] = 1;
   for (const RobotFailure& f : s.communication.failures) {
     RobotFailure resolved = f;
-    if (f.robot == RobotFailure::kRandomRobot)
-      resolved.robot = static_cast<int>(fail_rng.UniformInt(n));
+    if (f.robot == RobotFailure::kRandomRobot) {
+      do {
+        resolved.robot = static_cast<int>(fail_rng.UniformInt(n));
+      } while (taken[resolved.robot]);
+      taken[resolved.robot] = 1;
+    }
     w.truth.failures.push_back(resolved);
   }
   return w;

@@ -315,6 +315,55 @@ TEST(CliTest, SameScenarioAndSeedGiveByteIdenticalResults) {
   fs::remove_all(b);
 }
 
+// Every robot failed at step 0: no robot is active, so no minimum det
+// Sigma. trace.csv leaves the field empty (it wrote "inf"), as
+// summary.json's final_min_det is null; aia bench, with no step to time,
+// says so (it printed -nan).
+TEST(CliTest, NoActiveRobotWritesNoInfinityAndBenchHasNothingToTime) {
+  const std::string dir = testing::MakeTempDir("aia_all_failed_");
+  const std::string failures =
+      "communication.failures=[{robot: 0, step: 0}, {robot: 1, step: 0}]";
+  const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--out",
+                         dir, "--quiet", "--policy", "greedy", "--set",
+                         "robots.count=2", "--set", failures});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string trace = ReadFile(dir + "/trace.csv");
+  EXPECT_EQ(trace.find("inf"), std::string::npos) << trace;
+  EXPECT_EQ(trace.find("nan"), std::string::npos) << trace;
+  EXPECT_NE(trace.find("\n0,0,,1.000000e+00,"), std::string::npos) << trace;
+  const auto b = RunAia({"bench", "--steps", "2", "--repeats", "1",
+                         "--no-testspeed", "--sizes", "1x1", "--set",
+                         "communication.failures=[{robot: 0, step: 0}]"});
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_EQ(b.err,
+            "error: command line: --sizes 1x1: the mission ended before its "
+            "first decision step (no robot active: every robot fails at step "
+            "0?), so there is nothing to time\n");
+  EXPECT_EQ(b.out.find("nan"), std::string::npos) << b.out;
+  fs::remove_all(dir);
+}
+
+// aia eval ends each run at 3 F* and aia bench after --steps: a --set
+// mission.max_steps was written to effective.yaml and ignored.
+TEST(CliTest, EvalAndBenchRefuseASetMaxSteps) {
+  const std::string dir = testing::MakeTempDir("aia_eval_max_steps_");
+  const std::string expect =
+      "error: command line: --set mission.max_steps: is set by the command, "
+      "not by --set: aia eval runs each mission to 3 F* of the expert's "
+      "plan, aia bench for --steps decision steps\n";
+  const auto e =
+      RunAia({"eval", "--sizes", "1x1", "--seeds", "1", "--policies", "random",
+              "--quiet", "--set", "mission.max_steps=1", "--out", dir + "/e"});
+  EXPECT_EQ(e.exit_code, 2);
+  EXPECT_EQ(e.err, expect);
+  const auto b =
+      RunAia({"bench", "--steps", "2", "--repeats", "1", "--no-testspeed",
+              "--sizes", "1x1", "--set", "mission.max_steps=3"});
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_EQ(b.err, expect);
+  fs::remove_all(dir);
+}
+
 // Wheeled robots with absurd motors (10 g, 1000 N m): MuJoCo resets their
 // unstable state. The run writes its files and exits 0, but says so on
 // stderr, naming the counts that diagnostics.json holds and what to change.
@@ -346,7 +395,15 @@ TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
                        "): the robots' motion after it is not physical (too "
                        "strong a motor for its mass and time step: lower "
                        "robots.diff_drive.max_torque or physics.kp, raise "
-                       "robots.diff_drive.mass or lower physics.timestep)\n");
+                       "robots.diff_drive.mass or lower physics.timestep)\n"
+                       // Nor does any robot get anywhere.
+                       "warning: motors, seed 2: no robot reached the "
+                       "lattice point it drove to in 12 moves (0 ended at "
+                       "physics.step_timeout, 12 stalled): the robots cannot "
+                       "move with these settings (raise physics.step_timeout, "
+                       "or for wheeled robots robots.diff_drive.max_speed, "
+                       "max_turn_rate or the gains, or lower "
+                       "robots.diff_drive.mass)\n");
   // aia eval writes no diagnostics per run: it says it per run.
   const auto e = RunAia({"eval",        "--sizes",
                          "3x2",         "--seeds",
@@ -372,6 +429,63 @@ TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
 // robot_model, the simulated seconds it took (each decision step at least a
 // 0.5 m drive at 0.7 m/s) and each robot's stalls and timeouts; eval takes the
 // model with --set and times its rows in seconds too.
+// A learned policy's renderers keep grids over the whole workspace at the
+// model's cell: a 10 km world at 0.5 m asked for 20 GB and was killed by the
+// kernel. It is refused before anything is built.
+TEST(CliTest, AWorkspaceTooLargeForTheModelsGridsIsRefused) {
+  const std::string dir = testing::MakeTempDir("aia_huge_world_");
+  const auto r = RunAia({"run",
+                         SourcePath("scenarios/default.yaml"),
+                         "--out",
+                         dir,
+                         "--quiet",
+                         "--policy",
+                         "igbnet",
+                         "--set",
+                         "workspace.size=[10000,10000]",
+                         "--set",
+                         "robots.step=10",
+                         "--set",
+                         "robots.radius=1",
+                         "--set",
+                         "workspace.cell=10",
+                         "--set",
+                         "sensor.range=30",
+                         "--set",
+                         "robots.count=1",
+                         "--set",
+                         "targets.count=1",
+                         "--set",
+                         "workspace.obstacles.random.count=0"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: command line: --set workspace.size: policy "
+                       "igbnet ("),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("the channels' grids cover the workspace [10000, "
+                       "10000] at their 0.5 m cell: 20000 x 20000 pixels"),
+            std::string::npos)
+      << r.err;
+  fs::remove_all(dir);
+}
+
+// Wheeled robots whose every move ends at a step timeout too short for them
+// run, but say so (point robots are refused ahead; this used to be silent).
+TEST(CliTest, WheeledRobotsThatNeverArriveAreWarnedOf) {
+  const std::string dir = testing::MakeTempDir("aia_no_arrival_");
+  const auto r = RunAia({"run", SourcePath("scenarios/wheeled.yaml"), "--out",
+                         dir, "--quiet", "--max-steps", "3", "--set",
+                         "physics.step_timeout=0.001"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.rfind("warning: wheeled, seed 3: no robot reached the "
+                        "lattice point it drove to in 18 moves (18 ended at "
+                        "physics.step_timeout, 0 stalled)",
+                        0),
+            0u)
+      << r.err;
+  fs::remove_all(dir);
+}
+
 TEST(CliTest, DiffDriveRunsRepeatAndCountSeconds) {
   const std::string a = testing::MakeTempDir("aia_dd_"),
                     b = testing::MakeTempDir("aia_dd_");

@@ -427,6 +427,19 @@ def test_stand_in_spaces_take_a_mask():
     refused(lambda: d.sample(np.array([1, 1])), "Discrete.sample: mask")
 
 
+def test_channel_grids_beyond_the_limit_are_refused():
+    # 4 km at 0.5 m: 8000 x 8000 pixels of whole-map grids (some 4 GB).
+    m = aia.Mission(DEFAULT, seed=1, overrides={
+        "workspace.size": [4000, 4000], "workspace.cell": 10,
+        "workspace.obstacles.random.count": 0, "robots.step": 10,
+        "robots.radius": 1, "sensor.range": 30, "robots.count": 1,
+        "targets.count": 1})
+    refused(lambda: m.channels(), "aia.Mission.channels: the channels' "
+            "grids cover the workspace [4000, 4000] at their 0.5 m cell: "
+            "8000 x 8000 pixels")
+    assert m.channels(cell=2.0).shape == (1, 4, 40, 40)  # 2000 x 2000 fit
+
+
 def test_paths_with_a_nul_byte_are_refused():
     refused(lambda: aia.Mission(DEFAULT + "\0x.yaml"), "aia.Mission: "
             "scenario: a path cannot hold a NUL byte")

@@ -117,6 +117,26 @@ TEST(SensingTest, WallBlocksAndOpenSpaceSees) {
   EXPECT_TRUE(z[1].empty());
 }
 
+// A target exactly at a robot (a listed target on its start; a moving target
+// onto a resting robot) is in sight: nothing lies between a point and
+// itself. mj_ray refuses so short a ray, which ended the run with
+// "MuJoCo: mj_ray: vector length is too small".
+TEST(SensingTest, ATargetAtTheRobotIsInSight) {
+  const Scenario s = WallScenario();
+  const World w = World::Build(s);
+  Simulation sim(w, s);
+  const Vec2 p = sim.RobotPosition(0);
+  EXPECT_TRUE(sim.RayClear(p, p));
+  EXPECT_TRUE(sim.RayClear(p, p + Vec2(1e-17, 0.0)));
+  SensorModel sensor;
+  std::vector<Rng> rngs = {Rng(1, "s", 0)};
+  std::vector<std::vector<Measurement>> z;
+  Sense(sim, sensor, {p}, {p}, {1}, &rngs, &z);
+  ASSERT_EQ(z[0].size(), 1u);
+  EXPECT_EQ(z[0][0].target, 0);
+  EXPECT_NEAR(z[0][0].y.norm(), 0.0, 0.1);  // noise of std 0.01 at 0 m
+}
+
 TEST(SensingTest, RayClearMatchesWorldLineOfSight) {
   const Scenario s = WallScenario();
   const World w = World::Build(s);
@@ -228,6 +248,24 @@ TEST(MujocoHandlersTest, UnstableStateReportNamesTheResets) {
                 "robots.diff_drive.max_torque or physics.kp, raise "
                 "robots.diff_drive.mass or lower physics.timestep)\n");
   EXPECT_EQ(UnstableStateWarning({}, "m, seed 3"), "");
+}
+
+// A mission of no motion: every move ended at the timeout or stalled, and no
+// lattice move was completed. Counts by hand: 2 robots x 3 moves, 4
+// timeouts and 2 stalls.
+TEST(MujocoHandlersTest, NoArrivalWarningOnlyWhenNoRobotArrived) {
+  EXPECT_EQ(NoArrivalWarning({3, 3}, {3, 1}, {0, 2}, 0, "w, seed 3"),
+            "warning: w, seed 3: no robot reached the lattice point it drove "
+            "to in 6 moves (4 ended at physics.step_timeout, 2 stalled): the "
+            "robots cannot move with these settings (raise "
+            "physics.step_timeout, or for wheeled robots "
+            "robots.diff_drive.max_speed, max_turn_rate or the gains, or "
+            "lower robots.diff_drive.mass)\n");
+  // One robot arrived once (a lattice move, or a move short of both).
+  EXPECT_EQ(NoArrivalWarning({3, 3}, {3, 1}, {0, 2}, 1, "w"), "");
+  EXPECT_EQ(NoArrivalWarning({3, 3}, {3, 1}, {0, 1}, 0, "w"), "");
+  // Nobody was asked to move (success at step 0, or every robot failed).
+  EXPECT_EQ(NoArrivalWarning({0, 0}, {0, 0}, {0, 0}, 0, "w"), "");
 }
 
 TEST(MujocoHandlersTest, AStackOverflowInsideMjStepIsAPhysicsError) {

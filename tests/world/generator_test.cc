@@ -136,6 +136,13 @@ TEST(GeneratorTest, FreeSpaceIsConnectedForTheRobots) {
   for (const Case& c : cases) {
     for (const auto& [w, h] : sizes) {
       if (c.narrow && w * h > 40 * 40) continue;
+      // Rooms of up to 12 m in 10 x 10 m: one room and no wall, refused.
+      if (c.params.find("room_size: [4, 12]") != std::string::npos &&
+          w <= 12 && h <= 12) {
+        EXPECT_THROW(Generated(c.type, w, h, 0, c.params, c.robots, 3),
+                     InputError);
+        continue;
+      }
       for (std::uint64_t seed = 0; seed < 6; ++seed) {
         SCOPED_TRACE(c.type + " {" + c.params + "} " + c.robots + " in " +
                      std::to_string(w) + " x " + std::to_string(h) + ", seed " +

@@ -387,3 +387,27 @@ TEST(MjcfTest, NamesWithXmlCharactersAreEscaped) {
 
 }  // namespace
 }  // namespace aia
+
+namespace aia {
+namespace {
+
+// k random failure entries fail k robots, none of them a robot another entry
+// names (two random entries drew the same robot in 6 of 20 seeds before);
+// seeds 0..39 of 4 robots, robot 1 named, two random entries.
+TEST(WorldTest, RandomFailuresEachFailARobotOfTheirOwn) {
+  for (int seed = 0; seed < 40; ++seed) {
+    const Scenario s = testing::ScenarioFromYaml(
+        "seed: " + std::to_string(seed) +
+        "\nrobots: {count: 4}\ntargets: {count: 2}\ncommunication: "
+        "{failures: [{step: 2}, {robot: 1, step: 0}, {step: 3}]}\n");
+    const World w = World::Build(s);
+    ASSERT_EQ(w.truth.failures.size(), 3u);
+    std::set<int> failed;
+    for (const RobotFailure& f : w.truth.failures) failed.insert(f.robot);
+    EXPECT_EQ(failed.size(), 3u) << "seed " << seed;
+    EXPECT_EQ(w.truth.failures[1].robot, 1);
+  }
+}
+
+}  // namespace
+}  // namespace aia

@@ -34,7 +34,9 @@ struct RobotFailure {
     a->Visit(AIA_FIELD(robot)
                  .In(AtLeast(0))
                  .Keyword("random", kRandomRobot)
-                 .Doc("the robot's index, or random (drawn from the seed)"));
+                 .Doc("the robot's index, or random (drawn from the seed "
+                      "among the robots no other entry names or drew, so "
+                      "that k random entries fail k robots)"));
     a->Visit(AIA_FIELD(step)
                  .In(Between(0, 1e6))
                  .Doc("decision step from which it is isolated"));

@@ -260,6 +260,15 @@ class HeatFold {
   std::vector<float> top_, bottom_;
 };
 
+// A renderer keeps grids over the whole workspace at the channels' cell
+// (the occupancy shares, the heatmap and its fold, the reach field): about
+// 70 bytes a pixel with a policy's threads. More pixels than this are
+// refused before any is made (a 10 km world at 0.5 m asked for 20 GB).
+inline constexpr double kMaxChannelPixels = 4e7;
+// "" when a workspace of `size` metres at params.cell stays within
+// kMaxChannelPixels, else what is wrong and what would do.
+std::string ChannelGridProblem(const Vec2& size, const ChannelParams& params);
+
 // Renders the channels of the robots of one map. Owns scratch memory: one
 // renderer per thread.
 class ChannelRenderer {

@@ -417,8 +417,9 @@ struct TargetsConfig {
             .Doc(
                 "std of a default prior mean around the truth: mu_0 = x + N(0, "
                 "prior_offset^2 I), redrawn until it lies in free space where "
-                "a "
-                "reachable lattice point sees it"));
+                "a reachable lattice point sees it, up to 20 draws; after 20 "
+                "misses mu_0 is the truth itself (so an offset far beyond the "
+                "workspace gives most targets a perfect prior mean)"));
   }
   // count and list agree; at least one target.
   void Validate(const FieldChecker& check);
@@ -479,9 +480,10 @@ struct MissionConfig {
         "its own move ends; sensing at sensor.rate; steps count the slowest "
         "robot's decisions)"));
     a->Visit(AIA_FIELD(avoidance).Doc(
-        "async only: reserve (a robot waits while its next lattice point is "
-        "held by another robot, there or driving to it, deciding again at "
-        "the next sensing tick if it stays held) or none"));
+        "async only; not given: reserve. reserve (a robot waits while its "
+        "next lattice point is held by another robot, there or driving to "
+        "it, deciding again at the next sensing tick if it stays held) or "
+        "none (it drives on)"));
   }
 };
 
@@ -536,6 +538,8 @@ inline constexpr double kDiffDriveStepTimeout = 4.0;
 // dynamics per tick, move as fast in seconds as in the paper's steps, and a
 // robot that arrives decides on beliefs at most 0.2 s old.
 inline constexpr double DefaultSensorRate(RobotModel /*model*/) { return 5.0; }
+// mission.avoidance (async decisions) when the scenario gives none.
+inline constexpr Avoidance kDefaultAvoidance = Avoidance::kReserve;
 
 struct PhysicsConfig {
   double timestep = 0.005;

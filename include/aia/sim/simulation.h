@@ -66,6 +66,18 @@ std::string UnstableStateReport(const std::array<long, mjNWARNING>& warnings);
 // physical (...what to change)\n" (`what` names the mission); "" if none.
 std::string UnstableStateWarning(const std::array<long, mjNWARNING>& warnings,
                                  const std::string& what);
+// The line a command prints on stderr after a mission in which no robot
+// ever reached the lattice point it drove to: `moves` lattice moves were
+// completed (0), and every one of the robots' `decisions` ended at the
+// step timeout or stalled (`timeouts`, `stalls`: per robot, summed). Such
+// settings make a mission of no motion (motors too slow or a timeout too
+// short for them; point robots are refused ahead, wheeled ones cannot be,
+// since their motion depends on the contacts and turns they meet). "" when
+// some robot arrived, or none was asked to move.
+std::string NoArrivalWarning(const std::vector<long>& decisions,
+                             const std::vector<long>& timeouts,
+                             const std::vector<long>& stalls, long moves,
+                             const std::string& what);
 
 // Compiles MJCF text (through MuJoCo's virtual file system); throws
 // std::runtime_error with MuJoCo's message if it does not compile.
