@@ -137,8 +137,8 @@ TEST(GeneratorTest, FreeSpaceIsConnectedForTheRobots) {
     for (const auto& [w, h] : sizes) {
       if (c.narrow && w * h > 40 * 40) continue;
       // Rooms of up to 12 m in 10 x 10 m: one room and no wall, refused.
-      if (c.params.find("room_size: [4, 12]") != std::string::npos &&
-          w <= 12 && h <= 12) {
+      if (c.params.find("room_size: [4, 12]") != std::string::npos && w <= 12 &&
+          h <= 12) {
         EXPECT_THROW(Generated(c.type, w, h, 0, c.params, c.robots, 3),
                      InputError);
         continue;
