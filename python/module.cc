@@ -17,6 +17,7 @@
 #include <exception>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -1317,6 +1318,12 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
   std::string notes;
   {
     py::gil_scoped_release release;
+    // Calls from several threads take turns: the capture of C stdio and the
+    // Ctrl-C handler are the process's (two at once crashed in fflush and
+    // printed eval's lines). Taken without the GIL, which the running call
+    // needs for its policy's callbacks.
+    static std::mutex one_at_a_time;
+    const std::lock_guard<std::mutex> turn(one_at_a_time);
     CStdioCapture quiet;
     InterruptScope scope;  // Ctrl-C: the rows done are written; back to Python
     try {

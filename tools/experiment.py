@@ -120,9 +120,61 @@ def run(cmd, quiet=False):
 
 
 def save(fig, path):
-    fig.savefig(path, dpi=110)
+    """The figure, written atomically (a kill never leaves half a PNG)."""
+    root, ext = os.path.splitext(path)
+    tmp = f"{root}.tmp.{os.getpid()}{ext}"
+    fig.savefig(tmp, dpi=110)
     plt.close(fig)
+    os.replace(tmp, path)
     print(f"wrote {path}", flush=True)
+
+
+def finished(summary_path):
+    """Whether a run of `aia run` or `aia render` finished: its summary is
+    there and does not say it was interrupted (Ctrl-C writes the steps done
+    so far with "interrupted": true; such a run is run again)."""
+    try:
+        with open(summary_path) as f:
+            return not json.load(f).get("interrupted", False)
+    except (OSError, ValueError):
+        return False
+
+
+def video_finished(video):
+    """A video of `aia render` that was not cut short (FILE.summary.json)."""
+    return os.path.isfile(video) and \
+        finished(os.path.splitext(video)[0] + ".summary.json")
+
+
+# Keys of the arguments that change a folder's results without changing its
+# runs' folder names: a second call with other values would mix them.
+SETTINGS = ("set", "policy", "scenario", "max_steps", "quick")
+
+
+def check_settings(args):
+    """OUT/settings.json holds the settings the folder was made with; a call
+    with others is refused (Usage) rather than mixed into it."""
+    settings = {"experiment": args.experiment,
+                **{k: getattr(args, k) for k in SETTINGS if hasattr(args, k)}}
+    if "scenario" in settings:
+        settings["scenario"] = os.path.abspath(settings["scenario"])
+    path = os.path.join(args.out, "settings.json")
+    if os.path.isfile(path):
+        try:
+            with open(path) as f:
+                old = json.load(f)
+        except (OSError, ValueError) as e:
+            raise Usage(f"{path}: not readable ({e}); use another --out")
+        if old != settings:
+            changed = ", ".join(
+                f"{k}: {old.get(k)!r} -> {settings.get(k)!r}"
+                for k in sorted(set(old) | set(settings))
+                if old.get(k) != settings.get(k))
+            raise Usage(f"{path}: this folder was made with other settings "
+                        f"({changed}); its runs would be mixed with these: "
+                        "use another --out")
+    else:
+        write_json(path, settings)
 
 
 # ---------------------------------------------------------------- scalability
@@ -307,7 +359,7 @@ def mission(args, name, scenario, extra):
     base = [scenario, "--policy", args.policy] + extra
     for s in args.set:
         base += ["--set", s]
-    if not os.path.isfile(os.path.join(folder, "summary.json")):
+    if not finished(os.path.join(folder, "summary.json")):
         run([args.aia, "run"] + base + ["--out", folder, "--quiet"])
     summary = json.load(open(os.path.join(folder, "summary.json")))
     trace = plot_trace.load_trace(os.path.join(folder, "trace.csv"))
@@ -321,7 +373,7 @@ def mission(args, name, scenario, extra):
     plot_estimate(est, dof, os.path.join(folder, "estimate.png"),
                   f"{name}: {args.policy}, seed {summary['seed']}")
     video = os.path.join(folder, f"{name}.mp4")
-    if not args.no_video and not os.path.isfile(video):
+    if not args.no_video and not video_finished(video):
         size = ["--width", "320", "--height", "240"] if args.quick else []
         run([args.aia, "render"] + base + size + ["--heatmap", "0", "--out", video, "--quiet"])
     band = chi2_even_ppf(0.025, dof), chi2_even_ppf(0.975, dof)
@@ -369,7 +421,7 @@ NOMINAL = ["--set", "communication.mode=full", "--set", "communication.packet_lo
 def robustness_run(args, variant, seed):
     folder = os.path.join(args.out, "runs", f"{variant}-{seed}")
     path = os.path.join(folder, "summary.json")
-    if not os.path.isfile(path):
+    if not finished(path):
         cmd = [args.aia, "run", args.scenario, "--policy", args.policy, "--seed", str(seed),
                "--out", folder, "--quiet"]
         if variant == "nominal":
@@ -457,7 +509,7 @@ def robustness(args):
     fig.tight_layout()
     save(fig, os.path.join(args.out, "robustness.png"))
     video = os.path.join(args.out, "robustness.mp4")
-    if not args.no_video and not os.path.isfile(video):
+    if not args.no_video and not video_finished(video):
         size = ["--width", "320", "--height", "240", "--max-steps", "40"] if args.quick else []
         cmd = [args.aia, "render", args.scenario, "--policy", args.policy, "--seed",
                str(seeds[0]), "--out", video, "--quiet"] + size
@@ -565,7 +617,7 @@ def gen_files_run(args, name, scenario, seed, policy):
     folder = os.path.join(args.out, "runs", slug(name),
                           f"{os.path.splitext(os.path.basename(scenario))[0]}.{seed}.{policy}")
     path = os.path.join(folder, "summary.json")
-    if not os.path.isfile(path):
+    if not finished(path):
         cmd = [args.aia, "run", scenario, "--policy", policy, "--seed", str(seed),
                "--out", folder, "--quiet"]
         for kv in args.set:
@@ -730,7 +782,7 @@ def motion_run(args, name, scenario, variant, policy, seed):
     folder = os.path.join(args.out, "runs", slug(name),
                           f"{model}{'.' + decisions if decisions else ''}.{policy}.{seed}")
     path = os.path.join(folder, "summary.json")
-    if not os.path.isfile(path):
+    if not finished(path):
         cmd = [args.aia, "run", scenario, "--policy", policy, "--seed", str(seed),
                "--set", f"robots.model={model}", "--out", folder, "--quiet"]
         if decisions:
@@ -936,8 +988,24 @@ def main(argv=None):
     if getattr(args, "jobs", 1) < 1:
         print("error: --jobs: must be at least 1", file=sys.stderr)
         return 2
+    for name in ("seed_base", "threads", "mpi"):
+        v = getattr(args, name, 0)
+        if v is not None and v < 0:
+            print(f"error: --{name.replace('_', '-')}: must be at least 0, got {v}",
+                  file=sys.stderr)
+            return 2
+    for name in ("sizes", "policies", "models", "decisions"):
+        v = getattr(args, name, None)
+        if v is not None and (not v or any(not x for x in v)):
+            print(f"error: --{name}: a comma-separated list with no empty entry, "
+                  f"got {','.join(v)!r}", file=sys.stderr)
+            return 2
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        print(f"error: --out: {args.out} is a file, not a folder", file=sys.stderr)
+        return 2
     os.makedirs(args.out, exist_ok=True)
     try:
+        check_settings(args)
         {"scalability": scalability, "tracking": tracking, "robustness": robustness,
          "generalization": generalization, "motion": motion}[args.experiment](args)
     except Usage as e:

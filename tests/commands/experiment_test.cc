@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -193,6 +195,42 @@ TEST(ExperimentTest, BadArgumentsExitWith2) {
       "robustness --quick --no-video --set robots.count=-1 --out " + dir));
   EXPECT_EQ(bad.exit_code, 2) << bad.out << bad.err;
   EXPECT_NE(bad.err.find("error: "), std::string::npos) << bad.err;
+  for (const char* flag : {"--seed-base -1", "--sizes ,3x3"}) {
+    const auto r = RunCommand(Experiment(std::string("scalability --quick ") +
+                                         flag + " --out " + dir + "/s"));
+    EXPECT_EQ(r.exit_code, 2) << flag << r.err;
+  }
+  fs::remove_all(dir);
+}
+
+// A run that Ctrl-C cut short (its summary says "interrupted") is run again
+// on the next call, not kept as done; a folder made with other settings
+// (another --set, --policy) is refused rather than mixed.
+TEST(ExperimentTest, ResumeRunsInterruptedRunsAgainAndKeepsItsSettings) {
+  if (!HaveMatplotlib()) GTEST_SKIP() << "no python3-matplotlib";
+  const std::string dir = testing::MakeTempDir("aia_experiment_resume_");
+  const std::string cmd = Experiment(
+      "robustness --quick --no-video --seeds 1 --jobs 1 --out " + dir);
+  ASSERT_EQ(RunCommand(cmd).exit_code, 0);
+  const std::string run = dir + "/runs/faults-0/summary.json";
+  const std::string done = ReadFile(run);
+  std::ofstream(run) << "{\"interrupted\": true, \"success\": false, "
+                        "\"flowtime\": null, \"steps\": 0, \"max_steps\": "
+                        "400}\n";
+  const auto again = RunCommand(cmd);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  // Run again, the same result (but the wall clock).
+  const auto no_wall = [](const std::string& text) {
+    return std::regex_replace(text, std::regex("\"wall_s\": [0-9.e-]+"), "");
+  };
+  EXPECT_EQ(no_wall(ReadFile(run)), no_wall(done));
+  const auto other = RunCommand(cmd + " --set sensor.range=1.5");
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_NE(other.err.find("this folder was made with other settings (set: "
+                           "[] -> ['sensor.range=1.5'])"),
+            std::string::npos)
+      << other.err;
+  EXPECT_EQ(RunCommand(cmd + " --policy greedy").exit_code, 2);
   fs::remove_all(dir);
 }
 

@@ -195,3 +195,35 @@ def test_progress_callback(tmp_path):
     aia.evaluate(greedy, ["2x1"], 4, out=tmp_path, name="g",
                  progress=lambda done, total: seen.append((done, total)))
     assert seen[0] == (3, 4) and seen[-1] == (4, 4)
+
+
+def test_calls_from_two_threads_take_turns(tmp_path, capfd):
+    """Two aia.evaluate calls at once (threads) on one folder: they take
+    turns (before 2026-12-06 the process crashed in fflush, eval's lines
+    reached stdout and one policy's rows were lost)."""
+    import threading
+    greedy = aia.builtin_policy("greedy")
+    done, errors = {}, []
+
+    def run(name):
+        try:
+            done[name] = aia.evaluate(lambda m: greedy.decide(m),
+                                      ["3x2", "4x4"], 4, out=tmp_path,
+                                      name=name, progress=False)
+        except Exception as e:  # noqa: BLE001 - any is a finding
+            errors.append(repr(e))
+
+    threads = [threading.Thread(target=run, args=(n,)) for n in ("a", "b")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+    with open(tmp_path / "runs.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert sorted(r["policy"] for r in rows) == ["a"] * 8 + ["b"] * 8
+    # Both scored the same worlds with the same policy: the same rows.
+    key = lambda r: (r["size"], r["seed"], r["success"], r["flowtime"])
+    assert sorted(key(r) for r in rows if r["policy"] == "a") == \
+        sorted(key(r) for r in rows if r["policy"] == "b")
+    assert capfd.readouterr().out == ""  # nothing printed to stdout
