@@ -3,13 +3,17 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
 #include "aia/core/error.h"
@@ -163,6 +167,34 @@ bool LineReader::Next(std::string* line) {
     }
     searched = at_ + had;  // Fill() moved the unread bytes to the front
   }
+}
+
+bool LockedByAnotherProcess(const std::string& path) {
+  // The kernel's table of locks (/proc/locks) names each flock's file by
+  // device and inode and its holder by pid: no lock is taken to ask, and a
+  // lock of this process, whichever copy of this library took it (the torch
+  // plugin has its own), does not count.
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) return false;
+  std::ifstream locks("/proc/locks");
+  const unsigned long long inode = st.st_ino;
+  const unsigned major_id = major(st.st_dev), minor_id = minor(st.st_dev);
+  const long self = static_cast<long>(::getpid());
+  std::string line;
+  while (std::getline(locks, line)) {
+    // "1: FLOCK  ADVISORY  WRITE 1234 08:01:56789 0 EOF"
+    std::istringstream in(line);
+    std::string index, kind, mode, access, file;
+    long pid = 0;
+    if (!(in >> index >> kind) || kind != "FLOCK") continue;
+    if (!(in >> mode >> access >> pid >> file)) continue;
+    unsigned ma = 0, mi = 0;
+    unsigned long long ino = 0;
+    if (std::sscanf(file.c_str(), "%x:%x:%llu", &ma, &mi, &ino) != 3) continue;
+    if (ino == inode && ma == major_id && mi == minor_id && pid != self)
+      return true;
+  }
+  return false;
 }
 
 FileLock::FileLock(const std::string& path) {

@@ -574,6 +574,12 @@ Dataset ReadDataset(const std::vector<std::string>& paths,
   // files (a copied shard, shard sets of two counts) is refused.
   std::map<std::pair<std::string, std::int64_t>, std::string> seen;
   for (const std::string& f : DatasetFiles(paths, key)) {
+    // aia dataset holds an flock on the shard it writes: read now, a shard
+    // would give the episodes written so far (and a resume later others).
+    if (LockedByAnotherProcess(f))
+      throw InputError(f, 0, key,
+                       "is being written by aia dataset (it holds the "
+                       "shard's lock): read it once that has finished");
     const std::size_t first_world = out.worlds.size();
     std::string recipe;
     try {

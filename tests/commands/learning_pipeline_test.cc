@@ -244,10 +244,48 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
   for (const auto& change : std::vector<void (*)(TrainOptions*)>{
            [](TrainOptions* o) { o->lr = 1e-2; },
            [](TrainOptions* o) { o->valid_moves = 1; },
-           [](TrainOptions* o) { o->mistake_weight = 2.0; }}) {
+           [](TrainOptions* o) { o->mistake_weight = 2.0; },
+           // The weights depend on the thread count too.
+           [](TrainOptions* o) { o->threads = 2; }}) {
     TrainOptions c = b;
     change(&c);
     EXPECT_THROW(Train(c), InputError);
+  }
+  // A dataset that grew since (its samples would count in some epochs and
+  // not in others) is refused, and so is one that aia dataset is writing
+  // (it holds the shard's lock).
+  {
+    TrainOptions c = TinyTraining(dir + "/data", dir + "/c.pt");
+    c.stop_after_epochs = 1;
+    Train(c);
+    d.episodes = 10;
+    RunDataset(d);
+    c.stop_after_epochs = 0;
+    c.resume = true;
+    try {
+      Train(c);
+      ADD_FAILURE() << "a resume on grown data was taken";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("was written on other data"),
+                std::string::npos)
+          << e.what();
+    }
+    // This process's lock (it wrote `data` itself) does not count; another
+    // process's does: flock(1) holds the shard of a dataset made apart
+    // while aia train starts.
+    ASSERT_EQ(testing::RunAia({"dataset", "--out", dir + "/data2", "--episodes",
+                               "2", "--size", "3x3", "--quiet"})
+                  .exit_code,
+              0);
+    const auto r =
+        testing::RunCommand("flock -n " + dir + "/data2/shard-0-of-1.sqlite " +
+                            std::string(AIA_BINARY) + " train --data " + dir +
+                            "/data2 --out " + dir + "/e.pt --epochs 1");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("shard-0-of-1.sqlite: --data: is being written by "
+                         "aia dataset (it holds the shard's lock)"),
+              std::string::npos)
+        << r.err;
   }
 
   // Python (Debian's python3-torch) loads the model and reproduces the C++

@@ -95,6 +95,12 @@ class FileLock {
   int fd_ = -1;
 };
 
+// Whether another process holds a FileLock on `path` now (a reader's check
+// that no job is writing it; it takes no lock itself). A FileLock of this
+// process does not count, nor a path that does not exist (the reader then
+// says what is wrong with it).
+bool LockedByAnotherProcess(const std::string& path);
+
 // Where this process writes `path` before renaming it into place:
 // `PATH.tmp.PID`, or, with `keep_extension`, `DIR/.STEM.tmp.PID.EXT` for
 // writers that choose the format by the extension (a video's container).

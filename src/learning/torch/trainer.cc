@@ -13,9 +13,11 @@
 #include <memory>
 #include <numeric>
 #include <sstream>
+#include <thread>
 
 #include "aia/core/error.h"
 #include "aia/core/field_io.h"
+#include "aia/core/hash.h"
 #include "aia/core/io.h"
 #include "aia/core/rng.h"
 #include "aia/learning/dataset.h"
@@ -305,6 +307,28 @@ std::string OptionsKey(const TrainOptions& o) {
   return s.str();
 }
 
+// What a dataset holds, in short: its sample and world counts and a hash of
+// every world's episode, seed and steps and every sample's place and label.
+std::string DataFingerprint(const Dataset& d) {
+  std::string bytes;
+  bytes.reserve(32 * d.worlds.size() + 24 * d.samples.size());
+  const auto add = [&bytes](std::int64_t v) {
+    bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
+  };
+  for (const DatasetWorld& w : d.worlds) {
+    add(w.episode);
+    add(w.seed);
+    add(w.steps);
+  }
+  for (const DatasetSample& s : d.samples) {
+    add(s.episode);
+    add(s.step * 65536 + s.robot);
+    add(static_cast<std::int64_t>(s.label));
+  }
+  return std::to_string(d.samples.size()) + "/" +
+         std::to_string(d.worlds.size()) + "/" + Sha256Hex(bytes).substr(0, 16);
+}
+
 torch::Tensor StringTensor(const std::string& text) {
   torch::Tensor t =
       torch::empty({static_cast<int64_t>(text.size())}, torch::kUInt8);
@@ -489,7 +513,8 @@ std::unique_ptr<FileLock> LockOutputFolder(const std::string& out) {
 // --resume: the model, optimizer state and log of the checkpoint, which must
 // have been written with the same options (`key`). Returns the epochs done.
 int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
-                         IgbNetModule& module, torch::optim::Adam* optimizer,
+                         const std::string& legacy_key, IgbNetModule& module,
+                         torch::optim::Adam* optimizer,
                          std::vector<EpochLog>* logs) {
   try {
     // Read by aia's reader (never blocks; a bounded size) and checked as a
@@ -502,10 +527,22 @@ int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
     archive.load_from(bytes.data(), bytes.size());
     torch::Tensor t;
     archive.read("options", t, true);
-    if (TensorString(t) != key)
-      throw InputError(ckpt, 0, "--resume",
-                       "was written with other options; run without "
-                       "--resume or with the same options");
+    // A checkpoint of an earlier build holds the key without the threads
+    // and the data's fingerprint.
+    const std::string written = TensorString(t);
+    if (written != key && written != legacy_key) {
+      // The same options and threads, other data (the fingerprint is last).
+      const std::string options = key.substr(0, key.rfind(" data=") + 6);
+      const bool data = written.rfind(options, 0) == 0;
+      throw InputError(
+          ckpt, 0, "--resume",
+          data ? "was written on other data (the dataset grew, shrank or "
+                 "changed since: its samples would count in some epochs "
+                 "and not others); run without --resume"
+               : "was written with other options (the thread count "
+                 "included: the weights depend on it); run without "
+                 "--resume or with the same options");
+    }
     archive.read("epoch", t, true);
     const int done = static_cast<int>(t.item<int64_t>());
     archive.read("model", model_archive);
@@ -727,17 +764,25 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
       module->parameters(),
       torch::optim::AdamOptions(o.lr).weight_decay(o.weight_decay));
   const std::unique_ptr<FileLock> lock = LockOutputFolder(o.out);
-  const std::string key = OptionsKey(o);
+  Corpus corpus = LoadCorpus(o.data, o.network.channels, o.val_share, o.seed,
+                             o.weak_weight, o.valid_moves != 0);
+  // The weights depend on the thread count and on every sample: a resume
+  // with other threads or on a dataset that changed since is refused.
+  const std::string legacy_key = OptionsKey(o);
+  const int threads =
+      o.threads > 0 ? o.threads
+                    : static_cast<int>(std::thread::hardware_concurrency());
+  const std::string key = legacy_key + " threads=" + std::to_string(threads) +
+                          " data=" + DataFingerprint(corpus.data);
   const std::string ckpt = CheckpointPath(o.out);
   int start = 0;
   std::vector<EpochLog> logs;
   std::error_code ec;
   if (o.resume && std::filesystem::exists(ckpt, ec))
-    start = ResumeFromCheckpoint(ckpt, key, module, &optimizer, &logs);
+    start =
+        ResumeFromCheckpoint(ckpt, key, legacy_key, module, &optimizer, &logs);
   if (start >= o.epochs) return logs;
 
-  Corpus corpus = LoadCorpus(o.data, o.network.channels, o.val_share, o.seed,
-                             o.weak_weight, o.valid_moves != 0);
   if (corpus.train.empty())
     throw InputError("command line", 0, "--data",
                      "leaves no training samples after the split");
