@@ -22,6 +22,7 @@ Usage:
 
 import argparse
 import csv
+import fcntl
 import json
 import math
 import os
@@ -59,7 +60,13 @@ def run_size(args, n):
           file=sys.stderr, flush=True)
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed:\n{p.stdout}{p.stderr}")
+        # aia's own error line (the last of its stderr; /usr/bin/time adds
+        # its line after it).
+        lines = [ln for ln in p.stderr.splitlines()
+                 if ln and not ln.startswith("Command exited")]
+        why = next((ln for ln in reversed(lines) if ln.startswith("error:")),
+                   lines[-1] if lines else f"exit {p.returncode}")
+        raise RuntimeError(f"{n}x{n}: {why.removeprefix('error: ')}")
     row = None
     for line in p.stdout.splitlines():
         f = line.split()
@@ -155,11 +162,39 @@ def main(argv=None):
     if not sizes or min(sizes) < 1:
         print("error: --sizes: give team sizes of at least 1", file=sys.stderr)
         return 2
-    os.makedirs(args.out, exist_ok=True)
-    # A folder holds one configuration: resuming with another would mix rows.
-    if args.policy_threads < 1:
-        print("error: --policy-threads: give at least 1", file=sys.stderr)
+    for name in ("policy_threads", "steps", "repeats"):
+        if getattr(args, name) < 1:
+            print(f"error: --{name.replace('_', '-')}: give at least 1, got "
+                  f"{getattr(args, name)}", file=sys.stderr)
+            return 2
+    if args.seed < 0:
+        print(f"error: --seed: give a seed of 0 or more, got {args.seed}",
+              file=sys.stderr)
         return 2
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        print(f"error: --out: {args.out} is a file, not a folder", file=sys.stderr)
+        return 2
+    os.makedirs(args.out, exist_ok=True)
+    # One call at a time per folder: two would each rewrite scale.csv from
+    # their own rows (the lock ends with the process, however it ends).
+    lock = open(os.path.join(args.out, ".lock"), "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        print(f"error: --out: {args.out} is in use by another bench_scale.py "
+              "(it holds the folder's lock); wait for it or use another "
+              "folder", file=sys.stderr)
+        return 2
+    try:
+        return measure(args, sizes)
+    except KeyboardInterrupt:
+        print("\ninterrupted: the sizes measured are kept; run the same "
+              "command again to go on", file=sys.stderr)
+        return 130
+
+
+def measure(args, sizes):
+    # A folder holds one configuration: resuming with another would mix rows.
     settings = {"policy": args.policy, "set": args.set, "steps": args.steps,
                 "repeats": args.repeats, "seed": args.seed}
     if args.policy_threads != 1:  # folders of one thread stay resumable
@@ -172,13 +207,13 @@ def main(argv=None):
             print(f"error: {settings_path}: this folder was measured with {old}, "
                   f"not {settings}; use another --out", file=sys.stderr)
             return 2
-    else:
-        tmp = f"{settings_path}.tmp.{os.getpid()}"
-        with open(tmp, "w") as f:
-            json.dump(settings, f)
-        os.replace(tmp, settings_path)
     path = os.path.join(args.out, "scale.csv")
     rows = read_rows(path)
+    if any(n not in rows for n in sizes) and \
+            not (os.path.isfile(args.aia) and os.access(args.aia, os.X_OK)):
+        print(f"error: --aia: {args.aia} is not an executable (build it: "
+              "tools/bootstrap.sh)", file=sys.stderr)
+        return 2
     for n in sizes:
         if n in rows:
             continue
@@ -186,7 +221,14 @@ def main(argv=None):
             rows[n] = run_size(args, n)
         except RuntimeError as e:
             print(f"error: {e}", file=sys.stderr)
-            return 1
+            return 2
+        # The settings go with the first row measured, so that a call that
+        # measured nothing (a bad policy, say) leaves the folder open.
+        if not os.path.isfile(settings_path):
+            tmp = f"{settings_path}.tmp.{os.getpid()}"
+            with open(tmp, "w") as f:
+                json.dump(settings, f)
+            os.replace(tmp, settings_path)
         write_rows(path, rows)
     rows = {n: rows[n] for n in sizes}
 

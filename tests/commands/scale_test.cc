@@ -166,6 +166,38 @@ TEST(ScaleTest, BenchScaleKeepsItsPolicyThreads) {
   fs::remove_all(dir);
 }
 
+// bench_scale.py refuses bad input with one line and exit 2 before anything
+// is written (a bad policy left a settings.json that refused the corrected
+// command), and a folder another call holds (two calls lost each other's
+// rows).
+TEST(ScaleTest, BenchScaleRefusesBadInputAndABusyFolder) {
+  if (RunCommand("/usr/bin/python3 -c 'import matplotlib'").exit_code != 0)
+    GTEST_SKIP() << "no python3-matplotlib";
+  const std::string dir = testing::MakeTempDir("aia_bench_scale_bad_");
+  const std::string tool = "/usr/bin/python3 " +
+                           testing::SourcePath("tools/bench_scale.py") +
+                           " --aia '" + AIA_BINARY + "' --out " + dir +
+                           " --sizes 2 --repeats 1 --steps 2";
+  const auto steps = RunCommand(tool + " --steps 0");
+  EXPECT_EQ(steps.exit_code, 2);
+  EXPECT_EQ(steps.err, "error: --steps: give at least 1, got 0\n");
+  const auto policy = RunCommand(tool + " --policy nosuch");
+  EXPECT_EQ(policy.exit_code, 2);
+  EXPECT_NE(policy.err.find("error: 2x2: command line: --policy: unknown "
+                            "policy 'nosuch'"),
+            std::string::npos)
+      << policy.err;
+  EXPECT_FALSE(fs::exists(dir + "/settings.json"));
+  const auto busy =
+      RunCommand("flock -n " + dir + "/.lock " + tool + " --policy random");
+  EXPECT_EQ(busy.exit_code, 2);
+  EXPECT_NE(busy.err.find("is in use by another bench_scale.py"),
+            std::string::npos)
+      << busy.err;
+  EXPECT_EQ(RunCommand(tool + " --policy random").exit_code, 0);
+  fs::remove_all(dir);
+}
+
 // bench_scale.py splits physics into MuJoCo's time per mj_step call and the
 // calls per decision step, from rows already measured (none is run again).
 // By hand: 10 ms at 10000 calls/s is 0.1 ms x 100 calls; 40 ms at 4000/s
