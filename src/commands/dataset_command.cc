@@ -256,7 +256,11 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
   return spec;
 }
 
-std::string Recipe(const DatasetOptions& o) {
+// The options an episode's data depend on, kept in the shard and compared on
+// resume; `model`: the acting policy's model file (null for a policy
+// without one), named by its content, so that a model retrained or resolved
+// elsewhere (the default's path from another folder) is not mixed in.
+std::string Recipe(const DatasetOptions& o, const FileIdentity* model) {
   std::string r =
       "size=" + o.size.ToText() +
       " first_seed=" + std::to_string(o.first_seed) +
@@ -266,6 +270,7 @@ std::string Recipe(const DatasetOptions& o) {
                            : std::string()) +
       " shards=" + std::to_string(o.shard.count);
   for (const std::string& s : o.sets) r += " set=" + s;
+  if (model) r += " model_sha256=" + model->sha256;
   return r;
 }
 
@@ -383,7 +388,7 @@ void DatasetOptions::Validate(const FieldChecker& c) const {
 int RunDataset(const DatasetOptions& o) {
   const DatasetSetup d = PrepareDataset(o);
   const std::string file = OpenShard(o, d);
-  DatasetWriter writer(file, Recipe(o), "--out");
+  DatasetWriter writer(file, Recipe(o, d.acting->model_file()), "--out");
 
   std::vector<int> todo;
   for (int e = o.shard.index; e < o.episodes; e += o.shard.count)
@@ -422,6 +427,12 @@ int RunDataset(const DatasetOptions& o) {
   if (o.max_seconds > 0.0)
     skip = ", " + std::to_string(skipped) + " skipped (over --max-seconds " +
            FormatNumber(o.max_seconds) + ")";
+  // A folder made with a larger --episodes keeps them all (aia train reads
+  // every one): say so rather than "30 of 20 done".
+  if (writer.done().size() > static_cast<std::size_t>(mine))
+    skip += "; the shard holds " + std::to_string(writer.done().size()) +
+            " episodes, more than the " + std::to_string(mine) +
+            " asked for, and aia train reads them all";
   std::printf(
       "[aia dataset] %s: %d episodes written now (%zu of %d done)%s, %ld "
       "samples, %.1f s, %.2f episodes/s\n",

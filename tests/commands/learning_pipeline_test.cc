@@ -94,6 +94,57 @@ TEST(DatasetTest, KilledMidEpisodeAndResumedReadsBackIdentical) {
   fs::remove_all(dir);
 }
 
+// A dataset acted by a learned policy keeps its model's content in its
+// recipe: a resume whose model file has other content (retrained, or the
+// default resolved in another working folder) is refused, not mixed in.
+TEST(DatasetTest, AResumeWithAnotherModelIsRefused) {
+  const std::string dir = testing::MakeTempDir("aia_ds_model_");
+  const std::string model = dir + "/m.pt";
+  fs::copy_file(testing::SourcePath("models/igbnet_10x10.pt"), model);
+  const std::vector<std::string> args = {
+      "dataset", "--policy", "igbnet",      "--model", model,       "--size",
+      "3x3",     "--out",    dir + "/data", "--quiet", "--episodes"};
+  std::vector<std::string> first = args, second = args;
+  first.push_back("2");
+  second.push_back("3");
+  ASSERT_EQ(testing::RunAia(first).exit_code, 0);
+  fs::copy_file(testing::SourcePath("models/igbnet.pt"), model,
+                fs::copy_options::overwrite_existing);
+  const auto r = testing::RunAia(second);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("was written with another recipe"), std::string::npos)
+      << r.err;
+  fs::copy_file(testing::SourcePath("models/igbnet_10x10.pt"), model,
+                fs::copy_options::overwrite_existing);
+  EXPECT_EQ(testing::RunAia(second).exit_code, 0);  // the same model goes on
+  fs::remove_all(dir);
+}
+
+// OUT and OUT.pt share their log (the ".pt" is dropped): the second run
+// replaced the first's log. It is refused while the other model is there.
+TEST(TrainTest, TwoModelsThatShareALogAreRefused) {
+  const std::string dir = testing::MakeTempDir("aia_train_log_");
+  ASSERT_EQ(testing::RunAia({"dataset", "--out", dir + "/data", "--episodes",
+                             "2", "--size", "3x3", "--quiet"})
+                .exit_code,
+            0);
+  const std::vector<std::string> train = {
+      "train", "--data", dir + "/data", "--epochs", "1", "--quiet", "--out"};
+  std::vector<std::string> pt = train, bare = train;
+  pt.push_back(dir + "/m.pt");
+  bare.push_back(dir + "/m");
+  ASSERT_EQ(testing::RunAia(pt).exit_code, 0);
+  const std::string log = testing::ReadFile(dir + "/m.train.csv");
+  const auto r = testing::RunAia(bare);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(
+      r.err.find("writes the same log as this one ('" + dir + "/m.train.csv')"),
+      std::string::npos)
+      << r.err;
+  EXPECT_EQ(testing::ReadFile(dir + "/m.train.csv"), log);
+  fs::remove_all(dir);
+}
+
 TEST(DatasetTest, SigkilledCommandResumesToTheSameData) {
   const std::string dir = testing::MakeTempDir("aia_ds_");
   const std::vector<std::string> args = {

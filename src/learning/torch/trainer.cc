@@ -372,6 +372,23 @@ void CheckOptions(const TrainOptions& o) {
 // refused too: the first epoch would replace the starting point, so a run
 // started again (or one killed before its first checkpoint) would start
 // from a half-trained model.
+// OUT and OUT.pt write the same log (TrainLogPath drops ".pt"): a run of one
+// would replace the other's. Refused while the other's model or checkpoint
+// is there.
+void CheckTheLogIsOurs(const std::string& out) {
+  const bool pt = out.size() > 3 && out.compare(out.size() - 3, 3, ".pt") == 0;
+  const std::string other = pt ? out.substr(0, out.size() - 3) : out + ".pt";
+  std::error_code ec;
+  for (const std::string& f : {other, CheckpointPath(other)})
+    if (std::filesystem::exists(f, ec))
+      throw InputError("command line", 0, "--out",
+                       "'" + f + "' is there, and the model '" + other +
+                           "' writes the same log as this one ('" +
+                           TrainLogPath(out) +
+                           "'), which this run would replace: choose "
+                           "another name");
+}
+
 void CheckOutputsAreNotInputs(const TrainOptions& o) {
   std::vector<InputFile> inputs;
   for (const std::string& f : DatasetFiles(o.data, "--data"))
@@ -758,6 +775,7 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
   const std::unique_ptr<TorchNet> net = NetworkToTrain(&o);
   const int hops = o.network.message_hops;
   CheckOutputsAreNotInputs(o);
+  CheckTheLogIsOurs(o.out);
   ReturnFreedPagesWhileTraining(o.network);
   IgbNetModule& module = net->impl().module;
   torch::optim::Adam optimizer(
