@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
-#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -178,7 +177,6 @@ bool LockedByAnotherProcess(const std::string& path) {
   if (::stat(path.c_str(), &st) != 0) return false;
   std::ifstream locks("/proc/locks");
   const unsigned long long inode = st.st_ino;
-  const unsigned major_id = major(st.st_dev), minor_id = minor(st.st_dev);
   const long self = static_cast<long>(::getpid());
   std::string line;
   while (std::getline(locks, line)) {
@@ -191,8 +189,9 @@ bool LockedByAnotherProcess(const std::string& path) {
     unsigned ma = 0, mi = 0;
     unsigned long long ino = 0;
     if (std::sscanf(file.c_str(), "%x:%x:%llu", &ma, &mi, &ino) != 3) continue;
-    if (ino == inode && ma == major_id && mi == minor_id && pid != self)
-      return true;
+    // The inode decides: under overlayfs (containers) the table names the
+    // upper layer's device, which stat() does not give.
+    if (ino == inode && pid != self) return true;
   }
   return false;
 }

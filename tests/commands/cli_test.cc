@@ -389,21 +389,23 @@ TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
   ASSERT_TRUE(std::regex_search(diagnostics, count,
                                 std::regex("\"bad_qacc\": ([0-9]+)")))
       << diagnostics;
-  EXPECT_EQ(r.err, "warning: motors, seed 2: MuJoCo reset an unstable state " +
-                       count[1].str() + " time" + (count[1] == "1" ? "" : "s") +
-                       " (bad_qacc " + count[1].str() +
-                       "): the robots' motion after it is not physical (too "
-                       "strong a motor for its mass and time step: lower "
-                       "robots.diff_drive.max_torque or physics.kp, raise "
-                       "robots.diff_drive.mass or lower physics.timestep)\n"
-                       // Nor does any robot get anywhere.
-                       "warning: motors, seed 2: no robot reached the "
-                       "lattice point it drove to in 12 moves (0 ended at "
-                       "physics.step_timeout, 12 stalled): the robots cannot "
-                       "move with these settings (raise physics.step_timeout, "
-                       "or for wheeled robots robots.diff_drive.max_speed, "
-                       "max_turn_rate or the gains, or lower "
-                       "robots.diff_drive.mass)\n");
+  const std::string unstable =
+      "warning: motors, seed 2: MuJoCo reset an unstable state " +
+      count[1].str() + " time" + (count[1] == "1" ? "" : "s") + " (bad_qacc " +
+      count[1].str() +
+      "): the robots' motion after it is not physical (too strong a motor for "
+      "its mass and time step: lower robots.diff_drive.max_torque or "
+      "physics.kp, raise robots.diff_drive.mass or lower physics.timestep)\n";
+  ASSERT_EQ(r.err.substr(0, unstable.size()), unstable) << r.err;
+  // Such motion is chaotic (the counts differ between builds): whether any
+  // robot still arrives somewhere does too. If none does, that is said.
+  const std::string rest = r.err.substr(unstable.size());
+  EXPECT_TRUE(
+      rest.empty() ||
+      std::regex_match(rest, std::regex("warning: motors, seed 2: no robot "
+                                        "reached the lattice point it drove "
+                                        "to in [0-9]+ moves \\([^\n]*\n")))
+      << rest;
   // aia eval writes no diagnostics per run: it says it per run.
   const auto e = RunAia({"eval",        "--sizes",
                          "3x2",         "--seeds",

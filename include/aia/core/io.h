@@ -98,7 +98,7 @@ class FileLock {
 // Whether another process holds a FileLock on `path` now (a reader's check
 // that no job is writing it; it takes no lock itself). A FileLock of this
 // process does not count, nor a path that does not exist (the reader then
-// says what is wrong with it).
+// says what is wrong with it). Read from /proc/locks by inode (Linux).
 bool LockedByAnotherProcess(const std::string& path);
 
 // Where this process writes `path` before renaming it into place:
