@@ -81,7 +81,9 @@ def _integer(value, where, arg, low=0, high=None):
 _SEED_MAX = 2 ** 64 - 1
 
 
-_PLAIN_WORD = re.compile(r"[A-Za-z_/.][A-Za-z0-9_./-]*")
+# A letter, "_" or "/" first (or "." then one of them: "./x.yaml", not
+# ".5", which YAML reads as a number).
+_PLAIN_WORD = re.compile(r"\.?[A-Za-z_/][A-Za-z0-9_./-]*")
 _YAML_WORDS = {"true", "false", "yes", "no", "on", "off", "y", "n", "null",
                ".nan", ".inf", "-.inf", ".na"}
 

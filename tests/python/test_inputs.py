@@ -328,6 +328,8 @@ def test_string_overrides_stay_strings_and_numpy_scalars_are_values():
     assert m.summary()["scenario"] == "run # 2"  # not cut at the '#'
     refused(lambda: aia.Mission(DEFAULT, overrides={"robots.count": "3"}),
             "robots.count: must be an integer", 'got "3"')
+    refused(lambda: aia.Mission(DEFAULT, overrides={"sensor.range": ".5"}),
+            "sensor.range: must be a number", 'got ".5"')
     refused(lambda: aia.Mission(DEFAULT, overrides={"workspace.size":
                                                     "[30, 30]"}),
             "workspace.size")
