@@ -80,6 +80,14 @@ class Failure(Exception):
     pass
 
 
+class AlreadySaid(Exception):
+    """A child failed and printed its own error line: exit with its code."""
+
+    def __init__(self, code):
+        super().__init__(code)
+        self.code = code
+
+
 class Usage(Exception):
     """Bad arguments found once the experiment knows its pieces: exit 2."""
 
@@ -278,7 +286,10 @@ def scalability(args):
         cmd = ["mpirun", "-n", str(args.mpi)] + cmd
     t0 = time.time()
     print("+ " + " ".join(cmd), flush=True)
-    if subprocess.run(cmd).returncode != 0:  # its progress line shows
+    rc = subprocess.run(cmd).returncode  # its progress line shows
+    if rc == 2:  # bad input: aia eval said what, in one line
+        raise AlreadySaid(2)
+    if rc != 0:
         raise Failure("aia eval failed (see above)")
     wall = time.time() - t0
     runs = load_runs(os.path.join(eval_dir, "runs.csv"))
@@ -1008,6 +1019,8 @@ def main(argv=None):
         check_settings(args)
         {"scalability": scalability, "tracking": tracking, "robustness": robustness,
          "generalization": generalization, "motion": motion}[args.experiment](args)
+    except AlreadySaid as e:
+        return e.code
     except Usage as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -195,6 +195,13 @@ TEST(ExperimentTest, BadArgumentsExitWith2) {
       "robustness --quick --no-video --set robots.count=-1 --out " + dir));
   EXPECT_EQ(bad.exit_code, 2) << bad.out << bad.err;
   EXPECT_NE(bad.err.find("error: "), std::string::npos) << bad.err;
+  // aia eval's own error line, and no second line of the experiment's.
+  const auto policy = RunCommand(
+      Experiment("scalability --quick --policies nosuch --out " + dir + "/p"));
+  EXPECT_EQ(policy.exit_code, 2);
+  EXPECT_EQ(policy.err,
+            "error: command line: --policies: unknown policy 'nosuch' "
+            "(valid: random, greedy, expert, decsb, igbnet)\n");
   for (const char* flag : {"--seed-base -1", "--sizes ,3x3"}) {
     const auto r = RunCommand(Experiment(std::string("scalability --quick ") +
                                          flag + " --out " + dir + "/s"));
