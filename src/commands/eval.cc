@@ -194,16 +194,12 @@ std::vector<EvalRow> RunInstance(const EvalInstance& inst,
       for (const long c : episode.sim().robot_stalls()) row.stalls += c;
       for (const long c : episode.sim().robot_timeouts()) row.timeouts += c;
       // The row is kept (diagnostics are not written per run here), and
-      // said: a line per run whose state MuJoCo reset.
+      // said: a line per run whose state MuJoCo reset, or whose robots
+      // never arrived anywhere.
       const std::string what = "aia eval: " + inst.size + ", seed " +
                                std::to_string(inst.seed) + ", " + row.policy;
-      std::fputs(UnstableStateWarning(episode.sim().warnings(), what).c_str(),
+      std::fputs(EndOfMissionWarnings(episode, moves.moves(), what).c_str(),
                  stderr);
-      std::fputs(
-          NoArrivalWarning(episode.decisions(), episode.sim().robot_timeouts(),
-                           episode.sim().robot_stalls(), moves.moves(), what)
-              .c_str(),
-          stderr);
       row.wall_s = SecondsSince(t0);
     }
     rows.push_back(row);

@@ -466,4 +466,11 @@ void Episode::Observe() {
   times_.fusion += Since(t0);
 }
 
+std::string EndOfMissionWarnings(const Episode& e, long moves,
+                                 const std::string& what) {
+  return UnstableStateWarning(e.sim().warnings(), what) +
+         NoArrivalWarning(e.decisions(), e.sim().robot_timeouts(),
+                          e.sim().robot_stalls(), moves, what);
+}
+
 }  // namespace aia

@@ -272,14 +272,11 @@ MissionSummary MissionRunner::Run() {
   const MissionSummary summary = Summarize(e, SecondsSince(mission_.started));
   // Exits 0 all the same: the files are written and diagnostics.json counts
   // the warnings (physics.mujoco_warnings); no setting can be refused ahead,
-  // since whether a motor is too strong depends on the contacts it meets.
+  // since whether a motor is too strong (or too weak to arrive) depends on
+  // the contacts it meets.
   const std::string what =
       e.scenario().name + ", seed " + std::to_string(e.scenario().seed);
-  std::fputs(UnstableStateWarning(e.sim().warnings(), what).c_str(), stderr);
-  std::fputs(NoArrivalWarning(e.decisions(), e.sim().robot_timeouts(),
-                              e.sim().robot_stalls(), moves_->moves(), what)
-                 .c_str(),
-             stderr);
+  std::fputs(EndOfMissionWarnings(e, moves_->moves(), what).c_str(), stderr);
 
   WriteFileAtomic(prefix_ + "effective.yaml",
                   EffectiveYaml(EffectiveScenario(mission_), kEffectiveHeader));

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "aia/comm/graph.h"
@@ -267,6 +268,12 @@ class Episode {
   PhaseTimes times_;
   EpisodeStats stats_;
 };
+
+// The lines a command prints on stderr after a mission (`what` names it):
+// UnstableStateWarning and NoArrivalWarning of its physics, `moves` the
+// lattice moves completed (a MoveObserver's count); "" when all went well.
+std::string EndOfMissionWarnings(const Episode& e, long moves,
+                                 const std::string& what);
 
 }  // namespace aia
 

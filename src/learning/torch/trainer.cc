@@ -311,7 +311,7 @@ std::string OptionsKey(const TrainOptions& o) {
 // every world's episode, seed and steps and every sample's place and label.
 std::string DataFingerprint(const Dataset& d) {
   std::string bytes;
-  bytes.reserve(32 * d.worlds.size() + 24 * d.samples.size());
+  bytes.reserve(24 * d.worlds.size() + 32 * d.samples.size());
   const auto add = [&bytes](std::int64_t v) {
     bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
   };
@@ -322,7 +322,8 @@ std::string DataFingerprint(const Dataset& d) {
   }
   for (const DatasetSample& s : d.samples) {
     add(s.episode);
-    add(s.step * 65536 + s.robot);
+    add(s.step);
+    add(s.robot);
     add(static_cast<std::int64_t>(s.label));
   }
   return std::to_string(d.samples.size()) + "/" +
@@ -367,11 +368,6 @@ void CheckOptions(const TrainOptions& o) {
                      "is required (the model file to write)");
 }
 
-// No file written (the model, its checkpoint, its log) may be a file read:
-// a dataset file of --data, or the --init model. --init M --out M is
-// refused too: the first epoch would replace the starting point, so a run
-// started again (or one killed before its first checkpoint) would start
-// from a half-trained model.
 // OUT and OUT.pt write the same log (TrainLogPath drops ".pt"): a run of one
 // would replace the other's. Refused while the other's model or checkpoint
 // is there.
@@ -389,6 +385,11 @@ void CheckTheLogIsOurs(const std::string& out) {
                            "another name");
 }
 
+// No file written (the model, its checkpoint, its log) may be a file read:
+// a dataset file of --data, or the --init model. --init M --out M is
+// refused too: the first epoch would replace the starting point, so a run
+// started again (or one killed before its first checkpoint) would start
+// from a half-trained model.
 void CheckOutputsAreNotInputs(const TrainOptions& o) {
   std::vector<InputFile> inputs;
   for (const std::string& f : DatasetFiles(o.data, "--data"))
