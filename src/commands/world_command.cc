@@ -33,6 +33,7 @@ int RunWorldCommand(const WorldOptions& o) {
                            registry.UnknownPolicy(scenario.policy.name));
   CheckNotAnInput(o.out, "--out", MissionInputs(scenario, nullptr));
   const std::shared_ptr<const Instance> instance = BuildInstance(scenario);
+  ReportWarnings(scenario);
   const World& world = instance->world;
   // An unwritable folder is bad input (exit 2); a write that fails then (a
   // full disk) is an I/O error (exit 1), as for every command.

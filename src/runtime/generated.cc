@@ -49,7 +49,9 @@ Scenario WithFirstOverrides(const GeneratedSpec& spec, std::size_t n) {
 Scenario ReadGenerated(const GeneratedSpec& spec) {
   try {
     // WithOverrides reads back and checks even when there are none.
-    return WithFirstOverrides(spec, spec.overrides.size());
+    Scenario s = WithFirstOverrides(spec, spec.overrides.size());
+    ReportWarnings(s);
+    return s;
   } catch (const InputError& e) {
     NameTheFlag(e, spec);
   }

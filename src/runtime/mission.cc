@@ -79,6 +79,7 @@ PreparedMission PrepareMission(Scenario scenario,
   SetPolicyThreads(static_cast<int>(std::thread::hardware_concurrency()));
   m.policy = registry.Resolve(scenario);
   m.instance = BuildInstance(scenario);
+  ReportWarnings(scenario);
   m.scenario = std::move(scenario);
   return m;
 }

@@ -145,6 +145,26 @@ const char* GeneratorTypeName(GeneratorType type) {
 }
 
 void GeneratorConfig::Validate(const FieldChecker& check) {
+  // A key of another kind of world, given a value of its own: said, not
+  // refused (effective.yaml writes every key, and a --set of the type
+  // leaves the file's keys behind).
+  const GeneratorConfig unset;
+  const std::string kind = GeneratorTypeName(type);
+  const auto unused = [&](const auto& field, const auto& default_value,
+                          bool used, const char* users) {
+    if (!used && !(field == default_value))
+      check.Warn(field, std::string("applies to ") + users +
+                            " only; a " + kind + " changes nothing by it");
+  };
+  unused(wall, unset.wall, HasWalls(), "maze, rooms and corridors");
+  unused(corridor, unset.corridor, HasCorridors(), "maze and corridors");
+  unused(door, unset.door, HasRooms(), "rooms and corridors");
+  unused(room_size, unset.room_size, HasRooms(), "rooms and corridors");
+  unused(loops, unset.loops, type == GeneratorType::kMaze, "a maze");
+  const bool cave = type == GeneratorType::kCave;
+  unused(fill, unset.fill, cave, "a cave");
+  unused(smoothing, unset.smoothing, cave, "a cave");
+  unused(cell, unset.cell, cave, "a cave");
   if (!HasRooms()) return;
   const std::string shown = FormatPair(room_size.x(), room_size.y());
   if (room_size.x() > room_size.y())
@@ -175,6 +195,10 @@ void ObstaclesConfig::Validate(const FieldChecker& check) {
       check.Fail(*generator,
                  "cannot be combined with workspace.obstacles.map" + why);
   }
+  if (map.empty() && map_threshold != ObstaclesConfig{}.map_threshold)
+    check.Warn(map_threshold,
+               "applies to workspace.obstacles.map only, and no map is given: "
+               "it changes nothing");
   if (map.empty()) return;
   // Only existence here: the image is decoded by world/, which owns the
   // occupancy grid.
@@ -237,6 +261,16 @@ void RobotsConfig::Validate(const FieldChecker& check) {
                      FormatNumber(diff_drive.wheel_radius));
     }
   }
+  if (model == RobotModel::kPoint) {
+    const std::vector<std::string> set =
+        ChangedFields(diff_drive, DiffDriveConfig{});
+    if (!set.empty())
+      check.Warn(diff_drive,
+                 "sets " + field_text::Join(set, ", ") +
+                     ", which only robots.model diff_drive reads: point robots "
+                     "change nothing by " +
+                     (set.size() == 1 ? "it" : "them"));
+  }
   if (!(radius < step / 2)) {
     check.Fail(radius, "must be less than half of robots.step (" +
                            FormatNumber(step / 2) +
@@ -279,6 +313,23 @@ void TargetsConfig::Validate(const FieldChecker& check) {
     if (check.Given(list)) check.Fail(list, what);
     check.Fail(*this, what);
   }
+  // Defaults that no target takes: every target of the list gives its own.
+  if (has_list) {
+    bool all_means = true, all_sigmas = true;
+    for (const TargetConfig& t : list) {
+      all_means &= t.prior_mean.has_value();
+      all_sigmas &= t.prior_sigma.has_value();
+    }
+    const TargetsConfig unset;
+    if (all_means && prior_offset != unset.prior_offset)
+      check.Warn(prior_offset,
+                 "every target of targets.list gives its prior_mean, so no "
+                 "prior mean is drawn: it changes nothing");
+    if (all_sigmas && prior_sigma != unset.prior_sigma)
+      check.Warn(prior_sigma,
+                 "every target of targets.list gives its prior_sigma: it "
+                 "changes nothing");
+  }
   // With a list, count is its length (so that the effective scenario
   // states both consistently).
   if (has_list) count = static_cast<int>(list.size());
@@ -314,6 +365,17 @@ void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model,
   // A point robot's waypoint actuator is a critically damped spring:
   // explicit integration is stable while timestep * omega stays well below
   // 1. (A wheeled robot's motors are damped implicitly.)
+  if (model == RobotModel::kDiffDrive) {
+    const PhysicsConfig unset;
+    if (kp != unset.kp)
+      check.Warn(kp,
+                 "applies to point robots only (a diff_drive robot is driven "
+                 "by its motors, robots.diff_drive): it changes nothing");
+    if (robot_mass != unset.robot_mass)
+      check.Warn(robot_mass,
+                 "applies to point robots only (a diff_drive robot weighs "
+                 "robots.diff_drive.mass): it changes nothing");
+  }
   const double omega_dt = timestep * std::sqrt(kp / robot_mass);
   if (model == RobotModel::kPoint && omega_dt > 0.5) {
     check.Fail(kp, "is too stiff for physics.timestep " +
@@ -437,11 +499,26 @@ void Scenario::Validate(const FieldChecker& check) {
   }
   if (workspace.obstacles.generator) CheckGenerator(*this, check);
   physics.Validate(check, robots.model, robots.step);
+  if (communication.mode != CommMode::kRange &&
+      communication.range != CommParams{}.range)
+    check.Warn(communication.range,
+               "applies to communication.mode range only; with mode full "
+               "every pair of active robots talks, so it changes nothing");
   if (sensor.rate && mission.decisions != Decisions::kAsync) {
     check.Fail(sensor.rate,
                "applies to mission.decisions async only (lockstep senses once "
                "per decision step); remove it, or set mission.decisions: "
                "async");
+  }
+  if (sensor.rate) {
+    const long steps = SensingTickSteps(*sensor.rate, physics.timestep);
+    const double hz = 1.0 / (static_cast<double>(steps) * physics.timestep);
+    if (std::abs(hz - *sensor.rate) > 1e-6 * *sensor.rate)
+      check.Warn(sensor.rate,
+                 "is sensed at " + FormatNumber(hz) + " Hz: a tick falls on a "
+                 "physics step, every " + std::to_string(steps) +
+                 " of physics.timestep " + FormatNumber(physics.timestep) +
+                 " s (targets take a step of their dynamics per tick)");
   }
   if (mission.avoidance && mission.decisions != Decisions::kAsync) {
     check.Fail(mission.avoidance,

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <mutex>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -149,6 +151,7 @@ Scenario Read(const ConfigNode& root, const std::string& file,
   ReadOptions options;
   options.file = file;
   options.base_dir = base_dir;
+  options.warnings = &scenario.warnings;
   scenario.sources = ReadFields(root, options, "", &scenario);
   scenario.file = file;
   return scenario;
@@ -202,6 +205,14 @@ ConfigNode ScenarioNode(const Scenario& scenario) {
 
 std::string EffectiveYaml(const Scenario& scenario, const std::string& header) {
   return header + EmitYaml(ScenarioNode(scenario));
+}
+
+void ReportWarnings(const Scenario& scenario) {
+  static std::mutex mu;
+  static std::set<std::string> shown;
+  const std::lock_guard<std::mutex> lock(mu);
+  for (const std::string& w : scenario.warnings)
+    if (shown.insert(w).second) std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
 std::vector<FieldDoc> ScenarioKeys() { return FieldDocs::Of(Scenario{}); }

@@ -68,24 +68,27 @@ std::string UnstableStateReport(const std::array<long, mjNWARNING>& warnings) {
 }
 
 std::string UnstableStateWarning(const std::array<long, mjNWARNING>& warnings,
-                                 const std::string& what) {
+                                 RobotModel model, const std::string& what) {
   const std::string report = UnstableStateReport(warnings);
   if (report.empty()) return "";
   return "warning: " + what + ": " + report +
          ": the robots' motion after it is not physical (too strong a motor "
-         "for its mass and time step: lower robots.diff_drive.max_torque or "
-         "physics.kp, raise robots.diff_drive.mass or lower "
-         "physics.timestep)\n";
+         "for its mass and time step: " +
+         (model == RobotModel::kDiffDrive
+              ? "lower robots.diff_drive.max_torque, raise "
+                "robots.diff_drive.mass"
+              : "lower physics.kp, raise physics.robot_mass") +
+         " or lower physics.timestep)\n";
 }
 
-std::string NoArrivalWarning(const std::vector<long>& decisions,
+std::string NoArrivalWarning(const std::vector<long>& drives,
                              const std::vector<long>& timeouts,
                              const std::vector<long>& stalls, long moves,
                              const std::string& what) {
   const auto sum = [](const std::vector<long>& v) {
     return std::accumulate(v.begin(), v.end(), 0L);
   };
-  const long asked = sum(decisions), short_of = sum(timeouts) + sum(stalls);
+  const long asked = sum(drives), short_of = sum(timeouts) + sum(stalls);
   if (moves > 0 || asked == 0 || short_of < asked) return "";
   return "warning: " + what + ": no robot reached the lattice point it drove " +
          "to in " + std::to_string(asked) + " move" + (asked == 1 ? "" : "s") +

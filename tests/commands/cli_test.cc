@@ -156,8 +156,8 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
        "32 bits (at most 2147483647), got 1000000000000\n"},
       {{"render", scenario, "--out", "x.mp4", "--width",
         "99999999999999999999"},
-       "error: command line: --width: must be an integer >= 1 that fits in "
-       "32 bits (at most 2147483647), got 99999999999999999999\n"},
+       "error: command line: --width: must be an integer in [16, 8192], "
+       "got 99999999999999999999\n"},
       // An empty item of a list flag is a mistake, not one item fewer.
       {{"eval", "--sizes", "2x2,,3x3", "--out", "x"},
        "error: command line: --sizes: '2x2,,3x3' has an empty item; separate "
@@ -174,7 +174,8 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
       {{"plan", scenario, "--budget", "many"},
        "error: command line: --budget: must be an integer >= 0, got many\n"},
       {{"render", scenario, "--out", "x.mp4", "--width", "wide"},
-       "error: command line: --width: must be an integer >= 1, got wide\n"},
+       "error: command line: --width: must be an integer in [16, 8192], got "
+       "wide\n"},
       {{},
        "error: command line: A subcommand is required (aia --help lists "
        "the options)\n"},
@@ -364,6 +365,29 @@ TEST(CliTest, EvalAndBenchRefuseASetMaxSteps) {
   fs::remove_all(dir);
 }
 
+// A key that changes nothing where it stands runs, with one warning line on
+// stderr naming the flag (or the file's line): once per command, however
+// many worlds an evaluation reads.
+TEST(CliTest, AKeyThatChangesNothingIsWarnedOfOnce) {
+  const std::string dir = testing::MakeTempDir("aia_inert_");
+  const std::string expect =
+      "warning: command line: --set communication.range: applies to "
+      "communication.mode range only; with mode full every pair of active "
+      "robots talks, so it changes nothing\n";
+  const auto r = RunAia({"run", testing::SourcePath("scenarios/default.yaml"),
+                         "--policy", "greedy", "--max-steps", "2", "--set",
+                         "communication.range=5", "--out", dir + "/run",
+                         "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, expect);
+  const auto e = RunAia({"eval", "--sizes", "2x2", "--seeds", "3",
+                         "--policies", "greedy", "--out", dir + "/eval",
+                         "--quiet", "--set", "communication.range=5"});
+  EXPECT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_EQ(e.err, expect);
+  fs::remove_all(dir);
+}
+
 // Wheeled robots with absurd motors (10 g, 1000 N m): MuJoCo resets their
 // unstable state. The run writes its files and exits 0, but says so on
 // stderr, naming the counts that diagnostics.json holds and what to change.
@@ -381,7 +405,7 @@ TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
                          "targets: {count: 2}\n"
                          "policy: {name: greedy}\n"
                          "mission: {max_steps: 4}\n"
-                         "physics: {timestep: 0.02, kp: 1}\n";
+                         "physics: {timestep: 0.02}\n";
   const auto r = RunAia({"run", file, "--out", dir + "/out", "--quiet"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string diagnostics = ReadFile(dir + "/out/diagnostics.json");
@@ -394,8 +418,8 @@ TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
       count[1].str() + " time" + (count[1] == "1" ? "" : "s") + " (bad_qacc " +
       count[1].str() +
       "): the robots' motion after it is not physical (too strong a motor for "
-      "its mass and time step: lower robots.diff_drive.max_torque or "
-      "physics.kp, raise robots.diff_drive.mass or lower physics.timestep)\n";
+      "its mass and time step: lower robots.diff_drive.max_torque, raise "
+      "robots.diff_drive.mass or lower physics.timestep)\n";
   ASSERT_EQ(r.err.substr(0, unstable.size()), unstable) << r.err;
   // Such motion is chaotic (the counts differ between builds): whether any
   // robot still arrives somewhere does too. If none does, that is said.
@@ -416,8 +440,7 @@ TEST(CliTest, AnUnstablePhysicsStateIsWarnedOf) {
                          "--set",       "robots.diff_drive.mass=0.01",
                          "--set",       "robots.diff_drive.max_torque=1000",
                          "--set",       "robots.diff_drive.max_speed=100",
-                         "--set",       "physics.timestep=0.02",
-                         "--set",       "physics.kp=1"});
+                         "--set",       "physics.timestep=0.02"});
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_TRUE(std::regex_search(
       e.err, std::regex("^warning: aia eval: 3x2, seed 0, greedy: MuJoCo "

@@ -362,6 +362,71 @@ policy:
 // The loader keeps a policy's parameters as written, with their lines; the
 // policy registry reads them against the policy's declaration
 // (tests/planning/policy_test.cc).
+// A key given a value that nothing reads where it stands is run, with a
+// warning at its line; the same key at its default (as effective.yaml
+// writes every key), or where it is read, is no warning.
+TEST(LoaderTest, KeysThatChangeNothingAreWarnedOfAtTheirLine) {
+  const std::string yaml =
+      "robots: {count: 2}\n"                                      // 1
+      "targets:\n"                                                // 2
+      "  prior_offset: 2\n"                                       // 3
+      "  list:\n"                                                 // 4
+      "    - {position: [3, 3], prior_mean: [3, 4]}\n"            // 5
+      "communication:\n"                                          // 6
+      "  range: 6\n"                                              // 7
+      "workspace:\n"                                              // 8
+      "  obstacles:\n"                                            // 9
+      "    map_threshold: 0.3\n"                                  // 10
+      "    random: {count: 0}\n"                                  // 11
+      "    generator: {type: cave, loops: 0.5, fill: 0.4}\n"      // 12
+      "physics: {robot_mass: 0.25}\n";                            // 13
+  const Scenario s = ParseScenario(yaml, "w.yaml", "");
+  EXPECT_EQ(s.warnings,
+            (std::vector<std::string>{
+                "w.yaml:12: workspace.obstacles.generator.loops: applies to "
+                "a maze only; a cave changes nothing by it",
+                "w.yaml:10: workspace.obstacles.map_threshold: applies to "
+                "workspace.obstacles.map only, and no map is given: it "
+                "changes nothing",
+                "w.yaml:3: targets.prior_offset: every target of "
+                "targets.list gives its prior_mean, so no prior mean is "
+                "drawn: it changes nothing",
+                "w.yaml:7: communication.range: applies to "
+                "communication.mode range only; with mode full every pair "
+                "of active robots talks, so it changes nothing"}));
+  // Where they are read: none.
+  const Scenario read = ParseScenario(
+      "robots: {count: 2, model: diff_drive, diff_drive: {max_speed: 1}}\n"
+      "targets: {count: 2, prior_offset: 2}\n"
+      "communication: {mode: range, range: 6}\n"
+      "physics: {robot_mass: 0.25}\n",
+      "r.yaml", "");
+  EXPECT_TRUE(read.warnings.empty()) << read.warnings.front();
+  // Point robots given diff_drive keys; diff_drive robots given kp.
+  const Scenario point = ParseScenario(
+      "robots: {count: 2, diff_drive: {track: 0.2, max_speed: 1}}\n"
+      "targets: {count: 2}\n",
+      "p.yaml", "");
+  EXPECT_EQ(point.warnings,
+            (std::vector<std::string>{
+                "p.yaml:1: robots.diff_drive: sets track, max_speed, which "
+                "only robots.model diff_drive reads: point robots change "
+                "nothing by them"}));
+  const Scenario wheeled = ParseScenario(
+      "robots: {count: 2, model: diff_drive}\ntargets: {count: 2}\n"
+      "physics: {kp: 50}\n",
+      "d.yaml", "");
+  ASSERT_EQ(wheeled.warnings.size(), 1u);
+  EXPECT_EQ(wheeled.warnings[0].rfind("d.yaml:3: physics.kp: applies to "
+                                      "point robots only",
+                                      0),
+            0u)
+      << wheeled.warnings[0];
+  // effective.yaml writes every key at its value: no new warning.
+  EXPECT_TRUE(ParseScenario(EffectiveYaml(read, ""), "e.yaml", "")
+                  .warnings.empty());
+}
+
 TEST(LoaderTest, OtherPolicyKeysAreKeptForThePolicy) {
   const Scenario s = testing::ScenarioFromYaml(
       std::string(kMinimal) +

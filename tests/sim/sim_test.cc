@@ -241,13 +241,19 @@ TEST(MujocoHandlersTest, UnstableStateReportNamesTheResets) {
             "bad_ctrl 4)");
   // The line the commands print: the mission named, the report, what to
   // change; nothing when no state was reset.
-  EXPECT_EQ(UnstableStateWarning(w, "m, seed 3"),
+  // What to change names the keys of the robots' model only.
+  EXPECT_EQ(UnstableStateWarning(w, RobotModel::kDiffDrive, "m, seed 3"),
             "warning: m, seed 3: " + UnstableStateReport(w) +
                 ": the robots' motion after it is not physical (too strong a "
                 "motor for its mass and time step: lower "
-                "robots.diff_drive.max_torque or physics.kp, raise "
-                "robots.diff_drive.mass or lower physics.timestep)\n");
-  EXPECT_EQ(UnstableStateWarning({}, "m, seed 3"), "");
+                "robots.diff_drive.max_torque, raise robots.diff_drive.mass "
+                "or lower physics.timestep)\n");
+  EXPECT_EQ(UnstableStateWarning(w, RobotModel::kPoint, "m"),
+            "warning: m: " + UnstableStateReport(w) +
+                ": the robots' motion after it is not physical (too strong a "
+                "motor for its mass and time step: lower physics.kp, raise "
+                "physics.robot_mass or lower physics.timestep)\n");
+  EXPECT_EQ(UnstableStateWarning({}, RobotModel::kPoint, "m, seed 3"), "");
 }
 
 // A mission of no motion: every move ended at the timeout or stalled, and no
@@ -264,7 +270,8 @@ TEST(MujocoHandlersTest, NoArrivalWarningOnlyWhenNoRobotArrived) {
   // One robot arrived once (a lattice move, or a move short of both).
   EXPECT_EQ(NoArrivalWarning({3, 3}, {3, 1}, {0, 2}, 1, "w"), "");
   EXPECT_EQ(NoArrivalWarning({3, 3}, {3, 1}, {0, 1}, 0, "w"), "");
-  // Nobody was asked to move (success at step 0, or every robot failed).
+  // Nobody was sent anywhere (success at step 0, every robot failed, or
+  // every decision a stay or a wait for a held point).
   EXPECT_EQ(NoArrivalWarning({0, 0}, {0, 0}, {0, 0}, 0, "w"), "");
 }
 

@@ -189,6 +189,9 @@ struct ReadOptions {
   // Replaces "unknown key" for mappings read against a fixed set of names
   // (a policy's parameters), e.g. "unknown parameter for policy 'greedy'".
   std::string unknown_key_lead;
+  // Where Validate()'s warnings go (FieldChecker::Warn), each "FILE:LINE:
+  // key: what"; none kept when null.
+  std::vector<std::string>* warnings = nullptr;
 };
 
 // Reads typed structs from a ConfigNode, strictly: unknown keys, wrong types
@@ -281,6 +284,10 @@ class StructChecker : public FieldChecker {
   std::string ShownKey(const std::string& key) const override {
     const auto it = reader_->nodes_.find(key);
     return it == reader_->nodes_.end() ? std::string() : ShowNode(*it->second);
+  }
+  void WarnAt(const std::string& key, const std::string& what) const override {
+    if (reader_->options_.warnings == nullptr) return;
+    reader_->options_.warnings->push_back(ErrorAt(key, what).Format());
   }
 
  private:
@@ -660,7 +667,8 @@ class FieldDocs {
   static std::string DefaultText(const Field<T>& f) {
     if (!f.required.empty()) return "required";
     if constexpr (internal::IsOptional<T>::value) {
-      if (!f.value->has_value()) return "none";
+      if (!f.value->has_value())
+        return f.unset.empty() ? "none" : std::string(f.unset);
     }
     if constexpr (std::is_same_v<T, std::string>) {
       if (f.path && f.value->empty()) return "none";
@@ -708,6 +716,23 @@ void CheckFlags(T* value) {
   ConfigNode node = FieldWriter::WriteStruct(*value);
   SetFlagOrigins(&node);
   ReadFields(node, ReadOptions{"command line", "", ""}, "", value);
+}
+
+// The names of a struct's own fields whose value differs from `unset`'s (as
+// written: a nested struct counts as one field), in declaration order.
+template <typename T>
+std::vector<std::string> ChangedFields(const T& value, const T& unset) {
+  const ConfigNode a = FieldWriter::WriteStruct(value);
+  const ConfigNode b = FieldWriter::WriteStruct(unset);
+  std::vector<std::string> changed;
+  for (const ConfigNode::Entry& e : a.entries) {
+    const ConfigNode* other = b.Find(e.key);
+    if (other == nullptr || !SameValue(e.value, *other))
+      changed.push_back(e.key);
+  }
+  for (const ConfigNode::Entry& e : b.entries)
+    if (a.Find(e.key) == nullptr) changed.push_back(e.key);
+  return changed;
 }
 
 }  // namespace aia

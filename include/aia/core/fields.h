@@ -82,6 +82,9 @@ struct Field {
   std::string_view required;
   // Replaces the generic description of the allowed values in messages.
   std::string_view expect;
+  // Optional fields: the default docs show when none is given, where that
+  // is a value the reader takes ("reserve"); "none" when empty.
+  std::string_view unset;
   // Integers: a word accepted in place of `keyword_value` ("random").
   std::string_view keyword;
   long long keyword_value = 0;
@@ -107,6 +110,10 @@ struct Field {
   }
   Field& Expect(std::string_view text) {
     expect = text;
+    return *this;
+  }
+  Field& Unset(std::string_view text) {
+    unset = text;
     return *this;
   }
   Field& Keyword(std::string_view word, long long stands_for) {
@@ -206,6 +213,13 @@ class FieldChecker {
   std::string Key(const F& field) const {
     return KeyOf(&field, typeid(F));
   }
+  // Notes a problem that does not stop the read, e.g. a key given a value
+  // that nothing uses where it stands: the reader keeps it as "FILE:LINE:
+  // key: what" (ReadOptions::warnings) for the command to print.
+  template <typename F>
+  void Warn(const F& field, const std::string& what) const {
+    WarnAt(KeyOf(&field, typeid(F)), what);
+  }
 
  protected:
   virtual std::string KeyOf(const void* address,
@@ -214,6 +228,7 @@ class FieldChecker {
                              const std::string& what) const = 0;
   virtual bool GivenKey(const std::string& key) const = 0;
   virtual std::string ShownKey(const std::string& key) const = 0;
+  virtual void WarnAt(const std::string& key, const std::string& what) const = 0;
 };
 
 // A number as messages show it: up to 12 significant digits ("0.1", "20").

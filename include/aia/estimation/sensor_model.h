@@ -42,8 +42,11 @@ struct SensorModel {
                  .In(Between(1e-3, 1e3))
                  .Doc("Hz, mission.decisions async only: how often robots "
                       "sense, the graph and the filter update (and targets "
-                      "take a step of their dynamics) on the physics clock; "
-                      "none: 5 (a point robot's lattice move takes 0.2 s)"));
+                      "take a step of their dynamics) on the physics clock, "
+                      "a tick every whole number of physics steps (a rate "
+                      "that is not is rounded, with a warning; at most 1 / "
+                      "physics.timestep); none: 5 (a point robot's lattice "
+                      "move takes 0.2 s)"));
   }
 
   // Noise standard deviation at distance `dist`.

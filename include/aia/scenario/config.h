@@ -9,6 +9,7 @@
 #ifndef AIA_SCENARIO_CONFIG_H_
 #define AIA_SCENARIO_CONFIG_H_
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -479,11 +480,13 @@ struct MissionConfig {
         "until its slowest robot is done) or async (each robot decides when "
         "its own move ends; sensing at sensor.rate; steps count the slowest "
         "robot's decisions)"));
-    a->Visit(AIA_FIELD(avoidance).Doc(
-        "async only; not given: reserve. reserve (a robot waits while its "
-        "next lattice point is held by another robot, there or driving to "
-        "it, deciding again at the next sensing tick if it stays held) or "
-        "none (it drives on)"));
+    a->Visit(AIA_FIELD(avoidance)
+                 .Unset("reserve")
+                 .Doc("async only (refused in lockstep). reserve (a robot "
+                      "waits while its next lattice point is held by another "
+                      "robot, there or driving to it, deciding again at the "
+                      "next sensing tick if it stays held) or none (it "
+                      "drives on)"));
   }
 };
 
@@ -538,6 +541,12 @@ inline constexpr double kDiffDriveStepTimeout = 4.0;
 // dynamics per tick, move as fast in seconds as in the paper's steps, and a
 // robot that arrives decides on beliefs at most 0.2 s old.
 inline constexpr double DefaultSensorRate(RobotModel /*model*/) { return 5.0; }
+// Physics steps from one sensing tick to the next (async): a tick falls on a
+// physics step, so the rate's period is rounded to whole steps, at least
+// one (at most 1 / timestep ticks a second).
+inline long SensingTickSteps(double rate, double timestep) {
+  return std::max(1L, std::lround(1.0 / (rate * timestep)));
+}
 // mission.avoidance (async decisions) when the scenario gives none.
 inline constexpr Avoidance kDefaultAvoidance = Avoidance::kReserve;
 
@@ -604,12 +613,12 @@ struct RenderConfig {
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(width)
-                 .In(AtLeast(1))
+                 .In(Between(16, 8192))
                  .Doc("video width, pixels (even, 16 to 8192; width x "
                       "height needs 512 MiB + 256 bytes per pixel, within "
                       "aia render --memory-budget)"));
     a->Visit(AIA_FIELD(height)
-                 .In(AtLeast(1))
+                 .In(Between(16, 8192))
                  .Doc("video height, pixels (even, 16 to 8192)"));
     a->Visit(AIA_FIELD(fps)
                  .In(Between(1, 1000))
@@ -640,6 +649,10 @@ struct Scenario {
 
   std::string file;    // the YAML file it came from ("" if built in code)
   KeySources sources;  // where each key came from (lines, --set flags)
+  // "FILE:LINE: key: what" for keys given values that nothing reads where
+  // they stand (a range with a full graph); the read stores them, commands
+  // print them (ReportWarnings, loader.h).
+  std::vector<std::string> warnings;
 
   template <typename Archive>
   void Serialize(Archive* a) {

@@ -47,6 +47,11 @@ Scenario ParseScenario(const std::string& yaml, const std::string& file,
 Scenario WithOverrides(const Scenario& scenario,
                        const std::vector<Override>& overrides);
 
+// Prints the scenario's warnings (Scenario::warnings) to stderr, each as
+// "warning: FILE:LINE: key: what" and each text once per process (an
+// evaluation reads a scenario per world). Thread-safe.
+void ReportWarnings(const Scenario& scenario);
+
 // Every key of the scenario with its value, defaults included.
 ConfigNode ScenarioNode(const Scenario& scenario);
 

@@ -63,18 +63,20 @@ const std::string& LastMujocoWarning();
 std::string UnstableStateReport(const std::array<long, mjNWARNING>& warnings);
 // The line a command prints on stderr after a mission whose state MuJoCo
 // reset, "warning: WHAT: REPORT: the robots' motion after it is not
-// physical (...what to change)\n" (`what` names the mission); "" if none.
+// physical (...what to change for robots of `model`)\n" (`what` names the
+// mission); "" if none.
 std::string UnstableStateWarning(const std::array<long, mjNWARNING>& warnings,
-                                 const std::string& what);
+                                 RobotModel model, const std::string& what);
 // The line a command prints on stderr after a mission in which no robot
 // ever reached the lattice point it drove to: `moves` lattice moves were
-// completed (0), and every one of the robots' `decisions` ended at the
-// step timeout or stalled (`timeouts`, `stalls`: per robot, summed). Such
+// completed (0), and every one of the robots' `drives` (moves sent to
+// another lattice point; stays and waits for a held point are none) ended
+// at the step timeout or stalled (`timeouts`, `stalls`: per robot, summed). Such
 // settings make a mission of no motion (motors too slow or a timeout too
 // short for them; point robots are refused ahead, wheeled ones cannot be,
 // since their motion depends on the contacts and turns they meet). "" when
 // some robot arrived, or none was asked to move.
-std::string NoArrivalWarning(const std::vector<long>& decisions,
+std::string NoArrivalWarning(const std::vector<long>& drives,
                              const std::vector<long>& timeouts,
                              const std::vector<long>& stalls, long moves,
                              const std::string& what);
