@@ -19,6 +19,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <utility>
@@ -375,6 +376,26 @@ ChannelParams ChannelSettings(const KeyValues& params,
 
 std::atomic<std::uint64_t> g_next_mission_id{1};
 
+// Every aia.builtin_policy's per-mission states, so that a mission that
+// ends (deleted, restarted, its evaluation run over) is dropped by all of
+// them at once: a policy keeps each live mission's state however many take
+// turns. The lock serializes the states' maps: missions restart on
+// VectorMissions' worker threads without the GIL.
+struct LiveStates {
+  std::mutex mu;
+  std::set<PolicyStates*> all;
+};
+LiveStates& Live() {
+  static LiveStates* live = new LiveStates;  // outlives the module's statics
+  return *live;
+}
+void MissionEnded(std::uint64_t id) {
+  if (id == 0) return;
+  LiveStates& live = Live();
+  const std::lock_guard<std::mutex> lock(live.mu);
+  for (PolicyStates* s : live.all) s->Drop(id);
+}
+
 // What one step did (Mission.step), as Gymnasium tells it: `terminated`
 // when the mission reached an end state (success, or no robot left),
 // `truncated` when it was cut short (mission.max_steps).
@@ -431,8 +452,14 @@ class Mission {
     estimate_->OnStart(*episode_);
     seed_ = episode_->scenario().seed;
     max_steps_ = episode_->mission().max_steps;
+    MissionEnded(id_);
     id_ = g_next_mission_id++;
   }
+  ~Mission() {
+    if (owned()) MissionEnded(id_);
+  }
+  Mission(const Mission&) = delete;
+  Mission& operator=(const Mission&) = delete;
 
   bool owned() const { return episode_ != nullptr; }
   void Invalidate() { view_ = nullptr; }
@@ -806,7 +833,17 @@ class BuiltinPolicy {
     } catch (const InputError& e) {
       throw Renamed(e, "aia.builtin_policy");
     }
+    LiveStates& live = Live();
+    const std::lock_guard<std::mutex> lock(live.mu);
+    live.all.insert(&states_);
   }
+  ~BuiltinPolicy() {
+    LiveStates& live = Live();
+    const std::lock_guard<std::mutex> lock(live.mu);
+    live.all.erase(&states_);
+  }
+  BuiltinPolicy(const BuiltinPolicy&) = delete;
+  BuiltinPolicy& operator=(const BuiltinPolicy&) = delete;
 
   const std::string& name() const { return spec_->name(); }
   bool centralized() const { return spec_->centralized(); }
@@ -814,19 +851,22 @@ class BuiltinPolicy {
   // One move per robot from what the robots know at this step (the team's
   // belief only for a centralized policy). Each mission has its own policy
   // state, started afresh (Reset with the mission's seed) at its first
-  // decision or at a step that is not the next one, so that deciding at
-  // every step repeats `aia run`, also with missions on several threads
-  // (evaluate). Called with the GIL held; the decision runs without it.
+  // decision or at a round that is not the next one (DecisionContext::
+  // round: in async the step may repeat), so that deciding at every round
+  // repeats `aia run`, also with missions on several threads (evaluate). Called with the GIL held; the decision runs without it.
   py::array_t<long long> Decide(const Mission& mission) {
     CallGuard guard(mission.busy(), "aia.builtin_policy.decide");
     DecisionContext ctx = mission.Context();
-    const std::shared_ptr<PolicyStates::Entry> state =
-        states_.For(mission.id(), ctx.step, [&] {
-          std::unique_ptr<Policy> policy = spec_->Create();
-          policy->Reset(*ctx.map, mission.num_robots(), mission.num_targets(),
-                        mission.seed());
-          return policy;
-        });
+    std::shared_ptr<PolicyStates::Entry> state;
+    {
+      const std::lock_guard<std::mutex> lock(Live().mu);
+      state = states_.For(mission.id(), ctx.round, [&] {
+        std::unique_ptr<Policy> policy = spec_->Create();
+        policy->Reset(*ctx.map, mission.num_robots(), mission.num_targets(),
+                      mission.seed());
+        return policy;
+      });
+    }
     if (!state->policy->centralized()) {
       ctx.central = nullptr;
     } else if (ctx.central == nullptr) {
@@ -841,7 +881,10 @@ class BuiltinPolicy {
       status = state->policy->Decide(ctx, &moves);
     }
     status_ = status;
-    PolicyStates::Decided(state.get(), ctx.step);
+    {
+      const std::lock_guard<std::mutex> lock(Live().mu);
+      PolicyStates::Decided(state.get(), ctx.round);
+    }
     py::array_t<long long> out(static_cast<py::ssize_t>(moves.size()));
     auto v = out.mutable_unchecked<1>();
     for (std::size_t i = 0; i < moves.size(); ++i)
@@ -1172,6 +1215,7 @@ class CallbackPolicy : public Policy {
         progress_(std::move(progress)) {}
   ~CallbackPolicy() override {
     if (started_) ++progress_->finished;
+    MissionEnded(id_);
     py::gil_scoped_acquire gil;
     decide_ = py::object();
   }
@@ -1179,6 +1223,7 @@ class CallbackPolicy : public Policy {
   bool centralized() const override { return centralized_; }
   void Reset(const Map&, int, int, std::uint64_t seed) override {
     seed_ = seed;
+    MissionEnded(id_);
     id_ = g_next_mission_id++;
     started_ = true;
   }

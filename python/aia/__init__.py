@@ -117,8 +117,21 @@ def _yaml_text(key, value):
                 value.lower() not in _YAML_WORDS:
             return value
         return _json.dumps(value)
-    if isinstance(value, (list, tuple, dict)):
-        return _json.dumps(value)
+    if isinstance(value, _np.ndarray):
+        value = value.tolist()
+    # Containers in YAML's flow style, each item by these rules, so that a
+    # word inside stays a word: [{robot: random, step: 3}] (JSON would quote
+    # it, and a quoted keyword is a string, not the keyword).
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_yaml_text(key, v) for v in value) + "]"
+    if isinstance(value, dict):
+        items = []
+        for k, v in value.items():
+            if not isinstance(k, str):
+                raise InputError(f"{key}: a mapping's keys are strings, got "
+                                 f"{_shown(k)}")
+            items.append(f"{_yaml_text(key, k)}: {_yaml_text(key, v)}")
+        return "{" + ", ".join(items) + "}"
     raise InputError(f"{key}: a value of type {type(value).__name__} is not "
                      "a scenario value (give a bool, number, string, list or "
                      "dict)")
@@ -628,8 +641,17 @@ def aec_env(scenario, seed=None, overrides=None, render_mode=None, **kwargs):
     """The PettingZoo AEC API over parallel_env (aia.env.AECEnv: agents act
     in turn; the mission steps when every live agent has acted)."""
     from .env import AECEnv, ParallelEnv
-    return AECEnv(ParallelEnv(scenario, seed=seed, overrides=overrides,
-                              render_mode=render_mode, **kwargs))
+    try:
+        parallel = ParallelEnv(scenario, seed=seed, overrides=overrides,
+                               render_mode=render_mode, **kwargs)
+    except InputError as e:
+        # The function the caller called, not the one under it.
+        text = str(e)
+        if not text.startswith("aia.parallel_env:"):
+            raise
+        raise InputError("aia.aec_env:" +
+                         text[len("aia.parallel_env:"):]) from None
+    return AECEnv(parallel)
 
 
 def policy_names():

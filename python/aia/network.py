@@ -159,30 +159,43 @@ class _Archive(nn.Module):
 
 def save_model(net, path):
     """Writes `net` (an IgbNet) as a model file the C++ igbnet policy loads
-    (`policy.model=PATH`)."""
-    meta = {k: v for k, v in net.meta.items() if k != "channels"}
-    hops = meta.pop("message_hops", 0)
-    centre = meta.pop("centre", 0)
+    (`policy.model=PATH`): the metadata as aia train writes it
+    (NetworkConfig::ToJson), a feature that is off left out so that the
+    file keeps the oldest version that has what it uses."""
+    meta = default_meta()
+    meta.update({k: v for k, v in net.meta.items() if k != "channels"})
+    hops = int(meta.pop("message_hops", 0))
+    centre = int(meta.pop("centre", 0))
+    geodesic = bool(meta["geodesic"])
+    world = geodesic and bool(meta.get("reach_world", False))
     out = {k: meta[k] for k in NETWORK_KEYS + CHANNEL_KEYS}
     for k, default in OPTIONAL_KEYS.items():
         if meta.get(k, default) != default:
             out[k] = meta[k]
-    out["format"] = FORMAT
+    if not geodesic:
+        for k in ("geodesic", "geodesic_length", "observe_range",
+                  "reach_margin"):
+            out.pop(k, None)
+    if not world:
+        for k in ("reach_world", "search", "reach_detour", "reach_broad",
+                  "reach_second"):
+            out.pop(k, None)
     detour = float(out.get("reach_detour", 0.0)) > 0.0
     broad = float(out.get("reach_broad", 0.0)) > 0.0
     second = bool(out.get("reach_second", False))
-    out["version"] = (8 if second else 7 if broad else 6 if detour else 5
-                      if centre else 3 if hops else 2)
+    trail = bool(out.get("trail", False))
+    out["format"] = FORMAT
+    out["version"] = (8 if second else 7 if broad else 6 if detour else
+                      5 if centre else 4 if world or trail else
+                      3 if hops else 2 if geodesic else 1)
     if hops:
         out["message_hops"] = hops
     if centre:
         out["centre"] = centre
-    for k in ("cell", "blur", "cutoff", "geodesic_length", "observe_range"):
-        out[k] = float(out[k])
-    if detour:
-        out["reach_detour"] = float(out["reach_detour"])
-    if broad:
-        out["reach_broad"] = float(out["reach_broad"])
+    for k in ("cell", "blur", "cutoff", "geodesic_length", "observe_range",
+              "reach_detour", "reach_broad"):
+        if k in out:
+            out[k] = float(out[k])
     text = json.dumps(out, sort_keys=True, separators=(",", ":"))
     archive = _Archive(net.cpu().eval(), text)
     torch.jit.save(torch.jit.script(archive), str(path))

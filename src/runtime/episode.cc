@@ -82,11 +82,11 @@ Episode::Episode(std::shared_ptr<const Instance> instance,
   stopped_robot_.assign(n, 0);
   from_ = robot_idx_;
   decisions_.assign(n, 0);
+  drives_.assign(n, 0);
   if (async()) {
     const double rate =
         scenario.sensor.rate.value_or(DefaultSensorRate(scenario.robots.model));
-    tick_period_ =
-        std::max(1L, std::lround(1.0 / (rate * sim_.model()->opt.timestep)));
+    tick_period_ = SensingTickSteps(rate, sim_.model()->opt.timestep);
     next_tick_ = tick_period_;
     reserve_ =
         mission_.avoidance.value_or(kDefaultAvoidance) == Avoidance::kReserve;
@@ -156,6 +156,7 @@ void Episode::MoveTargets() {
 DecisionContext Episode::Context() const {
   DecisionContext ctx;
   ctx.step = step_;
+  ctx.round = rounds_;
   ctx.map = &instance_->world.map;
   ctx.sensor = &instance_->scenario.sensor;
   ctx.eps = mission_.eps;
@@ -178,6 +179,7 @@ PolicyStatus Episode::Decide(const DecisionContext& ctx) {
   DecisionContext given = ctx;
   if (!policy_->centralized()) given.central = nullptr;
   const PolicyStatus status = policy_->Decide(given, &moves_);
+  ++rounds_;
   ++stats_.statuses[static_cast<int>(status)];
   return status;
 }
@@ -208,6 +210,7 @@ void Episode::Step() {
                                   rule_rngs_[i], &replaced);
     invalid_moves_ += replaced ? 1 : 0;
     applied_[i] = m;
+    drives_[i] += m == Move::kStay ? 0 : 1;
     sim_.SetWaypoint(i, lattice.Point(lattice.Next(robot_idx_[i], m)));
   }
   times_.policy += Since(t0);
@@ -345,6 +348,7 @@ void Episode::Apply(int i, const Lattice& lattice) {
 
 void Episode::StartMove(int i, int to, const Lattice& lattice) {
   robot_idx_[i] = to;
+  ++drives_[i];
   if (reserve_) {
     ++held_[to];
     held_to_[i] = to;
@@ -468,8 +472,9 @@ void Episode::Observe() {
 
 std::string EndOfMissionWarnings(const Episode& e, long moves,
                                  const std::string& what) {
-  return UnstableStateWarning(e.sim().warnings(), what) +
-         NoArrivalWarning(e.decisions(), e.sim().robot_timeouts(),
+  return UnstableStateWarning(e.sim().warnings(), e.sim().robot_model(),
+                              what) +
+         NoArrivalWarning(e.drives(), e.sim().robot_timeouts(),
                           e.sim().robot_stalls(), moves, what);
 }
 

@@ -341,6 +341,27 @@ def test_string_overrides_stay_strings_and_numpy_scalars_are_values():
         **SMALL, "mission.decisions": "async"}).asynchronous
 
 
+def test_words_inside_list_and_dict_overrides_stay_words():
+    # JSON quoted them ("random"), and a quoted keyword is a string: a list
+    # of failures or a generator block given as Python containers was
+    # refused, naming the top key.
+    m = aia.Mission(DEFAULT, seed=1, overrides={
+        **SMALL, "communication.failures": [{"robot": "random", "step": 3}],
+        "workspace.obstacles.random.count": 0,
+        "workspace.obstacles.generator": {"type": "rooms", "door": 1.0},
+        "workspace.size": np.array([30.0, 30.0])})
+    assert m.num_robots == 3
+    refused(lambda: aia.Mission(DEFAULT, overrides={
+        **SMALL, "communication.failures": [{"robot": "some", "step": 3}]}),
+            "overrides: communication.failures: must be an integer >= 0 or "
+            "random, got some")
+    refused(lambda: aia.Mission(DEFAULT, overrides={
+        "workspace.size": {1: 2}}), "a mapping's keys are strings")
+    # The env made by aec_env names aec_env.
+    refused(lambda: aia.aec_env(DEFAULT, overrides={
+        **SMALL, "mission.decisions": "async"}), "aia.aec_env: ")
+
+
 def test_array_shaped_actions_and_seeds_are_refused():
     env = aia.parallel_env(DEFAULT, overrides=SMALL)
     env.reset(seed=1)

@@ -1,6 +1,7 @@
 """aia.Dataset and a training round trip between PyTorch and the C++
 igbnet policy, both ways."""
 
+import json
 import os
 import subprocess
 from pathlib import Path
@@ -113,6 +114,23 @@ def test_a_model_trained_in_python_runs_in_the_cpp_policy(data, tmp_path):
                         str(tmp_path / "run"), "--quiet"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize("name", ["igbnet.pt", "igbnet_10x10.pt",
+                                  "igbnet_learned.pt"])
+def test_a_shipped_model_saved_again_keeps_its_metadata(tmp_path, name):
+    """save_model writes what aia train wrote: the same metadata, version
+    included (it read keys a model without the reach channel does not have,
+    and wrote version 2 for a model of version 4)."""
+    original = SOURCE / "models" / name
+    net, _ = network.load_model(original)
+    copy = tmp_path / name
+    network.save_model(net, copy)
+
+    def metadata(path):
+        state = torch.jit.load(str(path), map_location="cpu").state_dict()
+        return json.loads(bytes(state["aia_meta"].tolist()).decode())
+    assert metadata(copy) == metadata(original)
 
 
 def test_a_centre_network_reads_the_cells_around_the_robot(tmp_path):

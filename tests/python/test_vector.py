@@ -35,6 +35,24 @@ def test_missions_stepped_together_are_the_missions_stepped_alone():
     assert all(m.success for m in v.missions)
 
 
+def test_one_policy_keeps_the_state_of_every_mission_it_decides_for():
+    # 257 missions deciding in turn with one random policy once lost every
+    # policy's state at every step (256 were kept): none repeated its run.
+    n = 300
+    small = {"robots.count": 2, "targets.count": 2, "mission.max_steps": 6}
+    v = aia.VectorMissions(n, DEFAULT, seed=40, overrides=small)
+    shared = aia.builtin_policy("random")
+    while not v.done.all():
+        v.step(np.stack([shared.decide(m) for m in v.missions]))
+    for i in (0, 150, n - 1):
+        alone = aia.Mission(DEFAULT, seed=40 + i, overrides=small)
+        own = aia.builtin_policy("random")
+        while not alone.done:
+            alone.step(own.decide(alone))
+        assert (alone.state()["positions"] ==
+                v.missions[i].state()["positions"]).all(), i
+
+
 def test_vector_moves_are_checked():
     v = aia.VectorMissions(2, DEFAULT, seed=1, overrides=SMALL)
     with pytest.raises(aia.InputError, match=r"must have shape \(2, 3\), "

@@ -36,6 +36,8 @@ class RoundObserver : public StepObserver {
     int ready = 0;
     for (std::uint8_t r : *d.ready) ready += r;
     if (ready < e.world().NumRobots()) ++partial_rounds;
+    // One round per decision, whether the step moved on or not.
+    EXPECT_EQ(ctx.round, rounds);
     ++rounds;
     return ObserverStatus::kContinue;
   }
@@ -179,8 +181,14 @@ TEST(AsyncTest, MovesAreCountedWhenTheyEnd) {
   for (long d : e->decisions()) decisions += d;
   EXPECT_EQ(moves.moves(), e->history().moves());
   EXPECT_GT(moves.moves(), 0);
-  // Stays and waits that ended at a tick are decisions without a move.
-  EXPECT_LE(moves.moves(), decisions);
+  // Stays and waits that ended at a tick are decisions without a move, and
+  // without a drive: a robot that waits for a held point drives nowhere
+  // (the no-arrival warning counts drives, not decisions).
+  long drives = 0;
+  for (long d : e->drives()) drives += d;
+  EXPECT_LE(moves.moves(), drives);
+  EXPECT_LT(drives, decisions);
+  EXPECT_GT(e->sim().time_use().yielding, 0.0);
 }
 
 }  // namespace

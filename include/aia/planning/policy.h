@@ -86,6 +86,11 @@ class NeighbourhoodHolds;  // planning/search.h
 // centralized policy (the expert) is given the centralized filter.
 struct DecisionContext {
   int step = 0;
+  // The policy's decisions before this one in the mission: the step in
+  // lockstep; in async one per round (the ready robots decide), while
+  // `step` counts the slowest robot's decisions and may repeat. A caller
+  // deciding for many missions by turns tells a continued mission by it.
+  int round = 0;
   const Map* map = nullptr;
   const SensorModel* sensor = nullptr;
   double eps = 0.1;

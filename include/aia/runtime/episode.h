@@ -143,6 +143,9 @@ class Episode {
   double clock_seconds() const { return sim_.clock_seconds(); }
   // Moves (a stay included) each robot has completed.
   const std::vector<long>& decisions() const { return decisions_; }
+  // Moves each robot was sent on to another lattice point (stays and waits
+  // for a held point excluded), arrived or not.
+  const std::vector<long>& drives() const { return drives_; }
   bool success() const { return flowtime_ >= 0; }
   int flowtime() const { return flowtime_; }  // -1 until success
   // Simulated seconds of the mission: until success, else so far.
@@ -242,6 +245,7 @@ class Episode {
   std::vector<StepObserver*> observers_;
   int num_targets_ = 0;
   int step_ = 0;
+  int rounds_ = 0;  // the policy's decisions so far (DecisionContext::round)
   int flowtime_ = -1;
   bool stopped_ = false;
   bool interrupted_ = false;
@@ -253,7 +257,7 @@ class Episode {
   std::vector<std::uint8_t> ready_;
   std::vector<std::uint8_t> stopped_robot_;  // failed, stopped for good
   std::vector<int> from_;
-  std::vector<long> decisions_;
+  std::vector<long> decisions_, drives_;
   std::vector<int> ended_;
   int tick_ = 0;
   long tick_period_ = 1, next_tick_ = 0, tick_start_ = 0;
