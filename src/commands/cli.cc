@@ -43,10 +43,13 @@ namespace {
 
 using Action = std::function<int()>;
 
-constexpr char kSetHelp[] =
-    "override a scenario key, e.g. --set mission.eps=0.05 or --set "
-    "policy.p_v=0.8 (repeatable; see aia schema and aia policies; not a "
-    "key that --policy, --seed or --max-steps gives too)";
+// --set's help, naming the command's own flags that set a key.
+std::string SetHelp(const std::string& own_flags) {
+  return "override a scenario key, e.g. --set mission.eps=0.05 or --set "
+         "policy.p_v=0.8 (repeatable; see aia schema and aia policies" +
+         (own_flags.empty() ? std::string(")")
+                            : "; not a key that " + own_flags + " gives too)");
+}
 
 // Paths given to a flag: an empty one is a mistake (an unset variable in a
 // script), not the flag's default.
@@ -200,7 +203,14 @@ struct MissionFlags {
       c->add_option("--max-steps", max_steps,
                     "decision steps at most (overrides mission.max_steps)")
           ->type_name("INT");
-    c->add_option("--set", sets, kSetHelp)->take_all()->expected(1);
+    c->add_option("--set", sets,
+                  SetHelp(with_policy && with_max_steps
+                              ? "--policy, --seed or --max-steps"
+                          : with_policy    ? "--policy or --seed"
+                          : with_max_steps ? "--seed or --max-steps"
+                                           : "--seed"))
+        ->take_all()
+        ->expected(1);
   }
   aia::CommandOverrides Get() const {
     aia::CommandOverrides o;
@@ -432,7 +442,11 @@ Action AddDatasetCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--model", o->model, "model of a learned acting policy")
       ->check(kPath);
-  cmd->add_option("--set", o->sets, kSetHelp)->take_all()->expected(1);
+  cmd->add_option("--set", o->sets,
+                  "override a key of the generated worlds' scenarios, e.g. "
+                  "--set sensor.range=3 (repeatable; see aia schema)")
+      ->take_all()
+      ->expected(1);
   cmd->add_flag("--quiet", *quiet, "no progress line");
   return [=]() {
     if (!cmd->parsed()) return -1;
@@ -502,6 +516,20 @@ Action AddTrainCommand(CLI::App& app) {
                 " model; drop the flag (or --init, for a new network)");
     }
     if (!validate->empty()) {
+      // It trains nothing: a flag of training or of a network to extend
+      // would be ignored, so it is refused.
+      static const std::set<std::string> kRead = {
+          "--data", "--validate", "--val-share", "--seed", "--valid-moves",
+          "--threads", "--quiet"};
+      for (const CLI::Option* opt : cmd->get_options()) {
+        const std::string name = opt->get_name();
+        if (opt->count() > 0 && !kRead.count(name))
+          throw aia::InputError(
+              "command line", 0, name,
+              "--validate trains nothing and scores the model as it is "
+              "(it reads --data, --val-share, --seed, --valid-moves and "
+              "--threads); drop the flag");
+      }
       const aia::ValidationResult v = aia::Validate(
           *validate, o->data, o->val_share, o->seed, o->valid_moves != 0);
       char useful[64] = "none of them with useful work";

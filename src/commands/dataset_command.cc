@@ -241,6 +241,15 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
         ov.path == "targets.count" || ov.path == "policy.name")
       throw InputError("command line", 0, "--set",
                        ov.path + " is given by --first-seed, --size, --policy");
+    // Given twice, one would win silently (aia run refuses the same).
+    if ((ov.path == "mission.max_steps" && o.max_steps > 0) ||
+        (ov.path == "policy.model" && !o.model.empty()))
+      throw InputError("command line", 0, "--set " + ov.path,
+                       std::string("is also given by ") +
+                           (o.max_steps > 0 && ov.path == "mission.max_steps"
+                                ? "--max-steps"
+                                : "--model") +
+                           "; give one of them");
     if (ov.path == "mission.decisions" && ov.value != "lockstep")
       throw InputError("command line", 0, "--set",
                        "mission.decisions " + ov.value +
@@ -265,7 +274,9 @@ std::string Recipe(const DatasetOptions& o, const FileIdentity* model) {
       "size=" + o.size.ToText() +
       " first_seed=" + std::to_string(o.first_seed) +
       " keep=" + std::to_string(o.keep) + " policy=" + o.policy +
-      " model=" + o.model + " max_steps=" + std::to_string(o.max_steps) +
+      // A model counts by its content (below), not by the path it was given.
+      " model=" + (model ? std::string() : o.model) +
+      " max_steps=" + std::to_string(o.max_steps) +
       (o.max_seconds > 0.0 ? " max_seconds=" + FormatNumber(o.max_seconds)
                            : std::string()) +
       " shards=" + std::to_string(o.shard.count);
@@ -301,6 +312,10 @@ DatasetSetup PrepareDataset(const DatasetOptions& o) {
   d.spec = DatasetSpec(o);
   d.base = ReadGenerated(d.spec);
   d.acting = d.registry.Resolve(d.base);
+  if (!o.model.empty() && d.acting->model_file() == nullptr)
+    throw InputError("command line", 0, "--model",
+                     "policy " + o.policy +
+                         " reads no model (a learned policy does: igbnet)");
   Scenario expert_scenario = d.base;
   expert_scenario.policy.name = "expert";
   expert_scenario.policy.params = ConfigNode();

@@ -95,8 +95,9 @@ TEST(DatasetTest, KilledMidEpisodeAndResumedReadsBackIdentical) {
 }
 
 // A dataset acted by a learned policy keeps its model's content in its
-// recipe: a resume whose model file has other content (retrained, or the
-// default resolved in another working folder) is refused, not mixed in.
+// recipe, not its path: a resume whose model file has other content
+// (retrained, or the default resolved in another working folder) is
+// refused, not mixed in; the same content by another path goes on.
 TEST(DatasetTest, AResumeWithAnotherModelIsRefused) {
   const std::string dir = testing::MakeTempDir("aia_ds_model_");
   const std::string model = dir + "/m.pt";
@@ -117,11 +118,21 @@ TEST(DatasetTest, AResumeWithAnotherModelIsRefused) {
   fs::copy_file(testing::SourcePath("models/igbnet_10x10.pt"), model,
                 fs::copy_options::overwrite_existing);
   EXPECT_EQ(testing::RunAia(second).exit_code, 0);  // the same model goes on
+  // The same content by another path (a copy) is the same model: it goes
+  // on (the recipe held the path as typed, and refused it).
+  const std::string copy = dir + "/copy.pt";
+  fs::copy_file(model, copy);
+  std::vector<std::string> third = second;
+  third[4] = copy;
+  third.back() = "4";
+  const auto c = testing::RunAia(third);
+  EXPECT_EQ(c.exit_code, 0) << c.err;
   fs::remove_all(dir);
 }
 
 // OUT and OUT.pt share their log (the ".pt" is dropped): the second run
-// replaced the first's log. It is refused while the other model is there.
+// replaced the first's log. It is refused while the other model is there,
+// not for a folder of that name.
 TEST(TrainTest, TwoModelsThatShareALogAreRefused) {
   const std::string dir = testing::MakeTempDir("aia_train_log_");
   ASSERT_EQ(testing::RunAia({"dataset", "--out", dir + "/data", "--episodes",
@@ -142,6 +153,37 @@ TEST(TrainTest, TwoModelsThatShareALogAreRefused) {
       std::string::npos)
       << r.err;
   EXPECT_EQ(testing::ReadFile(dir + "/m.train.csv"), log);
+  // A folder is no model: the dataset DIR/data beside the model
+  // DIR/data.pt (docs/paths.md's `--data data/small --out data/small.pt`).
+  std::vector<std::string> beside = train;
+  beside.push_back(dir + "/data.pt");
+  const auto b = testing::RunAia(beside);
+  EXPECT_EQ(b.exit_code, 0) << b.err;
+  fs::remove_all(dir);
+}
+
+// --threads 0 trains on libtorch's default (OMP_NUM_THREADS where set): the
+// checkpoint records the threads it really had, so that a resume on others
+// (whose weights would match neither run) is refused. It recorded the cores.
+TEST(TrainTest, AResumeOnOtherDefaultThreadsIsRefused) {
+  const std::string dir = testing::MakeTempDir("aia_train_threads_");
+  ASSERT_EQ(testing::RunAia({"dataset", "--out", dir + "/data", "--episodes",
+                             "2", "--size", "3x3", "--quiet"})
+                .exit_code,
+            0);
+  const auto train = [&](int omp, int epochs, bool resume) {
+    return testing::RunCommand(
+        "OMP_NUM_THREADS=" + std::to_string(omp) + " " +
+        std::string(AIA_BINARY) + " train --data " + dir +
+        "/data --quiet --out " + dir + "/m.pt --epochs " +
+        std::to_string(epochs) + (resume ? " --resume" : ""));
+  };
+  ASSERT_EQ(train(1, 1, false).exit_code, 0);
+  const auto other = train(2, 1, true);
+  EXPECT_EQ(other.exit_code, 2) << other.err;
+  EXPECT_NE(other.err.find("thread count"), std::string::npos) << other.err;
+  const auto same = train(1, 1, true);
+  EXPECT_EQ(same.exit_code, 0) << same.err;
   fs::remove_all(dir);
 }
 
@@ -724,6 +766,26 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
       {{"train", "--data", dir, "--validate", dir + "/none.pt", "--frame",
         "global"},
        "--frame: the network is the one of the --validate model"},
+      // --validate trains nothing: the flags that would change a model
+      // scored as it is were ignored.
+      {{"train", "--data", dir, "--validate", dir + "/none.pt", "--trail",
+        "1"},
+       "error: command line: --trail: --validate trains nothing"},
+      {{"train", "--data", dir, "--validate", dir + "/none.pt", "--epochs",
+        "3"},
+       "error: command line: --epochs: --validate trains nothing"},
+      // One setting given twice: one would win silently.
+      {{"dataset", "--out", dir, "--max-steps", "5", "--set",
+        "mission.max_steps=50"},
+       "error: command line: --set mission.max_steps: is also given by "
+       "--max-steps"},
+      {{"dataset", "--out", dir, "--policy", "igbnet", "--model",
+        testing::SourcePath("models/igbnet.pt"), "--set",
+        "policy.model=" + testing::SourcePath("models/igbnet_10x10.pt")},
+       "error: command line: --set policy.model: is also given by --model"},
+      {{"dataset", "--out", dir, "--policy", "random", "--model",
+        testing::SourcePath("models/igbnet.pt")},
+       "error: command line: --model: policy random reads no model"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = testing::RunAia(args);

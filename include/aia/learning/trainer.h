@@ -77,7 +77,7 @@ struct TrainOptions {
   int valid_moves = 0;
   double val_share = 0.1;  // of the worlds, held out for validation
   std::uint64_t seed = 1;
-  int threads = 0;  // libtorch intra-op threads; 0: all cores
+  int threads = 0;  // libtorch intra-op threads; 0: libtorch's default
   bool resume = false;
   bool progress = true;
   // For tests of --resume: return after this many epochs of this run, as a

@@ -370,13 +370,15 @@ void CheckOptions(const TrainOptions& o) {
 
 // OUT and OUT.pt write the same log (TrainLogPath drops ".pt"): a run of one
 // would replace the other's. Refused while the other's model or checkpoint
-// is there.
+// file is there.
 void CheckTheLogIsOurs(const std::string& out) {
   const bool pt = out.size() > 3 && out.compare(out.size() - 3, 3, ".pt") == 0;
   const std::string other = pt ? out.substr(0, out.size() - 3) : out + ".pt";
   std::error_code ec;
+  // Files only: a folder of that name (the dataset `--data data/small`
+  // beside `--out data/small.pt`) is no model.
   for (const std::string& f : {other, CheckpointPath(other)})
-    if (std::filesystem::exists(f, ec))
+    if (std::filesystem::is_regular_file(f, ec))
       throw InputError("command line", 0, "--out",
                        "'" + f + "' is there, and the model '" + other +
                            "' writes the same log as this one ('" +
@@ -558,8 +560,9 @@ int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
                  "changed since: its samples would count in some epochs "
                  "and not others); run without --resume"
                : "was written with other options (the thread count "
-                 "included: the weights depend on it); run without "
-                 "--resume or with the same options");
+                 "included, --threads or else libtorch's default, "
+                 "OMP_NUM_THREADS where set: the weights depend on it); run "
+                 "without --resume or with the same options");
     }
     archive.read("epoch", t, true);
     const int done = static_cast<int>(t.item<int64_t>());
@@ -572,6 +575,12 @@ int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
     return done;
   } catch (const InputError&) {
     throw;
+  } catch (const c10::Error& e) {
+    // libtorch's message without its C++ backtrace (one line, as every
+    // error): a model file or another archive where the checkpoint was.
+    throw InputError(ckpt, 0, "--resume",
+                     std::string("cannot read the checkpoint: ") +
+                         e.what_without_backtrace());
   } catch (const std::exception& e) {
     throw InputError(ckpt, 0, "--resume",
                      std::string("cannot read the checkpoint: ") + e.what());
@@ -788,9 +797,9 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
   // The weights depend on the thread count and on every sample: a resume
   // with other threads or on a dataset that changed since is refused.
   const std::string legacy_key = OptionsKey(o);
-  const int threads =
-      o.threads > 0 ? o.threads
-                    : static_cast<int>(std::thread::hardware_concurrency());
+  // The threads libtorch trains on: --threads, else its own default (one
+  // with Debian's build, OMP_NUM_THREADS where set), not the cores.
+  const int threads = torch::get_num_threads();
   const std::string key = legacy_key + " threads=" + std::to_string(threads) +
                           " data=" + DataFingerprint(corpus.data);
   const std::string ckpt = CheckpointPath(o.out);
