@@ -85,13 +85,22 @@ def run_size(args, n):
             "peak_rss_mib": round(int(rss_kib) / 1024.0, 1), "wall_s": float(wall)}
 
 
+class Damaged(Exception):
+    """A file of the folder that this tool did not write as it is."""
+
+
 def read_rows(path):
-    if not os.path.isfile(path):
+    if not os.path.exists(path):
         return {}
-    with open(path, newline="") as f:
-        # rows of an older layout (columns missing) are measured again
-        return {int(r["robots"]): r for r in csv.DictReader(f)
-                if all(r.get(k) not in (None, "") for k in COLUMNS)}
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            # rows of an older layout (columns missing) are measured again
+            return {int(r["robots"]): r for r in csv.DictReader(f)
+                    if all(r.get(k) not in (None, "") for k in COLUMNS)}
+    except (OSError, UnicodeDecodeError, ValueError, csv.Error) as e:
+        raise Damaged(f"{path}: cannot be read as this tool's table "
+                      f"({getattr(e, 'strerror', None) or e}); move it away "
+                      "to measure again") from None
 
 
 def write_rows(path, rows):
@@ -187,6 +196,9 @@ def main(argv=None):
         return 2
     try:
         return measure(args, sizes)
+    except Damaged as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("\ninterrupted: the sizes measured are kept; run the same "
               "command again to go on", file=sys.stderr)
@@ -200,9 +212,14 @@ def measure(args, sizes):
     if args.policy_threads != 1:  # folders of one thread stay resumable
         settings["policy_threads"] = args.policy_threads
     settings_path = os.path.join(args.out, "settings.json")
-    if os.path.isfile(settings_path):
-        with open(settings_path) as f:
-            old = json.load(f)
+    if os.path.exists(settings_path):
+        try:
+            with open(settings_path, encoding="utf-8") as f:
+                old = json.load(f)
+        except (OSError, UnicodeDecodeError, ValueError) as e:
+            raise Damaged(f"{settings_path}: cannot be read "
+                          f"({getattr(e, 'strerror', None) or e}); move it "
+                          "away to measure again") from None
         if old != settings:
             print(f"error: {settings_path}: this folder was measured with {old}, "
                   f"not {settings}; use another --out", file=sys.stderr)
@@ -267,7 +284,8 @@ def measure(args, sizes):
                     f" | {float(r['mj_step_per_s']):.0f} | {float(r['testspeed_per_s']):.0f}"
                     f" | {float(r['contacts']):.1f} / {float(r['testspeed_contacts']):.1f}"
                     f" | {float(r['peak_rss_mib']):.0f} |\n")
-        f.write("| growth (fitted from N = 80) | | " +
+        fitted = "N = 80" if sum(n >= 80 for n in rows) >= 2 else "all sizes"
+        f.write(f"| growth (fitted from {fitted}) | | " +
                 " | ".join(f"N^{slope(rows, k):.2f}" for k in ["ms_step"] + PHASES) +
                 " | | | | |\n")
         # Physics per decision step = (ms per mj_step) x (mj_step calls per

@@ -60,6 +60,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tools"))
 import plot_trace  # noqa: E402
+from tool_io import BadInput, save_figure  # noqa: E402
 
 SIZES = ["10x10", "20x20", "30x30", "40x40", "50x50", "60x60", "80x80"]
 POLICIES = ["expert", "igbnet", "decsb", "greedy", "random"]  # expert: C-SB in the loop
@@ -127,13 +128,9 @@ def run(cmd, quiet=False):
     return p.stdout
 
 
-def save(fig, path):
+def save(fig, path, inputs=()):
     """The figure, written atomically (a kill never leaves half a PNG)."""
-    root, ext = os.path.splitext(path)
-    tmp = f"{root}.tmp.{os.getpid()}{ext}"
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    os.replace(tmp, path)
+    save_figure(fig, path, 110, inputs)
     print(f"wrote {path}", flush=True)
 
 
@@ -249,7 +246,7 @@ def scalability_table(runs, sizes, policies):
     return table
 
 
-def plot_scalability(table, sizes, path, title):
+def plot_scalability(table, sizes, path, title, inputs=()):
     fig, (ax_s, ax_f) = plt.subplots(1, 2, figsize=(11, 4))
     for policy in dict.fromkeys(r["policy"] for r in table):
         rs = [r for r in table if r["policy"] == policy]
@@ -269,7 +266,16 @@ def plot_scalability(table, sizes, path, title):
     ax_s.legend()
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    save(fig, path)
+    save(fig, path, inputs)
+
+
+def canonical_size(text):
+    """"RxT" as aia eval writes it (whole numbers without leading zeros);
+    anything else as given, for aia eval to refuse."""
+    r, x, t = text.partition("x")
+    if x and r.isdigit() and t.isdigit():
+        return f"{int(r)}x{int(t)}"
+    return text
 
 
 def scalability(args):
@@ -988,7 +994,7 @@ def main(argv=None):
                     help="mission.decisions values, e.g. lockstep,async (default lockstep)")
     mo.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="runs at once")
     args = parser.parse_args(argv)
-    if not os.access(args.aia, os.X_OK):
+    if not (os.path.isfile(args.aia) and os.access(args.aia, os.X_OK)):
         print(f"error: {args.aia}: not built (run tools/bootstrap.sh)", file=sys.stderr)
         return 2
     for name in ("seeds", "file_seeds", "max_steps"):
@@ -1011,6 +1017,12 @@ def main(argv=None):
             print(f"error: --{name}: a comma-separated list with no empty entry, "
                   f"got {','.join(v)!r}", file=sys.stderr)
             return 2
+        if v is not None:
+            # Each once (two runs of one setting would share a folder), and a
+            # size as aia eval writes it ("03x3" is 3x3).
+            if name == "sizes":
+                v = [canonical_size(x) for x in v]
+            setattr(args, name, list(dict.fromkeys(v)))
     if os.path.exists(args.out) and not os.path.isdir(args.out):
         print(f"error: --out: {args.out} is a file, not a folder", file=sys.stderr)
         return 2
@@ -1021,7 +1033,7 @@ def main(argv=None):
          "generalization": generalization, "motion": motion}[args.experiment](args)
     except AlreadySaid as e:
         return e.code
-    except Usage as e:
+    except (Usage, BadInput) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     except Failure as e:

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Audit the expert planner (C-SB) over generated and long-horizon worlds.
 
 Per world it runs

@@ -170,6 +170,9 @@ def set_channels(model, out, assignments):
 
 
 def main(argv):
+    if argv[:1] in (["-h"], ["--help"]):
+        print(__doc__)
+        return 0
     if len(argv) >= 2 and argv[0] == "info":
         info(argv[1:])
         return 0

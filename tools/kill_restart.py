@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Kills an aia long job with SIGKILL at random moments, restarts it each
 time, lets the last restart finish, and checks that the result equals an
 uninterrupted run's: no finished work lost, nothing duplicated, no temporary

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Generate the long-horizon benchmark worlds in scenarios/long/.
 
 Writes scenarios/long/maps/NAME.pgm (binary PGM, P5, dark = occupied, row 0 at

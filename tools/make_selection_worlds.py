@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Generate the hand-made selection worlds in scenarios/selection/.
 
 These worlds are for *model selection only*: comparing variants of a

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Runs `aia run` on randomly mutated scenarios and reports any that crash,
 hang or eat memory (docs/hardening.md).
 

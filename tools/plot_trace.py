@@ -33,6 +33,9 @@ matplotlib.use("Agg")  # headless
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from tool_io import BadInput, save_figure  # noqa: E402
+
 
 def robot_color(i):
     """Robot i's colour, the same as in the MJCF and the videos (world/mjcf.cc)."""
@@ -61,27 +64,58 @@ def load_trace(path):
     """Reads step,target,min_det,det_r0..det_r{N-1} rows into a Trace
     (step,time,target,... with mission.decisions async: the time column is
     dropped, steps are then the sensing ticks)."""
-    with open(path, newline="") as f:
-        reader = csv.reader(f)
-        header = next(reader, None)
-        timed = header is not None and header[:2] == ["step", "time"]
-        if timed:
-            header = header[:1] + header[2:]
-        if header is None or header[:3] != ["step", "target", "min_det"]:
-            raise ValueError(f"{path}: not an aia trace (header {header})")
-        robots = [h for h in header[3:] if h.startswith("det_r")]
-        rows = [r[:1] + r[2:] if timed else r for r in reader if r]
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            reader = csv.reader(f)
+            header = next(reader, None)
+            timed = header is not None and header[:2] == ["step", "time"]
+            if timed:
+                header = header[:1] + header[2:]
+            if header is None or header[:3] != ["step", "target", "min_det"]:
+                raise BadInput(f"{path}: not an aia trace (header {header})")
+            robots = [h for h in header[3:] if h.startswith("det_r")]
+            rows = [(reader.line_num, r[:1] + r[2:] if timed else r)
+                    for r in reader if r]
+    except (OSError, UnicodeDecodeError, csv.Error) as e:
+        raise BadInput(f"{path}: {getattr(e, 'strerror', None) or e}") from None
     if not rows:
-        raise ValueError(f"{path}: no rows")
-    steps = sorted({int(r[0]) for r in rows})
-    targets = sorted({int(r[1]) for r in rows})
+        raise BadInput(f"{path}: no rows")
+
+    def whole(line, text, what):
+        try:
+            value = int(text)
+        except ValueError:
+            value = -1
+        if value < 0:
+            raise BadInput(f"{path}:{line}: {what}: must be a whole number "
+                           f">= 0, got {text!r}")
+        return value
+
+    def real(line, text, what):
+        try:
+            return float(text)
+        except ValueError:
+            raise BadInput(f"{path}:{line}: {what}: not a number, got "
+                           f"{text!r}") from None
+
+    parsed = []
+    for line, r in rows:
+        if len(r) != 3 + len(robots):
+            raise BadInput(f"{path}:{line}: {len(r)} fields, the header has "
+                           f"{3 + len(robots)}")
+        parsed.append((whole(line, r[0], "step"), whole(line, r[1], "target"),
+                       real(line, r[2], "min_det") if r[2] else np.nan,
+                       [real(line, x, "det") for x in r[3:]]))
+    steps = sorted({p[0] for p in parsed})
+    # Targets are numbered 0..M-1 (every target has a row at every step).
+    num_targets = max(p[1] for p in parsed) + 1
     index = {s: n for n, s in enumerate(steps)}
-    min_det = np.full((len(steps), len(targets)), np.nan)
-    det = np.full((len(steps), len(robots), len(targets)), np.nan)
-    for r in rows:
-        t, k = index[int(r[0])], int(r[1])
-        min_det[t, k] = float(r[2]) if r[2] else np.nan  # no robot active
-        det[t, :, k] = [float(x) for x in r[3:3 + len(robots)]]
+    min_det = np.full((len(steps), num_targets), np.nan)
+    det = np.full((len(steps), len(robots), num_targets), np.nan)
+    for step, k, low, dets in parsed:
+        t = index[step]
+        min_det[t, k] = low  # NaN: no robot active
+        det[t, :, k] = dets
     return Trace(np.array(steps), min_det, det)
 
 
@@ -102,8 +136,21 @@ def load_summary(trace_path, explicit=None):
     path = explicit or summary_path(trace_path)
     if path is None:
         return {}
-    with open(path) as f:
-        return json.load(f)
+    try:
+        with open(path, encoding="utf-8") as f:
+            summary = json.load(f)
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise BadInput(f"{path}: {getattr(e, 'strerror', None) or e}") from None
+    if not isinstance(summary, dict):
+        raise BadInput(f"{path}: not a run's summary (a JSON object)")
+    eps = summary.get("eps")
+    if eps is not None and (isinstance(eps, bool) or
+                            not isinstance(eps, (int, float))):
+        raise BadInput(f"{path}: eps: must be a number, got {eps!r}")
+    failed = summary.get("failed_robots", [])
+    if not isinstance(failed, list):
+        raise BadInput(f"{path}: failed_robots: must be a list, got {failed!r}")
+    return summary
 
 
 def _threshold(ax, eps):
@@ -175,22 +222,17 @@ def main(argv=None):
     parser.add_argument("--title", help="figure title (default: from the summary)")
     parser.add_argument("--dpi", type=int, default=120, help="resolution (default: 120)")
     args = parser.parse_args(argv)
-
-    try:
-        trace = load_trace(args.trace)
-        summary = load_summary(args.trace, args.summary)
-    except (OSError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+    if args.dpi < 1:
+        raise BadInput(f"--dpi: must be at least 1, got {args.dpi}")
+    trace = load_trace(args.trace)
+    summary = load_summary(args.trace, args.summary)
     out = args.out or os.path.splitext(args.trace)[0] + ".png"
     fig = FIGURES[args.figure](trace, summary, args)
-    folder = os.path.dirname(out)
-    if folder:
-        os.makedirs(folder, exist_ok=True)
-    fig.savefig(out, dpi=args.dpi)
+    save_figure(fig, out, args.dpi, inputs=[args.trace])
     print(out)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from tool_io import run
+    run(main)

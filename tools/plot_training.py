@@ -8,7 +8,8 @@ Usage:
 """
 
 import argparse
-import csv
+import math
+import os
 import sys
 
 import matplotlib
@@ -16,15 +17,21 @@ import matplotlib
 matplotlib.use("Agg")  # headless
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from tool_io import BadInput, number, read_rows, run, save_figure  # noqa: E402
+
+COLUMNS = ("epoch", "train_loss", "train_acc", "val_loss", "val_acc",
+           "val_acc_useful")
+
 
 def load(path):
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    rows = read_rows(path, COLUMNS, "a log of aia train (*.train.csv)")
     if not rows:
-        sys.exit("error: %s: no epochs logged" % path)
+        raise BadInput(f"{path}: no epochs logged")
     # Validation fields are empty when no world was held out (--val-share 0).
-    return {k: [float(r[k]) if r[k] != "" else float("nan") for r in rows]
-            for k in rows[0]}
+    return {k: [number(path, r, k, empty=math.nan) if k.startswith("val_")
+                else number(path, r, k) for r in rows]
+            for k in COLUMNS}
 
 
 def main():
@@ -35,10 +42,11 @@ def main():
     a = ap.parse_args()
     labels = a.labels.split(",") if a.labels else a.logs
     if len(labels) != len(a.logs):
-        sys.exit("error: --labels: give one label per log")
+        raise BadInput(f"--labels: {len(labels)} labels for {len(a.logs)} "
+                       "logs; give one label per log")
+    logs = [load(path) for path in a.logs]
     fig, (ax_loss, ax_acc) = plt.subplots(1, 2, figsize=(9, 3.4))
-    for i, (path, label) in enumerate(zip(a.logs, labels)):
-        d = load(path)
+    for i, (d, label) in enumerate(zip(logs, labels)):
         c = "C%d" % i
         ax_loss.plot(d["epoch"], d["train_loss"], c + "--", label=label + " train")
         ax_loss.plot(d["epoch"], d["val_loss"], c + "-o", ms=3, label=label + " val")
@@ -54,9 +62,10 @@ def main():
     for ax in (ax_loss, ax_acc):
         ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(a.out, dpi=90)
+    save_figure(fig, a.out, 90, inputs=a.logs)
     print("wrote " + a.out)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    run(main)

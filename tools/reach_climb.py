@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Does a model read its own reach channel? (issue 35, docs/notes)
 
 Plays missions three ways from the same channels (aia.Mission.channels with

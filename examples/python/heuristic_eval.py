@@ -35,6 +35,10 @@ def nearest_target(mission):
 
 
 if __name__ == "__main__":
+    if len(sys.argv) > 4 or any(a.startswith("-") for a in sys.argv[1:]):
+        print("usage: heuristic_eval.py [OUT_DIR [SIZE [SEEDS]]] (default "
+              "renders/compare 10x10 20)\n" + __doc__, file=sys.stderr)
+        sys.exit(0 if sys.argv[1:2] in (["-h"], ["--help"]) else 2)
     out = sys.argv[1] if len(sys.argv) > 1 else "renders/compare"
     size = sys.argv[2] if len(sys.argv) > 2 else "10x10"
     seeds = int(sys.argv[3]) if len(sys.argv) > 3 else 20

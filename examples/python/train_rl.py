@@ -173,6 +173,13 @@ def main():
     p.add_argument("--quick", action="store_true",
                    help="a smoke run: 2 small updates, a tiny network")
     args = p.parse_args()
+    # The model is written after the training: a --out that cannot be one
+    # is refused before it.
+    if os.path.isdir(args.out) or not os.path.isdir(
+            os.path.dirname(os.path.abspath(args.out))):
+        print(f"error: --out: {args.out}: give a model file in an "
+              "existing folder", file=sys.stderr)
+        sys.exit(2)
     if args.quick:
         args.updates, args.missions, args.rollout = 2, 4, 8
         args.width, args.hidden, args.minibatch = 4, 16, 64

@@ -1,0 +1,114 @@
+"""What the plotting and experiment tools share with aia's commands: bad
+input is one line, `error: WHAT`, and exit code 2 (never a traceback); a
+table is read with its file and line named in every problem; a figure is
+written atomically (a Ctrl-C or a kill never leaves half a PNG under its
+name) and Ctrl-C ends a tool with exit code 130 and no traceback.
+"""
+
+import csv
+import math
+import os
+import sys
+
+
+class BadInput(Exception):
+    """A problem with a tool's input or arguments: `error: MESSAGE`, exit 2."""
+
+
+def run(main):
+    """Runs a tool's main() and exits with its code: 2 and one error line on
+    BadInput, 130 on Ctrl-C."""
+    try:
+        code = main()
+    except BadInput as e:
+        print(f"error: {e}", file=sys.stderr)
+        code = 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        code = 130
+    sys.exit(code or 0)
+
+
+def read_rows(path, columns, what):
+    """The rows of the CSV file `path` (each a dict, its line under
+    "_line"), which must have the `columns`; `what` names what it should be
+    ("aia eval's summary.csv") in the messages."""
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            reader = csv.DictReader(f)
+            rows = []
+            for row in reader:
+                if None in row:
+                    raise BadInput(f"{path}:{reader.line_num}: more fields "
+                                   "than the header has")
+                row["_line"] = reader.line_num
+                rows.append(row)
+            header = reader.fieldnames or []
+    except IsADirectoryError:
+        raise BadInput(f"{path}: a folder, not {what}") from None
+    except FileNotFoundError:
+        raise BadInput(f"{path}: no such file") from None
+    except UnicodeDecodeError:
+        raise BadInput(f"{path}: not UTF-8 text, so not {what}") from None
+    except (OSError, csv.Error) as e:
+        raise BadInput(f"{path}: {e}") from None
+    missing = [c for c in columns if c not in header]
+    if missing:
+        raise BadInput(f"{path}: no column {', '.join(missing)}: not {what}")
+    return rows
+
+
+def number(path, row, column, empty=None):
+    """The finite number in `row[column]`; an empty field gives `empty`
+    when that is not None (a field that may be blank), else it is refused."""
+    text = (row.get(column) or "").strip()
+    if text == "" and empty is not None:
+        return empty
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise BadInput(f"{path}:{row['_line']}: {column}: must be a finite "
+                       f"number, got {text!r}")
+    return value
+
+
+def check_output(path, inputs=()):
+    """--out PATH: a file to write, not a folder and not one of the inputs."""
+    if os.path.isdir(path):
+        raise BadInput(f"--out: {path} is a folder; give the file to write")
+    for i in inputs:
+        if os.path.exists(path) and os.path.exists(i) and \
+                os.path.samefile(path, i):
+            raise BadInput(f"--out: {path} is an input; give another file")
+
+
+def save_figure(fig, path, dpi, inputs=()):
+    """Writes a matplotlib figure to `path` through a temporary file in its
+    folder (made when missing), in the format of its extension (PNG without
+    one), and closes it."""
+    import matplotlib.pyplot as plt
+    check_output(path, inputs)
+    folder = os.path.dirname(os.path.abspath(path))
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as e:
+        plt.close(fig)
+        raise BadInput(f"--out: cannot make the folder {folder}: "
+                       f"{e.strerror}") from None
+    ext = os.path.splitext(path)[1].lstrip(".").lower() or "png"
+    if ext not in fig.canvas.get_supported_filetypes():
+        plt.close(fig)
+        raise BadInput(f"--out: {path}: matplotlib writes no .{ext} files "
+                       "(png, pdf, svg, ...)")
+    tmp = os.path.join(folder, f".{os.path.basename(path)}.tmp.{os.getpid()}")
+    try:
+        fig.savefig(tmp, dpi=dpi, format=ext)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    finally:
+        plt.close(fig)
