@@ -853,7 +853,8 @@ class BuiltinPolicy {
   // state, started afresh (Reset with the mission's seed) at its first
   // decision or at a round that is not the next one (DecisionContext::
   // round: in async the step may repeat), so that deciding at every round
-  // repeats `aia run`, also with missions on several threads (evaluate). Called with the GIL held; the decision runs without it.
+  // repeats `aia run`, also with missions on several threads (evaluate). Called
+  // with the GIL held; the decision runs without it.
   py::array_t<long long> Decide(const Mission& mission) {
     CallGuard guard(mission.busy(), "aia.builtin_policy.decide");
     DecisionContext ctx = mission.Context();

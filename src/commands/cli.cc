@@ -519,8 +519,8 @@ Action AddTrainCommand(CLI::App& app) {
       // It trains nothing: a flag of training or of a network to extend
       // would be ignored, so it is refused.
       static const std::set<std::string> kRead = {
-          "--data", "--validate", "--val-share", "--seed", "--valid-moves",
-          "--threads", "--quiet"};
+          "--data",        "--validate", "--val-share", "--seed",
+          "--valid-moves", "--threads",  "--quiet"};
       for (const CLI::Option* opt : cmd->get_options()) {
         const std::string name = opt->get_name();
         if (opt->count() > 0 && !kRead.count(name))

@@ -244,12 +244,12 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
     // Given twice, one would win silently (aia run refuses the same).
     if ((ov.path == "mission.max_steps" && o.max_steps > 0) ||
         (ov.path == "policy.model" && !o.model.empty()))
-      throw InputError("command line", 0, "--set " + ov.path,
-                       std::string("is also given by ") +
-                           (o.max_steps > 0 && ov.path == "mission.max_steps"
-                                ? "--max-steps"
-                                : "--model") +
-                           "; give one of them");
+      throw InputError(
+          "command line", 0, "--set " + ov.path,
+          std::string("is also given by ") +
+              (o.max_steps > 0 && ov.path == "mission.max_steps" ? "--max-steps"
+                                                                 : "--model") +
+              "; give one of them");
     if (ov.path == "mission.decisions" && ov.value != "lockstep")
       throw InputError("command line", 0, "--set",
                        "mission.decisions " + ov.value +

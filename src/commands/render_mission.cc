@@ -15,6 +15,7 @@
 
 #include "aia/commands/episode_picture.h"
 #include "aia/core/error.h"
+#include "aia/core/interrupt.h"
 #include "aia/core/io.h"
 #include "aia/estimation/heatmap.h"
 #include "aia/render/frame_renderer.h"
@@ -146,7 +147,7 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
   if (need > budget) {
     char what[320];
     std::snprintf(what, sizeof what,
-                  "%d x %d pixels need about %.1f GiB (512 MiB + 256 bytes "
+                  "%d x %d pixels need about %.2f GiB (512 MiB + 256 bytes "
                   "per pixel), more than the render's memory budget of %s "
                   "GiB (--memory-budget); a smaller size, or a larger budget "
                   "on a machine that has it",
@@ -161,8 +162,8 @@ void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
       need > static_cast<double>(limit.rlim_cur)) {
     char what[320];
     std::snprintf(what, sizeof what,
-                  "%d x %d pixels need about %.1f GiB (512 MiB + 256 bytes "
-                  "per pixel), more than this process may take (%.1f GiB, "
+                  "%d x %d pixels need about %.2f GiB (512 MiB + 256 bytes "
+                  "per pixel), more than this process may take (%.2f GiB, "
                   "ulimit -v); a smaller size",
                   s.render.width, s.render.height, need / kGiB,
                   static_cast<double>(limit.rlim_cur) / kGiB);
@@ -202,15 +203,24 @@ class VideoObserver : public StepObserver {
     picture_.AfterStep(e);
     return ObserverStatus::kContinue;
   }
-  // The state after the last step's fusion, held `hold` seconds.
+  // The state after the last step's fusion, held `hold` seconds; Ctrl-C
+  // cuts the hold short (the video is then not whole: the summary says
+  // interrupted).
   void OnEnd(const Episode& e) override {
     const cv::Mat& last = Emit(e);
-    held_ = static_cast<int>(std::lround(options_.hold * fps_));
-    for (int h = 0; h < held_; ++h) video_->Write(last);
+    const int hold = static_cast<int>(std::lround(options_.hold * fps_));
+    for (held_ = 0; held_ < hold; ++held_) {
+      if (Interrupted()) {
+        hold_cut_ = true;
+        break;
+      }
+      video_->Write(last);
+    }
   }
 
   int png_frames() const { return png_frames_; }
   int held() const { return held_; }
+  bool hold_cut() const { return hold_cut_; }
   double sim_time() const { return sim_time_; }
   double write_seconds() const { return write_seconds_; }
 
@@ -246,6 +256,7 @@ class VideoObserver : public StepObserver {
   double frame_dt_ = 1.0 / 30, next_frame_ = 1.0 / 30;
   double sim_time_ = 0.0, step_start_ = 0.0;
   int png_frames_ = 0, held_ = 0;
+  bool hold_cut_ = false;
   double write_seconds_ = 0.0;  // H.264 encoding and PNG files
 };
 
@@ -255,10 +266,11 @@ namespace {
 
 // The PNG frames to be written into --frames: one that is there already as
 // a FIFO, device or folder is refused now, not after the rendering.
-void CheckFrameFiles(const std::string& dir) {
+// The frame_NNNNNN.png files in `dir` (none when it is not a folder).
+std::vector<std::string> FrameFiles(const std::string& dir) {
   std::error_code ec;
-  if (dir.empty() || !fs::is_directory(dir, ec)) return;
   std::vector<std::string> frames;
+  if (dir.empty() || !fs::is_directory(dir, ec)) return frames;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end;
        it.increment(ec)) {
     const std::string name = it->path().filename().string();
@@ -266,7 +278,11 @@ void CheckFrameFiles(const std::string& dir) {
         name.compare(12, 4, ".png") == 0)
       frames.push_back(it->path().string());
   }
-  CheckOutputFiles(frames, "--frames", "a frame");
+  return frames;
+}
+
+void CheckFrameFiles(const std::string& dir) {
+  CheckOutputFiles(FrameFiles(dir), "--frames", "a frame");
 }
 
 // Neither the video nor the files next to it may replace an input (the
@@ -285,6 +301,12 @@ void PrepareOutputs(const RenderOptions& options,
                     "written next to the video");
   MakeOutputDir(out.parent_path().string(), "--out");
   MakeOutputDir(options.frames_dir, "--frames");
+  // The folder's frames are this render's: an earlier render's (a longer
+  // one's frames past this one's last) would sit among them.
+  for (const std::string& old : FrameFiles(options.frames_dir)) {
+    std::error_code ec;
+    fs::remove(old, ec);
+  }
   RemoveStaleTemporaries(
       out.parent_path().empty() ? "." : out.parent_path().string());
   if (!options.frames_dir.empty()) RemoveStaleTemporaries(options.frames_dir);
@@ -300,6 +322,9 @@ std::string CheckVideoPaths(const RenderOptions& options) {
     throw InputError("command line", 0, "--out",
                      "must name an .mp4 file, got '" + options.out_file + "'");
   CheckOutputFile(options.out_file, "--out");
+  if (options.frames_dir.empty() && options.frames_every != 1)
+    throw InputError("command line", 0, "--frames-every",
+                     "needs --frames (the folder of the PNG frames)");
   const std::string prefix =
       (out.parent_path() / (out.stem().string() + ".")).string();
   std::vector<std::string> next_to_it;
@@ -426,6 +451,7 @@ RenderResult RenderMission(const RenderOptions& options) {
 
   nlohmann::ordered_json j =
       nlohmann::ordered_json::parse(SummaryJson(summary, runner.episode()));
+  if (filming.hold_cut()) j["interrupted"] = true;
   j["video"] =
       VideoSection(r, scenario, renderer, filming, settings.edges, wall);
   WriteFileAtomic(

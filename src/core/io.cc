@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -40,8 +41,33 @@ std::string NonRegularKind(const std::string& path) {
   return KindOf(st.st_mode);
 }
 
+std::string TemporaryNameProblem(const std::string& path) {
+  const std::filesystem::path p(path);
+  const std::string dir =
+      p.has_parent_path() ? p.parent_path().string() : std::string(".");
+  long max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  if (max <= 0) max = NAME_MAX;
+  // The longer of TemporaryPath's two forms: ".STEM.tmp.PID.EXT".
+  const std::size_t longest =
+      std::filesystem::path(TemporaryPath(path, /*keep_extension=*/true))
+          .filename()
+          .string()
+          .size();
+  if (static_cast<long>(longest) <= max) return "";
+  const long room =
+      max - static_cast<long>(longest - p.filename().string().size());
+  return "cannot write '" + path + "': its name has " +
+         std::to_string(p.filename().string().size()) +
+         " characters, and it is written under a temporary name " +
+         std::to_string(longest - p.filename().string().size()) +
+         " longer first (the file system takes " + std::to_string(max) +
+         "): give a name of at most " + std::to_string(room) + " characters";
+}
+
 std::string OutputFileProblem(const std::string& path,
                               const std::string& written) {
+  if (std::string longer = TemporaryNameProblem(path); !longer.empty())
+    return longer;
   const std::string kind = NonRegularKind(path);
   if (kind.empty()) return "";
   return "cannot write '" + path + "'" +

@@ -472,8 +472,7 @@ void Episode::Observe() {
 
 std::string EndOfMissionWarnings(const Episode& e, long moves,
                                  const std::string& what) {
-  return UnstableStateWarning(e.sim().warnings(), e.sim().robot_model(),
-                              what) +
+  return UnstableStateWarning(e.sim().warnings(), e.sim().robot_model(), what) +
          NoArrivalWarning(e.drives(), e.sim().robot_timeouts(),
                           e.sim().robot_stalls(), moves, what);
 }

@@ -38,6 +38,8 @@ void CheckOutputFile(const std::string& path, const std::string& flag) {
   } catch (const std::runtime_error& e) {
     throw InputError("command line", 0, flag, e.what());
   }
+  if (std::string longer = TemporaryNameProblem(path); !longer.empty())
+    throw InputError("command line", 0, flag, longer);
 }
 
 void CheckOutputFiles(const std::vector<std::string>& paths,

@@ -153,8 +153,8 @@ void GeneratorConfig::Validate(const FieldChecker& check) {
   const auto unused = [&](const auto& field, const auto& default_value,
                           bool used, const char* users) {
     if (!used && !(field == default_value))
-      check.Warn(field, std::string("applies to ") + users +
-                            " only; a " + kind + " changes nothing by it");
+      check.Warn(field, std::string("applies to ") + users + " only; a " +
+                            kind + " changes nothing by it");
   };
   unused(wall, unset.wall, HasWalls(), "maze, rooms and corridors");
   unused(corridor, unset.corridor, HasCorridors(), "maze and corridors");
@@ -515,10 +515,12 @@ void Scenario::Validate(const FieldChecker& check) {
     const double hz = 1.0 / (static_cast<double>(steps) * physics.timestep);
     if (std::abs(hz - *sensor.rate) > 1e-6 * *sensor.rate)
       check.Warn(sensor.rate,
-                 "is sensed at " + FormatNumber(hz) + " Hz: a tick falls on a "
-                 "physics step, every " + std::to_string(steps) +
-                 " of physics.timestep " + FormatNumber(physics.timestep) +
-                 " s (targets take a step of their dynamics per tick)");
+                 "is sensed at " + FormatNumber(hz) +
+                     " Hz: a tick falls on a "
+                     "physics step, every " +
+                     std::to_string(steps) + " of physics.timestep " +
+                     FormatNumber(physics.timestep) +
+                     " s (targets take a step of their dynamics per tick)");
   }
   if (mission.avoidance && mission.decisions != Decisions::kAsync) {
     check.Fail(mission.avoidance,

@@ -212,7 +212,8 @@ void ReportWarnings(const Scenario& scenario) {
   static std::set<std::string> shown;
   const std::lock_guard<std::mutex> lock(mu);
   for (const std::string& w : scenario.warnings)
-    if (shown.insert(w).second) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    if (shown.insert(w).second)
+      std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
 std::vector<FieldDoc> ScenarioKeys() { return FieldDocs::Of(Scenario{}); }

@@ -374,15 +374,15 @@ TEST(CliTest, AKeyThatChangesNothingIsWarnedOfOnce) {
       "warning: command line: --set communication.range: applies to "
       "communication.mode range only; with mode full every pair of active "
       "robots talks, so it changes nothing\n";
-  const auto r = RunAia({"run", testing::SourcePath("scenarios/default.yaml"),
-                         "--policy", "greedy", "--max-steps", "2", "--set",
-                         "communication.range=5", "--out", dir + "/run",
-                         "--quiet"});
+  const auto r =
+      RunAia({"run", testing::SourcePath("scenarios/default.yaml"), "--policy",
+              "greedy", "--max-steps", "2", "--set", "communication.range=5",
+              "--out", dir + "/run", "--quiet"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, expect);
-  const auto e = RunAia({"eval", "--sizes", "2x2", "--seeds", "3",
-                         "--policies", "greedy", "--out", dir + "/eval",
-                         "--quiet", "--set", "communication.range=5"});
+  const auto e = RunAia({"eval", "--sizes", "2x2", "--seeds", "3", "--policies",
+                         "greedy", "--out", dir + "/eval", "--quiet", "--set",
+                         "communication.range=5"});
   EXPECT_EQ(e.exit_code, 0) << e.err;
   EXPECT_EQ(e.err, expect);
   fs::remove_all(dir);

@@ -686,13 +686,13 @@ TEST(HardeningTest, RenderSizesBeyondTheMemoryBudgetAreRefusedAtOnce) {
   auto r = RunWithin({"render", scenario, "--width", "8192", "--height", "8192",
                       "--out", dir + "/v.mp4", "--quiet"});
   ExpectOneErrorLine(r,
-                     "--width: 8192 x 8192 pixels need about 16.5 GiB (512 "
+                     "--width: 8192 x 8192 pixels need about 16.50 GiB (512 "
                      "MiB + 256 bytes per pixel), more than the render's "
                      "memory budget of 8 GiB (--memory-budget)");
   // The budget is the user's to give: 640 x 480 needs 0.6 GiB.
   r = RunWithin({"render", scenario, "--memory-budget", "0.5", "--out",
                  dir + "/v.mp4", "--quiet"});
-  ExpectOneErrorLine(r, "640 x 480 pixels need about 0.6 GiB");
+  ExpectOneErrorLine(r, "640 x 480 pixels need about 0.57 GiB");
   // A process limit is a budget too (under ulimit -v the encoder failed
   // midway with OpenCV's raw line). AddressSanitizer reserves terabytes of
   // address space, so its tree cannot run under such a limit.
@@ -704,9 +704,9 @@ TEST(HardeningTest, RenderSizesBeyondTheMemoryBudgetAreRefusedAtOnce) {
   r = RunCommand("bash -c '" +
                  std::regex_replace(limited, std::regex("'"), "'\\''") + "'");
   ExpectOneErrorLine(r,
-                     "4096 x 4096 pixels need about 4.5 GiB (512 MiB + 256 "
+                     "4096 x 4096 pixels need about 4.50 GiB (512 MiB + 256 "
                      "bytes per pixel), more than this process may take "
-                     "(2.9 GiB, ulimit -v)");
+                     "(2.86 GiB, ulimit -v)");
 #endif
   EXPECT_TRUE(RegularFiles(dir).empty());
   fs::remove_all(dir);

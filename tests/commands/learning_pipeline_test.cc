@@ -172,11 +172,11 @@ TEST(TrainTest, AResumeOnOtherDefaultThreadsIsRefused) {
                 .exit_code,
             0);
   const auto train = [&](int omp, int epochs, bool resume) {
-    return testing::RunCommand(
-        "OMP_NUM_THREADS=" + std::to_string(omp) + " " +
-        std::string(AIA_BINARY) + " train --data " + dir +
-        "/data --quiet --out " + dir + "/m.pt --epochs " +
-        std::to_string(epochs) + (resume ? " --resume" : ""));
+    return testing::RunCommand("OMP_NUM_THREADS=" + std::to_string(omp) + " " +
+                               std::string(AIA_BINARY) + " train --data " +
+                               dir + "/data --quiet --out " + dir +
+                               "/m.pt --epochs " + std::to_string(epochs) +
+                               (resume ? " --resume" : ""));
   };
   ASSERT_EQ(train(1, 1, false).exit_code, 0);
   const auto other = train(2, 1, true);
@@ -768,8 +768,7 @@ TEST(LearningCliTest, BadFlagsAreOneLineErrorsWithExitCode2) {
        "--frame: the network is the one of the --validate model"},
       // --validate trains nothing: the flags that would change a model
       // scored as it is were ignored.
-      {{"train", "--data", dir, "--validate", dir + "/none.pt", "--trail",
-        "1"},
+      {{"train", "--data", dir, "--validate", dir + "/none.pt", "--trail", "1"},
        "error: command line: --trail: --validate trains nothing"},
       {{"train", "--data", dir, "--validate", dir + "/none.pt", "--epochs",
         "3"},

@@ -185,6 +185,20 @@ TEST_F(RenderCliTest, EveryKthFrameAsPng) {
   }
   EXPECT_EQ(pngs, (mission_frames + 9) / 10);
   EXPECT_EQ(summary["steps"].get<int>(), 2);
+  // Again into the same folder, shorter: the folder holds this render's
+  // frames only (an earlier render's last ones stayed among them).
+  std::ofstream(frames_dir + "/frame_999990.png") << "old";
+  ASSERT_EQ(RunAia({"render", scenario_, "--out", dir_ + "/v.mp4", "--frames",
+                    frames_dir, "--frames-every", "10", "--max-steps", "1",
+                    "--quiet"})
+                .exit_code,
+            0);
+  const auto again = nlohmann::json::parse(ReadFile(dir_ + "/v.summary.json"));
+  int now = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(frames_dir))
+    ++now;
+  EXPECT_EQ(now, again["video"]["png_frames"].get<int>());
+  EXPECT_FALSE(fs::exists(frames_dir + "/frame_999990.png"));
 }
 
 TEST_F(RenderCliTest, EndsLikeAiaRun) {
@@ -256,6 +270,10 @@ TEST_F(RenderCliTest, BadInputExitsWith2) {
        "--frames-every"},
       {"negative hold", {"--hold", "-1"}, "--hold"},
       {"unknown edges", {"--edges", "some"}, "--edges"},
+      // It did nothing, silently.
+      {"frames every without frames",
+       {"--frames-every", "5"},
+       "--frames-every"},
   };
   for (const BadCase& c : cases) {
     std::vector<std::string> args = {"render", scenario_, "--out", out,
@@ -274,6 +292,11 @@ TEST_F(RenderCliTest, BadInputExitsWith2) {
       {"frames under a file",
        {"--out", out, "--frames", dir_ + "/plain_file/f"},
        "--frames"},
+      // Files are written as NAME.tmp.PID first: a name the file system
+      // takes could fail only there, after the whole mission.
+      {"a name too long for its temporary form",
+       {"--out", dir_ + "/" + std::string(240, 'a') + ".mp4"},
+       "--out"},
   };
   for (const BadCase& c : paths) {
     std::vector<std::string> args = {"render", scenario_, "--quiet"};

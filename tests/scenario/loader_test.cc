@@ -367,19 +367,19 @@ policy:
 // writes every key), or where it is read, is no warning.
 TEST(LoaderTest, KeysThatChangeNothingAreWarnedOfAtTheirLine) {
   const std::string yaml =
-      "robots: {count: 2}\n"                                      // 1
-      "targets:\n"                                                // 2
-      "  prior_offset: 2\n"                                       // 3
-      "  list:\n"                                                 // 4
-      "    - {position: [3, 3], prior_mean: [3, 4]}\n"            // 5
-      "communication:\n"                                          // 6
-      "  range: 6\n"                                              // 7
-      "workspace:\n"                                              // 8
-      "  obstacles:\n"                                            // 9
-      "    map_threshold: 0.3\n"                                  // 10
-      "    random: {count: 0}\n"                                  // 11
-      "    generator: {type: cave, loops: 0.5, fill: 0.4}\n"      // 12
-      "physics: {robot_mass: 0.25}\n";                            // 13
+      "robots: {count: 2}\n"                                  // 1
+      "targets:\n"                                            // 2
+      "  prior_offset: 2\n"                                   // 3
+      "  list:\n"                                             // 4
+      "    - {position: [3, 3], prior_mean: [3, 4]}\n"        // 5
+      "communication:\n"                                      // 6
+      "  range: 6\n"                                          // 7
+      "workspace:\n"                                          // 8
+      "  obstacles:\n"                                        // 9
+      "    map_threshold: 0.3\n"                              // 10
+      "    random: {count: 0}\n"                              // 11
+      "    generator: {type: cave, loops: 0.5, fill: 0.4}\n"  // 12
+      "physics: {robot_mass: 0.25}\n";                        // 13
   const Scenario s = ParseScenario(yaml, "w.yaml", "");
   EXPECT_EQ(s.warnings,
             (std::vector<std::string>{
@@ -423,8 +423,8 @@ TEST(LoaderTest, KeysThatChangeNothingAreWarnedOfAtTheirLine) {
             0u)
       << wheeled.warnings[0];
   // effective.yaml writes every key at its value: no new warning.
-  EXPECT_TRUE(ParseScenario(EffectiveYaml(read, ""), "e.yaml", "")
-                  .warnings.empty());
+  EXPECT_TRUE(
+      ParseScenario(EffectiveYaml(read, ""), "e.yaml", "").warnings.empty());
 }
 
 TEST(LoaderTest, OtherPolicyKeysAreKeptForThePolicy) {

@@ -228,7 +228,8 @@ class FieldChecker {
                              const std::string& what) const = 0;
   virtual bool GivenKey(const std::string& key) const = 0;
   virtual std::string ShownKey(const std::string& key) const = 0;
-  virtual void WarnAt(const std::string& key, const std::string& what) const = 0;
+  virtual void WarnAt(const std::string& key,
+                      const std::string& what) const = 0;
 };
 
 // A number as messages show it: up to 12 significant digits ("0.1", "20").

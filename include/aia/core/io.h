@@ -26,10 +26,16 @@ std::string ReadFile(const std::string& path, std::uintmax_t max_bytes);
 // nothing can block.
 std::string NonRegularKind(const std::string& path);
 
+// Why `path`'s name is too long to be written, or "": a file is written
+// under TemporaryPath first, up to 17 characters longer, and a name the file
+// system takes could fail only there, after the work.
+std::string TemporaryNameProblem(const std::string& path);
+
 // Why `path` cannot be an output file, or "" when it can (it does not exist
-// or is a regular file): "cannot write 'PATH' (WRITTEN): it is a named pipe
-// (FIFO), not a regular file; remove it or give another path". Commands
-// check every file they write with it before any work.
+// or is a regular file, and TemporaryNameProblem has nothing): "cannot
+// write 'PATH' (WRITTEN): it is a named pipe (FIFO), not a regular file;
+// remove it or give another path". Commands check every file they write
+// with it before any work.
 std::string OutputFileProblem(const std::string& path,
                               const std::string& written = "");
 

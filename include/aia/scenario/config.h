@@ -480,13 +480,12 @@ struct MissionConfig {
         "until its slowest robot is done) or async (each robot decides when "
         "its own move ends; sensing at sensor.rate; steps count the slowest "
         "robot's decisions)"));
-    a->Visit(AIA_FIELD(avoidance)
-                 .Unset("reserve")
-                 .Doc("async only (refused in lockstep). reserve (a robot "
-                      "waits while its next lattice point is held by another "
-                      "robot, there or driving to it, deciding again at the "
-                      "next sensing tick if it stays held) or none (it "
-                      "drives on)"));
+    a->Visit(AIA_FIELD(avoidance).Unset("reserve").Doc(
+        "async only (refused in lockstep). reserve (a robot "
+        "waits while its next lattice point is held by another "
+        "robot, there or driving to it, deciding again at the "
+        "next sensing tick if it stays held) or none (it "
+        "drives on)"));
   }
 };
 

@@ -71,8 +71,8 @@ std::string UnstableStateWarning(const std::array<long, mjNWARNING>& warnings,
 // ever reached the lattice point it drove to: `moves` lattice moves were
 // completed (0), and every one of the robots' `drives` (moves sent to
 // another lattice point; stays and waits for a held point are none) ended
-// at the step timeout or stalled (`timeouts`, `stalls`: per robot, summed). Such
-// settings make a mission of no motion (motors too slow or a timeout too
+// at the step timeout or stalled (`timeouts`, `stalls`: per robot, summed).
+// Such settings make a mission of no motion (motors too slow or a timeout too
 // short for them; point robots are refused ahead, wheeled ones cannot be,
 // since their motion depends on the contacts and turns they meet). "" when
 // some robot arrived, or none was asked to move.
