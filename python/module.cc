@@ -430,8 +430,9 @@ class Mission {
     if (seed) all.push_back({"seed", "seed", std::to_string(*seed)});
     for (const Override& o : AsOverrides(overrides_, "overrides: "))
       all.push_back(o);
-    std::shared_ptr<const Instance> instance =
-        BuildInstance(LoadScenario(scenario_, all));
+    const Scenario scenario = LoadScenario(scenario_, all);
+    std::shared_ptr<const Instance> instance = BuildInstance(scenario);
+    scenario_warnings_ = scenario.warnings;
     // What refers to the old episode goes first.
     picture_.reset();
     renderer_.reset();
@@ -465,6 +466,12 @@ class Mission {
   void Invalidate() { view_ = nullptr; }
   const char** busy() const { return &busy_; }
   std::uint64_t id() const { return id_; }
+  // The scenario's warnings (keys that change nothing where they stand),
+  // "FILE:LINE: key: what"; Python's Mission raises them as
+  // aia.ScenarioWarning.
+  const std::vector<std::string>& scenario_warnings() const {
+    return scenario_warnings_;
+  }
   std::uint64_t seed() const { return seed_; }
   int max_steps() const {
     if (!owned())
@@ -779,6 +786,7 @@ class Mission {
  private:
   std::string scenario_;
   KeyValues overrides_;
+  std::vector<std::string> scenario_warnings_;
   std::uint64_t id_ = 0;
   const DecisionContext* view_ = nullptr;
   std::uint64_t seed_ = 0;
@@ -1524,6 +1532,12 @@ void BindMission(py::module_& m) {
           "ended)")
       .def_property_readonly("seed",
                              OneCall(&Mission::seed, "aia.Mission.seed"))
+      .def_property_readonly(
+          "scenario_warnings",
+          OneCall(&Mission::scenario_warnings,
+                  "aia.Mission.scenario_warnings"),
+          "the scenario's warnings, 'FILE:LINE: key: what' (keys given a "
+          "value that changes nothing where they stand)")
       .def_property_readonly("owned",
                              OneCall(&Mission::owned, "aia.Mission.owned"),
                              "False for a view inside aia.evaluate");

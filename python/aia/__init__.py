@@ -26,14 +26,21 @@ import numpy as _np
 
 from . import _aia
 
-__all__ = ["Dataset", "InputError", "Mission", "Move", "StepResult",
-           "VectorMissions", "VectorStepResult", "aec_env", "builtin_policy",
-           "evaluate", "parallel_env", "policy_names"]
+__all__ = ["Dataset", "InputError", "Mission", "Move", "ScenarioWarning",
+           "StepResult", "VectorMissions", "VectorStepResult", "aec_env",
+           "builtin_policy", "evaluate", "parallel_env", "policy_names"]
 
 InputError = _aia.InputError
 Move = _aia.Move
 StepResult = _aia.StepResult
 VectorStepResult = _aia.VectorStepResult
+
+
+class ScenarioWarning(UserWarning):
+    """A scenario key given a value that changes nothing where it stands
+    (communication.range with the full graph, robots.diff_drive keys on
+    point robots, ...): the text is "FILE:LINE: key: what", the line aia's
+    commands print after "warning: "."""
 
 # An installed package (cmake --install, or a wheel) says where its own
 # plugins and models are, relative to itself (_install.py, written at
@@ -47,6 +54,15 @@ if _install is not None:
     _aia._use_installed(
         os.path.normpath(os.path.join(_here, _install.PLUGIN_DIR)),
         os.path.normpath(os.path.join(_here, _install.DATA_DIR)))
+
+
+def _warn_scenario(core, where):
+    """The scenario's warnings (what aia's commands print as "warning: ..."
+    lines) as ScenarioWarning, an override's named as the argument."""
+    for text in core.scenario_warnings:
+        if text.startswith("command line: "):
+            text = where + ": " + text[len("command line: "):]
+        _warnings.warn(text, ScenarioWarning, stacklevel=3)
 
 
 def _shown(value):
@@ -161,6 +177,7 @@ class Mission:
         self._m = _aia.Mission(_path(scenario, "aia.Mission", "scenario"),
                                seed, _pairs(overrides, "overrides",
                                             "aia.Mission"))
+        _warn_scenario(self._m, "aia.Mission")
 
     @classmethod
     def _view(cls, core):
@@ -305,7 +322,9 @@ class VectorMissions:
         n = _integer(n, where, "n", 1)
         scenario = _path(scenario, where, "scenario")
         if seed is None:
-            seed = Mission(scenario, overrides=overrides).seed
+            with _warnings.catch_warnings():  # said once, below
+                _warnings.simplefilter("ignore", ScenarioWarning)
+                seed = Mission(scenario, overrides=overrides).seed
         seed = _integer(seed, where, "seed", 0, _SEED_MAX - n + 1)
         threads = _integer(threads, where, "threads", 0)
         if not isinstance(autoreset, (bool, _np.bool_)):
@@ -315,6 +334,7 @@ class VectorMissions:
             scenario, [seed + i for i in range(n)],
             _pairs(overrides, "overrides", where), threads, bool(autoreset))
         self.missions = [Mission._view(self._v.mission(i)) for i in range(n)]
+        _warn_scenario(self._v.mission(0), where)
 
     def __len__(self):
         return len(self.missions)

@@ -362,6 +362,25 @@ def test_words_inside_list_and_dict_overrides_stay_words():
         **SMALL, "mission.decisions": "async"}), "aia.aec_env: ")
 
 
+def test_keys_that_change_nothing_are_scenario_warnings():
+    # What aia's commands print as "warning: FILE:LINE: key: ..." lines.
+    with pytest.warns(aia.ScenarioWarning,
+                      match=r"^aia.Mission: overrides: communication.range: "
+                            r"applies to communication.mode range only"):
+        aia.Mission(DEFAULT, overrides={**SMALL, "communication.range": 5})
+    import warnings
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        aia.Mission(DEFAULT, overrides=SMALL)
+        aia.VectorMissions(2, DEFAULT, seed=1, overrides={
+            **SMALL, "robots.diff_drive.max_speed": 1.0})
+    texts = [str(w.message) for w in seen
+             if issubclass(w.category, aia.ScenarioWarning)]
+    assert len(texts) == 1 and "aia.VectorMissions: overrides: " \
+        "robots.diff_drive.max_speed: sets max_speed" in \
+        texts[0], texts
+
+
 def test_array_shaped_actions_and_seeds_are_refused():
     env = aia.parallel_env(DEFAULT, overrides=SMALL)
     env.reset(seed=1)
