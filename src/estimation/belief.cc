@@ -160,9 +160,20 @@ Mat2 BeliefSet::PositionCovariance(int row, int k) const {
 
 double BeliefSet::DetCovariance(int row, int k) const {
   const double* block = Omega(row, k).data();
-  const double det_omega = layout_->dim(k) == 2
-                               ? Eigen::Map<const MatD<2>>(block).determinant()
-                               : Eigen::Map<const MatD<4>>(block).determinant();
+  double det_omega = 0.0;
+  if (layout_->dim(k) == 2) {
+    det_omega = Eigen::Map<const MatD<2>>(block).determinant();
+  } else {
+    // Not the 4 x 4 cofactor formula, which cancels when Omega is badly
+    // scaled (a position known to 1e-4 m beside a loosely known velocity:
+    // 14.87 for 16.00, or inf): the Cholesky factor's diagonal, as
+    // LogDetCovariance.
+    const Eigen::LLT<MatD<4>> llt{Eigen::Map<const MatD<4>>(block)};
+    if (llt.info() != Eigen::Success)
+      return std::numeric_limits<double>::infinity();
+    const double root = llt.matrixLLT().diagonal().prod();
+    det_omega = root * root;
+  }
   if (!(det_omega > 0.0)) return std::numeric_limits<double>::infinity();
   return 1.0 / det_omega;
 }

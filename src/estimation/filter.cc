@@ -21,18 +21,20 @@ using ConstRowMap = Eigen::Map<const Eigen::ArrayXd>;
 
 // Omega_{t+1|t} = (A Sigma A' + q I)^-1 from Sigma = Omega_{t|t}^-1, through
 // the moment form: the information form has no cheaper exact time update
-// when A is not the identity. A predicted variance above kMaxVariance is a
-// divergence: `strict` (the filter) throws EstimateDiverged, otherwise (a
-// planner looking ahead) the covariance is scaled down to that bound.
+// when A is not the identity. A predicted variance above kMaxVariance is
+// scaled down to that bound, and the return value says so (the filter
+// decides whether that is a divergence: Predict); a variance that is not
+// finite throws EstimateDiverged.
 template <int D>
-void PredictOmega(const TargetModel& model, const MatD<D>& sigma,
-                  Eigen::Map<MatD<D>> omega, bool strict) {
+bool PredictOmega(const TargetModel& model, const MatD<D>& sigma,
+                  Eigen::Map<MatD<D>> omega) {
   const Eigen::Map<const MatD<D>> a(model.A.data());
   MatD<D> sigma_pred =
       a * sigma * a.transpose() + model.q * MatD<D>::Identity();
   const double top = sigma_pred.diagonal().maxCoeff();
-  if (!(top <= kMaxVariance)) {
-    if (strict || !std::isfinite(top)) {
+  const bool beyond = !(top <= kMaxVariance);
+  if (beyond) {
+    if (!std::isfinite(top)) {
       throw EstimateDiverged(-1, "its predicted variance reaches " +
                                      FormatNumber(top) + " m^2, beyond " +
                                      FormatNumber(kMaxVariance));
@@ -47,22 +49,26 @@ void PredictOmega(const TargetModel& model, const MatD<D>& sigma,
   // The DKF sums these blocks across robots every step; any asymmetry left
   // here would be carried (and compounded by prediction) forever.
   omega = 0.5 * (omega_pred + omega_pred.transpose());
+  return beyond;
 }
 
-// x_{t+1|t} for one target block: Omega as above, xi = Omega (A mu + b).
+// x_{t+1|t} for one target block: Omega as above, xi = Omega (A mu + b);
+// whether the variance was scaled back (PredictOmega). For the filter
+// (`filter`), a mean that is not finite is a divergence.
 template <int D>
-void PredictBlock(const TargetModel& model, double* block, bool strict) {
+bool PredictBlock(const TargetModel& model, double* block, bool filter) {
   Eigen::Map<MatD<D>> omega(block);
   Eigen::Map<VecD<D>> xi(block + D * D);
   const Eigen::Map<const MatD<D>> a(model.A.data());
   const Eigen::Map<const VecD<D>> b(model.b.data());
   const MatD<D> sigma = internal::InverseSpd<D>(omega);
   const VecD<D> mu = sigma * xi;
-  PredictOmega<D>(model, sigma, omega, strict);
+  const bool beyond = PredictOmega<D>(model, sigma, omega);
   const VecD<D> mu_pred = a * mu + b;
-  if (strict && !mu_pred.allFinite())
+  if (filter && !mu_pred.allFinite())
     throw EstimateDiverged(-1, "its predicted mean is not finite");
   xi = omega * mu_pred;
+  return beyond;
 }
 
 // Row i of the DKF's weights as MixRows takes it: uniform rows (the DKF's,
@@ -210,26 +216,38 @@ bool BlockSpd(const double* block, double tol) {
 
 }  // namespace
 
-void Predict(BeliefSet* beliefs) {
+void Predict(BeliefSet* beliefs, const std::vector<std::uint8_t>* active) {
   const BeliefLayout& layout = beliefs->layout();
   if (layout.all_static()) return;
   BeliefSet::Storage& data = beliefs->data();
-  for (int r = 0; r < beliefs->rows(); ++r) {
+  const int rows = beliefs->rows(), m = layout.num_targets();
+  AIA_CHECK(active == nullptr || static_cast<int>(active->size()) == rows);
+  // Per target: the rows that count, and those of them scaled back.
+  thread_local std::vector<int> counted, beyond;
+  counted.assign(m, 0);
+  beyond.assign(m, 0);
+  for (int r = 0; r < rows; ++r) {
     double* row = data.data() + r * data.cols();
-    for (int k = 0; k < layout.num_targets(); ++k) {
+    const bool counts = active == nullptr || (*active)[r] != 0;
+    for (int k = 0; k < m; ++k) {
       if (layout.is_static(k)) continue;
       double* block = row + layout.omega_offset(k);
       try {
-        if (layout.dim(k) == 2) {
-          PredictBlock<2>(layout.model(k), block, true);
-        } else {
-          PredictBlock<4>(layout.model(k), block, true);
-        }
+        const bool scaled = layout.dim(k) == 2
+                                ? PredictBlock<2>(layout.model(k), block, true)
+                                : PredictBlock<4>(layout.model(k), block, true);
+        counted[k] += counts ? 1 : 0;
+        beyond[k] += counts && scaled ? 1 : 0;
       } catch (const EstimateDiverged& e) {
         throw EstimateDiverged(k, e.what());
       }
     }
   }
+  for (int k = 0; k < m; ++k)
+    if (counted[k] > 0 && beyond[k] == counted[k])
+      throw EstimateDiverged(k, "its predicted variance passes " +
+                                    FormatNumber(kMaxVariance) +
+                                    " m^2 in every estimate that counts");
 }
 
 void PredictInformationBlock(const TargetModel& model, double* block) {
@@ -243,10 +261,10 @@ void PredictInformationBlock(const TargetModel& model, double* block) {
 void PredictInformationMatrix(const TargetModel& model, double* omega) {
   if (model.dim() == 2) {
     Eigen::Map<MatD<2>> m(omega);
-    PredictOmega<2>(model, internal::InverseSpd<2>(m), m, false);
+    PredictOmega<2>(model, internal::InverseSpd<2>(m), m);
   } else {
     Eigen::Map<MatD<4>> m(omega);
-    PredictOmega<4>(model, internal::InverseSpd<4>(m), m, false);
+    PredictOmega<4>(model, internal::InverseSpd<4>(m), m);
   }
 }
 

@@ -41,7 +41,9 @@ void TeamEstimate::Update(bool predict,
   // writes every row of fused_).
   predicted_.data().swap(fused_.data());
   if (predict) {
-    Predict(&predicted_);
+    // Only the active robots' estimates count: a failed robot's belief of
+    // an unstable target may grow to the bound while others measure it.
+    Predict(&predicted_, &active);
     Predict(&central_);
   }
   MakeDkfWeights(neighbors, kappa_self, &weights_);

@@ -31,7 +31,10 @@ void CheckGenerator(const Scenario& s, const FieldChecker& check) {
   const std::string type = GeneratorTypeName(g.type);
   const std::string step_text =
       "one lattice step (robots.step " + FormatNumber(step) + ")";
-  if (g.HasWalls() && !(g.wall < step - 2 * radius)) {
+  // With a margin of 1e-9 m: a wall at the limit itself (0.29 beside
+  // 0.5 - 2 x 0.105) can pass the subtraction's rounding and then touch the
+  // lattice's discs.
+  if (g.HasWalls() && !(g.wall < step - 2 * radius - 1e-9)) {
     check.Fail(g.wall, "must be less than robots.step - 2 robots.radius (" +
                            FormatNumber(step - 2 * radius) +
                            "): walls stand on the lines between lattice "
@@ -313,11 +316,12 @@ void TargetsConfig::Validate(const FieldChecker& check) {
     if (check.Given(list)) check.Fail(list, what);
     check.Fail(*this, what);
   }
-  // Defaults that no target takes: every target of the list gives its own.
+  // Defaults that no target takes: every target of the list gives its own
+  // (prior_mean is the position's: a 4-D target's velocity mean is drawn).
   if (has_list) {
     bool all_means = true, all_sigmas = true;
     for (const TargetConfig& t : list) {
-      all_means &= t.prior_mean.has_value();
+      all_means &= t.prior_mean.has_value() && t.dynamics.dim() == 2;
       all_sigmas &= t.prior_sigma.has_value();
     }
     const TargetsConfig unset;

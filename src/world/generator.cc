@@ -441,10 +441,16 @@ int Cave(const Scenario& s, Rng& rng, Layout* l) {
     ++parts;
   }
   if (best < 0)
-    throw s.ErrorAt(kKey, "the cave has no open cell after " +
-                              std::to_string(g.smoothing) +
-                              " smoothing passes with fill " +
-                              FormatNumber(g.fill) + " (a lower fill)");
+    throw s.ErrorAt(
+        kKey, "the cave has no open cell after " + std::to_string(g.smoothing) +
+                  " smoothing passes with fill " + FormatNumber(g.fill) +
+                  " on " + std::to_string(cx) + " x " + std::to_string(cy) +
+                  " cells" +
+                  (g.fill > 0.0 && std::min(cx, cy) > 3
+                       ? " (a lower fill)"
+                       : " (a cave a few cells across turns to rock as it is "
+                         "smoothed: a smaller cell, a wider workspace or "
+                         "fewer smoothing passes)"));
   int free_points = 0;
   for (int iy = 0; iy < l->ny; ++iy) {
     for (int ix = 0; ix < l->nx; ++ix) {

@@ -131,9 +131,12 @@ class QuietStderr {
   int saved_ = -1;
 };
 
-// Width and height as the image's header declares them; false when the
-// bytes are neither PNG nor PGM.
-bool HeaderSize(const std::string& b, long long* cols, long long* rows) {
+// Width and height as the image's header declares them, and a PGM's
+// maximum grey value (0 for a PNG, or when the header is cut before it);
+// false when the bytes are neither PNG nor PGM.
+bool HeaderSize(const std::string& b, long long* cols, long long* rows,
+                long long* max_gray) {
+  *max_gray = 0;
   static const char kPng[] = "\x89PNG\r\n\x1a\n";
   if (b.size() >= 24 && b.compare(0, 8, kPng, 8) == 0 &&
       b.compare(12, 4, "IHDR") == 0) {
@@ -149,7 +152,7 @@ bool HeaderSize(const std::string& b, long long* cols, long long* rows) {
   }
   if (b.size() >= 2 && b[0] == 'P' && (b[1] == '2' || b[1] == '5')) {
     std::size_t at = 2;
-    long long v[2] = {-1, -1};
+    long long v[3] = {-1, -1, 0};
     for (long long& x : v) {
       while (at < b.size()) {  // whitespace and comments
         if (std::isspace(static_cast<unsigned char>(b[at]))) {
@@ -167,10 +170,14 @@ bool HeaderSize(const std::string& b, long long* cols, long long* rows) {
         x = 10 * x + (b[at++] - '0');
         ++digits;
       }
-      if (digits == 0 || digits == 12) return false;
+      if (digits == 0 || digits == 12) {
+        if (&x == &v[2]) break;  // the decoder says what is wrong
+        return false;
+      }
     }
     *cols = v[0];
     *rows = v[1];
+    *max_gray = v[2];
     return true;
   }
   return false;
@@ -179,8 +186,8 @@ bool HeaderSize(const std::string& b, long long* cols, long long* rows) {
 }  // namespace
 
 GrayImage DecodeMapImage(const std::string& bytes) {
-  long long cols = 0, rows = 0;
-  if (!HeaderSize(bytes, &cols, &rows))
+  long long cols = 0, rows = 0, max_gray = 0;
+  if (!HeaderSize(bytes, &cols, &rows, &max_gray))
     throw std::invalid_argument("not a PGM or PNG image");
   if (cols <= 0 || rows <= 0)
     throw std::invalid_argument("the header declares an empty image (" +
@@ -202,6 +209,13 @@ GrayImage DecodeMapImage(const std::string& bytes) {
   }
   if (!decoded || out.cols != cols || out.rows != rows)
     throw std::invalid_argument("the image data is corrupt or truncated");
+  // A binary PGM whose white is below 255 (P5, maxval 1 to 254) is decoded
+  // as stored, so that its white read as grey: white is the file's maximum
+  // grey, scaled as the decoder scales the text form (P2), rounding down.
+  if (bytes[1] == '5' && max_gray > 0 && max_gray < 255) {
+    for (std::uint8_t& p : out.pixels)
+      p = static_cast<std::uint8_t>(std::min(255LL, 255LL * p / max_gray));
+  }
   return out;
 }
 

@@ -327,6 +327,29 @@ TEST(WorldTest, MapImageBecomesObstacles) {
   EXPECT_TRUE(w.map.PointFree({2.0, 10.0}));
 }
 
+// White is the file's maximum grey: a binary PGM whose maxval is below 255
+// was read as stored, its white as grey (every pixel dark at the default
+// threshold); its text form was scaled.
+TEST(WorldTest, APgmWhoseWhiteIsBelow255IsScaled) {
+  for (const std::string magic : {"P5", "P2"}) {
+    std::string bytes = magic + "\n3 2\n100\n";
+    const int values[] = {100, 0, 50, 100, 99, 1};
+    for (const int v : values) {
+      if (magic == "P5") {
+        bytes += static_cast<char>(v);
+      } else {
+        bytes += std::to_string(v) + " ";
+      }
+    }
+    const GrayImage image = DecodeMapImage(bytes);
+    ASSERT_EQ(image.cols, 3);
+    ASSERT_EQ(image.rows, 2);
+    EXPECT_EQ(image.pixels,
+              (std::vector<std::uint8_t>{255, 0, 127, 255, 252, 2}))
+        << magic;
+  }
+}
+
 TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
   // Point and wheeled robots (the latter with CG forced, and with Newton).
   for (const char* robots :

@@ -41,9 +41,14 @@ class EstimateDiverged : public std::runtime_error {
   int target_;
 };
 
-// One time update of every row (identity for static targets). Throws
-// EstimateDiverged for a target whose estimate diverges.
-void Predict(BeliefSet* beliefs);
+// One time update of every row (identity for static targets). A row whose
+// predicted variance of a target passes kMaxVariance is scaled back to it;
+// when that happens to every row in `active` (all rows when null), no
+// estimate of the target is left and EstimateDiverged is thrown for it. A
+// failed or cut-off robot's own belief of an unstable target thus grows to
+// the bound without ending a mission in which other robots measure it.
+void Predict(BeliefSet* beliefs,
+             const std::vector<std::uint8_t>* active = nullptr);
 
 // The time update of one target block stored as Omega (dim x dim,
 // column-major) followed by xi (dim), in place. Callers skip static targets

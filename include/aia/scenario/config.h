@@ -200,7 +200,8 @@ struct ObstaclesConfig {
     a->Visit(AIA_FIELD(boxes).Doc("explicit boxes"));
     a->Visit(AIA_FIELD(map).Path().Doc(
         "PGM or PNG image scaled to the workspace, row 0 at the top; dark "
-        "runs are merged into boxes"));
+        "runs are merged into boxes (read as grey: white is a PGM's maximum "
+        "value, colour is its luminance, a PNG's transparency is ignored)"));
     a->Visit(AIA_FIELD(map_threshold)
                  .In(kOpenUnit)
                  .Doc("map pixels darker than this fraction of white are "
@@ -380,7 +381,9 @@ struct TargetConfig {
                  .Doc("true initial velocity; only with 4x4 dynamics"));
     a->Visit(AIA_FIELD(prior_mean)
                  .In(kCoordinate)
-                 .Doc("mu_0; none: the truth plus N(0, prior_offset^2 I)"));
+                 .Doc("mu_0's position; none: the truth plus N(0, "
+                      "prior_offset^2 I) (a 4-D target's velocity mean is "
+                      "drawn so either way)"));
     a->Visit(AIA_FIELD(prior_sigma)
                  .In(kPriorSigma)
                  .Doc("prior std; none: targets.prior_sigma"));
