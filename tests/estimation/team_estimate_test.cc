@@ -28,6 +28,43 @@ Measurements RobotZeroMeasures() {
 const std::vector<Vec2> kAtOrigin = {Vec2(0.0, 0.0), Vec2(5.0, 5.0)};
 const std::vector<std::uint8_t> kBothActive = {1, 1};
 
+// An unstable target (A = 2 I): the variance of an estimate no measurement
+// reaches grows 4 times a step and passes kMaxVariance (1e24) at step 40.
+// The mission ended there even while another robot measured the target
+// every step (a failed robot's own belief, or a cut-off one's). It ends only
+// when every active robot's estimate has passed the bound; the others stay
+// at it.
+TEST(TeamEstimateTest, OnlyEveryActiveEstimateDivergingIsADivergence) {
+  TargetModel unstable = TargetModel::Static(2);
+  unstable.A = 2.0 * Eigen::MatrixXd::Identity(2, 2);
+  const auto team = [&] {
+    return TeamEstimate({unstable}, 2, {Eigen::Vector2d(1.0, 1.0)},
+                        {Eigen::MatrixXd::Identity(2, 2)});
+  };
+  const std::vector<std::vector<int>> apart = {{}, {}};
+  for (const std::vector<std::uint8_t>& active :
+       {kBothActive, std::vector<std::uint8_t>{1, 0}}) {
+    TeamEstimate e = team();
+    for (int step = 0; step < 80; ++step)
+      e.Update(step > 0, apart, 0.5, RobotZeroMeasures(), kAtOrigin, active);
+    // Robot 0's precision per axis settles where w = w / 4 + 0.75: w = 1.
+    EXPECT_NEAR(e.Det(0, 0), 1.0, 1e-9);
+    EXPECT_TRUE(std::isfinite(e.Det(1, 0)));
+    EXPECT_GT(e.Det(1, 0), 1e40);  // at the bound: (1e24)^2 scaled back
+  }
+  // Nobody measures: the team's estimate diverges, at step 40.
+  TeamEstimate e = team();
+  int step = 0;
+  try {
+    for (; step < 80; ++step)
+      e.Update(step > 0, apart, 0.5, Measurements(2), kAtOrigin, kBothActive);
+    ADD_FAILURE() << "no divergence";
+  } catch (const EstimateDiverged& d) {
+    EXPECT_EQ(d.target(), 0);
+  }
+  EXPECT_EQ(step, 40);
+}
+
 TEST(TeamEstimateTest, PriorIsEveryRowsBeliefAndItsLogDetIsKept) {
   const TeamEstimate e = TwoRobots();
   EXPECT_EQ(e.num_robots(), 2);
