@@ -366,9 +366,7 @@ void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model,
                               FormatNumber(tolerance));
     return;
   }
-  // A point robot's waypoint actuator is a critically damped spring:
-  // explicit integration is stable while timestep * omega stays well below
-  // 1. (A wheeled robot's motors are damped implicitly.)
+  // The point robots' spring, given to wheeled ones: said, not refused.
   if (model == RobotModel::kDiffDrive) {
     const PhysicsConfig unset;
     if (kp != unset.kp)
@@ -380,6 +378,9 @@ void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model,
                  "applies to point robots only (a diff_drive robot weighs "
                  "robots.diff_drive.mass): it changes nothing");
   }
+  // A point robot's waypoint actuator is a critically damped spring:
+  // explicit integration is stable while timestep * omega stays well below
+  // 1. (A wheeled robot's motors are damped implicitly.)
   const double omega_dt = timestep * std::sqrt(kp / robot_mass);
   if (model == RobotModel::kPoint && omega_dt > 0.5) {
     check.Fail(kp, "is too stiff for physics.timestep " +
@@ -520,8 +521,7 @@ void Scenario::Validate(const FieldChecker& check) {
     if (std::abs(hz - *sensor.rate) > 1e-6 * *sensor.rate)
       check.Warn(sensor.rate,
                  "is sensed at " + FormatNumber(hz) +
-                     " Hz: a tick falls on a "
-                     "physics step, every " +
+                     " Hz: a tick falls on a physics step, every " +
                      std::to_string(steps) + " of physics.timestep " +
                      FormatNumber(physics.timestep) +
                      " s (targets take a step of their dynamics per tick)");
