@@ -152,7 +152,7 @@ def main(argv=None):
                         help="team sizes N (N robots, N targets), comma-separated")
     parser.add_argument("--policy", default="igbnet", help="policy to time (default igbnet)")
     parser.add_argument("--steps", type=int, default=10, help="decision steps per run")
-    parser.add_argument("--repeats", type=int, default=3, help="runs per size (medians)")
+    parser.add_argument("--repeats", type=int, default=3, help="runs per size (aia bench reports the median run)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the worlds")
     parser.add_argument("--policy-threads", type=int, default=1,
                         help="threads of a learned policy (aia bench's "

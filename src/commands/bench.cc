@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <set>
 #include <string>
 
 #include "aia/commands/eval.h"
@@ -98,15 +99,19 @@ int RunExpertBench(const BenchOptions& o) {
       }
       const SamplingPlan plan = PlanFromStart(built, expert);
       secs.push_back(plan.seconds);
-      fstar.push_back(plan.depth);
+      // F* is a found plan's depth: a search that found none has no F*.
+      if (plan.found) fstar.push_back(plan.depth);
       nodes.push_back(static_cast<double>(plan.nodes));
       arena.push_back(plan.arena_bytes / 1048576.0);
       found += plan.found ? 1 : 0;
     }
+    char fstar_text[32] = "-";
+    if (!fstar.empty())
+      std::snprintf(fstar_text, sizeof fstar_text, "%.1f", Median(fstar));
     std::printf(
-        "%-8s %10.4f %10.4f %8.1f %5d/%-2d %10.0f %12.2f %12.2f %10.1f\n",
+        "%-8s %10.4f %10.4f %8s %5d/%-2d %10.0f %12.2f %12.2f %10.1f\n",
         size_text.c_str(), Median(secs),
-        *std::max_element(secs.begin(), secs.end()), Median(fstar), found,
+        *std::max_element(secs.begin(), secs.end()), fstar_text, found,
         o.seeds, Median(nodes), Median(arena),
         *std::max_element(arena.begin(), arena.end()), PeakRssMiB());
     std::fflush(stdout);
@@ -150,11 +155,50 @@ void BenchOptions::Validate(const FieldChecker& c) const {
   if (!why.empty()) c.Fail(seed, why);
 }
 
+// A flag the mode does not read, given a value of its own: refused, not
+// ignored (the network and the expert modes time other things).
+void CheckModeFlags(const BenchOptions& o) {
+  const BenchOptions d;
+  const char* mode =
+      o.network ? "--network (the network alone)"
+                : o.expert ? "--expert (the expert's plan from the start)"
+                           : nullptr;
+  const auto refuse = [&](bool given, const char* flag, const char* reads) {
+    if (given)
+      throw InputError("command line", 0, flag,
+                       std::string("is not read by aia bench ") + reads);
+  };
+  if (o.network && o.expert)
+    throw InputError("command line", 0, "--expert",
+                     "and --network time different things: give one");
+  if (mode != nullptr) {
+    const std::string with = std::string("with ") + mode;
+    refuse(o.policy != d.policy, "--policy", with.c_str());
+    refuse(o.steps != d.steps, "--steps", with.c_str());
+    refuse(o.skip_testspeed, "--no-testspeed", with.c_str());
+    refuse(o.policy_threads != d.policy_threads, "--policy-threads",
+           with.c_str());
+  }
+  if (o.network) {
+    refuse(!o.sets.empty(), "--set", "with --network (no world is made)");
+    refuse(o.seeds != d.seeds, "--seeds", "with --network");
+    refuse(o.seed != d.seed, "--seed", "with --network");
+  }
+  if (o.expert) refuse(o.repeats != d.repeats, "--repeats", "with --expert");
+  if (!o.expert) refuse(o.seeds != d.seeds, "--seeds", "without --expert");
+  std::set<std::string> sizes;
+  for (const TeamSize& s : o.sizes)
+    if (!sizes.insert(s.ToText()).second && !o.network)
+      throw InputError("command line", 0, "--sizes",
+                       s.ToText() + " is given twice");
+}
+
 int RunBench(const BenchOptions& o) {
   {
     BenchOptions flags = o;
     CheckFlags(&flags);  // their declarations: `--flag: what`
   }
+  CheckModeFlags(o);
   SetPolicyThreads(o.policy_threads);
   if (o.network) return RunNetworkBench(o);
   if (o.expert) return RunExpertBench(o);
@@ -165,7 +209,8 @@ int RunBench(const BenchOptions& o) {
   const EvalSetup setup =
       MakeEvalSetup({o.policy}, o.sets, registry, Instances(o));
   std::printf(
-      "aia bench: policy %s, %d decision steps x %d runs per size (medians), "
+      "aia bench: policy %s, %d decision steps x %d runs per size (the median "
+      "run by ms/step), "
       "%d policy thread%s\n",
       o.policy.c_str(), o.steps, o.repeats, o.policy_threads,
       o.policy_threads == 1 ? "" : "s");
@@ -223,12 +268,20 @@ int RunBench(const BenchOptions& o) {
       testspeed = TestSpeed(path.string(), 4000);
       std::filesystem::remove(path);
     }
+    // One run's row, the median run's by ms/step (the lower of the middle
+    // two for an even count), so that the phases add up to its ms/step and
+    // steps/s is 1000 / ms/step: medians of each column apart do not.
+    std::vector<std::size_t> order(ms.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return ms[a] < ms[b]; });
+    const std::size_t m = order[(order.size() - 1) / 2];
     std::printf(
         "%-8s %10.1f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %7.1f%% %10.0f "
         "%11.0f %9.2f %11.2f\n",
-        size_text.c_str(), Median(rate), Median(ms), Median(phys), Median(sens),
-        Median(fus), Median(pol), Median(rest), Median(share), Median(mjrate),
-        testspeed.steps_per_s, Median(contacts), testspeed.contacts);
+        size_text.c_str(), rate[m], ms[m], phys[m], sens[m], fus[m], pol[m],
+        rest[m], share[m], mjrate[m], testspeed.steps_per_s, contacts[m],
+        testspeed.contacts);
     std::fflush(stdout);
   }
   std::printf(

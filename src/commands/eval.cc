@@ -244,7 +244,10 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
         inc += static_cast<double>(f - r.fstar) / denom;
         flow += f;
         fstar += r.fstar;
-        gap += static_cast<double>(r.fstar) / std::max(r.bound, 1);
+        // F* over its bound; a world solved at step 0 (F* = bound = 0) is
+        // optimal, 1 (0 / max(0, 1) counted it as better than optimal).
+        gap += r.bound == 0 ? (r.fstar == 0 ? 1.0 : r.fstar)
+                            : static_cast<double>(r.fstar) / r.bound;
         reversals += r.reversal_share;
         longest = std::max(longest, r.longest_reversal_run);
         seconds += r.mission_seconds;
