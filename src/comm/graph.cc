@@ -23,6 +23,28 @@ int CommNetwork::NumActive() const {
   return count;
 }
 
+bool CommNetwork::ApplyFailures(int step) {
+  bool any = false;
+  for (const auto& f : failures_) {
+    if (step >= f.step && active_[f.robot]) {
+      active_[f.robot] = 0;
+      any = true;
+    }
+  }
+  if (!any) return false;
+  for (int i = 0; i < n_; ++i) {
+    std::vector<int>& nb = neighbors_[i];
+    if (!active_[i]) {
+      nb.clear();
+      continue;
+    }
+    nb.erase(std::remove_if(nb.begin(), nb.end(),
+                            [this](int j) { return !active_[j]; }),
+             nb.end());
+  }
+  return true;
+}
+
 void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
   AIA_CHECK(static_cast<int>(positions.size()) == n_);
   for (const auto& f : failures_)

@@ -300,14 +300,27 @@ void Episode::StepAsync() {
     if (physics.stalled > 0) ++stats_.stalled_steps;
     for (int i : ended_) EndMove(i, lattice);
     if (!ended_.empty()) {
-      // The slowest active robot's decisions.
-      long fewest = -1;
-      for (int i = 0; i < n; ++i)
-        if (comm_.Active(i) && (fewest < 0 || decisions_[i] < fewest))
-          fewest = decisions_[i];
-      if (fewest >= 0) step_ = static_cast<int>(fewest);
+      // The slowest active robot's decisions; a robot whose failure step
+      // that reaches stops now, not at the next tick (then the slowest of
+      // the others counts).
+      const auto slowest = [&] {
+        long fewest = -1;
+        for (int i = 0; i < n; ++i)
+          if (comm_.Active(i) && (fewest < 0 || decisions_[i] < fewest))
+            fewest = decisions_[i];
+        if (fewest >= 0) step_ = static_cast<int>(fewest);
+      };
+      slowest();
+      while (comm_.ApplyFailures(step_)) {
+        StopFailedRobots();
+        slowest();
+      }
     }
-    if (sim_.clock() >= next_tick_) Tick();
+    // The moves that complete max_steps are sensed and judged, as every
+    // lockstep step is: a last tick now when the next one is later.
+    if (sim_.clock() >= next_tick_ ||
+        (step_ >= mission_.max_steps && tick_start_ < sim_.clock()))
+      Tick();
     if (!ended_.empty() || stopped_ || done()) break;
   }
   times_.physics += sim_.physics_seconds() - physics_before;
@@ -394,23 +407,14 @@ void Episode::EndMove(int i, const Lattice& lattice) {
   ready_[i] = comm_.Active(i) ? 1 : 0;
 }
 
-// A sensing tick: every robot senses from where it is (mid-move too), the
-// graph and the filter update, success is judged; targets take their next
-// step of dynamics, reached by interpolation before the next tick.
-void Episode::Tick() {
+// A robot that failed stops where it is, mid-move or not, and lets go of
+// the points it held (at the tick that applies its failure, or between
+// ticks when the step reaches its failure step).
+void Episode::StopFailedRobots() {
   const int n = instance_->world.NumRobots();
   for (int i = 0; i < n; ++i) {
-    robot_pos_[i] = sim_.RobotPosition(i);
-    robot_heading_[i] = sim_.RobotHeading(i);
-  }
-  for (int k = 0; k < num_targets_; ++k)
-    sim_.SetTargetPosition(k, target_pos_[k]);
-  ++tick_;
-  Observe();
-  // A robot that failed at this tick stops where it is, mid-move or not,
-  // and lets go of the points it held.
-  for (int i = 0; i < n; ++i) {
     if (comm_.Active(i) || stopped_robot_[i]) continue;
+    robot_pos_[i] = sim_.RobotPosition(i);
     stopped_robot_[i] = 1;
     ready_[i] = 0;
     sim_.SetWaypoint(i, robot_pos_[i]);
@@ -425,6 +429,22 @@ void Episode::Tick() {
       if (at >= 0) ++held_[at];
     }
   }
+}
+
+// A sensing tick: every robot senses from where it is (mid-move too), the
+// graph and the filter update, success is judged; targets take their next
+// step of dynamics, reached by interpolation before the next tick.
+void Episode::Tick() {
+  const int n = instance_->world.NumRobots();
+  for (int i = 0; i < n; ++i) {
+    robot_pos_[i] = sim_.RobotPosition(i);
+    robot_heading_[i] = sim_.RobotHeading(i);
+  }
+  for (int k = 0; k < num_targets_; ++k)
+    sim_.SetTargetPosition(k, target_pos_[k]);
+  ++tick_;
+  Observe();
+  StopFailedRobots();
   for (StepObserver* o : observers_)
     stopped_ |= o->OnStep(*this) == ObserverStatus::kStop;
   MoveTargets();

@@ -468,6 +468,8 @@ PhysicsStepStats Simulation::AdvanceMoves(
             progress_[i] = d;
           }
           if ((RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2) {
+            // The substep it arrived in was spent on the way.
+            (turning_[i] ? time_use_.turning : time_use_.driving) += dt;
             end(i);
           } else if (elapsed >= settle && (stuck_[i] || Slow(i, kStallSpeed))) {
             time_use_.blocked += dt;

@@ -82,6 +82,10 @@ class CommNetwork {
   // with increasing steps; packet loss draws from the network's own stream.
   // O(N^2) for the full graph (its edges), O(N + edges) in range mode.
   void Update(int step, const std::vector<Vec2>& positions);
+  // Marks inactive, from now on, the robots whose failure step is `step` or
+  // earlier, and takes them out of the current graph (decisions on arrival
+  // come between two Updates); whether any robot failed now.
+  bool ApplyFailures(int step);
 
   int size() const { return n_; }
   // Robots whose messages robot i received this step (i excluded), ascending.

@@ -216,6 +216,9 @@ class Episode {
   PolicyStatus Decide(const DecisionContext& ctx);
   void StepAsync();
   void Tick();
+  // Failed robots still driving stop where they are and let go of their
+  // points (async).
+  void StopFailedRobots();
   void Apply(int i, const Lattice& lattice);
   void StartMove(int i, int to, const Lattice& lattice);
   void EndMove(int i, const Lattice& lattice);
