@@ -108,12 +108,11 @@ int RunExpertBench(const BenchOptions& o) {
     char fstar_text[32] = "-";
     if (!fstar.empty())
       std::snprintf(fstar_text, sizeof fstar_text, "%.1f", Median(fstar));
-    std::printf(
-        "%-8s %10.4f %10.4f %8s %5d/%-2d %10.0f %12.2f %12.2f %10.1f\n",
-        size_text.c_str(), Median(secs),
-        *std::max_element(secs.begin(), secs.end()), fstar_text, found,
-        o.seeds, Median(nodes), Median(arena),
-        *std::max_element(arena.begin(), arena.end()), PeakRssMiB());
+    std::printf("%-8s %10.4f %10.4f %8s %5d/%-2d %10.0f %12.2f %12.2f %10.1f\n",
+                size_text.c_str(), Median(secs),
+                *std::max_element(secs.begin(), secs.end()), fstar_text, found,
+                o.seeds, Median(nodes), Median(arena),
+                *std::max_element(arena.begin(), arena.end()), PeakRssMiB());
     std::fflush(stdout);
   }
   std::printf(
@@ -159,10 +158,9 @@ void BenchOptions::Validate(const FieldChecker& c) const {
 // ignored (the network and the expert modes time other things).
 void CheckModeFlags(const BenchOptions& o) {
   const BenchOptions d;
-  const char* mode =
-      o.network ? "--network (the network alone)"
-                : o.expert ? "--expert (the expert's plan from the start)"
-                           : nullptr;
+  const char* mode = o.network  ? "--network (the network alone)"
+                     : o.expert ? "--expert (the expert's plan from the start)"
+                                : nullptr;
   const auto refuse = [&](bool given, const char* flag, const char* reads) {
     if (given)
       throw InputError("command line", 0, flag,
@@ -273,8 +271,9 @@ int RunBench(const BenchOptions& o) {
     // steps/s is 1000 / ms/step: medians of each column apart do not.
     std::vector<std::size_t> order(ms.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return ms[a] < ms[b]; });
+    std::stable_sort(
+        order.begin(), order.end(),
+        [&](std::size_t a, std::size_t b) { return ms[a] < ms[b]; });
     const std::size_t m = order[(order.size() - 1) / 2];
     std::printf(
         "%-8s %10.1f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %7.1f%% %10.0f "

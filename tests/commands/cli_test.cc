@@ -217,8 +217,9 @@ TEST(CliTest, BenchCountsOutOfRangeExitWith2) {
        "--policy: is not read by aia bench with --expert"},
       {{"bench", "--network", "--policy-threads", "2"},
        "--policy-threads: is not read by aia bench with --network"},
-      {{"bench", "--seeds", "3"}, "--seeds: is not read by aia bench without "
-                                  "--expert"},
+      {{"bench", "--seeds", "3"},
+       "--seeds: is not read by aia bench without "
+       "--expert"},
       {{"bench", "--sizes", "2x2,2x2"}, "--sizes: 2x2 is given twice"},
       // aia eval's counts, from the same kind of declaration.
       {{"eval", "--seeds", "0", "--out", "/nonexistent/aia_eval"},

@@ -79,8 +79,7 @@ TEST(AsyncTest, WheeledRobotsDecideAloneAndNeverWait) {
   const int on_grid = static_cast<int>(e->clock_seconds() / 0.5 + 1e-9);
   for (int t = 0; t < on_grid; ++t)
     EXPECT_NEAR(rounds.tick_seconds[t], 0.5 * (t + 1), 1e-9);
-  const bool between =
-      std::abs(e->clock_seconds() - 0.5 * on_grid) > 1e-9;
+  const bool between = std::abs(e->clock_seconds() - 0.5 * on_grid) > 1e-9;
   EXPECT_EQ(rounds.ticks, on_grid + (between ? 1 : 0));
   EXPECT_NEAR(rounds.tick_seconds.back(), e->clock_seconds(), 1e-9);
 }
@@ -104,7 +103,8 @@ TEST(AsyncTest, FailuresAndTheLastStepTakeEffectBetweenTicks) {
   EXPECT_EQ(e->step(), 30);
 
   Scenario greedy = ScenarioFromYaml(
-      base + "mission: {eps: 0.01, decisions: async}\npolicy: {name: greedy}\n");
+      base +
+      "mission: {eps: 0.01, decisions: async}\npolicy: {name: greedy}\n");
   auto first = MakeEpisode(greedy, AllPolicies());
   first->Run();
   ASSERT_TRUE(first->success());
@@ -207,6 +207,25 @@ TEST(AsyncTest, AFailedRobotStopsMidMoveAndNeverDecidesAgain) {
   ASSERT_GE(decided, 0);
   EXPECT_EQ(e->step(), 12);  // the others' decisions, the failed one aside
   EXPECT_GT(std::min(e->decisions()[0], e->decisions()[2]), decided);
+}
+
+// Where the robots' time went covers every robot's every substep, in both
+// modes (async left out the substep a move arrived in: 65 moves x 5 ms).
+TEST(AsyncTest, TimeUseCoversEveryRobotsEverySubstep) {
+  for (const std::string decisions : {"async", "lockstep"}) {
+    Scenario s = ScenarioFromYaml(
+        "seed: 5\nrobots: {count: 3}\ntargets: {count: 3}\n"
+        "mission: {max_steps: 15, stop_at_success: false, decisions: " +
+        decisions +
+        "}\ncommunication: {failures: [{robot: 2, step: 6}]}\n"
+        "policy: {name: random}\n");
+    auto e = MakeEpisode(s, AllPolicies());
+    e->Run();
+    const Simulation::TimeUse& u = e->sim().time_use();
+    const double total =
+        u.driving + u.turning + u.blocked + u.arrived + u.staying + u.yielding;
+    EXPECT_NEAR(total, 3 * e->clock_seconds(), 1e-9) << decisions;
+  }
 }
 
 TEST(AsyncTest, MovesAreCountedWhenTheyEnd) {
