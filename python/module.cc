@@ -1534,8 +1534,7 @@ void BindMission(py::module_& m) {
                              OneCall(&Mission::seed, "aia.Mission.seed"))
       .def_property_readonly(
           "scenario_warnings",
-          OneCall(&Mission::scenario_warnings,
-                  "aia.Mission.scenario_warnings"),
+          OneCall(&Mission::scenario_warnings, "aia.Mission.scenario_warnings"),
           "the scenario's warnings, 'FILE:LINE: key: what' (keys given a "
           "value that changes nothing where they stand)")
       .def_property_readonly("owned",

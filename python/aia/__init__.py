@@ -56,13 +56,20 @@ if _install is not None:
         os.path.normpath(os.path.join(_here, _install.DATA_DIR)))
 
 
+def _retitled(text, old, new):
+    """`text` with its leading "OLD: " (the caller a message names) made
+    "NEW: "; other texts as they are."""
+    if text.startswith(old + ": "):
+        return new + ": " + text[len(old) + 2:]
+    return text
+
+
 def _warn_scenario(core, where):
     """The scenario's warnings (what aia's commands print as "warning: ..."
     lines) as ScenarioWarning, an override's named as the argument."""
     for text in core.scenario_warnings:
-        if text.startswith("command line: "):
-            text = where + ": " + text[len("command line: "):]
-        _warnings.warn(text, ScenarioWarning, stacklevel=3)
+        _warnings.warn(_retitled(text, "command line", where),
+                       ScenarioWarning, stacklevel=3)
 
 
 def _shown(value):
@@ -666,11 +673,8 @@ def aec_env(scenario, seed=None, overrides=None, render_mode=None, **kwargs):
                                render_mode=render_mode, **kwargs)
     except InputError as e:
         # The function the caller called, not the one under it.
-        text = str(e)
-        if not text.startswith("aia.parallel_env:"):
-            raise
-        raise InputError("aia.aec_env:" +
-                         text[len("aia.parallel_env:"):]) from None
+        raise InputError(_retitled(str(e), "aia.parallel_env",
+                                   "aia.aec_env")) from None
     return AECEnv(parallel)
 
 
