@@ -1666,8 +1666,18 @@ void BindInstallation(py::module_& m) {
       "_installed_dirs",
       [] { return py::make_tuple(InstalledLibDir(), InstalledDataDir()); },
       "(plugin folder, data folder) of an installed aia, '' in a build.");
-  m.def("_default_model_path", &DefaultModelPath,
-        "Where policy.model points when a scenario does not say.");
+  m.def(
+      "_default_model_path",
+      [](const std::string& coordination) {
+        if (coordination != "rules" && coordination != "none")
+          throw py::value_error("coordination: 'rules' or 'none', not '" +
+                                coordination + "'");
+        return DefaultModelPath(coordination == "none" ? Coordination::kNone
+                                                       : Coordination::kRules);
+      },
+      py::arg("coordination") = "rules",
+      "Where policy.model points when a scenario does not say, for "
+      "policy.coordination 'rules' or 'none'.");
 }
 
 }  // namespace

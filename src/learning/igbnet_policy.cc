@@ -16,9 +16,11 @@
 
 namespace aia {
 
-std::string DefaultModelPath() {
+std::string DefaultModelPath(Coordination coordination) {
   std::error_code ec;
-  const std::filesystem::path here = "models/igbnet.pt";
+  const std::filesystem::path here = coordination == Coordination::kNone
+                                         ? "models/igbnet_learned.pt"
+                                         : "models/igbnet.pt";
   // An installed aia's own model, whatever the working folder holds.
   if (const std::string data = InstalledDataDir(); !data.empty()) {
     const std::filesystem::path installed = std::filesystem::path(data) / here;
@@ -171,7 +173,8 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
       "I-GBNet, the paper's graph network trained by imitation of the expert "
       "(docs/learning.md); each robot decides from its own belief, its "
       "neighbours' positions and the map",
-      "models/igbnet.pt",
+      "models/igbnet.pt with coordination rules, models/igbnet_learned.pt "
+      "with none",
       [](const IgbNetParams& params, const Scenario& s) {
         if (params.coordination == Coordination::kNone) {
           const std::string key = FirstRuleKeySet(params);
@@ -182,7 +185,8 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
                             "remove it, or set policy.coordination: rules");
         }
         const bool given = !s.policy.model.empty();
-        const std::string path = given ? s.policy.model : DefaultModelPath();
+        const std::string path =
+            given ? s.policy.model : DefaultModelPath(params.coordination);
         std::shared_ptr<const IgbNet> net;
         try {
           net =

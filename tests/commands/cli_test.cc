@@ -758,6 +758,23 @@ TEST(CliTest, EffectiveYamlRecordsTheModelAndRefusesAnotherOne) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(ReadFile(dir + "/d/effective.yaml").find("/models/igbnet.pt\n"),
             std::string::npos);
+  // With coordination none it is the model trained for the network alone,
+  // and a model given is still the one taken.
+  r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--policy",
+              "igbnet", "--set", "policy.coordination=none", "--max-steps",
+              "1", "--out", dir + "/e", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(
+      ReadFile(dir + "/e/effective.yaml").find("/models/igbnet_learned.pt\n"),
+      std::string::npos);
+  r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--policy",
+              "igbnet", "--set", "policy.coordination=none", "--set",
+              "policy.model=" + SourcePath("models/igbnet_10x10.pt"),
+              "--max-steps", "1", "--out", dir + "/f", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(
+      ReadFile(dir + "/f/effective.yaml").find("/models/igbnet_10x10.pt\n"),
+      std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -36,6 +36,8 @@ from aia import _aia
 pkg = os.path.realpath({str(site / "aia")!r})
 assert os.path.realpath(aia.__file__).startswith(pkg), aia.__file__
 assert _aia._default_model_path().startswith(pkg + "/share/aia/models/")
+assert _aia._default_model_path("none") == \
+    pkg + "/share/aia/models/igbnet_learned.pt", _aia._default_model_path("none")
 m = aia.Mission({str(SOURCE / "scenarios" / "default.yaml")!r},
                 overrides={{"robots.count": 2, "targets.count": 1}})
 m.step(aia.builtin_policy("igbnet").decide(m))

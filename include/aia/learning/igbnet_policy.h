@@ -23,11 +23,13 @@
 
 namespace aia {
 
-// Where `policy.model` points when a scenario does not say: an installed
-// aia's own PREFIX/share/aia/models/igbnet.pt (core/plugin.h,
-// InstalledDataDir); else models/igbnet.pt under the working folder if it is
-// there, else under the source tree.
-std::string DefaultModelPath();
+// Where `policy.model` points when a scenario does not say: the model
+// trained for the coordination, models/igbnet.pt for rules (the default
+// model, trained with them) and models/igbnet_learned.pt for none (the
+// network alone); an installed aia's own PREFIX/share/aia/models/NAME
+// (core/plugin.h, InstalledDataDir), else models/NAME under the working
+// folder if it is there, else under the source tree.
+std::string DefaultModelPath(Coordination coordination = Coordination::kRules);
 
 // The model at `path`, loaded once per process; errors as IgbNet::Load.
 std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
