@@ -8,7 +8,6 @@
 #include <cstring>
 #include <limits>
 #include <queue>
-#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -429,6 +428,16 @@ void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
     for (int i = 0; i < width_ * height_; ++i) out[i] /= top;
 }
 
+namespace internal {
+namespace {
+thread_local bool reach_world_exhaustive = false;
+}  // namespace
+ExhaustiveReachWorld::ExhaustiveReachWorld() : was_(reach_world_exhaustive) {
+  reach_world_exhaustive = true;
+}
+ExhaustiveReachWorld::~ExhaustiveReachWorld() { reach_world_exhaustive = was_; }
+}  // namespace internal
+
 void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                                  const std::vector<HeatSource>& targets,
                                  const std::vector<double>& log_det_prior,
@@ -437,32 +446,68 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                                  bool detour, float* second) const {
   // cost(p) = min over observation pixels q of d(p, q) - (L / cell) ln w(q),
   // d in valid moves: the log of G(p) = max_q w(q) exp(-d(p, q) cell / L) up
-  // to the factor -cell / L. Dijkstra with the least cost first; each pixel
-  // settles once (with `second`, once per each of its two best targets).
-  // Scratch per thread: nothing is allocated once warm.
+  // to the factor -cell / L. Each pixel settles once (with `second`, once
+  // per each of its two best targets).
+  //
+  // Only the window's pixels and the robot's are read, so the search is A*
+  // toward them: entries pop in order of f = cost + g(p), g(p) the moves
+  // from p to the nearest of those pixels on an empty lattice (a lower
+  // bound on the way there that changes by at most 1 a move), and a
+  // target's observation pixels enter only when the search reaches a lower
+  // bound of their f. Every pixel on a least way to a window pixel of cost
+  // c has f <= c, so each pixel the images read settles, with the cost a
+  // search over the whole workspace gives it, before the first entry past
+  // the threshold below; what the search visits grows with the way from
+  // the robot to its nearest targets, not with the workspace or the number
+  // of targets. Scratch per thread, reset where the last call wrote it:
+  // nothing is allocated or cleared in proportion to the map once warm.
   const int nx = occupancy_.nx(), ny = occupancy_.ny();
   const std::size_t total = static_cast<std::size_t>(nx) * ny;
   const double moves_per_e = length / params_.cell;
   constexpr double kInf = std::numeric_limits<double>::infinity();
   thread_local std::vector<double> cost, cost2;
-  thread_local std::vector<int> label, label2;
-  // (cost, pixel, target): ordered by cost, then pixel and target, so that
-  // ties pop in one order on every machine.
-  using Entry = std::tuple<double, int, int>;
-  thread_local std::vector<Entry> heap;
-  const auto later = [](const Entry& a, const Entry& b) { return a > b; };
-  cost.assign(total, kInf);
-  heap.clear();
-  if (second) {
+  thread_local std::vector<int> label, label2, touched;
+  if (cost.size() != total) {
+    cost.assign(total, kInf);
     cost2.assign(total, kInf);
     label.assign(total, -1);
     label2.assign(total, -1);
+  } else {
+    for (const int j : touched) {
+      cost[j] = cost2[j] = kInf;
+      label[j] = label2[j] = -1;
+    }
   }
+  touched.clear();
+  // An entry: f, then the pixel and the target, so that ties pop in one
+  // order on every machine; its cost beside.
+  struct Entry {
+    double f, c;
+    int pixel, target;
+  };
+  thread_local std::vector<Entry> heap;
+  const auto later = [](const Entry& a, const Entry& b) {
+    if (a.f != b.f) return a.f > b.f;
+    if (a.pixel != b.pixel) return a.pixel > b.pixel;
+    return a.target > b.target;
+  };
+  heap.clear();
+  const bool exhaustive = internal::reach_world_exhaustive;
+  const bool self_inside = sx >= x0 && sy >= y0 && sx < x0 + w && sy < y0 + h;
+  const auto bound = [&](int gx, int gy) -> int {
+    if (exhaustive) return 0;
+    const int dx = gx < x0 ? x0 - gx : (gx >= x0 + w ? gx - (x0 + w - 1) : 0);
+    const int dy = gy < y0 ? y0 - gy : (gy >= y0 + h ? gy - (y0 + h - 1) : 0);
+    const int to_window = dx + dy;
+    if (self_inside) return to_window;
+    return std::min(to_window, std::abs(gx - sx) + std::abs(gy - sy));
+  };
   // A way of cost c from target k reaches pixel j. Without `second`: kept if
   // it is j's least. With it: kept if it is j's least or its least from any
   // other target than the least's (each pixel holds its two best targets,
   // never one twice).
   const auto improve = [&](int j, double c, int k) {
+    if (cost[j] == kInf) touched.push_back(j);
     if (!second || k == label[j]) {
       if (c >= cost[j]) return false;
       cost[j] = c;
@@ -478,21 +523,48 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
     } else {
       return false;
     }
-    heap.emplace_back(c, j, k);
+    heap.push_back({c + bound(j % nx, j / nx), c, j, k});
+    std::push_heap(heap.begin(), heap.end(), later);
     return true;
   };
+  // The targets in order of a lower bound on their observation pixels' f:
+  // c0 plus g at the point, less the most an observation pixel can be
+  // nearer (observe_range in pixels, along each axis).
+  thread_local std::vector<std::pair<double, int>> sources;
+  sources.clear();
+  const int observe =
+      static_cast<int>(std::ceil(params_.observe_range / params_.cell));
+  const auto points_of = [&](std::size_t k) -> std::size_t {
+    const bool searched = search && k < search->size() && !(*search)[k].empty();
+    return searched ? (*search)[k].size() : 1;
+  };
+  const auto point = [&](std::size_t k, std::size_t a) -> const Vec2& {
+    const bool searched = search && k < search->size() && !(*search)[k].empty();
+    return searched ? (*search)[k][a] : targets[k].mean;
+  };
+  thread_local std::vector<double> start;
+  start.assign(targets.size(), kInf);
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
     if (wk <= 0.0) continue;
-    const double c0 = -moves_per_e * std::log(wk);
-    const bool searched = search && k < search->size() && !(*search)[k].empty();
-    const std::size_t points = searched ? (*search)[k].size() : 1;
-    for (std::size_t a = 0; a < points; ++a) {
-      const Vec2& x = searched ? (*search)[k][a] : targets[k].mean;
-      for (const int idx : ObservationPixels(x))
-        improve(idx, c0, static_cast<int>(k));
+    start[k] = -moves_per_e * std::log(wk);
+    int near = std::numeric_limits<int>::max();
+    for (std::size_t a = 0; a < points_of(k) && near > 0; ++a) {
+      int mx = 0, my = 0;
+      occupancy_.CellOf(point(k, a), &mx, &my);
+      near = std::min(near, std::max(0, bound(mx, my) - 2 * observe));
     }
+    sources.emplace_back(start[k] + near, static_cast<int>(k));
   }
+  // A heap, least bound first: the search takes a few of them.
+  const auto greater = [](const std::pair<double, int>& a,
+                          const std::pair<double, int>& b) { return a > b; };
+  std::make_heap(sources.begin(), sources.end(), greater);
+  const auto seed = [&](int k) {
+    for (std::size_t a = 0; a < points_of(k); ++a)
+      for (const int idx : ObservationPixels(point(k, a)))
+        improve(idx, start[k], k);
+  };
   // The scale is the robot's own pixel: a pixel whose way is d moves
   // shorter holds exp(d / (L / cell) - kReachSelf), capped at 1, so that
   // the way on from where the robot stands reads the same however far the
@@ -507,15 +579,27 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
   // The robot's own costs, once settled; the search stops past the last one
   // the channels need.
   double self_cost = kInf, self_cost2 = kInf;
-  std::make_heap(heap.begin(), heap.end(), later);
-  while (!heap.empty()) {
+  while (true) {
+    const double threshold = (second ? self_cost2 : self_cost) + cap;
+    // Every target whose bound is at most the next entry's f (one at a
+    // time: each may bring a nearer next entry).
+    while (!sources.empty() &&
+           sources.front().first <=
+               std::min(heap.empty() ? kInf : heap.front().f, threshold)) {
+      std::pop_heap(sources.begin(), sources.end(), greater);
+      const int k = sources.back().second;
+      sources.pop_back();
+      seed(k);
+    }
+    if (heap.empty() || heap.front().f > threshold) break;
     std::pop_heap(heap.begin(), heap.end(), later);
-    const auto [c, idx, k] = heap.back();
+    const Entry e = heap.back();
     heap.pop_back();
+    const double c = e.c;
+    const int idx = e.pixel, k = e.target;
     const bool best = c == cost[idx] && (!second || k == label[idx]);
     if (!best && !(second && c == cost2[idx] && k == label2[idx]))
       continue;  // stale
-    if (c > (second ? self_cost2 : self_cost) + cap) break;
     if (idx == self_idx) (best ? self_cost : self_cost2) = c;
     const unsigned m = moves_[idx];
     const int gx = idx % nx, gy = idx / nx;
@@ -523,8 +607,7 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
       if (!(m & (1u << static_cast<int>(move)))) continue;
       const auto d = MoveDelta(move);
       const int j = occupancy_.Index(gx + d[0], gy + d[1]);
-      if (moves_[j] && improve(j, c + 1.0, k))
-        std::push_heap(heap.begin(), heap.end(), later);
+      if (moves_[j]) improve(j, c + 1.0, k);
     }
   }
   const auto image = [&](const std::vector<double>& costs, double self,

@@ -386,6 +386,20 @@ namespace internal {
 // thousands of observation pixels a window holds in a crowded world (the
 // reach channel's sources).
 void SortByValueDescending(std::vector<std::pair<float, int>>* items);
+// While one lives, the reach channel over the workspace on this thread
+// searches by cost alone (Dijkstra from every target's observation
+// pixels, as before its search was bounded toward the pixels it reads):
+// the reference its tests compare with.
+class ExhaustiveReachWorld {
+ public:
+  ExhaustiveReachWorld();
+  ~ExhaustiveReachWorld();
+  ExhaustiveReachWorld(const ExhaustiveReachWorld&) = delete;
+  ExhaustiveReachWorld& operator=(const ExhaustiveReachWorld&) = delete;
+
+ private:
+  bool was_;
+};
 }  // namespace internal
 
 }  // namespace aia
