@@ -579,19 +579,30 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
   // The robot's own costs, once settled; the search stops past the last one
   // the channels need.
   double self_cost = kInf, self_cost2 = kInf;
+  const auto seed_next = [&] {
+    std::pop_heap(sources.begin(), sources.end(), greater);
+    const int k = sources.back().second;
+    sources.pop_back();
+    seed(k);
+  };
+  // The reference (internal::ExhaustiveReachWorld) is the search before the
+  // bound: every source at once, stopping at the threshold itself. The
+  // bounded search stops one move later: f = cost + g is rounded once
+  // where a way's cost adds 1.0 a move, so a pixel on the least way to one
+  // at the threshold could read a unit in the last place above it; what
+  // settles past the threshold is never read.
+  const double slack = exhaustive ? 0.0 : 1.0;
+  if (exhaustive)
+    while (!sources.empty()) seed_next();
   while (true) {
-    const double threshold = (second ? self_cost2 : self_cost) + cap;
+    const double stop = (second ? self_cost2 : self_cost) + cap + slack;
     // Every target whose bound is at most the next entry's f (one at a
     // time: each may bring a nearer next entry).
     while (!sources.empty() &&
            sources.front().first <=
-               std::min(heap.empty() ? kInf : heap.front().f, threshold)) {
-      std::pop_heap(sources.begin(), sources.end(), greater);
-      const int k = sources.back().second;
-      sources.pop_back();
-      seed(k);
-    }
-    if (heap.empty() || heap.front().f > threshold) break;
+               std::min(heap.empty() ? kInf : heap.front().f, stop))
+      seed_next();
+    if (heap.empty() || heap.front().f > stop) break;
     std::pop_heap(heap.begin(), heap.end(), later);
     const Entry e = heap.back();
     heap.pop_back();
