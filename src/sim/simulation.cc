@@ -166,10 +166,20 @@ void Simulation::IndexRayGeoms() {
   // field, plane, a moving body) sends every ray to mj_ray.
   std::vector<Box> bounds;
   ray_geoms_.clear();
+  for (int i = 0; i < 4; ++i) {  // world/mjcf.cc's border walls
+    const int body =
+        mj_name2id(m_, mjOBJ_BODY, ("wall" + std::to_string(i)).c_str());
+    border_geoms_[i] =
+        body >= 0 && m_->body_geomnum[body] == 1 ? m_->body_geomadr[body] : -1;
+  }
+  const auto border = [&](int g) {
+    return std::find(border_geoms_.begin(), border_geoms_.end(), g) !=
+           border_geoms_.end();
+  };  // g >= 0 below
   Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
   for (int g = 0; g < m_->ngeom; ++g) {
     const int group = std::clamp(m_->geom_group[g], 0, mjNGROUP - 1);
-    if (group != kGroupObstacle) continue;
+    if (group != kGroupObstacle || border(g)) continue;
     const int mat = m_->geom_matid[g];
     if (mat < 0 ? m_->geom_rgba[4 * g + 3] == 0
                 : m_->mat_rgba[4 * mat + 3] == 0)
@@ -515,8 +525,13 @@ bool Simulation::RayClear(const Vec2& from, const Vec2& to) const {
     });
   }
   int geom = -1;
-  // Static geoms included (obstacles are static bodies).
+  // Static geoms included (obstacles are static bodies). The nearest hit
+  // being a border wall's means nothing lies before the wall, which the
+  // segment can only touch at its end.
   const mjtNum x = mj_ray(m_, data_.get(), pnt, vec, groups, 1, -1, &geom);
+  if (geom >= 0 && std::find(border_geoms_.begin(), border_geoms_.end(),
+                             geom) != border_geoms_.end())
+    return true;
   return x < 0.0 || x >= 1.0;
 }
 

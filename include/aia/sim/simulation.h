@@ -180,7 +180,11 @@ class Simulation {
   // mj_ray, which in MuJoCo 2.2 visits every geom, from the geoms whose
   // bounds meet the segment's: the obstacle geoms in buckets, each tested
   // with mju_rayGeom as mj_ray tests it (mj_ray itself where a geom of the
-  // group is not a static primitive).
+  // group is not a static primitive). The four border walls lie outside the
+  // workspace and are not tested: a segment from a point inside the
+  // workspace to one in it can only touch their inner faces at its end,
+  // where a target on the border is (the workspace's own line of sight,
+  // Map::LineOfSight, has no walls either).
   bool RayClear(const Vec2& from, const Vec2& to) const;
 
   // One mj_step. When the contacts of the step overflow MuJoCo's budget
@@ -276,6 +280,7 @@ class Simulation {
   // obstacle group, not invisible), bucketed by their bounding circles.
   void IndexRayGeoms();
   std::vector<int> ray_geoms_;
+  std::array<int, 4> border_geoms_{-1, -1, -1, -1};
   BoxBuckets ray_buckets_;
   bool ray_indexed_ = false;
   std::array<long, mjNWARNING> warnings_{};
