@@ -621,10 +621,12 @@ class Mission {
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
-    if (const std::string why = ChannelGridProblem(map.size(), settings);
+    // As the igbnet policy renders them: one pixel per lattice step.
+    const ChannelParams at_step = AtLatticeStep(settings, lattice.step());
+    if (const std::string why = ChannelGridProblem(map.size(), at_step);
         !why.empty())
       Refuse("aia.Mission.channels", "", why);
-    ChannelRenderer renderer(map.occupancy(), map.size(), settings, &lattice);
+    ChannelRenderer renderer(map.occupancy(), map.size(), at_step, &lattice);
     const int n = num_robots();
     py::array_t<float> out({static_cast<py::ssize_t>(n),
                             static_cast<py::ssize_t>(renderer.channels()),
@@ -1071,14 +1073,15 @@ class PyDataset {
     valid_.resize(data_.samples.size());
     for (std::size_t wi = 0; wi < data_.worlds.size(); ++wi) {
       const DatasetWorld& w = data_.worlds[wi];
-      if (const std::string why = ChannelGridProblem(w.size, channels_);
+      // As aia train renders them: one pixel per lattice step.
+      const ChannelParams at_step = AtLatticeStep(channels_, w.lattice_step);
+      if (const std::string why = ChannelGridProblem(w.size, at_step);
           !why.empty())
         Refuse("aia.Dataset", "channels",
                "world of episode " + std::to_string(w.episode) + ": " + why);
       const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
                     w.robot_radius);
-      renderers_.emplace_back(map.occupancy(), w.size, channels_,
-                              &map.lattice());
+      renderers_.emplace_back(map.occupancy(), w.size, at_step, &map.lattice());
       for (int i : of_world[wi])
         valid_[i] = ValidMoveBits(map.lattice(), data_.samples[i].position);
     }

@@ -213,7 +213,10 @@ class Mission:
         the reach channel, from its belief's means). `frame` is "centred"
         (a window around each robot, the default) or "global"; `params` are
         the other channel settings (window, cell, blur, cutoff, geodesic,
-        ...; docs/learning.md, Channels), checked as a model's are."""
+        ...; docs/learning.md, Channels), checked as a model's are. As the
+        igbnet policy does, they are rendered at one pixel per lattice
+        step: where robots.step is not `cell`, the pixel is the step and
+        geodesic_length, reach_detour and reach_broad scale with it."""
         if frame is not None:
             params["frame"] = frame
         return self._m.channels(_pairs(params, "channels",

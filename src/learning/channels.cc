@@ -22,6 +22,17 @@ std::atomic<std::uint64_t> renderers_made{0};
 
 }  // namespace
 
+ChannelParams AtLatticeStep(const ChannelParams& model, double step) {
+  if (step == model.cell || !(step > 0.0)) return model;
+  ChannelParams p = model;
+  const double scale = step / model.cell;
+  p.cell = step;
+  p.geodesic_length *= scale;
+  p.reach_detour *= scale;
+  p.reach_broad *= scale;
+  return p;
+}
+
 std::string ChannelGridProblem(const Vec2& size, const ChannelParams& params) {
   // As MakeHeatmapGrid sizes its grids.
   const double nx = std::ceil(size.x() / params.cell - 1e-9),

@@ -211,8 +211,9 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
                   "this one");
         // Its renderers' grids cover the workspace: refused before a 10 km
         // world asks for gigabytes.
-        if (const std::string why =
-                ChannelGridProblem(s.workspace.size, net->config().channels);
+        if (const std::string why = ChannelGridProblem(
+                s.workspace.size,
+                AtLatticeStep(net->config().channels, s.robots.step));
             !why.empty())
           throw s.ErrorAt("workspace.size", "policy " + s.policy.name + " (" +
                                                 net->file().path + "): " + why);

@@ -13,8 +13,10 @@ NetworkScorer::NetworkScorer(std::shared_ptr<const IgbNet> net)
 }
 
 void NetworkScorer::Reset(const Map& map, int num_robots, int num_targets) {
-  renderer_.emplace(map.occupancy(), map.size(), net_->config().channels,
-                    &map.lattice());
+  renderer_.emplace(
+      map.occupancy(), map.size(),
+      AtLatticeStep(net_->config().channels, map.lattice().step()),
+      &map.lattice());
   // Only a model that reads search points keeps them (N x M slots).
   if (net_->config().channels.search)
     search_.Reset(num_robots, num_targets);

@@ -689,6 +689,73 @@ TEST(ChannelsTest, BoundedReachOverTheWorldIsTheExhaustiveSearch) {
   EXPECT_GT(lit, compared / 2) << lit << " of " << compared;
 }
 
+// A model sees a world through pixels of its lattice step (AtLatticeStep):
+// the same world twice as large at twice the step, every length of it
+// doubled (boxes, robots, targets, covariances, and the heat's blur and
+// the observation range, which stay in metres; eps and the priors' det by
+// 16, so that the weights keep), gives the images of the world at the
+// model's own step, pixel for pixel, the reach channel over the workspace
+// with its detour included. At the model's own step the parameters are
+// the model's.
+TEST(ChannelsTest, AWorldAtTwiceTheStepLooksTheSameTwiceAsLarge) {
+  ChannelParams model = Params(ChannelFrame::kCentred, 16);
+  model.cell = 0.5;
+  model.geodesic = true;
+  model.geodesic_length = 0.25;
+  model.observe_range = 2.0;
+  model.reach_world = true;
+  model.reach_detour = 0.5;
+  const ChannelParams same = AtLatticeStep(model, 0.5);
+  EXPECT_EQ(same.cell, 0.5);
+  EXPECT_EQ(same.geodesic_length, 0.25);
+  EXPECT_EQ(same.reach_detour, 0.5);
+  std::vector<Box> boxes, doubled;
+  for (int i = 0; i < 10; ++i) {
+    boxes.push_back(Box::FromCenterSize(
+        Vec2(1.0 + (i * 7) % 10, 1.0 + (i * 5) % 10), Vec2(0.6, 1.2)));
+    doubled.push_back(Box{2.0 * boxes.back().lo, 2.0 * boxes.back().hi});
+  }
+  const Map small({12.0, 12.0}, boxes, 0.1, 0.5, 0.15);
+  const Map large({24.0, 24.0}, doubled, 0.2, 1.0, 0.3);
+  std::vector<HeatSource> targets, targets2;
+  for (int k = 0; k < 5; ++k) {
+    HeatSource t = WalledWorld::Target({0.7 + 2.3 * k, 11.3 - 2.1 * k},
+                                       std::pow(10.0, -1.0 + 0.5 * k));
+    targets.push_back(t);
+    t.mean *= 2.0;
+    t.cov *= 4.0;
+    t.log_det += std::log(16.0);
+    targets2.push_back(t);
+  }
+  const std::vector<double> prior(5, std::log(100.0)),
+      prior2(5, std::log(1600.0));
+  ChannelParams model2 = model;  // the world's own lengths, doubled
+  model2.blur *= 2.0;
+  model2.observe_range *= 2.0;
+  const ChannelParams at_step = AtLatticeStep(model2, 1.0);
+  EXPECT_EQ(at_step.cell, 1.0);
+  EXPECT_EQ(at_step.geodesic_length, 0.5);
+  EXPECT_EQ(at_step.reach_detour, 1.0);
+  ChannelRenderer r(small.occupancy(), small.size(), model, &small.lattice());
+  ChannelRenderer r2(large.occupancy(), large.size(), at_step,
+                     &large.lattice());
+  ASSERT_EQ(r.ImageSize(), r2.ImageSize());
+  for (const Vec2& self :
+       {Vec2(0.75, 0.75), Vec2(6.25, 5.75), Vec2(11.25, 2.25)}) {
+    const std::vector<Vec2> neighbours = {self + Vec2(1.0, 0.5)};
+    std::vector<float> img(r.ImageSize()), img2(r2.ImageSize());
+    r.Render(self, neighbours, targets, prior, 0.01, img.data());
+    r2.Render(2.0 * self, {2.0 * neighbours[0]}, targets2, prior2, 0.16,
+              img2.data());
+    const std::size_t plane = img.size() / model.num_channels();
+    for (std::size_t i = 0; i < img.size(); ++i)
+      ASSERT_NEAR(img2[i], img[i], 1e-5)
+          << "channel " << i / plane << " pixel " << i % plane << " robot "
+          << self.transpose();
+    EXPECT_GT(*std::max_element(img.begin() + 4 * plane, img.end()), 0.0f);
+  }
+}
+
 // The trail channel (the last): in a centred 3 x 3 window of 1 m pixels at
 // (0.25, 1.75), the robot came from 1 m south: pixel (1, 0) holds 1 and no
 // other; before its first move, none.

@@ -260,6 +260,16 @@ class HeatFold {
   std::vector<float> top_, bottom_;
 };
 
+// The channels a model reads in a world whose lattice step is `step`: one
+// pixel per lattice step, as in the worlds it was trained on (whose step
+// was its `cell`), so that a move is one pixel and a way a number of moves;
+// the lengths the reach channel counts in pixels (geodesic_length,
+// reach_detour, reach_broad) are scaled alike, and the world's own lengths
+// (blur, observe_range) stay in metres. `model` itself where the step is
+// its cell. The igbnet policy, aia train and the Python channels render
+// through it.
+ChannelParams AtLatticeStep(const ChannelParams& model, double step);
+
 // A renderer keeps grids over the whole workspace at the channels' cell
 // (the occupancy shares, the heatmap and its fold, the reach field): about
 // 70 bytes a pixel with a policy's threads. More pixels than this are

@@ -145,14 +145,15 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
   }
   for (std::size_t wi = 0; wi < c.data.worlds.size(); ++wi) {
     const DatasetWorld& w = c.data.worlds[wi];
-    if (const std::string why = ChannelGridProblem(w.size, channels);
+    const ChannelParams at_step = AtLatticeStep(channels, w.lattice_step);
+    if (const std::string why = ChannelGridProblem(w.size, at_step);
         !why.empty())
       throw InputError(
           "command line", 0, "--data",
           "world of episode " + std::to_string(w.episode) + ": " + why);
     const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
                   w.robot_radius);
-    c.renderers.emplace_back(map.occupancy(), w.size, channels, &map.lattice());
+    c.renderers.emplace_back(map.occupancy(), w.size, at_step, &map.lattice());
     if (valid_moves)
       for (int i : of_world[wi])
         c.valid[i] = ValidMoveBits(map.lattice(), c.data.samples[i].position);
