@@ -756,6 +756,22 @@ TEST(ChannelsTest, AWorldAtTwiceTheStepLooksTheSameTwiceAsLarge) {
   }
 }
 
+// A workspace whose grids at the channels' cell would pass
+// kMaxChannelPixels is refused with the numbers (a 10 km world at 0.5 m:
+// 20 GB); read at its own lattice step of 10 m it fits.
+TEST(ChannelsTest, GridsPastTheLimitAreRefusedWithTheirSize) {
+  ChannelParams p = Params(ChannelFrame::kCentred, 40);
+  p.cell = 0.5;
+  const std::string why = ChannelGridProblem(Vec2(10000.0, 10000.0), p);
+  EXPECT_NE(why.find("the channels' grids cover the workspace [10000, "
+                     "10000] at their 0.5 m cell: 20000 x 20000 pixels"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(ChannelGridProblem(Vec2(10000.0, 10000.0), AtLatticeStep(p, 10.0)),
+            "");
+  EXPECT_EQ(ChannelGridProblem(Vec2(100.0, 100.0), p), "");
+}
+
 // The trail channel (the last): in a centred 3 x 3 window of 1 m pixels at
 // (0.25, 1.75), the robot came from 1 m south: pixel (1, 0) holds 1 and no
 // other; before its first move, none.

@@ -469,17 +469,19 @@ def test_stand_in_spaces_take_a_mask():
     refused(lambda: d.sample(np.array([1, 1])), "Discrete.sample: mask")
 
 
-def test_channel_grids_beyond_the_limit_are_refused():
-    # 4 km at 0.5 m: 8000 x 8000 pixels of whole-map grids (some 4 GB).
+def test_channels_are_read_at_the_lattice_step():
+    # 4 km at a 10 m step: one pixel per lattice step, 400 x 400, whatever
+    # the cell asked for (at 0.5 m pixels, 8000 x 8000 whole-map grids,
+    # some 4 GB, were refused until the pixel followed the step).
     m = aia.Mission(DEFAULT, seed=1, overrides={
         "workspace.size": [4000, 4000], "workspace.cell": 10,
         "workspace.obstacles.random.count": 0, "robots.step": 10,
         "robots.radius": 1, "sensor.range": 30, "robots.count": 1,
         "targets.count": 1})
-    refused(lambda: m.channels(), "aia.Mission.channels: the channels' "
-            "grids cover the workspace [4000, 4000] at their 0.5 m cell: "
-            "8000 x 8000 pixels")
-    assert m.channels(cell=2.0).shape == (1, 4, 40, 40)  # 2000 x 2000 fit
+    at_step = m.channels(cell=10.0)
+    assert at_step.shape == (1, 4, 40, 40)
+    assert np.array_equal(m.channels(), at_step)
+    assert np.array_equal(m.channels(cell=2.0), at_step)
 
 
 def test_paths_with_a_nul_byte_are_refused():
