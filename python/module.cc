@@ -621,8 +621,12 @@ class Mission {
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
-    // As the igbnet policy renders them: one pixel per lattice step.
-    const ChannelParams at_step = AtLatticeStep(settings, lattice.step());
+    // As the igbnet policy renders them: one pixel per lattice step, and
+    // observation pixels within the sensor's range.
+    const ChannelParams at_step =
+        ctx.sensor ? AtSensorRange(AtLatticeStep(settings, lattice.step()),
+                                   ctx.sensor->range)
+                   : AtLatticeStep(settings, lattice.step());
     if (const std::string why = ChannelGridProblem(map.size(), at_step);
         !why.empty())
       Refuse("aia.Mission.channels", "", why);

@@ -215,8 +215,9 @@ class Mission:
         the other channel settings (window, cell, blur, cutoff, geodesic,
         ...; docs/learning.md, Channels), checked as a model's are. As the
         igbnet policy does, they are rendered at one pixel per lattice
-        step: where robots.step is not `cell`, the pixel is the step and
-        geodesic_length, reach_detour and reach_broad scale with it."""
+        step (where robots.step is not `cell`, the pixel is the step and
+        geodesic_length, reach_detour and reach_broad scale with it) and
+        with observe_range cut to sensor.range where that is shorter."""
         if frame is not None:
             params["frame"] = frame
         return self._m.channels(_pairs(params, "channels",

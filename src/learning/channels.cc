@@ -33,6 +33,12 @@ ChannelParams AtLatticeStep(const ChannelParams& model, double step) {
   return p;
 }
 
+ChannelParams AtSensorRange(const ChannelParams& model, double range) {
+  ChannelParams p = model;
+  if (range > 0.0 && range < p.observe_range) p.observe_range = range;
+  return p;
+}
+
 std::string ChannelGridProblem(const Vec2& size, const ChannelParams& params) {
   // As MakeHeatmapGrid sizes its grids.
   const double nx = std::ceil(size.x() / params.cell - 1e-9),

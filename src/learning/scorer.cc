@@ -27,6 +27,16 @@ void NetworkScorer::Reset(const Map& map, int num_robots, int num_targets) {
 void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
                           const ScorerView& view, float* logits) {
   AIA_CHECK_MSG(renderer_.has_value(), "Reset() before Score()");
+  // Observation pixels within the sensor's range (AtSensorRange), known from
+  // the first context that has the sensor: the renderer is made again then.
+  if (ctx.sensor) {
+    const ChannelParams at_sensor = AtSensorRange(
+        AtLatticeStep(net_->config().channels, ctx.map->lattice().step()),
+        ctx.sensor->range);
+    if (at_sensor.observe_range != renderer_->params().observe_range)
+      renderer_.emplace(ctx.map->occupancy(), ctx.map->size(), at_sensor,
+                        &ctx.map->lattice());
+  }
   const Lattice& lattice = ctx.map->lattice();
   const std::vector<int>& rows = team.rows;
   const std::size_t size = renderer_->ImageSize();

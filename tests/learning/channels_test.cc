@@ -756,6 +756,17 @@ TEST(ChannelsTest, AWorldAtTwiceTheStepLooksTheSameTwiceAsLarge) {
   }
 }
 
+// The observation pixels lie within the sensor's range: a model's 2 m is cut
+// to a 0.5 m sensor's, and kept with a 3 m sensor (its own standoff).
+TEST(ChannelsTest, ObservationRangeIsCutToTheSensors) {
+  ChannelParams p = Params(ChannelFrame::kCentred, 40);
+  p.observe_range = 2.0;
+  EXPECT_EQ(AtSensorRange(p, 0.5).observe_range, 0.5);
+  EXPECT_EQ(AtSensorRange(p, 3.0).observe_range, 2.0);
+  EXPECT_EQ(AtSensorRange(p, 2.0).observe_range, 2.0);
+  EXPECT_EQ(AtSensorRange(p, 0.5).cell, p.cell);
+}
+
 // A workspace whose grids at the channels' cell would pass
 // kMaxChannelPixels is refused with the numbers (a 10 km world at 0.5 m:
 // 20 GB); read at its own lattice step of 10 m it fits.

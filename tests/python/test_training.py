@@ -73,8 +73,9 @@ def python_moves(net, meta, mission):
     return logits
 
 
-def check_same_moves(net, meta, model_path, seed, steps=4, scenario=DEFAULT):
-    m = aia.Mission(scenario, seed=seed)
+def check_same_moves(net, meta, model_path, seed, steps=4, scenario=DEFAULT,
+                     overrides=None):
+    m = aia.Mission(scenario, seed=seed, overrides=overrides)
     cpp = aia.builtin_policy("igbnet", model=str(model_path), **ARGMAX)
     checked = 0
     for _ in range(steps):
@@ -246,6 +247,12 @@ def test_the_learned_model_runs_in_python():
     # Seed 2: a robot misses a target from step 1 on, so the search points
     # change the reach channel.
     assert check_same_moves(net, meta, path, seed=2, steps=12) == 120
+    # In a world of another lattice step and a shorter sensor the channels
+    # are read as the policy reads them: one pixel per step, observation
+    # pixels within the sensor's range.
+    assert check_same_moves(net, meta, path, seed=2, steps=8, overrides={
+        "robots.step": 1.0, "robots.radius": 0.3,
+        "sensor.range": 0.5}) == 80
     params = network.channel_params(meta)
     m = aia.Mission(DEFAULT, seed=2)
     m.channels(**params)

@@ -270,6 +270,14 @@ class HeatFold {
 // through it.
 ChannelParams AtLatticeStep(const ChannelParams& model, double step);
 
+// The channels a model reads with a sensor of `range` metres: its
+// observation pixels are where the robot could measure a target, so an
+// observe_range past the sensor's range is cut to it (a shorter one, the
+// model's own standoff, is kept). Datasets do not record the sensor, so
+// aia train renders at the model's observe_range; the igbnet policy and
+// the Python channels render through this.
+ChannelParams AtSensorRange(const ChannelParams& model, double range);
+
 // A renderer keeps grids over the whole workspace at the channels' cell
 // (the occupancy shares, the heatmap and its fold, the reach field): about
 // 70 bytes a pixel with a policy's threads. More pixels than this are
