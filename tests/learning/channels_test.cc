@@ -54,6 +54,19 @@ ChannelParams Params(ChannelFrame frame, int window = 3) {
   return p;
 }
 
+// A centred window of `window` pixels of 0.5 m with the reach channel at
+// decay length `length` (over the workspace with `world`), observation
+// range 2 m: the learned models' settings.
+ChannelParams ReachParams(int window, double length, bool world) {
+  ChannelParams p = Params(ChannelFrame::kCentred, window);
+  p.cell = 0.5;
+  p.geodesic = true;
+  p.geodesic_length = length;
+  p.observe_range = 2.0;
+  p.reach_world = world;
+  return p;
+}
+
 // Channel c at (x, y) of an image `w` pixels wide and `h` high.
 float At(const std::vector<float>& img, int h, int w, int c, int x, int y) {
   return img[(static_cast<std::size_t>(c) * h + y) * w + x];
@@ -571,12 +584,7 @@ TEST(ChannelsTest, KeptObservationPixelsGiveAFreshRenderersImages) {
   const std::vector<double> prior(targets.size(), std::log(100.0));
   const std::vector<Vec2> robots = {{0.75, 0.75}, {6.25, 5.75}, {11.25, 2.25}};
   for (const bool world : {false, true}) {
-    ChannelParams params = Params(ChannelFrame::kCentred, 16);
-    params.cell = 0.5;
-    params.geodesic = true;
-    params.geodesic_length = 5.0;
-    params.observe_range = 2.0;
-    params.reach_world = world;
+    const ChannelParams params = ReachParams(16, 5.0, world);
     const ChannelRenderer warm(map.occupancy(), map.size(), params,
                                &map.lattice());
     const Grid<float> heat = MakeHeatmapGrid(map.size(), params.cell);
@@ -647,13 +655,8 @@ TEST(ChannelsTest, BoundedReachOverTheWorldIsTheExhaustiveSearch) {
       break;
     }
     for (int variant = 0; variant < 4; ++variant) {
-      ChannelParams params = Params(ChannelFrame::kCentred, 40);
+      ChannelParams params = ReachParams(40, variant == 1 ? 5.0 : 0.25, true);
       if (variant == 3) params.frame = ChannelFrame::kGlobal;
-      params.cell = 0.5;
-      params.geodesic = true;
-      params.geodesic_length = variant == 1 ? 5.0 : 0.25;
-      params.observe_range = 2.0;
-      params.reach_world = true;
       params.search = variant != 2;
       params.reach_detour = variant == 0 ? 0.5 : 0.0;
       params.reach_second = variant == 2;
@@ -698,12 +701,7 @@ TEST(ChannelsTest, BoundedReachOverTheWorldIsTheExhaustiveSearch) {
 // with its detour included. At the model's own step the parameters are
 // the model's.
 TEST(ChannelsTest, AWorldAtTwiceTheStepLooksTheSameTwiceAsLarge) {
-  ChannelParams model = Params(ChannelFrame::kCentred, 16);
-  model.cell = 0.5;
-  model.geodesic = true;
-  model.geodesic_length = 0.25;
-  model.observe_range = 2.0;
-  model.reach_world = true;
+  ChannelParams model = ReachParams(16, 0.25, true);
   model.reach_detour = 0.5;
   const ChannelParams same = AtLatticeStep(model, 0.5);
   EXPECT_EQ(same.cell, 0.5);
