@@ -551,13 +551,12 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
   sources.clear();
   const int observe =
       static_cast<int>(std::ceil(params_.observe_range / params_.cell));
-  const auto points_of = [&](std::size_t k) -> std::size_t {
-    const bool searched = search && k < search->size() && !(*search)[k].empty();
-    return searched ? (*search)[k].size() : 1;
-  };
-  const auto point = [&](std::size_t k, std::size_t a) -> const Vec2& {
-    const bool searched = search && k < search->size() && !(*search)[k].empty();
-    return searched ? (*search)[k][a] : targets[k].mean;
+  // Target k's points: its search points, else its mean.
+  const auto points =
+      [&](std::size_t k) -> std::pair<const Vec2*, std::size_t> {
+    if (search && k < search->size() && !(*search)[k].empty())
+      return {(*search)[k].data(), (*search)[k].size()};
+    return {&targets[k].mean, 1};
   };
   thread_local std::vector<double> start;
   start.assign(targets.size(), kInf);
@@ -566,9 +565,10 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
     if (wk <= 0.0) continue;
     start[k] = -moves_per_e * std::log(wk);
     int near = std::numeric_limits<int>::max();
-    for (std::size_t a = 0; a < points_of(k) && near > 0; ++a) {
+    const auto [at, count] = points(k);
+    for (std::size_t a = 0; a < count && near > 0; ++a) {
       int mx = 0, my = 0;
-      occupancy_.CellOf(point(k, a), &mx, &my);
+      occupancy_.CellOf(at[a], &mx, &my);
       near = std::min(near, std::max(0, bound(mx, my) - 2 * observe));
     }
     sources.emplace_back(start[k] + near, static_cast<int>(k));
@@ -578,9 +578,9 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                           const std::pair<double, int>& b) { return a > b; };
   std::make_heap(sources.begin(), sources.end(), greater);
   const auto seed = [&](int k) {
-    for (std::size_t a = 0; a < points_of(k); ++a)
-      for (const int idx : ObservationPixels(point(k, a)))
-        improve(idx, start[k], k);
+    const auto [at, count] = points(k);
+    for (std::size_t a = 0; a < count; ++a)
+      for (const int idx : ObservationPixels(at[a])) improve(idx, start[k], k);
   };
   // The scale is the robot's own pixel: a pixel whose way is d moves
   // shorter holds exp(d / (L / cell) - kReachSelf), capped at 1, so that
