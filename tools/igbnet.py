@@ -11,8 +11,9 @@ standard library, load aia's models with Debian's python3-torch.
   tools/igbnet.py set MODEL OUT KEY=VALUE...
       writes MODEL's weights to OUT with channel parameters changed, and
       nothing else: KEY is reach_detour (metres, 0 off; the model must read
-      the reach channel over the workspace) or geodesic_length (metres,
-      above 0). The learned recipe's round 9 actor is made this way
+      the reach channel over the workspace), geodesic_length (metres,
+      above 0) or neighbour_cap (a whole number, 0 off). The learned
+      recipe's round 9 actor and its last step are made this way
       (tools/train_igbnet.sh).
 
 The dataset is SQLite (one file per shard): tables meta(key, value),
@@ -120,6 +121,8 @@ def check(model, images, n, h, w, logits):
 SETTABLE = {
     "reach_detour": (lambda v: v >= 0.0, "must be 0 (off) or above"),
     "geodesic_length": (lambda v: v > 0.0, "must be above 0"),
+    "neighbour_cap": (lambda v: v >= 0.0 and v == int(v) and v <= 1e6,
+                      "must be a whole number, 0 (off) to 1000000"),
 }
 
 
@@ -140,7 +143,7 @@ def set_channels(model, out, assignments):
             print("error: command line: %s: %s; got '%s'" % (key, why, text),
                   file=sys.stderr)
             return 2
-        changes[key] = value
+        changes[key] = int(value) if key == "neighbour_cap" else value
     if not os.path.isfile(model):
         print("error: command line: MODEL: no such file: %s" % model, file=sys.stderr)
         return 2

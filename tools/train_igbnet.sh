@@ -18,8 +18,9 @@
 #              worlds weighted to narrow perfect mazes, the last also with
 #              the team starting in one corner, then an epoch with a
 #              sharper reach channel, then one with it dimmed by the detour
-#              from the robot on all that data and mazes of 1 m passages;
-#              about 2 hours 55 minutes more on 2 cores);
+#              from the robot on all that data and mazes of 1 m passages,
+#              the neighbours channel then capped at 2 a pixel; about 2
+#              hours 55 minutes more on 2 cores);
 #   learned10  only WORK_DIR/igbnet_learned_10only.pt (not shipped): the
 #              scalability check of the network alone, a model that never
 #              saw more than 10 robots: the default's inputs on teams of 10
@@ -369,7 +370,12 @@ if [[ $models == all || $models == learned ]]; then
     "$work"/ddag9/{narrow1_20,narrow1_20l,narrow1_20b,corner1_30} --init "$work/sharp8q.pt" \
     --reach-detour 0.5 --epochs 1 --lr 3e-4 --lr-min 1e-5 --weak-weight 0 \
     --valid-moves 1 --threads 2 --out "$work/detour9n.pt" --resume --quiet
-  cp "$work/detour9n.pt" "$work/igbnet_learned.pt"
+  # Last (2026-12-06, docs/learning.md, Learned coordination): round 9's
+  # weights with the neighbours channel capped at 2 a pixel, so that the
+  # neighbours beyond the window, folded onto its border, read as they do
+  # in the training teams of at most 80 (--epochs 0: no training, a second).
+  "$aia" train --data "${all_paths[@]}" --init "$work/detour9n.pt" --neighbour-cap 2 \
+    --epochs 0 --out "$work/igbnet_learned.pt" --quiet
   cp "$work/detour9n.train.csv" "$work/igbnet_learned.train.csv"
   shipped+=(igbnet_learned)
 fi

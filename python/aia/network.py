@@ -18,14 +18,15 @@ from torch import nn
 FORMAT = "aia-igbnet"
 # The metadata keys of a model without message passing (format version 2);
 # with it, version 3 adds message_hops; version 5 adds centre; version 6
-# reach_detour; version 7 reach_broad; version 8 reach_second.
+# reach_detour; version 7 reach_broad; version 8 reach_second; version 9
+# neighbour_cap.
 NETWORK_KEYS = ("width", "hidden", "pool", "stem_stride")
 CHANNEL_KEYS = ("frame", "cell", "window", "blur", "cutoff", "geodesic",
                 "geodesic_length", "observe_range")
 # Channel settings written only when they differ from the default.
 OPTIONAL_KEYS = {"reach_margin": 0, "reach_world": False, "search": False,
                  "reach_detour": 0.0, "trail": False, "reach_broad": 0.0,
-                 "reach_second": False}
+                 "reach_second": False, "neighbour_cap": 0}
 
 
 def default_meta(**changes):
@@ -185,7 +186,9 @@ def save_model(net, path):
     second = bool(out.get("reach_second", False))
     trail = bool(out.get("trail", False))
     out["format"] = FORMAT
-    out["version"] = (8 if second else 7 if broad else 6 if detour else
+    cap = int(out.get("neighbour_cap", 0)) > 0
+    out["version"] = (9 if cap else 8 if second else 7 if broad else
+                      6 if detour else
                       5 if centre else 4 if world or trail else
                       3 if hops else 2 if geodesic else 1)
     if hops:

@@ -487,11 +487,11 @@ Action AddTrainCommand(CLI::App& app) {
   declared->Add(o.get());
   auto network = std::make_shared<DeclaredFlags>(cmd);
   // set by --message-hops, --reach-world, --search, --trail, --centre,
-  // --geodesic-length, --reach-detour, --reach-broad and --reach-second,
-  // which may change an --init model
+  // --geodesic-length, --reach-detour, --reach-broad, --reach-second and
+  // --neighbour-cap, which may change an --init model
   network->Add(&o->network, {"message_hops", "reach_world", "search", "trail",
                              "centre", "geodesic_length", "reach_detour",
-                             "reach_broad", "reach_second"});
+                             "reach_broad", "reach_second", "neighbour_cap"});
   cmd->add_flag("--resume", o->resume,
                 "continue from OUT.ckpt (same options) if it is there");
   auto validate = std::make_shared<std::string>();
@@ -542,6 +542,9 @@ Action AddTrainCommand(CLI::App& app) {
       return 0;
     }
     const std::vector<aia::EpochLog> logs = aia::Train(*o);
+    if (o->epochs == 0 && o->progress)
+      std::printf("[aia train] %s: the weights of %s, no training\n",
+                  o->out.c_str(), o->init.c_str());
     if (!logs.empty()) {
       const aia::EpochLog& e = logs.back();
       double seconds = 0.0;

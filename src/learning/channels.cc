@@ -251,6 +251,12 @@ void HeatFold::Fold(int x0, int y0, int w, float* out) const {
   }
 }
 
+void ChannelRenderer::CapNeighbours(float* nbr, std::size_t plane) const {
+  if (params_.neighbour_cap <= 0) return;
+  const float cap = static_cast<float>(params_.neighbour_cap);
+  for (std::size_t i = 0; i < plane; ++i) nbr[i] = std::min(nbr[i], cap);
+}
+
 void ChannelRenderer::RenderWithHeat(
     const Vec2& self, const std::vector<Vec2>& neighbours,
     const Grid<float>& field, const std::vector<HeatSource>* targets,
@@ -277,6 +283,7 @@ void ChannelRenderer::RenderWithHeat(
       occupancy_.CellOf(p, &ix, &iy);
       nbr[occupancy_.Index(ix, iy)] += 1.0f;
     }
+    CapNeighbours(nbr, plane);
     if (params_.geodesic)
       Reach(0, 0, self, *targets, *log_det_prior, eps, out + 4 * plane,
             memory.search);
@@ -304,6 +311,7 @@ void ChannelRenderer::RenderWithHeat(
     occupancy_.CellOf(p, &ix, &iy);
     nbr[fold(iy, y0) * w + fold(ix, x0)] += 1.0f;
   }
+  CapNeighbours(nbr, plane);
   // Row by row: the cells left of the window fold onto its first column,
   // those right of it onto its last, the rest onto their own column.
   const int mid0 = std::clamp(x0, 0, nx), mid1 = std::clamp(x0 + w, 0, nx);

@@ -21,8 +21,9 @@ constexpr const char* kFormat = "aia-igbnet";
 // search points and the trail; version 5: the centre; version 6: the reach
 // channel's detour (ChannelParams::reach_detour); version 7: the broad reach
 // channel (ChannelParams::reach_broad); version 8: the second reach channel
-// (ChannelParams::reach_second).
-constexpr int kVersion = 8;
+// (ChannelParams::reach_second); version 9: the neighbours channel's cap
+// (ChannelParams::neighbour_cap).
+constexpr int kVersion = 9;
 
 // Writes declared fields into a JSON object with their own types (an
 // integer stays an integer, an enumeration is its name).
@@ -75,7 +76,8 @@ std::string NetworkConfig::ToJson() const {
   nlohmann::json j;
   j["format"] = kFormat;
   const bool world = channels.geodesic && channels.reach_world;
-  j["version"] = world && channels.reach_second         ? 8
+  j["version"] = channels.neighbour_cap > 0             ? 9
+                 : world && channels.reach_second       ? 8
                  : world && channels.reach_broad > 0.0  ? 7
                  : world && channels.reach_detour > 0.0 ? 6
                  : centre > 0                           ? 5
@@ -98,6 +100,7 @@ std::string NetworkConfig::ToJson() const {
   if (!world || channels.reach_broad == 0.0) j.erase("reach_broad");
   if (!world || !channels.reach_second) j.erase("reach_second");
   if (!channels.trail) j.erase("trail");
+  if (channels.neighbour_cap == 0) j.erase("neighbour_cap");
   if (message_hops == 0) j.erase("message_hops");
   if (centre == 0) j.erase("centre");
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);

@@ -565,6 +565,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   world.trail = 1;
   world.geodesic_length = 2.0;
   world.reach_detour = 0.75;
+  world.neighbour_cap = 3;
   world.epochs = 1;
   ASSERT_EQ(Train(world).size(), 1u);
   const auto net = IgbNet::Load(dir + "/world.pt", "w", 0, "k");
@@ -577,6 +578,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
             5.0);
   EXPECT_EQ(net->config().channels.geodesic_length, 2.0);
   EXPECT_EQ(net->config().channels.reach_detour, 0.75);
+  EXPECT_EQ(net->config().channels.neighbour_cap, 3);
   // A second reach channel is added after the trail; a broad reach channel
   // would then go in between, where the second's weights are: refused.
   TrainOptions second = TinyTraining(dir + "/data", dir + "/second.pt");
@@ -584,10 +586,9 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   second.reach_second = 1;
   second.epochs = 1;
   Train(second);
-  EXPECT_EQ(IgbNet::Load(dir + "/second.pt", "s", 0, "k")
-                ->config()
-                .channels.second_channel(),
-            6);
+  const auto second_net = IgbNet::Load(dir + "/second.pt", "s", 0, "k");
+  EXPECT_EQ(second_net->config().channels.second_channel(), 6);
+  EXPECT_EQ(second_net->config().channels.neighbour_cap, 3);  // --init's
   TrainOptions between = TinyTraining(dir + "/data", dir + "/between.pt");
   between.init = dir + "/second.pt";
   between.reach_broad = 5.0;
@@ -634,6 +635,38 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
               "command line: --reach-detour: needs --reach-world 1");
   }
 
+  // --epochs 0: --init's weights written again with the channel settings
+  // the flags change, no training (how the learned recipe's last step caps
+  // the neighbours channel); without --init, refused.
+  TrainOptions capped = TinyTraining(dir + "/data", dir + "/capped.pt");
+  capped.init = dir + "/world.pt";
+  capped.neighbour_cap = 2;
+  capped.epochs = 0;
+  EXPECT_TRUE(Train(capped).empty());
+  const auto capped_net = IgbNet::Load(dir + "/capped.pt", "c", 0, "k");
+  EXPECT_EQ(capped_net->config().channels.neighbour_cap, 2);
+  EXPECT_EQ(capped_net->config().channels.reach_detour, 0.75);
+  {
+    const int c = net->config().channels.num_channels();
+    std::vector<float> x(2 * c * 16 * 16, 0.3f), want(8), got(8);
+    for (std::size_t i = 0; i < x.size(); i += 5) x[i] = 0.9f;
+    net->Forward(x.data(), 2, 16, 16, want.data());
+    capped_net->Forward(x.data(), 2, 16, 16, got.data());
+    EXPECT_EQ(got, want);
+  }
+  EXPECT_FALSE(fs::exists(dir + "/capped.ckpt"));
+  TrainOptions nothing = TinyTraining(dir + "/data", dir + "/nothing.pt");
+  nothing.epochs = 0;
+  try {
+    Train(nothing);
+    ADD_FAILURE() << "--epochs 0 without --init";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "command line: --epochs: 0 writes the --init model again: "
+              "needs --init");
+  }
+  EXPECT_FALSE(fs::exists(dir + "/nothing.pt"));
+
   // tools/igbnet.py set: the same weights, channel parameters changed (how
   // the learned recipe's round 9 actor is made); bad input is one line and
   // exit 2, and writes nothing.
@@ -645,11 +678,13 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
       "/usr/bin/python3 " + testing::SourcePath("tools/igbnet.py") + " set ";
   const auto ok = testing::RunCommand(set + dir + "/world.pt " + dir +
                                       "/set.pt reach_detour=0.25 "
-                                      "geodesic_length=3");
+                                      "geodesic_length=3 neighbour_cap=2");
   ASSERT_EQ(ok.exit_code, 0) << ok.out << ok.err;
   const auto changed = IgbNet::Load(dir + "/set.pt", "s", 0, "k");
   EXPECT_EQ(changed->config().channels.reach_detour, 0.25);
   EXPECT_EQ(changed->config().channels.geodesic_length, 3.0);
+  EXPECT_EQ(changed->config().channels.neighbour_cap, 2);
+  EXPECT_EQ(net->config().channels.neighbour_cap, 3);
   EXPECT_TRUE(changed->config().channels.search);
   const int c = net->config().channels.num_channels();
   std::vector<float> x(2 * c * 16 * 16, 0.2f), want(8), got(8);
@@ -661,7 +696,10 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
        std::vector<std::pair<std::string, std::string>>{
            {"/world.pt " + dir + "/bad.pt reach=1",
             "error: command line: reach: not a settable channel parameter "
-            "(geodesic_length, reach_detour)\n"},
+            "(geodesic_length, neighbour_cap, reach_detour)\n"},
+           {"/world.pt " + dir + "/bad.pt neighbour_cap=1.5",
+            "error: command line: neighbour_cap: must be a whole number, 0 "
+            "(off) to 1000000; got '1.5'\n"},
            {"/world.pt " + dir + "/bad.pt reach_detour=-1",
             "error: command line: reach_detour: must be 0 (off) or above; got "
             "'-1'\n"},

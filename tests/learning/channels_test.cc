@@ -171,6 +171,39 @@ TEST(ChannelsTest, CentredFrameFoldsWhatLiesBeyondTheWindowOntoItsBorder) {
   EXPECT_NEAR(img[3], kH0, 1e-6);
 }
 
+// ChannelParams::neighbour_cap: a pixel holds at most the cap, in both
+// frames, border pixels (the neighbours beyond the window) included; 0
+// counts them all.
+TEST(ChannelsTest, NeighboursAreCountedUpToTheCap) {
+  TinyWorld t;
+  // Three neighbours in pixel (1, 0), one in pixel (1, 1).
+  t.neighbours = {{1.5, 0.5}, {1.6, 0.6}, {1.4, 0.4}, {1.5, 1.5}};
+  for (const int cap : {0, 1, 2, 5}) {
+    ChannelParams global = Params(ChannelFrame::kGlobal);
+    global.neighbour_cap = cap;
+    ChannelRenderer g(t.occupancy, t.size, global);
+    std::vector<float> img(g.ImageSize());
+    g.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
+             img.data());
+    const float three = cap == 0 ? 3.0f : std::min(3.0f, float(cap));
+    EXPECT_FLOAT_EQ(At(img, 2, 2, 2, 1, 0), three) << cap;
+    EXPECT_FLOAT_EQ(At(img, 2, 2, 2, 1, 1), 1.0f) << cap;
+    EXPECT_FLOAT_EQ(At(img, 2, 2, 2, 0, 0), 0.0f) << cap;
+    // A one-pixel window: all four fold onto it.
+    ChannelParams centred = Params(ChannelFrame::kCentred, 1);
+    centred.neighbour_cap = cap;
+    ChannelRenderer c(t.occupancy, t.size, centred);
+    std::vector<float> one(c.ImageSize());
+    c.Render(t.self, t.neighbours, t.targets, t.log_det_prior, t.eps,
+             one.data());
+    EXPECT_FLOAT_EQ(one[2], cap == 0 ? 4.0f : std::min(4.0f, float(cap)))
+        << cap;
+    // The other channels do not change.
+    EXPECT_FLOAT_EQ(one[1], 1.0f);
+    EXPECT_NEAR(one[3], kH0, 1e-6);
+  }
+}
+
 // HeatFold folds a heatmap for any window exactly as the direct fold does:
 // random heat (ties and zeros included) on a 9 x 7 map, windows of 1 to 12
 // pixels (wider than the map too) around every pixel, so that a window

@@ -234,6 +234,18 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "metadata: reach_second: needs reach_world");
   }
+  // The neighbours channel's cap: version 9, with or without the reach
+  // channel; not written when 0.
+  for (const NetworkConfig& base : {g, second}) {
+    NetworkConfig capped = base;
+    capped.channels.neighbour_cap = 2;
+    EXPECT_NE(capped.ToJson().find("\"version\":9"), std::string::npos);
+    EXPECT_NE(capped.ToJson().find("\"neighbour_cap\":2"), std::string::npos);
+    EXPECT_EQ(NetworkConfig::FromJson(capped.ToJson()).channels.neighbour_cap,
+              2);
+    EXPECT_EQ(base.ToJson().find("neighbour_cap"), std::string::npos);
+    EXPECT_EQ(capped.channels.num_channels(), base.channels.num_channels());
+  }
   // The centre: version 5, odd, in the centred frame, within the blocks'
   // output (window 16, stride 2: 8 cells, the robot's cell 4).
   NetworkConfig centre = g;
@@ -268,12 +280,12 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   EXPECT_EQ(problem(9, ChannelFrame::kCentred),
             "must be at most 7: the blocks' output is 8 cells per side");
   std::string future = mp.ToJson();
-  future.replace(future.find("\"version\":3"), 11, "\"version\":9");
+  future.replace(future.find("\"version\":3"), 11, "\"version\":10");
   try {
     NetworkConfig::FromJson(future);
-    ADD_FAILURE() << "version 9 read";
+    ADD_FAILURE() << "version 10 read";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model format version 9, this build reads 1 to 8");
+    EXPECT_STREQ(e.what(), "model format version 10, this build reads 1 to 9");
   }
 }
 
@@ -303,7 +315,8 @@ TEST(IgbNetTest, MetadataErrorsNameTheKeyAndItsDeclaredRange) {
             "cell, window, blur, cutoff, geodesic, geodesic_length, "
             "observe_range, reach_margin, reach_world, search, "
             "reach_detour, trail, reach_broad, reach_second, "
-            "width, stem_stride, pool, hidden, centre, message_hops");
+            "neighbour_cap, width, stem_stride, pool, hidden, centre, "
+            "message_hops");
 }
 
 // Each shipped model written again is the same file, byte for byte: the

@@ -202,6 +202,28 @@ def test_a_broad_reach_model_written_here_runs_in_the_cpp_policy(tmp_path):
     assert check_same_moves(net, meta, path, seed=5) == 40
 
 
+def test_a_capped_neighbours_model_written_here_runs_in_the_cpp_policy(tmp_path):
+    """The neighbours channel's cap (neighbour_cap, format 9): a model
+    written here with it reads the neighbours channel at most 1 a pixel
+    in the C++ policy as in Python, where a team of 30 folds several
+    neighbours onto one border pixel."""
+    meta = network.default_meta(width=8, hidden=16, neighbour_cap=1)
+    torch.manual_seed(4)
+    net = network.IgbNet(meta).eval()
+    path = tmp_path / "capped.pt"
+    network.save_model(net, path)
+    _, meta_back = network.load_model(path)
+    assert meta_back["neighbour_cap"] == 1 and meta_back["version"] == 9
+    crowd = {"robots.count": 30, "targets.count": 6}
+    m = aia.Mission(DEFAULT, seed=7, overrides=crowd)
+    images = m.channels(**network.channel_params(meta))
+    counts = m.channels(**{**network.channel_params(meta),
+                           "neighbour_cap": 0})
+    assert images[:, 2].max() == 1.0 and counts[:, 2].max() > 1.0
+    assert np.array_equal(images[:, 2], np.minimum(counts[:, 2], 1.0))
+    assert check_same_moves(net, meta, path, seed=7, overrides=crowd) == 120
+
+
 def test_a_second_reach_model_written_here_runs_in_the_cpp_policy(tmp_path):
     """The second reach channel (reach_second, format 8): the seventh input
     after reach, search points and trail; the C++ policy reads a model

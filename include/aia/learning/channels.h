@@ -7,7 +7,7 @@
 //     workspace);
 //   1 own position: 1 at the robot's pixel;
 //   2 neighbours: the number of this step's neighbours (self excluded) in
-//     each pixel;
+//     each pixel, at most ChannelParams::neighbour_cap where that is set;
 //   3 heat: the robot's own fused belief projected as the heatmap of
 //     estimation/heatmap.h;
 //   4 reach (ChannelParams::geodesic, off in the paper's networks): where
@@ -113,6 +113,12 @@ struct ChannelParams {
   // the farther one leads on here, however far it is, up to the pixels
   // nearer that target, where channel 4 leads on to it.
   bool reach_second = false;
+  // Above 0: the neighbours channel holds at most this many in a pixel. Its
+  // border pixels count every neighbour beyond the window in their
+  // direction, so their counts grow with the team (up to about 30 with the
+  // 80 robots of the training data, hundreds at 500); a model trained on
+  // small teams reads them at the cap (0: counts as they are).
+  int neighbour_cap = 0;
 
   int num_channels() const {
     return kNumChannels + (geodesic ? 1 : 0) + (trail ? 1 : 0) +
@@ -212,6 +218,12 @@ struct ChannelParams {
                       "from each pixel's second target (the least cost over "
                       "every target but the one of least cost there), same "
                       "L and detour"));
+    a->Visit(AIA_FIELD(neighbour_cap)
+                 .In(Between(0, 1000000))
+                 .Doc("above 0: the neighbours channel holds at most this "
+                      "many in a pixel (its border pixels count every "
+                      "neighbour beyond the window in their direction, "
+                      "hundreds in large teams); 0: counts as they are"));
   }
 };
 
@@ -340,6 +352,8 @@ class ChannelRenderer {
   HeatmapParams Heatmap(double eps) const;
 
  private:
+  // The neighbours plane of `plane` pixels at ChannelParams::neighbour_cap.
+  void CapNeighbours(float* nbr, std::size_t plane) const;
   // Channel 4 of an image whose pixel (0, 0) is global pixel (x0, y0).
   void Reach(int x0, int y0, const Vec2& self,
              const std::vector<HeatSource>& targets,

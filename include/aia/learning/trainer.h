@@ -59,6 +59,10 @@ struct TrainOptions {
   // network's (off), or --init's; 0 or 1 sets it (from an --init model
   // without it, the stem's weights for the new channel start at zero).
   int reach_second = -1;
+  // The neighbours channel's cap (ChannelParams::neighbour_cap): -1 the
+  // network's (0, none), or --init's; 0 removes it; above 0 sets it (from an
+  // --init model the weights are kept).
+  int neighbour_cap = -1;
   int epochs = 20;
   int batch = 16;
   double lr = 1e-4;  // cosine from lr to lr_min over all epochs
@@ -89,7 +93,10 @@ struct TrainOptions {
   // declared here).
   template <typename Archive>
   void Serialize(Archive* a) {
-    a->Visit(AIA_FIELD(epochs).In(Between(1, 100000)).Doc("epochs"));
+    a->Visit(AIA_FIELD(epochs)
+                 .In(Between(0, 100000))
+                 .Doc("epochs (0: no training, --init's weights written to "
+                      "--out with the channel settings the flags change)"));
     a->Visit(AIA_FIELD(batch).In(Between(1, 65536)).Doc("batch size"));
     a->Visit(
         AIA_FIELD(lr).In(kOpenUnit).Doc("learning rate at the start (cosine)"));
@@ -172,10 +179,17 @@ struct TrainOptions {
                       "channel from each pixel's second target (same L and "
                       "detour; with --init the new input starts at zero "
                       "weight); -1, the default: --init's, else 0"));
+    a->Visit(AIA_FIELD(neighbour_cap)
+                 .In(Between(-1, 1000000))
+                 .Doc("above 0: the neighbours channel holds at most this "
+                      "many in a pixel (with --init the weights are kept); 0: "
+                      "counts as they are; -1, the default: --init's, else 0"));
   }
   // lr_min <= lr; a length is -1 or above 0.
   void Validate(const FieldChecker& check) const {
     if (lr_min > lr) check.Fail(lr_min, "must be at most --lr");
+    if (epochs == 0 && init.empty())
+      check.Fail(epochs, "0 writes the --init model again: needs --init");
     if (geodesic_length != -1.0 && geodesic_length <= 0.0)
       check.Fail(geodesic_length, "must be -1 (the default) or above 0");
     if (reach_detour != -1.0 && reach_detour < 0.0)

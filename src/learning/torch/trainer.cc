@@ -450,6 +450,7 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
     if (o->reach_detour >= 0.0) c->reach_detour = o->reach_detour;
     if (o->reach_broad >= 0.0) c->reach_broad = o->reach_broad;
     if (o->reach_second >= 0) c->reach_second = o->reach_second == 1;
+    if (o->neighbour_cap >= 0) c->neighbour_cap = o->neighbour_cap;
     if (const auto [key, needs] = c->MissingPrerequisite(); !key.empty()) {
       std::string flag = "--" + std::string(key);
       std::replace(flag.begin(), flag.end(), '_', '-');
@@ -793,6 +794,10 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
       module->parameters(),
       torch::optim::AdamOptions(o.lr).weight_decay(o.weight_decay));
   const std::unique_ptr<FileLock> lock = LockOutputFolder(o.out);
+  if (o.epochs == 0) {  // --init's weights as NetworkToTrain made them
+    net->Save(o.out);
+    return {};
+  }
   Corpus corpus = LoadCorpus(o.data, o.network.channels, o.val_share, o.seed,
                              o.weak_weight, o.valid_moves != 0);
   // The weights depend on the thread count and on every sample: a resume
