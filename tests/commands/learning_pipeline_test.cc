@@ -638,6 +638,14 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   // --epochs 0: --init's weights written again with the channel settings
   // the flags change, no training (how the learned recipe's last step caps
   // the neighbours channel); without --init, refused.
+  // A model's logits on fixed images (the same weights, the same logits).
+  const auto logits = [](const IgbNet& model) {
+    const int c = model.config().channels.num_channels();
+    std::vector<float> x(2 * c * 16 * 16, 0.2f), out(8);
+    for (std::size_t i = 0; i < x.size(); i += 3) x[i] = 0.7f;
+    model.Forward(x.data(), 2, 16, 16, out.data());
+    return out;
+  };
   TrainOptions capped = TinyTraining(dir + "/data", dir + "/capped.pt");
   capped.init = dir + "/world.pt";
   capped.neighbour_cap = 2;
@@ -646,14 +654,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   const auto capped_net = IgbNet::Load(dir + "/capped.pt", "c", 0, "k");
   EXPECT_EQ(capped_net->config().channels.neighbour_cap, 2);
   EXPECT_EQ(capped_net->config().channels.reach_detour, 0.75);
-  {
-    const int c = net->config().channels.num_channels();
-    std::vector<float> x(2 * c * 16 * 16, 0.3f), want(8), got(8);
-    for (std::size_t i = 0; i < x.size(); i += 5) x[i] = 0.9f;
-    net->Forward(x.data(), 2, 16, 16, want.data());
-    capped_net->Forward(x.data(), 2, 16, 16, got.data());
-    EXPECT_EQ(got, want);
-  }
+  EXPECT_EQ(logits(*capped_net), logits(*net));
   EXPECT_FALSE(fs::exists(dir + "/capped.ckpt"));
   TrainOptions nothing = TinyTraining(dir + "/data", dir + "/nothing.pt");
   nothing.epochs = 0;
@@ -686,12 +687,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   EXPECT_EQ(changed->config().channels.neighbour_cap, 2);
   EXPECT_EQ(net->config().channels.neighbour_cap, 3);
   EXPECT_TRUE(changed->config().channels.search);
-  const int c = net->config().channels.num_channels();
-  std::vector<float> x(2 * c * 16 * 16, 0.2f), want(8), got(8);
-  for (std::size_t i = 0; i < x.size(); i += 3) x[i] = 0.7f;
-  net->Forward(x.data(), 2, 16, 16, want.data());
-  changed->Forward(x.data(), 2, 16, 16, got.data());
-  EXPECT_EQ(got, want);
+  EXPECT_EQ(logits(*changed), logits(*net));
   for (const auto& [args, error] :
        std::vector<std::pair<std::string, std::string>>{
            {"/world.pt " + dir + "/bad.pt reach=1",
