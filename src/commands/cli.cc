@@ -542,7 +542,7 @@ Action AddTrainCommand(CLI::App& app) {
       return 0;
     }
     const std::vector<aia::EpochLog> logs = aia::Train(*o);
-    if (o->epochs == 0 && o->progress)
+    if (o->epochs == 0)
       std::printf("[aia train] %s: the weights of %s, no training\n",
                   o->out.c_str(), o->init.c_str());
     if (!logs.empty()) {

@@ -11,6 +11,8 @@
 #include <functional>
 
 #include "aia/commands/dataset_command.h"
+#include "aia/core/hash.h"
+#include "aia/core/io.h"
 #include "aia/learning/dataset.h"
 #include "aia/learning/network.h"
 #include "aia/learning/trainer.h"
@@ -667,6 +669,35 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
               "needs --init");
   }
   EXPECT_FALSE(fs::exists(dir + "/nothing.pt"));
+  // Nor with --resume, nor over a model whose checkpoint is there (it would
+  // describe another model, and a --resume from it keep this one).
+  TrainOptions resumed = capped;
+  resumed.resume = true;
+  try {
+    Train(resumed);
+    ADD_FAILURE() << "--epochs 0 with --resume";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(),
+              "command line: --resume: --epochs 0 trains nothing: there is "
+              "nothing to resume; drop the flag");
+  }
+  TrainOptions over = TinyTraining(dir + "/data", dir + "/world.pt");
+  over.init = dir + "/plain.pt";
+  over.epochs = 0;
+  const std::string world_sha =
+      Sha256Hex(ReadFile(dir + "/world.pt", 1 << 26));
+  try {
+    Train(over);
+    ADD_FAILURE() << "--epochs 0 beside a checkpoint";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.Format(), "command line: --out: '" +
+                              CheckpointPath(dir + "/world.pt") +
+                              "' is there (a training run of this model); "
+                              "--epochs 0 would write a model it does not "
+                              "describe beside it: remove it or choose "
+                              "another --out");
+  }
+  EXPECT_EQ(Sha256Hex(ReadFile(dir + "/world.pt", 1 << 26)), world_sha);
 
   // tools/igbnet.py set: the same weights, channel parameters changed (how
   // the learned recipe's round 9 actor is made); bad input is one line and

@@ -795,6 +795,20 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
       torch::optim::AdamOptions(o.lr).weight_decay(o.weight_decay));
   const std::unique_ptr<FileLock> lock = LockOutputFolder(o.out);
   if (o.epochs == 0) {  // --init's weights as NetworkToTrain made them
+    // A checkpoint of OUT would describe another model, and a --resume
+    // from it would keep this one: refused, as --resume is.
+    std::error_code ec;
+    if (o.resume)
+      throw InputError("command line", 0, "--resume",
+                       "--epochs 0 trains nothing: there is nothing to "
+                       "resume; drop the flag");
+    if (std::filesystem::exists(CheckpointPath(o.out), ec))
+      throw InputError("command line", 0, "--out",
+                       "'" + CheckpointPath(o.out) +
+                           "' is there (a training run of this model); "
+                           "--epochs 0 would write a model it does not "
+                           "describe beside it: remove it or choose another "
+                           "--out");
     net->Save(o.out);
     return {};
   }
