@@ -334,12 +334,19 @@ TEST(IgbNetTest, TheShippedModelsSavedAgainAreTheSameFiles) {
         << name;
   }
   // The learned model sees the whole workspace's reach, the search points
-  // and the trail (docs/learning.md, Learned coordination).
+  // and the trail, and its neighbours at most 2 a pixel (docs/learning.md,
+  // Learned coordination); the default counts them.
   const auto learned = IgbNet::Load(
       std::string(AIA_SOURCE_DIR) + "/models/igbnet_learned.pt", "f", 0, "k");
   EXPECT_TRUE(learned->config().channels.reach_world);
   EXPECT_TRUE(learned->config().channels.search);
   EXPECT_TRUE(learned->config().channels.trail);
+  EXPECT_EQ(learned->config().channels.neighbour_cap, 2);
+  EXPECT_EQ(IgbNet::Load(std::string(AIA_SOURCE_DIR) + "/models/igbnet.pt",
+                         "f", 0, "k")
+                ->config()
+                .channels.neighbour_cap,
+            0);
   fs::remove_all(dir);
 }
 
