@@ -684,8 +684,7 @@ TEST(TrainTest, SearchPointsAreRecordedAndAnInitModelLearnsToReadThem) {
   TrainOptions over = TinyTraining(dir + "/data", dir + "/world.pt");
   over.init = dir + "/plain.pt";
   over.epochs = 0;
-  const std::string world_sha =
-      Sha256Hex(ReadFile(dir + "/world.pt", 1 << 26));
+  const std::string world_sha = Sha256Hex(ReadFile(dir + "/world.pt", 1 << 26));
   try {
     Train(over);
     ADD_FAILURE() << "--epochs 0 beside a checkpoint";

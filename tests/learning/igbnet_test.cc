@@ -342,8 +342,8 @@ TEST(IgbNetTest, TheShippedModelsSavedAgainAreTheSameFiles) {
   EXPECT_TRUE(learned->config().channels.search);
   EXPECT_TRUE(learned->config().channels.trail);
   EXPECT_EQ(learned->config().channels.neighbour_cap, 2);
-  EXPECT_EQ(IgbNet::Load(std::string(AIA_SOURCE_DIR) + "/models/igbnet.pt",
-                         "f", 0, "k")
+  EXPECT_EQ(IgbNet::Load(std::string(AIA_SOURCE_DIR) + "/models/igbnet.pt", "f",
+                         0, "k")
                 ->config()
                 .channels.neighbour_cap,
             0);
