@@ -568,10 +568,13 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
   };
   thread_local std::vector<double> start;
   start.assign(targets.size(), kInf);
+  const double log_eps = std::log(eps);
   for (std::size_t k = 0; k < targets.size(); ++k) {
-    const double wk = HeatWeight(targets[k].log_det, log_det_prior[k], eps);
+    const double wk =
+        HeatWeightOfLog(targets[k].log_det, log_det_prior[k], log_eps);
     if (wk <= 0.0) continue;
-    start[k] = -moves_per_e * std::log(wk);
+    // A weight of 1 (each target the robot has not measured) needs no log.
+    start[k] = -moves_per_e * (wk == 1.0 ? 0.0 : std::log(wk));
     int near = std::numeric_limits<int>::max();
     const auto [at, count] = points(k);
     for (std::size_t a = 0; a < count && near > 0; ++a) {
