@@ -87,6 +87,12 @@ void SetInferenceThreads(int threads) {
 
 int InferenceThreads() { return Torch().threads(); }
 
+namespace internal {
+PlainConvolutions::PlainConvolutions()
+    : was_(Torch().set_onednn_layout(false)) {}
+PlainConvolutions::~PlainConvolutions() { Torch().set_onednn_layout(was_); }
+}  // namespace internal
+
 std::vector<EpochLog> Train(const TrainOptions& options) {
   return Torch().train(options);
 }

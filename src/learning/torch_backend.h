@@ -53,6 +53,9 @@ struct TorchBackend {
   // torch::get_num_threads.
   void (*set_threads)(int threads);
   int (*threads)();
+  // Whether inference may run the convolutions on oneDNN's own tensors
+  // (torch_net.h, FoldedNet); returns the setting before.
+  bool (*set_onednn_layout)(bool on);
 };
 
 // The plugin's table, loading it at the first call (thread-safe; errors as

@@ -153,6 +153,23 @@ int InferenceThreads();
 void SetPolicyThreads(int threads);
 int PolicyThreads();
 
+namespace internal {
+// While one lives, inference in this process runs every convolution on
+// plain tensors (ATen picks oneDNN's kernels for a batch of two or more
+// and reorders the activations around each): the reference its tests
+// compare the oneDNN tensors' path with, bit for bit.
+class PlainConvolutions {
+ public:
+  PlainConvolutions();
+  ~PlainConvolutions();
+  PlainConvolutions(const PlainConvolutions&) = delete;
+  PlainConvolutions& operator=(const PlainConvolutions&) = delete;
+
+ private:
+  bool was_;
+};
+}  // namespace internal
+
 // Runs f(begin, end, worker) over [0, n) in chunks of `grain` on
 // PolicyThreads() threads, worker in [0, PolicyThreads()); libtorch runs
 // single-threaded in each (nested OpenMP teams spin against each other on

@@ -1,6 +1,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -138,6 +139,8 @@ TorchNet::Impl& TorchNet::impl() {
 
 namespace {
 
+std::atomic<bool> onednn_layout{true};
+
 std::pair<torch::Tensor, torch::Tensor> FoldInto(
     const torch::nn::Conv2d& conv, const torch::nn::BatchNorm2d& bn) {
   const torch::Tensor g =
@@ -170,6 +173,8 @@ void Transplant(IgbNetModule& from, IgbNetModule& to) {
     if (torch::Tensor* t = buffers.find(b.key())) t->copy_(b.value());
 }
 
+bool SetOneDnnLayout(bool on) { return onednn_layout.exchange(on); }
+
 FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
   torch::NoGradGuard no_grad;
   FoldedNet f;
@@ -196,18 +201,48 @@ FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
             .contiguous();
   }
   f.fc1_b = module->fc1->bias.detach();
+  f.onednn = at::hasMKLDNN() && at::globalContext().userEnabledMkldnn();
+  if (f.onednn) {
+    const auto reorder = [](const torch::Tensor& w, int64_t stride) {
+      return at::mkldnn_reorder_conv2d_weight(w.to_mkldnn(), {1, 1},
+                                              {stride, stride}, {1, 1}, 1);
+    };
+    f.stem_onednn = reorder(f.stem_w, config.stem_stride);
+    for (const auto& b : f.blocks)
+      f.blocks_onednn.push_back({reorder(b[0], 1), reorder(b[2], 1)});
+  }
   return f;
 }
 
 torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
                           const NetworkConfig& config,
                           const torch::Tensor& input) {
-  torch::Tensor x = torch::relu(
-      torch::conv2d(input, f.stem_w, f.stem_b, config.stem_stride, 1));
-  for (const auto& b : f.blocks) {
-    torch::Tensor y = torch::relu(torch::conv2d(x, b[0], b[1], 1, 1));
-    y = torch::conv2d(y, b[2], b[3], 1, 1);
-    x = torch::relu(y + x);
+  torch::Tensor x;
+  // FoldedNet: the same numbers.
+  if (f.onednn && input.size(0) >= 2 && onednn_layout.load()) {
+    const int64_t s = config.stem_stride;
+    const auto conv = [](const torch::Tensor& in, const torch::Tensor& w,
+                         const torch::Tensor& b, int64_t stride) {
+      return at::mkldnn_convolution(in, w, b, {1, 1}, {stride, stride}, {1, 1},
+                                    1);
+    };
+    torch::Tensor h =
+        torch::relu(conv(input.to_mkldnn(), f.stem_onednn, f.stem_b, s));
+    for (std::size_t k = 0; k < f.blocks.size(); ++k) {
+      torch::Tensor y =
+          torch::relu(conv(h, f.blocks_onednn[k][0], f.blocks[k][1], 1));
+      y = conv(y, f.blocks_onednn[k][1], f.blocks[k][3], 1);
+      h = torch::relu(y + h);
+    }
+    x = h.to_dense();
+  } else {
+    x = torch::relu(
+        torch::conv2d(input, f.stem_w, f.stem_b, config.stem_stride, 1));
+    for (const auto& b : f.blocks) {
+      torch::Tensor y = torch::relu(torch::conv2d(x, b[0], b[1], 1, 1));
+      y = torch::conv2d(y, b[2], b[3], 1, 1);
+      x = torch::relu(y + x);
+    }
   }
   torch::Tensor z = torch::conv2d(module->pool(x), f.fc1_w, f.fc1_b);
   if (config.centre > 0) {

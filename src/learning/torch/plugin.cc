@@ -38,6 +38,7 @@ aia::TorchBackend MakeTable() {
   t.network_speed = aia::TorchNetworkSpeed;
   t.set_threads = [](int threads) { torch::set_num_threads(threads); };
   t.threads = [] { return torch::get_num_threads(); };
+  t.set_onednn_layout = aia::SetOneDnnLayout;
   return t;
 }
 

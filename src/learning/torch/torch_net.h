@@ -74,13 +74,26 @@ void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
 // before it (w' = w gamma / sqrt(var + eps), b' = beta - mean gamma /
 // sqrt(var + eps)): the same function in a quarter fewer passes over the
 // activations, for inference.
+// Where libtorch has oneDNN, the convolutions' weights are kept in oneDNN's
+// own layout too, so that a batch of two or more images runs the stem and
+// the blocks on oneDNN tensors: the same kernels ATen picks for such a
+// batch of plain tensors (the same numbers, bit for bit) without a reorder
+// of the activations into and out of that layout around every
+// convolution. A batch of one keeps ATen's own choice of kernel.
 struct FoldedNet {
   torch::Tensor stem_w, stem_b;
   std::vector<std::array<torch::Tensor, 4>> blocks;  // w1, b1, w2, b2
   torch::Tensor fc1_w, fc1_b;  // fc1 as a hidden x C x P x P convolution
   torch::Tensor fc1_centre_w;  // its centre's part, hidden x C x c x c
+  bool onednn = false;         // the weights below are made
+  torch::Tensor stem_onednn;
+  std::vector<std::array<torch::Tensor, 2>> blocks_onednn;  // w1, w2
 };
 FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config);
+// Whether FoldedEmbed may take oneDNN's tensors where a FoldedNet has them
+// (on until set; the comparison of internal::PlainConvolutions, network.h);
+// returns the setting before. Thread-safe.
+bool SetOneDnnLayout(bool on);
 torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
                             const NetworkConfig& config,
                             const torch::Tensor& x);
