@@ -378,12 +378,50 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
   return added;
 }
 
+void SearchPoints::RecomputeShared(const DecisionContext& ctx, int robot, int k,
+                                   int group, PointsCache* cache) {
+  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
+  const int component =
+      ctx.map->lattice().components()[(*ctx.robot_lattice)[robot]];
+  std::vector<int>& same =
+      cache->index[(static_cast<std::uint64_t>(group) << 32) |
+                   static_cast<std::uint32_t>(k)];
+  for (const int v : same) {
+    const SharedPoints& e = cache->entries[v];
+    if (e.mean != s.mean || e.cov != cov || e.component != component) continue;
+    if (e.forgot) s.missed.clear();
+    s.points = e.points;
+    return;
+  }
+  Recompute(ctx, robot, k);
+  if (cache->used == static_cast<int>(cache->entries.size()))
+    cache->entries.emplace_back();
+  const int v = cache->used++;
+  same.push_back(v);
+  SharedPoints& e = cache->entries[v];
+  e.mean = s.mean;
+  e.cov = cov;
+  e.component = component;
+  e.forgot = s.missed.empty();  // it held the union's points before
+  e.points = s.points;
+}
+
 void SearchPoints::Share(const DecisionContext& ctx,
                          const std::vector<int>& robots, const RangeRunner& run,
                          int workers) {
+  if (static_cast<int>(caches_.size()) < std::max(1, workers))
+    caches_.resize(std::max(1, workers));
+  for (PointsCache& cache : caches_) {
+    cache.index.clear();
+    cache.used = 0;
+  }
   sharing_.Share(
       ctx, robots, num_targets_, &slots_,
-      [&](int i, int k, int, int) { Recompute(ctx, i, k); }, run, workers);
+      [&](int i, int k, int group, int worker) {
+        RecomputeShared(ctx, i, k, group, &caches_[worker]);
+      },
+      run, workers);
 }
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,

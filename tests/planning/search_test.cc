@@ -598,6 +598,70 @@ TEST(SearchMemoryTest, ThreadsDoNotChangeTheMemory) {
     }
 }
 
+// The worlds of the shared-search tests: 12 x 12 m with 8 boxes, 9 robots,
+// three targets in the corners whose priors lie in the middle and `more`
+// of them, a full graph in trials 0 and 2 and a 4 m range graph in 1 and
+// 3, a 2 m sensor in trials 0 and 1 and 1.5 m after.
+Team SharedSearchTeam(int seed, int trial, const std::string& more = "") {
+  CommParams cp;
+  cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
+  cp.range = 4.0;
+  return Team(
+      "workspace: {size: [12.0, 12.0], obstacles: {random: {count: 8}}}\n"
+      "seed: " +
+          std::to_string(seed) +
+          "\nsensor: {range: " + (trial < 2 ? "2.0" : "1.5") +
+          "}\nrobots: {count: 9}\n"
+          "targets: {list: [{position: [1.0, 11.0], prior_mean: [6.1, "
+          "6.2], prior_sigma: 2.0}, {position: [11.0, 1.0], prior_mean: "
+          "[4.3, 7.9], prior_sigma: 1.5}, {position: [1.0, 1.0], "
+          "prior_mean: [8.2, 4.4], prior_sigma: 2.5}" +
+          more + "]}\n",
+      cp);
+}
+
+// Each robot of SharedSearchTeam at `step` of a walk around the middle of
+// the world (where the point is free), and the graph of those positions.
+void WalkAroundTheMiddle(int step, Team* team) {
+  const Lattice& lattice = team->world.map.lattice();
+  for (int i = 0; i < 9; ++i) {
+    const double a = 0.9 * i + 0.7 * step;
+    const int q =
+        lattice.NearestPoint(Vec2(6.0 + (1.0 + 0.4 * i) * std::cos(a),
+                                  6.0 + (1.0 + 0.4 * i) * std::sin(a)));
+    if (lattice.Free(q)) team->positions[i] = q;
+  }
+  std::vector<Vec2> p;
+  for (int idx : team->positions) p.push_back(lattice.Point(idx));
+  team->comm.Update(step, p);
+}
+
+// Eight steps of WalkAroundTheMiddle with `memory` (a SearchMemory or
+// SearchPoints of `targets` targets) updated and shared on three threads;
+// after each, check(ctx, step, i, k, missed) for each robot i and target k
+// whose misses changed in the step and are not empty.
+template <typename Memory, typename Check>
+void RunSharedSearch(Team* team, int targets, Memory* memory, Check check) {
+  memory->Reset(9, targets);
+  std::vector<int> robots(9);
+  for (int i = 0; i < 9; ++i) robots[i] = i;
+  for (int step = 0; step < 8; ++step) {
+    WalkAroundTheMiddle(step, team);
+    const DecisionContext ctx = team->Context();
+    std::vector<std::vector<int>> before;
+    for (int i = 0; i < 9; ++i)
+      for (int k = 0; k < targets; ++k) before.push_back(memory->Missed(i, k));
+    memory->Update(ctx, robots, ThreeThreads(), 3);
+    memory->Share(ctx, robots, ThreeThreads(), 3);
+    for (int i = 0; i < 9; ++i)
+      for (int k = 0; k < targets; ++k) {
+        const std::vector<int>& missed = memory->Missed(i, k);
+        if (!missed.empty() && missed != before[i * targets + k])
+          check(ctx, step, i, k, missed);
+      }
+  }
+}
+
 // Share's walks, made once per neighbourhood, target and belief, give each
 // robot the aim its own walk would: wherever a robot's misses changed in a
 // step, its aim is SearchAim's from its point, belief and misses, with the
@@ -606,68 +670,93 @@ TEST(SearchMemoryTest, ThreadsDoNotChangeTheMemory) {
 TEST(SearchMemoryTest, SharedWalksGiveEachRobotItsOwnAim) {
   int checked = 0;
   for (int trial = 0; trial < 4; ++trial) {
-    CommParams cp;
-    cp.mode = trial % 2 ? CommMode::kRange : CommMode::kFull;
-    cp.range = 4.0;
-    Team team(
-        "workspace: {size: [12.0, 12.0], obstacles: {random: {count: 8}}}\n"
-        "seed: " +
-            std::to_string(30 + trial) +
-            "\nsensor: {range: " + (trial < 2 ? "2.0" : "1.5") +
-            "}\nrobots: {count: 9}\n"
-            "targets: {list: [{position: [1.0, 11.0], prior_mean: [6.1, "
-            "6.2], prior_sigma: 2.0}, {position: [11.0, 1.0], prior_mean: "
-            "[4.3, 7.9], prior_sigma: 1.5}, {position: [1.0, 1.0], "
-            "prior_mean: [8.2, 4.4], prior_sigma: 2.5}]}\n",
-        cp);
+    Team team = SharedSearchTeam(30 + trial, trial);
+    const Map& map = team.world.map;
+    const int span =
+        static_cast<int>(std::ceil(team.sensor.range / map.lattice().step())) +
+        1;
+    SearchMemory memory;
+    RunSharedSearch(&team, 3, &memory,
+                    [&](const DecisionContext& ctx, int step, int i, int k,
+                        const std::vector<int>& missed) {
+                      Vec2 want;
+                      const int here = team.positions[i];
+                      SearchAim(
+                          map, team.sensor, MeanOf(ctx, i, k),
+                          ctx.beliefs->PositionCovariance(i, k), &missed,
+                          [&](const Vec2& x, int bound) {
+                            return NearestObserverDistance(
+                                map, team.sensor, here, x, span, bound);
+                          },
+                          &want);
+                      EXPECT_EQ(memory.Aim(i, k), want)
+                          << "trial " << trial << " step " << step << " robot "
+                          << i << " target " << k;
+                      ++checked;
+                    });
+  }
+  EXPECT_GT(checked, 40);
+}
+
+// Share's search points, recomputed once per neighbourhood, target,
+// belief and component, give each robot the points its own recompute
+// would: wherever a robot's misses changed in a step, its points are the
+// first ring of the prior (WalkPriorRings) whose points are free, not
+// ruled out by its misses and measurable from some point of its own
+// component; none where the mean itself is such a point. Full and range
+// graphs, boxes, two sensor ranges.
+TEST(SearchPointsTest, SharedPointsGiveEachRobotItsOwnPoints) {
+  int checked = 0, some = 0;
+  for (int trial = 0; trial < 4; ++trial) {
+    Team team = SharedSearchTeam(
+        40 + trial, trial,
+        ", {position: [7.0, 6.0], prior_mean: [4.5, 5.0], prior_sigma: 2.0}");
     const Map& map = team.world.map;
     const Lattice& lattice = map.lattice();
     const int span =
         static_cast<int>(std::ceil(team.sensor.range / lattice.step())) + 1;
-    SearchMemory memory;
-    memory.Reset(9, 3);
-    std::vector<int> robots(9);
-    for (int i = 0; i < 9; ++i) robots[i] = i;
-    for (int step = 0; step < 8; ++step) {
-      // Each robot on a walk around the middle of the world, on free points.
-      for (int i = 0; i < 9; ++i) {
-        const double a = 0.9 * i + 0.7 * step;
-        const int q =
-            lattice.NearestPoint(Vec2(6.0 + (1.0 + 0.4 * i) * std::cos(a),
-                                      6.0 + (1.0 + 0.4 * i) * std::sin(a)));
-        if (lattice.Free(q)) team.positions[i] = q;
-      }
-      std::vector<Vec2> p;
-      for (int idx : team.positions) p.push_back(lattice.Point(idx));
-      team.comm.Update(step, p);
-      const DecisionContext ctx = team.Context();
-      std::vector<std::vector<int>> before;
-      for (int i = 0; i < 9; ++i)
-        for (int k = 0; k < 3; ++k) before.push_back(memory.Missed(i, k));
-      memory.Update(ctx, robots, ThreeThreads(), 3);
-      memory.Share(ctx, robots, ThreeThreads(), 3);
-      for (int i = 0; i < 9; ++i)
-        for (int k = 0; k < 3; ++k) {
-          const std::vector<int>& missed = memory.Missed(i, k);
-          if (missed.empty() || missed == before[i * 3 + k]) continue;
-          Vec2 want;
+    // Target 3 (the one the walks pass): the odd robots hold another
+    // belief of it (more certain, its mean moved), so that the robots of a
+    // neighbourhood that take the same misses hold two beliefs.
+    for (int i = 1; i < 9; i += 2) {
+      auto omega = team.beliefs.Omega(i, 3);
+      omega *= 1.5;
+      team.beliefs.Xi(i, 3) = omega * Eigen::Vector2d(4.8, 4.8);
+    }
+    SearchPoints points;
+    RunSharedSearch(
+        &team, 4, &points,
+        [&](const DecisionContext& ctx, int step, int i, int k,
+            const std::vector<int>& missed) {
           const int here = team.positions[i];
-          SearchAim(
-              map, team.sensor, MeanOf(ctx, i, k),
-              ctx.beliefs->PositionCovariance(i, k), &missed,
-              [&](const Vec2& x, int bound) {
-                return NearestObserverDistance(map, team.sensor, here, x, span,
-                                               bound);
+          const std::vector<Vec2> ruled = MissedPoints(lattice, &missed);
+          std::vector<Vec2> want;
+          bool mean_viable = false;
+          int index = 0;
+          const int ring = WalkPriorRings(
+              MeanOf(ctx, i, k), ctx.beliefs->PositionCovariance(i, k),
+              lattice.step(),
+              [&](const Vec2& x) {
+                const bool first = index++ == 0;
+                if (!map.PointFree(x) || RuledOut(map, team.sensor, ruled, x) ||
+                    NearestObserverDistance(map, team.sensor, here, x, span) <
+                        0)
+                  return;
+                if (first) mean_viable = true;
+                want.push_back(x);
               },
-              &want);
-          EXPECT_EQ(memory.Aim(i, k), want)
+              [&] { return !want.empty(); });
+          ASSERT_GE(ring, 0);  // else the misses would have been forgotten
+          if (mean_viable) want.clear();
+          EXPECT_EQ(points.Points(i, k), want)
               << "trial " << trial << " step " << step << " robot " << i
               << " target " << k;
           ++checked;
-        }
-    }
+          some += !want.empty();
+        });
   }
   EXPECT_GT(checked, 40);
+  EXPECT_GT(some, 20);
 }
 
 // Route plans while robots x open targets is at most 40 x 40 and the

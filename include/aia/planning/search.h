@@ -567,13 +567,35 @@ class SearchPoints {
   // The search points of robot i's target k from its misses (all forgotten
   // where the prior is searched to 4 sigma).
   void Recompute(const DecisionContext& ctx, int robot, int k);
+  // One Recompute after Share, kept for the others of the neighbourhood:
+  // they hold the same misses (its union), and where they also hold the
+  // same belief bit for bit and stand in the same component of the
+  // lattice, their points (and whether the misses were forgotten) are the
+  // same, since a point's observability reads only the component.
+  struct SharedPoints {
+    Vec2 mean{0.0, 0.0};
+    Mat2 cov = Mat2::Zero();
+    int component = -1;
+    bool forgot = false;
+    std::vector<Vec2> points;
+  };
+  struct PointsCache {
+    std::unordered_map<std::uint64_t, std::vector<int>> index;  // (group, k)
+    std::vector<SharedPoints> entries;  // [0, used) this Share
+    int used = 0;
+  };
+  // Recompute after Share, from the points robot shares with the others of
+  // its neighbourhood `group`: the same points and misses as Recompute.
+  void RecomputeShared(const DecisionContext& ctx, int robot, int k, int group,
+                       PointsCache* cache);
   // Update's work; the points it added.
   int Record(const DecisionContext& ctx, int robot);
   int num_robots_ = 0, num_targets_ = 0;
   long misses_ = 0;
   NeighbourMisses sharing_;
   std::vector<Slot> slots_;
-  std::vector<long> added_;  // per worker
+  std::vector<long> added_;          // per worker
+  std::vector<PointsCache> caches_;  // per worker
 };
 
 // The first move of a shortest lattice path from point p to the nearest
