@@ -174,24 +174,17 @@ bool SearchMemory::ReaimShared(const DecisionContext& ctx, int robot, int k,
       static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
   Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
-  std::vector<int>& same =
-      cache->index[(static_cast<std::uint64_t>(group) << 32) |
-                   static_cast<std::uint32_t>(k)];
-  int w = -1;
-  for (int v : same)
-    if (cache->walks[v].mean == s.mean && cache->walks[v].cov == cov) w = v;
-  if (w < 0) {
-    if (cache->used == static_cast<int>(cache->walks.size()))
-      cache->walks.emplace_back();
-    w = cache->used++;
-    same.push_back(w);
-    SharedWalk& fresh = cache->walks[w];
-    fresh.mean = s.mean;
-    fresh.cov = cov;
-    fresh.ring_end.clear();
-    fresh.points.clear();
+  bool made = false;
+  SharedWalk& walk = cache->Find(
+      group, k,
+      [&](const SharedWalk& w) { return w.mean == s.mean && w.cov == cov; },
+      &made);
+  if (made) {
+    walk.mean = s.mean;
+    walk.cov = cov;
+    walk.ring_end.clear();
+    walk.points.clear();
   }
-  SharedWalk& walk = cache->walks[w];
   const int here = (*ctx.robot_lattice)[robot];
   const int component = lattice.components()[here];
   const int hx = lattice.Ix(here), hy = lattice.Iy(here);
@@ -271,10 +264,7 @@ void SearchMemory::Share(const DecisionContext& ctx,
                          int workers) {
   if (static_cast<int>(caches_.size()) < std::max(1, workers))
     caches_.resize(std::max(1, workers));
-  for (WalkCache& cache : caches_) {
-    cache.index.clear();
-    cache.used = 0;
-  }
+  for (WalkCache& cache : caches_) cache.Clear();
   sharing_.Share(
       ctx, robots, num_targets_, &slots_,
       [&](int i, int k, int group, int worker) {
@@ -384,22 +374,19 @@ void SearchPoints::RecomputeShared(const DecisionContext& ctx, int robot, int k,
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
   const int component =
       ctx.map->lattice().components()[(*ctx.robot_lattice)[robot]];
-  std::vector<int>& same =
-      cache->index[(static_cast<std::uint64_t>(group) << 32) |
-                   static_cast<std::uint32_t>(k)];
-  for (const int v : same) {
-    const SharedPoints& e = cache->entries[v];
-    if (e.mean != s.mean || e.cov != cov || e.component != component) continue;
+  bool made = false;
+  SharedPoints& e = cache->Find(
+      group, k,
+      [&](const SharedPoints& p) {
+        return p.mean == s.mean && p.cov == cov && p.component == component;
+      },
+      &made);
+  if (!made) {
     if (e.forgot) s.missed.clear();
     s.points = e.points;
     return;
   }
   Recompute(ctx, robot, k);
-  if (cache->used == static_cast<int>(cache->entries.size()))
-    cache->entries.emplace_back();
-  const int v = cache->used++;
-  same.push_back(v);
-  SharedPoints& e = cache->entries[v];
   e.mean = s.mean;
   e.cov = cov;
   e.component = component;
@@ -412,10 +399,7 @@ void SearchPoints::Share(const DecisionContext& ctx,
                          int workers) {
   if (static_cast<int>(caches_.size()) < std::max(1, workers))
     caches_.resize(std::max(1, workers));
-  for (PointsCache& cache : caches_) {
-    cache.index.clear();
-    cache.used = 0;
-  }
+  for (PointsCache& cache : caches_) cache.Clear();
   sharing_.Share(
       ctx, robots, num_targets_, &slots_,
       [&](int i, int k, int group, int worker) {

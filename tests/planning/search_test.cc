@@ -636,6 +636,20 @@ void WalkAroundTheMiddle(int step, Team* team) {
   team->comm.Update(step, p);
 }
 
+// A fourth target for SharedSearchTeam, at the middle the walks pass,
+// whose belief the odd robots hold otherwise (more certain, its mean
+// moved): the robots of a neighbourhood that take the same misses of it
+// hold two beliefs, so what Share makes per belief is told apart.
+constexpr const char* kTargetInTheMiddle =
+    ", {position: [7.0, 6.0], prior_mean: [4.5, 5.0], prior_sigma: 2.0}";
+void GiveTheOddRobotsAnotherBelief(Team* team) {
+  for (int i = 1; i < 9; i += 2) {
+    auto omega = team->beliefs.Omega(i, 3);
+    omega *= 1.5;
+    team->beliefs.Xi(i, 3) = omega * Eigen::Vector2d(4.8, 4.8);
+  }
+}
+
 // Eight steps of WalkAroundTheMiddle with `memory` (a SearchMemory or
 // SearchPoints of `targets` targets) updated and shared on three threads;
 // after each, check(ctx, step, i, k, missed) for each robot i and target k
@@ -666,17 +680,19 @@ void RunSharedSearch(Team* team, int targets, Memory* memory, Check check) {
 // robot the aim its own walk would: wherever a robot's misses changed in a
 // step, its aim is SearchAim's from its point, belief and misses, with the
 // nearest observer as the cost. A full graph (robots share walks) and a
-// range graph (they mostly do not), boxes, two sensor ranges.
+// range graph (they mostly do not), boxes, two sensor ranges, two beliefs
+// of one target in a team.
 TEST(SearchMemoryTest, SharedWalksGiveEachRobotItsOwnAim) {
   int checked = 0;
   for (int trial = 0; trial < 4; ++trial) {
-    Team team = SharedSearchTeam(30 + trial, trial);
+    Team team = SharedSearchTeam(30 + trial, trial, kTargetInTheMiddle);
+    GiveTheOddRobotsAnotherBelief(&team);
     const Map& map = team.world.map;
     const int span =
         static_cast<int>(std::ceil(team.sensor.range / map.lattice().step())) +
         1;
     SearchMemory memory;
-    RunSharedSearch(&team, 3, &memory,
+    RunSharedSearch(&team, 4, &memory,
                     [&](const DecisionContext& ctx, int step, int i, int k,
                         const std::vector<int>& missed) {
                       Vec2 want;
@@ -708,21 +724,12 @@ TEST(SearchMemoryTest, SharedWalksGiveEachRobotItsOwnAim) {
 TEST(SearchPointsTest, SharedPointsGiveEachRobotItsOwnPoints) {
   int checked = 0, some = 0;
   for (int trial = 0; trial < 4; ++trial) {
-    Team team = SharedSearchTeam(
-        40 + trial, trial,
-        ", {position: [7.0, 6.0], prior_mean: [4.5, 5.0], prior_sigma: 2.0}");
+    Team team = SharedSearchTeam(40 + trial, trial, kTargetInTheMiddle);
     const Map& map = team.world.map;
     const Lattice& lattice = map.lattice();
     const int span =
         static_cast<int>(std::ceil(team.sensor.range / lattice.step())) + 1;
-    // Target 3 (the one the walks pass): the odd robots hold another
-    // belief of it (more certain, its mean moved), so that the robots of a
-    // neighbourhood that take the same misses hold two beliefs.
-    for (int i = 1; i < 9; i += 2) {
-      auto omega = team.beliefs.Omega(i, 3);
-      omega *= 1.5;
-      team.beliefs.Xi(i, 3) = omega * Eigen::Vector2d(4.8, 4.8);
-    }
+    GiveTheOddRobotsAnotherBelief(&team);
     SearchPoints points;
     RunSharedSearch(
         &team, 4, &points,

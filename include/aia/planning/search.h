@@ -166,6 +166,40 @@ class MissList {
   std::uint32_t call_ = 0;
 };
 
+// What a Share call makes once per closed neighbourhood and target (and
+// per whatever else `same` tells apart: a belief, a component), per worker:
+// the first robot of a neighbourhood to ask makes it, the others reuse it
+// (SearchMemory's walks, SearchPoints' points). Clear() before each Share;
+// the memory is kept.
+template <typename Value>
+class ShareCache {
+ public:
+  void Clear() {
+    index_.clear();
+    used_ = 0;
+  }
+  // The value kept for (group, k) that same(value) accepts; else a slot of
+  // its own for the caller to fill (what it held before is left in it),
+  // with *made set. The reference holds until the next Find.
+  template <typename Same>
+  Value& Find(int group, int k, Same&& same, bool* made) {
+    std::vector<int>& kept = index_[(static_cast<std::uint64_t>(group) << 32) |
+                                    static_cast<std::uint32_t>(k)];
+    *made = false;
+    for (const int v : kept)
+      if (same(values_[v])) return values_[v];
+    if (used_ == static_cast<int>(values_.size())) values_.emplace_back();
+    kept.push_back(used_);
+    *made = true;
+    return values_[used_++];
+  }
+
+ private:
+  std::unordered_map<std::uint64_t, std::vector<int>> index_;  // (group, k)
+  std::vector<Value> values_;  // [0, used_) this Share
+  int used_ = 0;
+};
+
 // Share's work, one definition for SearchMemory and SearchPoints: each
 // robot among `robots` takes the points its neighbours in this step's graph
 // missed for a static target still open in its own belief (log det above
@@ -492,11 +526,7 @@ class SearchMemory {
     std::vector<int> ring_end;  // ring r: points[ring_end[r - 1], ring_end[r])
     std::vector<RingPoint> points;
   };
-  struct WalkCache {
-    std::unordered_map<std::uint64_t, std::vector<int>> index;  // (group, k)
-    std::vector<SharedWalk> walks;  // [0, used) this Share
-    int used = 0;
-  };
+  using WalkCache = ShareCache<SharedWalk>;
   // Reaim after Share, from the walk that robot shares with the others of
   // its neighbourhood `group` holding the same belief: the same aim and
   // return as Reaim.
@@ -579,11 +609,7 @@ class SearchPoints {
     bool forgot = false;
     std::vector<Vec2> points;
   };
-  struct PointsCache {
-    std::unordered_map<std::uint64_t, std::vector<int>> index;  // (group, k)
-    std::vector<SharedPoints> entries;  // [0, used) this Share
-    int used = 0;
-  };
+  using PointsCache = ShareCache<SharedPoints>;
   // Recompute after Share, from the points robot shares with the others of
   // its neighbourhood `group`: the same points and misses as Recompute.
   void RecomputeShared(const DecisionContext& ctx, int robot, int k, int group,
