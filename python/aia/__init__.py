@@ -17,8 +17,8 @@ scoring only. docs/python.md is the reference.
 import json as _json
 import math as _math
 import operator as _operator
-import os
-import re
+import os as _os
+import re as _re
 import sys as _sys
 import warnings as _warnings
 
@@ -50,10 +50,10 @@ try:
 except ImportError:  # the build tree's package
     _install = None
 if _install is not None:
-    _here = os.path.dirname(os.path.abspath(__file__))
+    _here = _os.path.dirname(_os.path.abspath(__file__))
     _aia._use_installed(
-        os.path.normpath(os.path.join(_here, _install.PLUGIN_DIR)),
-        os.path.normpath(os.path.join(_here, _install.DATA_DIR)))
+        _os.path.normpath(_os.path.join(_here, _install.PLUGIN_DIR)),
+        _os.path.normpath(_os.path.join(_here, _install.DATA_DIR)))
 
 
 def _retitled(text, old, new):
@@ -106,7 +106,7 @@ _SEED_MAX = 2 ** 64 - 1
 
 # A letter, "_" or "/" first (or "." then one of them: "./x.yaml", not
 # ".5", which YAML reads as a number).
-_PLAIN_WORD = re.compile(r"\.?[A-Za-z_/][A-Za-z0-9_./-]*")
+_PLAIN_WORD = _re.compile(r"\.?[A-Za-z_/][A-Za-z0-9_./-]*")
 _YAML_WORDS = {"true", "false", "yes", "no", "on", "off", "y", "n", "null",
                ".nan", ".inf", "-.inf", ".na"}
 
@@ -307,10 +307,10 @@ class Mission:
 
 
 def _path(value, where, arg):
-    if not isinstance(value, (str, os.PathLike)):
+    if not isinstance(value, (str, _os.PathLike)):
         raise InputError(f"{where}: {arg}: must be a path (str or "
                          f"os.PathLike), got {_shown(value)}")
-    path = os.fspath(value)
+    path = _os.fspath(value)
     if (b"\0" if isinstance(path, bytes) else "\0") in path:
         raise InputError(f"{where}: {arg}: a path cannot hold a NUL byte, "
                          f"got {_shown(value)}")
@@ -416,7 +416,7 @@ class Dataset:
     igbnet policy chooses from."""
 
     def __init__(self, paths, **channels):
-        if isinstance(paths, (str, os.PathLike)):
+        if isinstance(paths, (str, _os.PathLike)):
             paths = [paths]
         if not isinstance(paths, (list, tuple)) or not paths:
             raise InputError(f"aia.Dataset: paths: must be a path or a "
@@ -500,14 +500,14 @@ def builtin_policy(name, **params):
     return _BuiltinPolicy(name, params)
 
 
-_NAME = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
+_NAME = _re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
 
 
 def _runs_done(out, name, sizes, seeds, seed_base):
     """How many of this evaluation's runs of `name` out/runs.csv holds."""
     import csv
-    path = os.path.join(out, "runs.csv")
-    if not os.path.isfile(path):
+    path = _os.path.join(out, "runs.csv")
+    if not _os.path.isfile(path):
         return 0
     wanted = set(sizes)
     done = set()
@@ -636,7 +636,7 @@ def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
         report(total, total)
     if bar is not None:
         bar.end(out)
-    return _read_summary(os.path.join(out, "summary.csv"))
+    return _read_summary(_os.path.join(out, "summary.csv"))
 
 
 def _read_summary(path):

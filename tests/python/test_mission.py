@@ -257,3 +257,12 @@ def test_async_steps_use_the_ready_robots_moves_only():
                 assert after[i] == before[i]
     # Wheeled robots turn and drive for different times.
     assert partial > 0
+
+
+def test_the_package_names_only_what_it_exports():
+    # `from aia import *` and tab completion show the API, not the modules
+    # the package itself imports (os, re, ...): every public name is in
+    # __all__ or is one of the package's own submodules.
+    submodules = {"env", "network"}
+    public = {n for n in dir(aia) if not n.startswith("_")}
+    assert public - submodules == set(aia.__all__)
