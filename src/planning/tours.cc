@@ -159,6 +159,7 @@ TourPlanner::Insertion TourPlanner::BestInsertion(
         inserted[p] = Value(i, trial_);
       }
       inserted_version_[t][c] = version[i];
+      insert_work_ += static_cast<long>(route.size() + 1) * (route.size() + 1);
     }
     evaluations_ += static_cast<long>(route.size()) + 1;
     double robot_best = kInf;
@@ -198,7 +199,12 @@ void TourPlanner::Insert(const std::vector<int>& robots,
   // with its best insertion in another robot's route goes first.
   std::vector<int> remaining(num);
   for (int t = 0; t < num; ++t) remaining[t] = t;
+  insert_work_ = 0;
   while (!remaining.empty()) {
+    if (insert_work_ > settings.insert_work) {
+      AppendRest(targets, remaining, tours, &values);
+      break;
+    }
     int pick = -1;
     double pick_key = -kInf;
     Insertion chosen;
@@ -224,6 +230,36 @@ void TourPlanner::Insert(const std::vector<int>& robots,
     values[chosen.robot] = chosen.value;
     Summarize(values);
     remaining.erase(remaining.begin() + pick);
+  }
+}
+
+void TourPlanner::AppendRest(const std::vector<int>& targets,
+                             const std::vector<int>& rest, Tours* tours,
+                             std::vector<RouteValue>* values_out) {
+  std::vector<RouteValue>& values = *values_out;
+  for (int t : rest) {
+    const int k = targets[t];
+    int robot = -1;
+    double best = kInf;
+    RouteValue value;
+    for (int i : candidates_[t]) {
+      trial_ = tours->order[i];
+      trial_.push_back(k);
+      const RouteValue v = Evaluate(i, trial_);
+      const double obj = ObjectiveWith(values, i, v, -1, {});
+      if (obj < best) {
+        best = obj;
+        robot = i;
+        value = v;
+      }
+    }
+    if (robot < 0) {  // no candidate can reach it
+      tours->unassigned.push_back(k);
+      continue;
+    }
+    tours->order[robot].push_back(k);
+    values[robot] = value;
+    Summarize(values);
   }
 }
 

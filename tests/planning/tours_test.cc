@@ -235,5 +235,72 @@ TEST(ToursTest, TargetsGoToTheirCandidateRobots) {
   }
 }
 
+TEST(ToursTest, PastTheInsertionWorkTheRestJoinTheRouteEnds) {
+  // One robot at 50; targets 0..3 at 51, 55, 52 and 60. Regret insertion
+  // visits them near first: 51, 52, 55, 60 (arrivals 1, 2, 5, 10, latency
+  // 18). With the work for one round only, it inserts the cheapest (51,
+  // arrival 1) and the rest join the route's end in their order: 55, 52,
+  // 60 (arrivals 5, 8, 16, latency 30). No local search in either.
+  LineLegs legs({51, 55, 52, 60});
+  TourPlanner planner;
+  TourSettings settings;
+  settings.budget = 0;
+  const std::vector<double> w(4, 1.0);
+  const Tours full = planner.Plan({50}, {0, 1, 2, 3}, w, settings, legs);
+  EXPECT_EQ(full.order[0], (std::vector<int>{0, 2, 1, 3}));
+  EXPECT_DOUBLE_EQ(full.latency, 18.0);
+  settings.insert_work = 1;
+  const Tours cut = planner.Plan({50}, {0, 1, 2, 3}, w, settings, legs);
+  EXPECT_EQ(cut.order[0], (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_DOUBLE_EQ(cut.latency, 30.0);
+  EXPECT_EQ(cut.makespan, 16);
+}
+
+TEST(ToursTest, TheRestJoinTheRouteWhereTheyCostLeast) {
+  // Robots at 40 and 60; targets 41, 59, 42, 58 and one no robot reaches.
+  // Insertion takes 41 (to robot 0; 59's regret ties and comes later);
+  // then, appended in order: 59 to robot 1 (arrival 1, not 19), 42 to
+  // robot 0 (2, not 18), 58 to robot 1 (2, not 18); the last unassigned.
+  class Legs : public LineLegs {
+   public:
+    Legs() : LineLegs({41, 59, 42, 58, 0}) {}
+    Leg Compute(int from, int t, int k) override {
+      return k == 4 ? Leg{} : LineLegs::Compute(from, t, k);
+    }
+  } legs;
+  TourPlanner planner;
+  TourSettings settings;
+  settings.budget = 0;
+  settings.insert_work = 1;
+  const Tours t = planner.Plan({40, 60}, {0, 1, 2, 3, 4},
+                               std::vector<double>(5, 1.0), settings, legs);
+  EXPECT_EQ(t.order[0], (std::vector<int>{0, 2}));
+  EXPECT_EQ(t.order[1], (std::vector<int>{1, 3}));
+  EXPECT_EQ(t.unassigned, (std::vector<int>{4}));
+  EXPECT_DOUBLE_EQ(t.latency, 6.0);
+}
+
+TEST(ToursTest, ManyTargetsForOneRobotEndInOneRoute) {
+  // Insertion's work grows as M^4 for one robot: 600 targets would take
+  // minutes in full. Bounded, the plan ends, and holds every target once.
+  Rng rng(11);
+  const int m = 600;
+  std::vector<int> at(m), targets(m);
+  for (int k = 0; k < m; ++k) {
+    at[k] = static_cast<int>(rng.UniformInt(400));
+    targets[k] = k;
+  }
+  GridLegs legs(at);
+  TourPlanner planner;
+  TourSettings settings;
+  settings.insert_work = 100000;
+  const Tours t = planner.Plan({210}, targets, std::vector<double>(m, 1.0),
+                               settings, legs);
+  std::vector<int> order = t.order[0];
+  std::sort(order.begin(), order.end());
+  EXPECT_EQ(order, targets);
+  EXPECT_TRUE(t.unassigned.empty());
+}
+
 }  // namespace
 }  // namespace aia

@@ -50,6 +50,12 @@ struct TourSettings {
   // starts are nearest to it (LegOracle::Distance), this many of them; in
   // every route when there are no more robots than that.
   int candidates = 80;
+  // Legs regret insertion may look up at the most (each route a target is
+  // tried in, at every position). Insertion costs about M^4 / 3 legs for
+  // one robot and M targets (1e8 near 130 targets, a second or two); past
+  // this, the targets left join the routes at their ends, each where it
+  // costs least, so that a plan with many targets per robot ends.
+  long insert_work = 100000000;
 };
 
 struct Tours {
@@ -79,9 +85,14 @@ class TourPlanner {
   RouteValue Value(int robot, const std::vector<int>& route);  // uncounted
 
   // Regret insertion (Plan's first phase): every target into a route.
+  // Past settings.insert_work, AppendRest.
   void Insert(const std::vector<int>& robots, const std::vector<int>& targets,
               const TourSettings& settings, Tours* tours,
               std::vector<RouteValue>* values);
+  // The targets `rest` (indices into `targets`), in order, each at the end
+  // of the candidate route where the objective grows least.
+  void AppendRest(const std::vector<int>& targets, const std::vector<int>& rest,
+                  Tours* tours, std::vector<RouteValue>* values);
   // Each target's candidate robots (candidates_) and their scratch.
   void ChooseCandidates(const std::vector<int>& robots,
                         const std::vector<int>& targets,
@@ -117,6 +128,7 @@ class TourPlanner {
   const std::vector<double>* weight_ = nullptr;
   TourObjective objective_ = TourObjective::kLatency;
   long evaluations_ = 0;
+  long insert_work_ = 0;  // legs regret insertion looked up (upper bound)
   double weight_sum_ = 0.0;
   double latency_ = 0.0;                      // sum over routes
   std::array<std::pair<int, int>, 3> top_{};  // largest (makespan, robot)
