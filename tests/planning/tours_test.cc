@@ -294,8 +294,8 @@ TEST(ToursTest, ManyTargetsForOneRobotEndInOneRoute) {
   TourPlanner planner;
   TourSettings settings;
   settings.insert_work = 100000;
-  const Tours t = planner.Plan({210}, targets, std::vector<double>(m, 1.0),
-                               settings, legs);
+  const Tours t =
+      planner.Plan({210}, targets, std::vector<double>(m, 1.0), settings, legs);
   std::vector<int> order = t.order[0];
   std::sort(order.begin(), order.end());
   EXPECT_EQ(order, targets);
