@@ -8,9 +8,12 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -924,6 +927,28 @@ struct VectorStepResult {
   py::dict info;
 };
 
+// The process's resident memory and the memory the machine has available
+// (MemAvailable), in bytes; -1 where /proc does not say.
+long ResidentBytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (!f) return -1;
+  long size = 0, resident = -1;
+  if (std::fscanf(f, "%ld %ld", &size, &resident) != 2) resident = -1;
+  std::fclose(f);
+  return resident < 0 ? -1 : resident * sysconf(_SC_PAGESIZE);
+}
+
+long AvailableBytes() {
+  std::FILE* f = std::fopen("/proc/meminfo", "r");
+  if (!f) return -1;
+  char line[256];
+  long kib = -1;
+  while (std::fgets(line, sizeof line, f))
+    if (std::sscanf(line, "MemAvailable: %ld kB", &kib) == 1) break;
+  std::fclose(f);
+  return kib < 0 ? -1 : kib * 1024;
+}
+
 // n missions of one scenario (seeds given), stepped together on C++
 // threads without the GIL; with autoreset, a mission that ends restarts
 // with the next seed.
@@ -938,8 +963,49 @@ class VectorMissions {
               1),
         autoreset_(autoreset) {
     if (seeds.empty()) Refuse("aia.VectorMissions", "n", "must be at least 1");
-    for (std::uint64_t seed : seeds)
-      missions_.push_back(std::make_unique<Mission>(scenario, seed, overrides));
+    // The missions made so far, on average, times those still to make must
+    // fit in the memory the machine has available: n past that is refused
+    // as soon as it shows (the machine would swap, or the process be
+    // killed), not found out by a std::bad_alloc or MuJoCo's "could not
+    // allocate" at some mission. Checked after 2, 4, ... 64 missions, then
+    // every 64; the average leaves out the first (it also pays for what the
+    // process loads once), and until 64 missions, when it is rough, n is
+    // refused only at twice what is available.
+    const std::size_t n = seeds.size();
+    long first = -1;
+    try {
+      for (std::size_t i = 0; i < n; ++i) {
+        missions_.push_back(
+            std::make_unique<Mission>(scenario, seeds[i], overrides));
+        const std::size_t made = i + 1;
+        if (made == 1) first = ResidentBytes();
+        if (made < 2 || made == n || first < 0 ||
+            (made < 64 ? (made & (made - 1)) != 0 : made % 64 != 0))
+          continue;
+        const double each =
+            std::max(static_cast<double>(ResidentBytes() - first), 0.0) /
+            static_cast<double>(made - 1);
+        const double more = each * static_cast<double>(n - made);
+        const long available = AvailableBytes();
+        if (available < 0 || more * (made < 64 ? 0.5 : 1.0) <= available)
+          continue;
+        missions_.clear();
+        Refuse("aia.VectorMissions", "n",
+               std::to_string(n) + " missions of this scenario need about " +
+                   FormatNumber(std::ceil(more / (1 << 20))) + " MiB more (" +
+                   FormatNumber(std::ceil(each / 1024.0)) +
+                   " KiB each), and this machine has " +
+                   FormatNumber(std::floor(available / double(1 << 20))) +
+                   " MiB available");
+      }
+    } catch (const std::bad_alloc&) {
+      const std::size_t made = missions_.size();
+      missions_.clear();
+      Refuse("aia.VectorMissions", "n",
+             std::to_string(n) +
+                 " missions do not fit in memory (it ran out after " +
+                 std::to_string(made) + ")");
+    }
     next_seed_ = *std::max_element(seeds.begin(), seeds.end()) + 1;
   }
   int size() const { return static_cast<int>(missions_.size()); }

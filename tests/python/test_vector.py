@@ -64,6 +64,16 @@ def test_vector_moves_are_checked():
         aia.VectorMissions(0, DEFAULT)
 
 
+def test_more_missions_than_memory_holds_are_refused_before_they_are_made():
+    # Ten million missions of a few hundred KiB each: refused after the
+    # first few, not by a std::bad_alloc (or the machine swapping) later.
+    with pytest.raises(aia.InputError, match=r"aia.VectorMissions: n: "
+                       r"10000000 missions of this scenario need about \d+ "
+                       r"MiB more \(\d+ KiB each\), and this machine has "
+                       r"\d+ MiB available"):
+        aia.VectorMissions(10 ** 7, DEFAULT, overrides=SMALL)
+
+
 def play(v, rounds):
     """Greedy moves for every mission for `rounds` steps; the results."""
     policies = [aia.builtin_policy("greedy") for _ in range(len(v))]
