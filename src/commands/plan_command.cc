@@ -51,6 +51,7 @@ std::string CheckPlanOutputs(const PlanOptions& o,
   CheckNotAnInput(o.out, "--out", inputs);
   CheckNotAnInput(side, "--out", inputs, "written next to the plan");
   CheckOutputFiles({side}, "--out", "written next to the plan");
+  MakeOutputDir(out.parent_path().string(), "--out");
   return side;
 }
 
@@ -127,7 +128,6 @@ void WritePlan(const PlanOptions& o, const std::string& side,
                const PreparedMission& mission, const SamplingPlan& plan) {
   const nlohmann::ordered_json j =
       PlanJson(mission.scenario, mission.instance->world, plan);
-  MakeOutputDir(std::filesystem::path(o.out).parent_path().string(), "--out");
   WriteFileAtomic(
       o.out,
       j.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");

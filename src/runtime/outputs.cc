@@ -1,10 +1,5 @@
 #include "aia/runtime/outputs.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -62,17 +57,8 @@ void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
   } catch (const std::exception& e) {
     throw InputError("command line", 0, flag, e.what());
   }
-  // A file is created and removed again: permissions, read-only file
-  // systems and folders like /proc all answer this the same way.
-  const std::string probe =
-      dir + "/.aia-probe.tmp." + std::to_string(::getpid());
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
-  if (fd < 0)
-    throw InputError(
-        "command line", 0, flag,
-        "cannot write into '" + dir + "': " + std::strerror(errno));
-  ::close(fd);
-  ::unlink(probe.c_str());
+  if (const std::string why = UnwritableDirProblem(dir); !why.empty())
+    throw InputError("command line", 0, flag, why);
   if (!lock) return;
   LockOutput(dir, flag);
   RemoveStaleTemporaries(dir);

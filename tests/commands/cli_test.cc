@@ -181,7 +181,12 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
        "error: command line: --first-seed: must be an integer >= 0, got "
        "0x10\n"},
       {{"plan", scenario, "--budget", "many"},
-       "error: command line: --budget: must be an integer >= 0, got many\n"},
+       "error: command line: --budget: must be an integer in [0, "
+       "1000000000], got many\n"},
+      // As policy.anytime takes it: a plan's effective.yaml must load.
+      {{"plan", scenario, "--budget", "99999999999"},
+       "error: command line: --budget: must be an integer in [0, "
+       "1000000000], got 99999999999\n"},
       {{"render", scenario, "--out", "x.mp4", "--width", "wide"},
        "error: command line: --width: must be an integer in [16, 8192], got "
        "wide\n"},

@@ -69,6 +69,34 @@ TEST(HardeningTest, UnwritableOutputFolderIsBadInput) {
   ExpectOneErrorLine(r, "--out: ");
 }
 
+TEST(HardeningTest, EveryCommandRefusesAnUnwritableFolderBeforeItWorks) {
+  // Each command's --out inside /proc: one error line, exit code 2, and
+  // nothing done first (train used to train its epochs, then fail to save
+  // with exit code 1).
+  const std::string dir = testing::MakeTempDir("aia_proc_");
+  ASSERT_EQ(RunAia({"dataset", "--out", dir + "/data", "--size", "2x2",
+                    "--episodes", "2", "--keep", "2", "--quiet"})
+                .exit_code,
+            0);
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  const std::vector<std::vector<std::string>> commands = {
+      {"train", "--data", dir + "/data", "--epochs", "1", "--out",
+       "/proc/model.pt", "--quiet"},
+      {"dataset", "--episodes", "1", "--out", "/proc/data", "--quiet"},
+      {"eval", "--sizes", "2x2", "--seeds", "1", "--out", "/proc/eval",
+       "--quiet"},
+      {"world", scenario, "--out", "/proc/world.xml"},
+      {"plan", scenario, "--out", "/proc/plan.json"},
+      {"render", scenario, "--max-steps", "1", "--out", "/proc/video.mp4",
+       "--quiet"}};
+  for (const std::vector<std::string>& args : commands) {
+    const auto r = RunAia(args);
+    ExpectOneErrorLine(r, "--out: ");
+    EXPECT_EQ(r.out, "") << args[0];
+  }
+  fs::remove_all(dir);
+}
+
 TEST(HardeningTest, TemporaryFilesOfKilledJobsAreRemoved) {
   const std::string dir = testing::MakeTempDir("aia_tmp_");
   // PIDs above the kernel's default pid_max (4194304) never exist.

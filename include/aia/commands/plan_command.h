@@ -26,7 +26,7 @@ struct PlanOptions {
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(budget)
-                 .In(AtLeast(0))
+                 .In(Between(0, kMaxAnytime))
                  .Doc("anytime budget: sampling iterations after the first "
                       "goal (default: the expert's policy.anytime)"));
   }

@@ -85,6 +85,12 @@ class LineReader {
 // Creates a directory and its parents; throws std::runtime_error on failure.
 void MakeDirs(const std::string& path);
 
+// Whether a file can be made in folder `dir` (one is created and removed
+// again: permissions, read-only file systems and folders like /proc all
+// answer this the same way): "" if so, else "cannot write into 'DIR':
+// <errno text>".
+std::string UnwritableDirProblem(const std::string& dir);
+
 // An exclusive advisory lock (flock) on `path`: a folder, or a file
 // (created if needed, never written), held until destroyed or until the
 // process ends: a killed job leaves no stale lock. Throws

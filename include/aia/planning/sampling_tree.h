@@ -38,6 +38,9 @@
 
 namespace aia {
 
+// The most anytime iterations policy.anytime and `aia plan --budget` take.
+inline constexpr double kMaxAnytime = 1e9;
+
 // The tree's settings. The ones a user may set are declared (they are the
 // expert's parameters, `policy:` keys); max_depth and p_sorted are set by the
 // planners that use the tree.
@@ -74,7 +77,7 @@ struct SamplingParams {
         "the next target of its tour not yet localized) rather than a "
         "nearest-first assignment"));
     a->Visit(AIA_FIELD(anytime)
-                 .In(Between(0, 1e9))
+                 .In(Between(0, kMaxAnytime))
                  .Doc("sampling iterations after the first goal (`aia plan "
                       "--budget`)"));
     a->Visit(AIA_FIELD(max_iterations)

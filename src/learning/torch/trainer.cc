@@ -524,6 +524,11 @@ std::unique_ptr<FileLock> LockOutputFolder(const std::string& out) {
   } catch (const std::runtime_error& e) {
     throw InputError("command line", 0, "--out", e.what());
   }
+  // A folder no file can be made in (/proc, read-only): refused before the
+  // first epoch, not when the model is written.
+  if (const std::string why = UnwritableDirProblem(parent.string());
+      !why.empty())
+    throw InputError("command line", 0, "--out", why);
   // OUT, OUT.ckpt and the log share OUT's name without ".pt".
   std::string prefix = std::filesystem::path(out).filename().string();
   if (prefix.size() > 3 && prefix.compare(prefix.size() - 3, 3, ".pt") == 0)
