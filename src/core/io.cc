@@ -296,8 +296,7 @@ std::string UnwritableDirProblem(const std::string& dir) {
   const std::string probe =
       dir + "/.aia-probe.tmp." + std::to_string(::getpid());
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
-  if (fd < 0)
-    return "cannot write into '" + dir + "': " + std::strerror(errno);
+  if (fd < 0) return "cannot write into '" + dir + "': " + std::strerror(errno);
   ::close(fd);
   ::unlink(probe.c_str());
   return "";
