@@ -237,19 +237,13 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
   spec.overrides = {{"--policy", "policy.name", o.policy}};
   for (const std::string& s : o.sets) {
     Override ov = ParseSetFlag(s);
-    if (ov.path == "seed" || ov.path == "robots.count" ||
-        ov.path == "targets.count" || ov.path == "policy.name")
-      throw InputError("command line", 0, "--set",
-                       ov.path + " is given by --first-seed, --size, --policy");
-    // Given twice, one would win silently (aia run refuses the same).
-    if ((ov.path == "mission.max_steps" && o.max_steps > 0) ||
-        (ov.path == "policy.model" && !o.model.empty()))
-      throw InputError(
-          "command line", 0, "--set " + ov.path,
-          std::string("is also given by ") +
-              (o.max_steps > 0 && ov.path == "mission.max_steps" ? "--max-steps"
-                                                                 : "--model") +
-              "; give one of them");
+    RefuseSetOfFlagKey(ov, "seed", "--first-seed");
+    RefuseSetOfFlagKey(ov, "robots.count", "--size");
+    RefuseSetOfFlagKey(ov, "targets.count", "--size");
+    RefuseSetOfFlagKey(ov, "policy.name", "--policy");
+    if (o.max_steps > 0)
+      RefuseSetOfFlagKey(ov, "mission.max_steps", "--max-steps");
+    if (!o.model.empty()) RefuseSetOfFlagKey(ov, "policy.model", "--model");
     if (ov.path == "mission.decisions" && ov.value != "lockstep")
       throw InputError("command line", 0, "--set",
                        "mission.decisions " + ov.value +

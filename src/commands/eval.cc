@@ -60,6 +60,17 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
   for (const std::string& text : sets) {
     const Override o = ParseSetFlag(text);
     const std::string key = "--set " + o.path;
+    // A whole section holding a key the command sets would replace it.
+    for (const char* held : {"robots.count", "targets.count", "policy.name",
+                             "mission.max_steps"}) {
+      if (std::string(held).rfind(o.path + ".", 0) == 0)
+        throw InputError("command line", 0, key,
+                         "replaces the whole section, which holds " +
+                             std::string(held) +
+                             ", set by the command; set the section's keys "
+                             "one by one (--set " +
+                             o.path + ".KEY=VALUE)");
+    }
     if (o.path == "seed" || o.path == "robots.count" ||
         o.path == "targets.count") {
       throw InputError("command line", 0, key,

@@ -51,13 +51,8 @@ std::vector<Override> CommandOverrides::ToOverrides(
   const std::size_t given = out.size();
   for (const std::string& s : sets) {
     Override o = ParseSetFlag(s);
-    // A key given by its own flag and by --set: one of them would silently
-    // lose, so neither is guessed.
     for (std::size_t i = 0; i < given; ++i)
-      if (out[i].path == o.path)
-        throw InputError(
-            "command line", 0, "--set " + o.path,
-            "is also given by " + out[i].flag + "; give one of them");
+      RefuseSetOfFlagKey(o, out[i].path, out[i].flag);
     out.push_back(std::move(o));
   }
   return out;

@@ -178,6 +178,19 @@ Override ParseSetFlag(const std::string& text) {
   return o;
 }
 
+void RefuseSetOfFlagKey(const Override& set, const std::string& path,
+                        const std::string& flag) {
+  if (set.path == path)
+    throw InputError("command line", 0, "--set " + set.path,
+                     "is also given by " + flag + "; give one of them");
+  if (path.rfind(set.path + ".", 0) == 0)
+    throw InputError("command line", 0, "--set " + set.path,
+                     "replaces the whole section, and " + flag + " gives " +
+                         path +
+                         " in it; set the section's keys one by one (--set " +
+                         set.path + ".KEY=VALUE) or drop " + flag);
+}
+
 Scenario LoadScenario(const std::string& path,
                       const std::vector<Override>& overrides) {
   return ParseScenario(ReadText(path), path,

@@ -852,6 +852,22 @@ TEST(CliTest, BadSetIsBadInputOnEveryCommand) {
         "--set", "policy.name=random"},
        "error: command line: --set policy.name: is also given by --policy; "
        "give one of them\n"},
+      // A whole section replaced by --set after a flag set a key in it: the
+      // flag lost silently.
+      {{"run", scenario, "--max-steps", "2", "--set", "mission={eps: 0.05}",
+        "--out", out},
+       "error: command line: --set mission: replaces the whole section, and "
+       "--max-steps gives mission.max_steps in it; set the section's keys "
+       "one by one (--set mission.KEY=VALUE) or drop --max-steps\n"},
+      {{"eval", "--sizes", "2x2", "--set", "policy={name: random}", "--out",
+        out},
+       "error: command line: --set policy: replaces the whole section, which "
+       "holds policy.name, set by the command; set the section's keys one by "
+       "one (--set policy.KEY=VALUE)\n"},
+      // A section given nothing read as absent: every key at its default.
+      {{"run", scenario, "--set", "mission=", "--out", out},
+       "error: command line: --set mission: must be a mapping with keys among "
+       "eps, max_steps, stop_at_success, decisions, avoidance, got nothing\n"},
   };
   for (const auto& [args, prefix] : cases) {
     std::vector<std::string> a = args;

@@ -302,7 +302,12 @@ void FieldReader::ReadStruct(const ConfigNode& node, const std::string& key,
   static_assert(internal::HasSerialize<T>::value,
                 "ReadStruct needs a struct with Serialize()");
   const internal::FieldNames names = internal::NamesOf(value);
-  if (!node.IsNull() && !node.IsMap()) {
+  // A section given nothing on the command line (--set mission=) would
+  // read as absent, every key at its default: refused, as a key given
+  // nothing is. (In a file, `mission:` with nothing under it is an empty
+  // section.)
+  if ((!node.IsNull() && !node.IsMap()) ||
+      (node.IsNull() && !node.origin.empty())) {
     FailExpected(node, key,
                  "a mapping with keys among " + field_text::Join(names.names));
   }

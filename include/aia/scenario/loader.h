@@ -27,6 +27,13 @@ struct Override {
 // has no '=' or the path is not a key path.
 Override ParseSetFlag(const std::string& text);
 
+// InputError when `set` (a --set override) gives `path`, which the flag
+// `flag` gives too: the same key, or a section holding it, which --set
+// would replace with the flag's value lost. Either way one would silently
+// win, so neither is guessed.
+void RefuseSetOfFlagKey(const Override& set, const std::string& path,
+                        const std::string& flag);
+
 // Reads and validates a scenario file with the overrides applied in order.
 // Relative paths inside it (the map, the model) are resolved against the
 // file's directory. A change of policy.name drops the file's parameters
