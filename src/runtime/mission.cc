@@ -32,6 +32,28 @@ constexpr char kEffectiveHeader[] =
     "# defaults filled in, command-line overrides and the policy's parameters\n"
     "# applied. `aia run` reads it back to the same mission.\n";
 
+// policy.model (or model_sha256) given to a policy that reads no model
+// changes nothing: a warning, where the key and the policy's name come from
+// the same place (the file, or the command line), so that a file's model
+// for igbnet run with --policy greedy says nothing.
+void WarnUnreadModel(const PolicySpec& policy, Scenario* scenario) {
+  if (policy.model_file() != nullptr) return;
+  const auto origin = [&](const std::string& key) {
+    const auto it = scenario->sources.find(key);
+    return it == scenario->sources.end() ? std::string() : it->second.origin;
+  };
+  for (const char* key : {"policy.model", "policy.model_sha256"}) {
+    if (!scenario->sources.count(key) ||
+        (origin(key).empty() != origin("policy.name").empty()))
+      continue;
+    scenario->warnings.push_back(
+        scenario
+            ->ErrorAt(key, "policy " + scenario->policy.name +
+                               " reads no model: it changes nothing")
+            .Format());
+  }
+}
+
 }  // namespace
 
 std::vector<Override> CommandOverrides::ToOverrides(
@@ -73,6 +95,7 @@ PreparedMission PrepareMission(Scenario scenario,
   // keep one thread each).
   SetPolicyThreads(static_cast<int>(std::thread::hardware_concurrency()));
   m.policy = registry.Resolve(scenario);
+  WarnUnreadModel(*m.policy, &scenario);
   m.instance = BuildInstance(scenario);
   ReportWarnings(scenario);
   m.scenario = std::move(scenario);

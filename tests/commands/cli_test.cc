@@ -413,6 +413,35 @@ TEST(CliTest, AKeyThatChangesNothingIsWarnedOfOnce) {
   fs::remove_all(dir);
 }
 
+// A model for a policy that reads none: a warning at its line (or flag),
+// but not where the command line switched away from the file's policy.
+TEST(CliTest, AModelForAPolicyThatReadsNoneIsWarnedOf) {
+  const std::string dir = testing::MakeTempDir("aia_nomodel_");
+  const std::string file = dir + "/greedy.yaml";
+  std::ofstream(file) << "robots: {count: 2}\n"
+                         "targets: {count: 2}\n"
+                         "policy: {name: greedy, model: nowhere.pt}\n"
+                         "mission: {max_steps: 1}\n";
+  const auto r = RunAia({"run", file, "--out", dir + "/a", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "warning: " + file +
+                       ":3: policy.model: policy greedy reads no model: it "
+                       "changes nothing\n");
+  const auto flag =
+      RunAia({"run", testing::SourcePath("scenarios/default.yaml"), "--policy",
+              "random", "--set", "policy.model=" + file, "--max-steps", "1",
+              "--out", dir + "/b", "--quiet"});
+  EXPECT_EQ(flag.exit_code, 0) << flag.err;
+  EXPECT_EQ(flag.err,
+            "warning: command line: --set policy.model: policy random reads "
+            "no model: it changes nothing\n");
+  const auto other = RunAia(
+      {"run", file, "--policy", "random", "--out", dir + "/c", "--quiet"});
+  EXPECT_EQ(other.exit_code, 0) << other.err;
+  EXPECT_EQ(other.err, "");
+  fs::remove_all(dir);
+}
+
 // Wheeled robots with absurd motors (10 g, 1000 N m): MuJoCo resets their
 // unstable state. The run writes its files and exits 0, but says so on
 // stderr, naming the counts that diagnostics.json holds and what to change.
