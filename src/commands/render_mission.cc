@@ -90,9 +90,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Largest image side: far beyond any video, well within software GL's limits.
-constexpr int kMaxSide = 8192;
-
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 
 double SecondsSince(std::chrono::steady_clock::time_point t0) {
@@ -116,26 +113,9 @@ std::vector<Override> RenderOverrides(const RenderOptions& o,
   return out;
 }
 
-// What H.264 and the frame clock need of the render section: even sides (4:2:0)
-// and at most one frame per physics substep.
+// The render section's flags and what its size needs (its even sides and
+// frame rate are checked wherever a scenario is read: RenderConfig).
 void CheckRenderSection(const Scenario& s, const RenderOptions& o) {
-  for (const auto& [value, key] :
-       {std::pair{s.render.width, "render.width"},
-        std::pair{s.render.height, "render.height"}}) {
-    if (value < 16 || value > kMaxSide || value % 2 != 0)
-      throw s.ErrorAt(key, "must be an even number of pixels in [16, " +
-                               std::to_string(kMaxSide) +
-                               "] (H.264 needs even sides), got " +
-                               std::to_string(value));
-  }
-  const int max_fps =
-      static_cast<int>(std::floor(1.0 / s.physics.timestep + 1e-9));
-  if (s.render.fps > max_fps)
-    throw s.ErrorAt("render.fps",
-                    "must be in [1, " + std::to_string(max_fps) +
-                        "] (at most one frame per physics step of " +
-                        FormatNumber(s.physics.timestep) + " s), got " +
-                        std::to_string(s.render.fps));
   {
     RenderOptions flags = o;
     CheckFlags(&flags);  // their declarations: `--flag: what`

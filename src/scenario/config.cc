@@ -426,6 +426,16 @@ void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model,
   }
 }
 
+void RenderConfig::Validate(const FieldChecker& check) {
+  for (const int* side : {&width, &height}) {
+    if (*side % 2 != 0)
+      check.Fail(*side,
+                 "must be an even number of pixels in [16, 8192] (H.264 "
+                 "needs even sides), got " +
+                     std::to_string(*side));
+  }
+}
+
 void Scenario::Validate(const FieldChecker& check) {
   // The name labels one-line messages and the MuJoCo model (escaped there):
   // a line break or another control character has no place in it.
@@ -439,6 +449,14 @@ void Scenario::Validate(const FieldChecker& check) {
                            "); a name is one line of printable text");
     }
   }
+  // At most one video frame per physics step (`aia render`'s frame clock).
+  const int max_fps =
+      static_cast<int>(std::floor(1.0 / physics.timestep + 1e-9));
+  if (render.fps > max_fps)
+    check.Fail(render.fps, "must be in [1, " + std::to_string(max_fps) +
+                               "] (at most one frame per physics step of " +
+                               FormatNumber(physics.timestep) + " s), got " +
+                               std::to_string(render.fps));
   const Vec2& size = workspace.size;
   const std::string bounds = "[0, " + FormatNumber(size.x()) + "] x [0, " +
                              FormatNumber(size.y()) + "]";

@@ -632,6 +632,9 @@ struct RenderConfig {
             .Doc(
                 "robot whose uncertainty heatmap `aia render` draws; -1 none"));
   }
+  // Even sides (H.264's 4:2:0), checked wherever a scenario is read, so that
+  // a run's effective.yaml can always be rendered.
+  void Validate(const FieldChecker& check);
 };
 
 // One mission. `file` and `sources` let later stages (the world, the policy
