@@ -112,13 +112,19 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     throw std::runtime_error("its metadata is not JSON");
   if (j.value("format", "") != kFormat)
     throw std::runtime_error("not an aia I-GBNet model");
-  const int version = j.contains("version") && j["version"].is_number_integer()
-                          ? j["version"].get<int>()
-                          : -1;
-  if (version < 1 || version > kVersion)
-    throw std::runtime_error("model format version " + std::to_string(version) +
-                             ", this build reads 1 to " +
-                             std::to_string(kVersion));
+  if (!j.contains("version"))
+    throw std::runtime_error("metadata: version: is missing");
+  const nlohmann::json& v = j["version"];
+  const bool integer = v.is_number_integer();
+  if (!integer || v.get<std::int64_t>() < 1 ||
+      v.get<std::int64_t>() > kVersion)
+    throw std::runtime_error(
+        integer ? "model format version " + v.dump() +
+                      ", this build reads 1 to " + std::to_string(kVersion)
+                : "metadata: version: must be an integer in [1, " +
+                      std::to_string(kVersion) + "], got " +
+                      v.dump(-1, ' ', false,
+                             nlohmann::json::error_handler_t::replace));
   j.erase("format");
   j.erase("version");
   // What every version writes; the other keys default to "off".

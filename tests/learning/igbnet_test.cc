@@ -287,6 +287,26 @@ TEST(IgbNetTest, MetadataRoundTripsAndRejectsNonsense) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "model format version 10, this build reads 1 to 9");
   }
+  // A version that is no integer, or none: said as it is (both read as
+  // "version -1" before).
+  const auto version_error = [&](const std::string& to) {
+    std::string json = mp.ToJson();
+    json.replace(json.find("\"version\":3"), 11, to);
+    try {
+      NetworkConfig::FromJson(json);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("read");
+  };
+  EXPECT_EQ(version_error("\"version\":2.5"),
+            "metadata: version: must be an integer in [1, 9], got 2.5");
+  EXPECT_EQ(version_error("\"version\":\"3\""),
+            "metadata: version: must be an integer in [1, 9], got \"3\"");
+  EXPECT_EQ(version_error("\"vers\":3"), "metadata: version: is missing");
+  // 2^32 + 3 is no version 3 (an int would wrap to it).
+  EXPECT_EQ(version_error("\"version\":4294967299"),
+            "model format version 4294967299, this build reads 1 to 9");
 }
 
 // The metadata is read through NetworkConfig's declarations (the ranges
