@@ -116,8 +116,7 @@ NetworkConfig NetworkConfig::FromJson(const std::string& text) {
     throw std::runtime_error("metadata: version: is missing");
   const nlohmann::json& v = j["version"];
   const bool integer = v.is_number_integer();
-  if (!integer || v.get<std::int64_t>() < 1 ||
-      v.get<std::int64_t>() > kVersion)
+  if (!integer || v.get<std::int64_t>() < 1 || v.get<std::int64_t>() > kVersion)
     throw std::runtime_error(
         integer ? "model format version " + v.dump() +
                       ", this build reads 1 to " + std::to_string(kVersion)
