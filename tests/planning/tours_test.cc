@@ -177,6 +177,17 @@ std::vector<std::vector<int>> DefinitionRegret(const std::vector<int>& starts,
   return routes;
 }
 
+// m targets at random points of the grid (at) and their ids 0..m-1.
+void RandomGridTargets(Rng* rng, int m, std::vector<int>* at,
+                       std::vector<int>* targets) {
+  at->resize(m);
+  targets->resize(m);
+  for (int k = 0; k < m; ++k) {
+    (*at)[k] = static_cast<int>(rng->UniformInt(400));
+    (*targets)[k] = k;
+  }
+}
+
 TEST(ToursTest, InsertionIsRegretInsertionAsDefined) {
   // The planner keeps each route's values with a target inserted until the
   // route changes; with no budget for the local search its tours must be
@@ -210,12 +221,9 @@ TEST(ToursTest, TargetsGoToTheirCandidateRobots) {
   // left for the local search to move it.
   Rng rng(3);
   const int n = 12, m = 30;
-  std::vector<int> starts(n), at(m), targets(m);
+  std::vector<int> starts(n), at, targets;
   for (int& s : starts) s = static_cast<int>(rng.UniformInt(400));
-  for (int k = 0; k < m; ++k) {
-    at[k] = static_cast<int>(rng.UniformInt(400));
-    targets[k] = k;
-  }
+  RandomGridTargets(&rng, m, &at, &targets);
   GridLegs legs(at);
   TourPlanner planner;
   TourSettings settings;
@@ -285,11 +293,8 @@ TEST(ToursTest, ManyTargetsForOneRobotEndInOneRoute) {
   // minutes in full. Bounded, the plan ends, and holds every target once.
   Rng rng(11);
   const int m = 600;
-  std::vector<int> at(m), targets(m);
-  for (int k = 0; k < m; ++k) {
-    at[k] = static_cast<int>(rng.UniformInt(400));
-    targets[k] = k;
-  }
+  std::vector<int> at, targets;
+  RandomGridTargets(&rng, m, &at, &targets);
   GridLegs legs(at);
   TourPlanner planner;
   TourSettings settings;
