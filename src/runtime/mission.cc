@@ -33,9 +33,9 @@ constexpr char kEffectiveHeader[] =
     "# applied. `aia run` reads it back to the same mission.\n";
 
 // policy.model (or model_sha256) given to a policy that reads no model
-// changes nothing: a warning, where the key and the policy's name come from
-// the same place (the file, or the command line), so that a file's model
-// for igbnet run with --policy greedy says nothing.
+// changes nothing: a warning, unless the key is the file's and the command
+// line switched the policy (a file's model for igbnet run with --policy
+// greedy says nothing).
 void WarnUnreadModel(const PolicySpec& policy, Scenario* scenario) {
   if (policy.model_file() != nullptr) return;
   const auto origin = [&](const std::string& key) {
@@ -44,7 +44,7 @@ void WarnUnreadModel(const PolicySpec& policy, Scenario* scenario) {
   };
   for (const char* key : {"policy.model", "policy.model_sha256"}) {
     if (!scenario->sources.count(key) ||
-        (origin(key).empty() != origin("policy.name").empty()))
+        (origin(key).empty() && !origin("policy.name").empty()))
       continue;
     scenario->warnings.push_back(
         scenario

@@ -418,7 +418,8 @@ TEST(CliTest, AKeyThatChangesNothingIsWarnedOfOnce) {
 }
 
 // A model for a policy that reads none: a warning at its line (or flag),
-// but not where the command line switched away from the file's policy.
+// but not for the file's model where the command line switched away from
+// the file's policy.
 TEST(CliTest, AModelForAPolicyThatReadsNoneIsWarnedOf) {
   const std::string dir = testing::MakeTempDir("aia_nomodel_");
   const std::string file = dir + "/greedy.yaml";
@@ -443,6 +444,18 @@ TEST(CliTest, AModelForAPolicyThatReadsNoneIsWarnedOf) {
       {"run", file, "--policy", "random", "--out", dir + "/c", "--quiet"});
   EXPECT_EQ(other.exit_code, 0) << other.err;
   EXPECT_EQ(other.err, "");
+  // The command line's model for the file's policy.
+  const std::string plain = dir + "/plain.yaml";
+  std::ofstream(plain) << "robots: {count: 2}\n"
+                          "targets: {count: 2}\n"
+                          "policy: {name: greedy}\n"
+                          "mission: {max_steps: 1}\n";
+  const auto set = RunAia({"run", plain, "--set", "policy.model=" + file,
+                           "--out", dir + "/d", "--quiet"});
+  EXPECT_EQ(set.exit_code, 0) << set.err;
+  EXPECT_EQ(set.err,
+            "warning: command line: --set policy.model: policy greedy reads "
+            "no model: it changes nothing\n");
   fs::remove_all(dir);
 }
 
