@@ -63,7 +63,7 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
     // A whole section holding a key the command sets would replace it.
     for (const char* held : {"robots.count", "targets.count", "policy.name",
                              "mission.max_steps"}) {
-      if (std::string(held).rfind(o.path + ".", 0) == 0)
+      if (ReplacesSectionOf(o.path, held))
         throw InputError("command line", 0, key,
                          "replaces the whole section, which holds " +
                              std::string(held) +

@@ -178,12 +178,16 @@ Override ParseSetFlag(const std::string& text) {
   return o;
 }
 
+bool ReplacesSectionOf(const std::string& set_path, const std::string& path) {
+  return path.rfind(set_path + ".", 0) == 0;
+}
+
 void RefuseSetOfFlagKey(const Override& set, const std::string& path,
                         const std::string& flag) {
   if (set.path == path)
     throw InputError("command line", 0, "--set " + set.path,
                      "is also given by " + flag + "; give one of them");
-  if (path.rfind(set.path + ".", 0) == 0)
+  if (ReplacesSectionOf(set.path, path))
     throw InputError("command line", 0, "--set " + set.path,
                      "replaces the whole section, and " + flag + " gives " +
                          path +

@@ -27,6 +27,10 @@ struct Override {
 // has no '=' or the path is not a key path.
 Override ParseSetFlag(const std::string& text);
 
+// Whether an override of `set_path` replaces a whole section holding the
+// key `path` (mission holds mission.max_steps).
+bool ReplacesSectionOf(const std::string& set_path, const std::string& path);
+
 // InputError when `set` (a --set override) gives `path`, which the flag
 // `flag` gives too: the same key, or a section holding it, which --set
 // would replace with the flag's value lost. Either way one would silently
