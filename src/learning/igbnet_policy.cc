@@ -53,7 +53,9 @@ std::shared_ptr<const IgbNet> LoadModelOnce(const std::string& path,
 
 IgbNetPolicy::IgbNetPolicy(std::shared_ptr<const IgbNet> net,
                            IgbNetParams params)
-    : IgbNetPolicy(std::make_unique<NetworkScorer>(std::move(net)), params) {}
+    : IgbNetPolicy(
+          std::make_unique<NetworkScorer>(std::move(net), params.precision),
+          params) {}
 
 IgbNetPolicy::IgbNetPolicy(std::unique_ptr<MoveScorer> scorer,
                            IgbNetParams params)
@@ -68,7 +70,7 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int num_targets,
   scorer_->Reset(map, num_robots, num_targets);
   if (rules_) rules_->Reset(num_robots, num_targets);
   logits_.assign(static_cast<std::size_t>(num_robots) * kNumMoves, 0.0f);
-  decisions_ = shaped_moves_ = handwritten_moves_ = 0;
+  decisions_ = shaped_moves_ = handwritten_moves_ = bfloat16_decisions_ = 0;
 }
 
 const SearchMemory& IgbNetPolicy::search() const {
@@ -126,6 +128,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
       ++handwritten_moves_;
       continue;
     }
+    if (scorer_->BFloat16()) ++bfloat16_decisions_;
     const int here = (*ctx.robot_lattice)[i];
     const float* l = batch_logits_.data() + b * kNumMoves;
     std::copy(l, l + kNumMoves, logits_.data() + i * kNumMoves);
@@ -165,6 +168,7 @@ std::vector<std::pair<std::string, long>> IgbNetPolicy::Counters() const {
   }
   c.push_back({"shaped_moves", shaped_moves_});
   c.push_back({"handwritten_moves", handwritten_moves_});
+  c.push_back({"bfloat16_decisions", bfloat16_decisions_});
   return c;
 }
 
@@ -184,6 +188,9 @@ void AddLearnedPolicies(PolicyRegistry* registry) {
                             "which policy.coordination none does not use; "
                             "remove it, or set policy.coordination: rules");
         }
+        if (const std::string why = PrecisionProblem(params.precision);
+            !why.empty())
+          throw s.ErrorAt("policy.precision", why);
         const bool given = !s.policy.model.empty();
         const std::string path =
             given ? s.policy.model : DefaultModelPath(params.coordination);

@@ -7,12 +7,14 @@
 
 namespace aia {
 
-NetworkScorer::NetworkScorer(std::shared_ptr<const IgbNet> net)
-    : net_(std::move(net)) {
+NetworkScorer::NetworkScorer(std::shared_ptr<const IgbNet> net,
+                             Precision precision)
+    : net_(std::move(net)), precision_(precision) {
   AIA_CHECK(net_ != nullptr);
 }
 
 void NetworkScorer::Reset(const Map& map, int num_robots, int num_targets) {
+  bf16_ = UsesBFloat16(precision_, num_robots);
   renderer_.emplace(
       map.occupancy(), map.size(),
       AtLatticeStep(net_->config().channels, map.lattice().step()),
@@ -153,12 +155,12 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
       if (passing)
         net_->Embed(images_.data() + begin * size, end - begin,
                     renderer_->height(), renderer_->width(),
-                    features_.data() + begin * hidden);
+                    features_.data() + begin * hidden, bf16_);
       else if (made == 1 && (ctx.ready || end - begin > 1))
         ForwardAlone(images_.data() + begin * size, size, scored, worker);
       else if (made > 0)
         net_->Forward(images_.data() + begin * size, made, renderer_->height(),
-                      renderer_->width(), scored);
+                      renderer_->width(), scored, bf16_);
       if (made == end - begin) continue;
       // Unpacked to the chunk's rows, from the last (a row's packed place is
       // never after its own).
@@ -228,7 +230,8 @@ void NetworkScorer::ForwardAlone(const float* image, std::size_t size,
   std::copy_n(image, size, pair.data());
   std::copy_n(image, size, pair.data() + size);
   float two[2 * kNumMoves];
-  net_->Forward(pair.data(), 2, renderer_->height(), renderer_->width(), two);
+  net_->Forward(pair.data(), 2, renderer_->height(), renderer_->width(), two,
+                bf16_);
   std::copy_n(two, kNumMoves, logits);
 }
 

@@ -4,6 +4,7 @@
 #include "torch_backend.h"
 
 #include <atomic>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -63,13 +64,30 @@ const NetworkConfig& IgbNet::config() const { return backend_->config(*net_); }
 const FileIdentity& IgbNet::file() const { return backend_->file(*net_); }
 
 void IgbNet::Forward(const float* images, int batch, int height, int width,
-                     float* logits) const {
-  backend_->infer(*net_, images, batch, height, width, false, logits);
+                     float* logits, bool bfloat16) const {
+  backend_->infer(*net_, images, batch, height, width, false, bfloat16, logits);
 }
 
 void IgbNet::Embed(const float* images, int batch, int height, int width,
-                   float* features) const {
-  backend_->infer(*net_, images, batch, height, width, true, features);
+                   float* features, bool bfloat16) const {
+  backend_->infer(*net_, images, batch, height, width, true, bfloat16,
+                  features);
+}
+
+bool NativeBFloat16() { return Torch().native_bfloat16(); }
+
+std::string PrecisionProblem(Precision precision) {
+  if (precision != Precision::kBFloat16 || NativeBFloat16()) return "";
+  return "bfloat16: this CPU has no native bfloat16 (AMX-BF16 or AVX-512 "
+         "BF16), or libtorch has no oneDNN; use float32 or auto";
+}
+
+bool UsesBFloat16(Precision precision, int robots) {
+  if (const std::string why = PrecisionProblem(precision); !why.empty())
+    throw std::runtime_error(why);
+  return precision == Precision::kBFloat16 ||
+         (precision == Precision::kAuto && robots >= kBFloat16Team &&
+          NativeBFloat16());
 }
 
 void IgbNet::Head(const float* features, const TeamGraph& graph,

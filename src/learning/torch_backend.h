@@ -22,7 +22,7 @@
 namespace aia {
 
 // Bumped whenever the table below changes.
-inline constexpr int kTorchBackendVersion = 1;
+inline constexpr int kTorchBackendVersion = 2;
 // The plugin's one exported symbol: extern "C" const void* NAME(), its table
 // (core/plugin.h).
 inline constexpr const char* kTorchBackendSymbol = "aia_torch_backend";
@@ -36,9 +36,10 @@ struct TorchBackend {
   void (*save)(const TorchNet& net, const std::string& path);
   const NetworkConfig& (*config)(const TorchNet& net);
   const FileIdentity& (*file)(const TorchNet& net);
-  // Forward (embed false) or Embed (true).
+  // Forward (embed false) or Embed (true); the convolutions in bfloat16
+  // where `bfloat16` (IgbNet::Forward).
   void (*infer)(const TorchNet& net, const float* images, int batch, int height,
-                int width, bool embed, float* out);
+                int width, bool embed, bool bfloat16, float* out);
   void (*head)(const TorchNet& net, const float* features,
                const TeamGraph& graph, float* logits);
   std::int64_t (*num_parameters)(const TorchNet& net);
@@ -56,6 +57,8 @@ struct TorchBackend {
   // Whether inference may run the convolutions on oneDNN's own tensors
   // (torch_net.h, FoldedNet); returns the setting before.
   bool (*set_onednn_layout)(bool on);
+  // NativeBFloat16 (network.h).
+  bool (*native_bfloat16)();
 };
 
 // The plugin's table, loading it at the first call (thread-safe; errors as

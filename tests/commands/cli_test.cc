@@ -680,6 +680,49 @@ TEST(CliTest, RunWritesItsResultFiles) {
   fs::remove_all(out);
 }
 
+// policy.precision follows the CPU: with oneDNN capped below bfloat16
+// (its ONEDNN_MAX_CPU_ISA) bfloat16 is refused at its key and auto stays
+// float32 at 100 robots; uncapped, on a CPU that has it, auto is bfloat16
+// there (diagnostics.json counts the decisions).
+TEST(CliTest, PolicyPrecisionFollowsTheCpu) {
+  const std::string out = testing::MakeTempDir("aia_precision_");
+  const std::string aia = "'" + std::string(AIA_BINARY) + "' run '" +
+                          SourcePath("scenarios/default.yaml") +
+                          "' --policy igbnet --max-steps 1 --quiet --out " +
+                          out;
+  const auto refused = testing::RunCommand("ONEDNN_MAX_CPU_ISA=AVX2 " + aia +
+                                           " --set policy.precision=bfloat16");
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_EQ(refused.err,
+            "error: command line: --set policy.precision: bfloat16: this CPU "
+            "has no native bfloat16 (AMX-BF16 or AVX-512 BF16), or libtorch "
+            "has no oneDNN; use float32 or auto\n");
+  const std::string team =
+      " --set robots.count=100 --set targets.count=100 --set "
+      "workspace.size=[40,40]";
+  const auto counted = [&](const std::string& env) {
+    const auto r = testing::RunCommand(env + aia + team);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const std::string d = ReadFile(out + "/diagnostics.json");
+    const std::string key = "\"bfloat16_decisions\": ";
+    const std::size_t at = d.find(key);
+    return at == std::string::npos ? -1L : std::stol(d.substr(at + key.size()));
+  };
+  EXPECT_EQ(counted("ONEDNN_MAX_CPU_ISA=AVX512_CORE "), 0);
+  // The kernel's flags say whether the CPU has it (a container's view of
+  // /proc/cpuinfo may lack them; then nothing is asserted).
+  const std::string cpu = ReadFile("/proc/cpuinfo");
+  const bool has = cpu.find(" avx512_bf16") != std::string::npos ||
+                   cpu.find(" amx_bf16") != std::string::npos;
+  const long native = counted("");
+  // 100 robots decide at step 0 (but those the walk moves).
+  if (has) {
+    EXPECT_GT(native, 50);
+    EXPECT_LE(native, 100);
+  }
+  fs::remove_all(out);
+}
+
 TEST(CliTest, WorldWritesAnMjcfThatMujocoLoads) {
   const std::string dir = testing::MakeTempDir("aia_world_");
   const std::string scenario = dir + "/placed.yaml";

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <numeric>
+#include <stdexcept>
 
 #include "aia/core/error.h"
 #include "aia/core/hash.h"
@@ -370,6 +371,66 @@ TEST(IgbNetTest, TheOneDnnTensorsGiveThePlainConvolutionsLogits) {
       }
       EXPECT_EQ(fast, plain) << channels << " channels, batch " << batch;
     }
+  }
+}
+
+// policy.precision: auto is bfloat16 only for teams of kBFloat16Team robots
+// or more, and only where the CPU multiplies bfloat16 natively; bfloat16
+// itself is refused where it does not.
+TEST(IgbNetTest, PrecisionAutoIsBFloat16ForLargeTeamsWhereTheCpuHasIt) {
+  EXPECT_FALSE(UsesBFloat16(Precision::kFloat32, 1000));
+  EXPECT_FALSE(UsesBFloat16(Precision::kAuto, kBFloat16Team - 1));
+  EXPECT_EQ(UsesBFloat16(Precision::kAuto, kBFloat16Team), NativeBFloat16());
+  EXPECT_EQ(PrecisionProblem(Precision::kAuto), "");
+  EXPECT_EQ(PrecisionProblem(Precision::kFloat32), "");
+  if (NativeBFloat16()) {
+    EXPECT_EQ(PrecisionProblem(Precision::kBFloat16), "");
+    EXPECT_TRUE(UsesBFloat16(Precision::kBFloat16, 1));
+  } else {
+    EXPECT_NE(PrecisionProblem(Precision::kBFloat16).find("no native bfloat16"),
+              std::string::npos);
+    EXPECT_THROW(UsesBFloat16(Precision::kBFloat16, 1), std::runtime_error);
+  }
+}
+
+// The bfloat16 convolutions give the float32 logits to bfloat16's precision
+// (8 bits of mantissa, sums in float32): on images of the kinds the channels
+// make, each logit within 2 % of the logits' range, and the same most
+// probable move wherever the float32 one leads the next by more than that.
+TEST(IgbNetTest, BFloat16LogitsAreTheFloat32OnesToItsPrecision) {
+  if (!NativeBFloat16()) GTEST_SKIP() << "no native bfloat16 on this CPU";
+  for (const char* name : {"igbnet", "igbnet_learned"}) {
+    const auto net = IgbNet::Load(
+        std::string(AIA_SOURCE_DIR) + "/models/" + name + ".pt", "f", 0, "k");
+    const int side = net->config().channels.window;
+    const int channels = net->config().channels.num_channels();
+    const int batch = 64;
+    Rng rng(5);
+    std::vector<float> x(static_cast<std::size_t>(batch) * channels * side *
+                         side);
+    for (float& v : x) v = rng.Uniform() < 0.8 ? 0.0f : rng.Uniform();
+    std::vector<float> f32(batch * kNumMoves), bf16(batch * kNumMoves);
+    net->Forward(x.data(), batch, side, side, f32.data());
+    net->Forward(x.data(), batch, side, side, bf16.data(), true);
+    EXPECT_NE(f32, bf16) << name << ": bfloat16 was not used";
+    const auto [lo, hi] = std::minmax_element(f32.begin(), f32.end());
+    const float tolerance = 0.02f * (*hi - *lo);
+    int led = 0;
+    for (int b = 0; b < batch; ++b) {
+      const float* a = f32.data() + b * kNumMoves;
+      const float* c = bf16.data() + b * kNumMoves;
+      for (int m = 0; m < kNumMoves; ++m)
+        EXPECT_NEAR(a[m], c[m], tolerance) << name << " image " << b;
+      std::vector<float> sorted(a, a + kNumMoves);
+      std::sort(sorted.begin(), sorted.end());
+      if (sorted[kNumMoves - 1] - sorted[kNumMoves - 2] <= 2 * tolerance)
+        continue;
+      ++led;
+      EXPECT_EQ(std::max_element(a, a + kNumMoves) - a,
+                std::max_element(c, c + kNumMoves) - c)
+          << name << " image " << b;
+    }
+    EXPECT_GT(led, batch / 2) << name;
   }
 }
 

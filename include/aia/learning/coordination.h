@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "aia/core/fields.h"
+#include "aia/learning/network.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/search.h"
 
@@ -70,6 +71,8 @@ constexpr std::array<EnumName<OpenRule>, 2> EnumNames(OpenRule) {
 // refused, since it would do nothing).
 struct IgbNetParams {
   Coordination coordination = Coordination::kRules;
+  // The network's arithmetic at inference (learning/network.h, Precision).
+  Precision precision = Precision::kAuto;
   // DeadlockWalk: a robot whose last `max_reversals` moves each undid the
   // one before is deadlocked. It then walks a shortest lattice path toward
   // the nearest point that sees an open target (where its search memory
@@ -119,6 +122,11 @@ struct IgbNetParams {
                       "(search memory, claims, deadlock walk, no undo; the "
                       "keys below) around the network (docs/learning.md, "
                       "Coordination)"));
+    a->Visit(AIA_FIELD(precision).Doc(
+        "the network's convolutions at inference: float32 (as trained), "
+        "bfloat16 (about three times as fast on a CPU with AMX or AVX-512 "
+        "BF16, refused on others) or auto (bfloat16 for teams of 100 robots "
+        "or more where the CPU has it, float32 otherwise)"));
     a->Visit(AIA_FIELD(max_reversals)
                  .In(Between(0, 1000))
                  .Doc("rules, deadlock walk: reversals in a row after which a "

@@ -65,7 +65,8 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   // shaped_moves (the network's moves on an input a shaper changed: claims
   // hid an open target, or the memory moved an aim the input shows);
   // handwritten_moves (chosen by an arbiter, or shaped; 0 with
-  // coordination none). Every key with either coordination.
+  // coordination none); bfloat16_decisions (the network's decisions made
+  // in bfloat16, policy.precision). Every key with either coordination.
   std::vector<std::pair<std::string, long>> Counters() const override;
   // The last step's logits, robot-major (4 per robot; zero for inactive
   // robots and for those the walk moved, which the network did not score),
@@ -81,7 +82,8 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   std::vector<std::uint8_t> walking_;  // per row: moved by the walk this step
   BeliefDigest digest_;                // this step's, for every part
   NeighbourhoodHolds holds_;  // this step's, with policy.open neighbours
-  long decisions_ = 0, shaped_moves_ = 0, handwritten_moves_ = 0;
+  long decisions_ = 0, shaped_moves_ = 0, handwritten_moves_ = 0,
+       bfloat16_decisions_ = 0;
 };
 
 // Adds `igbnet` to a registry.

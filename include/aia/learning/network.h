@@ -13,6 +13,7 @@
 #ifndef AIA_LEARNING_NETWORK_H_
 #define AIA_LEARNING_NETWORK_H_
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -92,6 +93,33 @@ struct TeamGraph {
   int rows() const { return static_cast<int>(offsets.size()) - 1; }
 };
 
+// The arithmetic of inference's convolutions (policy.precision): float32,
+// as the network was trained; or bfloat16 (8 bits of mantissa, products
+// summed in float32), which oneDNN runs on AMX or AVX-512 BF16 about three
+// times as fast; auto, bfloat16 for a team of kBFloat16Team robots or more
+// on a CPU that multiplies bfloat16 natively, float32 otherwise (so that
+// teams of the training data's sizes run as trained). The stem and the
+// residual blocks only; pooling and the MLP stay float32.
+enum class Precision { kAuto, kFloat32, kBFloat16 };
+constexpr std::array<EnumName<Precision>, 3> EnumNames(Precision) {
+  return {{{Precision::kAuto, "auto"},
+           {Precision::kFloat32, "float32"},
+           {Precision::kBFloat16, "bfloat16"}}};
+}
+inline constexpr int kBFloat16Team = 100;
+
+// Whether this CPU multiplies bfloat16 natively (AMX-BF16 or AVX-512 BF16,
+// with the operating system's AVX-512 state on) and libtorch has oneDNN;
+// loads libtorch.
+bool NativeBFloat16();
+// Why `precision` cannot run here ("" when it can): bfloat16 on a CPU
+// without NativeBFloat16(), where oneDNN would emulate it slower than
+// float32, or not at all.
+std::string PrecisionProblem(Precision precision);
+// Whether `precision` runs in bfloat16 for a team of `robots` (auto as
+// above); a PrecisionProblem is a std::runtime_error.
+bool UsesBFloat16(Precision precision, int robots);
+
 class TorchNet;       // src/learning/torch/torch_net.h
 struct TorchBackend;  // src/learning/torch_backend.h
 
@@ -121,18 +149,19 @@ class IgbNet {
   const FileIdentity& file() const;
   // Inference (evaluation mode, no gradients; safe from several threads):
   // `images` holds `batch` images of kNumChannels x height x width floats;
-  // writes batch x 4 logits.
+  // writes batch x 4 logits; `bfloat16` as Precision above (only where
+  // NativeBFloat16()).
   // With message_hops > 0 every robot of the batch counts as alone (no
   // neighbours); the team's call is Embed and Head below.
   void Forward(const float* images, int batch, int height, int width,
-               float* logits) const;
+               float* logits, bool bfloat16 = false) const;
   // The two halves of Forward for message passing: Embed writes batch x
   // hidden features (the MLP's hidden layer); Head takes the whole team's
   // features and its graph (graph.rows() robots) and writes their logits.
   // Head runs on the calling thread (its result does not depend on
   // PolicyThreads()), through the same layers as training.
   void Embed(const float* images, int batch, int height, int width,
-             float* features) const;
+             float* features, bool bfloat16 = false) const;
   void Head(const float* features, const TeamGraph& graph, float* logits) const;
   // Number of trainable parameters.
   std::int64_t NumParameters() const;

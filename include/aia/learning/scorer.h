@@ -54,6 +54,9 @@ class MoveScorer {
                      const ScorerView& view, float* logits) = 0;
   // Whether the input shows ScorerView::aims (a reach channel).
   virtual bool ShowsAims() const = 0;
+  // Whether this episode's scores come from bfloat16 arithmetic
+  // (learning/network.h, Precision).
+  virtual bool BFloat16() const { return false; }
 };
 
 // One decision step of a model's own search points (ChannelParams::search),
@@ -76,7 +79,9 @@ void SetSearchPoints(const SearchPoints& points, int robot,
 // graph where the model has it.
 class NetworkScorer : public MoveScorer {
  public:
-  explicit NetworkScorer(std::shared_ptr<const IgbNet> net);
+  // `precision` is resolved for each episode's team at Reset.
+  explicit NetworkScorer(std::shared_ptr<const IgbNet> net,
+                         Precision precision = Precision::kFloat32);
   void Reset(const Map& map, int num_robots, int num_targets) override;
   void Score(const DecisionContext& ctx, const ScoringRows& rows,
              const ScorerView& view, float* logits) override;
@@ -84,6 +89,7 @@ class NetworkScorer : public MoveScorer {
   bool ShowsAims() const override {
     return net_->config().channels.geodesic && !net_->config().channels.search;
   }
+  bool BFloat16() const override { return bf16_; }
   // The search points of a model that reads them (empty before the first
   // step and for other models).
   const SearchPoints& search() const { return search_; }
@@ -92,6 +98,8 @@ class NetworkScorer : public MoveScorer {
   // Robots in one forward of the network.
   static constexpr int kForwardBatch = 32;
   std::shared_ptr<const IgbNet> net_;
+  Precision precision_;
+  bool bf16_ = false;  // precision_ for this episode's team
   std::optional<ChannelRenderer> renderer_;
   std::vector<float> images_;
   // The team rows rendered and scored (async: the deciding ones), and their

@@ -1,8 +1,14 @@
 #include <unistd.h>
 
+#if defined(__x86_64__)
+#include <cpuid.h>
+#endif
+
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <mutex>
@@ -175,6 +181,45 @@ void Transplant(IgbNetModule& from, IgbNetModule& to) {
 
 bool SetOneDnnLayout(bool on) { return onednn_layout.exchange(on); }
 
+bool NativeBFloat16Kernels() {
+  static const bool native = [] {
+    if (!at::hasMKLDNN() || !at::globalContext().userEnabledMkldnn())
+      return false;
+    // oneDNN's own cap on the instructions it uses (its documentation's
+    // ONEDNN_MAX_CPU_ISA, or the older DNNL_): below AVX512_CORE_BF16 it
+    // emulates bfloat16.
+    for (const char* name : {"ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA"}) {
+      const char* cap = std::getenv(name);
+      if (cap == nullptr || *cap == '\0') continue;
+      std::string isa(cap);
+      for (char& ch : isa) ch = static_cast<char>(std::toupper(ch));
+      if (isa != "ALL" && isa.find("BF16") == std::string::npos &&
+          isa.find("AMX") == std::string::npos &&
+          isa.find("FP16") == std::string::npos)
+        return false;
+      break;
+    }
+#if defined(__x86_64__)
+    unsigned a = 0, b = 0, c = 0, d = 0;
+    // OSXSAVE, then XCR0: the operating system saves the SSE, AVX and
+    // AVX-512 (opmask, ZMM_Hi256, Hi16_ZMM) state.
+    if (!__get_cpuid(1, &a, &b, &c, &d) || !(c & (1u << 27))) return false;
+    unsigned lo = 0, hi = 0;
+    __asm__("xgetbv" : "=a"(lo), "=d"(hi) : "c"(0));
+    if ((lo & 0xE6u) != 0xE6u || __get_cpuid_max(0, nullptr) < 7) return false;
+    __cpuid_count(7, 0, a, b, c, d);
+    const bool avx512f = (b & (1u << 16)) != 0;
+    const bool amx_bf16 = (d & (1u << 22)) != 0;
+    __cpuid_count(7, 1, a, b, c, d);
+    const bool avx512_bf16 = (a & (1u << 5)) != 0;
+    return avx512f && (avx512_bf16 || amx_bf16);
+#else
+    return false;
+#endif
+  }();
+  return native;
+}
+
 FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
   torch::NoGradGuard no_grad;
   FoldedNet f;
@@ -211,21 +256,47 @@ FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
     for (const auto& b : f.blocks)
       f.blocks_onednn.push_back({reorder(b[0], 1), reorder(b[2], 1)});
   }
+  f.bf16 = f.onednn && NativeBFloat16Kernels();
+  if (f.bf16) {
+    const auto bf = [](const torch::Tensor& t) {
+      return t.to(torch::kBFloat16);
+    };
+    const auto reorder = [&](const torch::Tensor& w, int64_t stride) {
+      return at::mkldnn_reorder_conv2d_weight(bf(w).to_mkldnn(), {1, 1},
+                                              {stride, stride}, {1, 1}, 1);
+    };
+    f.stem_bf16 = reorder(f.stem_w, config.stem_stride);
+    f.stem_b_bf16 = bf(f.stem_b);
+    for (const auto& b : f.blocks)
+      f.blocks_bf16.push_back(
+          {reorder(b[0], 1), bf(b[1]), reorder(b[2], 1), bf(b[3])});
+  }
   return f;
 }
 
 torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
                           const NetworkConfig& config,
-                          const torch::Tensor& input) {
+                          const torch::Tensor& input, bool bf16) {
   torch::Tensor x;
-  // FoldedNet: the same numbers.
-  if (f.onednn && input.size(0) >= 2 && onednn_layout.load()) {
-    const int64_t s = config.stem_stride;
-    const auto conv = [](const torch::Tensor& in, const torch::Tensor& w,
-                         const torch::Tensor& b, int64_t stride) {
-      return at::mkldnn_convolution(in, w, b, {1, 1}, {stride, stride}, {1, 1},
-                                    1);
-    };
+  const int64_t s = config.stem_stride;
+  const auto conv = [](const torch::Tensor& in, const torch::Tensor& w,
+                       const torch::Tensor& b, int64_t stride) {
+    return at::mkldnn_convolution(in, w, b, {1, 1}, {stride, stride}, {1, 1},
+                                  1);
+  };
+  if (bf16) {
+    // oneDNN's bfloat16 kernels (AMX where there is one), any batch.
+    AIA_CHECK_MSG(f.bf16, "bfloat16 inference without native bfloat16");
+    torch::Tensor h = torch::relu(conv(input.to(torch::kBFloat16).to_mkldnn(),
+                                       f.stem_bf16, f.stem_b_bf16, s));
+    for (const auto& b : f.blocks_bf16) {
+      torch::Tensor y = torch::relu(conv(h, b[0], b[1], 1));
+      y = conv(y, b[2], b[3], 1);
+      h = torch::relu(y + h);
+    }
+    x = h.to_dense().to(torch::kFloat32);
+  } else if (f.onednn && input.size(0) >= 2 && onednn_layout.load()) {
+    // FoldedNet: the same numbers.
     torch::Tensor h =
         torch::relu(conv(input.to_mkldnn(), f.stem_onednn, f.stem_b, s));
     for (std::size_t k = 0; k < f.blocks.size(); ++k) {
@@ -255,8 +326,8 @@ torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
 
 torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
                             const NetworkConfig& config,
-                            const torch::Tensor& input) {
-  return module->fc2(FoldedEmbed(f, module, config, input));
+                            const torch::Tensor& input, bool bf16) {
+  return module->fc2(FoldedEmbed(f, module, config, input, bf16));
 }
 
 TorchNet::TorchNet(const NetworkConfig& config, std::uint64_t seed)
@@ -383,7 +454,7 @@ std::shared_ptr<const FoldedNet> TorchNet::Folded() const {
 }
 
 void TorchNet::Infer(const float* images, int batch, int height, int width,
-                     bool embed, float* out) const {
+                     bool embed, bool bf16, float* out) const {
   AIA_CHECK(batch >= 0 && height > 0 && width > 0);
   // The centre is the robot's surroundings only in the window it was made
   // for (the centred frame's).
@@ -398,8 +469,8 @@ void TorchNet::Infer(const float* images, int batch, int height, int width,
       torch::kFloat32);
   const std::shared_ptr<const FoldedNet> folded = Folded();
   const torch::Tensor y =
-      (embed ? FoldedEmbed(*folded, impl_->module, impl_->config, x)
-             : FoldedForward(*folded, impl_->module, impl_->config, x))
+      (embed ? FoldedEmbed(*folded, impl_->module, impl_->config, x, bf16)
+             : FoldedForward(*folded, impl_->module, impl_->config, x, bf16))
           .contiguous();
   std::memcpy(out, y.data_ptr<float>(), sizeof(float) * y.numel());
 }

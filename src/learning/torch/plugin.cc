@@ -26,8 +26,8 @@ aia::TorchBackend MakeTable() {
     return net.file();
   };
   t.infer = [](const TorchNet& net, const float* images, int batch, int height,
-               int width, bool embed, float* out) {
-    net.Infer(images, batch, height, width, embed, out);
+               int width, bool embed, bool bfloat16, float* out) {
+    net.Infer(images, batch, height, width, embed, bfloat16, out);
   };
   t.head = [](const TorchNet& net, const float* features,
               const aia::TeamGraph& graph,
@@ -39,6 +39,7 @@ aia::TorchBackend MakeTable() {
   t.set_threads = [](int threads) { torch::set_num_threads(threads); };
   t.threads = [] { return torch::get_num_threads(); };
   t.set_onednn_layout = aia::SetOneDnnLayout;
+  t.native_bfloat16 = aia::NativeBFloat16Kernels;
   return t;
 }
 

@@ -88,7 +88,13 @@ struct FoldedNet {
   bool onednn = false;         // the weights below are made
   torch::Tensor stem_onednn;
   std::vector<std::array<torch::Tensor, 2>> blocks_onednn;  // w1, w2
+  // The same in bfloat16, made where NativeBFloat16Kernels().
+  bool bf16 = false;
+  torch::Tensor stem_bf16, stem_b_bf16;
+  std::vector<std::array<torch::Tensor, 4>> blocks_bf16;  // w1, b1, w2, b2
 };
+// NativeBFloat16 (network.h) on this side of the plugin.
+bool NativeBFloat16Kernels();
 FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config);
 // Whether FoldedEmbed may take oneDNN's tensors where a FoldedNet has them
 // (on until set; the comparison of internal::PlainConvolutions, network.h);
@@ -120,7 +126,7 @@ class TorchNet {
   const FileIdentity& file() const;
   // Forward (embed false: logits) or Embed (true: hidden features).
   void Infer(const float* images, int batch, int height, int width, bool embed,
-             float* out) const;
+             bool bf16, float* out) const;
   void Head(const float* features, const TeamGraph& graph, float* logits) const;
   std::int64_t NumParameters() const;
 

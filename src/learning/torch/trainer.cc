@@ -919,7 +919,8 @@ double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
       loss.backward();
       optimizer.step();
     } else {
-      net.Infer(images.data(), batch, height, width, false, logits.data());
+      net.Infer(images.data(), batch, height, width, false, false,
+                logits.data());
     }
   };
   for (int i = 0; i < 3; ++i) once();
