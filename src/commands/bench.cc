@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -128,8 +129,10 @@ int RunNetworkBench(const BenchOptions& o) {
       "aia bench --network: I-GBNet's network alone, samples (robot images) "
       "per second, medians of %d runs, %d threads\n",
       o.repeats, InferenceThreads());
-  std::printf("%-8s %-7s %6s %12s %12s %12s\n", "input", "stride", "width",
-              "infer b=10", "infer b=80", "train b=16");
+  // bfloat16 where the CPU has it (policy.precision), "-" where not.
+  const bool bf16 = NativeBFloat16();
+  std::printf("%-8s %-7s %6s %12s %12s %14s %12s\n", "input", "stride", "width",
+              "infer b=10", "infer b=80", "bfloat16 b=80", "train b=16");
   for (int stride : {1, 2}) {
     NetworkConfig c;
     c.stem_stride = stride;
@@ -138,11 +141,15 @@ int RunNetworkBench(const BenchOptions& o) {
         MeasureNetworkSpeed(c, side, side, 10, false, 20, o.repeats);
     const double i80 =
         MeasureNetworkSpeed(c, side, side, 80, false, 4, o.repeats);
+    const std::string b80 =
+        bf16 ? std::to_string(std::lround(MeasureNetworkSpeed(
+                   c, side, side, 80, false, 4, o.repeats, true)))
+             : "-";
     const double t16 =
         MeasureNetworkSpeed(c, side, side, 16, true, 8, o.repeats);
-    std::printf("%-8s %-7d %6d %12.0f %12.0f %12.0f\n",
+    std::printf("%-8s %-7d %6d %12.0f %12.0f %14s %12.0f\n",
                 (std::to_string(side) + "x" + std::to_string(side)).c_str(),
-                stride, c.width, i10, i80, t16);
+                stride, c.width, i10, i80, b80.c_str(), t16);
   }
   return 0;
 }

@@ -123,9 +123,10 @@ ValidationResult Validate(const std::string& model,
 }
 
 double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,
-                           int batch, bool train, int iterations, int repeats) {
+                           int batch, bool train, int iterations, int repeats,
+                           bool bf16) {
   return Torch().network_speed(config, height, width, batch, train, iterations,
-                               repeats);
+                               repeats, bf16);
 }
 
 }  // namespace aia

@@ -49,7 +49,8 @@ struct TorchBackend {
                                double val_share, std::uint64_t seed,
                                bool valid_moves);
   double (*network_speed)(const NetworkConfig& config, int height, int width,
-                          int batch, bool train, int iterations, int repeats);
+                          int batch, bool train, int iterations, int repeats,
+                          bool bf16);
   // torch::set_num_threads (on the calling thread's OpenMP team too) and
   // torch::get_num_threads.
   void (*set_threads)(int threads);

@@ -256,11 +256,13 @@ ValidationResult Validate(const std::string& model,
                           bool valid_moves = false);
 
 // Samples per second of the network on random images of height x width:
-// inference (evaluation mode, no gradients) at `batch`, or training steps
-// (forward, backward, Adam) at `batch`; the median of `repeats` timings of
+// inference (evaluation mode, no gradients; the convolutions in bfloat16
+// where `bf16`, learning/network.h) at `batch`, or training steps (forward,
+// backward, Adam) at `batch`; the median of `repeats` timings of
 // `iterations` calls each, after a warm-up.
 double MeasureNetworkSpeed(const NetworkConfig& config, int height, int width,
-                           int batch, bool train, int iterations, int repeats);
+                           int batch, bool train, int iterations, int repeats,
+                           bool bf16 = false);
 
 }  // namespace aia
 

@@ -160,7 +160,8 @@ ValidationResult TorchValidate(const std::string& model,
                                double val_share, std::uint64_t seed,
                                bool valid_moves);
 double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
-                         int batch, bool train, int iterations, int repeats);
+                         int batch, bool train, int iterations, int repeats,
+                         bool bf16);
 
 }  // namespace aia
 

@@ -900,7 +900,8 @@ ValidationResult TorchValidate(const std::string& model,
 }
 
 double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
-                         int batch, bool train, int iterations, int repeats) {
+                         int batch, bool train, int iterations, int repeats,
+                         bool bf16) {
   TorchNet net(config, 1);
   IgbNetModule& module = net.impl().module;
   const torch::Tensor x =
@@ -919,7 +920,7 @@ double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
       loss.backward();
       optimizer.step();
     } else {
-      net.Infer(images.data(), batch, height, width, false, false,
+      net.Infer(images.data(), batch, height, width, false, bf16,
                 logits.data());
     }
   };
