@@ -652,11 +652,13 @@ TEST(EvalTest, ResumeRefusesARetrainedModel) {
   ASSERT_NE(config.Find("policies"), nullptr) << effective;
   const ConfigNode* igbnet = config.Find("policies")->Find("igbnet");
   ASSERT_NE(igbnet, nullptr) << effective;
-  EXPECT_EQ(ShowNode(*igbnet, 100000),
-            "{coordination: rules, max_reversals: 1, max_walk: 0, search: "
-            "true, share_search: true, no_undo: true, claims: route, "
-            "approach: true, open: neighbours, refresh: 0.003, model: " +
-                model + ", model_sha256: " + sha.out.substr(0, 64) + "}")
+  EXPECT_EQ(
+      ShowNode(*igbnet, 100000),
+      "{coordination: rules, precision: auto, max_reversals: 1, max_walk: 0, "
+      "search: "
+      "true, share_search: true, no_undo: true, claims: route, "
+      "approach: true, open: neighbours, refresh: 0.003, model: " +
+          model + ", model_sha256: " + sha.out.substr(0, 64) + "}")
       << effective;
   EXPECT_EQ(eval().exit_code, 0);  // the same model resumes
   std::filesystem::copy_file(testing::SourcePath("models/igbnet.pt"), model,
@@ -718,9 +720,9 @@ TEST(EvalTest, AnOlderFolderStillResumes) {
   const std::string sha =
       testing::RunCommand("sha256sum '" + model + "'").out.substr(0, 64);
   const std::string igbnet_line =
-      "igbnet: {coordination: rules, max_reversals: 1, max_walk: 0, search: "
-      "true, share_search: true, no_undo: true, claims: route, approach: "
-      "true, open: neighbours, refresh: 0.003}; model " +
+      "igbnet: {coordination: rules, precision: auto, max_reversals: 1, "
+      "max_walk: 0, search: true, share_search: true, no_undo: true, claims: "
+      "route, approach: true, open: neighbours, refresh: 0.003}; model " +
       model + " sha256 " + sha;
   const std::string older =
       OlderForm(effective, {"greedy: {}", igbnet_line, "random: {}"});
@@ -753,9 +755,10 @@ TEST(EvalTest, AnOlderFolderStillResumes) {
   WriteFileAtomic(
       dir + "/e/effective.yaml",
       OlderForm(effective,
-                {"igbnet: {coordination: rules, max_reversals: 1, max_walk: 0, "
-                 "search: true, share_search: true, no_undo: true, claims: "
-                 "route, approach: true, open: neighbours, refresh: 0.003}"}));
+                {"igbnet: {coordination: rules, precision: auto, "
+                 "max_reversals: 1, max_walk: 0, search: true, share_search: "
+                 "true, no_undo: true, claims: route, approach: true, open: "
+                 "neighbours, refresh: 0.003}"}));
   r = eval("igbnet");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("igbnet's model file differs: the folder does not "
