@@ -220,6 +220,46 @@ bool NativeBFloat16Kernels() {
   return native;
 }
 
+namespace {
+
+// f's stem and blocks in oneDNN's layout and `type`.
+OneDnnLayers ForOneDnn(const FoldedNet& f, const NetworkConfig& config,
+                       torch::ScalarType type) {
+  const auto reorder = [type](const torch::Tensor& w, int64_t stride) {
+    return at::mkldnn_reorder_conv2d_weight(w.to(type).to_mkldnn(), {1, 1},
+                                            {stride, stride}, {1, 1}, 1);
+  };
+  OneDnnLayers l;
+  l.stem_w = reorder(f.stem_w, config.stem_stride);
+  l.stem_b = f.stem_b.to(type);
+  for (const auto& b : f.blocks)
+    l.blocks.push_back(
+        {reorder(b[0], 1), b[1].to(type), reorder(b[2], 1), b[3].to(type)});
+  return l;
+}
+
+// The stem and the blocks on oneDNN's tensors: `input` in the layers' type,
+// the features back as plain float32.
+torch::Tensor RunOneDnn(const OneDnnLayers& l, const torch::Tensor& input,
+                        int64_t stem_stride) {
+  const auto conv = [](const torch::Tensor& in, const torch::Tensor& w,
+                       const torch::Tensor& b, int64_t stride) {
+    return at::mkldnn_convolution(in, w, b, {1, 1}, {stride, stride}, {1, 1},
+                                  1);
+  };
+  torch::Tensor h =
+      torch::relu(conv(input.to(l.stem_b.scalar_type()).to_mkldnn(), l.stem_w,
+                       l.stem_b, stem_stride));
+  for (const auto& b : l.blocks) {
+    torch::Tensor y = torch::relu(conv(h, b[0], b[1], 1));
+    y = conv(y, b[2], b[3], 1);
+    h = torch::relu(y + h);
+  }
+  return h.to_dense().to(torch::kFloat32);
+}
+
+}  // namespace
+
 FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
   torch::NoGradGuard no_grad;
   FoldedNet f;
@@ -247,30 +287,9 @@ FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
   }
   f.fc1_b = module->fc1->bias.detach();
   f.onednn = at::hasMKLDNN() && at::globalContext().userEnabledMkldnn();
-  if (f.onednn) {
-    const auto reorder = [](const torch::Tensor& w, int64_t stride) {
-      return at::mkldnn_reorder_conv2d_weight(w.to_mkldnn(), {1, 1},
-                                              {stride, stride}, {1, 1}, 1);
-    };
-    f.stem_onednn = reorder(f.stem_w, config.stem_stride);
-    for (const auto& b : f.blocks)
-      f.blocks_onednn.push_back({reorder(b[0], 1), reorder(b[2], 1)});
-  }
+  if (f.onednn) f.f32 = ForOneDnn(f, config, torch::kFloat32);
   f.bf16 = f.onednn && NativeBFloat16Kernels();
-  if (f.bf16) {
-    const auto bf = [](const torch::Tensor& t) {
-      return t.to(torch::kBFloat16);
-    };
-    const auto reorder = [&](const torch::Tensor& w, int64_t stride) {
-      return at::mkldnn_reorder_conv2d_weight(bf(w).to_mkldnn(), {1, 1},
-                                              {stride, stride}, {1, 1}, 1);
-    };
-    f.stem_bf16 = reorder(f.stem_w, config.stem_stride);
-    f.stem_b_bf16 = bf(f.stem_b);
-    for (const auto& b : f.blocks)
-      f.blocks_bf16.push_back(
-          {reorder(b[0], 1), bf(b[1]), reorder(b[2], 1), bf(b[3])});
-  }
+  if (f.bf16) f.bf16_layers = ForOneDnn(f, config, torch::kBFloat16);
   return f;
 }
 
@@ -278,34 +297,13 @@ torch::Tensor FoldedEmbed(const FoldedNet& f, IgbNetModule& module,
                           const NetworkConfig& config,
                           const torch::Tensor& input, bool bf16) {
   torch::Tensor x;
-  const int64_t s = config.stem_stride;
-  const auto conv = [](const torch::Tensor& in, const torch::Tensor& w,
-                       const torch::Tensor& b, int64_t stride) {
-    return at::mkldnn_convolution(in, w, b, {1, 1}, {stride, stride}, {1, 1},
-                                  1);
-  };
   if (bf16) {
     // oneDNN's bfloat16 kernels (AMX where there is one), any batch.
     AIA_CHECK_MSG(f.bf16, "bfloat16 inference without native bfloat16");
-    torch::Tensor h = torch::relu(conv(input.to(torch::kBFloat16).to_mkldnn(),
-                                       f.stem_bf16, f.stem_b_bf16, s));
-    for (const auto& b : f.blocks_bf16) {
-      torch::Tensor y = torch::relu(conv(h, b[0], b[1], 1));
-      y = conv(y, b[2], b[3], 1);
-      h = torch::relu(y + h);
-    }
-    x = h.to_dense().to(torch::kFloat32);
+    x = RunOneDnn(f.bf16_layers, input, config.stem_stride);
   } else if (f.onednn && input.size(0) >= 2 && onednn_layout.load()) {
     // FoldedNet: the same numbers.
-    torch::Tensor h =
-        torch::relu(conv(input.to_mkldnn(), f.stem_onednn, f.stem_b, s));
-    for (std::size_t k = 0; k < f.blocks.size(); ++k) {
-      torch::Tensor y =
-          torch::relu(conv(h, f.blocks_onednn[k][0], f.blocks[k][1], 1));
-      y = conv(y, f.blocks_onednn[k][1], f.blocks[k][3], 1);
-      h = torch::relu(y + h);
-    }
-    x = h.to_dense();
+    x = RunOneDnn(f.f32, input, config.stem_stride);
   } else {
     x = torch::relu(
         torch::conv2d(input, f.stem_w, f.stem_b, config.stem_stride, 1));

@@ -80,18 +80,22 @@ void SaveArchiveAtomic(torch::serialize::OutputArchive& archive,
 // batch of plain tensors (the same numbers, bit for bit) without a reorder
 // of the activations into and out of that layout around every
 // convolution. A batch of one keeps ATen's own choice of kernel.
+// The stem and the residual blocks as oneDNN runs them: weights reordered
+// once into its layout, in one data type.
+struct OneDnnLayers {
+  torch::Tensor stem_w, stem_b;
+  std::vector<std::array<torch::Tensor, 4>> blocks;  // w1, b1, w2, b2
+};
+
 struct FoldedNet {
   torch::Tensor stem_w, stem_b;
   std::vector<std::array<torch::Tensor, 4>> blocks;  // w1, b1, w2, b2
   torch::Tensor fc1_w, fc1_b;  // fc1 as a hidden x C x P x P convolution
   torch::Tensor fc1_centre_w;  // its centre's part, hidden x C x c x c
-  bool onednn = false;         // the weights below are made
-  torch::Tensor stem_onednn;
-  std::vector<std::array<torch::Tensor, 2>> blocks_onednn;  // w1, w2
-  // The same in bfloat16, made where NativeBFloat16Kernels().
-  bool bf16 = false;
-  torch::Tensor stem_bf16, stem_b_bf16;
-  std::vector<std::array<torch::Tensor, 4>> blocks_bf16;  // w1, b1, w2, b2
+  bool onednn = false;         // f32 below is made
+  OneDnnLayers f32;
+  bool bf16 = false;  // bf16 below is made (NativeBFloat16Kernels())
+  OneDnnLayers bf16_layers;
 };
 // NativeBFloat16 (network.h) on this side of the plugin.
 bool NativeBFloat16Kernels();
