@@ -49,6 +49,13 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
   AIA_CHECK(static_cast<int>(positions.size()) == n_);
   for (const auto& f : failures_)
     if (step >= f.step) active_[f.robot] = 0;
+  lost_.clear();
+  // A full graph without loss is the same while the same robots are active
+  // (ApplyFailures changes active_, so it is built again after one).
+  const bool keep =
+      params_.mode != CommMode::kRange && params_.packet_loss_lambda <= 0.0;
+  if (keep && full_active_ == active_) return;
+  full_active_.clear();
   // The candidate edges (i <- j), each robot's ascending: every other
   // active robot, or those in range.
   for (auto& nb : neighbors_) nb.clear();
@@ -67,10 +74,10 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
       for (int j = 0; j < n_; ++j)
         if (j != i && active_[j]) neighbors_[i].push_back(j);
     }
+    if (keep) full_active_ = active_;
   }
   // Packet loss: Poisson(lambda) distinct directed edges, uniformly chosen
   // among the candidates numbered in order (receiver, then sender).
-  lost_.clear();
   if (params_.packet_loss_lambda <= 0.0) return;
   std::size_t edges = 0;
   for (const auto& nb : neighbors_) edges += nb.size();

@@ -69,6 +69,24 @@ TEST(CommTest, FailedRobotIsIsolatedForGood) {
   }
 }
 
+// The full graph kept from step to step (no loss) is the one built anew:
+// robots that move, failures at Update and between Updates (decisions on
+// arrival) included, against a network made fresh for each step.
+TEST(CommTest, AKeptFullGraphIsTheOneBuiltAnew) {
+  const std::vector<RobotFailure> failures = {{3, 2}, {0, 5}};
+  CommNetwork kept({}, 5, failures, 1);
+  for (int t = 0; t < 8; ++t) {
+    const std::vector<Vec2> pos(5, Vec2(t, 2 * t));
+    kept.Update(t, pos);
+    if (t == 4) kept.ApplyFailures(5);  // robot 0 fails between two steps
+    CommNetwork fresh({}, 5, failures, 1);
+    fresh.Update(t == 4 ? 5 : t, pos);
+    EXPECT_EQ(kept.AllNeighbors(), fresh.AllNeighbors()) << "step " << t;
+    EXPECT_EQ(kept.active(), fresh.active()) << "step " << t;
+  }
+  EXPECT_EQ(kept.Neighbors(1), (std::vector<int>{2, 4}));
+}
+
 TEST(CommTest, SameSeedSameLosses) {
   CommParams p;
   p.packet_loss_lambda = 2.0;

@@ -80,7 +80,9 @@ class CommNetwork {
 
   // Builds this step's graph from the robots' positions. Call once per step,
   // with increasing steps; packet loss draws from the network's own stream.
-  // O(N^2) for the full graph (its edges), O(N + edges) in range mode.
+  // O(N^2) for the full graph (its edges), O(N + edges) in range mode; a
+  // full graph without packet loss is kept from the step before while the
+  // same robots are active (O(N)).
   void Update(int step, const std::vector<Vec2>& positions);
   // Marks inactive, from now on, the robots whose failure step is `step` or
   // earlier, and takes them out of the current graph (decisions on arrival
@@ -107,6 +109,9 @@ class CommNetwork {
   std::vector<std::uint8_t> active_;
   std::vector<std::vector<int>> neighbors_;
   std::vector<std::pair<int, int>> lost_;
+  // The active robots the full graph in neighbors_ was built for (empty:
+  // none is kept).
+  std::vector<std::uint8_t> full_active_;
   // Scratch: the lost edges' numbers, the range mode's grid of robots.
   std::vector<std::uint64_t> drop_;
   PointGrid grid_;
