@@ -351,6 +351,7 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
            [](TrainOptions* o) { o->lr = 1e-2; },
            [](TrainOptions* o) { o->valid_moves = 1; },
            [](TrainOptions* o) { o->mistake_weight = 2.0; },
+           [](TrainOptions* o) { o->ending_weight = 2.0; },
            // The weights depend on the thread count too.
            [](TrainOptions* o) { o->threads = 2; }}) {
     TrainOptions c = b;

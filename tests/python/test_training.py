@@ -1,8 +1,12 @@
 """aia.Dataset and a training round trip between PyTorch and the C++
 igbnet policy, both ways."""
 
+import glob
 import json
+import math
 import os
+import sqlite3
+import struct
 import subprocess
 from pathlib import Path
 
@@ -384,4 +388,50 @@ def test_aia_train_weighs_the_acting_policys_mistakes(tmp_path):
     s_mistakes = l1 * len(d) - s_others
     assert l3 == pytest.approx((s_others + 3 * s_mistakes)
                                / (others + 3 * mistakes), rel=1e-3)
+    assert abs(l3 - l1) > 1e-3 * l1
+
+
+def test_aia_train_weighs_a_missions_ending(tmp_path):
+    """`aia train --ending-weight W` multiplies the weight of the samples
+    whose robot's own belief holds one or two targets above eps (read here
+    from the shards themselves: each target's log det Sigma is the sixth
+    float64 of its blob, eps the world's). As for the mistakes' weight
+    above: the means at W = 0 and W = 1 give the mean at W = 3."""
+    data = tmp_path / "expert"
+    r = subprocess.run([BINARY, "dataset", "--episodes", "12", "--size", "3x3",
+                        "--keep", "30", "--out", str(data), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    endings = total = 0
+    for shard in glob.glob(str(data / "*.sqlite")):
+        con = sqlite3.connect(shard)
+        eps = dict(con.execute("select episode, eps from worlds"))
+        for episode, blob in con.execute("select episode, targets from samples"):
+            v = struct.unpack(f"<{len(blob) // 8}d", blob)
+            above = sum(1 for x in v[5::6] if x > math.log(eps[episode]))
+            endings += 1 <= above <= 2
+            total += 1
+        con.close()
+    assert total == len(aia.Dataset(data))
+    assert 0 < endings < total
+    others = total - endings
+
+    def train_loss(weight):
+        out = tmp_path / f"e{weight}.pt"
+        r = subprocess.run([BINARY, "train", "--data", str(data), "--val-share",
+                            "0", "--weak-weight", "1", "--lr", "1e-9",
+                            "--lr-min", "1e-9", "--epochs", "1", "--width", "8",
+                            "--hidden", "16", "--ending-weight", str(weight),
+                            "--out", str(out), "--quiet"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        log = (tmp_path / f"e{weight}.train.csv").read_text().splitlines()
+        return float(dict(zip(log[0].split(","),
+                              log[-1].split(",")))["train_loss"])
+
+    l0, l1, l3 = train_loss(0), train_loss(1), train_loss(3)
+    s_others = l0 * others
+    s_endings = l1 * total - s_others
+    assert l3 == pytest.approx((s_others + 3 * s_endings)
+                               / (others + 3 * endings), rel=1e-3)
     assert abs(l3 - l1) > 1e-3 * l1

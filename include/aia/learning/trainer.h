@@ -75,6 +75,11 @@ struct TrainOptions {
   // differs from the label (DAgger's states of the network's own mistakes;
   // the expert's own data has none): 1 keeps them as they are.
   double mistake_weight = 1.0;
+  // Factor on the weight of the samples whose robot's own belief holds at
+  // most kEndingTargets targets above eps (and at least one): the mission's
+  // ending, where the last targets may lie far away behind walls. 1 keeps
+  // them as they are.
+  double ending_weight = 1.0;
   // 1: the loss is the cross-entropy among the moves valid from the robot's
   // lattice point (the moves the igbnet policy chooses among; validation
   // likewise); 0: among all four moves.
@@ -115,6 +120,11 @@ struct TrainOptions {
                  .Doc("factor on the weight of samples where the acting "
                       "policy's move differs from the label (the acting "
                       "network's mistakes in DAgger data; 1: as the others)"));
+    a->Visit(AIA_FIELD(ending_weight)
+                 .In({0.0, 100.0, false, false})
+                 .Doc("factor on the weight of samples whose robot's own "
+                      "belief holds one or two targets above eps (a "
+                      "mission's ending; 1: as the others)"));
     a->Visit(AIA_FIELD(valid_moves)
                  .In(Between(0, 1))
                  .Doc("1: the loss is the choice among the moves valid from "

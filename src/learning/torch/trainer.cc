@@ -172,17 +172,31 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
   return c;
 }
 
+// Targets a robot's own belief holds above eps, at most, for a sample to be
+// of a mission's ending (TrainOptions::ending_weight).
+constexpr int kEndingTargets = 2;
+
+// Whether sample `s` of world `w` is of a mission's ending: its robot's own
+// belief holds 1 to kEndingTargets targets above eps.
+bool EndingSample(const DatasetSample& s, const DatasetWorld& w) {
+  const double log_eps = std::log(w.eps);
+  int open = 0;
+  for (const HeatSource& t : s.targets) open += t.log_det > log_eps ? 1 : 0;
+  return open >= 1 && open <= kEndingTargets;
+}
+
 // Renders samples idx[0, n) into `images`, labels and weights (a weak label
 // weighs weak_weight, a sample whose acting policy's move differs from the
-// label mistake_weight times as much); with c->valid, `offsets` (n x 4) gets
+// label mistake_weight times as much, one of a mission's ending
+// ending_weight times as much); with c->valid, `offsets` (n x 4) gets
 // 0 for a valid move and -1e9 for another (the label's move always counts,
 // should the nearest lattice point differ from the robot's), added to the
 // logits so the loss is the choice among the valid moves.
 void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
-               double mistake_weight, int* height, int* width,
-               std::vector<float>* images, std::vector<int64_t>* labels,
-               std::vector<float>* weights, std::vector<char>* useful,
-               std::vector<float>* offsets) {
+               double mistake_weight, double ending_weight, int* height,
+               int* width, std::vector<float>* images,
+               std::vector<int64_t>* labels, std::vector<float>* weights,
+               std::vector<char>* useful, std::vector<float>* offsets) {
   const ChannelRenderer& r0 = c->renderers[c->data.samples[idx[0]].world];
   *height = r0.height();
   *width = r0.width();
@@ -202,9 +216,10 @@ void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
     r.Render(s.position, s.neighbours, s.targets, w.log_det_prior, w.eps,
              images->data() + b * size, SampleMemory(s, w));
     (*labels)[b] = static_cast<int64_t>(s.label);
-    (*weights)[b] =
-        static_cast<float>((s.useful ? 1.0 : weak_weight) *
-                           (s.acted != s.label ? mistake_weight : 1.0));
+    (*weights)[b] = static_cast<float>(
+        (s.useful ? 1.0 : weak_weight) *
+        (s.acted != s.label ? mistake_weight : 1.0) *
+        (ending_weight != 1.0 && EndingSample(s, w) ? ending_weight : 1.0));
     (*useful)[b] = s.useful;
   }
   offsets->clear();
@@ -260,8 +275,8 @@ ValidationResult Evaluate(IgbNetModule& module, Corpus* c, int hops) {
     }
     const int m = static_cast<int>(rows.size());
     int h = 0, w = 0;
-    MakeBatch(c, rows.data(), m, 1.0, 1.0, &h, &w, &images, &labels, &weights,
-              &useful, &offsets);
+    MakeBatch(c, rows.data(), m, 1.0, 1.0, 1.0, &h, &w, &images, &labels,
+              &weights, &useful, &offsets);
     const torch::Tensor x =
         torch::from_blob(images.data(), {m, channels, h, w});
     const torch::Tensor y = torch::from_blob(labels.data(), {n}, torch::kInt64);
@@ -304,6 +319,7 @@ std::string OptionsKey(const TrainOptions& o) {
   // checkpoints of earlier runs resume.
   if (o.valid_moves != 0) s << " valid_moves=" << o.valid_moves;
   if (o.mistake_weight != 1.0) s << " mistake_weight=" << o.mistake_weight;
+  if (o.ending_weight != 1.0) s << " ending_weight=" << o.ending_weight;
   for (const std::string& d : o.data) s << " data=" << d;
   return s.str();
 }
@@ -678,8 +694,9 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
     const int m = static_cast<int>(b->rows.size());
     if (m < 2) break;  // batch norm needs two samples
     int h = 0, w = 0;
-    MakeBatch(corpus, b->rows.data(), m, o.weak_weight, o.mistake_weight, &h,
-              &w, &b->images, &b->labels, &b->weights, &b->useful, &b->offsets);
+    MakeBatch(corpus, b->rows.data(), m, o.weak_weight, o.mistake_weight,
+              o.ending_weight, &h, &w, &b->images, &b->labels, &b->weights,
+              &b->useful, &b->offsets);
     lr = schedule.At(static_cast<double>(epoch * steps_per_epoch) +
                      (hops > 0 ? static_cast<double>(consumed) / o.batch
                                : static_cast<double>(s)));
