@@ -353,29 +353,17 @@ def test_aia_train_scores_the_choice_among_the_valid_moves(data, tmp_path):
     assert f"loss {every:.4f}" in r.stdout, (r.stdout, every)
 
 
-def test_aia_train_weighs_the_acting_policys_mistakes(tmp_path):
-    """`aia train --mistake-weight W` multiplies the weight of the samples
-    whose acting policy's move differs from the expert's label (Dataset.acted
-    against Dataset.labels). At a learning rate too small to move the
-    weights, an epoch's training loss is the weighted mean of the same
-    per-sample losses: the means at W = 0 (the other samples) and W = 1 (all)
-    give the mean at W = 3."""
-    data = tmp_path / "greedy"
-    r = subprocess.run([BINARY, "dataset", "--episodes", "12", "--size", "3x3",
-                        "--keep", "5", "--policy", "greedy", "--out",
-                        str(data), "--quiet"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    d = aia.Dataset(data)
-    mistakes = int((d.acted != d.labels).sum())
-    others = len(d) - mistakes
-    assert 0 < mistakes < len(d)
-
+def _assert_weighted_mean(data, tmp_path, flag, chosen, total):
+    """At a learning rate too small to move the weights, an epoch's training
+    loss is the weighted mean of the same per-sample losses: the means at
+    `flag` W = 0 (the samples not chosen) and W = 1 (all) give the mean at
+    W = 3, where the `chosen` of `total` samples weigh 3."""
     def train_loss(weight):
         out = tmp_path / f"w{weight}.pt"
         r = subprocess.run([BINARY, "train", "--data", str(data), "--val-share",
                             "0", "--weak-weight", "1", "--lr", "1e-9",
                             "--lr-min", "1e-9", "--epochs", "1", "--width", "8",
-                            "--hidden", "16", "--mistake-weight", str(weight),
+                            "--hidden", "16", flag, str(weight),
                             "--out", str(out), "--quiet"],
                            capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
@@ -383,20 +371,35 @@ def test_aia_train_weighs_the_acting_policys_mistakes(tmp_path):
         return float(dict(zip(log[0].split(","),
                               log[-1].split(",")))["train_loss"])
 
+    assert 0 < chosen < total
+    others = total - chosen
     l0, l1, l3 = train_loss(0), train_loss(1), train_loss(3)
     s_others = l0 * others
-    s_mistakes = l1 * len(d) - s_others
-    assert l3 == pytest.approx((s_others + 3 * s_mistakes)
-                               / (others + 3 * mistakes), rel=1e-3)
+    s_chosen = l1 * total - s_others
+    assert l3 == pytest.approx((s_others + 3 * s_chosen)
+                               / (others + 3 * chosen), rel=1e-3)
     assert abs(l3 - l1) > 1e-3 * l1
+
+
+def test_aia_train_weighs_the_acting_policys_mistakes(tmp_path):
+    """`aia train --mistake-weight W` multiplies the weight of the samples
+    whose acting policy's move differs from the expert's label (Dataset.acted
+    against Dataset.labels)."""
+    data = tmp_path / "greedy"
+    r = subprocess.run([BINARY, "dataset", "--episodes", "12", "--size", "3x3",
+                        "--keep", "5", "--policy", "greedy", "--out",
+                        str(data), "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = aia.Dataset(data)
+    _assert_weighted_mean(data, tmp_path, "--mistake-weight",
+                          int((d.acted != d.labels).sum()), len(d))
 
 
 def test_aia_train_weighs_a_missions_ending(tmp_path):
     """`aia train --ending-weight W` multiplies the weight of the samples
     whose robot's own belief holds one or two targets above eps (read here
     from the shards themselves: each target's log det Sigma is the sixth
-    float64 of its blob, eps the world's). As for the mistakes' weight
-    above: the means at W = 0 and W = 1 give the mean at W = 3."""
+    float64 of its blob, eps the world's)."""
     data = tmp_path / "expert"
     r = subprocess.run([BINARY, "dataset", "--episodes", "12", "--size", "3x3",
                         "--keep", "30", "--out", str(data), "--quiet"],
@@ -413,25 +416,4 @@ def test_aia_train_weighs_a_missions_ending(tmp_path):
             total += 1
         con.close()
     assert total == len(aia.Dataset(data))
-    assert 0 < endings < total
-    others = total - endings
-
-    def train_loss(weight):
-        out = tmp_path / f"e{weight}.pt"
-        r = subprocess.run([BINARY, "train", "--data", str(data), "--val-share",
-                            "0", "--weak-weight", "1", "--lr", "1e-9",
-                            "--lr-min", "1e-9", "--epochs", "1", "--width", "8",
-                            "--hidden", "16", "--ending-weight", str(weight),
-                            "--out", str(out), "--quiet"],
-                           capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        log = (tmp_path / f"e{weight}.train.csv").read_text().splitlines()
-        return float(dict(zip(log[0].split(","),
-                              log[-1].split(",")))["train_loss"])
-
-    l0, l1, l3 = train_loss(0), train_loss(1), train_loss(3)
-    s_others = l0 * others
-    s_endings = l1 * total - s_others
-    assert l3 == pytest.approx((s_others + 3 * s_endings)
-                               / (others + 3 * endings), rel=1e-3)
-    assert abs(l3 - l1) > 1e-3 * l1
+    _assert_weighted_mean(data, tmp_path, "--ending-weight", endings, total)
