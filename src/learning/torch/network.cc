@@ -181,10 +181,18 @@ void Transplant(IgbNetModule& from, IgbNetModule& to) {
 
 bool SetOneDnnLayout(bool on) { return onednn_layout.exchange(on); }
 
+namespace {
+
+// Whether libtorch runs convolutions on oneDNN here.
+bool OneDnnOn() {
+  return at::hasMKLDNN() && at::globalContext().userEnabledMkldnn();
+}
+
+}  // namespace
+
 bool NativeBFloat16Kernels() {
   static const bool native = [] {
-    if (!at::hasMKLDNN() || !at::globalContext().userEnabledMkldnn())
-      return false;
+    if (!OneDnnOn()) return false;
     // oneDNN's own cap on the instructions it uses (its documentation's
     // ONEDNN_MAX_CPU_ISA, or the older DNNL_): below AVX512_CORE_BF16 it
     // emulates bfloat16.
@@ -286,7 +294,7 @@ FoldedNet Fold(IgbNetModule& module, const NetworkConfig& config) {
             .contiguous();
   }
   f.fc1_b = module->fc1->bias.detach();
-  f.onednn = at::hasMKLDNN() && at::globalContext().userEnabledMkldnn();
+  f.onednn = OneDnnOn();
   if (f.onednn) f.f32 = ForOneDnn(f, config, torch::kFloat32);
   f.bf16 = f.onednn && NativeBFloat16Kernels();
   if (f.bf16) f.bf16_layers = ForOneDnn(f, config, torch::kBFloat16);
