@@ -20,6 +20,7 @@ selection seeds 5000.. (never the test seeds).
   PYTHONPATH=build/python tools/reach_climb.py --mode climb --seeds 10
 """
 import argparse
+import json
 import os
 import sys
 
@@ -67,7 +68,8 @@ def main():
     p.add_argument("--seed-base", type=int, default=5000)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="another scenario key (replaces the narrow maze's "
-                        "keys of the same name)")
+                        "keys of the same name); a JSON value is read as "
+                        "one: robots.count=20, workspace.size=[60,60]")
     a = p.parse_args()
     if a.seeds < 1:
         p.error("--seeds: must be at least 1")
@@ -76,7 +78,10 @@ def main():
         if "=" not in kv:
             p.error(f"--set {kv}: must be KEY=VALUE")
         k, v = kv.split("=", 1)
-        overrides[k] = v
+        try:  # numbers and lists as the Python API takes them: 20, [60, 60]
+            overrides[k] = json.loads(v)
+        except ValueError:
+            overrides[k] = v
     _, meta = network.load_model(a.model)
     if not meta.get("geodesic"):
         p.error(f"--model {a.model}: has no reach channel")
