@@ -2,7 +2,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <string>
 
 #include "aia/core/check.h"
@@ -98,34 +100,62 @@ struct RowPair {
   RowMap Out(int i) const { return {out.data() + i * out.cols(), out.cols()}; }
 };
 
-// o += scale * sum_j B_j over the rows `rows`, in their (ascending) order.
-// Four rows go in one pass over `o`, which saves loads and stores of `o` in
-// a loop that is bound by memory traffic.
-void AddRows(const std::vector<int>& rows, const RowPair& m, double scale,
+// o += scale * sum_j B_j over the rows j = rows(0), rows(1), ..., rows(count
+// - 1), in that (ascending) order. Four rows go in one pass over `o`, which
+// saves loads and stores of `o` in a loop that is bound by memory traffic.
+template <typename Rows>
+void AddRows(const Rows& rows, int count, const RowPair& m, double scale,
              RowMap o) {
-  const std::size_t full = rows.size() / 4 * 4;
-  for (std::size_t c = 0; c < full; c += 4)
-    o += scale * (m.In(rows[c]) + m.In(rows[c + 1]) + m.In(rows[c + 2]) +
-                  m.In(rows[c + 3]));
-  const std::size_t rest = rows.size() - full;
-  const int* r = rows.data() + full;
-  if (rest == 3) o += scale * (m.In(r[0]) + m.In(r[1]) + m.In(r[2]));
-  if (rest == 2) o += scale * (m.In(r[0]) + m.In(r[1]));
-  if (rest == 1) o += scale * m.In(r[0]);
+  const int full = count / 4 * 4;
+  for (int c = 0; c < full; c += 4)
+    o += scale * (m.In(rows(c)) + m.In(rows(c + 1)) + m.In(rows(c + 2)) +
+                  m.In(rows(c + 3)));
+  const int rest = count - full;
+  if (rest == 3)
+    o += scale *
+         (m.In(rows(full)) + m.In(rows(full + 1)) + m.In(rows(full + 2)));
+  if (rest == 2) o += scale * (m.In(rows(full)) + m.In(rows(full + 1)));
+  if (rest == 1) o += scale * m.In(rows(full));
 }
 
-// The rows of the team not in nb and not i, ascending, into `out`.
-void Excluded(const std::vector<int>& nb, int i, int n, std::vector<int>* out) {
-  out->clear();
+void AddRows(const std::vector<int>& rows, const RowPair& m, double scale,
+             RowMap o) {
+  AddRows([&](int c) { return rows[c]; }, static_cast<int>(rows.size()), m,
+          scale, o);
+}
+
+// o += scale * sum_j B_j over the rows of the team not in nb and not i, in
+// ascending order and grouped as AddRows groups them: the same numbers,
+// without a list of those rows (nb is ascending).
+void AddExcludedRows(const std::vector<int>& nb, int i, const RowPair& m,
+                     double scale, RowMap o) {
+  const int n = static_cast<int>(m.b.rows());
+  int pending[4], count = 0;
   std::size_t next = 0;
   for (int j = 0; j < n; ++j) {
     if (next < nb.size() && nb[next] == j) {
       ++next;
       continue;
     }
-    if (j != i) out->push_back(j);
+    if (j == i) continue;
+    pending[count++] = j;
+    if (count == 4) {
+      AddRows([&](int c) { return pending[c]; }, 4, m, scale, o);
+      count = 0;
+    }
   }
+  AddRows([&](int c) { return pending[c]; }, count, m, scale, o);
 }
+
+// Below this many doubles (rows x stride) the DKF's mix and the time update
+// run on the calling thread: at 200 robots and static targets (240 000) the
+// mix takes well under a millisecond, little more than handing it to
+// threads costs.
+constexpr Eigen::Index kParallelRows = Eigen::Index{1} << 18;
+
+// Columns summed per index when the column sum S is split over threads
+// (a runner takes indices in chunks: learning/network.h's of 16).
+constexpr Eigen::Index kSumColumns = 128;
 
 // out = W * B. A dense GEMM costs N^2 * stride multiply-adds whatever the
 // graph (and Eigen heap-allocates its packing buffer at this size). The DKF's
@@ -134,62 +164,66 @@ void Excluded(const std::vector<int>& nb, int i, int n, std::vector<int>* out) {
 //         = kappa_ii B_i + c_i (S - B_i - sum_{j not in N_i + i} B_j)
 // with the column sum S = sum_j B_j: the first form for few neighbours, the
 // second for many; O(N * stride) in all for the full graph, O(edges *
-// stride) for a sparse one. S lives in the first dense row of `out` (the
-// "holder"), which is finished last and in place, so no scratch memory is
-// needed. General rows take the direct sum. The subtraction costs accuracy
-// only when one robot's information dwarfs the others': the error is about
-// eps * sum_j |B_j| per element. Each element is summed in an order fixed by
-// the row indices, not by cache sizes or threads as in a blocked GEMM, so
-// results are reproducible. (Tiling the columns for L1 reuse gained nothing
-// at N = 80.)
+// stride) for a sparse one. General rows take the direct sum. The
+// subtraction costs accuracy only when one robot's information dwarfs the
+// others': the error is about eps * sum_j |B_j| per element. Each element is
+// summed in an order fixed by the row indices, not by cache sizes or threads
+// as in a blocked GEMM, so results are reproducible, and the same whether
+// `run` splits the rows (and S's columns) over threads or not. `row_done(i)`
+// is called on the thread that finished row i. (Tiling the columns for L1
+// reuse gained nothing at N = 80.)
+template <typename RowDone>
 void MixRows(const std::vector<RowWeights>& w, const BeliefSet::Storage& b,
-             BeliefSet::Storage* out, std::vector<int>* scratch) {
+             BeliefSet::Storage* out, Eigen::ArrayXd* sum,
+             const RangeRunner& run, const RowDone& row_done) {
   const int n = static_cast<int>(b.rows());
   const RowPair m{b, *out};
+  const Eigen::Index cols = b.cols();
+  const RangeRunner& split =
+      static_cast<Eigen::Index>(n) * cols >= kParallelRows ? run
+                                                           : RangeRunner{};
 
-  int holder = -1;
-  for (int i = 0; i < n && holder < 0; ++i) {
-    if (IsDenseUniform(w[i], n)) holder = i;
-  }
-  if (holder >= 0) {
-    RowMap sum = m.Out(holder);
-    sum = m.In(0);
-    for (int j = 1; j < n; ++j) sum += m.In(j);
+  bool dense = false;
+  for (int i = 0; i < n && !dense; ++i) dense = IsDenseUniform(w[i], n);
+  if (dense) {
+    sum->resize(cols);
+    const int blocks = static_cast<int>((cols + kSumColumns - 1) / kSumColumns);
+    RunRange(split, blocks, [&](int b0, int b1, int) {
+      const Eigen::Index c0 = b0 * kSumColumns;
+      const Eigen::Index width = std::min(cols, b1 * kSumColumns) - c0;
+      auto s = sum->segment(c0, width);
+      s = m.In(0).segment(c0, width);
+      for (int j = 1; j < n; ++j) s += m.In(j).segment(c0, width);
+    });
   }
 
-  for (int i = 0; i < n; ++i) {
-    if (i == holder) continue;
-    const RowWeights& r = w[i];
-    RowMap o = m.Out(i);
-    if (!r.uniform) {
-      o.setZero();
-      for (int j = 0; j < n; ++j) {
-        const double v = r.dense[j * r.stride];
-        if (v != 0.0) o += v * m.In(j);
+  RunRange(split, n, [&](int i0, int i1, int) {
+    for (int i = i0; i < i1; ++i) {
+      const RowWeights& r = w[i];
+      RowMap o = m.Out(i);
+      if (!r.uniform) {
+        o.setZero();
+        for (int j = 0; j < n; ++j) {
+          const double v = r.dense[j * r.stride];
+          if (v != 0.0) o += v * m.In(j);
+        }
+      } else if (dense && IsDenseUniform(r, n)) {
+        o = r.off * (*sum - m.In(i)) + r.self * m.In(i);
+        AddExcludedRows(*r.nb, i, m, -r.off, o);
+      } else {
+        o = r.self * m.In(i);
+        AddRows(*r.nb, m, r.off, o);
       }
-    } else if (holder >= 0 && IsDenseUniform(r, n)) {
-      o = r.off * (m.Out(holder) - m.In(i)) + r.self * m.In(i);
-      Excluded(*r.nb, i, n, scratch);
-      AddRows(*scratch, m, -r.off, o);
-    } else {
-      o = r.self * m.In(i);
-      AddRows(*r.nb, m, r.off, o);
+      row_done(i);
     }
-  }
-  if (holder >= 0) {
-    // Element-wise, so S may be overwritten as it is read.
-    const RowWeights& r = w[holder];
-    RowMap o = m.Out(holder);
-    o = r.off * (o - m.In(holder)) + r.self * m.In(holder);
-    Excluded(*r.nb, holder, n, scratch);
-    AddRows(*scratch, m, -r.off, o);
-  }
+  });
 }
 
 void FuseRows(const BeliefSet& predicted, const std::vector<RowWeights>& w,
               const std::vector<std::vector<Measurement>>& z,
               const std::vector<Vec2>& positions, BeliefSet* out,
-              std::vector<int>* scratch) {
+              const RangeRunner& run,
+              const std::function<void(int row)>& row_done) {
   AIA_CHECK(out != &predicted);
   const int n = predicted.rows();
   AIA_CHECK(static_cast<int>(w.size()) == n);
@@ -199,8 +233,11 @@ void FuseRows(const BeliefSet& predicted, const std::vector<RowWeights>& w,
       out->data().cols() != predicted.data().cols()) {
     *out = BeliefSet(&predicted.layout(), n);
   }
-  MixRows(w, predicted.data(), &out->data(), scratch);
-  for (int i = 0; i < n; ++i) AddMeasurements(z[i], positions[i], out, i);
+  thread_local Eigen::ArrayXd sum;
+  MixRows(w, predicted.data(), &out->data(), &sum, run, [&](int i) {
+    AddMeasurements(z[i], positions[i], out, i);
+    if (row_done) row_done(i);
+  });
 }
 
 template <int D>
@@ -216,38 +253,66 @@ bool BlockSpd(const double* block, double tol) {
 
 }  // namespace
 
-void Predict(BeliefSet* beliefs, const std::vector<std::uint8_t>* active) {
+void Predict(BeliefSet* beliefs, const std::vector<std::uint8_t>* active,
+             const RangeRunner& run) {
   const BeliefLayout& layout = beliefs->layout();
   if (layout.all_static()) return;
   BeliefSet::Storage& data = beliefs->data();
   const int rows = beliefs->rows(), m = layout.num_targets();
   AIA_CHECK(active == nullptr || static_cast<int>(active->size()) == rows);
-  // Per target: the rows that count, and those of them scaled back.
-  thread_local std::vector<int> counted, beyond;
-  counted.assign(m, 0);
-  beyond.assign(m, 0);
-  for (int r = 0; r < rows; ++r) {
-    double* row = data.data() + r * data.cols();
-    const bool counts = active == nullptr || (*active)[r] != 0;
-    for (int k = 0; k < m; ++k) {
-      if (layout.is_static(k)) continue;
-      double* block = row + layout.omega_offset(k);
-      try {
-        const bool scaled = layout.dim(k) == 2
-                                ? PredictBlock<2>(layout.model(k), block, true)
-                                : PredictBlock<4>(layout.model(k), block, true);
-        counted[k] += counts ? 1 : 0;
-        beyond[k] += counts && scaled ? 1 : 0;
-      } catch (const EstimateDiverged& e) {
-        throw EstimateDiverged(k, e.what());
+  // Per row and target: whether the prediction was scaled back. A row is
+  // predicted whole on one thread; the first failure in row-major order is
+  // the one thrown, whatever the split (a part stops at its own first).
+  // (A lambda names this thread's thread_local, not the caller's: the
+  // workers reach the vector through the reference.)
+  thread_local std::vector<std::uint8_t> scaled_storage;
+  std::vector<std::uint8_t>& scaled = scaled_storage;
+  scaled.assign(static_cast<std::size_t>(rows) * m, 0);
+  std::mutex failure_mutex;
+  std::size_t failure_at = scaled.size();
+  std::string failure;
+  const RangeRunner& split =
+      static_cast<Eigen::Index>(rows) * data.cols() >= kParallelRows
+          ? run
+          : RangeRunner{};
+  RunRange(split, rows, [&](int r0, int r1, int) {
+    for (int r = r0; r < r1; ++r) {
+      double* row = data.data() + r * data.cols();
+      for (int k = 0; k < m; ++k) {
+        if (layout.is_static(k)) continue;
+        double* block = row + layout.omega_offset(k);
+        const std::size_t at = static_cast<std::size_t>(r) * m + k;
+        try {
+          scaled[at] = layout.dim(k) == 2
+                           ? PredictBlock<2>(layout.model(k), block, true)
+                           : PredictBlock<4>(layout.model(k), block, true);
+        } catch (const EstimateDiverged& e) {
+          const std::lock_guard<std::mutex> lock(failure_mutex);
+          if (at < failure_at) {
+            failure_at = at;
+            failure = e.what();
+          }
+          return;
+        }
       }
     }
-  }
-  for (int k = 0; k < m; ++k)
-    if (counted[k] > 0 && beyond[k] == counted[k])
+  });
+  if (failure_at < scaled.size())
+    throw EstimateDiverged(static_cast<int>(failure_at % m), failure);
+  // A target diverges when every row that counts was scaled back.
+  for (int k = 0; k < m; ++k) {
+    if (layout.is_static(k)) continue;
+    bool counted = false, kept = false;
+    for (int r = 0; r < rows && !kept; ++r) {
+      if (active != nullptr && (*active)[r] == 0) continue;
+      counted = true;
+      kept = scaled[static_cast<std::size_t>(r) * m + k] == 0;
+    }
+    if (counted && !kept)
       throw EstimateDiverged(k, "its predicted variance passes " +
                                     FormatNumber(kMaxVariance) +
                                     " m^2 in every estimate that counts");
+  }
 }
 
 void PredictInformationBlock(const TargetModel& model, double* block) {
@@ -334,13 +399,14 @@ void MakeDkfWeights(const std::vector<std::vector<int>>& neighbors,
 
 void Fuse(const BeliefSet& predicted, const DkfWeights& w,
           const std::vector<std::vector<Measurement>>& z,
-          const std::vector<Vec2>& positions, BeliefSet* out) {
+          const std::vector<Vec2>& positions, BeliefSet* out,
+          const RangeRunner& run,
+          const std::function<void(int row)>& row_done) {
   const int n = predicted.rows();
   AIA_CHECK(w.neighbors != nullptr &&
             static_cast<int>(w.neighbors->size()) == n &&
             static_cast<int>(w.self.size()) == n);
   thread_local std::vector<RowWeights> rows;
-  thread_local std::vector<int> scratch;
   rows.resize(n);
   for (int i = 0; i < n; ++i) {
     RowWeights& r = rows[i];
@@ -349,7 +415,7 @@ void Fuse(const BeliefSet& predicted, const DkfWeights& w,
     r.off = w.off[i];
     r.nb = &(*w.neighbors)[i];
   }
-  FuseRows(predicted, rows, z, positions, out, &scratch);
+  FuseRows(predicted, rows, z, positions, out, run, row_done);
 }
 
 void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
@@ -377,8 +443,7 @@ void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
     r.dense = W.data() + i;  // column-major: W(i, j) at i + j * rows
     r.stride = W.rows();
   }
-  std::vector<int> scratch;
-  FuseRows(predicted, rows, z, positions, out, &scratch);
+  FuseRows(predicted, rows, z, positions, out, {}, {});
 }
 
 void CentralUpdate(const std::vector<std::vector<Measurement>>& z,

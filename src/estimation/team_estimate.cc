@@ -34,7 +34,8 @@ void TeamEstimate::Update(bool predict,
                           double kappa_self,
                           const std::vector<std::vector<Measurement>>& z,
                           const std::vector<Vec2>& positions,
-                          const std::vector<std::uint8_t>& active) {
+                          const std::vector<std::uint8_t>& active,
+                          const RangeRunner& run) {
   // Predict, exchange over this step's graph, fuse with the robot's own
   // measurements. The step before's fused beliefs become the ones to
   // predict by a swap of the storage, not a copy of the N x M blocks (Fuse
@@ -43,18 +44,19 @@ void TeamEstimate::Update(bool predict,
   if (predict) {
     // Only the active robots' estimates count: a failed robot's belief of
     // an unstable target may grow to the bound while others measure it.
-    Predict(&predicted_, &active);
+    Predict(&predicted_, &active, run);
     Predict(&central_);
   }
   MakeDkfWeights(neighbors, kappa_self, &weights_);
-  Fuse(predicted_, weights_, z, positions, &fused_);
+  // det Sigma of each row as soon as it is fused, while it is in the cache.
+  const int m = num_targets();
+  Fuse(predicted_, weights_, z, positions, &fused_, run, [&](int i) {
+    for (int k = 0; k < m; ++k)
+      det_[static_cast<std::size_t>(i) * m + k] = fused_.DetCovariance(i, k);
+  });
   CentralUpdate(z, positions, &central_);
 
   // The team's best estimate of each target over the active robots.
-  const int n = num_robots(), m = num_targets();
-  for (int i = 0; i < n; ++i)
-    for (int k = 0; k < m; ++k)
-      det_[static_cast<std::size_t>(i) * m + k] = fused_.DetCovariance(i, k);
   TeamBestRows(det_, m, active, &best_);
   for (int k = 0; k < m; ++k) {
     const int b = best_[k];

@@ -8,6 +8,7 @@
 #include "aia/core/check.h"
 #include "aia/core/interrupt.h"
 #include "aia/estimation/filter.h"
+#include "aia/learning/network.h"
 
 namespace aia {
 namespace {
@@ -465,7 +466,7 @@ void Episode::Observe() {
   try {
     estimate_.Update(filter_step() > 0, comm_.AllNeighbors(),
                      instance_->scenario.communication.kappa_self, z_,
-                     robot_pos_, comm_.active());
+                     robot_pos_, comm_.active(), PolicyRunner());
   } catch (const EstimateDiverged& e) {
     // Unstable dynamics that no robot measures: the model, not the robots,
     // makes the mission impossible; stop with the key to blame.

@@ -3,12 +3,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numeric>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "aia/core/rng.h"
+#include "aia/core/thread_pool.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
 
@@ -289,6 +292,123 @@ TEST(FuseTest, DkfWeightsGiveTheMatrixNumbersToTheBit) {
     Fuse(predicted, w, z, p, &sparse);
     EXPECT_EQ(dense.data(), sparse.data()) << "density " << density;
   }
+}
+
+// A large team's fusion split over threads (the rows, and the column sum of
+// the dense rows) gives the serial numbers to the bit, whatever the split;
+// each row is reported once, after it is final.
+TEST(FuseTest, SplitOverThreadsGivesTheSerialNumbersToTheBit) {
+  Rng rng(11);
+  std::vector<TargetModel> models;
+  for (int k = 0; k < 150; ++k)
+    models.push_back(k % 3 == 0 ? ConstantVelocity(0.1) : StaticModel(2));
+  const BeliefLayout layout(models);
+  const int n = 240;  // 240 x 1400 doubles: past the size that is split
+  ASSERT_GE(static_cast<long>(n) * layout.stride(), 1L << 18);
+  BeliefSet predicted(&layout, n);
+  Randomize(&predicted, &rng);
+  const std::vector<Vec2> p = RandomPositions(n, &rng);
+  const Measurements z = RandomMeasurements(n, layout.num_targets(), &rng);
+  ThreadPool pool(2);
+  // Chunks of 7 indices handed to the pool's threads, and chunks of 5 run
+  // last to first on this thread.
+  const RangeRunner threads = [&](int count, const RangeTask& f) {
+    pool.Run((count + 6) / 7, [&](int c, int worker) {
+      f(7 * c, std::min(count, 7 * c + 7), worker);
+    });
+  };
+  const RangeRunner backwards = [](int count, const RangeTask& f) {
+    for (int b = (count - 1) / 5 * 5; b >= 0; b -= 5)
+      f(b, std::min(count, b + 5), 0);
+  };
+  for (const double density : {0.1, 0.9, 1.0}) {
+    const Graph g =
+        density == 1.0 ? FullGraph(n) : RandomGraph(n, density, &rng);
+    DkfWeights w;
+    MakeDkfWeights(g, 0.75, &w);
+    BeliefSet serial;
+    Fuse(predicted, w, z, p, &serial);
+    for (const RangeRunner* run : {&threads, &backwards}) {
+      BeliefSet split;
+      std::vector<std::atomic<int>> done(n);
+      Fuse(predicted, w, z, p, &split, *run, [&](int i) {
+        // Row i is final here: the same bits as the serial fusion's.
+        EXPECT_EQ(split.data().row(i), serial.data().row(i));
+        ++done[i];
+      });
+      EXPECT_EQ(split.data(), serial.data()) << "density " << density;
+      for (int i = 0; i < n; ++i) EXPECT_EQ(done[i].load(), 1) << i;
+    }
+  }
+}
+
+// The time update split over threads: the serial numbers to the bit, and
+// the serial error (the first failing block in row-major order; a target
+// scaled back in every row).
+TEST(FilterTest, PredictSplitOverThreadsGivesTheSerialNumbersAndErrors) {
+  Rng rng(12);
+  std::vector<TargetModel> models;
+  for (int k = 0; k < 150; ++k) {
+    TargetModel drift = StaticModel(2);
+    drift.q = 0.01;
+    models.push_back(k % 3 == 0   ? ConstantVelocity(0.1)
+                     : k % 3 == 1 ? drift
+                                  : StaticModel(2));
+  }
+  models[20].A *= 2.0;  // unstable
+  const BeliefLayout layout(models);
+  const int n = 240;
+  ASSERT_GE(static_cast<long>(n) * layout.stride(), 1L << 18);
+  BeliefSet start(&layout, n);
+  Randomize(&start, &rng);
+  ThreadPool pool(2);
+  const RangeRunner threads = [&](int count, const RangeTask& f) {
+    pool.Run((count + 6) / 7, [&](int c, int worker) {
+      f(7 * c, std::min(count, 7 * c + 7), worker);
+    });
+  };
+  const RangeRunner backwards = [](int count, const RangeTask& f) {
+    for (int b = (count - 1) / 5 * 5; b >= 0; b -= 5)
+      f(b, std::min(count, b + 5), 0);
+  };
+  // What Predict throws on `b` with `run` ("" when nothing).
+  auto error = [](BeliefSet b, const RangeRunner& run) -> std::string {
+    try {
+      Predict(&b, nullptr, run);
+    } catch (const EstimateDiverged& e) {
+      return std::to_string(e.target()) + ": " + e.what();
+    }
+    return "";
+  };
+
+  BeliefSet serial = start;
+  Predict(&serial);
+  for (const RangeRunner* run : {&threads, &backwards}) {
+    BeliefSet split = start;
+    Predict(&split, nullptr, *run);
+    EXPECT_EQ(split.data(), serial.data());
+  }
+
+  // Two blocks that are not finite: the one first in row-major order.
+  BeliefSet broken = start;
+  broken.Omega(150, 3)(0, 0) = std::nan("");
+  broken.Omega(30, 9)(1, 1) = std::nan("");
+  const std::string first = error(broken, {});
+  EXPECT_EQ(first.rfind("9: ", 0), 0u) << first;
+  for (const RangeRunner* run : {&threads, &backwards})
+    EXPECT_EQ(error(broken, *run), first);
+
+  // The unstable target at a variance of 1e30 in every row: scaled back in
+  // each, so it diverges; one row still below the bound keeps it.
+  BeliefSet wide = start;
+  for (int r = 0; r < n; ++r)
+    wide.Omega(r, 20) = 1e-30 * Eigen::Matrix2d::Identity();
+  EXPECT_EQ(error(wide, {}).rfind("20: ", 0), 0u);
+  for (const RangeRunner* run : {&threads, &backwards})
+    EXPECT_EQ(error(wide, *run), error(wide, {}));
+  wide.Omega(n - 1, 20) = Eigen::Matrix2d::Identity();
+  for (const RangeRunner* run : {&threads, &backwards})
+    EXPECT_EQ(error(wide, *run), "");
 }
 
 // Fuse exploits the structure of W; it must still be exactly W * B + Z.

@@ -10,10 +10,12 @@
 #define AIA_ESTIMATION_FILTER_H_
 
 #include <Eigen/Core>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "aia/core/thread_pool.h"
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
@@ -47,8 +49,11 @@ class EstimateDiverged : public std::runtime_error {
 // estimate of the target is left and EstimateDiverged is thrown for it. A
 // failed or cut-off robot's own belief of an unstable target thus grows to
 // the bound without ending a mission in which other robots measure it.
+// Large sets split their rows over `run` (as Fuse below), with the same
+// numbers and the same error for any split.
 void Predict(BeliefSet* beliefs,
-             const std::vector<std::uint8_t>* active = nullptr);
+             const std::vector<std::uint8_t>* active = nullptr,
+             const RangeRunner& run = {});
 
 // The time update of one target block stored as Omega (dim x dim,
 // column-major) followed by xi (dim), in place. Callers skip static targets
@@ -89,10 +94,16 @@ void MakeDkfWeights(const std::vector<std::vector<int>>& neighbors,
                     double kappa_self, DkfWeights* w);
 // Fuse with these weights: the same numbers, to the bit, as Fuse with the
 // FusionWeights matrix, in O(N * stride) for the full graph and O(edges *
-// stride) for a sparse one. No allocation once `out` has its size.
+// stride) for a sparse one. Large sets (rows x stride of 2^18 doubles or
+// more, about 200 robots and targets) split their rows over `run`, with the
+// same numbers for any split; `row_done(i)`, where given, is called once row
+// i is final, on the thread that fused it (a reader of that row alone may
+// run there). No allocation once `out` has its size.
 void Fuse(const BeliefSet& predicted, const DkfWeights& w,
           const std::vector<std::vector<Measurement>>& z,
-          const std::vector<Vec2>& positions, BeliefSet* out);
+          const std::vector<Vec2>& positions, BeliefSet* out,
+          const RangeRunner& run = {},
+          const std::function<void(int row)>& row_done = {});
 
 // The centralized filter: one row, every robot's measurements added.
 void CentralUpdate(const std::vector<std::vector<Measurement>>& z,

@@ -36,11 +36,14 @@ class TeamEstimate {
   // MakeDkfWeights) with each robot's own measurements z[i] taken at
   // positions[i], the centralized update with all of them, then the team's
   // best estimates over the `active` robots. Predict's EstimateDiverged
-  // passes through (the caller knows which key to blame).
+  // passes through (the caller knows which key to blame). The fusion and
+  // the dets of a large team are split over `run` (filter.h, Fuse), with the
+  // same numbers for any split.
   void Update(bool predict, const std::vector<std::vector<int>>& neighbors,
               double kappa_self, const std::vector<std::vector<Measurement>>& z,
               const std::vector<Vec2>& positions,
-              const std::vector<std::uint8_t>& active);
+              const std::vector<std::uint8_t>& active,
+              const RangeRunner& run = {});
 
   int num_robots() const { return fused_.rows(); }
   int num_targets() const { return layout_.num_targets(); }

@@ -206,7 +206,8 @@ class PlainConvolutions {
 // depend on the split.
 void ParallelFor(int n, int grain, const std::function<void(int, int, int)>& f);
 // ParallelFor in chunks of 16 as a RangeRunner (core/thread_pool.h), for
-// the parts of the learned policy that split the robots.
+// the parts of the learned policy that split the robots, and the episode's
+// fusion of a large team (estimation/team_estimate.h).
 const RangeRunner& PolicyRunner();
 
 }  // namespace aia
