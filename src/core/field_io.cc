@@ -82,9 +82,14 @@ InputError KeyError(const std::string& file, const KeySources& sources,
     if (it != sources.end()) {
       const KeySource& s = it->second;
       if (!s.origin.empty()) {
-        return InputError("command line", 0,
-                          s.origin == "--set" ? "--set " + key : s.origin,
-                          what);
+        // A key a --set gave is named as that flag; one under a mapping a
+        // --set made (a default that clashes with what was set) by itself:
+        // no flag named it.
+        const std::string named =
+            s.origin != "--set" ? s.origin
+            : k == key          ? "--set " + key
+                                : key;
+        return InputError("command line", 0, named, what);
       }
       return InputError(file, at_value && k == key ? s.value_line : s.key_line,
                         key, what);

@@ -238,6 +238,14 @@ TEST(KeyErrorTest, BlamesTheNearestGivenKey) {
   EXPECT_EQ(KeyError("f", sources, "q", "x").line(), 0);
   EXPECT_EQ(KeyError("f", sources, "c.d", "x").Format(),
             "command line: --seed: x");
+  // A key a --set gave is that flag; a default under a mapping a --set made
+  // is named by itself, not as a flag nobody passed.
+  sources["g"] = {0, 0, "--set"};
+  sources["g.type"] = {0, 0, "--set"};
+  EXPECT_EQ(KeyError("f", sources, "g.type", "x").Format(),
+            "command line: --set g.type: x");
+  EXPECT_EQ(KeyError("f", sources, "g.size", "x").Format(),
+            "command line: g.size: x");
 }
 
 // Literals beyond a double's range are refused as such, not read as 0 or as
