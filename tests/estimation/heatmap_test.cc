@@ -303,5 +303,64 @@ TEST(TeamHeatmapTest, ThreadsDoNotChangeTheHeatmaps) {
   }
 }
 
+// Forty targets, 2-D and 4-D, over twelve robots: the keys are made a tile
+// of targets at a time, so targets on both sides of a tile's edge and a
+// split that cuts through tiles must each still give every robot its own
+// heatmap, the same with threads as without.
+TEST(TeamHeatmapTest, ManyTargetsAcrossTilesAreEachRobotsOwn) {
+  const int m = 40, n = 12;
+  std::vector<TargetModel> models;
+  std::vector<Eigen::VectorXd> means;
+  std::vector<Eigen::MatrixXd> covs;
+  std::vector<double> prior;
+  for (int k = 0; k < m; ++k) {
+    const int d = k % 7 == 3 ? 4 : 2;
+    models.push_back(TargetModel::Static(d));
+    Eigen::VectorXd mean = Eigen::VectorXd::Zero(d);
+    mean.head<2>() = Vec2(1.0 + 0.7 * k, 2.0 + 0.6 * (k % 9));
+    means.push_back(mean);
+    covs.push_back(Eigen::MatrixXd::Identity(d, d));
+    prior.push_back(0.0);
+  }
+  const BeliefLayout layout(models);
+  BeliefSet beliefs(&layout, n);
+  beliefs.SetPrior(means, covs);
+  // Most rows hold the prior; robot i measures the targets k with (k + i)
+  // % 11 == 0 (runs of equal rows broken at several places per target),
+  // and target 17 differs in every row.
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < m; ++k)
+      if ((k + i) % 11 == 0 || k == 17) {
+        const double r = 2.0 + i + 0.1 * k;
+        beliefs.Omega(i, k).topLeftCorner<2, 2>() += r * Mat2::Identity();
+        beliefs.Xi(i, k).head<2>() +=
+            r * (beliefs.PositionMean(i, k) + Vec2(0.2, 0.1 * i));
+      }
+  HeatmapParams params;
+  params.eps = 0.01;
+  const Grid<float> shape(70, 40, 0.5);
+  std::vector<int> rows(n);
+  for (int i = 0; i < n; ++i) rows[i] = i;
+  TeamHeatmap serial, threaded;
+  serial.Prepare(beliefs, rows, prior, params, shape);
+  const RangeRunner three = [](int count, const RangeTask& f) {
+    std::vector<std::thread> pool;
+    // Over the 40 targets: 0-6, 7-22, 23-39, through the tiles of 16.
+    const int cut[4] = {0, count * 7 / 40, count * 23 / 40, count};
+    for (int w = 0; w < 3; ++w) pool.emplace_back(f, cut[w], cut[w + 1], w);
+    for (std::thread& th : pool) th.join();
+  };
+  threaded.Prepare(beliefs, rows, prior, params, shape, three, 3);
+  EXPECT_EQ(serial.own_stamps(), threaded.own_stamps());
+  for (int b = 0; b < n; ++b) {
+    Grid<float> sa = shape, sb = shape, want = shape;
+    const Grid<float>& got = serial.Robot(b, &sa);
+    ASSERT_EQ(got.data(), threaded.Robot(b, &sb).data()) << "robot " << b;
+    ProjectHeatmap(beliefs, b, prior, params, &want);
+    for (std::size_t c = 0; c < got.size(); ++c)
+      ASSERT_NEAR(got.data()[c], want.data()[c], 1e-6) << "robot " << b;
+  }
+}
+
 }  // namespace
 }  // namespace aia
