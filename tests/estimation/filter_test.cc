@@ -294,6 +294,23 @@ TEST(FuseTest, DkfWeightsGiveTheMatrixNumbersToTheBit) {
   }
 }
 
+// Splits for a RangeRunner: chunks of 7 indices handed to a pool's threads,
+// and chunks of 5 run last to first on the calling thread.
+RangeRunner PoolRunner(ThreadPool* pool) {
+  return [pool](int count, const RangeTask& f) {
+    pool->Run((count + 6) / 7, [&](int c, int worker) {
+      f(7 * c, std::min(count, 7 * c + 7), worker);
+    });
+  };
+}
+
+RangeRunner Backwards() {
+  return [](int count, const RangeTask& f) {
+    for (int b = (count - 1) / 5 * 5; b >= 0; b -= 5)
+      f(b, std::min(count, b + 5), 0);
+  };
+}
+
 // A large team's fusion split over threads (the rows, and the column sum of
 // the dense rows) gives the serial numbers to the bit, whatever the split;
 // each row is reported once, after it is final.
@@ -310,17 +327,7 @@ TEST(FuseTest, SplitOverThreadsGivesTheSerialNumbersToTheBit) {
   const std::vector<Vec2> p = RandomPositions(n, &rng);
   const Measurements z = RandomMeasurements(n, layout.num_targets(), &rng);
   ThreadPool pool(2);
-  // Chunks of 7 indices handed to the pool's threads, and chunks of 5 run
-  // last to first on this thread.
-  const RangeRunner threads = [&](int count, const RangeTask& f) {
-    pool.Run((count + 6) / 7, [&](int c, int worker) {
-      f(7 * c, std::min(count, 7 * c + 7), worker);
-    });
-  };
-  const RangeRunner backwards = [](int count, const RangeTask& f) {
-    for (int b = (count - 1) / 5 * 5; b >= 0; b -= 5)
-      f(b, std::min(count, b + 5), 0);
-  };
+  const RangeRunner threads = PoolRunner(&pool), backwards = Backwards();
   for (const double density : {0.1, 0.9, 1.0}) {
     const Graph g =
         density == 1.0 ? FullGraph(n) : RandomGraph(n, density, &rng);
@@ -362,15 +369,7 @@ TEST(FilterTest, PredictSplitOverThreadsGivesTheSerialNumbersAndErrors) {
   BeliefSet start(&layout, n);
   Randomize(&start, &rng);
   ThreadPool pool(2);
-  const RangeRunner threads = [&](int count, const RangeTask& f) {
-    pool.Run((count + 6) / 7, [&](int c, int worker) {
-      f(7 * c, std::min(count, 7 * c + 7), worker);
-    });
-  };
-  const RangeRunner backwards = [](int count, const RangeTask& f) {
-    for (int b = (count - 1) / 5 * 5; b >= 0; b -= 5)
-      f(b, std::min(count, b + 5), 0);
-  };
+  const RangeRunner threads = PoolRunner(&pool), backwards = Backwards();
   // What Predict throws on `b` with `run` ("" when nothing).
   auto error = [](BeliefSet b, const RangeRunner& run) -> std::string {
     try {
