@@ -130,6 +130,7 @@ void AddRows(const std::vector<int>& rows, const RowPair& m, double scale,
 void AddExcludedRows(const std::vector<int>& nb, int i, const RowPair& m,
                      double scale, RowMap o) {
   const int n = static_cast<int>(m.b.rows());
+  if (static_cast<int>(nb.size()) == n - 1) return;  // every other row
   int pending[4], count = 0;
   std::size_t next = 0;
   for (int j = 0; j < n; ++j) {
