@@ -155,8 +155,9 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=3, help="runs per size (aia bench reports the median run)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the worlds")
     parser.add_argument("--policy-threads", type=int, default=1,
-                        help="threads of a learned policy (aia bench's "
-                             "--policy-threads; physics has one)")
+                        help="threads of a learned policy and of a large "
+                             "team's fusion (aia bench's --policy-threads; "
+                             "physics has one)")
     parser.add_argument("--aia", default="build/aia", help="the aia binary")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="another scenario key for every size, e.g. "

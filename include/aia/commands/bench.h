@@ -30,8 +30,9 @@ struct BenchOptions {
   // --network: time I-GBNet's network alone (inference at 10 and 80 robots
   // per batch, training at batch 16) for stem strides 1 and 2.
   bool network = false;
-  // Threads of a learned policy's rendering and inference (SetPolicyThreads;
-  // `aia run` uses every core, `aia eval` one per worker).
+  // Threads of a learned policy's rendering and inference, and of a large
+  // team's fusion (SetPolicyThreads; `aia run` uses every core, `aia eval`
+  // one per worker).
   int policy_threads = 1;
 
   // The flags, declared once for `aia bench`'s flags and their checks.
@@ -50,8 +51,9 @@ struct BenchOptions {
                  .Doc("with --expert: worlds per size"));
     a->Visit(AIA_FIELD(policy_threads)
                  .In(Between(1, 256))
-                 .Doc("threads of a learned policy's rendering and inference "
-                      "(aia run uses every core)"));
+                 .Doc("threads of a learned policy's rendering and inference, "
+                      "and of a large team's fusion (aia run uses every "
+                      "core)"));
   }
   // At least one size; with --expert, the last seed fits in 64 bits.
   void Validate(const FieldChecker& c) const;
