@@ -17,7 +17,8 @@ class BadInput(Exception):
 
 def run(main):
     """Runs a tool's main() and exits with its code: 2 and one error line on
-    BadInput, 130 on Ctrl-C."""
+    BadInput, 130 on Ctrl-C, and 141 in silence when its output is a pipe
+    whose reader has gone (`tool | head`), as a shell command ends."""
     try:
         code = main()
     except BadInput as e:
@@ -26,6 +27,11 @@ def run(main):
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         code = 130
+    except BrokenPipeError:
+        # Python would report the failed flush of stdout at exit: point it
+        # at /dev/null first.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        code = 141
     sys.exit(code or 0)
 
 

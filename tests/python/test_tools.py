@@ -77,3 +77,16 @@ def test_figures_go_where_asked_and_never_over_an_input(tmp_path):
     refused(tool("plot_trace.py", trace, "--out", trace), "is an input")
     refused(tool("plot_training.py", str(SOURCE / "models/igbnet.train.csv"),
                  "--out", str(tmp_path / "x.csv")), "writes no .csv files")
+
+
+def test_a_closed_pipe_ends_a_tool_without_a_traceback():
+    # A tool whose reader has gone (`tool | head`): exit 141, nothing on
+    # stderr, as a shell command ends.
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import tool_io\n"
+            "def main():\n"
+            "    raise BrokenPipeError(32, 'Broken pipe')\n"
+            "tool_io.run(main)\n")
+    r = subprocess.run([PYTHON, "-c", code, str(SOURCE / "tools")],
+                       capture_output=True, text=True)
+    assert r.returncode == 141, r.stderr
+    assert r.stderr == ""
