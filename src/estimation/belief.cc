@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <utility>
 
@@ -196,15 +197,26 @@ void BeliefDigest::Compute(const BeliefSet& beliefs, const RangeRunner& run) {
   const std::size_t size = static_cast<std::size_t>(beliefs.rows()) * m_;
   log_det_.resize(size);
   mean_.resize(size);
+  // A block equal bit for bit to the row before's (in a full graph most
+  // rows hold one belief of a target) takes that row's values, the ones
+  // the factorization would give; the row before is in the cache where it
+  // was read last, in the same part of the split.
+  const BeliefLayout& layout = beliefs.layout();
   RunRange(run, beliefs.rows(), [&](int r0, int r1, int) {
     for (int r = r0; r < r1; ++r)
       for (int k = 0; k < m_; ++k) {
         const std::size_t at = static_cast<std::size_t>(r) * m_ + k;
+        const int d = layout.dim(k);
         const double* block = beliefs.Omega(r, k).data();
-        if (beliefs.layout().dim(k) == 2)
+        if (r > r0 && std::memcmp(block, beliefs.Omega(r - 1, k).data(),
+                                  sizeof(double) * (d * d + d)) == 0) {
+          log_det_[at] = log_det_[at - m_];
+          mean_[at] = mean_[at - m_];
+        } else if (d == 2) {
           LogDetAndMeanOf<2>(block, &log_det_[at], &mean_[at]);
-        else
+        } else {
           LogDetAndMeanOf<4>(block, &log_det_[at], &mean_[at]);
+        }
       }
   });
 }
