@@ -352,6 +352,16 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
   for (const int u : robot_used_) own_used_ += u;
 }
 
+void TeamHeatmap::Edits(int b, std::vector<HeatEdit>* out) const {
+  AIA_CHECK(b >= 0 && b < static_cast<int>(robot_used_.size()));
+  out->clear();
+  for (int o = 0; o < robot_used_[b]; ++o) {
+    const Own& own = robot_own_[b][o];
+    out->push_back({&common_[own.target], true});
+    out->push_back({&own.stamp, false});
+  }
+}
+
 const Grid<float>& TeamHeatmap::Robot(int b, Grid<float>* scratch) const {
   AIA_CHECK(b >= 0 && b < static_cast<int>(robot_used_.size()));
   if (robot_used_[b] == 0) return base_;

@@ -168,6 +168,25 @@ void ChannelRenderer::Render(const Vec2& self,
                  memory);
 }
 
+namespace {
+
+// Folds one map row (nx cells) onto the window row h (w pixels, pixel 0 at
+// map column x0): the cells left of the window onto its first pixel, those
+// right of it onto its last, the rest onto their own; each pixel keeps the
+// largest heat (0 at least).
+void FoldMapRow(const float* row, int nx, int x0, int w, float* h) {
+  const int mid0 = std::clamp(x0, 0, nx), mid1 = std::clamp(x0 + w, 0, nx);
+  float left = 0.0f, right = 0.0f;
+  for (int gx = 0; gx < mid0; ++gx) left = std::max(left, row[gx]);
+  for (int gx = mid1; gx < nx; ++gx) right = std::max(right, row[gx]);
+  h[0] = std::max(h[0], left);
+  h[w - 1] = std::max(h[w - 1], right);
+  for (int gx = mid0; gx < mid1; ++gx)
+    h[gx - x0] = std::max(h[gx - x0], row[gx]);
+}
+
+}  // namespace
+
 void HeatFold::Build(const Grid<float>& heat) {
   heat_ = &heat;
   nx_ = heat.nx();
@@ -220,34 +239,89 @@ void HeatFold::Build(const Grid<float>& heat) {
             &bottom_from_);
 }
 
-void HeatFold::Fold(int x0, int y0, int w, float* out) const {
-  AIA_CHECK(heat_ != nullptr && w > 0);
+void HeatFold::FoldRegion(int lo, int hi, int x0, int w, float* h) const {
   const int mid0 = std::clamp(x0, 0, nx_), mid1 = std::clamp(x0 + w, 0, nx_);
   const int stride = nx_ + 1;
+  const float *before = nullptr, *from = nullptr, *cols = nullptr;
+  if (lo == 0) {  // rows [0, hi]
+    before = top_before_.data() + static_cast<std::size_t>(hi) * stride;
+    from = top_from_.data() + static_cast<std::size_t>(hi) * stride;
+    cols = top_.data() + static_cast<std::size_t>(hi) * nx_;
+  } else if (hi == ny_ - 1) {  // rows [lo, ny)
+    before = bottom_before_.data() + static_cast<std::size_t>(lo) * stride;
+    from = bottom_from_.data() + static_cast<std::size_t>(lo) * stride;
+    cols = bottom_.data() + static_cast<std::size_t>(lo) * nx_;
+  } else {  // row lo alone
+    AIA_CHECK(lo == hi);
+    before = row_before_.data() + static_cast<std::size_t>(lo) * stride;
+    from = row_from_.data() + static_cast<std::size_t>(lo) * stride;
+    cols = heat_->data().data() + static_cast<std::size_t>(lo) * nx_;
+  }
+  h[0] = std::max(h[0], before[mid0]);
+  h[w - 1] = std::max(h[w - 1], from[mid1]);
+  for (int gx = mid0; gx < mid1; ++gx)
+    h[gx - x0] = std::max(h[gx - x0], cols[gx]);
+}
+
+void HeatFold::Fold(int x0, int y0, int w, float* out) const {
+  AIA_CHECK(heat_ != nullptr && w > 0);
   for (int r = 0; r < w; ++r) {
     // The map rows that fold onto window row r.
     const int lo = std::max(0, r == 0 ? 0 : y0 + r);
     const int hi = std::min(ny_ - 1, r == w - 1 ? ny_ - 1 : y0 + r);
+    if (lo <= hi)
+      FoldRegion(lo, hi, x0, w, out + static_cast<std::size_t>(r) * w);
+  }
+}
+
+void HeatFold::FoldEdited(int x0, int y0, int w,
+                          const std::vector<HeatEdit>& edits,
+                          float* out) const {
+  AIA_CHECK(heat_ != nullptr && w > 0);
+  // The map rows an edit touches, counted up to each row.
+  thread_local std::vector<int> touched_before;
+  thread_local std::vector<float> row;
+  touched_before.assign(ny_ + 1, 0);
+  for (const HeatEdit& e : edits)
+    for (int y = e.stamp->y0; y < e.stamp->y0 + e.stamp->ny; ++y)
+      touched_before[y + 1] = 1;
+  for (int y = 0; y < ny_; ++y) touched_before[y + 1] += touched_before[y];
+  const auto touched = [&](int y) {
+    return touched_before[y + 1] != touched_before[y];
+  };
+  const float* data = heat_->data().data();
+  for (int r = 0; r < w; ++r) {
+    const int lo = std::max(0, r == 0 ? 0 : y0 + r);
+    const int hi = std::min(ny_ - 1, r == w - 1 ? ny_ - 1 : y0 + r);
     if (lo > hi) continue;
-    const float *before = nullptr, *from = nullptr, *cols = nullptr;
-    if (lo == 0) {  // rows [0, hi]
-      before = top_before_.data() + static_cast<std::size_t>(hi) * stride;
-      from = top_from_.data() + static_cast<std::size_t>(hi) * stride;
-      cols = top_.data() + static_cast<std::size_t>(hi) * nx_;
-    } else if (hi == ny_ - 1) {  // rows [lo, ny)
-      before = bottom_before_.data() + static_cast<std::size_t>(lo) * stride;
-      from = bottom_from_.data() + static_cast<std::size_t>(lo) * stride;
-      cols = bottom_.data() + static_cast<std::size_t>(lo) * nx_;
-    } else {  // row lo alone
-      before = row_before_.data() + static_cast<std::size_t>(lo) * stride;
-      from = row_from_.data() + static_cast<std::size_t>(lo) * stride;
-      cols = heat_->data().data() + static_cast<std::size_t>(lo) * nx_;
-    }
     float* h = out + static_cast<std::size_t>(r) * w;
-    h[0] = std::max(h[0], before[mid0]);
-    h[w - 1] = std::max(h[w - 1], from[mid1]);
-    for (int gx = mid0; gx < mid1; ++gx)
-      h[gx - x0] = std::max(h[gx - x0], cols[gx]);
+    if (touched_before[hi + 1] == touched_before[lo]) {
+      FoldRegion(lo, hi, x0, w, h);  // no edit in these rows: as Fold
+      continue;
+    }
+    // Row by row: an untouched one from its own tables, a touched one made
+    // (the base row, then every edit of it in order) and folded whole.
+    for (int gy = lo; gy <= hi; ++gy) {
+      const float* cells = data + static_cast<std::size_t>(gy) * nx_;
+      if (!touched(gy)) {
+        FoldRegion(gy, gy, x0, w, h);
+        continue;
+      }
+      row.assign(cells, cells + nx_);
+      for (const HeatEdit& e : edits) {
+        const HeatStamp& st = *e.stamp;
+        if (gy < st.y0 || gy >= st.y0 + st.ny) continue;
+        const float* in =
+            st.values.data() + static_cast<std::size_t>(gy - st.y0) * st.nx;
+        float* cell = row.data() + st.x0;
+        if (e.subtract) {
+          for (int x = 0; x < st.nx; ++x) cell[x] -= in[x];
+        } else {
+          for (int x = 0; x < st.nx; ++x) cell[x] += in[x];
+        }
+      }
+      FoldMapRow(row.data(), nx_, x0, w, h);
+    }
   }
 }
 
@@ -261,10 +335,15 @@ void ChannelRenderer::RenderWithHeat(
     const Vec2& self, const std::vector<Vec2>& neighbours,
     const Grid<float>& field, const std::vector<HeatSource>* targets,
     const std::vector<double>* log_det_prior, double eps, float* out,
-    const RobotMemory& memory, const HeatFold* heat_fold) const {
+    const RobotMemory& memory, const HeatFold* heat_fold,
+    const std::vector<HeatEdit>* heat_edits) const {
   AIA_CHECK(field.nx() == occupancy_.nx() && field.ny() == occupancy_.ny());
   AIA_CHECK_MSG(!params_.geodesic || (targets && log_det_prior),
                 "channel 4 needs the robot's belief");
+  AIA_CHECK_MSG(!heat_edits || heat_edits->empty() ||
+                    (heat_fold && heat_fold->heat() == &field &&
+                     params_.frame == ChannelFrame::kCentred),
+                "heat edits need the fold of the heatmap they edit");
   const std::size_t plane = static_cast<std::size_t>(height_) * width_;
   float* occ = out;
   float* own = out + plane;
@@ -314,21 +393,16 @@ void ChannelRenderer::RenderWithHeat(
   CapNeighbours(nbr, plane);
   // Row by row: the cells left of the window fold onto its first column,
   // those right of it onto its last, the rest onto their own column.
-  const int mid0 = std::clamp(x0, 0, nx), mid1 = std::clamp(x0 + w, 0, nx);
   if (heat_fold && heat_fold->heat() == &field) {
-    heat_fold->Fold(x0, y0, w, heat);
-  } else {
-    for (int gy = 0; gy < ny; ++gy) {
-      float* h = heat + fold(gy, y0) * w;
-      const float* row = field.data().data() + field.Index(0, gy);
-      float left = 0.0f, right = 0.0f;
-      for (int gx = 0; gx < mid0; ++gx) left = std::max(left, row[gx]);
-      for (int gx = mid1; gx < nx; ++gx) right = std::max(right, row[gx]);
-      h[0] = std::max(h[0], left);
-      h[w - 1] = std::max(h[w - 1], right);
-      for (int gx = mid0; gx < mid1; ++gx)
-        h[gx - x0] = std::max(h[gx - x0], row[gx]);
+    if (heat_edits && !heat_edits->empty()) {
+      heat_fold->FoldEdited(x0, y0, w, *heat_edits, heat);
+    } else {
+      heat_fold->Fold(x0, y0, w, heat);
     }
+  } else {
+    for (int gy = 0; gy < ny; ++gy)
+      FoldMapRow(field.data().data() + field.Index(0, gy), nx, x0, w,
+                 heat + fold(gy, y0) * w);
   }
   if (params_.geodesic)
     Reach(x0, y0, self, *targets, *log_det_prior, eps, out + 4 * plane,

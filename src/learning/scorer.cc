@@ -75,6 +75,7 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
     worker_targets_.resize(workers);
     worker_search_.resize(workers);
     worker_pair_.resize(workers);
+    worker_edits_.resize(workers);
   }
   const bool geodesic = renderer_->params().geodesic;
   const SearchMemory* aims =
@@ -144,11 +145,19 @@ void NetworkScorer::Score(const DecisionContext& ctx, const ScoringRows& team,
         const int here = (*ctx.robot_lattice)[i];
         SetTrail(lattice, here,
                  ctx.history ? ctx.history->last(i) : Move::kStay, &memory);
+        // With the fold, a robot's own heatmap is never made: the base's
+        // fold with its edits (HeatFold::FoldEdited).
+        std::vector<HeatEdit>& edits = worker_edits_[worker];
+        edits.clear();
+        if (folding && keep.empty()) heat_.Edits(b, &edits);
         renderer_->RenderWithHeat(
             lattice.Point(here), neighbours,
-            keep.empty() ? heat_.Robot(b, &heat) : heat_.Robot(b, keep, &heat),
+            folding && keep.empty()
+                ? heat_.base()
+                : (keep.empty() ? heat_.Robot(b, &heat)
+                                : heat_.Robot(b, keep, &heat)),
             targets, prior, ctx.eps, images_.data() + (begin + made) * size,
-            memory, folding ? &fold_ : nullptr);
+            memory, folding ? &fold_ : nullptr, &edits);
         ++made;
       }
       float* scored = scored_.data() + begin * kNumMoves;

@@ -250,6 +250,75 @@ TEST(ChannelsTest, HeatFoldFoldsAsTheWholeMapDoes) {
   EXPECT_FLOAT_EQ(direct[3 * 9 + 8], 9.0f);  // heat's top-right corner pixel
 }
 
+// A robot's heatmap as edits of the base (TeamHeatmap::Edits) folds as the
+// edited map itself does, made cell by cell: stamps that overlap, that are
+// taken away and added in turn (some cells end a rounding below zero), at
+// the map's edges and rows apart, under windows of 1 to 12 pixels around
+// every pixel (so edited rows fall in the window, above and below it).
+TEST(ChannelsTest, HeatFoldOfEditsFoldsAsTheEditedMapDoes) {
+  const int nx = 11, ny = 13;
+  Grid<std::uint8_t> occupancy(nx, ny, 1.0, 0);
+  Grid<float> base(nx, ny, 1.0, 0.0f);
+  std::uint64_t state = 777;
+  const auto draw = [&](int n) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((state >> 33) % n);
+  };
+  for (float& h : base.data()) h = 0.1f * static_cast<float>(draw(9));
+  // Stamps: a rectangle of x0, y0, nx, ny with values in [0.05, 0.5].
+  const auto stamp = [&](int x0, int y0, int sx, int sy) {
+    HeatStamp st;
+    st.x0 = x0, st.y0 = y0, st.nx = sx, st.ny = sy;
+    for (int i = 0; i < sx * sy; ++i)
+      st.values.push_back(0.05f * static_cast<float>(1 + draw(10)));
+    return st;
+  };
+  const std::vector<HeatStamp> stamps = {
+      stamp(0, 0, 4, 3), stamp(2, 1, 5, 4),   stamp(7, 10, 4, 3),
+      stamp(3, 6, 1, 1), stamp(0, 12, 11, 1), stamp(5, 4, 6, 2)};
+  // Take each stamp away where the base holds it, and add another.
+  Grid<float> with = base;
+  for (const HeatStamp& st : stamps) AddHeatStamp(st, false, &with);
+  std::vector<HeatEdit> edits;
+  for (std::size_t i = 0; i < stamps.size(); ++i) {
+    edits.push_back({&stamps[i], true});
+    edits.push_back({&stamps[(i + 2) % stamps.size()], false});
+  }
+  Grid<float> edited = with;
+  for (const HeatEdit& e : edits) AddHeatStamp(*e.stamp, e.subtract, &edited);
+  HeatFold fold_with;
+  fold_with.Build(with);
+  int windows = 0;
+  for (int w : {1, 2, 3, 5, 8, 12}) {
+    ChannelRenderer r(occupancy,
+                      {static_cast<double>(nx), static_cast<double>(ny)},
+                      Params(ChannelFrame::kCentred, w));
+    std::vector<float> direct(r.ImageSize()), by_edits(r.ImageSize());
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x) {
+        const Vec2 self(x + 0.5, y + 0.5);
+        r.RenderWithHeat(self, {}, edited, nullptr, nullptr, 0.01,
+                         direct.data());
+        r.RenderWithHeat(self, {}, with, nullptr, nullptr, 0.01,
+                         by_edits.data(), {}, &fold_with, &edits);
+        EXPECT_EQ(by_edits, direct)
+            << "window " << w << " at " << x << "," << y;
+        ++windows;
+      }
+  }
+  EXPECT_EQ(windows, 6 * nx * ny);
+  // No edits: the base's own fold.
+  ChannelRenderer r(occupancy,
+                    {static_cast<double>(nx), static_cast<double>(ny)},
+                    Params(ChannelFrame::kCentred, 5));
+  std::vector<float> direct(r.ImageSize()), none(r.ImageSize());
+  const std::vector<HeatEdit> no_edits;
+  r.RenderWithHeat({5.5, 6.5}, {}, with, nullptr, nullptr, 0.01, direct.data());
+  r.RenderWithHeat({5.5, 6.5}, {}, with, nullptr, nullptr, 0.01, none.data(),
+                   {}, &fold_with, &no_edits);
+  EXPECT_EQ(none, direct);
+}
+
 TEST(ChannelsTest, LocalizedTargetsLeaveNoHeat) {
   TinyWorld t;
   t.targets[0].log_det = std::log(t.eps);  // det Sigma = eps

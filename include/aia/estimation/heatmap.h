@@ -61,6 +61,11 @@ void MakeHeatStamp(const Vec2& mu, const Mat2& sigma, double weight,
                    HeatStamp* out);
 // out += stamp (or -= with subtract).
 void AddHeatStamp(const HeatStamp& stamp, bool subtract, Grid<float>* out);
+// One stamp added to (or taken from) a heatmap.
+struct HeatEdit {
+  const HeatStamp* stamp = nullptr;
+  bool subtract = false;
+};
 
 // What the heatmap needs of one target in one belief: the position mean and
 // covariance, and log det Sigma of the whole block (what eps judges). Also
@@ -126,6 +131,10 @@ class TeamHeatmap {
   // The common heatmap: what Robot returns for a robot that holds the
   // majority's belief of every target.
   const Grid<float>& base() const { return base_; }
+  // What Robot(b, scratch) applies to a copy of the base, in its order:
+  // each of the robot's own targets' common stamp taken away and its own
+  // stamp added (empty when Robot returns the base itself).
+  void Edits(int b, std::vector<HeatEdit>* out) const;
   // Robot-target pairs whose heat was not the common one (a measure of the
   // work saved).
   long own_stamps() const { return static_cast<long>(own_used_); }

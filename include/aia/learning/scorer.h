@@ -105,7 +105,8 @@ class NetworkScorer : public MoveScorer {
   // The team rows rendered and scored (async: the deciding ones), and their
   // logits in that order.
   std::vector<int> order_, deciding_;
-  std::vector<std::vector<float>> worker_pair_;  // ForwardAlone's batch
+  std::vector<std::vector<float>> worker_pair_;      // ForwardAlone's batch
+  std::vector<std::vector<HeatEdit>> worker_edits_;  // a robot's heat edits
   void ForwardAlone(const float* image, std::size_t size, float* logits,
                     int worker);
   std::vector<float> scored_;
