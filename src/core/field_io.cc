@@ -85,10 +85,9 @@ InputError KeyError(const std::string& file, const KeySources& sources,
         // A key a --set gave is named as that flag; one under a mapping a
         // --set made (a default that clashes with what was set) by itself:
         // no flag named it.
-        const std::string named =
-            s.origin != "--set" ? s.origin
-            : k == key          ? "--set " + key
-                                : key;
+        const std::string named = s.origin != "--set" ? s.origin
+                                  : k == key          ? "--set " + key
+                                                      : key;
         return InputError("command line", 0, named, what);
       }
       return InputError(file, at_value && k == key ? s.value_line : s.key_line,

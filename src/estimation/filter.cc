@@ -154,6 +154,13 @@ void AddExcludedRows(const std::vector<int>& nb, int i, const RowPair& m,
 // threads costs.
 constexpr Eigen::Index kParallelRows = Eigen::Index{1} << 18;
 
+// `run` for a set of rows x cols doubles from kParallelRows up, else none.
+const RangeRunner& SplitFor(Eigen::Index rows, Eigen::Index cols,
+                            const RangeRunner& run) {
+  static const RangeRunner kSerial;
+  return rows * cols >= kParallelRows ? run : kSerial;
+}
+
 // Columns summed per index when the column sum S is split over threads
 // (a runner takes indices in chunks: learning/network.h's of 16).
 constexpr Eigen::Index kSumColumns = 128;
@@ -180,9 +187,7 @@ void MixRows(const std::vector<RowWeights>& w, const BeliefSet::Storage& b,
   const int n = static_cast<int>(b.rows());
   const RowPair m{b, *out};
   const Eigen::Index cols = b.cols();
-  const RangeRunner& split =
-      static_cast<Eigen::Index>(n) * cols >= kParallelRows ? run
-                                                           : RangeRunner{};
+  const RangeRunner& split = SplitFor(n, cols, run);
 
   bool dense = false;
   for (int i = 0; i < n && !dense; ++i) dense = IsDenseUniform(w[i], n);
@@ -272,10 +277,7 @@ void Predict(BeliefSet* beliefs, const std::vector<std::uint8_t>* active,
   std::mutex failure_mutex;
   std::size_t failure_at = scaled.size();
   std::string failure;
-  const RangeRunner& split =
-      static_cast<Eigen::Index>(rows) * data.cols() >= kParallelRows
-          ? run
-          : RangeRunner{};
+  const RangeRunner& split = SplitFor(rows, data.cols(), run);
   RunRange(split, rows, [&](int r0, int r1, int) {
     for (int r = r0; r < r1; ++r) {
       double* row = data.data() + r * data.cols();
