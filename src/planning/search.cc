@@ -95,13 +95,53 @@ int NearestObserverDistance(const Map& map, const SensorModel& sensor, int here,
   return -1;
 }
 
-void SearchMemory::Reset(int num_robots, int num_targets) {
+// --- MissSlots ---------------------------------------------------------------
+
+template <typename Derived, typename Slot, typename Shared>
+void MissSlots<Derived, Slot, Shared>::Reset(int num_robots, int num_targets) {
   AIA_CHECK(num_robots >= 0 && num_targets >= 0);
   num_robots_ = num_robots;
   num_targets_ = num_targets;
   slots_.assign(static_cast<std::size_t>(num_robots) * num_targets, Slot{});
   misses_ = 0;
 }
+
+template <typename Derived, typename Slot, typename Shared>
+void MissSlots<Derived, Slot, Shared>::Update(const DecisionContext& ctx,
+                                              int robot) {
+  misses_ += derived().Record(ctx, robot);
+}
+
+template <typename Derived, typename Slot, typename Shared>
+void MissSlots<Derived, Slot, Shared>::Update(const DecisionContext& ctx,
+                                              const std::vector<int>& robots,
+                                              const RangeRunner& run,
+                                              int workers) {
+  misses_ += RecordAll(robots, run, workers, &added_,
+                       [&](int i) { return derived().Record(ctx, i); });
+}
+
+template <typename Derived, typename Slot, typename Shared>
+void MissSlots<Derived, Slot, Shared>::Share(const DecisionContext& ctx,
+                                             const std::vector<int>& robots,
+                                             const RangeRunner& run,
+                                             int workers) {
+  if (static_cast<int>(caches_.size()) < std::max(1, workers))
+    caches_.resize(std::max(1, workers));
+  for (Cache& cache : caches_) cache.Clear();
+  sharing_.Share(
+      ctx, robots, num_targets_, &slots_,
+      [&](int i, int k, int group, int worker) {
+        derived().RecomputeShared(ctx, i, k, group, &caches_[worker]);
+      },
+      run, workers);
+}
+
+template class MissSlots<SearchMemory, internal::AimSlot, internal::SharedWalk>;
+template class MissSlots<SearchPoints, internal::PointsSlot,
+                         internal::SharedPoints>;
+
+// --- SearchMemory ------------------------------------------------------------
 
 bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   const Map& map = *ctx.map;
@@ -115,7 +155,7 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   const auto cost = [&](const Vec2& x, int bound) {
     return NearestObserverDistance(map, sensor, here, x, span, bound);
   };
-  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  auto& s = slot(robot, k);
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
   if (SearchAim(map, sensor, s.mean, cov, &s.missed.points(), cost, &s.aim))
     return true;
@@ -123,17 +163,6 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   s.missed.clear();
   s.aim = s.mean;
   return false;
-}
-
-void SearchMemory::Update(const DecisionContext& ctx, int robot) {
-  misses_ += Record(ctx, robot);
-}
-
-void SearchMemory::Update(const DecisionContext& ctx,
-                          const std::vector<int>& robots,
-                          const RangeRunner& run, int workers) {
-  misses_ += RecordAll(robots, run, workers, &added_,
-                       [&](int i) { return Record(ctx, i); });
 }
 
 int SearchMemory::Record(const DecisionContext& ctx, int robot) {
@@ -148,7 +177,7 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
   const Vec2 p = lattice.Point(here);
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {
-    Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+    auto& s = slot(robot, k);
     const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
     if (!searching) s.missed.clear();
     if (s.missed.empty()) s.aim = s.mean;
@@ -165,19 +194,21 @@ int SearchMemory::Record(const DecisionContext& ctx, int robot) {
   return added;
 }
 
-bool SearchMemory::ReaimShared(const DecisionContext& ctx, int robot, int k,
-                               int group, WalkCache* cache) {
+bool SearchMemory::RecomputeShared(const DecisionContext& ctx, int robot, int k,
+                                   int group, Cache* cache) {
   const Map& map = *ctx.map;
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
   const int span =
       static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
-  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  auto& s = slot(robot, k);
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
   bool made = false;
-  SharedWalk& walk = cache->Find(
+  internal::SharedWalk& walk = cache->Find(
       group, k,
-      [&](const SharedWalk& w) { return w.mean == s.mean && w.cov == cov; },
+      [&](const internal::SharedWalk& w) {
+        return w.mean == s.mean && w.cov == cov;
+      },
       &made);
   if (made) {
     walk.mean = s.mean;
@@ -191,7 +222,7 @@ bool SearchMemory::ReaimShared(const DecisionContext& ctx, int robot, int k,
   // NearestObserverDistance from the point's summary: where the robot lies
   // beyond a corner of the observers' box, every observer is nearer along
   // both axes the same way, and the corner sum gives the least distance.
-  const auto cost = [&](const RingPoint& p, int bound) {
+  const auto cost = [&](const internal::SharedWalk::RingPoint& p, int bound) {
     if (p.component == -1) return -1;
     if (p.component >= 0 && p.component != component) return -1;
     if (p.component >= 0) {
@@ -212,7 +243,7 @@ bool SearchMemory::ReaimShared(const DecisionContext& ctx, int robot, int k,
       PriorRings(walk.mean, walk.cov, lattice.step())
           .Visit(r, [&](const Vec2& x) {
             if (!map.PointFree(x) || RuledOut(map, sensor, ruled, x)) return;
-            RingPoint p;
+            internal::SharedWalk::RingPoint p;
             p.x = x;
             const int c = lattice.NearestPoint(x);
             for (int iy = std::max(0, lattice.Iy(c) - span);
@@ -259,28 +290,6 @@ bool SearchMemory::ReaimShared(const DecisionContext& ctx, int robot, int k,
   return false;
 }
 
-void SearchMemory::Share(const DecisionContext& ctx,
-                         const std::vector<int>& robots, const RangeRunner& run,
-                         int workers) {
-  if (static_cast<int>(caches_.size()) < std::max(1, workers))
-    caches_.resize(std::max(1, workers));
-  for (WalkCache& cache : caches_) cache.Clear();
-  sharing_.Share(
-      ctx, robots, num_targets_, &slots_,
-      [&](int i, int k, int group, int worker) {
-        ReaimShared(ctx, i, k, group, &caches_[worker]);
-      },
-      run, workers);
-}
-
-void SearchPoints::Reset(int num_robots, int num_targets) {
-  AIA_CHECK(num_robots >= 0 && num_targets >= 0);
-  num_robots_ = num_robots;
-  num_targets_ = num_targets;
-  slots_.assign(static_cast<std::size_t>(num_robots) * num_targets, Slot{});
-  misses_ = 0;
-}
-
 void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   const Map& map = *ctx.map;
   const SensorModel& sensor = *ctx.sensor;
@@ -292,7 +301,7 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   const auto observable = [&](const Vec2& x) {
     return NearestObserverDistance(map, sensor, here, x, span) >= 0;
   };
-  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  auto& s = slot(robot, k);
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
   const std::vector<Vec2>& ruled = MissedPoints(lattice, &s.missed.points());
   s.points.clear();
@@ -317,17 +326,6 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   }
 }
 
-void SearchPoints::Update(const DecisionContext& ctx, int robot) {
-  misses_ += Record(ctx, robot);
-}
-
-void SearchPoints::Update(const DecisionContext& ctx,
-                          const std::vector<int>& robots,
-                          const RangeRunner& run, int workers) {
-  misses_ += RecordAll(robots, run, workers, &added_,
-                       [&](int i) { return Record(ctx, i); });
-}
-
 int SearchPoints::Record(const DecisionContext& ctx, int robot) {
   AIA_CHECK(robot >= 0 && robot < num_robots_);
   int added = 0;
@@ -339,7 +337,7 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
   const Vec2 p = map.lattice().Point(here);
   const double log_eps = std::log(ctx.eps);
   for (int k = 0; k < num_targets_; ++k) {
-    Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+    auto& s = slot(robot, k);
     const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
     if (!searching) {
       s.missed.clear();
@@ -369,15 +367,15 @@ int SearchPoints::Record(const DecisionContext& ctx, int robot) {
 }
 
 void SearchPoints::RecomputeShared(const DecisionContext& ctx, int robot, int k,
-                                   int group, PointsCache* cache) {
-  Slot& s = slots_[static_cast<std::size_t>(robot) * num_targets_ + k];
+                                   int group, Cache* cache) {
+  auto& s = slot(robot, k);
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
   const int component =
       ctx.map->lattice().components()[(*ctx.robot_lattice)[robot]];
   bool made = false;
-  SharedPoints& e = cache->Find(
+  internal::SharedPoints& e = cache->Find(
       group, k,
-      [&](const SharedPoints& p) {
+      [&](const internal::SharedPoints& p) {
         return p.mean == s.mean && p.cov == cov && p.component == component;
       },
       &made);
@@ -392,20 +390,6 @@ void SearchPoints::RecomputeShared(const DecisionContext& ctx, int robot, int k,
   e.component = component;
   e.forgot = s.missed.empty();  // it held the union's points before
   e.points = s.points;
-}
-
-void SearchPoints::Share(const DecisionContext& ctx,
-                         const std::vector<int>& robots, const RangeRunner& run,
-                         int workers) {
-  if (static_cast<int>(caches_.size()) < std::max(1, workers))
-    caches_.resize(std::max(1, workers));
-  for (PointsCache& cache : caches_) cache.Clear();
-  sharing_.Share(
-      ctx, robots, num_targets_, &slots_,
-      [&](int i, int k, int group, int worker) {
-        RecomputeShared(ctx, i, k, group, &caches_[worker]);
-      },
-      run, workers);
 }
 
 Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,

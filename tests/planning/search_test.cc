@@ -389,7 +389,7 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
     NeighbourMisses sharing;
     std::vector<std::pair<int, int>> calls;
     std::vector<int> shuffled(robots.rbegin(), robots.rend());
-    // What SearchMemory::ReaimShared relies on: the robots of a group that
+    // What SearchMemory::RecomputeShared relies on: the robots of a group that
     // took points of a target hold the same set of them.
     std::map<std::pair<int, int>, std::vector<int>> held;
     int shared = 0;

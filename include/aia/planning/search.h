@@ -456,33 +456,80 @@ class NeighbourhoodHolds {
   std::vector<std::uint8_t> open_;
 };
 
-// What one team's robots learned from their own missed measurements of
-// static targets, per robot and target: the lattice points from which the
-// robot saw its aim without measuring the target, and the aim that follows
-// (SearchAim; the mean while nothing is missed). Moving targets are not
-// searched (their aim is the mean). Nothing in it depends on the step
-// number; robot i's memory depends on robot i's belief row and points only.
-class SearchMemory {
+namespace internal {
+
+// One robot's memory of one target in SearchMemory and SearchPoints.
+struct AimSlot {
+  double log_det = std::numeric_limits<double>::quiet_NaN();  // last seen
+  Vec2 mean{0.0, 0.0};
+  Vec2 aim{0.0, 0.0};
+  MissList missed;
+};
+struct PointsSlot {
+  double log_det = std::numeric_limits<double>::quiet_NaN();  // last seen
+  Vec2 mean{0.0, 0.0};
+  MissList missed;
+  std::vector<Vec2> points;
+};
+
+// SearchMemory's walk over the rings, made once per neighbourhood, target
+// and belief by Share: after Share the robots of a closed neighbourhood
+// that search a target hold the same missed points, and in a full graph
+// most of them hold the same belief too (bit for bit), so they walk the
+// same rings and differ only in where they stand. A ring point keeps what
+// its cost needs from any robot: the component, bounding box and corner
+// sums of the lattice points that would measure a target there.
+struct SharedWalk {
+  struct RingPoint {
+    Vec2 x{0.0, 0.0};
+    int component = -1;                  // its observers': -1 none, -2 several
+    int x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // their bounding box (lattice)
+    // min over them of ix + iy, -ix + iy, ix - iy, -ix - iy
+    std::array<int, 4> corner{};
+  };
+  Vec2 mean{0.0, 0.0};
+  Mat2 cov = Mat2::Zero();
+  std::vector<int> ring_end;  // ring r: points[ring_end[r - 1], ring_end[r])
+  std::vector<RingPoint> points;
+};
+
+// SearchPoints' points made once by Share for the others of the
+// neighbourhood: they hold the same misses (its union), and where they also
+// hold the same belief bit for bit and stand in the same component of the
+// lattice, their points (and whether the misses were forgotten) are the
+// same, since a point's observability reads only the component.
+struct SharedPoints {
+  Vec2 mean{0.0, 0.0};
+  Mat2 cov = Mat2::Zero();
+  int component = -1;
+  bool forgot = false;
+  std::vector<Vec2> points;
+};
+
+}  // namespace internal
+
+// What SearchMemory and SearchPoints keep alike: a slot per robot and target
+// (`Slot`, with its `missed` list and the log det and mean last seen), the
+// misses counted, Update robot by robot (Derived::Record, the points it
+// added) and Share through NeighbourMisses, after which each (robot,
+// target) that took points is recomputed by Derived::RecomputeShared with
+// this worker's ShareCache<Shared>, cleared by each Share.
+template <typename Derived, typename Slot, typename Shared>
+class MissSlots {
  public:
   void Reset(int num_robots, int num_targets);
-  // Robot i after this step's fusion, at its lattice point: no measurement
-  // of the target while the point saw the aim adds the point to what the
-  // robot missed (and moves the aim); a measurement clears it (the mean
-  // moved and the search is over). Measured: the robot's own measurements
-  // where the context has them, else a belief that shrank. The first call
-  // only records the belief.
+  // Derived::Record for robot i after this step's fusion, at its lattice
+  // point (the first call only records the belief).
   void Update(const DecisionContext& ctx, int robot);
   // Update for each robot of `robots`, split over `run`'s `workers`.
   void Update(const DecisionContext& ctx, const std::vector<int>& robots,
               const RangeRunner& run, int workers);
   // After every robot's Update: each robot among `robots` adds the points
   // its neighbours in this step's graph missed (for the static targets
-  // still open in its own belief) and moves its aims accordingly, the
-  // robots split over `run`.
+  // still open in its own belief), from their lists as Update left them,
+  // and recomputes what follows from them; the robots split over `run`.
   void Share(const DecisionContext& ctx, const std::vector<int>& robots,
              const RangeRunner& run = {}, int workers = 1);
-  // Where robot i looks for target k (its belief's mean until it missed).
-  const Vec2& Aim(int robot, int k) const { return slot(robot, k).aim; }
   const std::vector<int>& Missed(int robot, int k) const {
     return slot(robot, k).missed.points();
   }
@@ -491,55 +538,54 @@ class SearchMemory {
   // Points added to any robot's misses since Reset.
   long misses() const { return misses_; }
 
- private:
-  struct Slot {
-    double log_det = std::numeric_limits<double>::quiet_NaN();  // last seen
-    Vec2 mean{0.0, 0.0};
-    Vec2 aim{0.0, 0.0};
-    MissList missed;
-  };
+ protected:
+  using Cache = ShareCache<Shared>;
   const Slot& slot(int i, int k) const {
     return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
   }
-  // SearchAim for robot's target k from its memory (forgets a prior
-  // searched to 4 sigma); false then.
-  bool Reaim(const DecisionContext& ctx, int robot, int k);
-
-  // Share's walks over the rings, made once per neighbourhood, target and
-  // belief: after Share the robots of a closed neighbourhood that search a
-  // target hold the same missed points, and in a full graph most of them
-  // hold the same belief too (bit for bit), so they walk the same rings and
-  // differ only in where they stand. A ring point keeps what its cost needs
-  // from any robot: the component, bounding box and corner sums of the
-  // lattice points that would measure a target there. Per worker, made as
-  // robots ask, cleared by each Share.
-  struct RingPoint {
-    Vec2 x{0.0, 0.0};
-    int component = -1;                  // its observers': -1 none, -2 several
-    int x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // their bounding box (lattice)
-    // min over them of ix + iy, -ix + iy, ix - iy, -ix - iy
-    std::array<int, 4> corner{};
-  };
-  struct SharedWalk {
-    Vec2 mean{0.0, 0.0};
-    Mat2 cov = Mat2::Zero();
-    std::vector<int> ring_end;  // ring r: points[ring_end[r - 1], ring_end[r])
-    std::vector<RingPoint> points;
-  };
-  using WalkCache = ShareCache<SharedWalk>;
-  // Reaim after Share, from the walk that robot shares with the others of
-  // its neighbourhood `group` holding the same belief: the same aim and
-  // return as Reaim.
-  bool ReaimShared(const DecisionContext& ctx, int robot, int k, int group,
-                   WalkCache* cache);
-  // Update's work; the points it added.
-  int Record(const DecisionContext& ctx, int robot);
+  Slot& slot(int i, int k) {
+    return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
+  }
   int num_robots_ = 0, num_targets_ = 0;
+
+ private:
+  Derived& derived() { return static_cast<Derived&>(*this); }
   long misses_ = 0;
   NeighbourMisses sharing_;
   std::vector<Slot> slots_;
-  std::vector<long> added_;        // per worker
-  std::vector<WalkCache> caches_;  // per worker
+  std::vector<long> added_;    // per worker
+  std::vector<Cache> caches_;  // per worker
+};
+
+// What one team's robots learned from their own missed measurements of
+// static targets, per robot and target: the lattice points from which the
+// robot saw its aim without measuring the target, and the aim that follows
+// (SearchAim; the mean while nothing is missed). Moving targets are not
+// searched (their aim is the mean). Nothing in it depends on the step
+// number; robot i's memory depends on robot i's belief row and points only.
+// Update: no measurement of the target while the robot's point saw the aim
+// adds the point to what the robot missed (and moves the aim); a
+// measurement clears it (the mean moved and the search is over). Measured:
+// the robot's own measurements where the context has them, else a belief
+// that shrank. Share moves the aims after the points taken.
+class SearchMemory
+    : public MissSlots<SearchMemory, internal::AimSlot, internal::SharedWalk> {
+ public:
+  // Where robot i looks for target k (its belief's mean until it missed).
+  const Vec2& Aim(int robot, int k) const { return slot(robot, k).aim; }
+
+ private:
+  friend class MissSlots<SearchMemory, internal::AimSlot, internal::SharedWalk>;
+  // SearchAim for robot's target k from its memory (forgets a prior
+  // searched to 4 sigma); false then.
+  bool Reaim(const DecisionContext& ctx, int robot, int k);
+  // Reaim after Share, from the walk that robot shares with the others of
+  // its neighbourhood `group` holding the same belief (internal::SharedWalk):
+  // the same aim and return as Reaim.
+  bool RecomputeShared(const DecisionContext& ctx, int robot, int k, int group,
+                       Cache* cache);
+  // Update's work; the points it added.
+  int Record(const DecisionContext& ctx, int robot);
 };
 
 // What each robot knows from its missed measurements of static targets, as
@@ -553,75 +599,31 @@ class SearchMemory {
 // that no missed point would have measured, and that some free point of the
 // robot's component would (where the robot can look). Nothing in it is
 // chosen for the robot beyond that; nothing depends on the step number.
-// Moving targets are not searched.
-class SearchPoints {
+// Moving targets are not searched. Update: no measurement of the target
+// (as SearchMemory's Update reads it) while the point saw one of its search
+// points adds the point to the misses (and moves the search points); a
+// measurement clears them.
+class SearchPoints : public MissSlots<SearchPoints, internal::PointsSlot,
+                                      internal::SharedPoints> {
  public:
-  void Reset(int num_robots, int num_targets);
-  // Robot i after this step's fusion, at its lattice point: no measurement
-  // of the target (as SearchMemory::Update reads it) while the point saw one
-  // of its search points adds the point to the misses (and moves the search
-  // points); a measurement clears them. The first call only records the
-  // belief.
-  void Update(const DecisionContext& ctx, int robot);
-  // Update for each robot of `robots`, split over `run`'s `workers`.
-  void Update(const DecisionContext& ctx, const std::vector<int>& robots,
-              const RangeRunner& run, int workers);
-  // After every robot's Update: each robot among `robots` adds the points
-  // its neighbours in this step's graph missed (for the static targets
-  // still open in its own belief), from their lists as Update left them,
-  // the robots split over `run`.
-  void Share(const DecisionContext& ctx, const std::vector<int>& robots,
-             const RangeRunner& run = {}, int workers = 1);
   // Robot i's search points for target k; empty: its belief's mean.
   const std::vector<Vec2>& Points(int robot, int k) const {
     return slot(robot, k).points;
   }
-  const std::vector<int>& Missed(int robot, int k) const {
-    return slot(robot, k).missed.points();
-  }
-  int num_robots() const { return num_robots_; }
-  int num_targets() const { return num_targets_; }
-  // Points added to any robot's misses since Reset.
-  long misses() const { return misses_; }
 
  private:
-  struct Slot {
-    double log_det = std::numeric_limits<double>::quiet_NaN();
-    Vec2 mean{0.0, 0.0};
-    MissList missed;
-    std::vector<Vec2> points;
-  };
-  const Slot& slot(int i, int k) const {
-    return slots_[static_cast<std::size_t>(i) * num_targets_ + k];
-  }
+  friend class MissSlots<SearchPoints, internal::PointsSlot,
+                         internal::SharedPoints>;
   // The search points of robot i's target k from its misses (all forgotten
   // where the prior is searched to 4 sigma).
   void Recompute(const DecisionContext& ctx, int robot, int k);
-  // One Recompute after Share, kept for the others of the neighbourhood:
-  // they hold the same misses (its union), and where they also hold the
-  // same belief bit for bit and stand in the same component of the
-  // lattice, their points (and whether the misses were forgotten) are the
-  // same, since a point's observability reads only the component.
-  struct SharedPoints {
-    Vec2 mean{0.0, 0.0};
-    Mat2 cov = Mat2::Zero();
-    int component = -1;
-    bool forgot = false;
-    std::vector<Vec2> points;
-  };
-  using PointsCache = ShareCache<SharedPoints>;
   // Recompute after Share, from the points robot shares with the others of
-  // its neighbourhood `group`: the same points and misses as Recompute.
+  // its neighbourhood `group` (internal::SharedPoints): the same points and
+  // misses as Recompute.
   void RecomputeShared(const DecisionContext& ctx, int robot, int k, int group,
-                       PointsCache* cache);
+                       Cache* cache);
   // Update's work; the points it added.
   int Record(const DecisionContext& ctx, int robot);
-  int num_robots_ = 0, num_targets_ = 0;
-  long misses_ = 0;
-  NeighbourMisses sharing_;
-  std::vector<Slot> slots_;
-  std::vector<long> added_;          // per worker
-  std::vector<PointsCache> caches_;  // per worker
 };
 
 // The first move of a shortest lattice path from point p to the nearest
