@@ -603,6 +603,34 @@ int CheckStandardOutput(int code) {
   return code == 0 ? 1 : code;
 }
 
+// "--sed: unknown option (did you mean `--seed`?)" for the first word of
+// the command line that reads as a long flag (`--name` or `--name=value`)
+// and is no flag of the command given (nor of aia itself); "" where there is
+// none.
+std::string UnknownFlag(const CLI::App& app, int argc, char** argv) {
+  std::vector<std::string> flags;
+  const auto add = [&](const CLI::App& a) {
+    for (const CLI::Option* o : a.get_options())
+      for (const std::string& name : o->get_lnames())
+        flags.push_back("--" + name);
+  };
+  add(app);
+  for (const CLI::App* sub : app.get_subcommands()) add(*sub);
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word == "--") break;  // what follows is no flag
+    if (word.size() < 3 || word.compare(0, 2, "--") != 0) continue;
+    const std::string flag = word.substr(0, word.find('='));
+    bool known = false;
+    for (const std::string& f : flags) known = known || f == flag;
+    if (known) continue;
+    const std::string closest = aia::field_text::ClosestName(flag, flags);
+    return aia::OneLine(flag) + ": unknown option" +
+           (closest.empty() ? "" : " (did you mean `" + closest + "`?)");
+  }
+  return "";
+}
+
 }  // namespace
 
 int aia::CliMain(int argc, char** argv) {
@@ -624,10 +652,17 @@ int aia::CliMain(int argc, char** argv) {
       names += (names.empty() ? "" : ", ") + sub->get_name();
     }
     if (!known) {
-      std::fprintf(stderr,
-                   "error: command line: '%s' is not a command; the commands "
-                   "are %s (aia --help lists them)\n",
-                   aia::OneLine(argv[1]).c_str(), names.c_str());
+      std::vector<std::string> all;
+      for (const CLI::App* sub : app.get_subcommands({}))
+        all.push_back(sub->get_name());
+      const std::string closest = aia::field_text::ClosestName(argv[1], all);
+      std::fprintf(
+          stderr,
+          "error: command line: '%s' is not a command%s; the "
+          "commands are %s (aia --help lists them)\n",
+          aia::OneLine(argv[1]).c_str(),
+          closest.empty() ? "" : (" (did you mean `" + closest + "`?)").c_str(),
+          names.c_str());
       return 2;
     }
   }
@@ -645,6 +680,11 @@ int aia::CliMain(int argc, char** argv) {
     std::string help = "aia --help";
     for (const CLI::App* sub : app.get_subcommands())
       help = "aia " + sub->get_name() + " --help";
+    // An unknown flag is what is wrong, named with the command's flag it is
+    // a typo of (CLI11 lists every word it did not expect, values
+    // included, or says that a command is required after `aia --verison`).
+    const std::string flag = UnknownFlag(app, argc, argv);
+    if (!flag.empty()) what = flag;
     std::fprintf(stderr, "error: command line: %s (%s lists the options)\n",
                  what.c_str(), help.c_str());
     return 2;

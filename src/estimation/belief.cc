@@ -163,7 +163,9 @@ double BeliefSet::DetCovariance(int row, int k) const {
   const double* block = Omega(row, k).data();
   double det_omega = 0.0;
   if (layout_->dim(k) == 2) {
-    det_omega = Eigen::Map<const MatD<2>>(block).determinant();
+    // Positive definite: a positive det and a positive diagonal.
+    det_omega =
+        block[0] > 0.0 ? Eigen::Map<const MatD<2>>(block).determinant() : 0.0;
   } else {
     // Not the 4 x 4 cofactor formula, which cancels when Omega is badly
     // scaled (a position known to 1e-4 m beside a loosely known velocity:

@@ -213,8 +213,10 @@ constexpr int kKeyBits = 40;
 // step there would split one belief's rounded copies into two keys.
 int ScaleExponent(double scale) {
   constexpr double kOffset = 0.70710678118654752;
+  // 0 for a zero or non-finite scale: such a block keys as zeros (or
+  // INT64_MIN), not as inf * 0.
   return scale > 0.0 && std::isfinite(scale) ? std::ilogb(scale * kOffset) + 2
-                                             : -1022;
+                                             : 0;
 }
 
 void Quantize(const double* block, int d, std::int64_t* key) {
@@ -277,8 +279,12 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
   member_.assign(static_cast<std::size_t>(n) * m, 0);
   if (static_cast<int>(scratch_.size()) < workers) scratch_.resize(workers);
   runner(m, [&](int k0, int k1, int worker) {
+    AIA_CHECK_MSG(worker >= 0 && worker < workers,
+                  "a runner's worker index beyond `workers`");
     Scratch& w = scratch_[worker];
-    if (w.representative.rows() != 1 || &w.representative.layout() != &layout)
+    // (Another layout may sit where an earlier one was: its stride too.)
+    if (w.representative.rows() != 1 || &w.representative.layout() != &layout ||
+        w.representative.data().cols() != layout.stride())
       w.representative = BeliefSet(&layout, 1);
     for (int k = k0; k < k1; ++k) {
       const int d = layout.dim(k);

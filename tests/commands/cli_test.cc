@@ -114,6 +114,12 @@ TEST(CliTest, UnknownFlagAndMissingArgumentExitWith2) {
             "error: command line: 'RUN' is not a command; the commands are "
             "run, render, plan, world, eval, bench, dataset, train, policies, "
             "schema (aia --help lists them)\n");
+  // One within two edits of a command is named.
+  EXPECT_EQ(RunAia({"evl"}).err,
+            "error: command line: 'evl' is not a command (did you mean "
+            "`eval`?); the commands are run, render, plan, world, eval, "
+            "bench, dataset, train, policies, schema (aia --help lists "
+            "them)\n");
 }
 
 // aia bench's row: every column a number, mujoco-testspeed's rate and
@@ -160,8 +166,27 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
   const std::string scenario = SourcePath("scenarios/default.yaml");
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"run", scenario, "--bogus"},
+       "error: command line: --bogus: unknown option (aia run --help lists "
+       "the options)\n"},
+      // A typo of a flag is named with the flag it is a typo of, before the
+      // value CLI11 would also list as unexpected.
+      {{"run", scenario, "--sed", "3"},
+       "error: command line: --sed: unknown option (did you mean `--seed`?) "
+       "(aia run --help lists the options)\n"},
+      {{"eval", "--out", "x", "--sizes=2x2", "--polices=random"},
+       "error: command line: --polices: unknown option (did you mean "
+       "`--policies`?) (aia eval --help lists the options)\n"},
+      {{"--verison"},
+       "error: command line: --verison: unknown option (did you mean "
+       "`--version`?) (aia --help lists the options)\n"},
+      // A word that is no flag keeps CLI11's words; after `--` nothing is a
+      // flag.
+      {{"run", scenario, "extra"},
        "error: command line: The following argument was not expected: "
-       "--bogus (aia run --help lists the options)\n"},
+       "extra (aia run --help lists the options)\n"},
+      {{"run", scenario, "--", "--seed"},
+       "error: command line: The following argument was not expected: "
+       "--seed (aia run --help lists the options)\n"},
       // Declared flags are read as the scenario keys are.
       // Beyond the field's type, its bound is said (issue 37).
       {{"eval", "--seeds", "1000000000000", "--out", "x"},

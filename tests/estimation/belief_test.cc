@@ -144,6 +144,25 @@ TEST(BeliefSetTest, NoInformationMeansUnboundedCovariance) {
   EXPECT_EQ(beliefs.LogDetCovariance(0, 0), inf);
 }
 
+// A block that is not positive definite holds no estimate, in either
+// dimension, though its det Omega may be positive (-I: 1).
+TEST(BeliefSetTest, IndefiniteOrNegativeBlocksHaveUnboundedCovariance) {
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const int d : {2, 4}) {
+    const BeliefLayout layout({Model(d)});
+    BeliefSet beliefs(&layout, 2);
+    beliefs.Omega(0, 0) = -Eigen::MatrixXd::Identity(d, d);
+    beliefs.Omega(1, 0) = Eigen::MatrixXd::Identity(d, d);
+    beliefs.Omega(1, 0)(0, 0) = -1.0;
+    beliefs.Omega(1, 0)(1, 1) = -1.0;  // det > 0, indefinite for d = 4
+    for (int r = 0; r < 2; ++r) {
+      EXPECT_EQ(beliefs.DetCovariance(r, 0), inf) << "d " << d << " row " << r;
+      EXPECT_EQ(beliefs.LogDetCovariance(r, 0), inf)
+          << "d " << d << " row " << r;
+    }
+  }
+}
+
 TEST(BeliefSetTest, CopyRowCopiesEveryBlock) {
   Rng rng(14);
   const BeliefLayout layout({Model(2), Model(4)});

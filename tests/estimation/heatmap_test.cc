@@ -280,6 +280,33 @@ TEST(TeamHeatmapTest, RelabellingTheRobotsPermutesTheHeatmaps) {
   }
 }
 
+// A layout of wider blocks built where the last one was (the same address)
+// gets scratch of its own width: the heat is a fresh TeamHeatmap's.
+TEST(TeamHeatmapTest, ANewLayoutAtTheSameAddressIsReadWhole) {
+  HeatmapParams params;
+  params.eps = 0.01;
+  const Grid<float> shape(20, 20, 0.5);
+  BeliefLayout layout({TargetModel::Static(2)});
+  TeamHeatmap reused;
+  {
+    BeliefSet one(&layout, 3);
+    one.SetPrior({Eigen::Vector2d(5, 5)}, {Eigen::MatrixXd::Identity(2, 2)});
+    reused.Prepare(one, {0, 1, 2}, {0.0}, params, shape);
+  }
+  layout = BeliefLayout(std::vector<TargetModel>(3, TargetModel::Static(4)));
+  BeliefSet wide(&layout, 3);
+  wide.SetPrior(
+      std::vector<Eigen::VectorXd>({Eigen::Vector4d(2, 3, 0, 0),
+                                    Eigen::Vector4d(5, 5, 0, 0),
+                                    Eigen::Vector4d(8, 6, 0, 0)}),
+      std::vector<Eigen::MatrixXd>(3, Eigen::MatrixXd::Identity(4, 4)));
+  const std::vector<double> prior(3, 0.0);
+  reused.Prepare(wide, {0, 1, 2}, prior, params, shape);
+  TeamHeatmap fresh;
+  fresh.Prepare(wide, {0, 1, 2}, prior, params, shape);
+  EXPECT_EQ(reused.base().data(), fresh.base().data());
+}
+
 TEST(TeamHeatmapTest, ThreadsDoNotChangeTheHeatmaps) {
   Team t;
   HeatmapParams params;

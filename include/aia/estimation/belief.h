@@ -69,7 +69,8 @@ class BeliefSet {
   Vec2 PositionMean(int row, int k) const;
   // Position marginal of the covariance (top-left 2 x 2 of Sigma).
   Mat2 PositionCovariance(int row, int k) const;
-  // det Sigma = 1 / det Omega, and its log.
+  // det Sigma = 1 / det Omega, and its log; infinity where Omega is not
+  // positive definite.
   double DetCovariance(int row, int k) const;
   double LogDetCovariance(int row, int k) const;
 

@@ -85,7 +85,8 @@ void Fuse(const BeliefSet& predicted, const Eigen::MatrixXd& W,
 
 // The DKF's weights without the N x N matrix: W(i,i) = self[i], W(i,j) =
 // off[i] for j in (*neighbors)[i] (ascending, i excluded), as FusionWeights
-// makes them. `neighbors` must outlive its use.
+// makes them (MakeDkfWeights checks the lists; the sums below rely on it).
+// `neighbors` must outlive its use.
 struct DkfWeights {
   std::vector<double> self, off;
   const std::vector<std::vector<int>>* neighbors = nullptr;
