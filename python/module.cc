@@ -417,7 +417,8 @@ class Mission {
  public:
   Mission(std::string scenario, std::optional<std::uint64_t> seed,
           KeyValues overrides)
-      : scenario_(std::move(scenario)), overrides_(std::move(overrides)) {
+      : scenario_(ReadScenarioSource(scenario)),
+        overrides_(std::move(overrides)) {
     Start(seed);
   }
   Mission(const DecisionContext* view, std::uint64_t seed, std::uint64_t id,
@@ -432,6 +433,7 @@ class Mission {
     if (seed) all.push_back({"seed", "seed", std::to_string(*seed)});
     for (const Override& o : AsOverrides(overrides_, "overrides: "))
       all.push_back(o);
+    // The file as it was read when the mission was made.
     const Scenario scenario = LoadScenario(scenario_, all);
     std::shared_ptr<const Instance> instance = BuildInstance(scenario);
     scenario_warnings_ = scenario.warnings;
@@ -792,7 +794,7 @@ class Mission {
   }
 
  private:
-  std::string scenario_;
+  ScenarioSource scenario_;
   KeyValues overrides_;
   std::vector<std::string> scenario_warnings_;
   std::uint64_t id_ = 0;
@@ -1546,17 +1548,36 @@ void BindMission(py::module_& m) {
                       "One mission of a scenario file, stepped from Python "
                       "(aia.Mission wraps it).")
       .def(py::init([](const std::string& scenario, py::handle seed,
-                       const KeyValues& overrides) {
+                       const KeyValues& overrides, const std::string& where) {
              const std::optional<std::uint64_t> s =
-                 SeedArg(seed, "aia.Mission", "seed", true);
+                 SeedArg(seed, where, "seed", true);
              try {
                return std::make_unique<Mission>(scenario, s, overrides);
              } catch (const InputError& e) {
-               throw Renamed(e, "aia.Mission");
+               throw Renamed(e, where);
              }
            }),
            py::arg("scenario"), py::arg("seed") = py::none(),
-           py::arg("overrides") = KeyValues{})
+           py::arg("overrides") = KeyValues{}, py::arg("where") = "aia.Mission",
+           "`where` names the callable in errors (the env that made it).")
+      .def(
+          "_restart",
+          [](Mission& m, py::handle seed, const std::string& where) {
+            if (!m.owned())
+              Refuse(where, "", "a decision's view cannot be restarted");
+            const std::optional<std::uint64_t> s =
+                SeedArg(seed, where, "seed", false);
+            const CallGuard guard(m.busy(), where.c_str());
+            try {
+              m.Start(s);
+            } catch (const InputError& e) {
+              throw Renamed(e, where);
+            }
+          },
+          py::arg("seed"), py::arg("where"),
+          "The mission again from step 0 at `seed`, from the scenario as "
+          "it was read when the mission was made (what the envs' reset "
+          "does).")
       .def("state", OneCall(&Mission::State, "aia.Mission.state"),
            "What the robots know now (numpy arrays), the truth apart.")
       .def("step", OneCall(&Mission::Step, "aia.Mission.step"),

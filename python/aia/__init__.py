@@ -180,11 +180,18 @@ class Mission:
     file's), `overrides` a dict of `--set` keys to values, e.g.
     {"sensor.range": 3, "robots.count": 5}."""
 
-    def __init__(self, scenario, seed=None, overrides=None):
-        self._m = _aia.Mission(_path(scenario, "aia.Mission", "scenario"),
-                               seed, _pairs(overrides, "overrides",
-                                            "aia.Mission"))
-        _warn_scenario(self._m, "aia.Mission")
+    def __init__(self, scenario, seed=None, overrides=None, *,
+                 _where="aia.Mission"):
+        # The file is read here, once: its later edits and a change of the
+        # working directory do not reach the envs' resets (_restart).
+        self._m = _aia.Mission(_path(scenario, _where, "scenario"),
+                               seed, _pairs(overrides, "overrides", _where),
+                               _where)
+        _warn_scenario(self._m, _where)
+
+    def _restart(self, seed, where):
+        """Step 0 again at `seed`, of the scenario as it was read."""
+        self._m._restart(seed, where)
 
     @classmethod
     def _view(cls, core):
@@ -335,7 +342,8 @@ class VectorMissions:
         if seed is None:
             with _warnings.catch_warnings():  # said once, below
                 _warnings.simplefilter("ignore", ScenarioWarning)
-                seed = Mission(scenario, overrides=overrides).seed
+                seed = Mission(scenario, overrides=overrides,
+                               _where=where).seed
         seed = _integer(seed, where, "seed", 0, _SEED_MAX - n + 1)
         threads = _integer(threads, where, "threads", 0)
         if not isinstance(autoreset, (bool, _np.bool_)):
@@ -371,8 +379,14 @@ class VectorMissions:
     def reset(self, seed=None, options=None):
         """Every mission restarted: at seeds seed .. seed + n - 1, else at
         the n seeds after the last one used. Returns (states(), info) with
-        info["seeds"], as Gymnasium's reset returns (observation, info)."""
+        info["seeds"], as Gymnasium's reset returns (observation, info).
+        `options` must be None or an empty dict: there are none."""
         n = len(self)
+        if options is not None and (not isinstance(options, dict) or
+                                    options):
+            raise InputError(f"aia.VectorMissions.reset: options: this "
+                             f"takes no options (None or {{}}), got "
+                             f"{_shown(options)}")
         if seed is None:
             seed = self._v.next_seed
         seed = _integer(seed, "aia.VectorMissions.reset", "seed", 0,

@@ -19,7 +19,7 @@ stand-ins below, with shape, dtype, n, sample(), contains() and seed().
 
 import numpy as np
 
-from . import InputError, Mission, _integer, _pairs, _shown
+from . import InputError, Mission, Move, _integer, _pairs, _shown
 
 try:  # pragma: no cover - gymnasium is not packaged in Debian 12
     from gymnasium import spaces as _spaces
@@ -61,10 +61,12 @@ class Discrete:
         return self.contains(x)
 
     def contains(self, x):
-        """Integers only (an int or numpy integer, not a bool or a float),
-        as gymnasium's Discrete."""
+        """Integers only (an int, numpy integer or aia.Move, not a bool or
+        a float), as gymnasium's Discrete."""
         if isinstance(x, (bool, np.bool_)):
             return False
+        if isinstance(x, Move):
+            return 0 <= int(x) < self.n
         if isinstance(x, (int, np.integer)):
             return 0 <= int(x) < self.n
         if isinstance(x, np.ndarray) and x.shape == () and \
@@ -209,7 +211,8 @@ class ParallelEnv:
         self._overrides = dict(overrides or {})
         self._channels = dict(channels or {})
         self._step_penalty = float(step_penalty)
-        first = Mission(self._scenario, seed=seed, overrides=self._overrides)
+        first = Mission(self._scenario, seed=seed, overrides=self._overrides,
+                        _where=where)
         if first.asynchronous:
             raise InputError(f"{where}: mission.decisions: async is not "
                              "an env's step (every agent acts at once); "
@@ -232,6 +235,10 @@ class ParallelEnv:
         # target the team's best clipped log det share and its mean (M, 2);
         # the step share.
         self.state_space = _box(3 * n + 3 * m + 1)
+        # Every reset restarts this one mission: the scenario is the file as
+        # read now (not as edited later, nor read from another working
+        # directory), and its warnings were said once, above.
+        self._made = first
         self._mission = None
         self._closed = False
         self._left = {}
@@ -249,9 +256,11 @@ class ParallelEnv:
         return self
 
     def observation_space(self, agent):
+        self._open("observation_space")
         return self.observation_spaces[self._agent(agent)]
 
     def action_space(self, agent):
+        self._open("action_space")
         return self.action_spaces[self._agent(agent)]
 
     def _agent(self, agent):
@@ -287,8 +296,8 @@ class ParallelEnv:
         if seed is not None:
             self._next_seed = _integer(seed, "aia.ParallelEnv.reset", "seed",
                                        0, 2 ** 64 - 1)
-        self._mission = Mission(self._scenario, seed=self._next_seed,
-                                overrides=self._overrides)
+        self._made._restart(self._next_seed, "aia.ParallelEnv.reset")
+        self._mission = self._made
         self._next_seed = (self._next_seed + 1) % 2 ** 64
         state = self._mission.state()
         self._log_det = self._own_log_det(state)
@@ -425,6 +434,7 @@ class ParallelEnv:
     def close(self):
         """Ends the env: every call but close() is refused after."""
         self._mission = None
+        self._made = None
         self.agents = []
         self._closed = True
 
@@ -592,3 +602,5 @@ class AECEnv:
 
     def close(self):
         self._env.close()
+        self.agents = []
+        self.agent_selection = None

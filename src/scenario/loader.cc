@@ -201,6 +201,22 @@ Scenario LoadScenario(const std::string& path,
                        fs::path(path).parent_path().string(), overrides);
 }
 
+ScenarioSource ReadScenarioSource(const std::string& path) {
+  ScenarioSource source{path, ReadText(path), ""};
+  const fs::path dir = fs::path(path).parent_path();
+  std::error_code error;
+  const fs::path absolute =
+      dir.empty() ? fs::current_path(error) : fs::absolute(dir, error);
+  if (error) throw InputError(path, 0, "(file)", error.message());
+  source.base_dir = absolute.string();
+  return source;
+}
+
+Scenario LoadScenario(const ScenarioSource& source,
+                      const std::vector<Override>& overrides) {
+  return ParseScenario(source.yaml, source.file, source.base_dir, overrides);
+}
+
 Scenario ParseScenario(const std::string& yaml, const std::string& file,
                        const std::string& base_dir,
                        const std::vector<Override>& overrides) {

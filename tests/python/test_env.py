@@ -289,3 +289,54 @@ def test_pettingzoos_own_parallel_api_test():
 def test_an_async_mission_is_not_an_env():
     with pytest.raises(aia.InputError, match="mission.decisions: async"):
         aia.parallel_env(DEFAULT, overrides={"mission.decisions": "async"})
+
+
+def test_the_env_keeps_the_scenario_it_was_made_from(tmp_path, monkeypatch):
+    """Resets restart the scenario as read when the env was made: not as
+    edited since, and not read again from another working directory."""
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(Path(DEFAULT).read_text())
+    monkeypatch.chdir(tmp_path)
+    env = aia.parallel_env("s.yaml", seed=4)
+    first, _ = env.reset(seed=4)
+    scenario.write_text("robots: {count: 4}\n")
+    monkeypatch.chdir(SOURCE)
+    again, _ = env.reset(seed=4)
+    assert sorted(again) == sorted(first) == env.possible_agents
+    for a in first:
+        for k in first[a]:
+            assert np.array_equal(first[a][k], again[a][k]), (a, k)
+
+
+def test_the_env_names_itself_and_warns_once():
+    with pytest.raises(aia.InputError, match=r"^aia\.parallel_env: seed: "):
+        aia.parallel_env(DEFAULT, seed=-1)
+    with pytest.raises(aia.InputError,
+                       match=r"^aia\.parallel_env: overrides: foo\.bar: "
+                             r"unknown key"):
+        aia.parallel_env(DEFAULT, overrides={"foo.bar": 1})
+    with pytest.warns(aia.ScenarioWarning) as said:
+        env = aia.parallel_env(DEFAULT,
+                               overrides={"communication.range": 3})
+        env.reset()
+        env.reset()
+    assert len(said) == 1
+    assert str(said[0].message).startswith(
+        "aia.parallel_env: overrides: communication.range: ")
+
+
+def test_a_closed_env_refuses_its_spaces_and_the_aec_env_has_no_agents():
+    env = aia.parallel_env(DEFAULT)
+    env.reset(seed=1)
+    assert aia.Move.LEFT in env.action_space("robot_0")
+    assert aia.Move.STAY not in env.action_space("robot_0")  # 4 moves
+    env.close()
+    for call in (env.action_space, env.observation_space):
+        with pytest.raises(aia.InputError, match="the env is closed"):
+            call("robot_0")
+    aec = aia.aec_env(DEFAULT)
+    aec.reset(seed=1)
+    assert aec.agents
+    aec.close()
+    assert aec.agents == [] and aec.agent_selection is None
+    assert list(aec.agent_iter()) == []

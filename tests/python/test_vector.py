@@ -147,3 +147,24 @@ def test_channels_come_from_the_cpp_renderer():
         m.channels(window=2)
     with pytest.raises(aia.InputError, match="channels: frame: must be"):
         m.channels("sideways")
+
+
+def test_autoreset_and_reset_read_no_file(tmp_path, monkeypatch):
+    """The missions restart the scenario as read when they were made: a
+    working directory changed since, or the file edited, changes nothing."""
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(Path(DEFAULT).read_text())
+    monkeypatch.chdir(tmp_path)
+    v = aia.VectorMissions(2, "s.yaml", seed=2, autoreset=True,
+                           overrides={**SMALL, "mission.max_steps": 1})
+    scenario.write_text("robots: {count: 4}\n")
+    monkeypatch.chdir(SOURCE)
+    r = v.step([[4, 4, 4]] * 2)
+    assert r.done.tolist() == [True, True]
+    assert v.seeds.tolist() == [4, 5]
+    states, info = v.reset(seed=9)
+    assert states["positions"].shape == (2, 3, 2)
+    with pytest.raises(aia.InputError,
+                       match=r"^aia\.VectorMissions\.reset: options: "):
+        v.reset(options={"a": 1})
+    assert v.reset(options={})[1]["seeds"].tolist() == [11, 12]

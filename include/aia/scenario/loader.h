@@ -46,6 +46,18 @@ void RefuseSetOfFlagKey(const Override& set, const std::string& path,
 Scenario LoadScenario(const std::string& path,
                       const std::vector<Override>& overrides = {});
 
+// A scenario file read once: its text, its name as errors give it, and the
+// directory its relative paths are resolved against, made absolute. For
+// callers that build the scenario again and again (Python's resets): those
+// builds see neither an edit of the file nor a change of the working
+// directory since.
+struct ScenarioSource {
+  std::string file, yaml, base_dir;
+};
+ScenarioSource ReadScenarioSource(const std::string& path);
+Scenario LoadScenario(const ScenarioSource& source,
+                      const std::vector<Override>& overrides = {});
+
 // The same from YAML text; `file` is used in error messages and `base_dir`
 // to resolve relative paths.
 Scenario ParseScenario(const std::string& yaml, const std::string& file,
