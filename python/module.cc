@@ -467,6 +467,9 @@ class Mission {
   Mission& operator=(const Mission&) = delete;
 
   bool owned() const { return episode_ != nullptr; }
+  bool in_vector() const { return in_vector_; }
+  // One of a VectorMissions: stepped and restarted by it only.
+  void MarkInVector() { in_vector_ = true; }
   void Invalidate() { view_ = nullptr; }
   const char** busy() const { return &busy_; }
   std::uint64_t id() const { return id_; }
@@ -741,6 +744,10 @@ class Mission {
   }
 
   StepResult Step(py::handle moves) {
+    if (in_vector_)
+      Refuse("aia.Mission.step", "",
+             "this mission is one of an aia.VectorMissions, whose missions "
+             "step together: VectorMissions.step");
     std::vector<Move> next =
         MovesFrom(moves, {num_robots()}, "aia.Mission.step");
     if (episode("aia.Mission.step").done())
@@ -795,6 +802,7 @@ class Mission {
 
  private:
   ScenarioSource scenario_;
+  bool in_vector_ = false;  // VectorMissions steps and restarts it
   KeyValues overrides_;
   std::vector<std::string> scenario_warnings_;
   std::uint64_t id_ = 0;
@@ -978,6 +986,7 @@ class VectorMissions {
       for (std::size_t i = 0; i < n; ++i) {
         missions_.push_back(
             std::make_unique<Mission>(scenario, seeds[i], overrides));
+        missions_.back()->MarkInVector();
         const std::size_t made = i + 1;
         if (made == 1) first = ResidentBytes();
         if (made < 2 || made == n || first < 0 ||
@@ -1563,8 +1572,10 @@ void BindMission(py::module_& m) {
       .def(
           "_restart",
           [](Mission& m, py::handle seed, const std::string& where) {
-            if (!m.owned())
-              Refuse(where, "", "a decision's view cannot be restarted");
+            if (!m.owned() || m.in_vector())
+              Refuse(where, "",
+                     "only a Mission made alone can be restarted (not a "
+                     "decision's view, nor one of an aia.VectorMissions)");
             const std::optional<std::uint64_t> s =
                 SeedArg(seed, where, "seed", false);
             const CallGuard guard(m.busy(), where.c_str());

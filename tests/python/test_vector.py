@@ -168,3 +168,15 @@ def test_autoreset_and_reset_read_no_file(tmp_path, monkeypatch):
                        match=r"^aia\.VectorMissions\.reset: options: "):
         v.reset(options={"a": 1})
     assert v.reset(options={})[1]["seeds"].tolist() == [11, 12]
+
+
+def test_a_vectors_mission_is_stepped_by_the_vector_only():
+    v = aia.VectorMissions(2, DEFAULT, seed=2, overrides=SMALL)
+    with pytest.raises(aia.InputError,
+                       match=r"^aia\.Mission\.step: this mission is one of "
+                             r"an aia\.VectorMissions"):
+        v.missions[0].step([4, 4, 4])
+    assert v.missions[0].steps == 0
+    assert v.missions[0].channels().shape[0] == 3  # reading is allowed
+    v.step([[4, 4, 4]] * 2)
+    assert [m.steps for m in v.missions] == [1, 1]
