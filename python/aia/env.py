@@ -280,23 +280,22 @@ class ParallelEnv:
             raise InputError(f"aia.{api}.{what}: call reset() before "
                              f"{what}()")
 
-    def reset(self, seed=None, options=None):
+    def reset(self, seed=None, options=None, *, _api="ParallelEnv"):
         """A new mission: at `seed`, else the constructor's seed at the first
         reset and the previous one + 1 after. A mission already over at
         step 0 (every target localized by the prior and the first
         measurements, or no robot active) has no agents: `agents` is empty
         and both dicts are empty; reset again for the next seed. `options`
         must be None or an empty dict: this env takes no options."""
-        self._open("reset")
+        self._open("reset", _api)
+        where = f"aia.{_api}.reset"
         if options is not None and (not isinstance(options, dict) or
                                     options):
-            raise InputError(f"aia.ParallelEnv.reset: options: this env "
-                             f"takes no options (None or {{}}), got "
-                             f"{_shown(options)}")
+            raise InputError(f"{where}: options: this env takes no options "
+                             f"(None or {{}}), got {_shown(options)}")
         if seed is not None:
-            self._next_seed = _integer(seed, "aia.ParallelEnv.reset", "seed",
-                                       0, 2 ** 64 - 1)
-        self._made._restart(self._next_seed, "aia.ParallelEnv.reset")
+            self._next_seed = _integer(seed, where, "seed", 0, 2 ** 64 - 1)
+        self._made._restart(self._next_seed, where)
         self._mission = self._made
         self._next_seed = (self._next_seed + 1) % 2 ** 64
         state = self._mission.state()
@@ -390,13 +389,13 @@ class ParallelEnv:
         observations = self._observations(state, alive)
         return observations, rewards, terminations, truncations, infos
 
-    def state(self):
+    def state(self, *, _api="ParallelEnv"):
         """The team's state as one float32 array (state_space), for a
         centralized critic: robot positions / workspace (N, 2), active (N,),
         per target the team's best log det Sigma as a share between log eps
         (0) and the prior (1), that estimate's mean / workspace (M, 2), and
         steps / max_steps. No ground truth (state_dict() has it)."""
-        self._started("state")
+        self._started("state", _api)
         s = self._mission.state()
         n, m = s["det"].shape
         size = np.asarray(s["workspace"], dtype=np.float64)
@@ -498,7 +497,8 @@ class AECEnv:
         return self._env.action_space(agent)
 
     def reset(self, seed=None, options=None):
-        self._observations, self.infos = self._env.reset(seed, options)
+        self._observations, self.infos = self._env.reset(seed, options,
+                                                         _api="AECEnv")
         self.agents = list(self._env.agents)
         self.rewards = {a: 0.0 for a in self.agents}
         self._cumulative_rewards = {a: 0.0 for a in self.agents}
@@ -595,7 +595,7 @@ class AECEnv:
         return live[0]
 
     def state(self):
-        return self._env.state()
+        return self._env.state(_api="AECEnv")
 
     def render(self, *args, **kwargs):
         return self._env.render(*args, **kwargs)

@@ -340,3 +340,17 @@ def test_a_closed_env_refuses_its_spaces_and_the_aec_env_has_no_agents():
     aec.close()
     assert aec.agents == [] and aec.agent_selection is None
     assert list(aec.agent_iter()) == []
+
+
+def test_the_aec_env_names_itself():
+    aec = aia.aec_env(DEFAULT)
+    with pytest.raises(aia.InputError, match=r"^aia\.AECEnv\.state: call "
+                                             r"reset\(\) before state\(\)"):
+        aec.state()
+    with pytest.raises(aia.InputError, match=r"^aia\.AECEnv\.reset: seed: "):
+        aec.reset(seed=-1)
+    with pytest.raises(aia.InputError,
+                       match=r"^aia\.AECEnv\.reset: options: "):
+        aec.reset(options={"x": 1})
+    aec.reset(seed=2)
+    assert aec.state().shape == aec.state_space.shape
