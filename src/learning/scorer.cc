@@ -19,6 +19,8 @@ void NetworkScorer::Reset(const Map& map, int num_robots, int num_targets) {
       map.occupancy(), map.size(),
       AtLatticeStep(net_->config().channels, map.lattice().step()),
       &map.lattice());
+  // The threads' heat grids are the map's shape: made again for this one.
+  worker_heat_.clear();
   // Only a model that reads search points keeps them (N x M slots).
   if (net_->config().channels.search)
     search_.Reset(num_robots, num_targets);

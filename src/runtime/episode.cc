@@ -389,10 +389,27 @@ void Episode::Reservations(const Lattice& lattice) {
 
 // Robot i's move ended (arrived, stalled, timed out, or its stay is over):
 // where it is, the lattice move it made, and it decides next.
+int Episode::PointAt(int i, const Lattice& lattice) const {
+  if (reserve_) {
+    int nearest = -1;
+    double best = 0.0;
+    for (const int p : {held_from_[i], held_to_[i]}) {
+      if (p < 0) continue;
+      const double d = (robot_pos_[i] - lattice.Point(p)).squaredNorm();
+      if (nearest < 0 || d < best) {
+        nearest = p;
+        best = d;
+      }
+    }
+    if (nearest >= 0) return nearest;
+  }
+  return lattice.NearestFree(robot_pos_[i]);
+}
+
 void Episode::EndMove(int i, const Lattice& lattice) {
   robot_pos_[i] = sim_.RobotPosition(i);
   robot_heading_[i] = sim_.RobotHeading(i);
-  const int idx = lattice.NearestFree(robot_pos_[i]);
+  const int idx = PointAt(i, lattice);
   robot_idx_[i] = idx >= 0 ? idx : from_[i];
   made_[i] = MoveBetween(lattice, from_[i], robot_idx_[i]);
   history_.Record(i, made_[i]);
@@ -420,7 +437,7 @@ void Episode::StopFailedRobots() {
     ready_[i] = 0;
     sim_.SetWaypoint(i, robot_pos_[i]);
     sim_.Park(i);
-    const int at = instance_->world.map.lattice().NearestFree(robot_pos_[i]);
+    const int at = PointAt(i, instance_->world.map.lattice());
     if (at >= 0) robot_idx_[i] = at;
     if (reserve_) {
       if (held_from_[i] >= 0) --held_[held_from_[i]];

@@ -731,6 +731,32 @@ TEST(IgbNetPolicyTest, UnreadRowsAreSkippedAndTheOthersScoreAsInTheWholeTeam) {
 // as without claims. A robot without neighbours owns every target it can
 // reach (nearest: its input is the one without claims, to the heat's
 // rounding) but routes to one at a time (route: it sees one of the two).
+// One policy through episodes on workspaces of other sizes decides each as
+// a fresh policy does (its threads' heat grids took the first map's shape
+// and the second episode aborted on a size check).
+TEST(IgbNetPolicyTest, AResetOnAnotherMapDecidesAsAFreshPolicy) {
+  const char* small = R"(
+workspace: {size: [8, 8]}
+robots: {count: 3, step: 0.5, start: [[1.25, 1.25], [6.75, 6.75], [1.25, 6.75]]}
+targets: {list: [{position: [2, 2], prior_mean: [2.25, 1.75]}, {position: [6, 6], prior_mean: [6.25, 6.25]}]}
+sensor: {range: 2.0}
+)";
+  const char* large = R"(
+workspace: {size: [12, 12]}
+robots: {count: 3, step: 0.5, start: [[1.25, 1.25], [10.75, 10.75], [1.25, 10.75]]}
+targets: {list: [{position: [2, 2], prior_mean: [2.25, 1.75]}, {position: [10, 10], prior_mean: [10.25, 10.25]}]}
+sensor: {range: 2.0}
+)";
+  const testing::TeamFixture a(small), b(large);
+  const std::vector<double> prior(2, 0.0);
+  IgbNetParams params;  // the rules' default: claims route the heat
+  const auto net = TestNet(ChannelFrame::kCentred, true);
+  IgbNetPolicy reused(net, params), fresh(net, params);
+  Decide(&reused, a, 0, prior);
+  EXPECT_EQ(Decide(&reused, b, 0, prior), Decide(&fresh, b, 0, prior));
+  EXPECT_EQ(reused.logits(), fresh.logits());
+}
+
 TEST(IgbNetPolicyTest, ClaimsNarrowTheHeatToTheTargetsARobotTakes) {
   const char* yaml = R"(
 workspace: {size: [8, 8]}

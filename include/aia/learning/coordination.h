@@ -93,9 +93,9 @@ struct IgbNetParams {
   bool share_search = true;
   // NoUndo: a network move that would undo the robot's last move is not
   // taken: the robot starts the walk instead, or stays where it can measure
-  // an open target or has nowhere to walk; a robot with no open target in
-  // its own belief (a tracking mission after success) takes the network's
-  // best move that does not undo the last.
+  // an open target or has nowhere to walk; a robot with no open target (as
+  // `open` below decides it; a tracking mission after success) takes the
+  // network's best move that does not undo the last.
   bool no_undo = true;
   // ClaimsShaper: which open targets each robot shows the network (above).
   TargetClaimsMode claims = TargetClaimsMode::kRoute;
@@ -322,8 +322,9 @@ class DeadlockWalk {
 // Move arbiter: no undo. Where the network's move would undo the robot's
 // last one, the robot starts the deadlock walk instead, or stays where it
 // can measure an open target or has nowhere to walk; a robot with no open
-// target in its own belief takes the network's best valid move that does
-// not undo the last.
+// target (OpenAims: IgbNetParams::open decides, its neighbourhood's holds
+// by default) takes the network's best valid move that does not undo the
+// last.
 class NoUndo {
  public:
   // Robot i's move in place of the network's `best` (which undoes its last

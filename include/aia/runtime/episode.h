@@ -222,6 +222,10 @@ class Episode {
   void Apply(int i, const Lattice& lattice);
   void StartMove(int i, int to, const Lattice& lattice);
   void EndMove(int i, const Lattice& lattice);
+  // The lattice point robot i stands at when its move ends or it fails:
+  // the nearest free one, or with reservations the nearest of the points
+  // it holds (any other may be another robot's, or be given to one).
+  int PointAt(int i, const Lattice& lattice) const;
   // mission.avoidance reserve, after each substep: points let go, waiting
   // robots started.
   void Reservations(const Lattice& lattice);
