@@ -209,18 +209,31 @@ DatasetWorld EpisodeWorld(const Episode& episode, int e, bool over_time) {
   return world;
 }
 
-// One shard set per folder: `aia train --data` reads them all, and sets of
-// two counts hold the same episodes.
-void CheckOneShardSet(const std::string& out, int shards) {
+// One shard set per folder, of one recipe: `aia train --data` reads them
+// all, sets of two counts hold the same episodes, and shards written with
+// other options would be mixed (each shard checks its own on resume).
+void CheckOneShardSet(const std::string& out, int shards,
+                      const std::string& file, const std::string& recipe) {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(out, ec)) {
-    const int n = ShardCount(entry.path().string());
+    const std::string path = entry.path().string();
+    const int n = ShardCount(path);
     if (n != 0 && n != shards)
       throw InputError("command line", 0, "--shard",
                        out + " holds shards of a set of " + std::to_string(n) +
-                           " ('" + entry.path().string() + "'), not of " +
+                           " ('" + path + "'), not of " +
                            std::to_string(shards) +
                            ": use the same N, or another folder");
+    if (n == 0 ||
+        entry.path().filename() == std::filesystem::path(file).filename())
+      continue;
+    const std::string other = DatasetRecipe(path, "--out");
+    if (!other.empty() && other != recipe)
+      throw InputError("command line", 0, "--out",
+                       out + " holds '" + path +
+                           "', written with other options (" + other +
+                           "); this shard's would be " + recipe +
+                           ": use the same options, or another folder");
   }
 }
 
@@ -323,7 +336,8 @@ DatasetSetup PrepareDataset(const DatasetOptions& o) {
 }
 
 // The shard's file, checked and locked: DIR/shard-I-of-N.sqlite.
-std::string OpenShard(const DatasetOptions& o, const DatasetSetup& d) {
+std::string OpenShard(const DatasetOptions& o, const DatasetSetup& d,
+                      const std::string& recipe) {
   const std::string file = o.out + "/shard-" + std::to_string(o.shard.index) +
                            "-of-" + std::to_string(o.shard.count) + ".sqlite";
   // The shard and SQLite's files beside it: a FIFO there would block SQLite.
@@ -332,7 +346,7 @@ std::string OpenShard(const DatasetOptions& o, const DatasetSetup& d) {
   MakeOutputDir(o.out, "--out");
   CheckNotAnInput(file, "--out", MissionInputs(d.base, d.acting.get()),
                   "the shard written");
-  CheckOneShardSet(o.out, o.shard.count);
+  CheckOneShardSet(o.out, o.shard.count, file, recipe);
   // One writer per shard (the ranks of an mpirun share the folder): an
   // flock on the shard file itself, which SQLite's own (fcntl) locks leave
   // alone; an empty new file is an empty database to SQLite.
@@ -396,8 +410,9 @@ void DatasetOptions::Validate(const FieldChecker& c) const {
 
 int RunDataset(const DatasetOptions& o) {
   const DatasetSetup d = PrepareDataset(o);
-  const std::string file = OpenShard(o, d);
-  DatasetWriter writer(file, Recipe(o, d.acting->model_file()), "--out");
+  const std::string recipe = Recipe(o, d.acting->model_file());
+  const std::string file = OpenShard(o, d, recipe);
+  DatasetWriter writer(file, recipe, "--out");
 
   std::vector<int> todo;
   for (int e = o.shard.index; e < o.episodes; e += o.shard.count)

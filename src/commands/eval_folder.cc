@@ -352,7 +352,8 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
   MakeOutputDir(out_dir, "--out", /*lock=*/true);
   ConfigNode merged = config;
   std::error_code ec;
-  if (std::filesystem::exists(effective_path, ec)) {
+  const bool checked = std::filesystem::exists(effective_path, ec);
+  if (checked) {
     // Read without blocking (a FIFO is refused) and within a bound: the
     // file aia writes is a few KiB.
     std::string text;
@@ -373,6 +374,13 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
   }
   std::vector<std::string> problems;
   std::vector<EvalRow> rows = ReadRuns(runs_path, &problems);
+  // Rows whose configuration cannot be checked are not taken as this one's.
+  if (!checked && !rows.empty())
+    throw InputError("command line", 0, "--out",
+                     out_dir + " holds " + std::to_string(rows.size()) +
+                         " rows in runs.csv but no effective.yaml to check "
+                         "them against: put back the effective.yaml of the "
+                         "run that made them, or use a new folder");
   if (!problems.empty()) {
     std::string shown;
     for (size_t i = 0; i < problems.size() && i < 5; ++i)

@@ -495,6 +495,21 @@ int ShardCount(const std::string& path) {
   return std::stoi(n);
 }
 
+std::string DatasetRecipe(const std::string& path, const std::string& key) {
+  sqlite3* db = nullptr;
+  try {
+    db = Open(path, false);
+    std::string recipe = MetaValue(db, "recipe");
+    sqlite3_close(db);
+    return recipe;
+  } catch (const SqliteError& e) {
+    sqlite3_close(db);
+    throw InputError(
+        path, 0, key,
+        std::string("not an aia dataset shard (SQLite: ") + e.what() + ")");
+  }
+}
+
 namespace {
 
 // The recipe without its shard count: shards of one recipe with different
@@ -542,6 +557,23 @@ std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
                   std::to_string(n) +
                   " (written with another --shard K/N); keep one set per "
                   "folder");
+        }
+      }
+      // The shards of a set share one recipe: another was written with
+      // other options (a resubmitted task with changed flags).
+      std::string recipe;
+      for (const std::string& f : files) {
+        if (ShardCount(f) == 0) continue;
+        const std::string r = DatasetRecipe(f, key);
+        if (r.empty()) continue;
+        if (recipe.empty()) {
+          recipe = r;
+          first = f;
+        } else if (r != recipe) {
+          throw InputError(p, 0, key,
+                           "mixes shards written with other options: '" +
+                               first + "' (" + recipe + ") and '" + f + "' (" +
+                               r + "); keep one recipe per folder");
         }
       }
     } else if (fs::is_regular_file(p, ec)) {

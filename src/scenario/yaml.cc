@@ -189,6 +189,27 @@ class Converter {
           const std::string core = "tag:yaml.org,2002:";
           out.tag =
               tag.rfind(core, 0) == 0 ? "!!" + tag.substr(core.size()) : tag;
+          // `!!int 3`, `!!float 0.1`, `!!bool true`: the value the tag says,
+          // read as the plain scalar it is; a text the tag does not fit is
+          // refused here, not read as another type.
+          if (out.tag == "!!int" || out.tag == "!!float" ||
+              out.tag == "!!bool") {
+            const std::string& s = out.scalar;
+            const bool fits =
+                out.tag == "!!int"     ? field_text::IsIntegerLiteral(s)
+                : out.tag == "!!float" ? field_text::IsDecimalLiteral(s)
+                                       : s == "true" || s == "false";
+            if (!fits)
+              Fail(out.line, key.empty() ? "(document)" : key,
+                   "'" + (s.size() > 40 ? s.substr(0, 40) + "..." : s) +
+                       "' is not " +
+                       (out.tag == "!!int"     ? "an integer"
+                        : out.tag == "!!float" ? "a decimal number"
+                                               : "true or false") +
+                       ", as its tag " + out.tag + " says");
+            out.style = ConfigNode::Style::kPlain;
+            out.tag.clear();
+          }
         }
         break;
       }
@@ -231,8 +252,8 @@ class Converter {
   }
 
  private:
-  // YAML's own tags are read (`!!str 5` is a string; a tagged number is
-  // refused by the number readers, which say so); any other tag (`!foo`,
+  // YAML's own tags are read (`!!str 5` is a string, `!!int 5` the integer;
+  // Convert checks that the text fits the tag); any other tag (`!foo`,
   // `!<tag:x>`) means something aia does not know: refused rather than
   // dropped.
   void CheckTag(const YAML::Node& node, const std::string& key,

@@ -608,6 +608,15 @@ TEST(EvalTest, ResumeRefusesAnotherConfiguration) {
               "--quiet"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("2 rows already done, 2 to run"), std::string::npos);
+  // Rows without the effective.yaml they were made under cannot be checked:
+  // refused, not taken as another configuration's.
+  std::filesystem::remove(dir + "/effective.yaml");
+  r = eval({});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "error: command line: --out: " + dir +
+                       " holds 4 rows in runs.csv but no effective.yaml to "
+                       "check them against: put back the effective.yaml of "
+                       "the run that made them, or use a new folder\n");
   std::filesystem::remove_all(dir);
 }
 

@@ -439,6 +439,28 @@ TEST(HardeningTest, DatasetsReadTwiceOrMixedShardSetsAreRefused) {
   ExpectOneErrorLine(train({dir + "/d"}),
                      "mixes shard sets: '" + shard + "' is one of 1 shards, '" +
                          dir + "/d/shard-1-of-2.sqlite' one of 2");
+  // Shards of one set written with other options (a resubmitted array task
+  // with changed flags): `aia dataset` refuses to add one...
+  const auto sized = [&](const std::string& out, const std::string& size,
+                         const std::string& shard_of) {
+    return RunAia({"dataset", "--episodes", "4", "--size", size, "--keep", "3",
+                   "--first-seed", "500", "--shard", shard_of, "--out", out,
+                   "--quiet"});
+  };
+  ASSERT_EQ(sized(dir + "/mix", "3x3", "0/2").exit_code, 0);
+  ExpectOneErrorLine(sized(dir + "/mix", "4x3", "1/2"),
+                     "--out: " + dir + "/mix holds '" + dir +
+                         "/mix/shard-0-of-2.sqlite', written with other "
+                         "options (size=3x3 ");
+  ASSERT_EQ(sized(dir + "/mix", "3x3", "1/2").exit_code, 0);  // the same
+  // ... and `aia train` a folder that got one anyway.
+  ASSERT_EQ(sized(dir + "/other", "4x3", "1/2").exit_code, 0);
+  fs::copy_file(dir + "/other/shard-1-of-2.sqlite",
+                dir + "/mix/shard-1-of-2.sqlite",
+                fs::copy_options::overwrite_existing);
+  ExpectOneErrorLine(train({dir + "/mix"}),
+                     "mixes shards written with other options: '" + dir +
+                         "/mix/shard-0-of-2.sqlite' (size=3x3 ");
   fs::remove_all(dir);
 }
 

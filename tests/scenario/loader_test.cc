@@ -881,6 +881,39 @@ TEST(YamlTest, CustomTagsAndDeepNestingAreNamed) {
   }
 }
 
+// YAML's own scalar tags give their value (scenarios.md): `!!int 3` is the
+// integer 3, as the plain 3 is; a text the tag does not fit is refused at
+// its key, and `!!str 3` stays a string (not a seed).
+TEST(YamlTest, CoreTagsAreReadAsTheirValues) {
+  const Scenario tagged = ParseScenario(
+      "seed: !!int 3\nmission: {eps: !!float 0.25}\nsensor: {line_of_sight: "
+      "!!bool false}\nrobots: {count: 2}\ntargets: {count: 2}\n",
+      "t.yaml", ".");
+  const Scenario plain = ParseScenario(
+      "seed: 3\nmission: {eps: 0.25}\nsensor: {line_of_sight: false}\n"
+      "robots: {count: 2}\ntargets: {count: 2}\n",
+      "t.yaml", ".");
+  EXPECT_EQ(EffectiveYaml(tagged, ""), EffectiveYaml(plain, ""));
+  const std::pair<const char*, const char*> bad[] = {
+      {"seed: !!int 0.5\n",
+       "seed: '0.5' is not an integer, as its tag !!int "
+       "says"},
+      {"mission: {eps: !!float abc}\n",
+       "mission.eps: 'abc' is not a decimal number, as its tag !!float says"},
+      {"sensor: {line_of_sight: !!bool 1}\n",
+       "sensor.line_of_sight: '1' is not true or false, as its tag !!bool "
+       "says"},
+      {"seed: !!str 3\n", "seed: must be an integer >= 0, got !!str 3"}};
+  for (const auto& [text, message] : bad) {
+    try {
+      ParseScenario(text, "t.yaml", ".");
+      ADD_FAILURE() << text << " was read";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.Format(), std::string("t.yaml:1: ") + message) << text;
+    }
+  }
+}
+
 // Seeds take the whole unsigned 64-bit range and nothing beyond it.
 TEST(OverrideTest, SeedsBeyond64BitsAreRefusedAtTheirLine) {
   const std::string yaml =

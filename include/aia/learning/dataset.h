@@ -101,11 +101,17 @@ class DatasetWriter {
 // 0 for any other name.
 int ShardCount(const std::string& path);
 
+// The options a dataset file was written with (aia dataset's recipe), read
+// alone; "" for a file that holds none yet. InputError naming `key` for a
+// file that is not a dataset.
+std::string DatasetRecipe(const std::string& path, const std::string& key);
+
 // The files `paths` name: each file given, and every `*.sqlite` file of
 // each folder, sorted by name. InputError naming `key` for a missing path, a
 // folder without dataset files, a folder that mixes shard sets of different
-// counts (shard-K-of-N.sqlite with two N), and a file read twice (given
-// twice, through a link, or as a file and within its folder).
+// counts (shard-K-of-N.sqlite with two N) or shards of one set written with
+// other options (recipes), and a file read twice (given twice, through a
+// link, or as a file and within its folder).
 std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
                                       const std::string& key);
 
