@@ -239,7 +239,8 @@ Action AddRunCommand(CLI::App& app) {
       ->required();
   flags->Add(cmd);
   cmd->add_option("--out", run->out_dir,
-                  "output directory (default: renders/<scenario name>)")
+                  "output directory (default: renders/NAME for a scenario file "
+                  "NAME.yaml)")
       ->check(kPath);
   // --trace, as RunOptions declares it.
   auto declared = std::make_shared<DeclaredFlags>(cmd);

@@ -265,6 +265,9 @@ std::string SummaryCsv(const std::vector<EvalRow>& rows,
         stalls += static_cast<double>(r.stalls);
         timeouts += static_cast<double>(r.timeouts);
       }
+      // A pair no row holds (another eval's size with this one's policy,
+      // or not run yet) is no row of the table, not one of empty columns.
+      if (n == 0 && no_plan == 0) continue;
       SummaryRow row;
       row.size = size;
       row.policy = policy;

@@ -390,6 +390,23 @@ DatasetWriter::DatasetWriter(const std::string& path, const std::string& recipe,
     }
     Statement st(db_->db, "SELECT episode FROM worlds");
     while (st.Step()) done_.insert(sqlite3_column_int64(st.get(), 0));
+    // An episode's world and samples are written in one transaction: samples
+    // without their world were left by a change made outside aia, and would
+    // collide with the episode's samples when it runs again.
+    Statement orphans(db_->db,
+                      "SELECT COUNT(DISTINCT episode) FROM samples WHERE "
+                      "episode NOT IN (SELECT episode FROM worlds)");
+    const std::int64_t lost =
+        orphans.Step() ? sqlite3_column_int64(orphans.get(), 0) : 0;
+    if (lost > 0)
+      throw InputError(
+          path, 0, key,
+          "holds samples of " +
+              (lost == 1 ? std::string("an episode without its world record")
+                         : std::to_string(lost) +
+                               " episodes without their world records") +
+              " (the shard was changed outside aia): remove the shard to "
+              "write it again, or choose another folder");
   } catch (const SqliteError& e) {
     // A full disk or an I/O error is exit 1 with the path; a file that is
     // not a database is bad input.

@@ -188,6 +188,13 @@ TEST(EvalTest, SummaryCoversEveryRowOfTheFolder) {
   const std::string summary = ReadFile(dir + "/summary.csv");
   EXPECT_NE(summary.find("\n3x3,greedy,3,"), std::string::npos) << summary;
   EXPECT_NE(summary.find("\n4x4,random,2,"), std::string::npos) << summary;
+  // A size of one policy alone: no row for the policies it was not run with
+  // (it was a row of empty columns).
+  ASSERT_EQ(eval("2x2", "random", "0").exit_code, 0);
+  const std::string more = ReadFile(dir + "/summary.csv");
+  EXPECT_NE(more.find("\n2x2,random,2,"), std::string::npos) << more;
+  EXPECT_EQ(more.find("2x2,greedy"), std::string::npos) << more;
+  EXPECT_EQ(lines(more).size(), lines(summary).size() + 1) << more;
   std::filesystem::remove_all(dir);
 }
 

@@ -464,6 +464,31 @@ TEST(HardeningTest, DatasetsReadTwiceOrMixedShardSetsAreRefused) {
   fs::remove_all(dir);
 }
 
+// A shard changed outside aia (an episode's world record deleted, its
+// samples left) is refused on resume at its path, not with SQLite's raw
+// "UNIQUE constraint failed" and exit 1 when the episode ran again.
+TEST(HardeningTest, AShardWithSamplesOfNoWorldIsRefusedOnResume) {
+  const std::string dir = testing::MakeTempDir("aia_orphan_");
+  const std::vector<std::string> args = {"dataset", "--episodes", "4", "--size",
+                                         "3x3",     "--keep",     "2", "--out",
+                                         dir,       "--quiet"};
+  ASSERT_EQ(RunAia(args).exit_code, 0);
+  const std::string shard = dir + "/shard-0-of-1.sqlite";
+  ASSERT_EQ(RunCommand("/usr/bin/python3 -c \"import sqlite3; c = "
+                       "sqlite3.connect('" +
+                       shard +
+                       "'); c.execute('DELETE FROM worlds WHERE episode = 1'); "
+                       "c.commit()\"")
+                .exit_code,
+            0);
+  ExpectOneErrorLine(RunAia(args),
+                     shard +
+                         ": --out: holds samples of an episode without "
+                         "its world record (the shard was changed outside "
+                         "aia)");
+  fs::remove_all(dir);
+}
+
 // Issue 19: a policy or size listed twice wrote duplicate rows, which every
 // resume dropped and ran again.
 TEST(HardeningTest, EvalRefusesAPolicyOrASizeListedTwice) {

@@ -155,6 +155,18 @@ TEST(TrainTest, TwoModelsThatShareALogAreRefused) {
       std::string::npos)
       << r.err;
   EXPECT_EQ(testing::ReadFile(dir + "/m.train.csv"), log);
+  // Nor is a model written over the checkpoint or the log another keeps.
+  const std::string checkpoint = testing::ReadFile(dir + "/m.pt.ckpt");
+  for (const std::string& name : {"/m.pt.ckpt", "/m.train.csv"}) {
+    std::vector<std::string> over = train;
+    over.push_back(dir + name);
+    const auto o = testing::RunAia(over);
+    EXPECT_EQ(o.exit_code, 2) << name;
+    EXPECT_NE(o.err.find("is what the model '" + dir + "/m"), std::string::npos)
+        << o.err;
+  }
+  EXPECT_EQ(testing::ReadFile(dir + "/m.pt.ckpt"), checkpoint);
+  EXPECT_EQ(testing::ReadFile(dir + "/m.train.csv"), log);
   // A folder is no model: the dataset DIR/data beside the model
   // DIR/data.pt (docs/paths.md's `--data data/small --out data/small.pt`).
   std::vector<std::string> beside = train;

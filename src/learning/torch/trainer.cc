@@ -402,6 +402,24 @@ void CheckTheLogIsOurs(const std::string& out) {
                            TrainLogPath(out) +
                            "'), which this run would replace: choose "
                            "another name");
+  // OUT is itself the checkpoint or the log of a model that is there.
+  const auto ends = [&](const std::string& tail) {
+    return out.size() > tail.size() &&
+           out.compare(out.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  std::vector<std::string> owners;
+  if (ends(".ckpt")) owners.push_back(out.substr(0, out.size() - 5));
+  if (ends(".train.csv")) {
+    const std::string base = out.substr(0, out.size() - 10);
+    owners.insert(owners.end(), {base, base + ".pt"});
+  }
+  for (const std::string& model : owners)
+    if (std::filesystem::is_regular_file(model, ec))
+      throw InputError("command line", 0, "--out",
+                       "'" + out + "' is what the model '" + model +
+                           "', which is there, keeps beside it (its " +
+                           (ends(".ckpt") ? "checkpoint" : "log") +
+                           "): choose another name");
 }
 
 // No file written (the model, its checkpoint, its log) may be a file read:
