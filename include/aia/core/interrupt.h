@@ -11,7 +11,8 @@ namespace aia {
 inline constexpr int kInterruptedExitCode = 130;
 
 // From now on SIGINT and SIGTERM set a flag instead of ending the process;
-// a second one ends it at once.
+// a second one ends it at once, unless it comes within 0.1 s of the first
+// (the same request delivered twice, as `timeout -s INT` does).
 void InstallInterruptHandler();
 
 // Whether SIGINT or SIGTERM arrived since InstallInterruptHandler().
