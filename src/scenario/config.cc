@@ -391,6 +391,46 @@ void PhysicsConfig::Validate(const FieldChecker& check, RobotModel model,
                        ", at most 0.5 keeps the simulation stable (lower kp "
                        "or the timestep)");
   }
+  // The stall rule judges a point robot that moves slower than kStallSpeed
+  // from kSettleTime on blocked. Near its waypoint the spring's speed is
+  // below omega x at distance x, so within kStallSpeed / omega of it the
+  // robot is slow: a tolerance inside that stalls every move short of its
+  // point. And from rest the robot must be faster than that at kSettleTime,
+  // step omega^2 t e^(-omega t), unless it has arrived by then.
+  if (model == RobotModel::kPoint) {
+    // Two significant digits, rounded up: what the message says is enough.
+    const auto up = [](double x) {
+      const double unit = std::pow(10.0, std::floor(std::log10(x)) - 1.0);
+      return std::ceil(x / unit) * unit;
+    };
+    const double omega = std::sqrt(kp / robot_mass);
+    const double slow_within = kStallSpeed / omega;
+    if (tolerance < 1.5 * slow_within) {
+      check.Fail(tolerance,
+                 "must be at least " + FormatNumber(up(1.5 * slow_within)) +
+                     " for kp " + FormatNumber(kp) + " and robot_mass " +
+                     FormatNumber(robot_mass) +
+                     ": a point robot slows below the stall rule's " +
+                     FormatNumber(kStallSpeed) + " m/s within " +
+                     FormatNumber(up(slow_within)) +
+                     " m of its waypoint, and would end every move as "
+                     "stalled short of it (raise the tolerance or kp), got " +
+                     FormatNumber(tolerance));
+      return;
+    }
+    const double t = kSettleTime;
+    const double speed = step * omega * omega * t * std::exp(-omega * t);
+    if (PointArrivalSeconds(step) > t && speed < kStallSpeed) {
+      check.Fail(kp, "is too soft for robot_mass " + FormatNumber(robot_mass) +
+                         ": a point robot starting a move is still slower "
+                         "than the stall rule's " +
+                         FormatNumber(kStallSpeed) + " m/s after " +
+                         FormatNumber(t) + " s (" + FormatNumber(up(speed)) +
+                         " m/s) and would end every move as stalled where "
+                         "it started (raise kp)");
+      return;
+    }
+  }
   const double timeout = StepTimeout(model);
   // A point robot's move takes the spring's time to come within tolerance
   // of a waypoint one lattice step away: a decision step shorter than that

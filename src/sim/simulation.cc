@@ -340,8 +340,9 @@ void Simulation::SetTargetPosition(int k, const Vec2& p) {
 }
 
 namespace {
-constexpr double kStallSpeed = 0.01;  // m/s: this slow and not there: blocked
-constexpr double kSettleTime = 0.05;  // s: a robot is never stalled before
+// This slow and not there: blocked; never before kSettleTime into a move.
+constexpr double kStallSpeed = PhysicsConfig::kStallSpeed;
+constexpr double kSettleTime = PhysicsConfig::kSettleTime;
 }  // namespace
 
 PhysicsStepStats Simulation::AdvanceToWaypoints(
@@ -349,8 +350,10 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
   PhysicsStepStats stats;
   const PhysicsConfig& physics = model_->physics();
   const double dt = m_->opt.timestep;
+  // (Less a rounding: 0.56 / 0.005 is 112.00000000000001.)
   const int max_steps = std::max(
-      1, static_cast<int>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
+      1, static_cast<int>(
+             std::ceil(physics.StepTimeout(robot_model()) / dt - 1e-9)));
   const double tol = physics.tolerance;
   const double tol2 = tol * tol;
   // A robot in a sliding contact can creep on for seconds faster than
@@ -443,8 +446,8 @@ PhysicsStepStats Simulation::AdvanceMoves(
   const PhysicsConfig& physics = model_->physics();
   const double dt = m_->opt.timestep;
   const long timeout = std::max(
-      1L,
-      static_cast<long>(std::ceil(physics.StepTimeout(robot_model()) / dt)));
+      1L, static_cast<long>(
+              std::ceil(physics.StepTimeout(robot_model()) / dt - 1e-9)));
   const double tol2 = physics.tolerance * physics.tolerance;
   const long settle = static_cast<long>(std::ceil(kSettleTime / dt - 1e-9));
   const long check_every = std::max(

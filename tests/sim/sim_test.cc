@@ -60,6 +60,22 @@ TEST(SimulationTest, RobotTracksItsWaypoint) {
             s.physics.tolerance);
 }
 
+// A step that times out lasts step_timeout / timestep substeps: 0.56 s is
+// 112 of 0.005 s (the quotient, 112.00000000000001, took 113).
+TEST(SimulationTest, ATimedOutStepLastsTheTimeoutsSubsteps) {
+  const Scenario s = ScenarioFromYaml(
+      "workspace: {size: [20, 20]}\n"
+      "robots: {count: 1, start: [[1.25, 5.25]]}\n"
+      "targets: {count: 1}\n"
+      "physics: {kp: 50, step_timeout: 0.56}\n");
+  const World w = World::Build(s);
+  Simulation sim(w, s);
+  sim.SetWaypoint(0, {10.25, 5.25});  // 9 m: about 0.67 s of the spring
+  const PhysicsStepStats st = sim.AdvanceToWaypoints();
+  EXPECT_TRUE(st.timed_out);
+  EXPECT_EQ(st.substeps, 112);
+}
+
 TEST(SimulationTest, ContactsKeepRobotsApart) {
   // Both robots are sent to the same point: real contacts stop them short.
   const Scenario s = ScenarioFromYaml(

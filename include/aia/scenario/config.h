@@ -553,6 +553,12 @@ inline long SensingTickSteps(double rate, double timestep) {
 inline constexpr Avoidance kDefaultAvoidance = Avoidance::kReserve;
 
 struct PhysicsConfig {
+  // The stall rule (sim/simulation.h): a robot that has not arrived is
+  // blocked once it moves slower than kStallSpeed (m/s), from kSettleTime
+  // (s) into its move on.
+  static constexpr double kStallSpeed = 0.01;
+  static constexpr double kSettleTime = 0.05;
+
   double timestep = 0.005;
   double kp = 200.0;
   double robot_mass = 0.25;
@@ -600,9 +606,10 @@ struct PhysicsConfig {
   // tolerance of a waypoint `step` metres away.
   double PointArrivalSeconds(double step) const;
   // The tolerance is below half a lattice step; a point robot's spring is
-  // stable at this timestep and its move fits in a decision step; a
-  // decision step is at most 1e6 timesteps. Called by Scenario::Validate,
-  // which knows the robot model and robots.step.
+  // stable at this timestep, moves faster than the stall speed from
+  // kSettleTime until it is within tolerance, and its move fits in a
+  // decision step; a decision step is at most 1e6 timesteps. Called by
+  // Scenario::Validate, which knows the robot model and robots.step.
   void Validate(const FieldChecker& check, RobotModel model, double step);
 };
 
