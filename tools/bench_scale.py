@@ -30,10 +30,10 @@ import re
 import subprocess
 import sys
 
-import matplotlib
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from tool_io import pyplot, run  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+plt = pyplot()  # headless; where matplotlib is missing, its first use says so
 
 PHASES = ["physics", "sensing", "fusion", "policy", "rest"]
 COLUMNS = (["robots", "side_m", "boxes", "steps_per_s", "ms_step"] + PHASES +
@@ -302,4 +302,4 @@ def measure(args, sizes):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run(main)

@@ -52,15 +52,12 @@ import subprocess
 import sys
 import time
 
-import matplotlib
-
-matplotlib.use("Agg")  # headless
-import matplotlib.pyplot as plt  # noqa: E402
-
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tools"))
 import plot_trace  # noqa: E402
-from tool_io import BadInput, save_figure  # noqa: E402
+from tool_io import BadInput, os_error, pyplot, save_figure  # noqa: E402
+
+plt = pyplot()  # headless; where matplotlib is missing, its first use says so
 
 SIZES = ["10x10", "20x20", "30x30", "40x40", "50x50", "60x60", "80x80"]
 POLICIES = ["expert", "igbnet", "decsb", "greedy", "random"]  # expert: C-SB in the loop
@@ -1026,22 +1023,41 @@ def main(argv=None):
     if os.path.exists(args.out) and not os.path.isdir(args.out):
         print(f"error: --out: {args.out} is a file, not a folder", file=sys.stderr)
         return 2
-    os.makedirs(args.out, exist_ok=True)
+    try:
+        os.makedirs(args.out, exist_ok=True)
+    except OSError as e:
+        line, code = os_error(e)
+        print(line, file=sys.stderr)
+        return code
+    settings = os.path.join(args.out, "settings.json")
+    fresh = not os.path.exists(settings)
+
+    def refused(code):
+        # Bad input found before anything ran: the folder keeps no settings
+        # of it, so that the corrected command may use it.
+        if code == 2 and fresh and os.listdir(args.out) == ["settings.json"]:
+            os.remove(settings)
+        return code
+
     try:
         check_settings(args)
         {"scalability": scalability, "tracking": tracking, "robustness": robustness,
          "generalization": generalization, "motion": motion}[args.experiment](args)
     except AlreadySaid as e:
-        return e.code
+        return refused(e.code)
     except (Usage, BadInput) as e:
         print(f"error: {e}", file=sys.stderr)
-        return 2
+        return refused(2)
     except Failure as e:
         print(f"error: {e}", file=sys.stderr)
-        return 2 if " exited with 2" in str(e) else 1
+        return refused(2 if " exited with 2" in str(e) else 1)
     except KeyboardInterrupt:
         print("\ninterrupted: run the same command again to go on", file=sys.stderr)
         return 130
+    except OSError as e:
+        line, code = os_error(e)
+        print(line, file=sys.stderr)
+        return refused(code)
     print(f"results in {args.out}")
     return 0
 

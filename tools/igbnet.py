@@ -147,6 +147,12 @@ def set_channels(model, out, assignments):
     if not os.path.isfile(model):
         print("error: command line: MODEL: no such file: %s" % model, file=sys.stderr)
         return 2
+    # The model is read whole before OUT is written, but a mistyped OUT that
+    # names MODEL would replace it with no way back (a shipped model too).
+    if os.path.exists(out) and os.path.samefile(model, out):
+        print("error: command line: OUT: %s is MODEL; give another file" % out,
+              file=sys.stderr)
+        return 2
     nw = network()
     net, _ = nw.load_model(model)
     net.meta.update(changes)

@@ -27,7 +27,8 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-MINE = {"whole", "killed", "data", "report.json"}  # what --out may hold
+MARK = ".kill_restart"  # written first into a folder this tool makes
+MINE = {"whole", "killed", "data", "report.json", MARK}  # what --out may hold
 
 
 def job_args(job: str, out: pathlib.Path, data: pathlib.Path) -> list:
@@ -116,12 +117,20 @@ def main() -> int:
     if out.exists():
         if not out.is_dir():
             ap.error(f"--out: '{out}' is not a folder")
-        others = {p.name for p in out.iterdir()} - MINE
+        names = {p.name for p in out.iterdir()}
+        others = names - MINE
         if others:
             ap.error(f"--out: '{out}' holds files this tool did not write "
                      f"({', '.join(sorted(others)[:3])}); give a new folder")
+        # Only a folder this tool made is replaced: a "data" folder of the
+        # same name may be anyone's.
+        if names and MARK not in names:
+            ap.error(f"--out: '{out}' was not made by this tool (no {MARK} "
+                     "in it); give a new folder")
         shutil.rmtree(out)
     out.mkdir(parents=True)
+    (out / MARK).write_text("made by tools/kill_restart.py; replaced by its "
+                            "next run\n")
     data = out / "data"
     if a.job == "train":  # a small dataset to train on, made once
         run(a.aia, ["dataset", "--episodes", "40", "--size", "4x4", "--keep",

@@ -27,14 +27,12 @@ import json
 import os
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")  # headless
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from tool_io import BadInput, save_figure  # noqa: E402
+from tool_io import BadInput, pyplot, save_figure  # noqa: E402
+
+plt = pyplot()  # headless; where matplotlib is missing, its first use says so
 
 
 def robot_color(i):

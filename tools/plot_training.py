@@ -12,13 +12,11 @@ import math
 import os
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")  # headless
-import matplotlib.pyplot as plt  # noqa: E402
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from tool_io import BadInput, number, read_rows, run, save_figure  # noqa: E402
+from tool_io import (BadInput, number, pyplot, read_rows, run,  # noqa: E402
+                     save_figure)
+
+plt = pyplot()  # headless; where matplotlib is missing, its first use says so
 
 COLUMNS = ("epoch", "train_loss", "train_acc", "val_loss", "val_acc",
            "val_acc_useful")

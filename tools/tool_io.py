@@ -6,6 +6,7 @@ name) and Ctrl-C ends a tool with exit code 130 and no traceback.
 """
 
 import csv
+import errno
 import math
 import os
 import sys
@@ -15,10 +16,25 @@ class BadInput(Exception):
     """A problem with a tool's input or arguments: `error: MESSAGE`, exit 2."""
 
 
+# A path that cannot be read or written as given (bad input, exit 2); any
+# other OSError (a full disk, an I/O error) is exit 1.
+_PATH_ERRNOS = {errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.EACCES,
+                errno.EPERM, errno.EROFS, errno.ENAMETOOLONG, errno.ELOOP,
+                errno.EEXIST}
+
+
+def os_error(e):
+    """An OSError as one error line and its exit code."""
+    where = f"{e.filename}: " if e.filename else ""
+    return (f"error: {where}{e.strerror or e}",
+            2 if e.errno in _PATH_ERRNOS else 1)
+
+
 def run(main):
     """Runs a tool's main() and exits with its code: 2 and one error line on
-    BadInput, 130 on Ctrl-C, and 141 in silence when its output is a pipe
-    whose reader has gone (`tool | head`), as a shell command ends."""
+    BadInput or a path it cannot use (1 for other OSErrors: a full disk),
+    130 on Ctrl-C, and 141 in silence when its output is a pipe whose reader
+    has gone (`tool | head`), as a shell command ends."""
     try:
         code = main()
     except BadInput as e:
@@ -32,6 +48,9 @@ def run(main):
         # at /dev/null first.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         code = 141
+    except OSError as e:
+        line, code = os_error(e)
+        print(line, file=sys.stderr)
     sys.exit(code or 0)
 
 
@@ -88,6 +107,28 @@ def check_output(path, inputs=()):
         if os.path.exists(path) and os.path.exists(i) and \
                 os.path.samefile(path, i):
             raise BadInput(f"--out: {path} is an input; give another file")
+
+
+class _NoPyplot:
+    """pyplot where matplotlib is missing: the tool's --help and its checks
+    work, and the first plot says what is missing in one line."""
+
+    def __getattr__(self, name):
+        raise BadInput(f"matplotlib is not installed for {sys.executable}: "
+                       "Debian's python3-matplotlib (tools/bootstrap.sh "
+                       "installs it); run the tool with /usr/bin/python3")
+
+
+def pyplot():
+    """matplotlib.pyplot on the headless backend, or a stand-in that raises
+    BadInput when used where matplotlib is missing."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return _NoPyplot()
+    return plt
 
 
 def save_figure(fig, path, dpi, inputs=()):

@@ -18,10 +18,13 @@ int RunWorldCommand(const WorldOptions& o) {
   const std::filesystem::path out(o.out);
   const std::filesystem::path parent =
       out.has_parent_path() ? out.parent_path() : ".";
+  // A missing folder is made, as every command makes its --out's (below,
+  // once the scenario is known to be good); one that is a file is refused.
   std::error_code ec;
-  if (!std::filesystem::is_directory(parent, ec))
+  if (std::filesystem::exists(parent, ec) &&
+      !std::filesystem::is_directory(parent, ec))
     throw InputError("command line", 0, "--out",
-                     "folder '" + parent.string() + "' does not exist");
+                     "'" + parent.string() + "' is not a folder");
   CheckOutputFile(o.out, "--out");
   const PolicyRegistry registry = AllPolicies();
   const Scenario scenario =
