@@ -40,11 +40,15 @@ struct PhaseTimes {
 struct EpisodeStats {
   // Decisions per PolicyStatus (indexed by its value).
   std::array<long, kNumPolicyStatuses> statuses{};
-  long physics_timeouts = 0;  // steps whose physics hit physics.step_timeout
-  long stalled_steps = 0;     // steps that ended with a robot blocked short of
-                              // its waypoint (a contact), before the timeout
-  long substeps = 0;          // mj_step calls
-  double sim_seconds = 0.0;   // simulated time
+  // Steps whose physics hit physics.step_timeout, and steps that ended with
+  // a robot blocked short of its waypoint (a contact) before the timeout.
+  // With mission.decisions async both count rounds (the physics between
+  // two batches of decisions), of which a step has one or more, and one
+  // round can count in both.
+  long physics_timeouts = 0;
+  long stalled_steps = 0;
+  long substeps = 0;         // mj_step calls
+  double sim_seconds = 0.0;  // simulated time
   // Simulated seconds when the mission succeeded (-1 until then).
   double success_seconds = -1.0;
 };
