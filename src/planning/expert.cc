@@ -32,6 +32,7 @@ void ExpertPolicy::Reset(const Map&, int, int, std::uint64_t seed) {
   team_best_ = false;
   missed_.clear();
   last_det_.clear();
+  best_belief_.reset();  // it points into the last episode's layout
 }
 
 void ExpertPolicy::RecordMisses(const DecisionContext& ctx) {
@@ -135,8 +136,13 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
     }
     if (m == Move::kStay && ctx.comm->Active(i)) {
       // Nothing planned for this robot (depth-0 plan or no valid move): any
-      // valid move, as the world rule would pick.
-      m = RandomValidMove(lattice, (*ctx.robot_lattice)[i], rng_);
+      // valid move, as the world rule would pick; none (walled in): it
+      // stays, and says so as the other policies do.
+      const int here = (*ctx.robot_lattice)[i];
+      if (lattice.NumValidMoves(here) == 0)
+        status = PolicyStatus::kNoValidMove;
+      else
+        m = RandomValidMove(lattice, here, rng_);
     }
     (*moves)[i] = m;
     if (has_next) ++at_[i];

@@ -44,6 +44,27 @@ TEST_P(PolicyContractTest, ReachesSuccessOnASmallScenario) {
   }
 }
 
+// A robot walled in on its lattice point has no valid move: it stays, and
+// every policy says so in its status (the expert said ok).
+TEST_P(PolicyContractTest, AWalledInRobotStaysAndIsReported) {
+  Scenario s = ScenarioFromYaml(
+      "seed: 3\nworkspace: {size: [10, 10], obstacles: {boxes: ["
+      "{center: [7.25, 7.75], size: [1.5, 0.5]}, {center: [7.25, 6.75], "
+      "size: [1.5, 0.5]}, {center: [6.75, 7.25], size: [0.5, 0.5]}, "
+      "{center: [7.75, 7.25], size: [0.5, 0.5]}]}}\nrobots: {count: 2, "
+      "start: [[7.25, 7.25], [1.25, 1.25]]}\ntargets: {list: [{position: "
+      "[2, 8], prior_sigma: 1}, {position: [8, 2], prior_sigma: 1}]}\n"
+      "mission: {eps: 0.1, max_steps: 4}\n");
+  s.policy.name = GetParam();
+  auto e = MakeEpisode(s, AllPolicies());
+  const Vec2 start = e->robot_positions()[0];
+  while (!e->done()) e->Step();
+  EXPECT_LT((e->robot_positions()[0] - start).norm(), 1e-6) << GetParam();
+  EXPECT_EQ(e->stats().statuses[static_cast<int>(PolicyStatus::kNoValidMove)],
+            e->step())
+      << GetParam();
+}
+
 INSTANTIATE_TEST_SUITE_P(AllPolicies, PolicyContractTest,
                          ::testing::ValuesIn(AllPolicies().Names()),
                          [](const auto& info) { return info.param; });
