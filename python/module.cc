@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -470,7 +471,18 @@ class Mission {
   bool in_vector() const { return in_vector_; }
   // One of a VectorMissions: stepped and restarted by it only.
   void MarkInVector() { in_vector_ = true; }
-  void Invalidate() { view_ = nullptr; }
+  // The decision is over: the view reads nothing after this. A call still
+  // in flight on it (another thread inside channels() or a policy's
+  // decide, the GIL released) is waited for first, with the GIL let go
+  // while waiting; the caller holds the GIL, as every CallGuard does when
+  // it marks and clears busy_, so reading it here is no race.
+  void Invalidate() {
+    while (busy_ != nullptr) {
+      py::gil_scoped_release release;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    view_ = nullptr;
+  }
   const char** busy() const { return &busy_; }
   std::uint64_t id() const { return id_; }
   // The scenario's warnings (keys that change nothing where they stand),
@@ -1207,11 +1219,22 @@ class PyDataset {
   // (--val-share, --seed).
   py::array_t<bool> ValidationWorlds(py::handle share_arg,
                                      py::handle seed_arg) const {
-    if (IsBool(share_arg) || !PyNumber_Check(share_arg.ptr()))
+    // A real number: not a bool, a complex, an array, nor one past a
+    // double (10**400).
+    const auto refuse = [&] {
       Refuse("aia.Dataset.split", "val_share",
              "must be a number in [0, 1], got " + Shown(share_arg));
-    const double share =
-        py::float_(py::reinterpret_borrow<py::object>(share_arg));
+    };
+    if (IsBool(share_arg) || !PyNumber_Check(share_arg.ptr()) ||
+        PyComplex_Check(share_arg.ptr()) ||
+        py::isinstance<py::array>(share_arg))
+      refuse();
+    double share = 0.0;
+    try {
+      share = py::float_(py::reinterpret_borrow<py::object>(share_arg));
+    } catch (const py::error_already_set&) {
+      refuse();
+    }
     if (!(share >= 0.0 && share <= 1.0))
       Refuse("aia.Dataset.split", "val_share",
              "must be a number in [0, 1], got " + Shown(share_arg));
@@ -1297,6 +1320,9 @@ struct EvalProgress {
 // A Python callable as a policy of aia's own loop (evaluate): each decision
 // takes the GIL, hands the callable a view of the decision and reads its
 // moves. A Python exception ends the evaluation and reaches the caller.
+// Whether this thread is running a policy's callbacks for aia.evaluate.
+thread_local bool t_inside_evaluate = false;
+
 class CallbackPolicy : public Policy {
  public:
   CallbackPolicy(std::string name, bool centralized, py::object decide,
@@ -1322,6 +1348,13 @@ class CallbackPolicy : public Policy {
   PolicyStatus Decide(const DecisionContext& ctx,
                       std::vector<Move>* moves) override {
     py::gil_scoped_acquire gil;
+    // What runs from here (the progress callback, the policy) is inside an
+    // evaluation: an aia.evaluate it calls is refused (it would wait for
+    // this one's turn for ever).
+    struct Inside {
+      Inside() { t_inside_evaluate = true; }
+      ~Inside() { t_inside_evaluate = false; }
+    } inside;
     progress_->Report();
     const int n = static_cast<int>(moves->size());
     py::object view = py::cast(new Mission(&ctx, seed_, id_, 0),
@@ -1427,6 +1460,11 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
                    std::uint64_t seed_base, const std::string& out, int threads,
                    const std::vector<std::string>& sets, py::object progress,
                    int done_before, int total) {
+  if (t_inside_evaluate)
+    Refuse("aia.evaluate", "",
+           "called from a policy or progress callback of a running "
+           "aia.evaluate: evaluations do not nest (it would wait for the "
+           "running one for ever); run it after");
   EvalOptions o;
   o.sizes.clear();
   for (std::size_t i = 0; i < sizes.size(); ++i) {

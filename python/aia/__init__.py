@@ -321,6 +321,12 @@ def _path(value, where, arg):
     if (b"\0" if isinstance(path, bytes) else "\0") in path:
         raise InputError(f"{where}: {arg}: a path cannot hold a NUL byte, "
                          f"got {_shown(value)}")
+    if isinstance(path, str):
+        try:
+            path.encode("utf-8")
+        except UnicodeEncodeError:
+            # A name os.listdir decoded with surrogates: its bytes pass.
+            path = _os.fsencode(path)
     return path
 
 

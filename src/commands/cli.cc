@@ -531,6 +531,8 @@ Action AddTrainCommand(CLI::App& app) {
               "(it reads --data, --val-share, --seed, --valid-moves and "
               "--threads); drop the flag");
       }
+      // --threads as training takes it (0: libtorch's default).
+      aia::SetInferenceThreads(o->threads);
       const aia::ValidationResult v = aia::Validate(
           *validate, o->data, o->val_share, o->seed, o->valid_moves != 0);
       char useful[64] = "none of them with useful work";

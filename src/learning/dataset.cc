@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "aia/core/error.h"
+#include "aia/core/fields.h"
 #include "aia/core/io.h"
 #include "aia/scenario/config.h"
 #include "aia/world/lattice.h"
@@ -305,6 +306,13 @@ std::string ReadFile(const std::string& file, Dataset* out) {
       h.mean = {t[0], t[1]};
       h.cov << t[2], t[3], t[3], t[4];
       h.log_det = t[5];
+      // A covariance (positive semidefinite): the heat stamp's window and
+      // weight read its square roots.
+      if (!(t[2] >= 0.0 && t[4] >= 0.0 && t[2] * t[4] - t[3] * t[3] >= 0.0))
+        throw std::runtime_error(
+            where + ": target " + std::to_string(k) +
+            "'s belief covariance is not one (" + FormatNumber(t[2]) + ", " +
+            FormatNumber(t[3]) + ", " + FormatNumber(t[4]) + ")");
     }
     if (has_search) {
       // (target, count, count x (x, y)) per target with search points.

@@ -772,15 +772,21 @@ TEST(CliTest, WorldWritesAnMjcfThatMujocoLoads) {
       testing::RunCommand("cd " + dir + " && mujoco-testxml world.xml");
   EXPECT_EQ(t.exit_code, 0) << t.out << t.err;
   EXPECT_NE(t.out.find("Max difference : 0"), std::string::npos) << t.out;
-  // --set applies; a missing folder and a bad scenario are bad input.
+  // --set applies; a missing folder is made (as every command makes its
+  // --out's); a file in its place and a bad scenario are bad input.
   const auto s = RunAia({"world", SourcePath("scenarios/default.yaml"), "--set",
                          "robots.count=3", "--out", dir + "/three.xml"});
   ASSERT_EQ(s.exit_code, 0) << s.err;
   EXPECT_NE(s.out.find("3 robots"), std::string::npos) << s.out;
+  const auto made = RunAia({"world", SourcePath("scenarios/default.yaml"),
+                            "--out", dir + "/new/folder/world.xml"});
+  EXPECT_EQ(made.exit_code, 0) << made.err;
+  EXPECT_TRUE(fs::exists(dir + "/new/folder/world.xml"));
   const auto m = RunAia({"world", SourcePath("scenarios/default.yaml"), "--out",
-                         dir + "/no/such/world.xml"});
+                         dir + "/three.xml/world.xml"});
   EXPECT_EQ(m.exit_code, 2);
-  EXPECT_EQ(m.err.rfind("error: command line: --out: ", 0), 0u) << m.err;
+  EXPECT_EQ(m.err, "error: command line: --out: '" + dir +
+                       "/three.xml' is not a folder\n");
   const auto b = RunAia({"world", scenario, "--set", "robots.radius=-1",
                          "--out", dir + "/bad.xml"});
   EXPECT_EQ(b.exit_code, 2);

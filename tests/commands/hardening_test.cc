@@ -519,6 +519,34 @@ TEST(HardeningTest, AShardWithSamplesOfNoWorldIsRefusedOnResume) {
   fs::remove_all(dir);
 }
 
+// A sample whose belief covariance is no covariance (edited outside aia)
+// is refused at its shard, not read into a heat stamp that aborted (rc 134)
+// or took a NaN window (a segfault).
+TEST(HardeningTest, ASampleWithoutACovarianceIsRefused) {
+  const std::string dir = testing::MakeTempDir("aia_cov_");
+  ASSERT_EQ(RunAia({"dataset", "--episodes", "2", "--size", "3x3", "--keep",
+                    "2", "--out", dir + "/d", "--quiet"})
+                .exit_code,
+            0);
+  const std::string shard = dir + "/d/shard-0-of-1.sqlite";
+  // Every sample's first target: the covariance -I.
+  ASSERT_EQ(RunCommand("/usr/bin/python3 -c \"import sqlite3, struct; c = "
+                       "sqlite3.connect('" +
+                       shard +
+                       "'); rows = c.execute('SELECT rowid, targets FROM "
+                       "samples').fetchall(); [c.execute('UPDATE samples SET "
+                       "targets = ? WHERE rowid = ?', (b[:16] + "
+                       "struct.pack('<3d', -1, 0, -1) + b[40:], r)) for r, b "
+                       "in rows]; c.commit()\"")
+                .exit_code,
+            0);
+  ExpectOneErrorLine(
+      RunAia({"train", "--data", dir + "/d", "--out", dir + "/m.pt", "--epochs",
+              "1", "--width", "8", "--window", "16", "--quiet"}),
+      "target 0's belief covariance is not one (-1, 0, -1)");
+  fs::remove_all(dir);
+}
+
 // Issue 19: a policy or size listed twice wrote duplicate rows, which every
 // resume dropped and ran again.
 TEST(HardeningTest, EvalRefusesAPolicyOrASizeListedTwice) {

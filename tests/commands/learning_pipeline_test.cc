@@ -358,6 +358,13 @@ TEST(TrainTest, AFewStepsLowerTheLossAndAResumedRunEndsTheSame) {
   nb->Forward(x.data(), 3, 16, 16, lb.data());
   EXPECT_EQ(la, lb);
 
+  // A run killed after its last checkpoint and before its log: a resume of
+  // the finished run writes the log as the checkpoint holds it.
+  const std::string log = testing::ReadFile(dir + "/b.train.csv");
+  WriteFileAtomic(dir + "/b.train.csv", log.substr(0, log.find('\n') + 1));
+  EXPECT_EQ(Train(b).size(), 4u);
+  EXPECT_EQ(testing::ReadFile(dir + "/b.train.csv"), log);
+
   // Resuming with other options is refused, the loss's options included.
   for (const auto& change : std::vector<void (*)(TrainOptions*)>{
            [](TrainOptions* o) { o->lr = 1e-2; },

@@ -5,6 +5,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -227,3 +228,44 @@ def test_calls_from_two_threads_take_turns(tmp_path, capfd):
     assert sorted(key(r) for r in rows if r["policy"] == "a") == \
         sorted(key(r) for r in rows if r["policy"] == "b")
     assert capfd.readouterr().out == ""  # nothing printed to stdout
+
+
+def test_a_view_in_use_on_another_thread_outlives_no_decision(tmp_path):
+    """A thread still inside the view's channels() when the decision ends
+    (the GIL let go) is waited for before the view is invalidated: the
+    evaluation read freed memory (a segfault) before. The policy's own call
+    is refused while the other thread holds the view (the evaluation ends
+    with that error), or, where the thread has not begun yet, the decision
+    ends with the thread inside; either way nothing crashes."""
+    started = []
+
+    def policy(view):
+        t = threading.Thread(target=view.channels,
+                             kwargs=dict(geodesic=True, window=128))
+        t.start()
+        started.append(t)
+        time.sleep(0.002)
+        return [4] * view.num_robots
+
+    for run in range(3):
+        try:
+            aia.evaluate(policy, ["10x10"], 1, out=str(tmp_path / f"a{run}"),
+                         threads=1, progress=False)
+        except aia.InputError as e:
+            assert "another thread is inside" in str(e)
+        for t in started:
+            t.join()
+
+
+def test_evaluations_do_not_nest(tmp_path):
+    def policy(view):
+        aia.evaluate(lambda v: [4] * v.num_robots, ["4x4"], 1,
+                     out=str(tmp_path / "inner"), progress=False,
+                     name="inner")
+        return [4] * view.num_robots
+
+    with pytest.raises(aia.InputError,
+                       match=r"^aia\.evaluate: called from a policy or "
+                             r"progress callback of a running aia\.evaluate"):
+        aia.evaluate(policy, ["4x4"], 1, out=str(tmp_path / "outer"),
+                     threads=1, progress=False)

@@ -737,10 +737,19 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
     const double wsum = wt.sum().item<double>();
     if (wsum <= 0.0) continue;
     const torch::Tensor loss = (per * wt).sum() / wsum;
+    const double value = loss.item<double>();
+    // A step on it would make every weight NaN, saved into the model and
+    // the checkpoint (which the loader then refuses): stop before that.
+    if (!std::isfinite(value))
+      throw std::runtime_error(
+          "epoch " + std::to_string(epoch + 1) + ", batch " +
+          std::to_string(s + 1) +
+          ": the training loss is not finite; nothing of this epoch is "
+          "saved (a lower --lr, or data without extreme values)");
     optimizer->zero_grad();
     loss.backward();
     optimizer->step();
-    loss_sum += loss.item<double>() * wsum;
+    loss_sum += value * wsum;
     weight_sum += wsum;
     const torch::Tensor pred = logits.argmax(1);
     right += (pred == y).sum().item<int64_t>();
@@ -761,6 +770,13 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
   e.train_acc = static_cast<double>(right) / std::max(seen, 1L);
   e.samples = seen;
   return e;
+}
+
+// The log beside the model (TrainLogPath), the epochs so far.
+void WriteTrainLog(const std::string& out, const std::vector<EpochLog>& logs) {
+  std::string csv = CsvHeader<EpochLog>() + "\n";
+  for (const EpochLog& l : logs) csv += CsvLine(l);
+  WriteFileAtomic(TrainLogPath(out), csv);
 }
 
 // After an epoch: the model (OUT), the checkpoint (model, optimizer, epochs
@@ -789,9 +805,7 @@ void SaveEpoch(const TrainOptions& o, const TorchNet& net, IgbNetModule& module,
     archive.write("log", StringTensor(log.str()), true);
     SaveArchiveAtomic(archive, CheckpointPath(o.out));
   }
-  std::string csv = CsvHeader<EpochLog>() + "\n";
-  for (const EpochLog& l : logs) csv += CsvLine(l);
-  WriteFileAtomic(TrainLogPath(o.out), csv);
+  WriteTrainLog(o.out, logs);
 }
 
 // build/aia keeps every page it frees (tools/aia_main.cc: no decay), which
@@ -869,7 +883,12 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
   if (o.resume && std::filesystem::exists(ckpt, ec))
     start =
         ResumeFromCheckpoint(ckpt, key, legacy_key, module, &optimizer, &logs);
-  if (start >= o.epochs) return logs;
+  if (start >= o.epochs) {
+    // Done: the log as the checkpoint has it (a run killed after its last
+    // checkpoint and before its log was one epoch short).
+    WriteTrainLog(o.out, logs);
+    return logs;
+  }
 
   if (corpus.train.empty())
     throw InputError("command line", 0, "--data",
