@@ -20,9 +20,11 @@ import time
 
 import numpy as np
 
-import aia
-
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from tool_io import import_aia, run  # noqa: E402
+
+aia = import_aia()
 
 
 def overhead(scenario, aia_binary, steps, runs):
@@ -88,4 +90,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    run(main)

@@ -174,4 +174,6 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from tool_io import run  # one error line for bad paths, not a traceback
+    run(main)

@@ -27,8 +27,10 @@ import sys
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "build", "python"))
-import aia  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from tool_io import import_aia, run  # noqa: E402
+
+aia = import_aia()
 from aia import network  # noqa: E402
 
 # left, right, up, down: the pixel one lattice move away, (du, dv)
@@ -73,6 +75,8 @@ def main():
     a = p.parse_args()
     if a.seeds < 1:
         p.error("--seeds: must be at least 1")
+    if not os.path.isfile(a.model):
+        p.error(f"--model {a.model}: no such file")
     overrides = narrow_maze()
     for kv in a.set:
         if "=" not in kv:
@@ -119,4 +123,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    run(main)

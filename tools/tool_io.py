@@ -51,7 +51,29 @@ def run(main):
     except OSError as e:
         line, code = os_error(e)
         print(line, file=sys.stderr)
+    except ValueError as e:
+        # The aia package's InputError (a ValueError): its one line.
+        if type(e).__name__ != "InputError" or \
+                not type(e).__module__.startswith("aia"):
+            raise
+        print(f"error: {e}", file=sys.stderr)
+        code = 2
     sys.exit(code or 0)
+
+
+def import_aia():
+    """The aia package (build/python on the path, or installed), or one
+    error line and exit 2 where it is not there."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    sys.path.insert(0, os.path.join(root, "build", "python"))
+    try:
+        import aia
+    except ImportError as e:
+        print(f"error: the aia package does not import ({e}): build it "
+              "(tools/bootstrap.sh), or set PYTHONPATH=build/python "
+              "(docs/python.md)", file=sys.stderr)
+        sys.exit(2)
+    return aia
 
 
 def read_rows(path, columns, what):

@@ -302,6 +302,14 @@ std::string CheckVideoPaths(const RenderOptions& options) {
     throw InputError("command line", 0, "--out",
                      "must name an .mp4 file, got '" + options.out_file + "'");
   CheckOutputFile(options.out_file, "--out");
+  // The frames' folder cannot be the video, nor a file written next to it
+  // (found before any folder is made).
+  if (!options.frames_dir.empty() &&
+      fs::path(options.frames_dir).lexically_normal() == out.lexically_normal())
+    throw InputError("command line", 0, "--frames",
+                     "'" + options.frames_dir +
+                         "' is the video's own path (--out); give the "
+                         "frames a folder of their own");
   if (options.frames_dir.empty() && options.frames_every != 1)
     throw InputError("command line", 0, "--frames-every",
                      "needs --frames (the folder of the PNG frames)");

@@ -292,6 +292,11 @@ TEST_F(RenderCliTest, BadInputExitsWith2) {
       {"frames under a file",
        {"--out", out, "--frames", dir_ + "/plain_file/f"},
        "--frames"},
+      // Refused before the folder was made (it then blocked the corrected
+      // command: "--out ... is a folder").
+      {"frames in the video's place",
+       {"--out", dir_ + "/fl/v.mp4", "--frames", dir_ + "/fl/./v.mp4"},
+       "--frames"},
       // Files are written as NAME.tmp.PID first: a name the file system
       // takes could fail only there, after the whole mission.
       {"a name too long for its temporary form",
@@ -307,6 +312,7 @@ TEST_F(RenderCliTest, BadInputExitsWith2) {
         << c.name << ": " << r.err;
   }
   EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir_ + "/fl"));
   // A bad render section in the file names the file, line and key.
   std::string odd = kScenario;
   odd.replace(odd.find("width: 160"), 10, "width: 161");
