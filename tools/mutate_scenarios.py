@@ -20,6 +20,7 @@ import pathlib
 import random
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -103,7 +104,18 @@ def run_one(aia, index, source, text, out, timeout, max_rss_mb):
     cmd = ["/usr/bin/time", "-f", "%M", aia, "run", str(scenario), "--out",
            str(work / "out"), "--quiet"]
     try:
-        p = subprocess.run(cmd, capture_output=True, timeout=timeout)
+        # A session of its own: a hang ends /usr/bin/time and the aia it runs
+        # (killing time alone left aia running, with parent 1).
+        with subprocess.Popen(cmd, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE,
+                              start_new_session=True) as proc:
+            try:
+                _, stderr = proc.communicate(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.communicate()
+                raise
+        p = subprocess.CompletedProcess(cmd, proc.returncode, b"", stderr)
         code, err = p.returncode, p.stderr.decode("utf-8", "replace")
         lines = err.rstrip("\n").split("\n")
         rss_mb = int(lines[-1]) / 1024 if lines[-1].isdigit() else 0
