@@ -497,6 +497,17 @@ TEST(HardeningTest, DatasetsReadTwiceOrMixedShardSetsAreRefused) {
 // A shard changed outside aia (an episode's world record deleted, its
 // samples left) is refused on resume at its path, not with SQLite's raw
 // "UNIQUE constraint failed" and exit 1 when the episode ran again.
+// Edits a dataset shard as a change made outside aia: `statements` are
+// Python run with `c` a sqlite3 connection to it (struct imported), then
+// committed. Whether that worked.
+bool EditShard(const std::string& shard, const std::string& statements) {
+  return RunCommand(
+             "/usr/bin/python3 -c \"import sqlite3, struct; c = "
+             "sqlite3.connect('" +
+             shard + "'); " + statements + "; c.commit()\"")
+             .exit_code == 0;
+}
+
 TEST(HardeningTest, AShardWithSamplesOfNoWorldIsRefusedOnResume) {
   const std::string dir = testing::MakeTempDir("aia_orphan_");
   const std::vector<std::string> args = {"dataset", "--episodes", "4", "--size",
@@ -504,13 +515,8 @@ TEST(HardeningTest, AShardWithSamplesOfNoWorldIsRefusedOnResume) {
                                          dir,       "--quiet"};
   ASSERT_EQ(RunAia(args).exit_code, 0);
   const std::string shard = dir + "/shard-0-of-1.sqlite";
-  ASSERT_EQ(RunCommand("/usr/bin/python3 -c \"import sqlite3; c = "
-                       "sqlite3.connect('" +
-                       shard +
-                       "'); c.execute('DELETE FROM worlds WHERE episode = 1'); "
-                       "c.commit()\"")
-                .exit_code,
-            0);
+  ASSERT_TRUE(
+      EditShard(shard, "c.execute('DELETE FROM worlds WHERE episode = 1')"));
   ExpectOneErrorLine(RunAia(args),
                      shard +
                          ": --out: holds samples of an episode without "
@@ -530,16 +536,11 @@ TEST(HardeningTest, ASampleWithoutACovarianceIsRefused) {
             0);
   const std::string shard = dir + "/d/shard-0-of-1.sqlite";
   // Every sample's first target: the covariance -I.
-  ASSERT_EQ(RunCommand("/usr/bin/python3 -c \"import sqlite3, struct; c = "
-                       "sqlite3.connect('" +
-                       shard +
-                       "'); rows = c.execute('SELECT rowid, targets FROM "
-                       "samples').fetchall(); [c.execute('UPDATE samples SET "
-                       "targets = ? WHERE rowid = ?', (b[:16] + "
-                       "struct.pack('<3d', -1, 0, -1) + b[40:], r)) for r, b "
-                       "in rows]; c.commit()\"")
-                .exit_code,
-            0);
+  ASSERT_TRUE(EditShard(
+      shard,
+      "rows = c.execute('SELECT rowid, targets FROM samples').fetchall(); "
+      "[c.execute('UPDATE samples SET targets = ? WHERE rowid = ?', (b[:16] "
+      "+ struct.pack('<3d', -1, 0, -1) + b[40:], r)) for r, b in rows]"));
   ExpectOneErrorLine(
       RunAia({"train", "--data", dir + "/d", "--out", dir + "/m.pt", "--epochs",
               "1", "--width", "8", "--window", "16", "--quiet"}),
