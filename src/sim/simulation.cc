@@ -343,6 +343,12 @@ namespace {
 // This slow and not there: blocked; never before kSettleTime into a move.
 constexpr double kStallSpeed = PhysicsConfig::kStallSpeed;
 constexpr double kSettleTime = PhysicsConfig::kSettleTime;
+
+// Timesteps of dt in `seconds`, rounded up but not for a quotient's
+// rounding (0.56 / 0.005 is 112.00000000000001); at least one.
+long TimestepsFor(double seconds, double dt) {
+  return std::max(1L, static_cast<long>(std::ceil(seconds / dt - 1e-9)));
+}
 }  // namespace
 
 PhysicsStepStats Simulation::AdvanceToWaypoints(
@@ -350,10 +356,8 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
   PhysicsStepStats stats;
   const PhysicsConfig& physics = model_->physics();
   const double dt = m_->opt.timestep;
-  // (Less a rounding: 0.56 / 0.005 is 112.00000000000001.)
-  const int max_steps = std::max(
-      1, static_cast<int>(
-             std::ceil(physics.StepTimeout(robot_model()) / dt - 1e-9)));
+  const int max_steps =
+      static_cast<int>(TimestepsFor(physics.StepTimeout(robot_model()), dt));
   const double tol = physics.tolerance;
   const double tol2 = tol * tol;
   // A robot in a sliding contact can creep on for seconds faster than
@@ -445,11 +449,9 @@ PhysicsStepStats Simulation::AdvanceMoves(
   ended->clear();
   const PhysicsConfig& physics = model_->physics();
   const double dt = m_->opt.timestep;
-  const long timeout = std::max(
-      1L, static_cast<long>(
-              std::ceil(physics.StepTimeout(robot_model()) / dt - 1e-9)));
+  const long timeout = TimestepsFor(physics.StepTimeout(robot_model()), dt);
   const double tol2 = physics.tolerance * physics.tolerance;
-  const long settle = static_cast<long>(std::ceil(kSettleTime / dt - 1e-9));
+  const long settle = TimestepsFor(kSettleTime, dt);
   const long check_every = std::max(
       1L, static_cast<long>(std::lround(driver_->progress_window() / dt)));
   const int n = num_robots();
