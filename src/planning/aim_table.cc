@@ -36,13 +36,19 @@ void AimTable::Reset(const Map& map, const SensorModel& sensor,
   models_.assign(m, nullptr);
   full_mean_.assign(m, {});
   means_.assign(1, std::vector<Vec2>(m));
-  slots_.assign(m, {});
+  slots_.resize(m);
   for (int k = 0; k < m; ++k) {
     is_static_[k] = layout.is_static(k) ? 1 : 0;
     models_[k] = &layout.model(k);
     full_mean_[k] = belief.Mean(row, k);
     means_[0][k] = full_mean_[k].head<2>();
-    slots_[k].assign(is_static_[k] ? 1 : kMaxBuckets, Slot{});
+    // A static target's slot keeps its field for SlotAt to reuse; a moving
+    // target's aims move with it, so its fields are made anew.
+    if (is_static_[k] && slots_[k].size() == 1) {
+      slots_[k][0].ready = false;
+    } else {
+      slots_[k].assign(is_static_[k] ? 1 : kMaxBuckets, Slot{});
+    }
   }
   // What the active robots can reach.
   std::vector<int> sources;
@@ -126,11 +132,16 @@ AimTable::Slot& AimTable::SlotAt(int depth, int k) {
                                                                : nullptr;
   FindAim(mean, Eigen::Matrix2d(sigma), missed, &slot.point, &region_);
   slot.at_mean = !is_static_[k] && slot.point == mean;
-  std::vector<int> sources;
-  sources.reserve(region_.size());
-  for (const auto& [q, r] : region_) sources.push_back(q);
-  BfsDistances(map_->lattice(), sources.data(),
-               static_cast<int>(sources.size()), &slot.field, &bfs_queue_);
+  sources_.clear();
+  for (const auto& [q, r] : region_) sources_.push_back(q);
+  const Lattice& lattice = map_->lattice();
+  if (slot.made_on != lattice.id() || slot.sources != sources_) {
+    slot.sources = sources_;
+    slot.made_on = lattice.id();
+    BfsDistances(lattice, slot.sources.data(),
+                 static_cast<int>(slot.sources.size()), &slot.field,
+                 &bfs_queue_);
+  }
   slot.ready = true;
   return slot;
 }

@@ -170,14 +170,17 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
   // targets' per span of depths, when first asked for.
   aims_.Reset(*p.map, *p.sensor, belief, p.belief_row, p.missed, p.start,
               p.active);
-  std::vector<std::vector<std::pair<int, double>>> per_point(lattice.size());
+  // Each static target's observation region, as (point, target, r) in
+  // target order, then as obs_: per lattice point, its (target, r) in
+  // target order (a counting sort by point).
+  observed_.clear();
   region_box_.assign(m_, LatticeRect{});
   static_field_.assign(m_, nullptr);
   for (int k = 0; k < m_; ++k) {
     if (!targets_[k].is_static) continue;
     static_field_[k] = aims_.FieldAt(0, k).data();
     for (const auto& [q, r] : aims_.last_region()) {
-      per_point[q].push_back({k, r});
+      observed_.push_back({q, k, r});
       region_box_[k].Add(lattice.Ix(q), lattice.Iy(q));
     }
   }
@@ -189,12 +192,11 @@ void SamplingTree::Prepare(const SamplingProblem& p) {
     pad_ = std::max({pad_, cx - b.x0, b.x1 - cx, cy - b.y0, b.y1 - cy});
   }
   obs_begin_.assign(lattice.size() + 1, 0);
-  obs_.clear();
-  for (int q = 0; q < lattice.size(); ++q) {
-    obs_begin_[q] = static_cast<int>(obs_.size());
-    obs_.insert(obs_.end(), per_point[q].begin(), per_point[q].end());
-  }
-  obs_begin_[lattice.size()] = static_cast<int>(obs_.size());
+  for (const Observed& o : observed_) ++obs_begin_[o.q + 1];
+  for (int q = 0; q < lattice.size(); ++q) obs_begin_[q + 1] += obs_begin_[q];
+  obs_.resize(observed_.size());
+  obs_fill_.assign(obs_begin_.begin(), obs_begin_.end() - 1);
+  for (const Observed& o : observed_) obs_[obs_fill_[o.q]++] = {o.k, o.r};
 
   arena_.Reset(n_, stride_);
   for (auto& level : levels_) level.clear();

@@ -472,6 +472,7 @@ Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
 
 void TargetClaims::Reset() {
   index_.clear();
+  by_sources_.clear();
   free_.clear();
   fields_.clear();
   used_ = 0;
@@ -503,12 +504,18 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor,
     // steps); free the others.
     for (auto it = index_.begin(); it != index_.end();) {
       if (it->second.step.load(std::memory_order_relaxed) != step_) {
-        free_.push_back(it->second.slot);
-        fields_[it->second.slot].reset();
         it = index_.erase(it);
       } else {
         ++it;
       }
+    }
+    for (int slot = 0; slot < static_cast<int>(fields_.size()); ++slot) {
+      std::unique_ptr<AimField>& field = fields_[slot];
+      if (!field || field->step.load(std::memory_order_relaxed) == step_)
+        continue;
+      by_sources_.erase(field->sources());
+      field.reset();
+      free_.push_back(slot);
     }
   }
   map_ = &map;
@@ -522,6 +529,7 @@ void TargetClaims::Begin(const Map& map, const SensorModel& sensor,
 void TargetClaims::AimField::Compute(const Lattice& lattice,
                                      const std::vector<int>& sources,
                                      int horizon, std::vector<int>* queue) {
+  sources_ = sources;
   whole_ = horizon < 0;
   if (whole_) {
     x0_ = y0_ = 0;
@@ -595,18 +603,22 @@ Move TargetClaims::AimField::StepDown(const Lattice& lattice, int p) const {
 const TargetClaims::AimField& TargetClaims::Field(const Vec2& aim) {
   AIA_CHECK_MSG(map_ && sensor_, "Begin() before Field()");
   const PointKey key = KeyOf(aim);
+  const auto used = [&](int slot) -> const AimField& {
+    fields_[slot]->step.store(step_, std::memory_order_relaxed);
+    return *fields_[slot];
+  };
   {
     std::shared_lock<std::shared_mutex> lock(fields_mutex_);
     const auto it = index_.find(key);
     if (it != index_.end()) {
       it->second.step.store(step_, std::memory_order_relaxed);
-      return *fields_[it->second.slot];
+      return used(it->second.slot);
     }
   }
-  // Made outside the lock (another thread may make the same field: the
-  // first one kept, the same either way).
+  // The aim's points, then its field if no other aim has them; made
+  // outside the lock (another thread may make the same field: the first
+  // one kept, the same either way).
   thread_local std::vector<int> sources, queue;
-  auto field = std::make_unique<AimField>();
   const Lattice& lattice = map_->lattice();
   const int span =
       static_cast<int>(std::ceil(sensor_->range / lattice.step())) + 1;
@@ -622,19 +634,32 @@ const TargetClaims::AimField& TargetClaims::Field(const Vec2& aim) {
           PredictedPrecision(*map_, *sensor_, lattice.Point(q), aim) > 0.0)
         sources.push_back(q);
     }
+  // Under the exclusive lock: the aim's entry, pointing at `slot`.
+  const auto enter = [&](int slot) -> const AimField& {
+    auto [it, fresh] = index_.try_emplace(key);
+    if (fresh) it->second.slot = slot;
+    it->second.step.store(step_, std::memory_order_relaxed);
+    return used(it->second.slot);
+  };
+  {
+    std::unique_lock<std::shared_mutex> lock(fields_mutex_);
+    const auto it = by_sources_.find(sources);
+    if (it != by_sources_.end()) return enter(it->second);
+  }
+  auto field = std::make_unique<AimField>();
   field->Compute(lattice, sources, horizon_, &queue);
   std::unique_lock<std::shared_mutex> lock(fields_mutex_);
-  auto [it, fresh] = index_.try_emplace(key);
-  it->second.step.store(step_, std::memory_order_relaxed);
-  if (!fresh) return *fields_[it->second.slot];
-  if (free_.empty()) {
-    free_.push_back(static_cast<int>(fields_.size()));
-    fields_.emplace_back();
+  const auto [it, fresh] = by_sources_.try_emplace(sources, -1);
+  if (fresh) {
+    if (free_.empty()) {
+      free_.push_back(static_cast<int>(fields_.size()));
+      fields_.emplace_back();
+    }
+    it->second = free_.back();
+    free_.pop_back();
+    fields_[it->second] = std::move(field);
   }
-  it->second.slot = free_.back();
-  free_.pop_back();
-  fields_[it->second.slot] = std::move(field);
-  return *fields_[it->second.slot];
+  return enter(it->second);
 }
 
 int TargetClaims::Distance(const Vec2& aim, int p) {

@@ -1,6 +1,7 @@
 #include "aia/world/lattice.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -38,6 +39,8 @@ Lattice::Lattice(const Vec2& workspace, double step, double radius,
       ny_(static_cast<int>(std::floor(workspace.y() / step + 1e-9))),
       step_(step) {
   AIA_CHECK(step > 0.0 && radius >= 0.0);
+  static std::atomic<std::uint64_t> built{0};
+  id_ = ++built;
   const int n = size();
   free_.assign(n, 0);
   next_.assign(static_cast<size_t>(n) * kNumMoves, -1);

@@ -5,7 +5,10 @@
 // that measure it there, with the precision r each gives) and the BFS field
 // toward that region. A static target has one slot; a moving one a slot per
 // span of depths (its predicted mean at the span's middle), made when first
-// asked for.
+// asked for. A static target's field is kept for the next solve on the same
+// lattice and made again only when its observation region has changed (the
+// field is a function of the region alone): Dec-SB solves for each robot
+// each step, and its robots mostly aim at the same regions.
 #ifndef AIA_PLANNING_AIM_TABLE_H_
 #define AIA_PLANNING_AIM_TABLE_H_
 
@@ -52,6 +55,9 @@ class AimTable {
     bool at_mean = true;  // the predicted mean itself (else `point`)
     Vec2 point{0.0, 0.0};
     std::vector<int> field;
+    // What `field` was made from: the region's points, on lattice `made_on`.
+    std::vector<int> sources;
+    std::uint64_t made_on = 0;
   };
   Slot& SlotAt(int depth, int k);
   int Bucket(int depth, int k) const;
@@ -73,7 +79,7 @@ class AimTable {
   std::vector<int> reach_;  // BFS distance from the nearest active robot
   // Scratch.
   std::vector<std::pair<int, double>> region_, trial_region_;
-  std::vector<int> bfs_queue_;
+  std::vector<int> bfs_queue_, sources_;
 };
 
 }  // namespace aia

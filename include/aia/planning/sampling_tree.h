@@ -248,6 +248,13 @@ class SamplingTree {
   // Static targets observable from each lattice point: CSR (target, r).
   std::vector<int> obs_begin_;
   std::vector<std::pair<int, double>> obs_;
+  // Prepare's scratch for obs_.
+  struct Observed {
+    int q, k;
+    double r;
+  };
+  std::vector<Observed> observed_;
+  std::vector<int> obs_fill_;
   bool any_moving_ = false;
 
   NodeArena arena_;

@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <shared_mutex>
@@ -748,8 +749,12 @@ class TargetClaims {
     // The field of `sources` within `horizon` moves (-1: every point).
     void Compute(const Lattice& lattice, const std::vector<int>& sources,
                  int horizon, std::vector<int>* queue);
+    const std::vector<int>& sources() const { return sources_; }
+    // The step that last used the field.
+    std::atomic<long> step{0};
 
    private:
+    std::vector<int> sources_;
     bool whole_ = true;
     int x0_ = 0, y0_ = 0, nx_ = 0, ny_ = 0;
     std::vector<int> dist_;
@@ -786,9 +791,12 @@ class TargetClaims {
   std::vector<double> weight_;
   TourPlanner planner_;
   // aim (its coordinates' bits) -> its field's slot in fields_ and the
-  // step that last used it; free_ lists the unused slots. Fields are read
-  // under a shared lock and added under an exclusive one; a field is made
-  // outside the lock.
+  // step that last used it; the field's points (its sources) -> its slot,
+  // so that aims a few bits or centimetres apart, which are measured from
+  // the same points (robots' own beliefs of one target on a range graph),
+  // share one field; free_ lists the unused slots. Fields are read under a
+  // shared lock and added under an exclusive one; a field is made outside
+  // the lock.
   struct Slot {
     int slot = -1;
     std::atomic<long> step{0};
@@ -796,6 +804,7 @@ class TargetClaims {
   std::shared_mutex fields_mutex_;
   std::mutex plans_mutex_;
   std::unordered_map<PointKey, Slot, PointKeyHash> index_;
+  std::map<std::vector<int>, int> by_sources_;
   std::vector<std::unique_ptr<AimField>> fields_;
   int horizon_ = -1, span_ = 0;
   std::vector<int> free_;

@@ -35,6 +35,9 @@ class Lattice {
   }
   bool Free(int idx) const { return free_[idx] != 0; }
   int NumFree() const { return num_free_; }
+  // A number no other lattice built in this process has (a copy keeps it;
+  // 0 for an empty one): what is computed from a lattice can be kept by it.
+  std::uint64_t id() const { return id_; }
 
   // Destination of a move from `idx`, or -1 when the move is invalid.
   int Next(int idx, Move m) const {
@@ -60,6 +63,7 @@ class Lattice {
   double step_ = 0.5;
   int num_free_ = 0;
   int num_components_ = 0;
+  std::uint64_t id_ = 0;
   std::vector<std::uint8_t> free_;
   std::vector<int> next_;  // size() * kNumMoves
   std::vector<int> component_;
