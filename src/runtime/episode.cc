@@ -319,8 +319,10 @@ void Episode::StepAsync() {
     }
     // The moves that complete max_steps are sensed and judged, as every
     // lockstep step is: a last tick now when the next one is later.
+    // Likewise when the last robot has failed: the team's end is judged.
     if (sim_.clock() >= next_tick_ ||
-        (step_ >= mission_.max_steps && tick_start_ < sim_.clock()))
+        ((step_ >= mission_.max_steps || comm_.NumActive() == 0) &&
+         tick_start_ < sim_.clock()))
       Tick();
     if (!ended_.empty() || stopped_ || done()) break;
   }
@@ -387,25 +389,34 @@ void Episode::Reservations(const Lattice& lattice) {
       StartMove(i, pending_[i], lattice);
 }
 
-// Robot i's move ended (arrived, stalled, timed out, or its stay is over):
-// where it is, the lattice move it made, and it decides next.
+// The lattice point robot i is at when its move ends or it fails: the free
+// point nearest to it; with reservations, that point where no other robot
+// holds it (a move cut short, say by the step timeout, can end anywhere,
+// a wheeled robot's even beyond both of its points), else the nearer of
+// its own points.
 int Episode::PointAt(int i, const Lattice& lattice) const {
-  if (reserve_) {
-    int nearest = -1;
-    double best = 0.0;
-    for (const int p : {held_from_[i], held_to_[i]}) {
-      if (p < 0) continue;
-      const double d = (robot_pos_[i] - lattice.Point(p)).squaredNorm();
-      if (nearest < 0 || d < best) {
-        nearest = p;
-        best = d;
-      }
+  const int free = lattice.NearestFree(robot_pos_[i]);
+  if (!reserve_) return free;
+  const int own[2] = {held_from_[i], held_to_[i]};
+  const auto mine = [&](int p) {
+    return p >= 0 && (p == own[0] || p == own[1]);
+  };
+  if (free >= 0 && (held_[free] == 0 || mine(free))) return free;
+  int nearest = -1;
+  double best = 0.0;
+  for (const int p : own) {
+    if (p < 0) continue;
+    const double d = (robot_pos_[i] - lattice.Point(p)).squaredNorm();
+    if (nearest < 0 || d < best) {
+      nearest = p;
+      best = d;
     }
-    if (nearest >= 0) return nearest;
   }
-  return lattice.NearestFree(robot_pos_[i]);
+  return nearest >= 0 ? nearest : free;
 }
 
+// Robot i's move ended (arrived, stalled, timed out, or its stay is over):
+// where it is, the lattice move it made, and it decides next.
 void Episode::EndMove(int i, const Lattice& lattice) {
   robot_pos_[i] = sim_.RobotPosition(i);
   robot_heading_[i] = sim_.RobotHeading(i);
@@ -437,7 +448,8 @@ void Episode::StopFailedRobots() {
     ready_[i] = 0;
     sim_.SetWaypoint(i, robot_pos_[i]);
     sim_.Park(i);
-    const int at = PointAt(i, instance_->world.map.lattice());
+    const Lattice& lattice = instance_->world.map.lattice();
+    const int at = PointAt(i, lattice);
     if (at >= 0) robot_idx_[i] = at;
     if (reserve_) {
       if (held_from_[i] >= 0) --held_[held_from_[i]];
@@ -445,8 +457,28 @@ void Episode::StopFailedRobots() {
       held_to_[i] = pending_[i] = -1;
       held_from_[i] = at;
       if (at >= 0) ++held_[at];
+      HoldAround(i, at, lattice);
     }
   }
+}
+
+// A failed robot stops between points, or off them: every other point a
+// robot there would touch it from (within two radii, and a margin for a
+// wheeled robot's braking) is held for good too.
+void Episode::HoldAround(int i, int at, const Lattice& lattice) {
+  constexpr double kBrakingMargin = 0.1;  // metres
+  const double reach = std::sqrt(release2_) + kBrakingMargin;
+  const Vec2 p = robot_pos_[i];
+  const int c = lattice.NearestPoint(p);
+  const int span = static_cast<int>(std::ceil(reach / lattice.step()));
+  for (int iy = std::max(0, lattice.Iy(c) - span);
+       iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy)
+    for (int ix = std::max(0, lattice.Ix(c) - span);
+         ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
+      const int q = lattice.Index(ix, iy);
+      if (q != at && lattice.Free(q) && (lattice.Point(q) - p).norm() < reach)
+        ++held_[q];
+    }
 }
 
 // A sensing tick: every robot senses from where it is (mid-move too), the
@@ -501,7 +533,9 @@ void Episode::Observe() {
   if (all_localized_) {
     ++localized_steps_;
     if (flowtime_ < 0) {
-      flowtime_ = step_;
+      // In async a tick during the first moves finds no decision completed
+      // yet; F = 0 is kept for a mission localized at the start.
+      flowtime_ = async() && tick_ > 0 ? std::max(step_, 1) : step_;
       stats_.success_seconds = stats_.sim_seconds;
     }
   }

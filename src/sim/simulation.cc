@@ -94,7 +94,8 @@ std::string NoArrivalWarning(const std::vector<long>& drives,
          "to in " + std::to_string(asked) + " move" + (asked == 1 ? "" : "s") +
          " (" + std::to_string(sum(timeouts)) + " ended at " +
          "physics.step_timeout, " + std::to_string(sum(stalls)) +
-         " stalled): the robots cannot move with these settings (raise "
+         " stalled): the robots block each other or the walls, or cannot "
+         "move with these settings (raise "
          "physics.step_timeout, or for wheeled robots "
          "robots.diff_drive.max_speed, max_turn_rate or the gains, or lower "
          "robots.diff_drive.mass)\n";

@@ -293,3 +293,112 @@ def test_reserved_points_keep_wheeled_robots_apart_when_moves_time_out(
         closest = min(closest, d.min())
     assert sum(m.diagnostics["physics"]["robot_timeouts"]) > 0
     assert closest > 2 * 0.1 - 0.02, closest
+
+
+def test_a_cut_wheeled_move_ends_at_the_free_point_nearest_to_the_robot(
+        tmp_path):
+    """Async, reservations, a lone wheeled robot whose moves a tight
+    timeout cuts while it rolls: it stands at the lattice point nearest to
+    it (at most half a diagonal away), not at one of the points it held,
+    which it may have drifted past (1.1 m from its body before)."""
+    scenario = tmp_path / "one.yaml"
+    scenario.write_text(
+        "seed: 4\nworkspace: {size: [6.0, 6.0]}\n"
+        "robots: {count: 1, model: diff_drive}\ntargets: {count: 3}\n"
+        "sensor: {range: 0.6}\n"
+        "mission: {eps: 1.0e-6, max_steps: 60, decisions: async,"
+        " stop_at_success: false}\nphysics: {step_timeout: 0.5}\n")
+    m = aia.Mission(scenario)
+    random = aia.builtin_policy("random")
+    worst = 0.0
+    while not m.done:
+        m.step(random.decide(m))
+        s = m.state()
+        if m.ready[0]:
+            point = (s["cells"][0] + 0.5) * 0.5
+            worst = max(worst, np.linalg.norm(s["positions"][0] - point))
+    assert sum(m.diagnostics["physics"]["robot_timeouts"]) > 0
+    assert worst <= 0.5 * np.sqrt(0.5) + 1e-9, worst
+
+
+def test_a_robot_that_fails_mid_move_keeps_teammates_two_radii_away(
+        tmp_path):
+    """Async, reservations: robot 0 fails between (0.75, 0.25) and (1.25,
+    0.25), 0.27 m from the second point; robot 2 then asks to move onto
+    it. The failed robot holds every point within two radii of where it
+    stopped, so robot 2 waits (it drove into it before: 0.294 m apart)."""
+    scenario = tmp_path / "fail_mid.yaml"
+    scenario.write_text(
+        "seed: 1\nworkspace: {size: [4.0, 1.0]}\n"
+        "robots: {count: 3, model: point,"
+        " start: [[0.75, 0.25], [3.25, 0.75], [1.75, 0.25]]}\n"
+        "targets: {list: [{position: [2.0, 0.9]}]}\n"
+        "sensor: {range: 0.3, rate: 200}\n"
+        "mission: {eps: 1.0e-9, max_steps: 300, decisions: async,"
+        " stop_at_success: false}\n"
+        "communication: {failures: [{robot: 0, step: 1}]}\n")
+    m = aia.Mission(scenario)
+    stays, asked, rounds, closest = 0, False, 0, np.inf
+    while not m.done and rounds < 5000:
+        s = m.state()
+        moves = [4, 4, 4]
+        if m.ready[0]:  # stays 28 times, then moves right
+            moves[0] = 4 if stays < 28 else 1
+            stays += 1
+        if m.ready[1] and rounds == 0:  # completes step 1: robot 0 fails
+            moves[1] = 0
+        if m.ready[2] and not s["active"][0] and not asked:
+            moves[2] = 0  # left, toward the failed robot
+            asked = True
+            stopped_at = s["positions"][0][0]
+        m.step(moves)
+        rounds += 1
+        p = m.state()["positions"]
+        closest = min(closest, np.linalg.norm(p[0] - p[2]))
+    assert asked and 0.75 < stopped_at < 1.25 - 0.15, stopped_at
+    assert closest >= 2 * 0.15, closest
+
+
+def test_async_missions_are_judged_as_lockstep_ones_at_their_ends(tmp_path):
+    """Async: a mission whose last robot fails between ticks has a last tick
+    (no robot active: no estimate, as in lockstep); a target first
+    localized during the first moves gives F = 1, not the F = 0 of a
+    mission localized at the start."""
+    failed = tmp_path / "failed.yaml"
+    failed.write_text(
+        "seed: 1\nworkspace: {size: [4.0, 4.0]}\n"
+        "robots: {count: 1, start: [[0.25, 0.25]]}\n"
+        "targets: {list: [{position: [1.0, 1.0]}]}\n"
+        "mission: {eps: 0.1, max_steps: 20, stop_at_success: false,"
+        " decisions: async}\n"
+        "communication: {failures: [{robot: 0, step: 3}]}\n"
+        "policy: {name: random}\n")
+    first = tmp_path / "first.yaml"
+    first.write_text(
+        "seed: 1\nworkspace: {size: [4.0, 1.0]}\n"
+        "robots: {count: 1, start: [[0.25, 0.25]]}\n"
+        "sensor: {range: 1.0, rate: 100}\n"
+        "targets: {list: [{position: [1.4, 0.25]}]}\n"
+        "mission: {eps: 0.1, max_steps: 10, decisions: async}\n"
+        "policy: {name: greedy}\n")
+    first_lockstep = tmp_path / "first_lockstep.yaml"
+    first_lockstep.write_text(first.read_text().replace(
+        "sensor: {range: 1.0, rate: 100}", "sensor: {range: 1.0}"))
+    summaries = {}
+    for name, decisions, path in (("failed", "async", failed),
+                                  ("failed", "lockstep", failed),
+                                  ("first", "async", first),
+                                  ("first", "lockstep", first_lockstep)):
+        out = tmp_path / f"{name}_{decisions}"
+        done = run_cli("run", str(path), "--quiet", "--out", str(out),
+                       "--set", f"mission.decisions={decisions}")
+        assert done.returncode == 0, done.stderr
+        summaries[name, decisions] = json.loads(
+            (out / "summary.json").read_text())
+    for decisions in ("async", "lockstep"):
+        s = summaries["failed", decisions]
+        assert s["final_min_det"] == [None], (decisions, s)
+        assert s["localized_at_end"] == 0, (decisions, s)
+    assert summaries["first", "async"]["flowtime"] == 1
+    assert summaries["first", "async"]["steps"] == 0
+    assert summaries["first", "lockstep"]["flowtime"] == 1

@@ -320,7 +320,8 @@ TEST(MujocoHandlersTest, NoArrivalWarningOnlyWhenNoRobotArrived) {
   EXPECT_EQ(NoArrivalWarning({3, 3}, {3, 1}, {0, 2}, 0, "w, seed 3"),
             "warning: w, seed 3: no robot reached the lattice point it drove "
             "to in 6 moves (4 ended at physics.step_timeout, 2 stalled): the "
-            "robots cannot move with these settings (raise "
+            "robots block each other or the walls, or cannot move with these "
+            "settings (raise "
             "physics.step_timeout, or for wheeled robots "
             "robots.diff_drive.max_speed, max_turn_rate or the gains, or "
             "lower robots.diff_drive.mass)\n");

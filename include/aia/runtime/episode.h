@@ -227,9 +227,12 @@ class Episode {
   void StartMove(int i, int to, const Lattice& lattice);
   void EndMove(int i, const Lattice& lattice);
   // The lattice point robot i stands at when its move ends or it fails:
-  // the nearest free one, or with reservations the nearest of the points
-  // it holds (any other may be another robot's, or be given to one).
+  // the nearest free one; with reservations, that one unless another robot
+  // holds it, else the nearer of the points robot i holds.
   int PointAt(int i, const Lattice& lattice) const;
+  // Failed robot i, at point `at`: holds for good the other points within
+  // two radii (and a braking margin) of where it stopped.
+  void HoldAround(int i, int at, const Lattice& lattice);
   // mission.avoidance reserve, after each substep: points let go, waiting
   // robots started.
   void Reservations(const Lattice& lattice);
