@@ -303,6 +303,12 @@ std::string UnwritableDirProblem(const std::string& dir) {
 }
 
 void CheckReplaceableFile(const std::string& path) {
+  // `dir/`, `dir/.` or `..` name a folder, whether it exists yet or not.
+  const std::string name = std::filesystem::path(path).filename().string();
+  if (!path.empty() && (name.empty() || name == "." || name == ".."))
+    throw std::runtime_error("cannot write '" + path +
+                             "': it names a folder, not a file; give a "
+                             "file's path");
   const std::string kind = NonRegularKind(path);
   if (!kind.empty())
     throw std::runtime_error("cannot write '" + path + "': it is " + kind +

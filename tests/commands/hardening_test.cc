@@ -62,6 +62,21 @@ TEST(HardeningTest, ScenarioThatIsADeviceOrAPipeIsRefusedAtOnce) {
   fs::remove_all(dir);
 }
 
+TEST(HardeningTest, AnOutputFilePathThatNamesAFolderIsRefusedBeforeWork) {
+  // `--out DIR/` of a command that writes one file: plan and world solved
+  // and built, then failed with exit code 1, leaving DIR made.
+  const std::string dir = testing::MakeTempDir("aia_outdir_");
+  const std::string scenario = SourcePath("scenarios/default.yaml");
+  for (const std::string& out : {dir + "/p/", dir + "/p/.", dir + "/p/.."}) {
+    ExpectOneErrorLine(RunAia({"plan", scenario, "--out", out}),
+                       "it names a folder, not a file");
+    ExpectOneErrorLine(RunAia({"world", scenario, "--out", out}),
+                       "it names a folder, not a file");
+  }
+  EXPECT_FALSE(fs::exists(dir + "/p"));
+  fs::remove_all(dir);
+}
+
 TEST(HardeningTest, UnwritableOutputFolderIsBadInput) {
   // /proc exists but takes no new files, even for root.
   const auto r = RunAia({"run", SourcePath("scenarios/default.yaml"), "--out",

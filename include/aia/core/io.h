@@ -127,7 +127,8 @@ int RemoveStaleTemporaries(const std::string& dir,
 // Throws std::runtime_error("cannot write 'PATH': it is a named pipe (FIFO),
 // not a regular file; ...") when `path` exists and is not a regular file
 // (after links): renaming a finished file onto it would replace a folder, a
-// device such as /dev/null, or a pipe.
+// device such as /dev/null, or a pipe; likewise ("...: it names a folder")
+// when its last component is empty, `.` or `..` (`dir/`), made yet or not.
 void CheckReplaceableFile(const std::string& path);
 
 // Whether `a` and `b` name one existing file (std::filesystem::equivalent:

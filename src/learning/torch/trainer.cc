@@ -552,6 +552,7 @@ std::unique_ptr<FileLock> LockOutputFolder(const std::string& out) {
   if (parent.empty()) parent = ".";
   std::unique_ptr<FileLock> lock;
   try {
+    CheckReplaceableFile(out);  // before its folder is made: `--out DIR/`
     MakeDirs(parent.string());
     lock = std::make_unique<FileLock>(parent.string());
     CheckReplaceableFile(out);
