@@ -1,9 +1,12 @@
 #include "aia/world/mjcf.h"
 
 #include <algorithm>
+#include <clocale>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+
+#include "aia/core/error.h"
 
 namespace aia {
 namespace {
@@ -151,6 +154,21 @@ void WriteDiffDriveRobot(const World& world, const Scenario& s, int i,
 
 }  // namespace
 
+void CheckNumericLocale() {
+  // The C library's numbers (printf's, strtod's, MuJoCo's XML reader's)
+  // follow LC_NUMERIC; a host that set it to a comma-decimal locale (a
+  // Python process after locale.setlocale(locale.LC_ALL, "")) would write
+  // 0,005 here and read 0.005 there as 0.
+  const char* point = std::localeconv()->decimal_point;
+  if (point == nullptr || std::string(point) != ".")
+    throw InputError("locale", 0, "LC_NUMERIC",
+                     std::string("this process writes numbers with '") +
+                         (point ? point : "") +
+                         "' as the decimal point, which MuJoCo's model reader "
+                         "and aia's files do not read; set LC_NUMERIC to C "
+                         "(Python: locale.setlocale(locale.LC_NUMERIC, 'C'))");
+}
+
 SolverChoice ChooseSolver(const Scenario& s, long nv) {
   SolverChoice c;
   if (s.robots.model != RobotModel::kDiffDrive) {
@@ -279,6 +297,7 @@ std::array<float, 3> RobotColor(int robot) {
 }
 
 std::string MakeMjcf(const World& world, const Scenario& s, long contacts) {
+  CheckNumericLocale();
   const int n = world.NumRobots();
   const bool wheeled = s.robots.model == RobotModel::kDiffDrive;
   const double W = world.map.size().x(), H = world.map.size().y();

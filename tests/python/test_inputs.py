@@ -3,6 +3,8 @@ line that names the Python callable and argument, never a silent
 conversion, another exception type or a crash (issue 39, docs/python.md)."""
 
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -517,3 +519,35 @@ def test_a_file_that_is_not_a_shard(tmp_path):
     refused(lambda: aia.Dataset([str(other)]), "paths: not an aia dataset "
             "shard (SQLite: no such table: meta)")
     refused(lambda: aia.Dataset([str(text)]), "not an aia dataset shard")
+
+
+def test_a_comma_decimal_locale_is_refused_in_one_line(tmp_path):
+    """A host that sets LC_NUMERIC to a comma-decimal locale: MuJoCo's model
+    reader and aia's writers follow it (the model was written with 0,005
+    and refused with MuJoCo's raw message). One InputError naming the fix,
+    and aia works again once the locale is C."""
+    made = subprocess.run(
+        ["localedef", "-i", "de_DE", "-f", "UTF-8",
+         str(tmp_path / "de_DE.UTF-8")], capture_output=True)
+    if not (tmp_path / "de_DE.UTF-8").exists():
+        pytest.skip("cannot make a de_DE locale here: " +
+                    made.stderr.decode(errors="replace")[:200])
+    program = (
+        "import locale, aia, sys\n"
+        "locale.setlocale(locale.LC_NUMERIC, 'de_DE.UTF-8')\n"
+        "try:\n"
+        "    aia.Mission(sys.argv[1])\n"
+        "    print('no error')\n"
+        "except aia.InputError as e:\n"
+        "    print(e)\n"
+        "locale.setlocale(locale.LC_NUMERIC, 'C')\n"
+        "print(aia.Mission(sys.argv[1]).num_robots)\n")
+    done = subprocess.run(
+        [sys.executable, "-c", program, DEFAULT], capture_output=True,
+        text=True, env={**os.environ, "LOCPATH": str(tmp_path)}, timeout=300)
+    assert done.returncode == 0, done.stderr
+    first, second = done.stdout.splitlines()
+    assert first.startswith("locale: LC_NUMERIC: this process writes numbers "
+                            "with ',' as the decimal point"), first
+    assert "locale.setlocale(locale.LC_NUMERIC, 'C')" in first
+    assert second == "10"

@@ -113,8 +113,14 @@ std::array<float, 3> RobotColor(int robot);
 // and hinge joints "robot<i>_left" / "robot<i>_right", the chassis geom
 // "robot<i>_chassis".
 // `contacts`: the model's first contact budget (0: InitialContacts).
+// Throws InputError (CheckNumericLocale) under a comma-decimal locale.
 std::string MakeMjcf(const World& world, const Scenario& scenario,
                      long contacts = 0);
+
+// Throws InputError("locale", 0, "LC_NUMERIC", ...) unless the C library
+// writes and reads numbers with a decimal point (the "C" numeric locale, or
+// any with '.'): MuJoCo's model reader and aia's writers follow it.
+void CheckNumericLocale();
 
 }  // namespace aia
 
