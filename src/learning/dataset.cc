@@ -520,6 +520,23 @@ int ShardCount(const std::string& path) {
   return std::stoi(n);
 }
 
+namespace {
+
+// What is wrong with a shard SQLite could not read: left mid-episode by a
+// stopped aia dataset (its rollback journal beside it, which only a writer
+// can roll back), or not a shard at all.
+std::string UnreadableShard(const std::string& path, const SqliteError& e) {
+  std::error_code ec;
+  if (std::filesystem::exists(path + "-journal", ec))
+    return "was left mid-episode by an aia dataset that was stopped (" + path +
+           "-journal is its unfinished episode): run that aia dataset "
+           "command again, which drops the episode and goes on (SQLite: " +
+           e.what() + ")";
+  return std::string("not an aia dataset shard (SQLite: ") + e.what() + ")";
+}
+
+}  // namespace
+
 std::string DatasetRecipe(const std::string& path, const std::string& key) {
   sqlite3* db = nullptr;
   try {
@@ -529,9 +546,7 @@ std::string DatasetRecipe(const std::string& path, const std::string& key) {
     return recipe;
   } catch (const SqliteError& e) {
     sqlite3_close(db);
-    throw InputError(
-        path, 0, key,
-        std::string("not an aia dataset shard (SQLite: ") + e.what() + ")");
+    throw InputError(path, 0, key, UnreadableShard(path, e));
   }
 }
 
@@ -644,9 +659,7 @@ Dataset ReadDataset(const std::vector<std::string>& paths,
     } catch (const InputError&) {
       throw;
     } catch (const SqliteError& e) {
-      throw InputError(
-          f, 0, key,
-          std::string("not an aia dataset shard (SQLite: ") + e.what() + ")");
+      throw InputError(f, 0, key, UnreadableShard(f, e));
     } catch (const std::exception& e) {
       throw InputError(f, 0, key, e.what());
     }

@@ -563,6 +563,37 @@ TEST(HardeningTest, ASampleWithoutACovarianceIsRefused) {
   fs::remove_all(dir);
 }
 
+// A shard that a stopped aia dataset left mid-episode (its hot journal
+// beside it, which a reader cannot roll back): the error says so and what
+// to do, not "not an aia dataset shard"; the dataset command then resumes.
+TEST(HardeningTest, AShardLeftMidEpisodeSaysToRunTheDatasetAgain) {
+  const std::string dir = testing::MakeTempDir("aia_journal_");
+  const std::vector<std::string> args = {
+      "dataset", "--episodes", "3",     "--size",   "3x3",
+      "--keep",  "2",          "--out", dir + "/d", "--quiet"};
+  ASSERT_EQ(RunAia(args).exit_code, 0);
+  const std::string shard = dir + "/d/shard-0-of-1.sqlite";
+  // A writer that dies inside its transaction (as SIGKILL would).
+  ASSERT_EQ(
+      RunCommand(
+          "/usr/bin/python3 -c \"import sqlite3, os; c = "
+          "sqlite3.connect('" +
+          shard +
+          "'); c.execute('PRAGMA cache_size = 1'); c.execute('DELETE FROM "
+          "samples'); c.execute('DELETE FROM worlds'); os._exit(0)\"")
+          .exit_code,
+      0);
+  ASSERT_TRUE(fs::exists(shard + "-journal"));
+  ExpectOneErrorLine(RunAia({"train", "--data", dir + "/d", "--out",
+                             dir + "/m.pt", "--epochs", "1", "--quiet"}),
+                     shard +
+                         ": --data: was left mid-episode by an aia "
+                         "dataset that was stopped");
+  EXPECT_EQ(RunAia(args).exit_code, 0);
+  EXPECT_FALSE(fs::exists(shard + "-journal"));
+  fs::remove_all(dir);
+}
+
 // Issue 19: a policy or size listed twice wrote duplicate rows, which every
 // resume dropped and ran again.
 TEST(HardeningTest, EvalRefusesAPolicyOrASizeListedTwice) {
