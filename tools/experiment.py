@@ -484,8 +484,13 @@ def robustness(args):
                     "mean_mission_seconds": mean_se([r["mission_seconds"] for r in rs])[0]}
     both = [(mission_time(a), mission_time(b)) for a, b in zip(by["nominal"], by["faults"])
             if a["success"] and b["success"]]
-    penalty = stats["faults"]["mean_mission_time"] / stats["nominal"]["mean_mission_time"] - 1
-    penalty_both = (sum(b for _, b in both) / sum(a for a, _ in both) - 1) if both else None
+    # A ratio to nominal missions that all succeed at step 0 has no value.
+    nominal_time = stats["nominal"]["mean_mission_time"]
+    penalty = (stats["faults"]["mean_mission_time"] / nominal_time - 1
+               if nominal_time > 0 else None)
+    nominal_both = sum(a for a, _ in both)
+    penalty_both = (sum(b for _, b in both) / nominal_both - 1
+                    if both and nominal_both > 0 else None)
     write_csv(os.path.join(args.out, "robustness.csv"),
               ["seed", "variant", "success", "flowtime", "steps", "mission_time",
                "mission_seconds", "failed_robots"],
@@ -500,8 +505,10 @@ def robustness(args):
         "stats": stats, "mission_time_increase": penalty,
         "mission_time_increase_both_succeeded": penalty_both,
         "paper_mission_time_increase": 0.7151, "wall_s_this_call": wall})
+    increase = "no ratio (the nominal missions took 0 steps)" if penalty is None \
+        else f"{100 * penalty:+.1f} %"
     print(f"mission time: nominal {stats['nominal']['mean_mission_time']:.1f}, with faults "
-          f"{stats['faults']['mean_mission_time']:.1f} steps: {100 * penalty:+.1f} % "
+          f"{stats['faults']['mean_mission_time']:.1f} steps: {increase} "
           f"(paper: +71.51 %)")
 
     fig, (ax_b, ax_s) = plt.subplots(1, 2, figsize=(11, 4))
@@ -509,7 +516,7 @@ def robustness(args):
              [stats["nominal"]["mean_mission_time"], stats["faults"]["mean_mission_time"]],
              color=["C2", "C3"])
     ax_b.set_ylabel("mean mission time (steps)")
-    ax_b.set_title(f"{args.policy}, {runs_n} worlds: {100 * penalty:+.1f} % (paper +71.51 %)")
+    ax_b.set_title(f"{args.policy}, {runs_n} worlds: {increase} (paper +71.51 %)")
     x = [mission_time(r) for r in by["nominal"]]
     y = [mission_time(r) for r in by["faults"]]
     ax_s.scatter(x, y, s=14)
