@@ -53,12 +53,4 @@ double SegmentBoxDistance(const Vec2& a, const Vec2& b, const Box& box) {
   return std::sqrt(best);
 }
 
-bool SegmentBlocked(const Vec2& a, const Vec2& b,
-                    const std::vector<Box>& boxes) {
-  for (const Box& box : boxes) {
-    if (SegmentIntersectsBox(a, b, box)) return true;
-  }
-  return false;
-}
-
 }  // namespace aia

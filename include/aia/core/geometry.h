@@ -38,10 +38,6 @@ double SegmentBoxDistance(const Vec2& a, const Vec2& b, const Box& box);
 // Whether the segment [a, b] meets the box (slab test).
 bool SegmentIntersectsBox(const Vec2& a, const Vec2& b, const Box& box);
 
-// Whether the open segment (a, b) meets any box in the list.
-bool SegmentBlocked(const Vec2& a, const Vec2& b,
-                    const std::vector<Box>& boxes);
-
 // A point by the bits of its coordinates, as the key of a table of
 // answers per exact point (the claims' fields per aim, the reach channel's
 // observation pixels per point).

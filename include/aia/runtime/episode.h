@@ -215,9 +215,9 @@ class Episode {
  private:
   void Observe();  // sense, exchange, fuse, judge (the second half of a step)
   void MoveTargets();
-  // mission.decisions async: one round (the ready robots decide, physics
-  // runs until a robot's move ends, sensing ticks on the way) and one tick.
   PolicyStatus Decide(const DecisionContext& ctx);
+  // mission.decisions async: one round (the ready robots decide, physics
+  // runs until a robot's move ends, sensing ticks on the way), and one tick.
   void StepAsync();
   void Tick();
   // Failed robots still driving stop where they are and let go of their
