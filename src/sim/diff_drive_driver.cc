@@ -14,6 +14,8 @@
 namespace aia {
 namespace {
 
+constexpr double kEnoughTurnProgress = 0.01;  // m per progress window
+
 class DiffDriveDriver : public RobotDriver {
  public:
   DiffDriveDriver(const mjModel* m, const Scenario& scenario, int robots)
@@ -74,8 +76,20 @@ class DiffDriveDriver : public RobotDriver {
   // with the distance, a quarter of what is left beyond the tolerance is
   // progress enough.
   double progress_window() const override { return 0.25; }
+  // A robot declared arrived within the tolerance still rolls at about
+  // speed_gain x tolerance (0.2 m/s at 0.025 m), and its next move may
+  // point the other way.
+  double BrakeSeconds(const mjData* d, int i) const override {
+    const double turn = d->qvel[joints_.qvel[i] + 5];
+    return (Velocity(d, i).norm() + std::fabs(turn) * law_.half_track()) /
+           law_.brake();
+  }
+  // At most 1 cm (the default tolerance's) whatever the tolerance: a robot
+  // turning in place toward its goal gains half_track x the heading it
+  // turns, a few centimetres a window as the heading error closes.
   double EnoughProgress(double before, double tolerance) const override {
-    return std::min(tolerance, 0.25 * std::max(0.0, before - tolerance));
+    return std::min({tolerance, 0.25 * std::max(0.0, before - tolerance),
+                     kEnoughTurnProgress});
   }
 
  private:

@@ -156,6 +156,7 @@ Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
   since_.assign(waypoints_.size(), 0);
   progress_.assign(waypoints_.size(), 0.0);
   stuck_.assign(waypoints_.size(), 0);
+  grace_.assign(waypoints_.size(), 0);
   mj_forward(m_, data_.get());
   IndexRayGeoms();
 }
@@ -370,12 +371,17 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
   const int n = num_robots();
   progress_.resize(n);
   stuck_.assign(n, 0);
-  for (int i = 0; i < n; ++i) progress_[i] = ToGo(i);
+  grace_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    progress_[i] = ToGo(i);
+    grace_[i] = GraceSteps(i, dt);
+  }
   auto arrived = [&](int i) {
     return (RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2;
   };
   auto settled = [&](int i, double elapsed) {
-    return elapsed >= kSettleTime && (stuck_[i] || Slow(i, kStallSpeed));
+    return elapsed >= kSettleTime + grace_[i] * dt &&
+           (stuck_[i] || Slow(i, kStallSpeed));
   };
   double elapsed = 0.0;
   bool all_settled = false;
@@ -388,7 +394,10 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
       for (int i = 0; i < n; ++i) {
         const double d = ToGo(i);
         const double enough = driver_->EnoughProgress(progress_[i], tol);
-        stuck_[i] = progress_[i] - d < enough ? 1 : 0;
+        // A window that began while the robot braked is not judged.
+        stuck_[i] =
+            s + 1 - check_every >= grace_[i] && progress_[i] - d < enough ? 1
+                                                                          : 0;
         progress_[i] = d;
       }
     }
@@ -434,6 +443,12 @@ void Simulation::StartMove(int i, const Vec2& p) {
   since_[i] = clock_;
   progress_[i] = ToGo(i);
   stuck_[i] = 0;
+  grace_[i] = GraceSteps(i, m_->opt.timestep);
+}
+
+long Simulation::GraceSteps(int i, double dt) const {
+  const double seconds = driver_->BrakeSeconds(data_.get(), i);
+  return seconds > 0.0 ? static_cast<long>(std::ceil(seconds / dt)) : 0;
 }
 
 void Simulation::Hold(int i, long until, bool yielding) {
@@ -479,7 +494,9 @@ PhysicsStepStats Simulation::AdvanceMoves(
           const long elapsed = clock_ - since_[i];
           if (elapsed > 0 && elapsed % check_every == 0) {
             const double d = ToGo(i);
-            stuck_[i] = progress_[i] - d < driver_->EnoughProgress(
+            // A window that began while the robot braked is not judged.
+            stuck_[i] = elapsed - check_every >= grace_[i] &&
+                        progress_[i] - d < driver_->EnoughProgress(
                                                progress_[i], physics.tolerance);
             progress_[i] = d;
           }
@@ -487,7 +504,8 @@ PhysicsStepStats Simulation::AdvanceMoves(
             // The substep it arrived in was spent on the way.
             (turning_[i] ? time_use_.turning : time_use_.driving) += dt;
             end(i);
-          } else if (elapsed >= settle && (stuck_[i] || Slow(i, kStallSpeed))) {
+          } else if (elapsed >= settle + grace_[i] &&
+                     (stuck_[i] || Slow(i, kStallSpeed))) {
             time_use_.blocked += dt;
             ++stats.stalled;
             ++robot_stalls_[i];

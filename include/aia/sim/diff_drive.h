@@ -62,6 +62,8 @@ class DiffDriveLaw {
   double ToGo(const Vec2& p, double heading, const Vec2& goal) const;
 
   double half_track() const { return half_track_; }
+  // The deceleration Speed brakes with, m/s^2.
+  double brake() const { return brake_; }
   // min(v_max, k_d d, sqrt(2 a d)): the speed for a distance d.
   double Speed(double distance) const;
   double wheel_radius() const { return wheel_radius_; }

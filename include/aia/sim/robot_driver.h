@@ -54,6 +54,11 @@ class RobotDriver {
   // the start of the window.
   virtual double progress_window() const = 0;
   virtual double EnoughProgress(double before, double tolerance) const = 0;
+  // Seconds robot i needs to brake what it still rolls with from its last
+  // move (0 for a model whose moves start from rest): a new move's stall
+  // test waits that long, since a robot that reverses passes through rest
+  // and first goes the wrong way.
+  virtual double BrakeSeconds(const mjData*, int) const { return 0.0; }
 };
 
 // Per robot: the qpos and qvel addresses of the joint "robotI" + `suffix`

@@ -262,6 +262,10 @@ class Simulation {
   std::vector<mjtNum> saved_;     // time, qpos, qvel, qacc_warmstart, act
   std::vector<double> progress_;  // distance to the waypoint at a checkpoint
   std::vector<std::uint8_t> stuck_;
+  // Per robot, the substeps its move's stall test waits beyond kSettleTime
+  // for the robot to brake what it rolls with (RobotDriver::BrakeSeconds).
+  std::vector<long> grace_;
+  long GraceSteps(int i, double dt) const;
   std::vector<long> robot_stalls_, robot_timeouts_;
   std::vector<std::uint8_t> turning_;  // per robot, its controller's last call
   // Asynchronous moves: each robot's state, the substep its move started
