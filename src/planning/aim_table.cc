@@ -93,20 +93,14 @@ int AimTable::Bucket(int depth, int k) const {
 void AimTable::RegionOf(const Vec2& x,
                         std::vector<std::pair<int, double>>* region) {
   const Lattice& lattice = map_->lattice();
-  const int span =
-      static_cast<int>(std::ceil(sensor_->range / lattice.step())) + 1;
   region->clear();
-  const int c = lattice.NearestPoint(x);
-  for (int iy = std::max(0, lattice.Iy(c) - span);
-       iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy) {
-    for (int ix = std::max(0, lattice.Ix(c) - span);
-         ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
-      const int q = lattice.Index(ix, iy);
-      if (!lattice.Free(q) || reach_[q] < 0) continue;
-      const double r = PredictedPrecision(*map_, *sensor_, lattice.Point(q), x);
-      if (r > 0.0) region->push_back({q, r});
-    }
-  }
+  ForEachInWindow(lattice, lattice.NearestPoint(x),
+                  SensorSpan(lattice, *sensor_), [&](int q, int, int) {
+                    if (!lattice.Free(q) || reach_[q] < 0) return;
+                    const double r = PredictedPrecision(*map_, *sensor_,
+                                                        lattice.Point(q), x);
+                    if (r > 0.0) region->push_back({q, r});
+                  });
 }
 
 bool AimTable::FindAim(const Vec2& mean, const Eigen::Matrix2d& cov,

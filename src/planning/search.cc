@@ -148,8 +148,7 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
   const int here = (*ctx.robot_lattice)[robot];
-  const int span =
-      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  const int span = SensorSpan(lattice, sensor);
   // Near: the lattice distance (|dx| + |dy|) from the robot to the nearest
   // point of its own component that would measure a target at x.
   const auto cost = [&](const Vec2& x, int bound) {
@@ -199,8 +198,7 @@ bool SearchMemory::RecomputeShared(const DecisionContext& ctx, int robot, int k,
   const Map& map = *ctx.map;
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
-  const int span =
-      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  const int span = SensorSpan(lattice, sensor);
   auto& s = slot(robot, k);
   const Mat2 cov = ctx.beliefs->PositionCovariance(robot, k);
   bool made = false;
@@ -245,33 +243,30 @@ bool SearchMemory::RecomputeShared(const DecisionContext& ctx, int robot, int k,
             if (!map.PointFree(x) || RuledOut(map, sensor, ruled, x)) return;
             internal::SharedWalk::RingPoint p;
             p.x = x;
-            const int c = lattice.NearestPoint(x);
-            for (int iy = std::max(0, lattice.Iy(c) - span);
-                 iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy)
-              for (int ix = std::max(0, lattice.Ix(c) - span);
-                   ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span);
-                   ++ix) {
-                const int q = lattice.Index(ix, iy);
-                if (!lattice.Free(q) ||
-                    PredictedPrecision(map, sensor, lattice.Point(q), x) <= 0.0)
-                  continue;
-                const std::array<int, 4> sums = {ix + iy, -ix + iy, ix - iy,
-                                                 -ix - iy};
-                if (p.component == -1) {
-                  p.component = lattice.components()[q];
-                  p.x0 = p.x1 = ix;
-                  p.y0 = p.y1 = iy;
-                  p.corner = sums;
-                  continue;
-                }
-                if (p.component != lattice.components()[q]) p.component = -2;
-                p.x0 = std::min(p.x0, ix);
-                p.x1 = std::max(p.x1, ix);
-                p.y0 = std::min(p.y0, iy);
-                p.y1 = std::max(p.y1, iy);
-                for (int e = 0; e < 4; ++e)
-                  p.corner[e] = std::min(p.corner[e], sums[e]);
-              }
+            ForEachInWindow(lattice, lattice.NearestPoint(x), span,
+                            [&](int q, int ix, int iy) {
+                              if (!lattice.Free(q) ||
+                                  PredictedPrecision(
+                                      map, sensor, lattice.Point(q), x) <= 0.0)
+                                return;
+                              const std::array<int, 4> sums = {
+                                  ix + iy, -ix + iy, ix - iy, -ix - iy};
+                              if (p.component == -1) {
+                                p.component = lattice.components()[q];
+                                p.x0 = p.x1 = ix;
+                                p.y0 = p.y1 = iy;
+                                p.corner = sums;
+                                return;
+                              }
+                              if (p.component != lattice.components()[q])
+                                p.component = -2;
+                              p.x0 = std::min(p.x0, ix);
+                              p.x1 = std::max(p.x1, ix);
+                              p.y0 = std::min(p.y0, iy);
+                              p.y1 = std::max(p.y1, iy);
+                              for (int e = 0; e < 4; ++e)
+                                p.corner[e] = std::min(p.corner[e], sums[e]);
+                            });
             walk.points.push_back(p);
           });
       walk.ring_end.push_back(static_cast<int>(walk.points.size()));
@@ -295,8 +290,7 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   const SensorModel& sensor = *ctx.sensor;
   const Lattice& lattice = map.lattice();
   const int here = (*ctx.robot_lattice)[robot];
-  const int span =
-      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  const int span = SensorSpan(lattice, sensor);
   // Some free point of the robot's component would measure a target at x.
   const auto observable = [&](const Vec2& x) {
     return NearestObserverDistance(map, sensor, here, x, span) >= 0;
@@ -402,8 +396,7 @@ Move TowardNearestAim::FirstMove(const Map& map, const SensorModel& sensor,
   // The open aims by the lattice point nearest them; their observation points
   // are the points of the (2 span + 1)^2 window around it from which the aim
   // is seen.
-  const int span =
-      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  const int span = SensorSpan(lattice, sensor);
   const int num_aims = static_cast<int>(aims.size());
   centres_.resize(num_aims);
   open_.assign(num_aims, 0);
@@ -492,8 +485,7 @@ int TargetClaims::Horizon(int num_targets, const Lattice& lattice, int span) {
 void TargetClaims::Begin(const Map& map, const SensorModel& sensor,
                          int num_targets) {
   const Lattice& lattice = map.lattice();
-  const int span =
-      static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+  const int span = SensorSpan(lattice, sensor);
   const int horizon = Horizon(num_targets, lattice, span);
   span_ = span;
   if (map_ != &map || sensor_ != &sensor ||
@@ -620,20 +612,14 @@ const TargetClaims::AimField& TargetClaims::Field(const Vec2& aim) {
   // one kept, the same either way).
   thread_local std::vector<int> sources, queue;
   const Lattice& lattice = map_->lattice();
-  const int span =
-      static_cast<int>(std::ceil(sensor_->range / lattice.step())) + 1;
-  const int c = lattice.NearestPoint(aim);
-  const int cx = lattice.Ix(c), cy = lattice.Iy(c);
+  const int span = SensorSpan(lattice, *sensor_);
   sources.clear();
-  for (int iy = std::max(0, cy - span);
-       iy <= std::min(lattice.ny() - 1, cy + span); ++iy)
-    for (int ix = std::max(0, cx - span);
-         ix <= std::min(lattice.nx() - 1, cx + span); ++ix) {
-      const int q = lattice.Index(ix, iy);
-      if (lattice.Free(q) &&
-          PredictedPrecision(*map_, *sensor_, lattice.Point(q), aim) > 0.0)
-        sources.push_back(q);
-    }
+  ForEachInWindow(
+      lattice, lattice.NearestPoint(aim), span, [&](int q, int, int) {
+        if (lattice.Free(q) &&
+            PredictedPrecision(*map_, *sensor_, lattice.Point(q), aim) > 0.0)
+          sources.push_back(q);
+      });
   // Under the exclusive lock: the aim's entry, pointing at `slot`.
   const auto enter = [&](int slot) -> const AimField& {
     auto [it, fresh] = index_.try_emplace(key);

@@ -469,16 +469,11 @@ void Episode::HoldAround(int i, int at, const Lattice& lattice) {
   constexpr double kBrakingMargin = 0.1;  // metres
   const double reach = std::sqrt(release2_) + kBrakingMargin;
   const Vec2 p = robot_pos_[i];
-  const int c = lattice.NearestPoint(p);
   const int span = static_cast<int>(std::ceil(reach / lattice.step()));
-  for (int iy = std::max(0, lattice.Iy(c) - span);
-       iy <= std::min(lattice.ny() - 1, lattice.Iy(c) + span); ++iy)
-    for (int ix = std::max(0, lattice.Ix(c) - span);
-         ix <= std::min(lattice.nx() - 1, lattice.Ix(c) + span); ++ix) {
-      const int q = lattice.Index(ix, iy);
-      if (q != at && lattice.Free(q) && (lattice.Point(q) - p).norm() < reach)
-        ++held_[q];
-    }
+  ForEachInWindow(lattice, lattice.NearestPoint(p), span, [&](int q, int, int) {
+    if (q != at && lattice.Free(q) && (lattice.Point(q) - p).norm() < reach)
+      ++held_[q];
+  });
 }
 
 // A sensing tick: every robot senses from where it is (mid-move too), the

@@ -11,9 +11,17 @@
 #include "aia/core/types.h"
 #include "aia/estimation/belief.h"
 #include "aia/estimation/sensor_model.h"
+#include "aia/world/lattice.h"
 #include "aia/world/map.h"
 
 namespace aia {
+
+// The half side, in lattice steps, of the window around the lattice point
+// nearest a target that holds every point that can measure it: the
+// sensor's range in steps, rounded up, plus one.
+inline int SensorSpan(const Lattice& lattice, const SensorModel& sensor) {
+  return static_cast<int>(std::ceil(sensor.range / lattice.step())) + 1;
+}
 
 // r such that Z = r M'M, or 0 when no measurement is predicted.
 inline double PredictedPrecision(const Map& map, const SensorModel& sensor,

@@ -6,6 +6,7 @@
 #ifndef AIA_WORLD_LATTICE_H_
 #define AIA_WORLD_LATTICE_H_
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -68,6 +69,19 @@ class Lattice {
   std::vector<int> next_;  // size() * kNumMoves
   std::vector<int> component_;
 };
+
+// f(q, ix, iy) for each point of the (2 span + 1)^2 window of lattice
+// points centred on point c, clamped to the lattice, row by row (iy outer,
+// ix inner).
+template <typename F>
+void ForEachInWindow(const Lattice& lattice, int c, int span, F&& f) {
+  const int cx = lattice.Ix(c), cy = lattice.Iy(c);
+  const int x1 = std::min(lattice.nx() - 1, cx + span);
+  const int y1 = std::min(lattice.ny() - 1, cy + span);
+  for (int iy = std::max(0, cy - span); iy <= y1; ++iy)
+    for (int ix = std::max(0, cx - span); ix <= x1; ++ix)
+      f(lattice.Index(ix, iy), ix, iy);
+}
 
 // Breadth-first distances (in moves) over valid moves from a set of sources;
 // -1 where unreachable. `dist` is resized to the lattice size; `queue` is
