@@ -555,18 +555,21 @@ def build_all(root):
     return out
 
 
-def main():
-    here = os.path.dirname(os.path.abspath(__file__))
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--root", default=os.path.join(here, "..", "scenarios",
-                                                   "long"),
-                    help="output folder (default: scenarios/long)")
+def write_or_check(description, default_root, build):
+    """The world makers' command line: build(root) gives {path: bytes};
+    write them under --root (default `default_root`), or with --check
+    compare them with the files there (exit 1 on a difference)."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--root", default=default_root,
+                    help="output folder (default: %s)" % os.path.relpath(
+                        default_root, os.path.join(
+                            os.path.dirname(os.path.abspath(__file__)), "..")))
     ap.add_argument("--check", action="store_true",
                     help="compare with the files on disk instead of writing; "
                     "exit 1 on a difference")
     args = ap.parse_args()
     root = os.path.normpath(args.root)
-    files = build_all(root)
+    files = build(root)
     bad = 0
     for path in sorted(files):
         data = files[path]
@@ -589,6 +592,12 @@ def main():
     print("wrote %d files under %s" % (len(files), root))
     return 0
 
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    return write_or_check(__doc__.split("\n\n")[0],
+                          os.path.join(here, "..", "scenarios", "long"),
+                          build_all)
 
 if __name__ == "__main__":
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))

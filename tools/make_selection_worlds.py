@@ -17,13 +17,12 @@ maps at 0.1 m per pixel); deterministic. `--check` compares instead of
 writing and exits 1 on a difference.
 """
 
-import argparse
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from make_long_worlds import (Grid, Rng, maze, pgm_bytes,  # noqa: E402
-                              scenario_text)
+                              scenario_text, write_or_check)
 
 
 def comb30():
@@ -141,37 +140,9 @@ def build_all(root):
 
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--root", default=os.path.join(here, "..", "scenarios",
-                                                   "selection"),
-                    help="output folder (default: scenarios/selection)")
-    ap.add_argument("--check", action="store_true",
-                    help="compare with the files on disk; exit 1 on a "
-                    "difference")
-    args = ap.parse_args()
-    root = os.path.normpath(args.root)
-    files = build_all(root)
-    bad = 0
-    for path in sorted(files):
-        if args.check:
-            try:
-                with open(path, "rb") as f:
-                    same = f.read() == files[path]
-            except OSError:
-                same = False
-            if not same:
-                print("differs: " + path)
-                bad += 1
-            continue
-        os.makedirs(os.path.dirname(path), exist_ok=True)
-        with open(path, "wb") as f:
-            f.write(files[path])
-    if args.check:
-        print("%d files, %d differ" % (len(files), bad))
-        return 1 if bad else 0
-    print("wrote %d files under %s" % (len(files), root))
-    return 0
-
+    return write_or_check(__doc__.split("\n\n")[0],
+                          os.path.join(here, "..", "scenarios", "selection"),
+                          build_all)
 
 if __name__ == "__main__":
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
