@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <charconv>
@@ -648,16 +649,13 @@ int aia::CliMain(int argc, char** argv) {
   // A first word that names no command: CLI11 would say only that a
   // command is required.
   if (argc > 1 && argv[1][0] != '-') {
-    bool known = false;
+    std::vector<std::string> all;
     std::string names;
     for (const CLI::App* sub : app.get_subcommands({})) {
-      known = known || sub->get_name() == argv[1];
+      all.push_back(sub->get_name());
       names += (names.empty() ? "" : ", ") + sub->get_name();
     }
-    if (!known) {
-      std::vector<std::string> all;
-      for (const CLI::App* sub : app.get_subcommands({}))
-        all.push_back(sub->get_name());
+    if (std::find(all.begin(), all.end(), argv[1]) == all.end()) {
       const std::string closest = aia::field_text::ClosestName(argv[1], all);
       std::fprintf(
           stderr,
