@@ -143,7 +143,9 @@ void Episode::MoveTargets() {
     target_prev_[k] = target_pos_[k];
     if (estimate_.layout().is_static(k)) continue;
     Eigen::VectorXd& x = target_state_[k];
-    Eigen::VectorXd next = model.A * x + model.b;
+    Eigen::VectorXd& next = next_state_;  // scratch: no allocation a step
+    next.noalias() = model.A * x;
+    next += model.b;
     const double sd = std::sqrt(model.q);
     for (int c = 0; c < next.size(); ++c) next[c] += sd * target_rng_.Normal();
     // The truth stays in the workspace (the filter's model does not know this).

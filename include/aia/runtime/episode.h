@@ -249,6 +249,7 @@ class Episode {
   std::vector<Vec2> robot_pos_, target_pos_, target_prev_;
   std::vector<double> robot_heading_;
   std::vector<Eigen::VectorXd> target_state_;
+  Eigen::VectorXd next_state_;  // MoveTargets' scratch
   std::vector<int> robot_idx_;
   std::vector<Move> moves_, applied_;
   // The lattice moves the robots made in the last step, and all of them so
