@@ -970,6 +970,38 @@ long AvailableBytes() {
   return kib < 0 ? -1 : kib * 1024;
 }
 
+// A ThreadPool of the process that made it. In a child forked since
+// (Python's multiprocessing, os.fork) its threads do not exist: the pool
+// is left behind, never joined (its destructor would wait for them for
+// ever), and the child makes its own at its first use (as learning/
+// parallel.cc does for the policy's pool).
+class ProcessPool {
+ public:
+  explicit ProcessPool(int workers)
+      : workers_(workers),
+        owner_(::getpid()),
+        pool_(std::make_unique<ThreadPool>(workers)) {}
+  ~ProcessPool() {
+    if (owner_ != ::getpid()) (void)pool_.release();
+  }
+  ProcessPool(const ProcessPool&) = delete;
+  ProcessPool& operator=(const ProcessPool&) = delete;
+
+  ThreadPool& get() {
+    if (owner_ != ::getpid()) {
+      (void)pool_.release();
+      pool_ = std::make_unique<ThreadPool>(workers_);
+      owner_ = ::getpid();
+    }
+    return *pool_;
+  }
+
+ private:
+  int workers_;
+  pid_t owner_;
+  std::unique_ptr<ThreadPool> pool_;
+};
+
 // n missions of one scenario (seeds given), stepped together on C++
 // threads without the GIL; with autoreset, a mission that ends restarts
 // with the next seed.
@@ -1058,7 +1090,8 @@ class VectorMissions {
                  std::to_string(seeds.size()));
     {
       py::gil_scoped_release release;
-      pool_.Run(size(), [&](int i, int) { missions_[i]->Start(seeds[i]); });
+      pool_.get().Run(size(),
+                      [&](int i, int) { missions_[i]->Start(seeds[i]); });
     }
     next_seed_ = *std::max_element(seeds.begin(), seeds.end()) + 1;
   }
@@ -1087,7 +1120,7 @@ class VectorMissions {
     {
       py::gil_scoped_release release;
       // A failed mission must not keep the others from stepping.
-      pool_.Run(
+      pool_.get().Run(
           n,
           [&](int i, int) {
             if (stepped[i]) missions_[i]->StepWith(std::move(next[i]));
@@ -1132,7 +1165,7 @@ class VectorMissions {
     }
     {
       py::gil_scoped_release release;
-      pool_.Run(static_cast<int>(finished.size()), [&](int k, int) {
+      pool_.get().Run(static_cast<int>(finished.size()), [&](int k, int) {
         missions_[finished[k]]->Start(seeds[finished[k]]);
       });
     }
@@ -1143,7 +1176,7 @@ class VectorMissions {
   }
 
  private:
-  ThreadPool pool_;  // the caller is the first of `threads`
+  ProcessPool pool_;  // the caller is the first of `threads`
   bool autoreset_;
   std::uint64_t next_seed_ = 0;
   std::vector<std::unique_ptr<Mission>> missions_;
