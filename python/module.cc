@@ -44,6 +44,7 @@
 #include "aia/learning/scorer.h"
 #include "aia/planning/policy.h"
 #include "aia/planning/registry.h"
+#include "aia/render/scene.h"
 #include "aia/runtime/episode.h"
 #include "aia/runtime/generated.h"
 #include "aia/runtime/instance.h"
@@ -698,6 +699,8 @@ class Mission {
   py::array_t<std::uint8_t> Render(py::handle width_arg,
                                    py::handle height_arg) {
     const Episode& e = episode("aia.Mission.render");  // owned only
+    if (const std::string why = RenderForkProblem(); !why.empty())
+      Refuse("aia.Mission.render", "", why);
     const int width = static_cast<int>(
         IntegerArg(width_arg, "aia.Mission.render", "width", 16, 8192));
     const int height = static_cast<int>(

@@ -1,8 +1,11 @@
 #include "aia/render/scene.h"
 
 #include <GL/osmesa.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -10,6 +13,39 @@
 #include "aia/core/check.h"
 
 namespace aia {
+namespace {
+
+// The process that made the first GL context (0: none yet), and whether
+// llvmpipe made its threads then. Mesa reads LP_NUM_THREADS once, when
+// that context makes its screen.
+std::atomic<pid_t> g_gl_process{0};
+std::atomic<bool> g_gl_threads{false};
+
+void NoteFirstContext() {
+  const char* threads = std::getenv("LP_NUM_THREADS");
+  pid_t none = 0;
+  if (g_gl_process.compare_exchange_strong(none, ::getpid()))
+    g_gl_threads = threads == nullptr || std::string(threads) != "0";
+}
+
+// Refuses to go on in a process that cannot render.
+void CheckCanRender() {
+  if (const std::string why = RenderForkProblem(); !why.empty())
+    throw std::runtime_error(why);
+}
+
+}  // namespace
+
+std::string RenderForkProblem() {
+  const pid_t first = g_gl_process.load();
+  if (first == 0 || first == ::getpid() || !g_gl_threads.load()) return "";
+  return "this process was forked from one that had rendered (pid " +
+         std::to_string(first) +
+         ") and lacks the threads Mesa's llvmpipe made there, for which a "
+         "render would wait for ever: use multiprocessing's 'spawn' or "
+         "'forkserver' start method, or set LP_NUM_THREADS=0 before the "
+         "first render";
+}
 
 void OsMesaDeleter::operator()(osmesa_context* context) const {
   OSMesaDestroyContext(context);
@@ -57,6 +93,8 @@ SceneRenderer::SceneRenderer(const mjModel* model,
   vis.quality.numslices = std::min(vis.quality.numslices, 16);
   vis.quality.numstacks = std::min(vis.quality.numstacks, 8);
 
+  CheckCanRender();
+  NoteFirstContext();
   gl_ = OsMesaPtr(OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 0, nullptr));
   if (!gl_) throw std::runtime_error("cannot create an OSMesa context");
   gl_buffer_.resize(static_cast<size_t>(settings.width) * settings.height * 4);
@@ -96,6 +134,7 @@ SceneRenderer::~SceneRenderer() {
 
 void SceneRenderer::Render(const mjData* data, const mjvCamera& camera,
                            cv::Mat* bgr) {
+  CheckCanRender();
   const int w = settings_.width, h = settings_.height;
   AIA_CHECK(
       OSMesaMakeCurrent(gl_.get(), gl_buffer_.data(), GL_UNSIGNED_BYTE, w, h));

@@ -8,6 +8,7 @@
 
 #include <memory>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "aia/sim/simulation.h"
@@ -42,13 +43,22 @@ struct SceneSettings {
   int samples = 0;
 };
 
+// Why this process cannot render, "" where it can. Mesa's llvmpipe makes
+// its rasterizer threads with the process's first GL context and keeps
+// them for the process's life; a process forked since (os.fork, Python
+// multiprocessing's default start method on Linux) has none of them, and
+// its first render waited for them for ever. A first context made with
+// LP_NUM_THREADS=0 has no threads to miss.
+std::string RenderForkProblem();
+
 // Renders one model's state. The renderer keeps its own copy of the model,
 // with the offscreen size, sampling and lights it needs, so that the
 // simulation's model stays untouched. One GL context per renderer; each
 // Render() makes it current, so several renderers may live in one thread.
 class SceneRenderer {
  public:
-  // Throws std::runtime_error when no GL context can be made.
+  // Throws std::runtime_error when no GL context can be made (also in a
+  // process that cannot render: RenderForkProblem()).
   SceneRenderer(const mjModel* model, const SceneSettings& settings);
   ~SceneRenderer();
   SceneRenderer(const SceneRenderer&) = delete;
