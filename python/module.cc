@@ -4,6 +4,7 @@
 // policy is a registered policy deciding on a mission's state with the
 // same truth fence as in the loop. Each area is bound by its own Bind*
 // function at the end of the file.
+#include <pthread.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -135,6 +136,82 @@ auto OneCall(R (C::*f)(A...) const, const char* where) {
     return (self.*f)(std::forward<A>(a)...);
   };
 }
+
+// ---------------------------------------------------------------------------
+// The GIL let go for C++ work, and the interpreter's exit. A daemon thread
+// inside such a call when the interpreter finalizes is ended (pthread_exit)
+// as it takes the GIL back, and that unwind through pybind11's
+// gil_scoped_release (noexcept) aborted the process ("terminate called
+// without an active exception"). So the module's atexit handler, which
+// runs while daemon threads still live, marks the exit and waits for the
+// calls under way to finish their C++ work. From then on a call on another
+// thread never takes the GIL back: one under way stays in the call once
+// its work is done, one that starts stays there at once, without the GIL,
+// until the process ends. (Keeping the GIL for such calls instead starved
+// the exiting thread: between calls the daemon let the GIL go and took it
+// back at once, in numpy or I/O, so that CPython never asked it to drop
+// the GIL, and exits took seconds.) The exiting thread's own calls go on
+// as before: finalization does not end it.
+
+// Whether this thread is running a policy's callbacks for aia.evaluate
+// (one of the evaluation's threads, the GIL taken for the call): their
+// evaluation is a call under way, which the exit waits for, and needs
+// them to go on.
+thread_local bool t_inside_evaluate = false;
+
+std::atomic<bool> g_exiting{false};  // set by AwaitCallsAtExit, GIL held
+std::thread::id g_exit_thread;       // AwaitCallsAtExit's, before g_exiting
+std::atomic<int> g_without_gil{0};   // calls under way without the GIL
+
+// Whether this thread must not take the GIL back (see above).
+bool Parked() {
+  return g_exiting && !t_inside_evaluate &&
+         std::this_thread::get_id() != g_exit_thread;
+}
+
+// Without the GIL until the process ends.
+[[noreturn]] void Park() {
+  for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+}
+
+// py::gil_scoped_release for the module's calls: the GIL let go for the
+// scope and taken back at its end, unless the interpreter is exiting
+// (above).
+class ReleaseGil {
+ public:
+  ReleaseGil() {
+    const bool park = Parked();  // with the GIL, as the exit sets it
+    if (!park) ++g_without_gil;
+    release_.emplace();
+    if (park) Park();
+  }
+  ~ReleaseGil() {
+    if (Parked()) {  // the work is done: the exit need not wait
+      --g_without_gil;
+      Park();
+    }
+    release_.reset();  // the GIL back first: the exit waits for this
+    --g_without_gil;
+  }
+  ReleaseGil(const ReleaseGil&) = delete;
+  ReleaseGil& operator=(const ReleaseGil&) = delete;
+
+ private:
+  std::optional<py::gil_scoped_release> release_;
+};
+
+// Python's atexit handler (registered at import): waits for the calls
+// under way, without the GIL (an aia.evaluate's threads need it).
+void AwaitCallsAtExit() {
+  g_exit_thread = std::this_thread::get_id();
+  g_exiting = true;
+  py::gil_scoped_release release;
+  while (g_without_gil.load() > 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+}
+
+// A child forked while other threads were inside calls has none of them.
+void NoCallsInForkedChild() { g_without_gil = 0; }
 
 // A Python value as an error shows it: its repr (cut short) and its type.
 std::string Shown(py::handle h) {
@@ -479,7 +556,7 @@ class Mission {
   // it marks and clears busy_, so reading it here is no race.
   void Invalidate() {
     while (busy_ != nullptr) {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     view_ = nullptr;
@@ -635,7 +712,7 @@ class Mission {
       search_points_->Reset(num_robots(), num_targets());
     }
     if (settings.search) {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       SyncSearchPoints();
     }
     const DecisionContext ctx = Context();
@@ -663,7 +740,7 @@ class Mission {
     const std::vector<double>& prior =
         ctx.log_det_prior ? *ctx.log_det_prior : no_prior;
     SearchPointSets points;
-    py::gil_scoped_release release;
+    ReleaseGil release;
     for (int i = 0; i < n; ++i) {
       neighbours.clear();
       for (int j : ctx.comm->Neighbors(i))
@@ -770,7 +847,7 @@ class Mission {
              "the mission is done (done is True): start another Mission");
     const long invalid_before = episode_->invalid_moves();
     {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       StepWith(std::move(next));
     }
     return Result(invalid_before);
@@ -919,7 +996,7 @@ class BuiltinPolicy {
     std::vector<Move> moves(mission.num_robots(), Move::kStay);
     PolicyStatus status;
     {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       status = state->policy->Decide(ctx, &moves);
     }
     status_ = status;
@@ -1092,7 +1169,7 @@ class VectorMissions {
              "one seed per mission: " + std::to_string(size()) + ", got " +
                  std::to_string(seeds.size()));
     {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       pool_.get().Run(size(),
                       [&](int i, int) { missions_[i]->Start(seeds[i]); });
     }
@@ -1121,7 +1198,7 @@ class VectorMissions {
       stepped[i] = !e.done();
     }
     {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       // A failed mission must not keep the others from stepping.
       pool_.get().Run(
           n,
@@ -1167,7 +1244,7 @@ class VectorMissions {
       seeds[i] = next_seed_++;
     }
     {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       pool_.get().Run(static_cast<int>(finished.size()), [&](int k, int) {
         missions_[finished[k]]->Start(seeds[finished[k]]);
       });
@@ -1312,7 +1389,7 @@ class PyDataset {
       labels.mutable_at(k) =
           static_cast<long long>(data_.samples[indices[k]].label);
     {
-      py::gil_scoped_release release;
+      ReleaseGil release;
       for (py::ssize_t k = 0; k < b; ++k) {
         const DatasetSample& s = data_.samples[indices[k]];
         const DatasetWorld& w = data_.worlds[s.world];
@@ -1333,9 +1410,6 @@ class PyDataset {
                                         // the GIL)
 };
 
-// A Python callable as a policy of aia's own loop (evaluate): each decision
-// takes the GIL, hands the callable a view of the decision and reads its
-// moves. A Python exception ends the evaluation and reaches the caller.
 // How far aia.evaluate is: the Python policy's runs finished (each ends
 // when its policy is destroyed), reported to a Python callable from the
 // next decision, which holds the GIL anyway (no thread of its own).
@@ -1356,9 +1430,6 @@ struct EvalProgress {
 // A Python callable as a policy of aia's own loop (evaluate): each decision
 // takes the GIL, hands the callable a view of the decision and reads its
 // moves. A Python exception ends the evaluation and reaches the caller.
-// Whether this thread is running a policy's callbacks for aia.evaluate.
-thread_local bool t_inside_evaluate = false;
-
 class CallbackPolicy : public Policy {
  public:
   CallbackPolicy(std::string name, bool centralized, py::object decide,
@@ -1528,7 +1599,7 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
   int rc = 0;
   std::string notes;
   {
-    py::gil_scoped_release release;
+    ReleaseGil release;
     // Calls from several threads take turns: the capture of C stdio and the
     // Ctrl-C handler are the process's (two at once crashed in fflush and
     // printed eval's lines). Taken without the GIL, which the running call
@@ -1869,6 +1940,9 @@ PYBIND11_MODULE(_aia, m) {
   // the GIL and waits on that guard.
   py::module_::import("numpy");
   (void)py::array_t<long long>(1);
+  py::module_::import("atexit").attr("register")(
+      py::cpp_function(&aia::python::AwaitCallsAtExit));
+  pthread_atfork(nullptr, nullptr, &aia::python::NoCallsInForkedChild);
   aia::python::BindErrors(m);
   aia::python::BindMoves(m);
   aia::python::BindMission(m);

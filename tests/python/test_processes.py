@@ -1,6 +1,7 @@
-"""aia in a child forked from a process that used it: nothing may hang
-(or, where it cannot work, it is refused).
-Every child runs under a time limit, so that a hang fails the test."""
+"""aia in a child forked from a process that used it, and at the
+interpreter's exit with a thread inside a call: nothing may hang or abort
+(or, where it cannot work, it is refused). Every child runs under a time
+limit, so that a hang fails the test."""
 
 import gc
 import multiprocessing
@@ -172,3 +173,94 @@ def test_a_forked_child_renders_where_the_parent_made_no_llvmpipe_threads(
     assert code == 0, err
     assert out.splitlines() == ["new same frame", "old same frame",
                                 "freed True", "exit code 0"], out
+
+
+DAEMON_AT_EXIT = """
+import atexit, sys, time
+# Runs after aia's atexit handler: how long the exit waited.
+atexit.register(lambda: print("waited", time.time() - DONE, file=sys.stderr))
+import threading, aia, numpy as np
+S, kind, out = sys.argv[1], sys.argv[2], sys.argv[3]
+SMALL = {"robots.count": 3, "targets.count": 3}
+def actor():
+    if kind == "mission":
+        m = aia.Mission(S, seed=1, overrides=SMALL)
+        while True:
+            if m.done:
+                m = aia.Mission(S, seed=m.seed + 1, overrides=SMALL)
+            m.step(np.zeros(m.num_robots, dtype=int))
+    elif kind == "env":
+        env = aia.parallel_env(S, seed=1, overrides=SMALL)
+        env.reset()
+        while True:
+            if not env.agents:
+                env.reset()
+            env.step({a: 0 for a in env.agents})
+    elif kind == "vector":
+        v = aia.VectorMissions(2, S, seed=1, overrides=SMALL, threads=2,
+                               autoreset=True)
+        while True:
+            v.step(np.zeros((2, v.num_robots), dtype=int))
+    else:
+        greedy = aia.builtin_policy("greedy")
+        for i in range(1000):
+            aia.evaluate(greedy.decide, ["2x1"], 1, out=f"{out}/{i}",
+                         name="greedy_py", threads=2, progress=False)
+threading.Thread(target=actor, daemon=True).start()
+time.sleep(1.0)
+print("main done", flush=True)
+DONE = time.time()
+"""
+
+
+@pytest.mark.parametrize("kind", ["mission", "env", "vector", "evaluate"])
+def test_a_daemon_thread_inside_a_call_at_exit_does_not_abort(kind,
+                                                             tmp_path):
+    # The thread was ended as it took the GIL back during finalization, and
+    # the unwind through gil_scoped_release (noexcept) aborted the process
+    # (exit 134, "terminate called without an active exception"), every
+    # time. The exit waits for the call under way only: a thread that kept
+    # the GIL for its calls after starved it for seconds (the env's, whose
+    # numpy lets the GIL go between calls).
+    for run in range(3):
+        code, out, err = run_python(DAEMON_AT_EXIT, DEFAULT, kind,
+                                    str(tmp_path / str(run)))
+        assert "terminate called" not in err, err
+        assert (code, out) == (0, "main done\n"), err
+        waited = [float(line.split()[1]) for line in err.splitlines()
+                  if line.startswith("waited ")]
+        assert len(waited) == 1 and waited[0] < 3.0, err
+
+
+FORK_DURING_CALL = """
+import os, sys, threading, time, aia, numpy as np
+SMALL = {"robots.count": 3, "targets.count": 3}
+v = aia.VectorMissions(2, sys.argv[1], seed=1, overrides=SMALL, threads=2,
+                       autoreset=True)
+def actor():
+    while True:
+        v.step(np.zeros((2, v.num_robots), dtype=int))
+threading.Thread(target=actor, daemon=True).start()
+time.sleep(0.3)
+for _ in range(3):
+    pid = os.fork()
+    if pid == 0:
+        sys.exit(0)  # through atexit, forked while the actor was stepping
+    for _ in range(3000):
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            print("exit status", status, flush=True)
+            break
+        time.sleep(0.01)
+    else:
+        os.kill(pid, 9)
+        os.waitpid(pid, 0)
+        print("child hung", flush=True)
+"""
+
+
+def test_a_child_forked_while_a_thread_is_inside_a_call_exits():
+    # The exit waits for the calls under way: the child's count of them
+    # was the parent's, and it waited for the thread it does not have.
+    code, out, err = run_python(FORK_DURING_CALL, DEFAULT)
+    assert (code, out) == (0, "exit status 0\n" * 3), err
