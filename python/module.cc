@@ -1689,14 +1689,34 @@ void BindMission(py::module_& m) {
                     "every target localized (summary.json's success)")
       .def_property_readonly("done", &StepResult::done,
                              "terminated or truncated")
-      .def("__repr__", [](const StepResult& r) {
-        return "StepResult(steps=" + std::to_string(r.steps) +
-               ", invalid_moves=" + std::to_string(r.invalid_moves) +
-               ", localized=" + std::to_string(r.localized) +
-               ", terminated=" + (r.terminated ? "True" : "False") +
-               ", truncated=" + (r.truncated ? "True" : "False") +
-               ", success=" + (r.success ? "True" : "False") + ")";
-      });
+      .def("__repr__",
+           [](const StepResult& r) {
+             return "StepResult(steps=" + std::to_string(r.steps) +
+                    ", invalid_moves=" + std::to_string(r.invalid_moves) +
+                    ", localized=" + std::to_string(r.localized) +
+                    ", terminated=" + (r.terminated ? "True" : "False") +
+                    ", truncated=" + (r.truncated ? "True" : "False") +
+                    ", success=" + (r.success ? "True" : "False") + ")";
+           })
+      // Pickled as its fields (a worker process sends its results back).
+      .def(py::pickle(
+          [](const StepResult& r) {
+            return py::make_tuple(r.steps, r.invalid_moves, r.localized,
+                                  r.terminated, r.truncated, r.success);
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 6)
+              Refuse("aia.StepResult", "state",
+                     "must be its 6 fields, got " + Shown(t));
+            StepResult r;
+            r.steps = t[0].cast<int>();
+            r.invalid_moves = t[1].cast<long>();
+            r.localized = t[2].cast<int>();
+            r.terminated = t[3].cast<bool>();
+            r.truncated = t[4].cast<bool>();
+            r.success = t[5].cast<bool>();
+            return r;
+          }));
 
   py::class_<Mission>(m, "Mission",
                       "One mission of a scenario file, stepped from Python "
@@ -1805,7 +1825,28 @@ void BindVectorMissions(py::module_& m) {
       .def_readonly("done", &VectorStepResult::done)
       .def_readonly("info", &VectorStepResult::info,
                     "with autoreset: final_info (summary dicts), "
-                    "final_state (state dicts), _final_info (mask)");
+                    "final_state (state dicts), _final_info (mask)")
+      .def(py::pickle(
+          [](const VectorStepResult& r) {
+            return py::make_tuple(r.steps, r.invalid_moves, r.localized,
+                                  r.terminated, r.truncated, r.success, r.done,
+                                  r.info);
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 8)
+              Refuse("aia.VectorStepResult", "state",
+                     "must be its 8 fields, got " + Shown(t));
+            VectorStepResult r;
+            r.steps = t[0].cast<py::array_t<long long>>();
+            r.invalid_moves = t[1].cast<py::array_t<long long>>();
+            r.localized = t[2].cast<py::array_t<long long>>();
+            r.terminated = t[3].cast<py::array_t<bool>>();
+            r.truncated = t[4].cast<py::array_t<bool>>();
+            r.success = t[5].cast<py::array_t<bool>>();
+            r.done = t[6].cast<py::array_t<bool>>();
+            r.info = t[7].cast<py::dict>();
+            return r;
+          }));
 
   py::class_<VectorMissions>(
       m, "VectorMissions",

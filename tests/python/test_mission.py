@@ -7,6 +7,7 @@ the CLI and AIA_SOURCE_DIR the checkout.
 import csv
 import json
 import os
+import pickle
 import re
 import subprocess
 import tempfile
@@ -232,6 +233,19 @@ def test_builtin_policies_decide_for_the_team():
         assert ((moves >= 0) & (moves <= 4)).all(), name
         assert p.centralized == (name == "expert")
         assert p.last_status in ("ok", "no_valid_move", "budget_exhausted")
+
+
+def test_a_step_result_pickles():
+    # What a worker process sends back through a pipe.
+    m = aia.Mission(DEFAULT, seed=1, overrides={"robots.count": 3,
+                                                "targets.count": 3,
+                                                "mission.max_steps": 2})
+    for _ in range(2):
+        r = m.step([0, 1, 4])
+        back = pickle.loads(pickle.dumps(r))
+        assert type(back) is type(r) and repr(back) == repr(r)
+        assert back.done == r.done
+    assert back.truncated and back.steps == 2
 
 
 def test_async_steps_use_the_ready_robots_moves_only():

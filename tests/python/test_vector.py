@@ -1,6 +1,7 @@
 """aia.VectorMissions and Mission.channels."""
 
 import os
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -110,6 +111,23 @@ def test_autoreset_restarts_with_the_next_seed_and_reports_the_end():
     assert v.seeds.tolist() == [34, 35]
     assert [m.steps for m in v.missions] == [1, 1]
     assert results[4].info == {} and not results[4].done.any()
+
+
+def test_a_vector_step_result_pickles():
+    # What a worker process sends back through a pipe.
+    limit = {**SMALL, "mission.max_steps": 2}
+    v = aia.VectorMissions(2, DEFAULT, seed=30, overrides=limit,
+                           autoreset=True)
+    for r in play(v, 2):
+        back = pickle.loads(pickle.dumps(r))
+        for field in ("steps", "invalid_moves", "localized", "terminated",
+                      "truncated", "success", "done"):
+            assert (getattr(back, field) == getattr(r, field)).all()
+            assert getattr(back, field).dtype == getattr(r, field).dtype
+        assert back.info.keys() == r.info.keys()
+    assert back.info["final_info"] == r.info["final_info"]  # the end
+    assert (back.info["final_state"][1]["det"] ==
+            r.info["final_state"][1]["det"]).all()
 
 
 def test_reset_and_a_finished_row_without_autoreset():
