@@ -19,7 +19,7 @@ stand-ins below, with shape, dtype, n, sample(), contains() and seed().
 
 import numpy as np
 
-from . import InputError, Mission, Move, _integer, _pairs, _shown
+from . import InputError, Mission, Move, _integer, _pairs, _retitled, _shown
 
 try:  # pragma: no cover - gymnasium is not packaged in Debian 12
     from gymnasium import spaces as _spaces
@@ -422,13 +422,17 @@ class ParallelEnv:
     def mission(self):
         return self._mission
 
-    def render(self, width=640, height=480):
+    def render(self, width=640, height=480, *, _api="ParallelEnv"):
         """With render_mode "rgb_array": the mission's frame (H, W, 3)."""
-        self._open("render")
+        self._open("render", _api)
         if self.render_mode is None:
             return None
-        self._started("render")
-        return self._mission.render(width, height)
+        self._started("render", _api)
+        try:
+            return self._mission.render(width, height)
+        except InputError as e:  # named as this env's render
+            raise InputError(_retitled(str(e), "aia.Mission.render",
+                                       f"aia.{_api}.render")) from None
 
     def close(self):
         """Ends the env: every call but close() is refused after."""
@@ -597,8 +601,8 @@ class AECEnv:
     def state(self):
         return self._env.state(_api="AECEnv")
 
-    def render(self, *args, **kwargs):
-        return self._env.render(*args, **kwargs)
+    def render(self, width=640, height=480):
+        return self._env.render(width, height, _api="AECEnv")
 
     def close(self):
         self._env.close()

@@ -354,3 +354,23 @@ def test_the_aec_env_names_itself():
         aec.reset(options={"x": 1})
     aec.reset(seed=2)
     assert aec.state().shape == aec.state_space.shape
+
+
+def test_the_envs_render_names_the_env():
+    # It named aia.Mission.render, which the caller did not call.
+    env = aia.parallel_env(DEFAULT, seed=1, render_mode="rgb_array")
+    env.reset()
+    with pytest.raises(aia.InputError,
+                       match=r"^aia\.ParallelEnv\.render: width: must be an "
+                             r"integer in \[16, 8192\], got 0$"):
+        env.render(0, 0)
+    aec = aia.aec_env(DEFAULT, seed=1, render_mode="rgb_array")
+    with pytest.raises(aia.InputError, match=r"^aia\.AECEnv\.render: call "
+                                             r"reset\(\) before render\(\)"):
+        aec.render()
+    aec.reset()
+    with pytest.raises(aia.InputError,
+                       match=r"^aia\.AECEnv\.render: height: must be an "
+                             r"integer in \[16, 8192\], got 8$"):
+        aec.render(64, 8)
+    assert aec.render(64, 48).shape == (48, 64, 3)
