@@ -408,7 +408,8 @@ class VectorMissions:
         autoreset a mission already done ignores its row; with it, info
         holds final_info (the summary() of each mission that ended at this
         step, else None), final_state (its last state()) and _final_info
-        (the mask)."""
+        (the mask). A mission over at step 0 (restarted so, too) is not
+        stepped: this step reports it done with steps 0."""
         return self._v.step(moves)
 
     def states(self):

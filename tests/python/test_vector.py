@@ -113,6 +113,22 @@ def test_autoreset_restarts_with_the_next_seed_and_reports_the_end():
     assert results[4].info == {} and not results[4].done.any()
 
 
+def test_a_mission_over_at_step_0_is_reported_done_with_steps_0():
+    # Seed 1 of this world has its one target localized at step 0 (the
+    # sensor sees the whole workspace), seed 2 not.
+    over = {"robots.count": 3, "targets.count": 1, "sensor.range": 50}
+    v = aia.VectorMissions(2, DEFAULT, seed=1, overrides=over,
+                           autoreset=True)
+    assert v.done.tolist() == [True, False]
+    r = v.step(np.zeros((2, 3), dtype=int))
+    assert r.steps.tolist() == [0, 1] and r.done.tolist() == [True, False]
+    assert r.success.tolist() == [True, False]
+    assert [f and f["seed"] for f in r.info["final_info"]] == [1, None]
+    # Restarted with the next seed, 3, whatever its mission is at step 0.
+    assert v.seeds.tolist() == [3, 2]
+    assert v.missions[0].steps == 0
+
+
 def test_a_vector_step_result_pickles():
     # What a worker process sends back through a pipe.
     limit = {**SMALL, "mission.max_steps": 2}
