@@ -107,9 +107,36 @@ void MissSlots<Derived, Slot, Shared>::Reset(int num_robots, int num_targets) {
 }
 
 template <typename Derived, typename Slot, typename Shared>
+int MissSlots<Derived, Slot, Shared>::Record(const DecisionContext& ctx,
+                                             int robot) {
+  AIA_CHECK(robot >= 0 && robot < num_robots_);
+  AIA_CHECK(ctx.beliefs->layout().num_targets() == num_targets_);
+  const Map& map = *ctx.map;
+  const int here = (*ctx.robot_lattice)[robot];
+  const Vec2 p = map.lattice().Point(here);
+  const double log_eps = std::log(ctx.eps);
+  int added = 0;
+  for (int k = 0; k < num_targets_; ++k) {
+    Slot& s = slot(robot, k);
+    const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
+    Derived::Settle(&s, searching);
+    if (!searching) continue;
+    // Nothing measured, though this point sees where the target was looked
+    // for: it is not anywhere the point would have measured.
+    if (!Derived::Sees(map, *ctx.sensor, p, s) ||
+        std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
+      continue;
+    s.missed.push_back(here);
+    ++added;
+    derived().Recompute(ctx, robot, k);
+  }
+  return added;
+}
+
+template <typename Derived, typename Slot, typename Shared>
 void MissSlots<Derived, Slot, Shared>::Update(const DecisionContext& ctx,
                                               int robot) {
-  misses_ += derived().Record(ctx, robot);
+  misses_ += Record(ctx, robot);
 }
 
 template <typename Derived, typename Slot, typename Shared>
@@ -118,7 +145,7 @@ void MissSlots<Derived, Slot, Shared>::Update(const DecisionContext& ctx,
                                               const RangeRunner& run,
                                               int workers) {
   misses_ += RecordAll(robots, run, workers, &added_,
-                       [&](int i) { return derived().Record(ctx, i); });
+                       [&](int i) { return Record(ctx, i); });
 }
 
 template <typename Derived, typename Slot, typename Shared>
@@ -164,33 +191,14 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   return false;
 }
 
-int SearchMemory::Record(const DecisionContext& ctx, int robot) {
-  AIA_CHECK(robot >= 0 && robot < num_robots_);
-  int added = 0;
-  const BeliefSet& beliefs = *ctx.beliefs;
-  AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
-  const Map& map = *ctx.map;
-  const SensorModel& sensor = *ctx.sensor;
-  const Lattice& lattice = map.lattice();
-  const int here = (*ctx.robot_lattice)[robot];
-  const Vec2 p = lattice.Point(here);
-  const double log_eps = std::log(ctx.eps);
-  for (int k = 0; k < num_targets_; ++k) {
-    auto& s = slot(robot, k);
-    const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
-    if (!searching) s.missed.clear();
-    if (s.missed.empty()) s.aim = s.mean;
-    if (!searching) continue;
-    // Nothing measured, though this point sees the aim: the target is not
-    // anywhere the point would have measured.
-    if (PredictedPrecision(map, sensor, p, s.aim) <= 0.0 ||
-        std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
-      continue;
-    s.missed.push_back(here);
-    ++added;
-    Reaim(ctx, robot, k);
-  }
-  return added;
+void SearchMemory::Settle(internal::AimSlot* s, bool searching) {
+  if (!searching) s->missed.clear();
+  if (s->missed.empty()) s->aim = s->mean;
+}
+
+bool SearchMemory::Sees(const Map& map, const SensorModel& sensor,
+                        const Vec2& p, const internal::AimSlot& s) {
+  return PredictedPrecision(map, sensor, p, s.aim) > 0.0;
 }
 
 bool SearchMemory::RecomputeShared(const DecisionContext& ctx, int robot, int k,
@@ -320,44 +328,18 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   }
 }
 
-int SearchPoints::Record(const DecisionContext& ctx, int robot) {
-  AIA_CHECK(robot >= 0 && robot < num_robots_);
-  int added = 0;
-  const BeliefSet& beliefs = *ctx.beliefs;
-  AIA_CHECK(beliefs.layout().num_targets() == num_targets_);
-  const Map& map = *ctx.map;
-  const SensorModel& sensor = *ctx.sensor;
-  const int here = (*ctx.robot_lattice)[robot];
-  const Vec2 p = map.lattice().Point(here);
-  const double log_eps = std::log(ctx.eps);
-  for (int k = 0; k < num_targets_; ++k) {
-    auto& s = slot(robot, k);
-    const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
-    if (!searching) {
-      s.missed.clear();
-      s.points.clear();
-      continue;
-    }
-    // Nothing measured, though this point sees a search point: the target
-    // is not anywhere the point would have measured.
-    bool seen = false;
-    if (s.points.empty()) {
-      seen = PredictedPrecision(map, sensor, p, s.mean) > 0.0;
-    } else {
-      for (const Vec2& x : s.points)
-        if (PredictedPrecision(map, sensor, p, x) > 0.0) {
-          seen = true;
-          break;
-        }
-    }
-    if (!seen ||
-        std::find(s.missed.begin(), s.missed.end(), here) != s.missed.end())
-      continue;
-    s.missed.push_back(here);
-    ++added;
-    Recompute(ctx, robot, k);
-  }
-  return added;
+void SearchPoints::Settle(internal::PointsSlot* s, bool searching) {
+  if (searching) return;
+  s->missed.clear();
+  s->points.clear();
+}
+
+bool SearchPoints::Sees(const Map& map, const SensorModel& sensor,
+                        const Vec2& p, const internal::PointsSlot& s) {
+  if (s.points.empty()) return PredictedPrecision(map, sensor, p, s.mean) > 0.0;
+  for (const Vec2& x : s.points)
+    if (PredictedPrecision(map, sensor, p, x) > 0.0) return true;
+  return false;
 }
 
 void SearchPoints::RecomputeShared(const DecisionContext& ctx, int robot, int k,

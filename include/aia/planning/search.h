@@ -551,6 +551,12 @@ class MissSlots {
 
  private:
   Derived& derived() { return static_cast<Derived&>(*this); }
+  // Update's work for one robot: per target it is still searching (not
+  // measured, open, static), its point added to its misses where the
+  // point sees where the target is looked for (Derived::Sees), then
+  // Derived::Recompute; Derived::Settle first (what a slot keeps when the
+  // search is over, or goes on). The points it added.
+  int Record(const DecisionContext& ctx, int robot);
   long misses_ = 0;
   NeighbourMisses sharing_;
   std::vector<Slot> slots_;
@@ -585,8 +591,14 @@ class SearchMemory
   // the same aim and return as Reaim.
   bool RecomputeShared(const DecisionContext& ctx, int robot, int k, int group,
                        Cache* cache);
-  // Update's work; the points it added.
-  int Record(const DecisionContext& ctx, int robot);
+  // MissSlots::Record's hooks: a finished search forgets its misses, and
+  // with no miss the aim is the mean; the aim is what a point must see.
+  static void Settle(internal::AimSlot* s, bool searching);
+  static bool Sees(const Map& map, const SensorModel& sensor, const Vec2& p,
+                   const internal::AimSlot& s);
+  void Recompute(const DecisionContext& ctx, int robot, int k) {
+    Reaim(ctx, robot, k);
+  }
 };
 
 // What each robot knows from its missed measurements of static targets, as
@@ -623,8 +635,12 @@ class SearchPoints : public MissSlots<SearchPoints, internal::PointsSlot,
   // misses as Recompute.
   void RecomputeShared(const DecisionContext& ctx, int robot, int k, int group,
                        Cache* cache);
-  // Update's work; the points it added.
-  int Record(const DecisionContext& ctx, int robot);
+  // MissSlots::Record's hooks: a finished search forgets its misses and
+  // points; a point sees the search when it sees one of its points (the
+  // mean while there are none).
+  static void Settle(internal::PointsSlot* s, bool searching);
+  static bool Sees(const Map& map, const SensorModel& sensor, const Vec2& p,
+                   const internal::PointsSlot& s);
 };
 
 // The first move of a shortest lattice path from point p to the nearest
