@@ -426,13 +426,7 @@ void Episode::EndMove(int i, const Lattice& lattice) {
   robot_idx_[i] = idx >= 0 ? idx : from_[i];
   made_[i] = MoveBetween(lattice, from_[i], robot_idx_[i]);
   history_.Record(i, made_[i]);
-  if (reserve_) {
-    if (held_from_[i] >= 0) --held_[held_from_[i]];
-    if (held_to_[i] >= 0) --held_[held_to_[i]];
-    held_from_[i] = robot_idx_[i];
-    ++held_[robot_idx_[i]];
-    held_to_[i] = pending_[i] = -1;
-  }
+  if (reserve_) HoldOnly(i, robot_idx_[i]);
   from_[i] = robot_idx_[i];
   ++decisions_[i];
   ready_[i] = comm_.Active(i) ? 1 : 0;
@@ -454,14 +448,20 @@ void Episode::StopFailedRobots() {
     const int at = PointAt(i, lattice);
     if (at >= 0) robot_idx_[i] = at;
     if (reserve_) {
-      if (held_from_[i] >= 0) --held_[held_from_[i]];
-      if (held_to_[i] >= 0) --held_[held_to_[i]];
-      held_to_[i] = pending_[i] = -1;
-      held_from_[i] = at;
-      if (at >= 0) ++held_[at];
+      HoldOnly(i, at);
       HoldAround(i, at, lattice);
     }
   }
+}
+
+// Robot i lets go of the points it held (and of one it waited for) and
+// holds `at` (none where it is -1).
+void Episode::HoldOnly(int i, int at) {
+  if (held_from_[i] >= 0) --held_[held_from_[i]];
+  if (held_to_[i] >= 0) --held_[held_to_[i]];
+  held_to_[i] = pending_[i] = -1;
+  held_from_[i] = at;
+  if (at >= 0) ++held_[at];
 }
 
 // A failed robot stops between points, or off them: every other point a

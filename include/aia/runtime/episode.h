@@ -230,6 +230,9 @@ class Episode {
   // the nearest free one; with reservations, that one unless another robot
   // holds it, else the nearer of the points robot i holds.
   int PointAt(int i, const Lattice& lattice) const;
+  // Robot i holds `at` alone (-1: nothing): what it held and waited for
+  // let go.
+  void HoldOnly(int i, int at);
   // Failed robot i, at point `at`: holds for good the other points within
   // two radii (and a braking margin) of where it stopped.
   void HoldAround(int i, int at, const Lattice& lattice);
