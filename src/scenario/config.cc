@@ -613,8 +613,11 @@ void Scenario::Validate(const FieldChecker& check) {
     }
     if (f.robot == RobotFailure::kRandomRobot) {
       ++random_failures;
-    } else {
-      named.insert(f.robot);
+    } else if (!named.insert(f.robot).second) {
+      // Which of two steps would fail it? Said once.
+      check.Fail(f.robot, "robot " + std::to_string(f.robot) +
+                              " is named by two failure entries: give each "
+                              "robot one failure step");
     }
   }
   // Each random entry fails a robot of its own (world.cc).

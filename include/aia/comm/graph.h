@@ -34,9 +34,10 @@ struct RobotFailure {
     a->Visit(AIA_FIELD(robot)
                  .In(AtLeast(0))
                  .Keyword("random", kRandomRobot)
-                 .Doc("the robot's index, or random (drawn from the seed "
-                      "among the robots no other entry names or drew, so "
-                      "that k random entries fail k robots)"));
+                 .Doc("the robot's index (named by one entry at most), or "
+                      "random (drawn from the seed among the robots no other "
+                      "entry names or drew, so that k random entries fail k "
+                      "robots)"));
     a->Visit(AIA_FIELD(step)
                  .In(Between(0, 1e6))
                  .Doc("decision step from which it is isolated"));
