@@ -208,11 +208,7 @@ void Episode::Step() {
       sim_.SetWaypoint(i, robot_pos_[i]);  // a failed robot stops where it is
       continue;
     }
-    bool replaced = false;
-    const Move m = ApplyWorldRule(lattice, robot_idx_[i], moves_[i],
-                                  rule_rngs_[i], &replaced);
-    invalid_moves_ += replaced ? 1 : 0;
-    applied_[i] = m;
+    const Move m = ApplyRule(i, lattice);
     drives_[i] += m == Move::kStay ? 0 : 1;
     sim_.SetWaypoint(i, lattice.Point(lattice.Next(robot_idx_[i], m)));
   }
@@ -332,6 +328,16 @@ void Episode::StepAsync() {
   times_.total += Since(t_step);
 }
 
+// The world rule on robot i's move (an invalid one is replaced and
+// counted): the move applied.
+Move Episode::ApplyRule(int i, const Lattice& lattice) {
+  bool replaced = false;
+  applied_[i] = ApplyWorldRule(lattice, robot_idx_[i], moves_[i], rule_rngs_[i],
+                               &replaced);
+  invalid_moves_ += replaced ? 1 : 0;
+  return applied_[i];
+}
+
 // Robot i's next move starts now: a stay holds it at its point until the
 // next sensing tick; a failed robot stops where it is.
 void Episode::Apply(int i, const Lattice& lattice) {
@@ -342,11 +348,7 @@ void Episode::Apply(int i, const Lattice& lattice) {
     sim_.Park(i);
     return;
   }
-  bool replaced = false;
-  const Move m = ApplyWorldRule(lattice, robot_idx_[i], moves_[i],
-                                rule_rngs_[i], &replaced);
-  invalid_moves_ += replaced ? 1 : 0;
-  applied_[i] = m;
+  const Move m = ApplyRule(i, lattice);
   from_[i] = robot_idx_[i];
   if (m == Move::kStay) {
     sim_.SetWaypoint(i, lattice.Point(robot_idx_[i]));

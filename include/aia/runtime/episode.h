@@ -230,6 +230,9 @@ class Episode {
   // the nearest free one; with reservations, that one unless another robot
   // holds it, else the nearer of the points robot i holds.
   int PointAt(int i, const Lattice& lattice) const;
+  // The world rule on robot i's policy move: applied_[i], counted if
+  // replaced.
+  Move ApplyRule(int i, const Lattice& lattice);
   // Robot i holds `at` alone (-1: nothing): what it held and waited for
   // let go.
   void HoldOnly(int i, int at);
