@@ -4,7 +4,6 @@
 // policy is a registered policy deciding on a mission's state with the
 // same truth fence as in the loop. Each area is bound by its own Bind*
 // function at the end of the file.
-#include <pthread.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -139,79 +138,77 @@ auto OneCall(R (C::*f)(A...) const, const char* where) {
 
 // ---------------------------------------------------------------------------
 // The GIL let go for C++ work, and the interpreter's exit. A daemon thread
-// inside such a call when the interpreter finalizes is ended (pthread_exit)
-// as it takes the GIL back, and that unwind through pybind11's
-// gil_scoped_release (noexcept) aborted the process ("terminate called
-// without an active exception"). So the module's atexit handler, which
-// runs while daemon threads still live, marks the exit and waits for the
-// calls under way to finish their C++ work. From then on a call on another
-// thread never takes the GIL back: one under way stays in the call once
-// its work is done, one that starts stays there at once, without the GIL,
-// until the process ends. (Keeping the GIL for such calls instead starved
-// the exiting thread: between calls the daemon let the GIL go and took it
-// back at once, in numpy or I/O, so that CPython never asked it to drop
-// the GIL, and exits took seconds.) The exiting thread's own calls go on
-// as before: finalization does not end it.
+// inside such a call when the interpreter finalizes is ended by CPython
+// (pthread_exit) as it takes the GIL back: a forced unwind from inside
+// PyEval_RestoreThread, which must be able to leave the frames above it, as
+// it leaves CPython's own (pybind11's dispatcher lets it through). Through
+// pybind11's gil_scoped_release, whose destructor is noexcept, it aborted
+// the process ("terminate called without an active exception").
 
-// Whether this thread is running a policy's callbacks for aia.evaluate
-// (one of the evaluation's threads, the GIL taken for the call): their
-// evaluation is a call under way, which the exit waits for, and needs
-// them to go on.
+// Whether this thread is running a policy's callbacks for aia.evaluate (one
+// of the evaluation's threads, the GIL taken for the call): an
+// aia.evaluate called there is refused.
 thread_local bool t_inside_evaluate = false;
 
-std::atomic<bool> g_exiting{false};  // set by AwaitCallsAtExit, GIL held
-std::thread::id g_exit_thread;       // AwaitCallsAtExit's, before g_exiting
-std::atomic<int> g_without_gil{0};   // calls under way without the GIL
+// aia.evaluate calls running (their handler for Ctrl-C installed), and
+// whether the interpreter's exit has begun (StopEvaluationsAtExit).
+std::atomic<int> g_evaluations{0};
+std::atomic<bool> g_exiting{false};
 
-// Whether this thread must not take the GIL back (see above).
-bool Parked() {
-  return g_exiting && !t_inside_evaluate &&
-         std::this_thread::get_id() != g_exit_thread;
+// Python's atexit handler (registered at import): an aia.evaluate still
+// running on another thread (a daemon thread's) is stopped as Ctrl-C stops
+// it, after the runs under way, their rows written, so that the exit waits
+// for those runs only and finalization does not meet its threads; without
+// the GIL, which its policy's callbacks need until they stop.
+void StopEvaluationsAtExit() {
+  g_exiting = true;
+  py::gil_scoped_release release;
+  while (g_evaluations.load() > 0) {
+    RequestInterrupt();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
 }
 
-// Without the GIL until the process ends.
-[[noreturn]] void Park() {
-  for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+// Whether the interpreter is finalizing (a thread other than the
+// finalizing one that takes the GIL is ended).
+bool Finalizing() {
+#if PY_VERSION_HEX >= 0x030D0000
+  return Py_IsFinalizing() != 0;
+#else
+  return _Py_IsFinalizing() != 0;
+#endif
 }
 
-// py::gil_scoped_release for the module's calls: the GIL let go for the
-// scope and taken back at its end, unless the interpreter is exiting
-// (above).
+// py::gil_scoped_release for the module's calls, but a destructor that the
+// thread's end may leave by a forced unwind (above). Not to be left by an
+// exception of the scope's own while finalization ends the thread.
 class ReleaseGil {
  public:
-  ReleaseGil() {
-    const bool park = Parked();  // with the GIL, as the exit sets it
-    if (!park) ++g_without_gil;
-    release_.emplace();
-    if (park) Park();
-  }
-  ~ReleaseGil() {
-    if (Parked()) {  // the work is done: the exit need not wait
-      --g_without_gil;
-      Park();
-    }
-    release_.reset();  // the GIL back first: the exit waits for this
-    --g_without_gil;
-  }
+  ReleaseGil() : state_(PyEval_SaveThread()) {}
+  ~ReleaseGil() noexcept(false) { PyEval_RestoreThread(state_); }
   ReleaseGil(const ReleaseGil&) = delete;
   ReleaseGil& operator=(const ReleaseGil&) = delete;
 
  private:
-  std::optional<py::gil_scoped_release> release_;
+  PyThreadState* state_;
 };
 
-// Python's atexit handler (registered at import): waits for the calls
-// under way, without the GIL (an aia.evaluate's threads need it).
-void AwaitCallsAtExit() {
-  g_exit_thread = std::this_thread::get_id();
-  g_exiting = true;
-  py::gil_scoped_release release;
-  while (g_without_gil.load() > 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-}
+// py::gil_scoped_acquire on aia.evaluate's own threads, whose pool would
+// stop a forced unwind: during finalization such a thread waits, without
+// the GIL, until the process ends.
+class AcquireGil {
+ public:
+  AcquireGil() {
+    if (Finalizing())
+      for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+    acquire_.emplace();
+  }
+  AcquireGil(const AcquireGil&) = delete;
+  AcquireGil& operator=(const AcquireGil&) = delete;
 
-// A child forked while other threads were inside calls has none of them.
-void NoCallsInForkedChild() { g_without_gil = 0; }
+ private:
+  std::optional<py::gil_scoped_acquire> acquire_;
+};
 
 // A Python value as an error shows it: its repr (cut short) and its type.
 std::string Shown(py::handle h) {
@@ -1441,7 +1438,7 @@ class CallbackPolicy : public Policy {
   ~CallbackPolicy() override {
     if (started_) ++progress_->finished;
     MissionEnded(id_);
-    py::gil_scoped_acquire gil;
+    AcquireGil gil;
     decide_ = py::object();
   }
   std::string_view name() const override { return name_; }
@@ -1454,7 +1451,7 @@ class CallbackPolicy : public Policy {
   }
   PolicyStatus Decide(const DecisionContext& ctx,
                       std::vector<Move>* moves) override {
-    py::gil_scoped_acquire gil;
+    AcquireGil gil;
     // What runs from here (the progress callback, the policy) is inside an
     // evaluation: an aia.evaluate it calls is refused (it would wait for
     // this one's turn for ever).
@@ -1492,11 +1489,11 @@ class CallbackSpec : public PolicySpec {
         decide_(std::move(decide)),
         progress_(std::move(progress)) {}
   ~CallbackSpec() override {
-    py::gil_scoped_acquire gil;
+    AcquireGil gil;
     decide_ = py::object();
   }
   std::unique_ptr<Policy> Create() const override {
-    py::gil_scoped_acquire gil;
+    AcquireGil gil;
     return std::make_unique<CallbackPolicy>(name(), centralized(), decide_,
                                             progress_);
   }
@@ -1608,6 +1605,10 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
     const std::lock_guard<std::mutex> turn(one_at_a_time);
     CStdioCapture quiet;
     InterruptScope scope;  // Ctrl-C: the rows done are written; back to Python
+    struct Running {       // after the scope, which clears the flag
+      Running() { ++g_evaluations; }
+      ~Running() { --g_evaluations; }
+    } running;
     try {
       rc = RunEval(o);
     } catch (const InputError& e) {
@@ -1982,8 +1983,10 @@ PYBIND11_MODULE(_aia, m) {
   py::module_::import("numpy");
   (void)py::array_t<long long>(1);
   py::module_::import("atexit").attr("register")(
-      py::cpp_function(&aia::python::AwaitCallsAtExit));
-  pthread_atfork(nullptr, nullptr, &aia::python::NoCallsInForkedChild);
+      py::cpp_function(&aia::python::StopEvaluationsAtExit));
+  m.def(
+      "_exiting", [] { return aia::python::g_exiting.load(); },
+      "whether the interpreter's exit has begun (aia.evaluate's end then)");
   aia::python::BindErrors(m);
   aia::python::BindMoves(m);
   aia::python::BindMission(m);

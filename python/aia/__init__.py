@@ -650,6 +650,8 @@ def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
     if rc == 130:
         if bar is not None:
             bar.end(out)
+        if _aia._exiting():  # stopped by the interpreter's exit
+            return None
         raise KeyboardInterrupt(f"aia.evaluate: interrupted; the finished "
                                 f"rows are in {out}/runs.csv: call again "
                                 "with the same arguments to go on")

@@ -48,6 +48,8 @@ void InstallInterruptHandler() {
 
 bool Interrupted() { return g_interrupted != 0; }
 
+void RequestInterrupt() { g_interrupted = 1; }
+
 struct InterruptScope::Saved {
   struct sigaction int_action {};
   struct sigaction term_action {};

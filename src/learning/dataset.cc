@@ -528,9 +528,10 @@ namespace {
 std::string UnreadableShard(const std::string& path, const SqliteError& e) {
   std::error_code ec;
   if (std::filesystem::exists(path + "-journal", ec))
-    return "was left mid-episode by an aia dataset that was stopped (" + path +
-           "-journal is its unfinished episode): run that aia dataset "
-           "command again, which drops the episode and goes on (SQLite: " +
+    return "holds an unfinished episode (" + path +
+           "-journal): an aia dataset that was stopped left it (run that "
+           "command again, which drops the episode and goes on), or one is "
+           "writing it now (read the shard once it has finished) (SQLite: " +
            e.what() + ")";
   return std::string("not an aia dataset shard (SQLite: ") + e.what() + ")";
 }

@@ -14,10 +14,11 @@ namespace aia {
 namespace {
 
 // Moving targets' aims and fields are kept per span of this many depths (the
-// predicted mean at the span's middle), for at most kMaxBuckets spans;
-// where the moving targets' fields would pass kMovingFieldBytes (a field is
-// an int per lattice point), fewer and longer spans covering as many
-// depths (10 robots, 50 moving targets, 100 m: 512 MB of fields before).
+// predicted mean at the span's middle), for at most kMaxBuckets spans, the
+// last of which takes every deeper depth; where the moving targets' fields
+// would pass kMovingFieldBytes (a field is an int per lattice point), fewer
+// spans, the near ones as they were (10 robots, 50 moving targets, 100 m:
+// 512 MB of fields before).
 constexpr int kBucket = 4;
 constexpr int kMaxBuckets = 64;
 constexpr double kMovingFieldBytes = 128.0 * (1 << 20);
@@ -48,7 +49,6 @@ void AimTable::Reset(const Map& map, const SensorModel& sensor,
   if (moving > 0 && moving * field_bytes * kMaxBuckets > kMovingFieldBytes)
     buckets_ = std::max(
         1, static_cast<int>(kMovingFieldBytes / (moving * field_bytes)));
-  span_ = (kBucket * kMaxBuckets + buckets_ - 1) / buckets_;
   slots_.resize(m);
   for (int k = 0; k < m; ++k) {
     is_static_[k] = layout.is_static(k) ? 1 : 0;
@@ -87,7 +87,7 @@ const Vec2& AimTable::MeanAt(int depth, int k) {
 
 int AimTable::Bucket(int depth, int k) const {
   if (is_static_[k]) return 0;
-  return std::min(depth / span_, buckets_ - 1);
+  return std::min(depth / kBucket, buckets_ - 1);
 }
 
 void AimTable::RegionOf(const Vec2& x,
@@ -131,7 +131,7 @@ AimTable::Slot& AimTable::SlotAt(int depth, int k) {
   if (slot.ready) return slot;
   const int b = Bucket(depth, k);
   const Vec2 mean =
-      is_static_[k] ? means_[0][k] : MeanAt(b * span_ + span_ / 2, k);
+      is_static_[k] ? means_[0][k] : MeanAt(b * kBucket + kBucket / 2, k);
   const Eigen::MatrixXd sigma =
       belief_->Covariance(row_, k).topLeftCorner(2, 2);
   const std::vector<int>* missed =

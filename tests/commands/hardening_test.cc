@@ -586,9 +586,9 @@ TEST(HardeningTest, AShardLeftMidEpisodeSaysToRunTheDatasetAgain) {
   ASSERT_TRUE(fs::exists(shard + "-journal"));
   ExpectOneErrorLine(RunAia({"train", "--data", dir + "/d", "--out",
                              dir + "/m.pt", "--epochs", "1", "--quiet"}),
-                     shard +
-                         ": --data: was left mid-episode by an aia "
-                         "dataset that was stopped");
+                     shard + ": --data: holds an unfinished episode (" + shard +
+                         "-journal): an aia dataset that was stopped left "
+                         "it (run that command again");
   EXPECT_EQ(RunAia(args).exit_code, 0);
   EXPECT_FALSE(fs::exists(shard + "-journal"));
   fs::remove_all(dir);

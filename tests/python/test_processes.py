@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 import weakref
 from pathlib import Path
 
@@ -177,7 +178,7 @@ def test_a_forked_child_renders_where_the_parent_made_no_llvmpipe_threads(
 
 DAEMON_AT_EXIT = """
 import atexit, sys, time
-# Runs after aia's atexit handler: how long the exit waited.
+# How long the exit waited.
 atexit.register(lambda: print("waited", time.time() - DONE, file=sys.stderr))
 import threading, aia, numpy as np
 S, kind, out = sys.argv[1], sys.argv[2], sys.argv[3]
@@ -219,9 +220,8 @@ def test_a_daemon_thread_inside_a_call_at_exit_does_not_abort(kind,
     # The thread was ended as it took the GIL back during finalization, and
     # the unwind through gil_scoped_release (noexcept) aborted the process
     # (exit 134, "terminate called without an active exception"), every
-    # time. The exit waits for the call under way only: a thread that kept
-    # the GIL for its calls after starved it for seconds (the env's, whose
-    # numpy lets the GIL go between calls).
+    # time: the forced unwind CPython starts there now leaves the module's
+    # frames as it leaves CPython's.
     for run in range(3):
         code, out, err = run_python(DAEMON_AT_EXIT, DEFAULT, kind,
                                     str(tmp_path / str(run)))
@@ -230,6 +230,58 @@ def test_a_daemon_thread_inside_a_call_at_exit_does_not_abort(kind,
         waited = [float(line.split()[1]) for line in err.splitlines()
                   if line.startswith("waited ")]
         assert len(waited) == 1 and waited[0] < 3.0, err
+
+
+JOIN_AT_EXIT = """
+import atexit, sys, threading, time
+stop = threading.Event()
+def cleanup():  # registered before aia is imported: runs after its own
+    stop.set()
+    t.join()
+    print("joined", flush=True)
+atexit.register(cleanup)
+import aia
+S = sys.argv[1]
+def worker():
+    m = aia.Mission(S, seed=1, overrides={"robots.count": 3})
+    while not stop.is_set():
+        if m.done:
+            m = aia.Mission(S, seed=m.seed + 1, overrides={"robots.count": 3})
+        m.step([0] * m.num_robots)
+t = threading.Thread(target=worker, daemon=True)
+t.start()
+time.sleep(1.0)
+"""
+
+EVALUATE_AT_EXIT = """
+import sys, threading, time, aia
+def policy(m):
+    time.sleep(0.01)
+    return [4] * m.num_robots
+def run():
+    aia.evaluate(policy, ["4x4"], seeds=200, out=sys.argv[2], threads=1,
+                 progress=False)
+threading.Thread(target=run, daemon=True).start()
+time.sleep(2.0)
+print("main done", flush=True)
+"""
+
+
+def test_the_exit_lets_handlers_join_and_stops_an_evaluation(tmp_path):
+    # An atexit handler of the package that parked every call after it ran
+    # blocked a user handler registered before `import aia` that joins a
+    # thread making calls (hung for ever), and the exit waited for a daemon
+    # thread's whole aia.evaluate (minutes; without the wait, a segfault).
+    code, out, err = run_python(JOIN_AT_EXIT, DEFAULT)
+    assert (code, out) == (0, "joined\n"), err
+    start = time.time()
+    code, out, err = run_python(EVALUATE_AT_EXIT, DEFAULT,
+                                str(tmp_path / "e"))
+    assert "terminate called" not in err and "Traceback" not in err, err
+    assert (code, out) == (0, "main done\n"), err
+    assert time.time() - start < 30.0, err
+    rows = (tmp_path / "e" / "runs.csv").read_text().splitlines()
+    assert 1 < len(rows) < 201, rows  # some runs kept, not all made
 
 
 FORK_DURING_CALL = """
@@ -260,7 +312,7 @@ for _ in range(3):
 
 
 def test_a_child_forked_while_a_thread_is_inside_a_call_exits():
-    # The exit waits for the calls under way: the child's count of them
-    # was the parent's, and it waited for the thread it does not have.
+    # A child forked while another thread is inside a call has no such
+    # thread: its exit must not wait for it.
     code, out, err = run_python(FORK_DURING_CALL, DEFAULT)
     assert (code, out) == (0, "exit status 0\n" * 3), err

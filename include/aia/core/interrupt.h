@@ -17,6 +17,9 @@ void InstallInterruptHandler();
 
 // Whether SIGINT or SIGTERM arrived since InstallInterruptHandler().
 bool Interrupted();
+// Sets that flag as a signal would: a request from within the process (the
+// Python package's, at the interpreter's exit, to a running evaluate).
+void RequestInterrupt();
 
 // The handler for one job inside a longer-lived process (the Python
 // package's evaluate): installed on construction; on destruction the

@@ -76,8 +76,8 @@ class AimTable {
   std::vector<std::vector<Vec2>> means_;    // [depth][k] position means
   std::vector<Eigen::VectorXd> full_mean_;  // mean propagation's state
   std::vector<std::vector<Slot>> slots_;    // [k][bucket]
-  std::vector<int> reach_;      // BFS distance from the nearest active robot
-  int buckets_ = 1, span_ = 1;  // a moving target's spans, and their depths
+  std::vector<int> reach_;  // BFS distance from the nearest active robot
+  int buckets_ = 1;  // a moving target's spans (the last: every depth on)
   // Scratch.
   std::vector<std::pair<int, double>> region_, trial_region_;
   std::vector<int> bfs_queue_, sources_;
