@@ -1,7 +1,8 @@
 #include "aia/world/mjcf.h"
 
+#include <langinfo.h>
+
 #include <algorithm>
-#include <clocale>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -159,7 +160,7 @@ void CheckNumericLocale() {
   // follow LC_NUMERIC; a host that set it to a comma-decimal locale (a
   // Python process after locale.setlocale(locale.LC_ALL, "")) would write
   // 0,005 here and read 0.005 there as 0.
-  const char* point = std::localeconv()->decimal_point;
+  const char* point = nl_langinfo(RADIXCHAR);  // localeconv is not MT-safe
   if (point == nullptr || std::string(point) != ".")
     throw InputError("locale", 0, "LC_NUMERIC",
                      std::string("this process writes numbers with '") +
