@@ -143,7 +143,7 @@ AimTable::Slot& AimTable::SlotAt(int depth, int k) {
   for (const auto& [q, r] : region_) sources_.push_back(q);
   const Lattice& lattice = map_->lattice();
   if (slot.made_on != lattice.id() || slot.sources != sources_) {
-    slot.sources = sources_;
+    slot.sources.swap(sources_);  // sources_ is scratch
     slot.made_on = lattice.id();
     BfsDistances(lattice, slot.sources.data(),
                  static_cast<int>(slot.sources.size()), &slot.field,

@@ -555,7 +555,6 @@ std::unique_ptr<FileLock> LockOutputFolder(const std::string& out) {
     CheckReplaceableFile(out);  // before its folder is made: `--out DIR/`
     MakeDirs(parent.string());
     lock = std::make_unique<FileLock>(parent.string());
-    CheckReplaceableFile(out);
   } catch (const std::runtime_error& e) {
     throw InputError("command line", 0, "--out", e.what());
   }
