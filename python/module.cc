@@ -296,8 +296,8 @@ std::vector<long long> Integers(
   const bool is_array = py::isinstance<py::array>(obj);
   if (!is_array && !PyList_Check(obj.ptr()) && !PyTuple_Check(obj.ptr()))
     Refuse(where, arg,
-           "must be a list or numpy array of integers " + expect + " " +
-               shape_name + ", got " + Shown(obj));
+           "must be a list or numpy array of integers (" + shape_name +
+               "), each " + expect + ", got " + Shown(obj));
   py::array a;
   try {
     // A list's own items (object dtype): numpy would make True into 1.
@@ -318,7 +318,7 @@ std::vector<long long> Integers(
   const char kind = a.dtype().kind();
   if (kind != 'i' && kind != 'u' && kind != 'O')
     Refuse(where, arg,
-           "must be integers " + expect + ", got an array of " +
+           "must be integers, each " + expect + ", got an array of " +
                py::str(a.dtype()).cast<std::string>());
   // "[i][j]" of the flat element k, for an error.
   const auto index_of = [&got](std::size_t k) {
@@ -874,7 +874,10 @@ class Mission {
       bool any_active = false;
       for (int i = 0; i < num_robots(); ++i)
         any_active = any_active || ctx.comm->Active(i);
-      r.terminated = e.success() || !any_active;
+      // Ended by success only where success ends it (a tracking mission,
+      // stop_at_success false, runs to its horizon: truncated there).
+      r.terminated =
+          (e.success() && e.mission().stop_at_success) || !any_active;
       r.truncated = !r.terminated;
     }
     return r;
@@ -1364,7 +1367,7 @@ class PyDataset {
     const std::vector<long long> indices = Integers(
         indices_arg, {-1}, 0, size() - 1, "aia.Dataset.batch", "indices",
         "a sample index in [0, " + std::to_string(size() - 1) + "]",
-        "a list of sample indices");
+        "sample indices");
     if (indices.empty())
       Refuse("aia.Dataset.batch", "indices", "no sample indices");
     const ChannelRenderer& first = renderers_[data_.samples[indices[0]].world];

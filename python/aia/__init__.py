@@ -66,10 +66,17 @@ def _retitled(text, old, new):
 
 def _warn_scenario(core, where):
     """The scenario's warnings (what aia's commands print as "warning: ..."
-    lines) as ScenarioWarning, an override's named as the argument."""
+    lines) as ScenarioWarning, an override's named as the argument, each
+    told at the caller's line (the first frame outside this package, however
+    deep the call: aia.parallel_env makes its Mission in env.py)."""
+    package = _os.path.dirname(_os.path.abspath(__file__)) + _os.sep
+    frame, level = _sys._getframe(1), 2
+    while frame is not None and \
+            _os.path.abspath(frame.f_code.co_filename).startswith(package):
+        frame, level = frame.f_back, level + 1
     for text in core.scenario_warnings:
         _warnings.warn(_retitled(text, "command line", where),
-                       ScenarioWarning, stacklevel=3)
+                       ScenarioWarning, stacklevel=level)
 
 
 def _shown(value):

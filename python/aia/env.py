@@ -9,7 +9,8 @@ move 4, which Mission.step takes, is not an action here: the paper's four
 moves, so that a team cannot learn to idle). Its reward at
 a step is the drop of its own summed log det Sigma (each target counted
 down to log eps only, as the greedy policy counts gains), less
-`step_penalty`. At success every agent terminates and `agents` is empty;
+`step_penalty`. At success every agent terminates and `agents` is empty
+(unless mission.stop_at_success is false: a tracking mission runs on);
 past mission.max_steps every agent is truncated; a failed robot terminates
 and leaves `agents`.
 
@@ -27,6 +28,14 @@ except ImportError:
     _spaces = None
 
 
+def _seeded(seed):
+    """A generator and its seed, as gymnasium's seeding.np_random: the same
+    draws as numpy.random.default_rng(seed), and the seed drawn from the
+    operating system's entropy when none is given."""
+    sequence = np.random.SeedSequence(seed)
+    return np.random.Generator(np.random.PCG64(sequence)), sequence.entropy
+
+
 class Discrete:
     """{0, ..., n-1}, as gymnasium.spaces.Discrete."""
 
@@ -37,7 +46,7 @@ class Discrete:
         self._rng = np.random.default_rng(seed)
 
     def seed(self, seed=None):
-        self._rng = np.random.default_rng(seed)
+        self._rng, seed = _seeded(seed)
         return [seed]
 
     def sample(self, mask=None):
@@ -92,7 +101,7 @@ class Box:
         self._rng = np.random.default_rng(seed)
 
     def seed(self, seed=None):
-        self._rng = np.random.default_rng(seed)
+        self._rng, seed = _seeded(seed)
         return [seed]
 
     def sample(self, mask=None):
@@ -104,7 +113,12 @@ class Box:
         return self._rng.uniform(lo, hi).astype(self.dtype)
 
     def contains(self, x):
-        x = np.asarray(x)
+        # A list or a number is read as this space's dtype, as gymnasium's.
+        if not isinstance(x, np.ndarray):
+            try:
+                x = np.asarray(x, dtype=self.dtype)
+            except (TypeError, ValueError):
+                return False
         return (x.shape == self.shape and np.can_cast(x.dtype, self.dtype)
                 and bool(np.all(x >= self.low)) and bool(np.all(x <= self.high)))
 
@@ -131,6 +145,22 @@ class Dict:
 
     def __getitem__(self, key):
         return self.spaces[key]
+
+    # A mapping, as gymnasium's Dict.
+    def __iter__(self):
+        return iter(self.spaces)
+
+    def __len__(self):
+        return len(self.spaces)
+
+    def keys(self):
+        return self.spaces.keys()
+
+    def values(self):
+        return self.spaces.values()
+
+    def items(self):
+        return self.spaces.items()
 
     def seed(self, seed=None):
         seeds = []
@@ -224,17 +254,21 @@ class ParallelEnv:
         self.possible_agents = [f"robot_{i}" for i in range(n)]
         self._robot = {a: i for i, a in enumerate(self.possible_agents)}
         self.agents = []
-        shape = first.channels(**self._channels).shape[1:]
+        try:
+            shape = first.channels(**self._channels).shape[1:]
+        except InputError as e:  # named as this function's argument
+            raise InputError(_retitled(str(e), "aia.Mission.channels",
+                                       where)) from None
         # One space object per agent: seeding one seeds that one only.
-        self.observation_spaces = {
+        self._observation_spaces = {
             a: _observation_space(shape, len(VECTOR_FEATURES))
             for a in self.possible_agents}
-        self.action_spaces = {a: _action_space()
-                              for a in self.possible_agents}
+        self._action_spaces = {a: _action_space()
+                               for a in self.possible_agents}
         # state(): positions (N, 2) and active (N,) of the robots; per
         # target the team's best clipped log det share and its mean (M, 2);
         # the step share.
-        self.state_space = _box(3 * n + 3 * m + 1)
+        self._state_space = _box(3 * n + 3 * m + 1)
         # Every reset restarts this one mission: the scenario is the file as
         # read now (not as edited later, nor read from another working
         # directory), and its warnings were said once, above.
@@ -255,13 +289,29 @@ class ParallelEnv:
     def unwrapped(self):
         return self
 
-    def observation_space(self, agent):
-        self._open("observation_space")
-        return self.observation_spaces[self._agent(agent)]
+    # The spaces, refused after close() as every call is.
+    @property
+    def observation_spaces(self):
+        self._open("observation_spaces")
+        return self._observation_spaces
 
-    def action_space(self, agent):
-        self._open("action_space")
-        return self.action_spaces[self._agent(agent)]
+    @property
+    def action_spaces(self):
+        self._open("action_spaces")
+        return self._action_spaces
+
+    @property
+    def state_space(self):
+        self._open("state_space")
+        return self._state_space
+
+    def observation_space(self, agent, _api="ParallelEnv"):
+        self._open("observation_space", _api)
+        return self._observation_spaces[self._agent(agent)]
+
+    def action_space(self, agent, _api="ParallelEnv"):
+        self._open("action_space", _api)
+        return self._action_spaces[self._agent(agent)]
 
     def _agent(self, agent):
         if agent not in self._robot:
@@ -363,13 +413,14 @@ class ParallelEnv:
         if not self.agents:
             raise InputError("aia.ParallelEnv.step: the mission is over "
                              "(agents is empty): call reset()")
-        self._mission.step(self._moves(actions))
+        result = self._mission.step(self._moves(actions))
         state = self._mission.state()
         log_det = self._own_log_det(state)
         drop = self._log_det - log_det
         self._log_det = log_det
-        success = self._mission.success
-        truncated = self._mission.done and not success
+        # The mission's own end: success ends it only where it stops at
+        # success (a tracking mission runs to its horizon, truncated).
+        success, truncated = result.terminated, result.truncated
         masks = self._mission.valid_moves().astype(np.int8)
         alive = self.agents
         rewards, terminations, truncations, infos = {}, {}, {}, {}
@@ -453,8 +504,6 @@ class AECEnv:
     def __init__(self, parallel):
         self._env = parallel
         self.possible_agents = list(parallel.possible_agents)
-        self.observation_spaces = parallel.observation_spaces
-        self.action_spaces = parallel.action_spaces
         self.agents = []
         self.agent_selection = None
         self.rewards = {}
@@ -473,9 +522,21 @@ class AECEnv:
     def render_mode(self):
         return self._env.render_mode
 
+    # The spaces, refused after close() as the parallel env's are.
+    @property
+    def observation_spaces(self):
+        self._env._open("observation_spaces", "AECEnv")
+        return self._env._observation_spaces
+
+    @property
+    def action_spaces(self):
+        self._env._open("action_spaces", "AECEnv")
+        return self._env._action_spaces
+
     @property
     def state_space(self):
-        return self._env.state_space
+        self._env._open("state_space", "AECEnv")
+        return self._env._state_space
 
     @property
     def num_agents(self):
@@ -495,10 +556,10 @@ class AECEnv:
         return len(self.possible_agents)
 
     def observation_space(self, agent):
-        return self._env.observation_space(agent)
+        return self._env.observation_space(agent, _api="AECEnv")
 
     def action_space(self, agent):
-        return self._env.action_space(agent)
+        return self._env.action_space(agent, _api="AECEnv")
 
     def reset(self, seed=None, options=None):
         self._observations, self.infos = self._env.reset(seed, options,

@@ -92,12 +92,8 @@ int RunExpertBench(const BenchOptions& o) {
     for (int k = 0; k < o.seeds; ++k) {
       const EvalInstance instance{size_text, size.robots, size.targets,
                                   o.seed + k};
-      std::shared_ptr<const Instance> built;
-      try {
-        built = BuildInstance(InstanceScenario(instance, setup));
-      } catch (const InputError& e) {
-        NameTheFlag(e, InstanceSpec(instance, setup));
-      }
+      const std::shared_ptr<const Instance> built = BuildGenerated(
+          InstanceScenario(instance, setup), InstanceSpec(instance, setup));
       const SamplingPlan plan = PlanFromStart(built, expert);
       secs.push_back(plan.seconds);
       // F* is a found plan's depth: a search that found none has no F*.
@@ -229,12 +225,8 @@ int RunBench(const BenchOptions& o) {
     s.mission.max_steps = o.steps;
     s.mission.stop_at_success = false;
     const std::shared_ptr<const PolicySpec>& policy = setup.policies[0];
-    std::shared_ptr<const Instance> instance;
-    try {
-      instance = BuildInstance(s);
-    } catch (const InputError& e) {
-      NameTheFlag(e, InstanceSpec(generated, setup));
-    }
+    const std::shared_ptr<const Instance> instance =
+        BuildGenerated(s, InstanceSpec(generated, setup));
     std::vector<double> rate, ms, phys, sens, fus, pol, rest, share, mjrate,
         contacts;
     std::string mjcf;

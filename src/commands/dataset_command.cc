@@ -327,11 +327,7 @@ DatasetSetup PrepareDataset(const DatasetOptions& o) {
   expert_scenario.policy.name = "expert";
   expert_scenario.policy.params = ConfigNode();
   d.expert = d.registry.Resolve(expert_scenario);
-  try {
-    BuildInstance(d.base);
-  } catch (const InputError& e) {
-    NameTheFlag(e, d.spec);
-  }
+  BuildGenerated(d.base, d.spec);
   return d;
 }
 
@@ -376,14 +372,9 @@ DatasetEpisode RunDatasetEpisode(const DatasetOptions& o, const DatasetSetup& d,
     shadow_owner = d.expert->Create();
     shadow = dynamic_cast<ExpertPolicy*>(shadow_owner.get());
   }
-  std::shared_ptr<const Instance> instance;
-  try {
-    instance = BuildInstance(s);
-  } catch (const InputError& error) {
-    GeneratedSpec spec = d.spec;
-    spec.seed = s.seed;
-    NameTheFlag(error, spec);
-  }
+  GeneratedSpec spec = d.spec;
+  spec.seed = s.seed;
+  const std::shared_ptr<const Instance> instance = BuildGenerated(s, spec);
   Episode episode(instance, d.acting->Create());
   DatasetObserver observer(shadow, e, stop ? 3 : -1, o.max_seconds, o.keep,
                            instance->scenario.mission.max_steps, s.seed);

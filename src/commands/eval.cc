@@ -104,11 +104,7 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
   Scenario base;
   for (const EvalInstance& inst : checked) {
     const Scenario s = InstanceScenario(inst, setup);
-    try {
-      BuildInstance(s);
-    } catch (const InputError& e) {
-      NameTheFlag(e, InstanceSpec(inst, setup));
-    }
+    BuildGenerated(s, InstanceSpec(inst, setup));
     if (&inst == &checked.front()) base = s;
   }
   if (checked.empty()) base = InstanceScenario({"1x1", 1, 1, 0}, setup);
@@ -165,12 +161,8 @@ Scenario InstanceScenario(const EvalInstance& instance,
 std::vector<EvalRow> RunInstance(const EvalInstance& inst,
                                  const EvalSetup& setup,
                                  const std::vector<std::string>& policies) {
-  std::shared_ptr<const Instance> instance;
-  try {
-    instance = BuildInstance(InstanceScenario(inst, setup));
-  } catch (const InputError& e) {
-    NameTheFlag(e, InstanceSpec(inst, setup));
-  }
+  const std::shared_ptr<const Instance> instance =
+      BuildGenerated(InstanceScenario(inst, setup), InstanceSpec(inst, setup));
   const SamplingPlan plan =
       PlanFromStart(instance, *ParamsOf<ExpertParams>(*setup.expert));
   const int fstar = plan.found ? plan.depth : -1;

@@ -419,9 +419,7 @@ RowSink::RowSink(const EvalOptions& o, const std::vector<std::string>& policies,
     fd_ = -1;
     errno = EINVAL;
   }
-  if (fd_ < 0)
-    throw std::runtime_error("cannot write '" + runs_path_ +
-                             "': " + std::strerror(errno));
+  if (fd_ < 0) ThrowCannotWriteErrno(runs_path_, errno);
   ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
 }
 RowSink::~RowSink() {
@@ -434,10 +432,10 @@ void RowSink::Record(const EvalRow& row) {
     ranks_->SendLine(line);
     return;
   }
+  errno = 0;
   if (::write(fd_, line.data(), line.size()) !=
       static_cast<ssize_t>(line.size()))
-    throw std::runtime_error("cannot write '" + runs_path_ + "': " +
-                             std::strerror(errno != 0 ? errno : ENOSPC));
+    ThrowCannotWriteErrno(runs_path_, errno);
   // Kept as the file holds it (its columns rounded), so that summary.csv
   // is the same whether the rows were run now or read by a resume.
   EvalRow written;

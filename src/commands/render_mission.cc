@@ -218,9 +218,7 @@ class VideoObserver : public StepObserver {
       // cv::imwrite prints libpng's own message and returns false.
       const std::string png =
           EncodePng(image.data, image.cols, image.rows, image.step);
-      if (png.empty())
-        throw std::runtime_error("cannot write '" + path +
-                                 "': the PNG encoder failed");
+      if (png.empty()) ThrowCannotWrite(path, "the PNG encoder failed");
       WriteFileAtomic(path, png);
       ++png_frames_;
     }

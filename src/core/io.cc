@@ -306,13 +306,11 @@ void CheckReplaceableFile(const std::string& path) {
   // `dir/`, `dir/.` or `..` name a folder, whether it exists yet or not.
   const std::string name = std::filesystem::path(path).filename().string();
   if (!path.empty() && (name.empty() || name == "." || name == ".."))
-    throw std::runtime_error("cannot write '" + path +
-                             "': it names a folder, not a file; give a "
-                             "file's path");
+    ThrowCannotWrite(path, "it names a folder, not a file; give a file's path");
   const std::string kind = NonRegularKind(path);
   if (!kind.empty())
-    throw std::runtime_error("cannot write '" + path + "': it is " + kind +
-                             ", not a regular file; give a file's path");
+    ThrowCannotWrite(
+        path, "it is " + kind + ", not a regular file; give a file's path");
 }
 
 bool SameFile(const std::string& a, const std::string& b) {
@@ -349,14 +347,12 @@ AtomicFile::AtomicFile(const std::string& path)
   const int fd =
       ::open(tmp_.c_str(),
              O_WRONLY | O_CREAT | O_TRUNC | O_NONBLOCK | O_CLOEXEC, 0644);
-  if (fd < 0)
-    throw std::runtime_error("cannot write '" + path +
-                             "': " + std::strerror(errno));
+  if (fd < 0) ThrowCannotWriteErrno(path, errno);
   struct stat st;
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     ::close(fd);
-    throw std::runtime_error("cannot write '" + path + "': its temporary '" +
-                             tmp_ + "' is not a regular file");
+    ThrowCannotWrite(path,
+                     "its temporary '" + tmp_ + "' is not a regular file");
   }
   ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
   file_ = ::fdopen(fd, "wb");
@@ -364,8 +360,7 @@ AtomicFile::AtomicFile(const std::string& path)
     const int err = errno;
     ::close(fd);
     std::remove(tmp_.c_str());
-    throw std::runtime_error("cannot write '" + path +
-                             "': " + std::strerror(err));
+    ThrowCannotWriteErrno(path, err);
   }
 }
 
@@ -393,17 +388,24 @@ void AtomicFile::Commit() {
   if (err == 0 && std::rename(tmp_.c_str(), path_.c_str()) != 0) err = errno;
   if (err != 0) {
     std::remove(tmp_.c_str());
-    throw std::runtime_error("cannot write '" + path_ +
-                             "': " + std::strerror(err));
+    ThrowCannotWriteErrno(path_, err);
   }
 }
 
 void WriteFileAtomic(const std::string& path, const std::string& content) {
   AtomicFile f(path);
+  errno = 0;
   if (std::fwrite(content.data(), 1, content.size(), f.get()) != content.size())
-    throw std::runtime_error("cannot write '" + path +
-                             "': " + std::strerror(errno));
+    ThrowCannotWriteErrno(path, errno);
   f.Commit();
+}
+
+void ThrowCannotWrite(const std::string& path, const std::string& why) {
+  throw std::runtime_error("cannot write '" + path + "': " + why);
+}
+
+void ThrowCannotWriteErrno(const std::string& path, int err) {
+  ThrowCannotWrite(path, std::strerror(err != 0 ? err : ENOSPC));
 }
 
 }  // namespace aia

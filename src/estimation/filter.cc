@@ -55,8 +55,11 @@ bool PredictOmega(const TargetModel& model, const MatD<D>& sigma,
 }
 
 // x_{t+1|t} for one target block: Omega as above, xi = Omega (A mu + b);
-// whether the variance was scaled back (PredictOmega). For the filter
-// (`filter`), a mean that is not finite is a divergence.
+// whether the variance was scaled back (PredictOmega) or, for the filter
+// (`filter`), the mean: each entry held within kMaxMean (an unstable
+// target's mean doubles a step in a belief that nothing measures, and
+// overflowed after some 1000 steps). A mean that is not finite even so is
+// a divergence.
 template <int D>
 bool PredictBlock(const TargetModel& model, double* block, bool filter) {
   Eigen::Map<MatD<D>> omega(block);
@@ -65,10 +68,16 @@ bool PredictBlock(const TargetModel& model, double* block, bool filter) {
   const Eigen::Map<const VecD<D>> b(model.b.data());
   const MatD<D> sigma = internal::InverseSpd<D>(omega);
   const VecD<D> mu = sigma * xi;
-  const bool beyond = PredictOmega<D>(model, sigma, omega);
-  const VecD<D> mu_pred = a * mu + b;
-  if (filter && !mu_pred.allFinite())
-    throw EstimateDiverged(-1, "its predicted mean is not finite");
+  bool beyond = PredictOmega<D>(model, sigma, omega);
+  VecD<D> mu_pred = a * mu + b;
+  if (filter) {
+    if (mu_pred.cwiseAbs().maxCoeff() > kMaxMean) {
+      mu_pred = mu_pred.cwiseMax(-kMaxMean).cwiseMin(kMaxMean);
+      beyond = true;
+    }
+    if (!mu_pred.allFinite())
+      throw EstimateDiverged(-1, "its predicted mean is not finite");
+  }
   xi = omega * mu_pred;
   return beyond;
 }
@@ -350,9 +359,10 @@ void Predict(BeliefSet* beliefs, const std::vector<std::uint8_t>* active,
       kept = scaled[static_cast<std::size_t>(r) * m + k] == 0;
     }
     if (counted && !kept)
-      throw EstimateDiverged(k, "its predicted variance passes " +
-                                    FormatNumber(kMaxVariance) +
-                                    " m^2 in every estimate that counts");
+      throw EstimateDiverged(
+          k, "its predicted variance passes " + FormatNumber(kMaxVariance) +
+                 " m^2, or its mean " + FormatNumber(kMaxMean) +
+                 ", in every estimate that counts");
   }
 }
 

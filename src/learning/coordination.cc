@@ -3,23 +3,18 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
+#include "aia/core/field_io.h"
 #include "aia/learning/network.h"
 #include "aia/planning/information.h"
 
 namespace aia {
 
 std::string FirstRuleKeySet(const IgbNetParams& params) {
-  const IgbNetParams d;
-  if (params.max_reversals != d.max_reversals) return "policy.max_reversals";
-  if (params.max_walk != d.max_walk) return "policy.max_walk";
-  if (params.search != d.search) return "policy.search";
-  if (params.share_search != d.share_search) return "policy.share_search";
-  if (params.no_undo != d.no_undo) return "policy.no_undo";
-  if (params.claims != d.claims) return "policy.claims";
-  if (params.approach != d.approach) return "policy.approach";
-  if (params.open != d.open) return "policy.open";
-  if (params.refresh != d.refresh) return "policy.refresh";
+  // Every field but the two that are not rules, in declaration order.
+  for (const std::string& key : ChangedFields(params, IgbNetParams{}))
+    if (key != "coordination" && key != "precision") return "policy." + key;
   return "";
 }
 

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <new>
 #include <stdexcept>
 
 #include "aia/core/error.h"
@@ -132,7 +133,7 @@ class SqliteError : public std::runtime_error {
   } else {
     why = sqlite3_errstr(code);
   }
-  throw std::runtime_error("cannot write '" + path + "': " + why);
+  ThrowCannotWrite(path, why);
 }
 
 class Statement {
@@ -661,6 +662,8 @@ Dataset ReadDataset(const std::vector<std::string>& paths,
       throw;
     } catch (const SqliteError& e) {
       throw InputError(f, 0, key, UnreadableShard(f, e));
+    } catch (const std::bad_alloc&) {
+      throw;  // out of memory is not bad input (cli.cc says it)
     } catch (const std::exception& e) {
       throw InputError(f, 0, key, e.what());
     }

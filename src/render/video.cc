@@ -76,13 +76,13 @@ void Mp4Writer::Commit() {
     const std::string dir = std::filesystem::path(tmp_).parent_path().string();
     if (NoSpaceLeft(dir)) damage = std::strerror(ENOSPC);
     std::remove(tmp_.c_str());
-    throw std::runtime_error("cannot write '" + path_ + "': " + damage);
+    ThrowCannotWrite(path_, damage);
   }
   std::error_code ec;
   std::filesystem::rename(tmp_, path_, ec);
   if (ec) {
     std::remove(tmp_.c_str());
-    throw std::runtime_error("cannot write '" + path_ + "': " + ec.message());
+    ThrowCannotWrite(path_, ec.message());
   }
 }
 

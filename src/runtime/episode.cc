@@ -143,7 +143,7 @@ void Episode::MoveTargets() {
     target_prev_[k] = target_pos_[k];
     if (estimate_.layout().is_static(k)) continue;
     Eigen::VectorXd& x = target_state_[k];
-    Eigen::VectorXd& next = next_state_;  // scratch: no allocation a step
+    auto& next = next_state_;
     next.noalias() = model.A * x;
     next += model.b;
     const double sd = std::sqrt(model.q);
@@ -206,6 +206,7 @@ void Episode::Step() {
     if (!comm_.Active(i)) {
       applied_[i] = Move::kStay;
       sim_.SetWaypoint(i, robot_pos_[i]);  // a failed robot stops where it is
+      sim_.Retire(i);
       continue;
     }
     const Move m = ApplyRule(i, lattice);
@@ -245,8 +246,9 @@ void Episode::Step() {
     // The lattice move the robot made (none where it stayed, or stalled
     // short of the next point).
     made_[i] = MoveBetween(lattice, before, robot_idx_[i]);
+    if (!comm_.Active(i)) continue;  // pushed, a failed robot makes no move
     history_.Record(i, made_[i]);
-    if (comm_.Active(i)) ++decisions_[i];
+    ++decisions_[i];
   }
   Observe();
   times_.total += Since(t_step);

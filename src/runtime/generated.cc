@@ -57,6 +57,15 @@ Scenario ReadGenerated(const GeneratedSpec& spec) {
   }
 }
 
+std::shared_ptr<const Instance> BuildGenerated(const Scenario& s,
+                                               const GeneratedSpec& spec) {
+  try {
+    return BuildInstance(s);
+  } catch (const InputError& e) {
+    NameTheFlag(e, spec);
+  }
+}
+
 void NameTheFlag(const InputError& error, const GeneratedSpec& spec) {
   if (error.file() == "command line") throw error;
   const std::string size = spec.size_flag + " " + spec.size;

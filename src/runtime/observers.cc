@@ -1,7 +1,5 @@
 #include "aia/runtime/observers.h"
 
-#include <unistd.h>
-
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <charconv>
@@ -161,24 +159,6 @@ double EstimateObserver::mean_nees() const {
   return samples_ && !sum_nees_.empty()
              ? s / (samples_ * static_cast<double>(sum_nees_.size()))
              : 0.0;
-}
-
-ProgressLine::ProgressLine(bool enabled)
-    : enabled_(enabled && ::isatty(STDERR_FILENO)) {}
-
-void ProgressLine::Update(const std::string& text) {
-  if (!enabled_) return;
-  std::string line = "\r" + text;
-  if (text.size() < last_width_)
-    line += std::string(last_width_ - text.size(), ' ');
-  last_width_ = text.size();
-  std::fputs(line.c_str(), stderr);
-  std::fflush(stderr);
-}
-
-void ProgressLine::Finish() {
-  if (enabled_ && last_width_ > 0) std::fputs("\n", stderr);
-  last_width_ = 0;
 }
 
 ProgressObserver::ProgressObserver(std::string label, bool enabled,

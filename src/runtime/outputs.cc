@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <new>
 
 #include "aia/core/error.h"
 #include "aia/core/io.h"
@@ -54,6 +55,8 @@ void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
                      "'" + dir + "' is " + kind + ", not a folder");
   try {
     MakeDirs(dir);
+  } catch (const std::bad_alloc&) {
+    throw;  // out of memory is not bad input (cli.cc says it)
   } catch (const std::exception& e) {
     throw InputError("command line", 0, flag, e.what());
   }

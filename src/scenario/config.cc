@@ -93,24 +93,22 @@ void CheckGenerator(const Scenario& s, const FieldChecker& check) {
     // halves keep it), the workspace itself being the first room: one
     // narrower than min holds no room of the size asked for (it came out
     // as one room and no wall).
-    const int m = std::max(1, StepsIn(g.room_size.x(), step));
+    const GeneratorConfig::RoomSteps rooms = g.RoomStepsAt(step);
+    const int m = rooms.min;
     if (std::min(nx, ny) < m) {
       check.Fail(g.room_size,
                  workspace + " is narrower than the rooms' min side (" +
                      FormatNumber(m * step) + " m), so it holds no room; got " +
                      FormatPair(g.room_size.x(), g.room_size.y()));
     }
-    // The generator's first split (world/generator.cc, Rooms): a side is
-    // split only where it is longer than max and holds two rooms of min;
-    // with neither side so, the workspace is one room and no wall.
-    const int big = std::max(m, StepsIn(g.room_size.y(), step));
-    const auto splits = [&](int l) { return l > big && l >= 2 * m; };
-    if (!splits(nx) && !splits(ny)) {
+    // The generator's first split (world/generator.cc, Rooms): with neither
+    // side split, the workspace is one room and no wall.
+    if (!rooms.Splits(nx) && !rooms.Splits(ny)) {
       check.Fail(g.room_size,
                  workspace +
                      " would be one room and no wall: a side is split only "
                      "where it is longer than the rooms' max side (" +
-                     FormatNumber(big * step) +
+                     FormatNumber(rooms.max * step) +
                      " m) and holds two of their "
                      "min side (" +
                      FormatNumber(2 * m * step) + " m); got " +

@@ -151,6 +151,7 @@ Simulation::Simulation(std::shared_ptr<const PhysicsModel> model)
   waypoints_ = model_->starts_;
   robot_stalls_.assign(waypoints_.size(), 0);
   robot_timeouts_.assign(waypoints_.size(), 0);
+  retired_.assign(waypoints_.size(), 0);
   turning_.assign(waypoints_.size(), 0);
   state_.assign(waypoints_.size(), RobotState::kParked);
   since_.assign(waypoints_.size(), 0);
@@ -376,8 +377,10 @@ PhysicsStepStats Simulation::AdvanceToWaypoints(
     progress_[i] = ToGo(i);
     grace_[i] = GraceSteps(i, dt);
   }
+  // A retired robot counts as arrived: nothing waits for it.
   auto arrived = [&](int i) {
-    return (RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2;
+    return retired_[i] ||
+           (RobotPosition(i) - waypoints_[i]).squaredNorm() <= tol2;
   };
   auto settled = [&](int i, double elapsed) {
     return elapsed >= kSettleTime + grace_[i] * dt &&

@@ -144,8 +144,8 @@ struct Region {
 // wall; each split joins two connected parts, so the rooms are connected
 // (the doors form a spanning tree of the rooms).
 void Rooms(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
-  const int m = std::max(1, StepsIn(g.room_size.x(), step));
-  const int big = std::max(m, StepsIn(g.room_size.y(), step));
+  const GeneratorConfig::RoomSteps rooms = g.RoomStepsAt(step);
+  const int m = rooms.min;
   const int d = StepsIn(g.door, step);
   AIA_CHECK(d >= 1);
   std::vector<Region> todo;
@@ -155,8 +155,8 @@ void Rooms(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
     Region r = std::move(todo.back());
     todo.pop_back();
     const int lx = r.x1 - r.x0, ly = r.y1 - r.y0;
-    const bool can_x = lx > big && lx >= 2 * m;  // split across x
-    const bool can_y = ly > big && ly >= 2 * m;
+    const bool can_x = rooms.Splits(lx);  // split across x
+    const bool can_y = rooms.Splits(ly);
     bool axes[2];  // true: a vertical line (split across x)
     int num_axes = 0;
     if (can_x && can_y) {
@@ -373,8 +373,8 @@ void BandWalls(const Strip& s, const CrossCorridors& x, int m, int big, int d,
 // the bands; every room has one door onto its corridor.
 void Corridors(const GeneratorConfig& g, double step, Rng& rng, Layout* l) {
   const int c = StepsIn(g.corridor, step);
-  const int m = std::max(1, StepsIn(g.room_size.x(), step));
-  const int big = std::max(m, StepsIn(g.room_size.y(), step));
+  const GeneratorConfig::RoomSteps rooms = g.RoomStepsAt(step);
+  const int m = rooms.min, big = rooms.max;
   const int d = StepsIn(g.door, step);
   AIA_CHECK(c >= 1 && d >= 1);
   Frame f{l, rng.Bernoulli(0.5)};

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -84,6 +85,8 @@ std::vector<Box> MapBoxes(const Scenario& s) {
   std::string bytes;
   try {
     bytes = ReadFile(map, kMaxFileBytes);
+  } catch (const std::bad_alloc&) {
+    throw;  // out of memory is not bad input (cli.cc says it)
   } catch (const std::exception& e) {
     Fail(s, key, e.what());
   }

@@ -878,5 +878,37 @@ TEST(FilterStressTest, DivergingDynamicsThrowEstimateDiverged) {
   EXPECT_NEAR(1.0 / omega(0, 0), kMaxVariance, 1e-6 * kMaxVariance);
 }
 
+// A failed robot's belief of an unstable target (x' = 2x, nothing measured)
+// doubled its mean every step until it overflowed, some 1030 steps in, and
+// that ended the mission while a teammate measured the target every step.
+// Its mean is held at kMaxMean now, as its variance at kMaxVariance, and
+// only a target that no counted row keeps within the bounds diverges.
+TEST(FilterStressTest, AnUnmeasuredRowOfAnUnstableTargetStaysWithinTheBounds) {
+  const BeliefLayout layout({Scaled(2, 2.0, 0.0)});
+  BeliefSet b(&layout, 2);
+  b.SetPrior({Eigen::Vector2d(5.0, 6.0)}, {Eigen::Matrix2d::Identity()});
+  const std::vector<std::uint8_t> active{1, 0};  // row 1 failed
+  for (int t = 0; t < 1500; ++t) {
+    ASSERT_NO_THROW(Predict(&b, &active)) << "step " << t;
+    AddMeasurements({Measurement{0, Vec2(5.0, 6.0), 100.0}}, Vec2::Zero(), &b,
+                    0);
+  }
+  const Eigen::VectorXd lost = b.Mean(1, 0);
+  ASSERT_TRUE(lost.allFinite());
+  EXPECT_EQ(lost.cwiseAbs().maxCoeff(), kMaxMean);
+  EXPECT_GT(b.Omega(0, 0)(0, 0), 10.0);  // the measured row is sure of it
+  // With the lost row alone counted, the target diverges, saying why.
+  const std::vector<std::uint8_t> only_lost{0, 1};
+  try {
+    Predict(&b, &only_lost);
+    FAIL() << "no divergence reported";
+  } catch (const EstimateDiverged& e) {
+    EXPECT_EQ(e.target(), 0);
+    EXPECT_NE(std::string(e.what()).find("in every estimate that counts"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace aia

@@ -303,6 +303,12 @@ TEST(CoordinationTest, NoneNamesARuleKeyThatWouldDoNothing) {
   p = None();
   p.approach = false;
   EXPECT_EQ(FirstRuleKeySet(p), "policy.approach");
+  // The last rule key too; the network's precision is not a rule.
+  p = None();
+  p.precision = Precision::kFloat32;
+  EXPECT_EQ(FirstRuleKeySet(p), "");
+  p.refresh = 0.01;
+  EXPECT_EQ(FirstRuleKeySet(p), "policy.refresh");
 }
 
 }  // namespace

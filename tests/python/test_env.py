@@ -374,3 +374,96 @@ def test_the_envs_render_names_the_env():
                              r"integer in \[16, 8192\], got 8$"):
         aec.render(64, 8)
     assert aec.render(64, 48).shape == (48, 64, 3)
+
+
+def test_a_tracking_mission_runs_past_success_to_its_horizon():
+    # mission.stop_at_success false: success does not end the mission, so
+    # the horizon truncates it (it terminated every agent at the first
+    # success, and Mission.step told the horizon's end as terminated).
+    tracking = str(SOURCE / "scenarios" / "tracking.yaml")
+    greedy = aia.builtin_policy("greedy")
+    mission = aia.Mission(tracking, seed=0,
+                          overrides={"mission.max_steps": 60})
+    while not mission.done:
+        result = mission.step(greedy.decide(mission))
+        assert result.steps == 60 or not result.done
+    assert result.success and result.steps == 60
+    assert result.truncated and not result.terminated
+
+    env = aia.parallel_env(tracking, seed=0,
+                           overrides={"mission.max_steps": 60})
+    env.reset(seed=0)
+    steps, succeeded = 0, False
+    while env.agents:
+        moves = greedy.decide(env.mission)
+        _, _, term, trunc, _ = env.step(
+            {a: int(moves[env.possible_agents.index(a)]) % 4
+             for a in env.agents})
+        steps += 1
+        succeeded = succeeded or env.mission.success
+    assert succeeded and steps == 60
+    assert all(trunc.values()) and not any(term.values())
+
+
+def test_a_closed_env_refuses_the_spaces_dicts_and_its_state_space():
+    env = aia.parallel_env(DEFAULT)
+    aec = aia.aec_env(DEFAULT)
+    assert env.observation_spaces["robot_0"] is env.observation_space("robot_0")
+    assert aec.observation_spaces["robot_0"] is aec.observation_space("robot_0")
+    env.close()
+    aec.close()
+    for name in ("observation_spaces", "action_spaces", "state_space"):
+        with pytest.raises(aia.InputError,
+                           match=rf"^aia.ParallelEnv.{name}: the env is "):
+            getattr(env, name)
+        with pytest.raises(aia.InputError,
+                           match=rf"^aia.AECEnv.{name}: the env is "):
+            getattr(aec, name)
+    with pytest.raises(aia.InputError,
+                       match=r"^aia.AECEnv.observation_space: the env is"):
+        aec.observation_space("robot_0")
+
+
+def test_channel_settings_are_named_as_the_envs_argument():
+    for make, name in ((aia.parallel_env, "aia.parallel_env"),
+                       (aia.aec_env, "aia.aec_env")):
+        with pytest.raises(aia.InputError) as e:
+            make(DEFAULT, channels={"window": -1})
+        assert str(e.value).startswith(
+            f"{name}: channels: window: must be an integer in [4, 512]"), \
+            str(e.value)
+
+
+def test_scenario_warnings_point_at_the_callers_line():
+    import warnings
+    for make in (aia.parallel_env, aia.aec_env, aia.Mission):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            make(DEFAULT, overrides={"communication.range": 5})
+        told = [w for w in seen if issubclass(w.category, aia.ScenarioWarning)]
+        assert len(told) == 1, [str(w.message) for w in seen]
+        assert told[0].filename == __file__, (make, told[0].filename)
+
+
+def test_the_stand_in_spaces_read_as_gymnasiums():
+    from aia import env as env_module
+    space = env_module._observation_space((3, 4, 4), 2)
+    if not isinstance(space, env_module.Dict):
+        pytest.skip("gymnasium's own spaces are in use")
+    assert list(space) == ["channels", "vector"] == list(space.keys())
+    assert len(space) == 2 and dict(space.items())["vector"] is space["vector"]
+    # A list is read as the Box's dtype; a string is not a member.
+    assert space["vector"].contains([0.1, 0.2])
+    assert not space["vector"].contains([0.1, 0.2, 0.3])
+    assert not space["vector"].contains(["a", "b"])
+    # seed(None) draws a seed and says which, as gymnasium's.
+    action = env_module._action_space()
+    (drawn,) = action.seed()
+    assert isinstance(drawn, int)
+    first = [action.sample() for _ in range(20)]
+    assert action.seed(drawn) == [drawn]
+    assert [action.sample() for _ in range(20)] == first
+    assert action.seed(7) == [7]
+    reference = np.random.default_rng(7)
+    assert [action.sample() for _ in range(5)] == \
+        [int(reference.integers(4)) for _ in range(5)]

@@ -56,6 +56,9 @@ def mission():
     (["0", 0, 0], "got '0' (str)"),
     ([[0, 1], [2]], "shape"),
     (3, "must be a list or numpy array"),
+    (range(3), "must be a list or numpy array of integers (one move per "
+               "robot), each 0 (left), 1 (right), 2 (up), 3 (down) or 4 "
+               "(stay), got range(0, 3)"),
     ("012", "must be a list or numpy array"),
     (None, "must be a list or numpy array"),
 ])

@@ -91,6 +91,25 @@ TEST(SimulationTest, ContactsKeepRobotsApart) {
             2 * 0.15 - 0.02);
 }
 
+// A failed robot (lockstep): a teammate pushes it off its waypoint, and the
+// step neither waits for it nor counts it stalled or late (it counted
+// stalls for a robot that had failed, and steps waited for it).
+TEST(SimulationTest, ARetiredRobotIsNeitherWaitedForNorCounted) {
+  const Scenario s = ScenarioFromYaml(
+      "robots: {count: 2, start: [[5.25, 5.25], [6.25, 5.25]]}\ntargets: "
+      "{count: 1}\n");
+  const World w = World::Build(s);
+  Simulation sim(w, s);
+  sim.Retire(1);
+  sim.SetWaypoint(0, {6.25, 5.25});  // onto the failed robot's place
+  sim.SetWaypoint(1, {6.25, 5.25});
+  const PhysicsStepStats st = sim.AdvanceToWaypoints();
+  EXPECT_FALSE(st.all_arrived);
+  EXPECT_EQ(st.stalled + st.late, 1);  // robot 0 alone
+  EXPECT_EQ(sim.robot_stalls()[1] + sim.robot_timeouts()[1], 0);
+  EXPECT_EQ(sim.robot_stalls()[0] + sim.robot_timeouts()[0], 1);
+}
+
 TEST(SimulationTest, RobotDoesNotPassThroughAnObstacle) {
   const Scenario s = ScenarioFromYaml(
       "robots: {count: 1, start: [[4.25, 5.25]]}\ntargets: {count: 1}\n"

@@ -124,6 +124,13 @@ std::string TemporaryPath(const std::string& path, bool keep_extension = false);
 int RemoveStaleTemporaries(const std::string& dir,
                            const std::string& prefix = "");
 
+// aia's I/O error for an output: std::runtime_error("cannot write 'PATH':
+// WHY"); the second with the text of errno `err`, where 0 (a short write
+// that set none) reads as a full disk (ENOSPC).
+[[noreturn]] void ThrowCannotWrite(const std::string& path,
+                                   const std::string& why);
+[[noreturn]] void ThrowCannotWriteErrno(const std::string& path, int err);
+
 // Throws std::runtime_error("cannot write 'PATH': it is a named pipe (FIFO),
 // not a regular file; ...") when `path` exists and is not a regular file
 // (after links): renaming a finished file onto it would replace a folder, a

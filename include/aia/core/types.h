@@ -53,21 +53,6 @@ inline constexpr Move Opposite(Move m) {
                           : static_cast<Move>(static_cast<int>(m) ^ 1);
 }
 
-inline constexpr std::string_view MoveName(Move m) {
-  switch (m) {
-    case Move::kLeft:
-      return "left";
-    case Move::kRight:
-      return "right";
-    case Move::kUp:
-      return "up";
-    case Move::kDown:
-      return "down";
-    default:
-      return "stay";
-  }
-}
-
 }  // namespace aia
 
 #endif  // AIA_CORE_TYPES_H_

@@ -29,6 +29,9 @@ inline constexpr double kMaxVariance = 1e24;
 // Smallest predicted variance: added to the diagonal of a prediction that
 // falls below it, so that Omega stays finite.
 inline constexpr double kMinVariance = 1e-30;
+// Largest entry of a filter's predicted mean (m, or m/s for a velocity):
+// as far beyond any workspace as kMaxVariance's standard deviation.
+inline constexpr double kMaxMean = 1e12;
 
 // The filter cannot go on: a target's predicted covariance grows past
 // kMaxVariance (unstable dynamics and no measurements) or is not finite.
@@ -44,11 +47,12 @@ class EstimateDiverged : public std::runtime_error {
 };
 
 // One time update of every row (identity for static targets). A row whose
-// predicted variance of a target passes kMaxVariance is scaled back to it;
-// when that happens to every row in `active` (all rows when null), no
-// estimate of the target is left and EstimateDiverged is thrown for it. A
-// failed or cut-off robot's own belief of an unstable target thus grows to
-// the bound without ending a mission in which other robots measure it.
+// predicted variance of a target passes kMaxVariance is scaled back to it,
+// and a mean entry beyond kMaxMean is held at it; when that happens to
+// every row in `active` (all rows when null), no estimate of the target is
+// left and EstimateDiverged is thrown for it. A failed or cut-off robot's
+// own belief of an unstable target thus grows to the bounds without ending
+// a mission in which other robots measure it.
 // Large sets split their rows over `run` (as Fuse below), with the same
 // numbers and the same error for any split.
 void Predict(BeliefSet* beliefs,

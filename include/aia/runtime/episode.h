@@ -210,7 +210,6 @@ class Episode {
   // The whole team's view of the current step (the centralized belief
   // included); the policy is given the same without it unless centralized.
   DecisionContext Context() const;
-  Policy& mutable_policy() { return *policy_; }
 
  private:
   void Observe();  // sense, exchange, fuse, judge (the second half of a step)
@@ -255,7 +254,9 @@ class Episode {
   std::vector<Vec2> robot_pos_, target_pos_, target_prev_;
   std::vector<double> robot_heading_;
   std::vector<Eigen::VectorXd> target_state_;
-  Eigen::VectorXd next_state_;  // MoveTargets' scratch
+  // MoveTargets' scratch: a target's state has 2 or 4 entries, and teams
+  // mix the two, so the room for 4 is kept inline (no allocation a step).
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 4, 1> next_state_;
   std::vector<int> robot_idx_;
   std::vector<Move> moves_, applied_;
   // The lattice moves the robots made in the last step, and all of them so

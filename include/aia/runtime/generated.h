@@ -5,6 +5,7 @@
 #define AIA_RUNTIME_GENERATED_H_
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +15,8 @@
 #include "aia/scenario/loader.h"
 
 namespace aia {
+
+struct Instance;
 
 // The generated worlds of the experiments (docs/design.md, Evaluation): 20 x 20
 // m, 30 random boxes, N robots and M random static targets, all drawn from
@@ -48,6 +51,12 @@ Scenario ReadGenerated(const GeneratedSpec& spec);
 // already is thrown as it is.
 [[noreturn]] void NameTheFlag(const InputError& error,
                               const GeneratedSpec& spec);
+
+// Builds `s`, the spec's scenario (as ReadGenerated gives it, perhaps with
+// settings the command fixes itself): its InputErrors name the flag behind
+// them (NameTheFlag).
+std::shared_ptr<const Instance> BuildGenerated(const Scenario& s,
+                                               const GeneratedSpec& spec);
 
 }  // namespace aia
 

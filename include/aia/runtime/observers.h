@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "aia/core/progress.h"
 #include "aia/runtime/episode.h"
 
 namespace aia {
@@ -94,18 +95,6 @@ class MoveObserver : public StepObserver {
   void Count(const Episode& e);
   long moves_ = 0, reversals_ = 0, stays_ = 0;
   int longest_run_ = 0;
-};
-
-// A progress line on stderr, drawn only when stderr is a terminal.
-class ProgressLine {
- public:
-  explicit ProgressLine(bool enabled);
-  void Update(const std::string& text);
-  void Finish();
-
- private:
-  bool enabled_;
-  size_t last_width_ = 0;
 };
 
 // "[aia run] greedy  step 12/400  localized 3/10" after every step, plus

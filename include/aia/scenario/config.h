@@ -138,6 +138,19 @@ struct GeneratorConfig {
     return type == GeneratorType::kRooms || type == GeneratorType::kCorridors;
   }
 
+  // The rooms' min and max side in lattice steps, and the rooms generator's
+  // rule for a part `length` steps across: it is split across that side
+  // only where it is longer than max and holds two rooms of min (one rule
+  // for the generator and the scenario's check of it).
+  struct RoomSteps {
+    int min, max;
+    bool Splits(int length) const { return length > max && length >= 2 * min; }
+  };
+  RoomSteps RoomStepsAt(double step) const {
+    const int m = std::max(1, StepsIn(room_size.x(), step));
+    return {m, std::max(m, StepsIn(room_size.y(), step))};
+  }
+
   template <typename Archive>
   void Serialize(Archive* a) {
     a->Visit(AIA_FIELD(type)

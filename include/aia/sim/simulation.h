@@ -218,6 +218,11 @@ class Simulation {
   long clock() const { return clock_; }
   double clock_seconds() const { return clock_ * m_->opt.timestep; }
 
+  // A failed robot, in lockstep: it keeps driving to its waypoint (it holds
+  // its place where others push it), but a decision step neither waits for
+  // it nor counts it stalled or late (AdvanceToWaypoints).
+  void Retire(int i) { retired_[i] = 1; }
+
   // Per robot: decision steps that ended with it stalled short of its
   // waypoint, and those whose timeout found it still on its way.
   const std::vector<long>& robot_stalls() const { return robot_stalls_; }
@@ -267,6 +272,7 @@ class Simulation {
   std::vector<long> grace_;
   long GraceSteps(int i, double dt) const;
   std::vector<long> robot_stalls_, robot_timeouts_;
+  std::vector<std::uint8_t> retired_;  // per robot: Retire
   std::vector<std::uint8_t> turning_;  // per robot, its controller's last call
   // Asynchronous moves: each robot's state, the substep its move started
   // (or its hold ends), and the simulation clock in substeps.

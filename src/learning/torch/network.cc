@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <new>
 #include <stdexcept>
 #include <vector>
 
@@ -372,6 +373,8 @@ std::unique_ptr<TorchNet> TorchNet::Load(const std::string& path,
   std::string bytes;
   try {
     bytes = ReadFile(path, std::uintmax_t{1} << 31);
+  } catch (const std::bad_alloc&) {
+    throw;  // out of memory is not bad input (cli.cc says it)
   } catch (const std::exception& e) {
     throw fail(std::string("not a readable model: ") + e.what());
   }
@@ -419,6 +422,8 @@ std::unique_ptr<TorchNet> TorchNet::Load(const std::string& path,
     const auto nl = what.find('\n');
     if (nl != std::string::npos) what.resize(nl);
     throw fail("not a readable model (" + what + ")");
+  } catch (const std::bad_alloc&) {
+    throw;  // out of memory is not bad input (cli.cc says it)
   } catch (const std::exception& e) {
     throw fail(e.what());
   }

@@ -1,5 +1,3 @@
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <new>
 #include <numeric>
 #include <sstream>
 #include <thread>
@@ -19,6 +18,7 @@
 #include "aia/core/field_io.h"
 #include "aia/core/hash.h"
 #include "aia/core/io.h"
+#include "aia/core/progress.h"
 #include "aia/core/rng.h"
 #include "aia/learning/dataset.h"
 #include "aia/world/map.h"
@@ -622,6 +622,8 @@ int ResumeFromCheckpoint(const std::string& ckpt, const std::string& key,
     throw InputError(ckpt, 0, "--resume",
                      std::string("cannot read the checkpoint: ") +
                          e.what_without_backtrace());
+  } catch (const std::bad_alloc&) {
+    throw;  // out of memory is not bad input (cli.cc says it)
   } catch (const std::exception& e) {
     throw InputError(ckpt, 0, "--resume",
                      std::string("cannot read the checkpoint: ") + e.what());
@@ -692,8 +694,8 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
                     Corpus* corpus,
                     const std::vector<std::vector<int>>& batches,
                     const TrainOptions& o, const LrSchedule& schedule,
-                    int epoch, long steps_per_epoch, int hops,
-                    BatchScratch* b) {
+                    int epoch, long steps_per_epoch, int hops, BatchScratch* b,
+                    ProgressLine* progress) {
   const auto t0 = Clock::now();
   module->train();
   double loss_sum = 0.0, weight_sum = 0.0;
@@ -754,14 +756,17 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
     const torch::Tensor pred = logits.argmax(1);
     right += (pred == y).sum().item<int64_t>();
     seen += n;
-    if (o.progress && isatty(2) && (s % 50 == 0 || s + 1 == num_batches))
-      std::fprintf(stderr,
-                   "\r[train] epoch %d/%d  batch %ld/%ld  loss %.4f  acc "
-                   "%.3f  %.0f samples/s   ",
-                   epoch + 1, o.epochs, s + 1, num_batches,
-                   loss_sum / std::max(weight_sum, 1e-12),
-                   static_cast<double>(right) / std::max(seen, 1L),
-                   seen / std::max(Seconds(t0), 1e-9));
+    if (s % 50 == 0 || s + 1 == num_batches) {
+      char line[160];
+      std::snprintf(line, sizeof line,
+                    "[train] epoch %d/%d  batch %ld/%ld  loss %.4f  acc %.3f  "
+                    "%.0f samples/s",
+                    epoch + 1, o.epochs, s + 1, num_batches,
+                    loss_sum / std::max(weight_sum, 1e-12),
+                    static_cast<double>(right) / std::max(seen, 1L),
+                    seen / std::max(Seconds(t0), 1e-9));
+      progress->Update(line);
+    }
   }
   EpochLog e;
   e.epoch = epoch + 1;
@@ -908,13 +913,14 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
       (static_cast<long>(corpus.train.size()) + o.batch - 1) / o.batch;
   const LrSchedule schedule{o.lr, o.lr_min, steps_per_epoch * o.epochs};
   BatchScratch scratch;
+  ProgressLine progress(o.progress);
   for (int epoch = start; epoch < o.epochs; ++epoch) {
     if (o.stop_after_epochs > 0 && epoch - start >= o.stop_after_epochs) break;
     const auto t0 = Clock::now();
     const std::vector<std::vector<int>> batches =
         EpochBatches(corpus, o, epoch, steps_per_epoch, hops);
     EpochLog e = TrainEpoch(module, &optimizer, &corpus, batches, o, schedule,
-                            epoch, steps_per_epoch, hops, &scratch);
+                            epoch, steps_per_epoch, hops, &scratch, &progress);
     const ValidationResult v = Evaluate(module, &corpus, hops);
     e.val_loss = v.loss;
     e.val_acc = v.acc;
@@ -923,13 +929,16 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
     logs.push_back(e);
     module->eval();
     SaveEpoch(o, *net, module, optimizer, key, logs);
-    if (o.progress)
-      std::fprintf(stderr,
-                   "%s[train] epoch %d/%d: loss %.4f acc %.3f | %s | %.0f s, "
-                   "%.0f samples/s\n",
-                   isatty(2) ? "\r" : "", e.epoch, o.epochs, e.train_loss,
-                   e.train_acc, ValidationText(e).c_str(), e.seconds,
-                   e.samples / std::max(e.seconds, 1e-9));
+    if (o.progress) {
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "[train] epoch %d/%d: loss %.4f acc %.3f | %s | %.0f s, "
+                    "%.0f samples/s",
+                    e.epoch, o.epochs, e.train_loss, e.train_acc,
+                    ValidationText(e).c_str(), e.seconds,
+                    e.samples / std::max(e.seconds, 1e-9));
+      progress.Print(line);
+    }
   }
   return logs;
 }
