@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -1087,15 +1088,17 @@ class ProcessPool {
 // with the next seed.
 class VectorMissions {
  public:
-  VectorMissions(const std::string& scenario,
-                 const std::vector<std::uint64_t>& seeds,
-                 const KeyValues& overrides, int threads, bool autoreset)
+  // Missions at seeds first .. first + n - 1 (no list of n seeds is made:
+  // an n far past memory is refused after two missions, below).
+  VectorMissions(const std::string& scenario, std::uint64_t first,
+                 std::size_t n, const KeyValues& overrides, int threads,
+                 bool autoreset)
       : pool_((threads > 0 ? threads
                            : static_cast<int>(std::max(
                                  1u, std::thread::hardware_concurrency()))) -
               1),
         autoreset_(autoreset) {
-    if (seeds.empty()) Refuse("aia.VectorMissions", "n", "must be at least 1");
+    if (n == 0) Refuse("aia.VectorMissions", "n", "must be at least 1");
     // The missions made so far, on average, times those still to make must
     // fit in the memory the machine has available: n past that is refused
     // as soon as it shows (the machine would swap, or the process be
@@ -1104,20 +1107,19 @@ class VectorMissions {
     // every 64; the average leaves out the first (it also pays for what the
     // process loads once), and until 64 missions, when it is rough, n is
     // refused only at twice what is available.
-    const std::size_t n = seeds.size();
-    long first = -1;
+    long first_bytes = -1;
     try {
       for (std::size_t i = 0; i < n; ++i) {
         missions_.push_back(
-            std::make_unique<Mission>(scenario, seeds[i], overrides));
+            std::make_unique<Mission>(scenario, first + i, overrides));
         missions_.back()->MarkInVector();
         const std::size_t made = i + 1;
-        if (made == 1) first = ResidentBytes();
-        if (made < 2 || made == n || first < 0 ||
+        if (made == 1) first_bytes = ResidentBytes();
+        if (made < 2 || made == n || first_bytes < 0 ||
             (made < 64 ? (made & (made - 1)) != 0 : made % 64 != 0))
           continue;
         const double each =
-            std::max(static_cast<double>(ResidentBytes() - first), 0.0) /
+            std::max(static_cast<double>(ResidentBytes() - first_bytes), 0.0) /
             static_cast<double>(made - 1);
         const double more = each * static_cast<double>(n - made);
         const long available = AvailableBytes();
@@ -1140,7 +1142,7 @@ class VectorMissions {
                  " missions do not fit in memory (it ran out after " +
                  std::to_string(made) + ")");
     }
-    next_seed_ = *std::max_element(seeds.begin(), seeds.end()) + 1;
+    next_seed_ = first + n;  // wraps to 0 after 2^64 - 1, as reset's
   }
   int size() const { return static_cast<int>(missions_.size()); }
   int num_robots() const { return missions_[0]->num_robots(); }
@@ -1855,22 +1857,24 @@ void BindVectorMissions(py::module_& m) {
   py::class_<VectorMissions>(
       m, "VectorMissions",
       "Missions of one scenario stepped together on C++ threads.")
-      .def(py::init([](const std::string& scenario, py::handle seeds,
-                       const KeyValues& overrides, py::handle threads,
-                       bool autoreset) {
+      .def(py::init([](const std::string& scenario, py::handle seed,
+                       std::size_t n, const KeyValues& overrides,
+                       py::handle threads, bool autoreset) {
              const int t = static_cast<int>(
                  IntegerArg(threads, "aia.VectorMissions", "threads", 0, 4096));
-             std::vector<std::uint64_t> s;
-             for (py::handle seed : seeds)
-               s.push_back(*SeedArg(seed, "aia.VectorMissions", "seed", false));
+             const std::uint64_t first =
+                 *SeedArg(seed, "aia.VectorMissions", "seed", false);
+             if (n - 1 > std::numeric_limits<std::uint64_t>::max() - first)
+               Refuse("aia.VectorMissions", "seed",
+                      "seed + n - 1 passes 2^64 - 1");
              try {
-               return std::make_unique<VectorMissions>(scenario, s, overrides,
-                                                       t, autoreset);
+               return std::make_unique<VectorMissions>(scenario, first, n,
+                                                       overrides, t, autoreset);
              } catch (const InputError& e) {
                throw Renamed(e, "aia.VectorMissions");
              }
            }),
-           py::arg("scenario"), py::arg("seeds"),
+           py::arg("scenario"), py::arg("seed"), py::arg("n"),
            py::arg("overrides") = KeyValues{}, py::arg("threads") = 0,
            py::arg("autoreset") = false)
       .def("__len__", &VectorMissions::size)

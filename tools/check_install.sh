@@ -21,6 +21,17 @@ readelf -d "$tmp/example/my_aia" | grep -q "RUNPATH.*$tmp/prefix/lib/aia" ||
   --out "$tmp/eval" --quiet > "$tmp/eval.log"
 grep -q '^3x3,nearest_mean,2,' "$tmp/eval/summary.csv"
 grep -q '^3x3,greedy,2,' "$tmp/eval/summary.csv"
+# my_aia runs igbnet with the installed plugin and model (aia_installed_dirs.cc
+# compiled into it), not the build tree's, still there, nor the source tree's.
+(cd "$tmp" && LD_DEBUG=files LD_DEBUG_OUTPUT="$tmp/ld_my" "$tmp/example/my_aia" \
+  run "$src/scenarios/default.yaml" --policy igbnet --max-steps 2 \
+  --out "$tmp/my_run" --quiet > /dev/null)
+loaded=$(cat "$tmp"/ld_my.* | grep -o 'file=[^ ]*libaia_torch.so' | sort -u)
+[ "$(realpath "${loaded#file=}")" = "$(realpath "$tmp/prefix/lib/aia/libaia_torch.so")" ] ||
+  { echo "my_aia loaded: $loaded"; exit 1; }
+grep -q "model: $(realpath "$tmp/prefix")/share/aia/models/igbnet.pt" \
+  "$tmp/my_run/effective.yaml" ||
+  { echo "my_aia's model:"; grep model "$tmp/my_run/effective.yaml"; exit 1; }
 # The installed Python package imports and steps a mission, with its own
 # plugin and model (the build tree, still there, is not used), also when run
 # from the source tree (whose models/igbnet.pt is there).

@@ -350,7 +350,8 @@ class VectorMissions:
     def __init__(self, n, scenario, seed=None, overrides=None, threads=0,
                  autoreset=False):
         where = "aia.VectorMissions"
-        n = _integer(n, where, "n", 1)
+        # Memory refuses far fewer (after the first two missions).
+        n = _integer(n, where, "n", 1, 2 ** 31 - 1)
         scenario = _path(scenario, where, "scenario")
         if seed is None:
             with _warnings.catch_warnings():  # said once, below
@@ -363,8 +364,8 @@ class VectorMissions:
             raise InputError(f"{where}: autoreset: must be True or False, "
                              f"got {_shown(autoreset)}")
         self._v = _aia.VectorMissions(
-            scenario, [seed + i for i in range(n)],
-            _pairs(overrides, "overrides", where), threads, bool(autoreset))
+            scenario, seed, n, _pairs(overrides, "overrides", where), threads,
+            bool(autoreset))
         self.missions = [Mission._view(self._v.mission(i)) for i in range(n)]
         _warn_scenario(self._v.mission(0), where)
 

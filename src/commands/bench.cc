@@ -184,12 +184,14 @@ void CheckModeFlags(const BenchOptions& o) {
     refuse(!o.sets.empty(), "--set", "with --network (no world is made)");
     refuse(o.seeds != d.seeds, "--seeds", "with --network");
     refuse(o.seed != d.seed, "--seed", "with --network");
+    refuse(o.sizes != d.sizes, "--sizes",
+           "with --network (it times its own batches of 10 and 80)");
   }
   if (o.expert) refuse(o.repeats != d.repeats, "--repeats", "with --expert");
   if (!o.expert) refuse(o.seeds != d.seeds, "--seeds", "without --expert");
   std::set<std::string> sizes;
   for (const TeamSize& s : o.sizes)
-    if (!sizes.insert(s.ToText()).second && !o.network)
+    if (!sizes.insert(s.ToText()).second)
       throw InputError("command line", 0, "--sizes",
                        s.ToText() + " is given twice");
 }

@@ -43,7 +43,23 @@ std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
   const std::string why =
       SeedRangeProblem(seed_base, seeds, "--seeds", "--seed-base");
   if (!why.empty()) throw InputError("command line", 0, "--seed-base", why);
+  // Each world is a C-SB solve and a mission per policy (tens of ms at the
+  // least): a million is days of work; more would first fill the memory
+  // with their list.
+  constexpr std::uint64_t kMaxWorlds = 1000000;
+  const std::uint64_t worlds = static_cast<std::uint64_t>(sizes.size()) *
+                               static_cast<std::uint64_t>(seeds);
+  if (worlds > kMaxWorlds)
+    throw InputError(
+        "command line", 0, "--seeds",
+        std::to_string(sizes.size()) + " sizes x " + std::to_string(seeds) +
+            " seeds are " + std::to_string(worlds) +
+            " worlds, more than one evaluation takes (" +
+            std::to_string(kMaxWorlds) +
+            "): split the seeds over several evaluations with --seed-base "
+            "(docs/sweeps.md)");
   std::vector<EvalInstance> out;
+  out.reserve(worlds);
   for (const TeamSize& size : sizes)
     for (int s = 0; s < seeds; ++s)
       out.push_back({size.ToText(), size.robots, size.targets,

@@ -152,6 +152,17 @@ int RunPlanCommand(const PlanOptions& o) {
     CheckFlags(&flags);  // their declarations: `--flag: what`
   }
   if (!o.out.empty()) CheckOutputFile(o.out, "--out");
+  // aia plan runs the expert, and --budget is its anytime: a --set of
+  // either would be overruled (said as --policy's, a flag plan lacks).
+  for (const std::string& text : o.overrides.sets) {
+    const Override set = ParseSetFlag(text);
+    if (set.path == "policy.name" || ReplacesSectionOf(set.path, "policy.name"))
+      throw InputError("command line", 0, "--set " + set.path,
+                       "aia plan runs the expert (C-SB) and sets policy.name "
+                       "itself; set the expert's keys one by one (--set "
+                       "policy.KEY=VALUE)");
+    if (o.budget) RefuseSetOfFlagKey(set, "policy.anytime", "--budget");
+  }
   const PolicyRegistry registry = AllPolicies();
   CommandOverrides overrides = o.overrides;
   overrides.policy = "expert";

@@ -10,6 +10,21 @@
 #include "aia/scenario/loader.h"
 
 namespace aia {
+namespace {
+
+// renders/NAME for a run without --out: the scenario file's stem, unless it
+// would name another folder ("..yaml", "...yaml") or hold a character that
+// makes a poor folder name (a control character, a '/'): then "scenario".
+std::string DefaultOutName(const std::string& scenario_path) {
+  const std::string stem = std::filesystem::path(scenario_path).stem().string();
+  bool plain = !stem.empty() && stem != "." && stem != "..";
+  for (const char c : stem)
+    plain =
+        plain && static_cast<unsigned char>(c) >= 0x20 && c != 0x7f && c != '/';
+  return plain ? stem : "scenario";
+}
+
+}  // namespace
 
 MissionSummary RunMission(const RunOptions& options) {
   const PolicyRegistry registry = AllPolicies();
@@ -18,9 +33,7 @@ MissionSummary RunMission(const RunOptions& options) {
                                   options.overrides.ToOverrides(registry)),
                      registry);
   std::string out = options.out_dir;
-  if (out.empty())
-    out = "renders/" +
-          std::filesystem::path(options.scenario_path).stem().string();
+  if (out.empty()) out = "renders/" + DefaultOutName(options.scenario_path);
   // The folder may hold the scenario itself (DIR/effective.yaml of an
   // earlier run): none of the files written may be an input.
   const std::vector<InputFile> inputs =

@@ -116,6 +116,11 @@ Scenario EffectiveScenario(const PreparedMission& mission) {
   if (const FileIdentity* model = mission.policy->model_file()) {
     s.policy.model = model->path;
     s.policy.model_sha256 = model->sha256;
+  } else {
+    // A policy that reads none (the file's igbnet switched by --policy):
+    // kept, the model would be warned about on every repeat.
+    s.policy.model.clear();
+    s.policy.model_sha256.reset();
   }
   return s;
 }

@@ -207,8 +207,9 @@ void ObstaclesConfig::Validate(const FieldChecker& check) {
   std::error_code ec;
   if (!fs::exists(map, ec)) {
     check.Fail(map, "map file does not exist: " + map +
-                        " (relative paths are resolved against the "
-                        "scenario's directory)");
+                        " (a relative path in a scenario file is resolved "
+                        "against the file's folder, one given by --set "
+                        "against the working folder)");
   }
   if (!fs::is_regular_file(map, ec))
     check.Fail(map, "map is not a file: " + map);

@@ -135,10 +135,11 @@ class QuietStderr {
 };
 
 // Width and height as the image's header declares them, and a PGM's
-// maximum grey value (0 for a PNG, or when the header is cut before it);
+// maximum grey value (0 for a PNG, or when the header is cut before it) and
+// where its pixels begin (after the one whitespace that ends the header);
 // false when the bytes are neither PNG nor PGM.
 bool HeaderSize(const std::string& b, long long* cols, long long* rows,
-                long long* max_gray) {
+                long long* max_gray, std::size_t* data_at) {
   *max_gray = 0;
   static const char kPng[] = "\x89PNG\r\n\x1a\n";
   if (b.size() >= 24 && b.compare(0, 8, kPng, 8) == 0 &&
@@ -181,6 +182,7 @@ bool HeaderSize(const std::string& b, long long* cols, long long* rows,
     *cols = v[0];
     *rows = v[1];
     *max_gray = v[2];
+    *data_at = at + 1;
     return true;
   }
   return false;
@@ -188,9 +190,54 @@ bool HeaderSize(const std::string& b, long long* cols, long long* rows,
 
 }  // namespace
 
+// A PGM whose maximum grey is 256 to 65534: OpenCV reads its 16-bit
+// samples as if 65535 were white (a map of 1000 for white came out dark),
+// so they are read here, each scaled as the narrow forms are,
+// 255 x value / maximum rounded down. Binary (P5): two bytes a sample,
+// most significant first; text (P2): decimal numbers.
+GrayImage DecodeWidePgm(const std::string& b, int cols, int rows,
+                        long long max_gray, std::size_t at) {
+  GrayImage out;
+  out.cols = cols;
+  out.rows = rows;
+  const std::size_t n = static_cast<std::size_t>(cols) * rows;
+  out.pixels.resize(n);
+  const auto put = [&](std::size_t k, long long v) {
+    if (v > max_gray)
+      throw std::invalid_argument(
+          "pixel " + std::to_string(k) + " is " + std::to_string(v) +
+          ", above the header's maximum grey " + std::to_string(max_gray));
+    out.pixels[k] = static_cast<std::uint8_t>(255LL * v / max_gray);
+  };
+  if (b[1] == '5') {
+    if (at > b.size() || b.size() - at < 2 * n)
+      throw std::invalid_argument("the image data is corrupt or truncated");
+    for (std::size_t k = 0; k < n; ++k)
+      put(k, (static_cast<unsigned char>(b[at + 2 * k]) << 8) |
+                 static_cast<unsigned char>(b[at + 2 * k + 1]));
+    return out;
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    while (at < b.size() && std::isspace(static_cast<unsigned char>(b[at])))
+      ++at;
+    long long v = 0;
+    int digits = 0;
+    while (at < b.size() && std::isdigit(static_cast<unsigned char>(b[at])) &&
+           digits < 6) {
+      v = 10 * v + (b[at++] - '0');
+      ++digits;
+    }
+    if (digits == 0 || digits == 6)
+      throw std::invalid_argument("the image data is corrupt or truncated");
+    put(k, v);
+  }
+  return out;
+}
+
 GrayImage DecodeMapImage(const std::string& bytes) {
   long long cols = 0, rows = 0, max_gray = 0;
-  if (!HeaderSize(bytes, &cols, &rows, &max_gray))
+  std::size_t data_at = 0;
+  if (!HeaderSize(bytes, &cols, &rows, &max_gray, &data_at))
     throw std::invalid_argument("not a PGM or PNG image");
   if (cols <= 0 || rows <= 0)
     throw std::invalid_argument("the header declares an empty image (" +
@@ -202,6 +249,14 @@ GrayImage DecodeMapImage(const std::string& bytes) {
         "the header declares " + std::to_string(cols) + " x " +
         std::to_string(rows) + " pixels; at most " +
         std::to_string(kMaxMapPixels) + " pixels (e.g. 4096 x 4096)");
+  const bool pgm = bytes[0] == 'P';
+  if (pgm && data_at <= bytes.size() && (max_gray < 1 || max_gray > 65535))
+    throw std::invalid_argument("the header declares a maximum grey of " +
+                                std::to_string(max_gray) +
+                                "; a PGM's is 1 to 65535");
+  if (pgm && max_gray > 255 && max_gray < 65535)
+    return DecodeWidePgm(bytes, static_cast<int>(cols), static_cast<int>(rows),
+                         max_gray, data_at);
   GrayImage out;
   bool decoded = false;
   {

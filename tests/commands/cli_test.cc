@@ -216,6 +216,15 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
       {{"plan", scenario, "--budget", "99999999999"},
        "error: command line: --budget: must be an integer in [0, "
        "1000000000], got 99999999999\n"},
+      // plan runs the expert; --budget is its anytime (a --set of either
+      // named --policy, which plan lacks, or was overruled in silence).
+      {{"plan", scenario, "--set", "policy.name=expert"},
+       "error: command line: --set policy.name: aia plan runs the expert "
+       "(C-SB) and sets policy.name itself; set the expert's keys one by one "
+       "(--set policy.KEY=VALUE)\n"},
+      {{"plan", scenario, "--budget", "7", "--set", "policy.anytime=5"},
+       "error: command line: --set policy.anytime: is also given by "
+       "--budget; give one of them\n"},
       {{"render", scenario, "--out", "x.mp4", "--width", "wide"},
        "error: command line: --width: must be an integer in [16, 8192], got "
        "wide\n"},
@@ -255,6 +264,8 @@ TEST(CliTest, BenchCountsOutOfRangeExitWith2) {
        "--seeds: is not read by aia bench without "
        "--expert"},
       {{"bench", "--sizes", "2x2,2x2"}, "--sizes: 2x2 is given twice"},
+      {{"bench", "--network", "--sizes", "3x3"},
+       "--sizes: is not read by aia bench with --network"},
       // aia eval's counts, from the same kind of declaration.
       {{"eval", "--seeds", "0", "--out", "/nonexistent/aia_eval"},
        "--seeds: must be an integer >= 1, got 0"},
@@ -897,6 +908,20 @@ TEST(CliTest, EffectiveYamlRecordsTheModelAndRefusesAnotherOne) {
   EXPECT_NE(
       ReadFile(dir + "/f/effective.yaml").find("/models/igbnet_10x10.pt\n"),
       std::string::npos);
+  // A file's igbnet switched by --policy greedy runs without a word, and so
+  // does its repeat: the model that greedy does not read is not recorded
+  // (it was, and the repeat warned that it changes nothing).
+  r = RunAia({"run", dir + "/d/effective.yaml", "--policy", "greedy",
+              "--max-steps", "1", "--out", dir + "/g", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(ReadFile(dir + "/g/effective.yaml").find("model_sha256: "),
+            std::string::npos);
+  r = RunAia(
+      {"run", dir + "/g/effective.yaml", "--out", dir + "/h", "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(ReadFile(dir + "/g/trace.csv"), ReadFile(dir + "/h/trace.csv"));
   fs::remove_all(dir);
 }
 

@@ -563,6 +563,19 @@ TEST(EvalPiecesTest, ErrorsOfGeneratedScenariosNameTheFlagBehindThem) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "--seed-base");
   }
+  // 2^31 - 1 seeds of two sizes: refused before their list (280 GB) is
+  // made; a million worlds is the most one evaluation takes.
+  EXPECT_THROW(EnumerateInstances({{1, 1}}, 1000001, 0), InputError);
+  try {
+    EnumerateInstances({{1, 1}, {2, 1}}, 2147483647, 0);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "--seeds");
+    EXPECT_NE(e.message().find("4294967294 worlds, more than one evaluation "
+                               "takes (1000000)"),
+              std::string::npos)
+        << e.message();
+  }
 }
 
 TEST(EvalTest, ResumeRefusesAnotherConfiguration) {

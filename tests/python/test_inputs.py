@@ -154,7 +154,8 @@ def test_vector_missions_arguments():
     refused(lambda: aia.VectorMissions(2.0, DEFAULT),
             "aia.VectorMissions: n: ", "got 2.0 (float)")
     refused(lambda: aia.VectorMissions(0, DEFAULT),
-            "aia.VectorMissions: n: must be an integer >= 1, got 0")
+            "aia.VectorMissions: n: must be an integer in [1, 2147483647], "
+            "got 0")
     v = aia.VectorMissions(2, DEFAULT, seed=1, overrides=SMALL)
     refused(lambda: v.step(np.zeros((2, 3))), "got an array of float64")
     refused(lambda: v.step([[float("nan"), 0, 0], [0, 0, 0]]),

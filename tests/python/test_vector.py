@@ -61,7 +61,8 @@ def test_vector_moves_are_checked():
         v.step(np.zeros((3, 3), dtype=int))
     with pytest.raises(aia.InputError, match=r"moves\[1\]\[2\]: must be 0"):
         v.step([[0, 0, 0], [0, 0, 5]])
-    with pytest.raises(aia.InputError, match="n: must be an integer >= 1"):
+    with pytest.raises(aia.InputError,
+                       match=r"n: must be an integer in \[1, 2147483647\]"):
         aia.VectorMissions(0, DEFAULT)
 
 
@@ -73,6 +74,11 @@ def test_more_missions_than_memory_holds_are_refused_before_they_are_made():
                        r"MiB more \(\d+ KiB each\), and this machine has "
                        r"\d+ MiB available"):
         aia.VectorMissions(10 ** 7, DEFAULT, overrides=SMALL)
+    # The most missions allowed: refused as soon (a list of their seeds,
+    # made first, took the machine's memory).
+    with pytest.raises(aia.InputError, match=r"aia.VectorMissions: n: "
+                       r"2147483647 missions of this scenario need about"):
+        aia.VectorMissions(2 ** 31 - 1, DEFAULT, overrides=SMALL)
 
 
 def play(v, rounds):

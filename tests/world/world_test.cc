@@ -350,6 +350,44 @@ TEST(WorldTest, APgmWhoseWhiteIsBelow255IsScaled) {
   }
 }
 
+// A maximum grey of 256 to 65534: OpenCV read the 16-bit samples against
+// 65535 (a map of 1000 for white came out dark: "no free lattice point");
+// scaled to the file's maximum as the narrow forms are. A maximum outside
+// PGM's 1 to 65535 is said, not "corrupt".
+TEST(WorldTest, APgmWhoseWhiteIsAbove255IsScaledToIt) {
+  for (const std::string magic : {"P5", "P2"}) {
+    std::string bytes = magic + "\n3 2\n1000\n";
+    const int values[] = {1000, 0, 500, 1000, 999, 300};
+    for (const int v : values) {
+      if (magic == "P5") {
+        bytes += static_cast<char>(v >> 8);
+        bytes += static_cast<char>(v & 0xff);
+      } else {
+        bytes += std::to_string(v) + " ";
+      }
+    }
+    const GrayImage image = DecodeMapImage(bytes);
+    ASSERT_EQ(image.cols, 3);
+    ASSERT_EQ(image.rows, 2);
+    EXPECT_EQ(image.pixels,
+              (std::vector<std::uint8_t>{255, 0, 127, 255, 254, 76}))
+        << magic;
+    EXPECT_THROW(DecodeMapImage(bytes.substr(0, bytes.size() - 4)),
+                 std::invalid_argument)
+        << magic << ": cut";
+  }
+  for (const char* header : {"P5\n3 2\n0\n", "P5\n3 2\n70000\n"}) {
+    try {
+      DecodeMapImage(std::string(header) + std::string(12, '\0'));
+      ADD_FAILURE() << header;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("; a PGM's is 1 to 65535"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(MjcfTest, GeneratedModelPassesMujocoTestxml) {
   // Point and wheeled robots (the latter with CG forced, and with Newton).
   for (const char* robots :
