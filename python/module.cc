@@ -1272,7 +1272,11 @@ class PyDataset {
     try {
       data_ = ReadDataset(paths, "paths");
     } catch (const InputError& e) {
-      throw Renamed(e, "aia.Dataset");  // "command line" is not Python's
+      // "command line" is not Python's; a file's error names the callable
+      // first, as every other Python error does.
+      if (e.file() != "command line" && e.key() == "paths")
+        Refuse("aia.Dataset", "paths", "'" + e.file() + "': " + e.message());
+      throw Renamed(e, "aia.Dataset");
     }
     if (data_.samples.empty())
       Refuse("aia.Dataset", "paths", "holds no samples");

@@ -196,6 +196,9 @@ class Mission:
                                _where)
         _warn_scenario(self._m, _where)
 
+    # The env whose mission this is (aia.parallel_env's): it steps it.
+    _stepped_by = None
+
     def _restart(self, seed, where):
         """Step 0 again at `seed`, of the scenario as it was read."""
         self._m._restart(seed, where)
@@ -271,6 +274,12 @@ class Mission:
         step), localized (targets below eps in the team's best estimate),
         terminated (success, or no robot left), truncated (past
         mission.max_steps), success, done (terminated or truncated)."""
+        if self._stepped_by is not None:
+            raise InputError(
+                f"aia.Mission.step: this is the mission of an "
+                f"{self._stepped_by}: step it with the env's step() (a step "
+                f"here would leave the env's agents, rewards and ends "
+                f"behind); read it here")
         return self._m.step(moves)
 
     @property

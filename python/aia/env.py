@@ -273,6 +273,7 @@ class ParallelEnv:
         # read now (not as edited later, nor read from another working
         # directory), and its warnings were said once, above.
         self._made = first
+        first._stepped_by = "aia.ParallelEnv"
         self._mission = None
         self._closed = False
         self._left = {}
@@ -413,7 +414,7 @@ class ParallelEnv:
         if not self.agents:
             raise InputError("aia.ParallelEnv.step: the mission is over "
                              "(agents is empty): call reset()")
-        result = self._mission.step(self._moves(actions))
+        result = self._mission._m.step(self._moves(actions))
         state = self._mission.state()
         log_det = self._own_log_det(state)
         drop = self._log_det - log_det

@@ -686,6 +686,12 @@ int aia::CliMain(int argc, char** argv) {
     // included, or says that a command is required after `aia --verison`).
     const std::string flag = UnknownFlag(app, argc, argv);
     if (!flag.empty()) what = flag;
+    // A flag given twice, in aia's words (CLI11: "--seed: At Most 1
+    // required but received 2").
+    const std::string twice = ": At Most 1 required but received ";
+    if (const std::size_t at = what.find(twice); at != std::string::npos)
+      what = what.substr(0, at) + ": given " + what.substr(at + twice.size()) +
+             " times; give it once";
     std::fprintf(stderr, "error: command line: %s (%s lists the options)\n",
                  what.c_str(), help.c_str());
     return 2;

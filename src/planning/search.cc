@@ -121,6 +121,7 @@ int MissSlots<Derived, Slot, Shared>::Record(const DecisionContext& ctx,
     const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
     Derived::Settle(&s, searching);
     if (!searching) continue;
+    if (s.missed.empty()) derived().Unmissed(ctx, robot, k);
     // Nothing measured, though this point sees where the target was looked
     // for: it is not anywhere the point would have measured.
     if (!Derived::Sees(map, *ctx.sensor, p, s) ||
@@ -194,6 +195,25 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
 void SearchMemory::Settle(internal::AimSlot* s, bool searching) {
   if (!searching) s->missed.clear();
   if (s->missed.empty()) s->aim = s->mean;
+}
+
+void SearchMemory::Unmissed(const DecisionContext& ctx, int robot, int k) {
+  auto& s = slot(robot, k);
+  const Lattice& lattice = ctx.map->lattice();
+  const int here = (*ctx.robot_lattice)[robot];
+  const int component = lattice.components()[here];
+  // Checked once per mean and component (a static target's mean moves only
+  // where it is measured, which ends the search).
+  if (!(s.checked_mean == s.mean) || s.checked_component != component) {
+    s.checked_mean = s.mean;
+    s.checked_component = component;
+    s.ring_aim.reset();
+    if (NearestObserverDistance(*ctx.map, *ctx.sensor, here, s.mean,
+                                SensorSpan(lattice, *ctx.sensor)) < 0 &&
+        Reaim(ctx, robot, k))
+      s.ring_aim = s.aim;
+  }
+  if (s.ring_aim) s.aim = *s.ring_aim;
 }
 
 bool SearchMemory::Sees(const Map& map, const SensorModel& sensor,

@@ -209,6 +209,11 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
       {{"dataset", "--episodes", "1", "--out", "x", "--first-seed", "0x10"},
        "error: command line: --first-seed: must be an integer >= 0, got "
        "0x10\n"},
+      // A flag given twice, in aia's words (CLI11's "At Most 1 required
+      // but received 2" before).
+      {{"run", scenario, "--seed", "1", "--seed", "2"},
+       "error: command line: --seed: given 2 times; give it once (aia run "
+       "--help lists the options)\n"},
       {{"plan", scenario, "--budget", "many"},
        "error: command line: --budget: must be an integer in [0, "
        "1000000000], got many\n"},

@@ -203,6 +203,36 @@ TEST(SearchMemoryTest, APointThatDoesNotSeeTheAimMissesNothing) {
   EXPECT_NEAR((memory.Aim(0, 0) - Vec2(6.1, 5.25)).norm(), 0.0, 1e-12);
 }
 
+// A prior mean that no point of the robot's component would measure (inside
+// a box): the aim is not the mean, which nothing could ever see or rule out
+// (the default policy's robots froze beside it for a whole mission), but the
+// nearest point of the prior that a point would measure, as a miss of the
+// mean would have made it.
+TEST(SearchMemoryTest, AMeanNoPointSeesIsNotTheAim) {
+  Team team(
+      "workspace: {size: [10.0, 10.0], obstacles: {boxes: [{center: [6.0, "
+      "5.25], size: [2.0, 2.0]}]}}\n"
+      "robots: {count: 1, start: [[1.25, 1.25]]}\n"
+      "targets: {list: [{position: [8.5, 8.0], prior_mean: [6.0, 5.25], "
+      "prior_sigma: 1.0}]}\n");
+  const Map& map = team.world.map;
+  const SensorModel& sensor = team.sensor;
+  const int span = SensorSpan(map.lattice(), sensor);
+  const Vec2 mean(6.0, 5.25);
+  ASSERT_LT(NearestObserverDistance(map, sensor, team.positions[0], mean, span),
+            0);
+  SearchMemory memory;
+  memory.Reset(1, 1);
+  for (int step = 0; step < 3; ++step) memory.Update(team.Context(), 0);
+  EXPECT_TRUE(memory.Missed(0, 0).empty());
+  const Vec2 aim = memory.Aim(0, 0);
+  EXPECT_GT((aim - mean).norm(), 0.2);
+  EXPECT_LE((aim - mean).norm(), 4.0 + 1e-9);
+  EXPECT_TRUE(map.PointFree(aim));
+  EXPECT_GE(NearestObserverDistance(map, sensor, team.positions[0], aim, span),
+            0);
+}
+
 TEST(SearchMemoryTest, MovingTargetsAreNotSearched) {
   Team team(
       "workspace: {size: [10.0, 10.0]}\n"

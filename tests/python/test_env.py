@@ -467,3 +467,17 @@ def test_the_stand_in_spaces_read_as_gymnasiums():
     reference = np.random.default_rng(7)
     assert [action.sample() for _ in range(5)] == \
         [int(reference.integers(4)) for _ in range(5)]
+
+
+def test_the_envs_mission_is_stepped_by_the_env_only():
+    # A step of env.mission behind the env's back left its agents, rewards
+    # and ends behind (the next env reward covered two steps).
+    env = aia.parallel_env(DEFAULT, seed=0, overrides={"mission.max_steps": 3})
+    env.reset(seed=2)
+    with pytest.raises(aia.InputError, match=r"^aia.Mission.step: this is "
+                       r"the mission of an aia.ParallelEnv: step it with"):
+        env.mission.step([4] * len(env.possible_agents))
+    assert env.mission.steps == 0
+    env.step({a: 0 for a in env.agents})
+    assert env.mission.steps == 1
+    env.mission.state()  # read freely

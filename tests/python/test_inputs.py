@@ -520,9 +520,15 @@ def test_a_file_that_is_not_a_shard(tmp_path):
     sqlite3.connect(other).execute("CREATE TABLE t (x)").connection.close()
     text = tmp_path / "text.sqlite"
     text.write_text("not a database\n" * 100)
-    refused(lambda: aia.Dataset([str(other)]), "paths: not an aia dataset "
+    refused(lambda: aia.Dataset([str(other)]), "': not an aia dataset "
             "shard (SQLite: no such table: meta)")
     refused(lambda: aia.Dataset([str(text)]), "not an aia dataset shard")
+    # Named as every Python error is: the callable first, then the file.
+    for path in (other, text, tmp_path / "nope.sqlite"):
+        with pytest.raises(aia.InputError) as e:
+            aia.Dataset([str(path)])
+        assert str(e.value).startswith(f"aia.Dataset: paths: '{path}': "), \
+            str(e.value)
 
 
 def test_a_comma_decimal_locale_is_refused_in_one_line(tmp_path):
