@@ -104,6 +104,7 @@ void MissSlots<Derived, Slot, Shared>::Reset(int num_robots, int num_targets) {
   num_targets_ = num_targets;
   slots_.assign(static_cast<std::size_t>(num_robots) * num_targets, Slot{});
   misses_ = 0;
+  derived().Resized();
 }
 
 template <typename Derived, typename Slot, typename Shared>
@@ -119,7 +120,8 @@ int MissSlots<Derived, Slot, Shared>::Record(const DecisionContext& ctx,
   for (int k = 0; k < num_targets_; ++k) {
     Slot& s = slot(robot, k);
     const bool searching = StillSearching(ctx, robot, k, log_eps, &s);
-    Derived::Settle(&s, searching);
+    derived().Settle(static_cast<std::size_t>(robot) * num_targets_ + k, &s,
+                     searching);
     if (!searching) continue;
     if (s.missed.empty()) derived().Unmissed(ctx, robot, k);
     // Nothing measured, though this point sees where the target was looked
@@ -189,31 +191,41 @@ bool SearchMemory::Reaim(const DecisionContext& ctx, int robot, int k) {
   // The prior is searched to 4 sigma: forget, and search it again.
   s.missed.clear();
   s.aim = s.mean;
+  start_[static_cast<std::size_t>(robot) * num_targets_ + k] = kUnchecked;
   return false;
 }
 
-void SearchMemory::Settle(internal::AimSlot* s, bool searching) {
-  if (!searching) s->missed.clear();
-  if (s->missed.empty()) s->aim = s->mean;
+void SearchMemory::Settle(std::size_t at, internal::AimSlot* s,
+                          bool searching) {
+  if (!searching) {
+    s->missed.clear();
+    start_[at] = kUnchecked;
+  }
+  if (s->missed.empty() && start_[at] != kRing) s->aim = s->mean;
 }
 
 void SearchMemory::Unmissed(const DecisionContext& ctx, int robot, int k) {
-  auto& s = slot(robot, k);
+  std::uint8_t& start =
+      start_[static_cast<std::size_t>(robot) * num_targets_ + k];
+  if (start != kUnchecked) return;
+  // Once a search starts (the mean it has then: a static target's moves
+  // only by the consensus until measured, which ends the search), and the
+  // window scanned only for a mean in an obstacle or whose nearest lattice
+  // point is not a free one of the robot's component (a scan of every
+  // slot's window would cost seconds a step at 1000 x 1000).
+  const auto& s = slot(robot, k);
   const Lattice& lattice = ctx.map->lattice();
   const int here = (*ctx.robot_lattice)[robot];
   const int component = lattice.components()[here];
-  // Checked once per mean and component (a static target's mean moves only
-  // where it is measured, which ends the search).
-  if (!(s.checked_mean == s.mean) || s.checked_component != component) {
-    s.checked_mean = s.mean;
-    s.checked_component = component;
-    s.ring_aim.reset();
-    if (NearestObserverDistance(*ctx.map, *ctx.sensor, here, s.mean,
-                                SensorSpan(lattice, *ctx.sensor)) < 0 &&
-        Reaim(ctx, robot, k))
-      s.ring_aim = s.aim;
-  }
-  if (s.ring_aim) s.aim = *s.ring_aim;
+  const int nearest = lattice.NearestPoint(s.mean);
+  const bool suspect = !ctx.map->PointFree(s.mean) || !lattice.Free(nearest) ||
+                       lattice.components()[nearest] != component;
+  const bool ring =
+      suspect &&
+      NearestObserverDistance(*ctx.map, *ctx.sensor, here, s.mean,
+                              SensorSpan(lattice, *ctx.sensor)) < 0 &&
+      Reaim(ctx, robot, k);
+  start = ring ? kRing : kMean;
 }
 
 bool SearchMemory::Sees(const Map& map, const SensorModel& sensor,
@@ -348,7 +360,8 @@ void SearchPoints::Recompute(const DecisionContext& ctx, int robot, int k) {
   }
 }
 
-void SearchPoints::Settle(internal::PointsSlot* s, bool searching) {
+void SearchPoints::Settle(std::size_t, internal::PointsSlot* s,
+                          bool searching) {
   if (searching) return;
   s->missed.clear();
   s->points.clear();

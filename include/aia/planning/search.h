@@ -22,7 +22,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <shared_mutex>
 #include <unordered_map>
 #include <utility>
@@ -466,13 +465,6 @@ struct AimSlot {
   Vec2 mean{0.0, 0.0};
   Vec2 aim{0.0, 0.0};
   MissList missed;
-  // SearchMemory::Unmissed's check of `checked_mean` from the robot's
-  // lattice component: no point of it would measure a target there (a
-  // prior mean inside an obstacle), so the aim is `ring_aim`, a point of
-  // the prior that one would (none where none within 4 sigma would).
-  Vec2 checked_mean{std::numeric_limits<double>::quiet_NaN(), 0.0};
-  int checked_component = -1;
-  std::optional<Vec2> ring_aim;
 };
 struct PointsSlot {
   double log_det = std::numeric_limits<double>::quiet_NaN();  // last seen
@@ -605,13 +597,23 @@ class SearchMemory
   // obstacle, where it is the nearest point of the prior one would, as
   // SearchAim picks it; the robots froze beside such a mean); the aim is
   // what a point must see.
-  static void Settle(internal::AimSlot* s, bool searching);
+  void Resized() {
+    start_.assign(static_cast<std::size_t>(num_robots_) * num_targets_,
+                  kUnchecked);
+  }
+  void Settle(std::size_t at, internal::AimSlot* s, bool searching);
   void Unmissed(const DecisionContext& ctx, int robot, int k);
   static bool Sees(const Map& map, const SensorModel& sensor, const Vec2& p,
                    const internal::AimSlot& s);
   void Recompute(const DecisionContext& ctx, int robot, int k) {
     Reaim(ctx, robot, k);
   }
+  // Per slot, Unmissed's check of the mean once a search starts (kRing:
+  // no point of the robot's component would measure a target there); kept
+  // apart from the slots, which the default policy reads every step for
+  // every robot and target.
+  enum : std::uint8_t { kUnchecked, kMean, kRing };
+  std::vector<std::uint8_t> start_;
 };
 
 // What each robot knows from its missed measurements of static targets, as
@@ -651,7 +653,8 @@ class SearchPoints : public MissSlots<SearchPoints, internal::PointsSlot,
   // MissSlots::Record's hooks: a finished search forgets its misses and
   // points; a point sees the search when it sees one of its points (the
   // mean while there are none).
-  static void Settle(internal::PointsSlot* s, bool searching);
+  void Resized() {}
+  static void Settle(std::size_t, internal::PointsSlot* s, bool searching);
   void Unmissed(const DecisionContext&, int, int) {}
   static bool Sees(const Map& map, const SensorModel& sensor, const Vec2& p,
                    const internal::PointsSlot& s);
