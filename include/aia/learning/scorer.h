@@ -97,6 +97,21 @@ class NetworkScorer : public MoveScorer {
  private:
   // Robots in one forward of the network.
   static constexpr int kForwardBatch = 32;
+  // Score's steps, in order; what they share is a Step (scorer.cc).
+  struct Step;
+  void MatchSensorRange(const DecisionContext& ctx);
+  // order_: the rows rendered and scored.
+  void ChooseRows(Step* step);
+  // The priors, heatmaps, fold, per-worker scratch and search points.
+  void PrepareInputs(Step* step, int workers);
+  // Every chunk of order_ rendered and run through the network.
+  void RenderAndRun(const Step& step);
+  // Row b's image into `image`.
+  void RenderRow(const Step& step, int b, float* image, int worker);
+  void RunChunk(const Step& step, int begin, int end, int made, int worker);
+  void UnpackChunk(const Step& step, int begin, int end, int made);
+  void WriteLogits(const Step& step, float* logits) const;
+  void PassMessages(const Step& step, float* logits);
   std::shared_ptr<const IgbNet> net_;
   Precision precision_;
   bool bf16_ = false;  // precision_ for this episode's team
