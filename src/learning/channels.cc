@@ -528,14 +528,285 @@ void ChannelRenderer::Reach(int x0, int y0, const Vec2& self,
 }
 
 namespace internal {
-namespace {
-thread_local bool reach_world_exhaustive = false;
-}  // namespace
-ExhaustiveReachWorld::ExhaustiveReachWorld() : was_(reach_world_exhaustive) {
-  reach_world_exhaustive = true;
+ChannelRenderer ExhaustiveReachWorld(const ChannelRenderer& renderer) {
+  ChannelRenderer reference = renderer;
+  reference.exhaustive_reach_ = true;
+  return reference;
 }
-ExhaustiveReachWorld::~ExhaustiveReachWorld() { reach_world_exhaustive = was_; }
 }  // namespace internal
+
+namespace {
+
+// The reach channel over the workspace is scaled at the robot's own pixel:
+// a pixel whose way is d moves shorter holds exp(d / (L / cell) -
+// kReachSelf), capped at 1 (ChannelRenderer::ReachWorld).
+constexpr double kReachSelf = 2.0;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+// ReachWorld's search (see there) for one call: A* toward the window's
+// pixels and the robot's, from the observation pixels of every target with
+// a weight, each target entering when the search reaches a lower bound of
+// its pixels' f. Its scratch is per thread, reset where the last call wrote
+// it: nothing is allocated or cleared in proportion to the map once warm.
+class ChannelRenderer::ReachSearch {
+ public:
+  // An entry: f, its cost, the pixel and the target. The heap orders by f
+  // alone: entries of equal f pop in whichever order the heap holds them,
+  // and the images do not depend on it (a pixel's cost is its least over
+  // the targets, its second cost the least over the others, whichever way
+  // ties are found; the labels of tied ways may differ, their costs not).
+  // Comparing the pixel and the target too cost 3 to 4 % of the network
+  // alone's policy at 1000 robots (the heap is most of this search).
+  struct Entry {
+    double f, c;
+    int pixel, target;
+  };
+
+  // `second`: each pixel keeps its two best targets (ReachWorld's second).
+  ReachSearch(const ChannelRenderer& renderer, int x0, int y0, int w, int h,
+              int sx, int sy, bool second,
+              const std::vector<HeatSource>& targets,
+              const SearchPointSets* search);
+  // Every target of weight above 0 a source, of cost -(L / cell) ln w,
+  // ordered by a lower bound on its observation pixels' f.
+  void AddSources(const std::vector<double>& log_det_prior, double eps,
+                  double moves_per_e);
+  // Settles pixels in order of f until the next entry's f passes the
+  // robot's own cost (its second with `second`; self_idx: the robot's
+  // pixel, -1 where it cannot stand) plus `cap`.
+  void Run(double cap, int self_idx);
+
+  // Per global pixel: the least cost and (with `second`) the second's;
+  // infinite where nothing settled.
+  const std::vector<double>& cost() const { return s_.cost; }
+  const std::vector<double>& cost2() const { return s_.cost2; }
+  // The robot's own costs, once settled (else infinite).
+  double self_cost() const { return self_cost_; }
+  double self_cost2() const { return self_cost2_; }
+
+ private:
+  struct Scratch {
+    std::vector<double> cost, cost2;
+    std::vector<int> label, label2, touched;
+    std::vector<Entry> heap;
+    std::vector<std::pair<double, int>> sources;
+    std::vector<double> start;
+  };
+  struct Later {
+    bool operator()(const Entry& a, const Entry& b) const { return a.f > b.f; }
+  };
+  struct Greater {
+    bool operator()(const std::pair<double, int>& a,
+                    const std::pair<double, int>& b) const {
+      return a > b;
+    }
+  };
+
+  // This thread's scratch, reset for a map of `total` pixels.
+  static Scratch& ResetScratch(std::size_t total);
+  // g(p): the moves from global pixel (gx, gy) to the nearest pixel of the
+  // window or the robot's on an empty lattice (0 when exhaustive).
+  int Bound(int gx, int gy) const;
+  // A way of cost c from target k reaches pixel j; whether it is kept.
+  bool Improve(int j, double c, int k);
+  // Target k's points: its search points, else its mean.
+  std::pair<const Vec2*, std::size_t> Points(std::size_t k) const;
+  // Target k's observation pixels enter at its start cost.
+  void Seed(int k);
+  // The source of least bound enters.
+  void SeedNext();
+
+  const ChannelRenderer& r_;
+  const int nx_;
+  const int x0_, y0_, w_, h_, sx_, sy_;
+  const bool second_;
+  const bool exhaustive_;
+  const bool self_inside_;
+  const std::vector<HeatSource>& targets_;
+  const SearchPointSets* search_;
+  Scratch& s_;
+  double self_cost_ = kInf, self_cost2_ = kInf;
+};
+
+ChannelRenderer::ReachSearch::ReachSearch(
+    const ChannelRenderer& renderer, int x0, int y0, int w, int h, int sx,
+    int sy, bool second, const std::vector<HeatSource>& targets,
+    const SearchPointSets* search)
+    : r_(renderer),
+      nx_(renderer.occupancy_.nx()),
+      x0_(x0),
+      y0_(y0),
+      w_(w),
+      h_(h),
+      sx_(sx),
+      sy_(sy),
+      second_(second),
+      exhaustive_(renderer.exhaustive_reach_),
+      self_inside_(sx >= x0 && sy >= y0 && sx < x0 + w && sy < y0 + h),
+      targets_(targets),
+      search_(search),
+      s_(ResetScratch(static_cast<std::size_t>(renderer.occupancy_.nx()) *
+                      renderer.occupancy_.ny())) {}
+
+ChannelRenderer::ReachSearch::Scratch&
+ChannelRenderer::ReachSearch::ResetScratch(std::size_t total) {
+  thread_local Scratch s;
+  if (s.cost.size() != total) {
+    s.cost.assign(total, kInf);
+    s.cost2.assign(total, kInf);
+    s.label.assign(total, -1);
+    s.label2.assign(total, -1);
+  } else {
+    for (const int j : s.touched) {
+      s.cost[j] = s.cost2[j] = kInf;
+      s.label[j] = s.label2[j] = -1;
+    }
+  }
+  s.touched.clear();
+  s.heap.clear();
+  s.sources.clear();
+  return s;
+}
+
+int ChannelRenderer::ReachSearch::Bound(int gx, int gy) const {
+  if (exhaustive_) return 0;
+  const int dx =
+      gx < x0_ ? x0_ - gx : (gx >= x0_ + w_ ? gx - (x0_ + w_ - 1) : 0);
+  const int dy =
+      gy < y0_ ? y0_ - gy : (gy >= y0_ + h_ ? gy - (y0_ + h_ - 1) : 0);
+  const int to_window = dx + dy;
+  if (self_inside_) return to_window;
+  return std::min(to_window, std::abs(gx - sx_) + std::abs(gy - sy_));
+}
+
+// Without `second`: kept if it is j's least. With it: kept if it is j's
+// least or its least from any other target than the least's (each pixel
+// holds its two best targets, never one twice).
+bool ChannelRenderer::ReachSearch::Improve(int j, double c, int k) {
+  std::vector<double>& cost = s_.cost;
+  std::vector<double>& cost2 = s_.cost2;
+  std::vector<int>& label = s_.label;
+  std::vector<int>& label2 = s_.label2;
+  if (cost[j] == kInf) s_.touched.push_back(j);
+  if (!second_ || k == label[j]) {
+    if (c >= cost[j]) return false;
+    cost[j] = c;
+    if (second_) label[j] = k;
+  } else if (c < cost[j]) {
+    cost2[j] = cost[j];
+    label2[j] = label[j];
+    cost[j] = c;
+    label[j] = k;
+  } else if (c < cost2[j]) {
+    cost2[j] = c;
+    label2[j] = k;
+  } else {
+    return false;
+  }
+  s_.heap.push_back({c + Bound(j % nx_, j / nx_), c, j, k});
+  std::push_heap(s_.heap.begin(), s_.heap.end(), Later());
+  return true;
+}
+
+std::pair<const Vec2*, std::size_t> ChannelRenderer::ReachSearch::Points(
+    std::size_t k) const {
+  if (search_ && k < search_->size() && !(*search_)[k].empty())
+    return {(*search_)[k].data(), (*search_)[k].size()};
+  return {&targets_[k].mean, 1};
+}
+
+// The targets in order of a lower bound on their observation pixels' f: c0
+// plus g at the point, less the most an observation pixel can be nearer
+// (observe_range in pixels, along each axis). A heap, least bound first:
+// the search takes a few of them.
+void ChannelRenderer::ReachSearch::AddSources(
+    const std::vector<double>& log_det_prior, double eps, double moves_per_e) {
+  std::vector<std::pair<double, int>>& sources = s_.sources;
+  std::vector<double>& start = s_.start;
+  const int observe =
+      static_cast<int>(std::ceil(r_.params_.observe_range / r_.params_.cell));
+  start.assign(targets_.size(), kInf);
+  const double log_eps = std::log(eps);
+  for (std::size_t k = 0; k < targets_.size(); ++k) {
+    const double wk =
+        HeatWeightOfLog(targets_[k].log_det, log_det_prior[k], log_eps);
+    if (wk <= 0.0) continue;
+    // A weight of 1 (each target the robot has not measured) needs no log.
+    start[k] = -moves_per_e * (wk == 1.0 ? 0.0 : std::log(wk));
+    int near = std::numeric_limits<int>::max();
+    const auto [at, count] = Points(k);
+    for (std::size_t a = 0; a < count && near > 0; ++a) {
+      int mx = 0, my = 0;
+      r_.occupancy_.CellOf(at[a], &mx, &my);
+      near = std::min(near, std::max(0, Bound(mx, my) - 2 * observe));
+    }
+    sources.emplace_back(start[k] + near, static_cast<int>(k));
+  }
+  std::make_heap(sources.begin(), sources.end(), Greater());
+}
+
+void ChannelRenderer::ReachSearch::Seed(int k) {
+  const auto [at, count] = Points(k);
+  for (std::size_t a = 0; a < count; ++a)
+    for (const int idx : r_.ObservationPixels(at[a]))
+      Improve(idx, s_.start[k], k);
+}
+
+void ChannelRenderer::ReachSearch::SeedNext() {
+  std::vector<std::pair<double, int>>& sources = s_.sources;
+  std::pop_heap(sources.begin(), sources.end(), Greater());
+  const int k = sources.back().second;
+  sources.pop_back();
+  Seed(k);
+}
+
+void ChannelRenderer::ReachSearch::Run(double cap, int self_idx) {
+  std::vector<Entry>& heap = s_.heap;
+  std::vector<std::pair<double, int>>& sources = s_.sources;
+  const std::vector<double>& cost = s_.cost;
+  const std::vector<double>& cost2 = s_.cost2;
+  const std::vector<int>& label = s_.label;
+  const std::vector<int>& label2 = s_.label2;
+  const std::vector<std::uint8_t>& moves = r_.moves_;
+  // The reference (internal::ExhaustiveReachWorld) is the search before the
+  // bound: every source at once, stopping at the threshold itself. The
+  // bounded search stops one move later: f = cost + g is rounded once
+  // where a way's cost adds 1.0 a move, so a pixel on the least way to one
+  // at the threshold could read a unit in the last place above it; what
+  // settles past the threshold is never read.
+  const double slack = exhaustive_ ? 0.0 : 1.0;
+  if (exhaustive_)
+    while (!sources.empty()) SeedNext();
+  while (true) {
+    const double stop = (second_ ? self_cost2_ : self_cost_) + cap + slack;
+    // Every target whose bound is at most the next entry's f (one at a
+    // time: each may bring a nearer next entry).
+    while (!sources.empty() &&
+           sources.front().first <=
+               std::min(heap.empty() ? kInf : heap.front().f, stop))
+      SeedNext();
+    if (heap.empty() || heap.front().f > stop) break;
+    std::pop_heap(heap.begin(), heap.end(), Later());
+    const Entry e = heap.back();
+    heap.pop_back();
+    const double c = e.c;
+    const int idx = e.pixel, k = e.target;
+    const bool best = c == cost[idx] && (!second_ || k == label[idx]);
+    if (!best && !(second_ && c == cost2[idx] && k == label2[idx]))
+      continue;  // stale
+    if (idx == self_idx) (best ? self_cost_ : self_cost2_) = c;
+    const unsigned m = moves[idx];
+    const int gx = idx % nx_, gy = idx / nx_;
+    for (Move move : kMoves) {
+      if (!(m & (1u << static_cast<int>(move)))) continue;
+      const auto d = MoveDelta(move);
+      const int j = r_.occupancy_.Index(gx + d[0], gy + d[1]);
+      if (moves[j]) Improve(j, c + 1.0, k);
+    }
+  }
+}
 
 void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
                                  const std::vector<HeatSource>& targets,
@@ -549,211 +820,67 @@ void ChannelRenderer::ReachWorld(int x0, int y0, int w, int h, int sx, int sy,
   // per each of its two best targets).
   //
   // Only the window's pixels and the robot's are read, so the search is A*
-  // toward them: entries pop in order of f = cost + g(p), g(p) the moves
-  // from p to the nearest of those pixels on an empty lattice (a lower
-  // bound on the way there that changes by at most 1 a move), and a
+  // toward them (ReachSearch): entries pop in order of f = cost + g(p), g(p)
+  // the moves from p to the nearest of those pixels on an empty lattice (a
+  // lower bound on the way there that changes by at most 1 a move), and a
   // target's observation pixels enter only when the search reaches a lower
   // bound of their f. Every pixel on a least way to a window pixel of cost
   // c has f <= c, so each pixel the images read settles, with the cost a
   // search over the whole workspace gives it, before the first entry past
   // the threshold below; what the search visits grows with the way from
   // the robot to its nearest targets, not with the workspace or the number
-  // of targets. Scratch per thread, reset where the last call wrote it:
-  // nothing is allocated or cleared in proportion to the map once warm.
+  // of targets.
   const int nx = occupancy_.nx(), ny = occupancy_.ny();
-  const std::size_t total = static_cast<std::size_t>(nx) * ny;
   const double moves_per_e = length / params_.cell;
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  thread_local std::vector<double> cost, cost2;
-  thread_local std::vector<int> label, label2, touched;
-  if (cost.size() != total) {
-    cost.assign(total, kInf);
-    cost2.assign(total, kInf);
-    label.assign(total, -1);
-    label2.assign(total, -1);
-  } else {
-    for (const int j : touched) {
-      cost[j] = cost2[j] = kInf;
-      label[j] = label2[j] = -1;
-    }
-  }
-  touched.clear();
-  // An entry: f, its cost, the pixel and the target. The heap orders by f
-  // alone: entries of equal f pop in whichever order the heap holds them,
-  // and the images do not depend on it (a pixel's cost is its least over
-  // the targets, its second cost the least over the others, whichever way
-  // ties are found; the labels of tied ways may differ, their costs not).
-  // Comparing the pixel and the target too cost 3 to 4 % of the network
-  // alone's policy at 1000 robots (the heap is most of this search).
-  struct Entry {
-    double f, c;
-    int pixel, target;
-  };
-  thread_local std::vector<Entry> heap;
-  const auto later = [](const Entry& a, const Entry& b) { return a.f > b.f; };
-  heap.clear();
-  const bool exhaustive = internal::reach_world_exhaustive;
-  const bool self_inside = sx >= x0 && sy >= y0 && sx < x0 + w && sy < y0 + h;
-  const auto bound = [&](int gx, int gy) -> int {
-    if (exhaustive) return 0;
-    const int dx = gx < x0 ? x0 - gx : (gx >= x0 + w ? gx - (x0 + w - 1) : 0);
-    const int dy = gy < y0 ? y0 - gy : (gy >= y0 + h ? gy - (y0 + h - 1) : 0);
-    const int to_window = dx + dy;
-    if (self_inside) return to_window;
-    return std::min(to_window, std::abs(gx - sx) + std::abs(gy - sy));
-  };
-  // A way of cost c from target k reaches pixel j. Without `second`: kept if
-  // it is j's least. With it: kept if it is j's least or its least from any
-  // other target than the least's (each pixel holds its two best targets,
-  // never one twice).
-  const auto improve = [&](int j, double c, int k) {
-    if (cost[j] == kInf) touched.push_back(j);
-    if (!second || k == label[j]) {
-      if (c >= cost[j]) return false;
-      cost[j] = c;
-      if (second) label[j] = k;
-    } else if (c < cost[j]) {
-      cost2[j] = cost[j];
-      label2[j] = label[j];
-      cost[j] = c;
-      label[j] = k;
-    } else if (c < cost2[j]) {
-      cost2[j] = c;
-      label2[j] = k;
-    } else {
-      return false;
-    }
-    heap.push_back({c + bound(j % nx, j / nx), c, j, k});
-    std::push_heap(heap.begin(), heap.end(), later);
-    return true;
-  };
-  // The targets in order of a lower bound on their observation pixels' f:
-  // c0 plus g at the point, less the most an observation pixel can be
-  // nearer (observe_range in pixels, along each axis).
-  thread_local std::vector<std::pair<double, int>> sources;
-  sources.clear();
-  const int observe =
-      static_cast<int>(std::ceil(params_.observe_range / params_.cell));
-  // Target k's points: its search points, else its mean.
-  const auto points =
-      [&](std::size_t k) -> std::pair<const Vec2*, std::size_t> {
-    if (search && k < search->size() && !(*search)[k].empty())
-      return {(*search)[k].data(), (*search)[k].size()};
-    return {&targets[k].mean, 1};
-  };
-  thread_local std::vector<double> start;
-  start.assign(targets.size(), kInf);
-  const double log_eps = std::log(eps);
-  for (std::size_t k = 0; k < targets.size(); ++k) {
-    const double wk =
-        HeatWeightOfLog(targets[k].log_det, log_det_prior[k], log_eps);
-    if (wk <= 0.0) continue;
-    // A weight of 1 (each target the robot has not measured) needs no log.
-    start[k] = -moves_per_e * (wk == 1.0 ? 0.0 : std::log(wk));
-    int near = std::numeric_limits<int>::max();
-    const auto [at, count] = points(k);
-    for (std::size_t a = 0; a < count && near > 0; ++a) {
-      int mx = 0, my = 0;
-      occupancy_.CellOf(at[a], &mx, &my);
-      near = std::min(near, std::max(0, bound(mx, my) - 2 * observe));
-    }
-    sources.emplace_back(start[k] + near, static_cast<int>(k));
-  }
-  // A heap, least bound first: the search takes a few of them.
-  const auto greater = [](const std::pair<double, int>& a,
-                          const std::pair<double, int>& b) { return a > b; };
-  std::make_heap(sources.begin(), sources.end(), greater);
-  const auto seed = [&](int k) {
-    const auto [at, count] = points(k);
-    for (std::size_t a = 0; a < count; ++a)
-      for (const int idx : ObservationPixels(at[a])) improve(idx, start[k], k);
-  };
-  // The scale is the robot's own pixel: a pixel whose way is d moves
-  // shorter holds exp(d / (L / cell) - kReachSelf), capped at 1, so that
-  // the way on from where the robot stands reads the same however far the
-  // goal is. Pixels far above the robot's cost (below 1e-6) are left at 0:
-  // the search stops there, its cost the area between the robot and the
+  ReachSearch reach(*this, x0, y0, w, h, sx, sy, second != nullptr, targets,
+                    search);
+  reach.AddSources(log_det_prior, eps, moves_per_e);
+  // Pixels far above the robot's cost (below 1e-6, kReachSelf) are left at
+  // 0: the search stops there, its cost the area between the robot and the
   // nearest observation pixels, not the map's.
-  constexpr double kReachSelf = 2.0;
   const double cap = moves_per_e * (std::log(1e6) - kReachSelf);
   const bool self_free = sx >= 0 && sy >= 0 && sx < nx && sy < ny &&
                          moves_[occupancy_.Index(sx, sy)] != 0;
-  const int self_idx = self_free ? occupancy_.Index(sx, sy) : -1;
-  // The robot's own costs, once settled; the search stops past the last one
-  // the channels need.
-  double self_cost = kInf, self_cost2 = kInf;
-  const auto seed_next = [&] {
-    std::pop_heap(sources.begin(), sources.end(), greater);
-    const int k = sources.back().second;
-    sources.pop_back();
-    seed(k);
-  };
-  // The reference (internal::ExhaustiveReachWorld) is the search before the
-  // bound: every source at once, stopping at the threshold itself. The
-  // bounded search stops one move later: f = cost + g is rounded once
-  // where a way's cost adds 1.0 a move, so a pixel on the least way to one
-  // at the threshold could read a unit in the last place above it; what
-  // settles past the threshold is never read.
-  const double slack = exhaustive ? 0.0 : 1.0;
-  if (exhaustive)
-    while (!sources.empty()) seed_next();
-  while (true) {
-    const double stop = (second ? self_cost2 : self_cost) + cap + slack;
-    // Every target whose bound is at most the next entry's f (one at a
-    // time: each may bring a nearer next entry).
-    while (!sources.empty() &&
-           sources.front().first <=
-               std::min(heap.empty() ? kInf : heap.front().f, stop))
-      seed_next();
-    if (heap.empty() || heap.front().f > stop) break;
-    std::pop_heap(heap.begin(), heap.end(), later);
-    const Entry e = heap.back();
-    heap.pop_back();
-    const double c = e.c;
-    const int idx = e.pixel, k = e.target;
-    const bool best = c == cost[idx] && (!second || k == label[idx]);
-    if (!best && !(second && c == cost2[idx] && k == label2[idx]))
-      continue;  // stale
-    if (idx == self_idx) (best ? self_cost : self_cost2) = c;
-    const unsigned m = moves_[idx];
-    const int gx = idx % nx, gy = idx / nx;
-    for (Move move : kMoves) {
-      if (!(m & (1u << static_cast<int>(move)))) continue;
-      const auto d = MoveDelta(move);
-      const int j = occupancy_.Index(gx + d[0], gy + d[1]);
-      if (moves_[j]) improve(j, c + 1.0, k);
-    }
+  reach.Run(cap, self_free ? occupancy_.Index(sx, sy) : -1);
+  const bool dim = detour && params_.reach_detour > 0.0 && self_free;
+  ReachImage(x0, y0, w, h, reach.cost(), reach.self_cost(), moves_per_e, cap,
+             out);
+  if (dim) DimByDetour(x0, y0, w, h, sx, sy, out);
+  if (second) {
+    ReachImage(x0, y0, w, h, reach.cost2(), reach.self_cost2(), moves_per_e,
+               cap, second);
+    if (dim) DimByDetour(x0, y0, w, h, sx, sy, second);
   }
-  const auto image = [&](const std::vector<double>& costs, double self,
-                         float* image_out) {
-    // Where no way leads to the robot: scaled to the window's least cost.
-    double ref = self, offset = kReachSelf;
-    if (!std::isfinite(ref)) {
-      offset = 0.0;
-      for (int v = 0; v < h; ++v)
-        for (int u = 0; u < w; ++u) {
-          const int gx = x0 + u, gy = y0 + v;
-          if (gx < 0 || gy < 0 || gx >= nx || gy >= ny) continue;
-          ref = std::min(ref, costs[occupancy_.Index(gx, gy)]);
-        }
-    }
+}
+
+void ChannelRenderer::ReachImage(int x0, int y0, int w, int h,
+                                 const std::vector<double>& costs, double self,
+                                 double moves_per_e, double cap,
+                                 float* out) const {
+  const int nx = occupancy_.nx(), ny = occupancy_.ny();
+  // Where no way leads to the robot: scaled to the window's least cost.
+  double ref = self, offset = kReachSelf;
+  if (!std::isfinite(ref)) {
+    offset = 0.0;
     for (int v = 0; v < h; ++v)
       for (int u = 0; u < w; ++u) {
         const int gx = x0 + u, gy = y0 + v;
-        float value = 0.0f;
-        if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(ref)) {
-          const double c = costs[occupancy_.Index(gx, gy)];
-          if (c <= ref + cap)  // settled (an unsettled pixel: below 1e-6)
-            value = static_cast<float>(
-                std::min(1.0, std::exp((ref - c) / moves_per_e - offset)));
-        }
-        image_out[v * w + u] = value;
+        if (gx < 0 || gy < 0 || gx >= nx || gy >= ny) continue;
+        ref = std::min(ref, costs[occupancy_.Index(gx, gy)]);
       }
-    if (detour && params_.reach_detour > 0.0 && self_free)
-      DimByDetour(x0, y0, w, h, sx, sy, image_out);
-  };
-  image(cost, self_cost, out);
-  if (second) image(cost2, self_cost2, second);
+  }
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const int gx = x0 + u, gy = y0 + v;
+      float value = 0.0f;
+      if (gx >= 0 && gy >= 0 && gx < nx && gy < ny && std::isfinite(ref)) {
+        const double c = costs[occupancy_.Index(gx, gy)];
+        if (c <= ref + cap)  // settled (an unsettled pixel: below 1e-6)
+          value = static_cast<float>(
+              std::min(1.0, std::exp((ref - c) / moves_per_e - offset)));
+      }
+      out[v * w + u] = value;
+    }
 }
 
 void ChannelRenderer::DimByDetour(int x0, int y0, int w, int h, int sx, int sy,

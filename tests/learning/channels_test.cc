@@ -765,6 +765,7 @@ TEST(ChannelsTest, BoundedReachOverTheWorldIsTheExhaustiveSearch) {
       params.reach_broad = variant == 1 ? 2.0 : 0.0;
       const ChannelRenderer r(map.occupancy(), map.size(), params,
                               &map.lattice());
+      const ChannelRenderer reference = internal::ExhaustiveReachWorld(r);
       const Grid<float> heat = MakeHeatmapGrid(map.size(), params.cell);
       const std::size_t plane = r.ImageSize() / params.num_channels();
       for (const Vec2& self : robots) {
@@ -772,11 +773,8 @@ TEST(ChannelsTest, BoundedReachOverTheWorldIsTheExhaustiveSearch) {
         std::vector<float> exhaustive(r.ImageSize(), -2.0f);
         r.RenderWithHeat(self, {}, heat, &targets, &prior, 0.01, bounded.data(),
                          RobotMemory{&search});
-        {
-          const internal::ExhaustiveReachWorld reference;
-          r.RenderWithHeat(self, {}, heat, &targets, &prior, 0.01,
-                           exhaustive.data(), RobotMemory{&search});
-        }
+        reference.RenderWithHeat(self, {}, heat, &targets, &prior, 0.01,
+                                 exhaustive.data(), RobotMemory{&search});
         const auto differ =
             std::mismatch(bounded.begin(), bounded.end(), exhaustive.begin());
         ASSERT_TRUE(differ.first == bounded.end())

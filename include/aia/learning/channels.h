@@ -312,6 +312,15 @@ inline constexpr double kMaxChannelPixels = 4e7;
 // kMaxChannelPixels, else what is wrong and what would do.
 std::string ChannelGridProblem(const Vec2& size, const ChannelParams& params);
 
+class ChannelRenderer;
+namespace internal {
+// A copy of `renderer` whose reach channel over the workspace searches by
+// cost alone (Dijkstra from every target's observation pixels, as before
+// its search was bounded toward the pixels it reads): the reference its
+// tests compare with.
+ChannelRenderer ExhaustiveReachWorld(const ChannelRenderer& renderer);
+}  // namespace internal
+
 // Renders the channels of the robots of one map. Owns scratch memory: one
 // renderer per thread.
 class ChannelRenderer {
@@ -384,6 +393,14 @@ class ChannelRenderer {
                   const std::vector<double>& log_det_prior, double eps,
                   float* out, const SearchPointSets* search, double length,
                   bool detour, float* second) const;
+  // ReachWorld's search (channels.cc).
+  class ReachSearch;
+  // ReachWorld's image of the w x h pixels from global pixel (x0, y0), from
+  // the search's `costs` and the robot's own cost `self` (infinite: the
+  // window's least cost is the scale).
+  void ReachImage(int x0, int y0, int w, int h,
+                  const std::vector<double>& costs, double self,
+                  double moves_per_e, double cap, float* out) const;
   // Channel 4 over the w x h pixels from global pixel (x0, y0), scaled to 1.
   void ReachRegion(int x0, int y0, int w, int h,
                    const std::vector<HeatSource>& targets,
@@ -424,6 +441,10 @@ class ChannelRenderer {
   // Which renderer's points a thread's kept answers are: shared by copies
   // (the same map and parameters), new for each renderer made.
   std::uint64_t observation_owner_ = 0;
+  // ReachWorld searches by cost alone (internal::ExhaustiveReachWorld).
+  bool exhaustive_reach_ = false;
+  friend ChannelRenderer internal::ExhaustiveReachWorld(
+      const ChannelRenderer& renderer);
 };
 
 namespace internal {
@@ -433,20 +454,6 @@ namespace internal {
 // thousands of observation pixels a window holds in a crowded world (the
 // reach channel's sources).
 void SortByValueDescending(std::vector<std::pair<float, int>>* items);
-// While one lives, the reach channel over the workspace on this thread
-// searches by cost alone (Dijkstra from every target's observation
-// pixels, as before its search was bounded toward the pixels it reads):
-// the reference its tests compare with.
-class ExhaustiveReachWorld {
- public:
-  ExhaustiveReachWorld();
-  ~ExhaustiveReachWorld();
-  ExhaustiveReachWorld(const ExhaustiveReachWorld&) = delete;
-  ExhaustiveReachWorld& operator=(const ExhaustiveReachWorld&) = delete;
-
- private:
-  bool was_;
-};
 }  // namespace internal
 
 }  // namespace aia
