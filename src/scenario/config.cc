@@ -128,6 +128,208 @@ void CheckGenerator(const Scenario& s, const FieldChecker& check) {
   }
 }
 
+// The workspace's bounds as messages show them.
+std::string BoundsText(const Vec2& size) {
+  return "[0, " + FormatNumber(size.x()) + "] x [0, " + FormatNumber(size.y()) +
+         "]";
+}
+
+// The name labels one-line messages and the MuJoCo model (escaped there):
+// a line break or another control character has no place in it.
+void CheckName(const Scenario& s, const FieldChecker& check) {
+  for (std::size_t i = 0; i < s.name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(s.name[i]);
+    if (c < 0x20 || c == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof code, "0x%02x", c);
+      check.Fail(s.name, "holds a control character (" + std::string(code) +
+                             " at character " + std::to_string(i + 1) +
+                             "); a name is one line of printable text");
+    }
+  }
+}
+
+// At most one video frame per physics step (`aia render`'s frame clock).
+void CheckFrameRate(const Scenario& s, const FieldChecker& check) {
+  const int max_fps =
+      static_cast<int>(std::floor(1.0 / s.physics.timestep + 1e-9));
+  if (s.render.fps > max_fps)
+    check.Fail(s.render.fps, "must be in [1, " + std::to_string(max_fps) +
+                                 "] (at most one frame per physics step of " +
+                                 FormatNumber(s.physics.timestep) +
+                                 " s), got " + std::to_string(s.render.fps));
+}
+
+// Derived sizes, before anything is allocated (the ranges keep these
+// products finite and far from integer overflow): grid cells, lattice
+// points and simulated bodies.
+void CheckDerivedSizes(const Scenario& s, const FieldChecker& check) {
+  const Vec2& size = s.workspace.size;
+  const double cells = std::ceil(size.x() / s.workspace.cell) *
+                       std::ceil(size.y() / s.workspace.cell);
+  if (cells > limits::kMaxGridCells) {
+    check.Fail(s.workspace.cell,
+               "makes " + FormatNumber(cells) +
+                   " occupancy-grid cells in the workspace " +
+                   FormatPair(size.x(), size.y()) + "; at most " +
+                   FormatNumber(limits::kMaxGridCells) + " (a larger cell)");
+  }
+  const double points = std::floor(size.x() / s.robots.step + 1e-9) *
+                        std::floor(size.y() / s.robots.step + 1e-9);
+  if (points > limits::kMaxLatticePoints) {
+    check.Fail(s.robots.step, "makes " + FormatNumber(points) +
+                                  " lattice points in the workspace " +
+                                  FormatPair(size.x(), size.y()) +
+                                  "; at most " +
+                                  FormatNumber(limits::kMaxLatticePoints) +
+                                  " (a larger step or a smaller workspace)");
+  }
+  const int random_boxes =
+      s.workspace.obstacles.random ? s.workspace.obstacles.random->count : 0;
+  // A diff_drive robot is three bodies (chassis and two wheels).
+  const bool wheeled = s.robots.model == RobotModel::kDiffDrive;
+  const long robot_bodies = (wheeled ? 3L : 1L) * s.robots.count;
+  const long bodies = robot_bodies + s.NumTargets() + random_boxes +
+                      static_cast<long>(s.workspace.obstacles.boxes.size());
+  if (bodies > limits::kMaxBodies) {
+    const std::string what =
+        std::to_string(s.robots.count) +
+        (wheeled ? " diff_drive robots (3 bodies each), " : " robots, ") +
+        std::to_string(s.NumTargets()) + " targets and " +
+        std::to_string(bodies - robot_bodies - s.NumTargets()) +
+        " obstacle boxes make " + std::to_string(bodies) +
+        " bodies; aia simulates at most " + std::to_string(limits::kMaxBodies);
+    if (random_boxes >= s.robots.count && random_boxes >= s.NumTargets())
+      check.Fail(s.workspace.obstacles.random->count, what);
+    if (s.robots.count >= s.NumTargets()) check.Fail(s.robots.count, what);
+    if (s.targets.list.empty()) check.Fail(s.targets.count, what);
+    check.Fail(s.targets.list, what);
+  }
+}
+
+// Obstacle boxes and random boxes against the workspace, then the
+// generator's parameters.
+void CheckObstacles(const Scenario& s, const FieldChecker& check) {
+  const Vec2& size = s.workspace.size;
+  for (const BoxConfig& b : s.workspace.obstacles.boxes) {
+    const Vec2 lo = b.center - 0.5 * b.size, hi = b.center + 0.5 * b.size;
+    if (!(lo.x() < size.x() && lo.y() < size.y() && hi.x() > 0.0 &&
+          hi.y() > 0.0)) {
+      check.Fail(b.center, "box " + check.Shown(b.center) + " of size " +
+                               check.Shown(b.size) +
+                               " lies outside the workspace " +
+                               BoundsText(size));
+    }
+  }
+  // A block that draws no box (count 0, the way to swap random boxes for a
+  // generator or a map) holds no world back.
+  if (const auto& random = s.workspace.obstacles.random;
+      random && random->count > 0 &&
+      (random->max_size.array() > size.array()).any()) {
+    check.Fail(random->max_size,
+               "must not be larger than the workspace " +
+                   FormatPair(size.x(), size.y()) + ", got " +
+                   FormatPair(random->max_size.x(), random->max_size.y()));
+  }
+  if (s.workspace.obstacles.generator) CheckGenerator(s, check);
+}
+
+void CheckCommunicationRange(const Scenario& s, const FieldChecker& check) {
+  if (s.communication.mode != CommMode::kRange &&
+      s.communication.range != CommParams{}.range)
+    check.Warn(s.communication.range,
+               "applies to communication.mode range only; with mode full "
+               "every pair of active robots talks, so it changes nothing");
+}
+
+// sensor.rate and mission.avoidance apply to asynchronous decisions only;
+// a rate is sensed on the physics steps.
+void CheckAsyncKeys(const Scenario& s, const FieldChecker& check) {
+  const std::optional<double>& rate = s.sensor.rate;
+  if (rate && s.mission.decisions != Decisions::kAsync) {
+    check.Fail(rate,
+               "applies to mission.decisions async only (lockstep senses once "
+               "per decision step); remove it, or set mission.decisions: "
+               "async");
+  }
+  if (rate) {
+    const long steps = SensingTickSteps(*rate, s.physics.timestep);
+    const double hz = 1.0 / (static_cast<double>(steps) * s.physics.timestep);
+    if (std::abs(hz - *rate) > 1e-6 * *rate)
+      check.Warn(rate,
+                 "is sensed at " + FormatNumber(hz) +
+                     " Hz: a tick falls on a physics step, every " +
+                     std::to_string(steps) + " of physics.timestep " +
+                     FormatNumber(s.physics.timestep) +
+                     " s (targets take a step of their dynamics per tick)");
+  }
+  if (s.mission.avoidance && s.mission.decisions != Decisions::kAsync) {
+    check.Fail(s.mission.avoidance,
+               "applies to mission.decisions async only (in lockstep robots "
+               "move together); remove it, or set mission.decisions: async");
+  }
+}
+
+// Obstacles are checked against positions when the world is built; here
+// only the workspace bounds [0, size] are, robots' and then targets'.
+void CheckPositions(const Scenario& s, const FieldChecker& check) {
+  const Vec2& size = s.workspace.size;
+  for (const Vec2& p : s.robots.start) {
+    if (!Inside(p, size)) {
+      check.Fail(p, "must lie inside the workspace " + BoundsText(size) +
+                        ", got " + check.Shown(p));
+    }
+  }
+  for (const TargetConfig& t : s.targets.list) {
+    if (!Inside(t.position, size)) {
+      check.Fail(t.position, "must lie inside the workspace " +
+                                 BoundsText(size) + ", got " +
+                                 check.Shown(t.position));
+    }
+  }
+}
+
+// communication.failures: robot indices in range, each robot named once,
+// and a robot of its own for each random entry.
+void CheckFailures(const Scenario& s, const FieldChecker& check) {
+  const int robots = s.robots.count;
+  std::set<int> named;
+  int random_failures = 0;
+  for (const RobotFailure& f : s.communication.failures) {
+    if (f.robot >= robots) {
+      check.Fail(f.robot, "must be a robot index in " + RobotIndexText(robots) +
+                              " or random, got " + check.Shown(f.robot));
+    }
+    if (f.robot == RobotFailure::kRandomRobot) {
+      ++random_failures;
+    } else if (!named.insert(f.robot).second) {
+      // Which of two steps would fail it? Said once.
+      check.Fail(f.robot, "robot " + std::to_string(f.robot) +
+                              " is named by two failure entries: give each "
+                              "robot one failure step");
+    }
+  }
+  // Each random entry fails a robot of its own (world.cc).
+  if (const int free = robots - static_cast<int>(named.size());
+      random_failures > free) {
+    check.Fail(s.communication.failures,
+               std::to_string(random_failures) + " random entries, but " +
+                   std::to_string(free) +
+                   (free == 1 ? " robot is" : " robots are") +
+                   " not named by another entry: each random entry fails a "
+                   "robot of its own");
+  }
+}
+
+void CheckFollowRobot(const Scenario& s, const FieldChecker& check) {
+  if (s.render.follow_robot >= s.robots.count) {
+    check.Fail(s.render.follow_robot,
+               "must be -1 (no robot) or a robot index in " +
+                   RobotIndexText(s.robots.count) + ", got " +
+                   check.Shown(s.render.follow_robot));
+  }
+}
+
 }  // namespace
 
 void RandomObstaclesConfig::Validate(const FieldChecker& check) {
@@ -475,166 +677,19 @@ void RenderConfig::Validate(const FieldChecker& check) {
   }
 }
 
+// The sections' relations, topic by topic; the first that fails is the
+// error, so the order of the checks is the order of their messages.
 void Scenario::Validate(const FieldChecker& check) {
-  // The name labels one-line messages and the MuJoCo model (escaped there):
-  // a line break or another control character has no place in it.
-  for (std::size_t i = 0; i < name.size(); ++i) {
-    const unsigned char c = static_cast<unsigned char>(name[i]);
-    if (c < 0x20 || c == 0x7f) {
-      char code[8];
-      std::snprintf(code, sizeof code, "0x%02x", c);
-      check.Fail(name, "holds a control character (" + std::string(code) +
-                           " at character " + std::to_string(i + 1) +
-                           "); a name is one line of printable text");
-    }
-  }
-  // At most one video frame per physics step (`aia render`'s frame clock).
-  const int max_fps =
-      static_cast<int>(std::floor(1.0 / physics.timestep + 1e-9));
-  if (render.fps > max_fps)
-    check.Fail(render.fps, "must be in [1, " + std::to_string(max_fps) +
-                               "] (at most one frame per physics step of " +
-                               FormatNumber(physics.timestep) + " s), got " +
-                               std::to_string(render.fps));
-  const Vec2& size = workspace.size;
-  const std::string bounds = "[0, " + FormatNumber(size.x()) + "] x [0, " +
-                             FormatNumber(size.y()) + "]";
-  // Derived sizes, before anything is allocated (the ranges keep these
-  // products finite and far from integer overflow).
-  const double cells = std::ceil(size.x() / workspace.cell) *
-                       std::ceil(size.y() / workspace.cell);
-  if (cells > limits::kMaxGridCells) {
-    check.Fail(workspace.cell,
-               "makes " + FormatNumber(cells) +
-                   " occupancy-grid cells in the workspace " +
-                   FormatPair(size.x(), size.y()) + "; at most " +
-                   FormatNumber(limits::kMaxGridCells) + " (a larger cell)");
-  }
-  const double points = std::floor(size.x() / robots.step + 1e-9) *
-                        std::floor(size.y() / robots.step + 1e-9);
-  if (points > limits::kMaxLatticePoints) {
-    check.Fail(robots.step, "makes " + FormatNumber(points) +
-                                " lattice points in the workspace " +
-                                FormatPair(size.x(), size.y()) + "; at most " +
-                                FormatNumber(limits::kMaxLatticePoints) +
-                                " (a larger step or a smaller workspace)");
-  }
-  const int random_boxes =
-      workspace.obstacles.random ? workspace.obstacles.random->count : 0;
-  // A diff_drive robot is three bodies (chassis and two wheels).
-  const bool wheeled = robots.model == RobotModel::kDiffDrive;
-  const long robot_bodies = (wheeled ? 3L : 1L) * robots.count;
-  const long bodies = robot_bodies + NumTargets() + random_boxes +
-                      static_cast<long>(workspace.obstacles.boxes.size());
-  if (bodies > limits::kMaxBodies) {
-    const std::string what =
-        std::to_string(robots.count) +
-        (wheeled ? " diff_drive robots (3 bodies each), " : " robots, ") +
-        std::to_string(NumTargets()) + " targets and " +
-        std::to_string(bodies - robot_bodies - NumTargets()) +
-        " obstacle boxes make " + std::to_string(bodies) +
-        " bodies; aia simulates at most " + std::to_string(limits::kMaxBodies);
-    if (random_boxes >= robots.count && random_boxes >= NumTargets())
-      check.Fail(workspace.obstacles.random->count, what);
-    if (robots.count >= NumTargets()) check.Fail(robots.count, what);
-    if (targets.list.empty()) check.Fail(targets.count, what);
-    check.Fail(targets.list, what);
-  }
-  for (const BoxConfig& b : workspace.obstacles.boxes) {
-    const Vec2 lo = b.center - 0.5 * b.size, hi = b.center + 0.5 * b.size;
-    if (!(lo.x() < size.x() && lo.y() < size.y() && hi.x() > 0.0 &&
-          hi.y() > 0.0)) {
-      check.Fail(b.center, "box " + check.Shown(b.center) + " of size " +
-                               check.Shown(b.size) +
-                               " lies outside the workspace " + bounds);
-    }
-  }
-  // A block that draws no box (count 0, the way to swap random boxes for a
-  // generator or a map) holds no world back.
-  if (const auto& random = workspace.obstacles.random;
-      random && random->count > 0 &&
-      (random->max_size.array() > size.array()).any()) {
-    check.Fail(random->max_size,
-               "must not be larger than the workspace " +
-                   FormatPair(size.x(), size.y()) + ", got " +
-                   FormatPair(random->max_size.x(), random->max_size.y()));
-  }
-  if (workspace.obstacles.generator) CheckGenerator(*this, check);
+  CheckName(*this, check);
+  CheckFrameRate(*this, check);
+  CheckDerivedSizes(*this, check);
+  CheckObstacles(*this, check);
   physics.Validate(check, robots.model, robots.step);
-  if (communication.mode != CommMode::kRange &&
-      communication.range != CommParams{}.range)
-    check.Warn(communication.range,
-               "applies to communication.mode range only; with mode full "
-               "every pair of active robots talks, so it changes nothing");
-  if (sensor.rate && mission.decisions != Decisions::kAsync) {
-    check.Fail(sensor.rate,
-               "applies to mission.decisions async only (lockstep senses once "
-               "per decision step); remove it, or set mission.decisions: "
-               "async");
-  }
-  if (sensor.rate) {
-    const long steps = SensingTickSteps(*sensor.rate, physics.timestep);
-    const double hz = 1.0 / (static_cast<double>(steps) * physics.timestep);
-    if (std::abs(hz - *sensor.rate) > 1e-6 * *sensor.rate)
-      check.Warn(sensor.rate,
-                 "is sensed at " + FormatNumber(hz) +
-                     " Hz: a tick falls on a physics step, every " +
-                     std::to_string(steps) + " of physics.timestep " +
-                     FormatNumber(physics.timestep) +
-                     " s (targets take a step of their dynamics per tick)");
-  }
-  if (mission.avoidance && mission.decisions != Decisions::kAsync) {
-    check.Fail(mission.avoidance,
-               "applies to mission.decisions async only (in lockstep robots "
-               "move together); remove it, or set mission.decisions: async");
-  }
-  // Obstacles are checked against positions when the world is built; here
-  // only the workspace bounds [0, size] are.
-  for (const Vec2& p : robots.start) {
-    if (!Inside(p, size)) {
-      check.Fail(p, "must lie inside the workspace " + bounds + ", got " +
-                        check.Shown(p));
-    }
-  }
-  for (const TargetConfig& t : targets.list) {
-    if (!Inside(t.position, size)) {
-      check.Fail(t.position, "must lie inside the workspace " + bounds +
-                                 ", got " + check.Shown(t.position));
-    }
-  }
-  std::set<int> named;
-  int random_failures = 0;
-  for (const RobotFailure& f : communication.failures) {
-    if (f.robot >= robots.count) {
-      check.Fail(f.robot, "must be a robot index in " +
-                              RobotIndexText(robots.count) +
-                              " or random, got " + check.Shown(f.robot));
-    }
-    if (f.robot == RobotFailure::kRandomRobot) {
-      ++random_failures;
-    } else if (!named.insert(f.robot).second) {
-      // Which of two steps would fail it? Said once.
-      check.Fail(f.robot, "robot " + std::to_string(f.robot) +
-                              " is named by two failure entries: give each "
-                              "robot one failure step");
-    }
-  }
-  // Each random entry fails a robot of its own (world.cc).
-  if (const int free = robots.count - static_cast<int>(named.size());
-      random_failures > free) {
-    check.Fail(communication.failures,
-               std::to_string(random_failures) + " random entries, but " +
-                   std::to_string(free) +
-                   (free == 1 ? " robot is" : " robots are") +
-                   " not named by another entry: each random entry fails a "
-                   "robot of its own");
-  }
-  if (render.follow_robot >= robots.count) {
-    check.Fail(render.follow_robot,
-               "must be -1 (no robot) or a robot index in " +
-                   RobotIndexText(robots.count) + ", got " +
-                   check.Shown(render.follow_robot));
-  }
+  CheckCommunicationRange(*this, check);
+  CheckAsyncKeys(*this, check);
+  CheckPositions(*this, check);
+  CheckFailures(*this, check);
+  CheckFollowRobot(*this, check);
 }
 
 InputError Scenario::ErrorAt(const std::string& key,
