@@ -201,13 +201,15 @@ std::string MetaValue(sqlite3* db, const std::string& key) {
   return t ? reinterpret_cast<const char*>(t) : "";
 }
 
-// Appends the file's worlds and samples; returns its recipe.
-std::string ReadFile(const std::string& file, Dataset* out) {
-  sqlite3* db = Open(file, false);
-  struct Closer {
-    sqlite3* db;
-    ~Closer() { sqlite3_close(db); }
-  } closer{db};
+// What a file's format version holds: search points from version 2 on, the
+// move a robot came by from version 3 on.
+struct FileFormat {
+  bool has_search = false;
+  bool has_came = false;
+};
+
+// meta.format and meta.version, checked.
+FileFormat ReadFormat(sqlite3* db) {
   const std::string format = MetaValue(db, "format");
   if (format != "aia-igbnet-dataset")
     throw std::runtime_error("not an aia dataset (meta.format is '" + format +
@@ -218,132 +220,174 @@ std::string ReadFile(const std::string& file, Dataset* out) {
     throw std::runtime_error("dataset format version " + version +
                              ", this build reads 1 to " +
                              std::to_string(kDatasetFormatVersion));
-  const bool has_search = version != "1";
-  const bool has_came = version != "1" && version != "2";
-  const std::size_t first_world = out->worlds.size();
+  FileFormat f;
+  f.has_search = version != "1";
+  f.has_came = version != "1" && version != "2";
+  return f;
+}
+
+// One row of the worlds table, checked (WorldRowProblem).
+DatasetWorld ReadWorldRow(sqlite3_stmt* s) {
+  DatasetWorld w;
+  w.episode = sqlite3_column_int64(s, 0);
+  w.seed = sqlite3_column_int64(s, 1);
+  w.size = {sqlite3_column_double(s, 2), sqlite3_column_double(s, 3)};
+  w.map_cell = sqlite3_column_double(s, 4);
+  w.lattice_step = sqlite3_column_double(s, 5);
+  w.robot_radius = sqlite3_column_double(s, 6);
+  w.eps = sqlite3_column_double(s, 7);
+  w.robots = sqlite3_column_int(s, 8);
+  w.targets = sqlite3_column_int(s, 9);
+  w.steps = sqlite3_column_int(s, 10);
+  w.flowtime = sqlite3_column_int(s, 11);
+  const std::vector<double> boxes = Doubles(s, 12);
+  if (boxes.size() % 4 != 0)
+    throw std::runtime_error("episode " + std::to_string(w.episode) +
+                             ": obstacles blob is not 4 floats per box");
+  for (std::size_t i = 0; i < boxes.size(); i += 4)
+    w.obstacles.push_back(
+        {{boxes[i], boxes[i + 1]}, {boxes[i + 2], boxes[i + 3]}});
+  w.log_det_prior = Doubles(s, 13);
+  if (const std::string problem = WorldRowProblem(w); !problem.empty())
+    throw std::runtime_error("episode " + std::to_string(w.episode) +
+                             ": world row is inconsistent: " + problem);
+  return w;
+}
+
+// Appends the file's worlds, in episode order; returns their episodes.
+std::vector<std::int64_t> ReadWorlds(sqlite3* db, Dataset* out) {
   std::vector<std::int64_t> episodes;
-  {
-    Statement st(db,
-                 "SELECT episode, seed, width, height, map_cell, lattice_step, "
-                 "robot_radius, eps, robots, targets, steps, flowtime, "
-                 "obstacles, log_det_prior FROM worlds ORDER BY episode");
-    while (st.Step()) {
-      sqlite3_stmt* s = st.get();
-      DatasetWorld w;
-      w.episode = sqlite3_column_int64(s, 0);
-      w.seed = sqlite3_column_int64(s, 1);
-      w.size = {sqlite3_column_double(s, 2), sqlite3_column_double(s, 3)};
-      w.map_cell = sqlite3_column_double(s, 4);
-      w.lattice_step = sqlite3_column_double(s, 5);
-      w.robot_radius = sqlite3_column_double(s, 6);
-      w.eps = sqlite3_column_double(s, 7);
-      w.robots = sqlite3_column_int(s, 8);
-      w.targets = sqlite3_column_int(s, 9);
-      w.steps = sqlite3_column_int(s, 10);
-      w.flowtime = sqlite3_column_int(s, 11);
-      const std::vector<double> boxes = Doubles(s, 12);
-      if (boxes.size() % 4 != 0)
-        throw std::runtime_error("episode " + std::to_string(w.episode) +
-                                 ": obstacles blob is not 4 floats per box");
-      for (std::size_t i = 0; i < boxes.size(); i += 4)
-        w.obstacles.push_back(
-            {{boxes[i], boxes[i + 1]}, {boxes[i + 2], boxes[i + 3]}});
-      w.log_det_prior = Doubles(s, 13);
-      if (const std::string problem = WorldRowProblem(w); !problem.empty())
-        throw std::runtime_error("episode " + std::to_string(w.episode) +
-                                 ": world row is inconsistent: " + problem);
-      episodes.push_back(w.episode);
-      out->worlds.push_back(std::move(w));
-    }
-  }
-  Statement st(db, has_came ? "SELECT episode, step, robot, x, y, label, "
-                              "useful, acted, neighbours, targets, search, "
-                              "came FROM samples ORDER BY episode, step, robot"
-                   : has_search
-                       ? "SELECT episode, step, robot, x, y, label, useful, "
-                         "acted, neighbours, targets, search FROM samples "
-                         "ORDER BY episode, step, robot"
-                       : "SELECT episode, step, robot, x, y, label, useful, "
-                         "acted, neighbours, targets FROM samples ORDER BY "
-                         "episode, step, robot");
+  Statement st(db,
+               "SELECT episode, seed, width, height, map_cell, lattice_step, "
+               "robot_radius, eps, robots, targets, steps, flowtime, "
+               "obstacles, log_det_prior FROM worlds ORDER BY episode");
   while (st.Step()) {
-    sqlite3_stmt* s = st.get();
-    DatasetSample d;
-    d.episode = sqlite3_column_int64(s, 0);
-    d.step = sqlite3_column_int(s, 1);
-    d.robot = sqlite3_column_int(s, 2);
-    d.position = {sqlite3_column_double(s, 3), sqlite3_column_double(s, 4)};
-    const int label = sqlite3_column_int(s, 5);
-    const int acted = sqlite3_column_int(s, 7);
-    d.useful = sqlite3_column_int(s, 6) != 0;
-    const auto it =
-        std::lower_bound(episodes.begin(), episodes.end(), d.episode);
-    const std::string where = "episode " + std::to_string(d.episode) +
-                              " step " + std::to_string(d.step) + " robot " +
-                              std::to_string(d.robot);
-    if (it == episodes.end() || *it != d.episode)
-      throw std::runtime_error(where + ": sample of no world");
-    d.world = static_cast<int>(first_world + (it - episodes.begin()));
-    const DatasetWorld& w = out->worlds[d.world];
-    if (label < 0 || label >= kNumMoves || acted < 0 || acted > kNumMoves ||
-        d.robot < 0 || d.robot >= w.robots)
-      throw std::runtime_error(where + ": label or robot out of range");
-    d.label = static_cast<Move>(label);
-    d.acted = static_cast<Move>(acted);
-    const std::vector<double> nb = Doubles(s, 8);
-    const std::vector<double> tg = Doubles(s, 9);
-    if (nb.size() % 2 != 0 || tg.size() != 6u * w.targets)
-      throw std::runtime_error(where + ": neighbours or targets blob size");
-    if (!Inside(w, d.position) || !AllFinite(nb) || !AllFinite(tg))
-      throw std::runtime_error(where +
-                               ": position outside the workspace, or a "
-                               "neighbour or belief not finite");
-    for (std::size_t i = 0; i < nb.size(); i += 2)
-      d.neighbours.emplace_back(nb[i], nb[i + 1]);
-    d.targets.resize(w.targets);
-    for (int k = 0; k < w.targets; ++k) {
-      const double* t = tg.data() + 6 * k;
-      HeatSource& h = d.targets[k];
-      h.mean = {t[0], t[1]};
-      h.cov << t[2], t[3], t[3], t[4];
-      h.log_det = t[5];
-      // A covariance (positive semidefinite): the heat stamp's window and
-      // weight read its square roots.
-      if (!(t[2] >= 0.0 && t[4] >= 0.0 && t[2] * t[4] - t[3] * t[3] >= 0.0))
-        throw std::runtime_error(
-            where + ": target " + std::to_string(k) +
-            "'s belief covariance is not one (" + FormatNumber(t[2]) + ", " +
-            FormatNumber(t[3]) + ", " + FormatNumber(t[4]) + ")");
-    }
-    if (has_search) {
-      // (target, count, count x (x, y)) per target with search points.
-      const std::vector<double> sp = Doubles(s, 10);
-      for (std::size_t i = 0; i < sp.size();) {
-        if (i + 2 > sp.size())
-          throw std::runtime_error(where + ": search blob size");
-        const double k = sp[i], count = sp[i + 1];
-        if (!(k >= 0 && k < w.targets && k == std::floor(k)) ||
-            !(count >= 1 && count == std::floor(count) &&
-              i + 2 + 2 * count <= sp.size()))
-          throw std::runtime_error(where + ": search blob is inconsistent");
-        if (d.search.empty()) d.search.resize(w.targets);
-        std::vector<Vec2>& points = d.search[static_cast<int>(k)];
-        for (int a = 0; a < static_cast<int>(count); ++a) {
-          points.emplace_back(sp[i + 2 + 2 * a], sp[i + 3 + 2 * a]);
-          if (!points.back().allFinite())
-            throw std::runtime_error(where + ": search point not finite");
-        }
-        i += 2 + 2 * static_cast<std::size_t>(count);
-      }
-    }
-    if (has_came) {
-      const int came = sqlite3_column_int(s, 11);
-      if (came < 0 || came > kNumMoves)
-        throw std::runtime_error(where + ": came out of range");
-      d.came = static_cast<Move>(came);
-    }
-    out->samples.push_back(std::move(d));
+    DatasetWorld w = ReadWorldRow(st.get());
+    episodes.push_back(w.episode);
+    out->worlds.push_back(std::move(w));
   }
+  return episodes;
+}
+
+// The samples query of a file of format `f`.
+const char* SamplesQuery(const FileFormat& f) {
+  return f.has_came     ? "SELECT episode, step, robot, x, y, label, "
+                          "useful, acted, neighbours, targets, search, "
+                          "came FROM samples ORDER BY episode, step, robot"
+         : f.has_search ? "SELECT episode, step, robot, x, y, label, useful, "
+                          "acted, neighbours, targets, search FROM samples "
+                          "ORDER BY episode, step, robot"
+                        : "SELECT episode, step, robot, x, y, label, useful, "
+                          "acted, neighbours, targets FROM samples ORDER BY "
+                          "episode, step, robot";
+}
+
+// The targets blob (6 floats per target: mean, covariance xx, xy, yy, log
+// det) into d->targets; each covariance checked. `where` names the sample.
+void ReadBeliefs(const std::vector<double>& tg, const DatasetWorld& w,
+                 const std::string& where, DatasetSample* d) {
+  d->targets.resize(w.targets);
+  for (int k = 0; k < w.targets; ++k) {
+    const double* t = tg.data() + 6 * k;
+    HeatSource& h = d->targets[k];
+    h.mean = {t[0], t[1]};
+    h.cov << t[2], t[3], t[3], t[4];
+    h.log_det = t[5];
+    // A covariance (positive semidefinite): the heat stamp's window and
+    // weight read its square roots.
+    if (!(t[2] >= 0.0 && t[4] >= 0.0 && t[2] * t[4] - t[3] * t[3] >= 0.0))
+      throw std::runtime_error(where + ": target " + std::to_string(k) +
+                               "'s belief covariance is not one (" +
+                               FormatNumber(t[2]) + ", " + FormatNumber(t[3]) +
+                               ", " + FormatNumber(t[4]) + ")");
+  }
+}
+
+// The search blob, (target, count, count x (x, y)) per target with search
+// points, into d->search.
+void ReadSearchPoints(const std::vector<double>& sp, const DatasetWorld& w,
+                      const std::string& where, DatasetSample* d) {
+  for (std::size_t i = 0; i < sp.size();) {
+    if (i + 2 > sp.size())
+      throw std::runtime_error(where + ": search blob size");
+    const double k = sp[i], count = sp[i + 1];
+    if (!(k >= 0 && k < w.targets && k == std::floor(k)) ||
+        !(count >= 1 && count == std::floor(count) &&
+          i + 2 + 2 * count <= sp.size()))
+      throw std::runtime_error(where + ": search blob is inconsistent");
+    if (d->search.empty()) d->search.resize(w.targets);
+    std::vector<Vec2>& points = d->search[static_cast<int>(k)];
+    for (int a = 0; a < static_cast<int>(count); ++a) {
+      points.emplace_back(sp[i + 2 + 2 * a], sp[i + 3 + 2 * a]);
+      if (!points.back().allFinite())
+        throw std::runtime_error(where + ": search point not finite");
+    }
+    i += 2 + 2 * static_cast<std::size_t>(count);
+  }
+}
+
+// One row of the samples table, checked against its world (one of `worlds`,
+// whose first `first_world` came from other files; `episodes`: this file's).
+DatasetSample ReadSampleRow(sqlite3_stmt* s, const FileFormat& f,
+                            const std::vector<std::int64_t>& episodes,
+                            std::size_t first_world,
+                            const std::vector<DatasetWorld>& worlds) {
+  DatasetSample d;
+  d.episode = sqlite3_column_int64(s, 0);
+  d.step = sqlite3_column_int(s, 1);
+  d.robot = sqlite3_column_int(s, 2);
+  d.position = {sqlite3_column_double(s, 3), sqlite3_column_double(s, 4)};
+  const int label = sqlite3_column_int(s, 5);
+  const int acted = sqlite3_column_int(s, 7);
+  d.useful = sqlite3_column_int(s, 6) != 0;
+  const auto it = std::lower_bound(episodes.begin(), episodes.end(), d.episode);
+  const std::string where = "episode " + std::to_string(d.episode) + " step " +
+                            std::to_string(d.step) + " robot " +
+                            std::to_string(d.robot);
+  if (it == episodes.end() || *it != d.episode)
+    throw std::runtime_error(where + ": sample of no world");
+  d.world = static_cast<int>(first_world + (it - episodes.begin()));
+  const DatasetWorld& w = worlds[d.world];
+  if (label < 0 || label >= kNumMoves || acted < 0 || acted > kNumMoves ||
+      d.robot < 0 || d.robot >= w.robots)
+    throw std::runtime_error(where + ": label or robot out of range");
+  d.label = static_cast<Move>(label);
+  d.acted = static_cast<Move>(acted);
+  const std::vector<double> nb = Doubles(s, 8);
+  const std::vector<double> tg = Doubles(s, 9);
+  if (nb.size() % 2 != 0 || tg.size() != 6u * w.targets)
+    throw std::runtime_error(where + ": neighbours or targets blob size");
+  if (!Inside(w, d.position) || !AllFinite(nb) || !AllFinite(tg))
+    throw std::runtime_error(where +
+                             ": position outside the workspace, or a "
+                             "neighbour or belief not finite");
+  for (std::size_t i = 0; i < nb.size(); i += 2)
+    d.neighbours.emplace_back(nb[i], nb[i + 1]);
+  ReadBeliefs(tg, w, where, &d);
+  if (f.has_search) ReadSearchPoints(Doubles(s, 10), w, where, &d);
+  if (f.has_came) {
+    const int came = sqlite3_column_int(s, 11);
+    if (came < 0 || came > kNumMoves)
+      throw std::runtime_error(where + ": came out of range");
+    d.came = static_cast<Move>(came);
+  }
+  return d;
+}
+
+// Appends the file's worlds and samples; returns its recipe.
+std::string ReadFile(const std::string& file, Dataset* out) {
+  sqlite3* db = Open(file, false);
+  struct Closer {
+    sqlite3* db;
+    ~Closer() { sqlite3_close(db); }
+  } closer{db};
+  const FileFormat format = ReadFormat(db);
+  const std::size_t first_world = out->worlds.size();
+  const std::vector<std::int64_t> episodes = ReadWorlds(db, out);
+  Statement st(db, SamplesQuery(format));
+  while (st.Step())
+    out->samples.push_back(
+        ReadSampleRow(st.get(), format, episodes, first_world, out->worlds));
   return MetaValue(db, "recipe");
 }
 
