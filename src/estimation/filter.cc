@@ -55,11 +55,10 @@ bool PredictOmega(const TargetModel& model, const MatD<D>& sigma,
 }
 
 // x_{t+1|t} for one target block: Omega as above, xi = Omega (A mu + b);
-// whether the variance was scaled back (PredictOmega) or, for the filter
-// (`filter`), the mean: each entry held within kMaxMean (an unstable
-// target's mean doubles a step in a belief that nothing measures, and
-// overflowed after some 1000 steps). A mean that is not finite even so is
-// a divergence.
+// whether the variance was scaled back (PredictOmega) or the mean: each
+// entry held within kMaxMean (an unstable target's mean doubles a step in a
+// belief that nothing measures, and overflowed after some 1000 steps). For
+// the filter (`filter`), a mean that is not finite even so is a divergence.
 template <int D>
 bool PredictBlock(const TargetModel& model, double* block, bool filter) {
   Eigen::Map<MatD<D>> omega(block);
@@ -70,14 +69,12 @@ bool PredictBlock(const TargetModel& model, double* block, bool filter) {
   const VecD<D> mu = sigma * xi;
   bool beyond = PredictOmega<D>(model, sigma, omega);
   VecD<D> mu_pred = a * mu + b;
-  if (filter) {
-    if (mu_pred.cwiseAbs().maxCoeff() > kMaxMean) {
-      mu_pred = mu_pred.cwiseMax(-kMaxMean).cwiseMin(kMaxMean);
-      beyond = true;
-    }
-    if (!mu_pred.allFinite())
-      throw EstimateDiverged(-1, "its predicted mean is not finite");
+  if (mu_pred.cwiseAbs().maxCoeff() > kMaxMean) {
+    mu_pred = mu_pred.cwiseMax(-kMaxMean).cwiseMin(kMaxMean);
+    beyond = true;
   }
+  if (filter && !mu_pred.allFinite())
+    throw EstimateDiverged(-1, "its predicted mean is not finite");
   xi = omega * mu_pred;
   return beyond;
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <new>
 #include <stdexcept>
@@ -90,7 +91,50 @@ std::string Blob(const std::vector<double>& v) {
   return s;
 }
 
+// A column of the wrong type or range (its row's context is added by the
+// row's reader).
+struct ColumnError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// What a column holds, for an error: SQLite converts between types at will
+// (a label 'x' read as 0, 1.7 as 1), so each column's type is checked.
+std::string ColumnProblem(sqlite3_stmt* st, int col, const char* want) {
+  static const char* const kTypes[] = {"",     "an integer", "a real number",
+                                       "text", "a blob",     "null"};
+  const int type = sqlite3_column_type(st, col);
+  return std::string("column ") + sqlite3_column_name(st, col) + " holds " +
+         (type >= 1 && type <= 5 ? kTypes[type] : "an unknown type") +
+         ", not " + want;
+}
+
+std::int64_t Integer(sqlite3_stmt* st, int col) {
+  if (sqlite3_column_type(st, col) != SQLITE_INTEGER)
+    throw ColumnError(ColumnProblem(st, col, "an integer"));
+  return sqlite3_column_int64(st, col);
+}
+
+// An integer column that fits an int (a count, an index, a move).
+int SmallInteger(sqlite3_stmt* st, int col) {
+  const std::int64_t v = Integer(st, col);
+  if (v < std::numeric_limits<int>::min() ||
+      v > std::numeric_limits<int>::max())
+    throw ColumnError(std::string("column ") + sqlite3_column_name(st, col) +
+                      " holds " + std::to_string(v) + ", out of range");
+  return static_cast<int>(v);
+}
+
+double Real(sqlite3_stmt* st, int col) {
+  const int type = sqlite3_column_type(st, col);
+  if (type != SQLITE_FLOAT && type != SQLITE_INTEGER)
+    throw ColumnError(ColumnProblem(st, col, "a number"));
+  return sqlite3_column_double(st, col);
+}
+
 std::vector<double> Doubles(sqlite3_stmt* st, int col) {
+  const int type = sqlite3_column_type(st, col);
+  if (type != SQLITE_BLOB && type != SQLITE_NULL)
+    throw ColumnError(ColumnProblem(st, col, "a blob of float64"));
   const int bytes = sqlite3_column_bytes(st, col);
   const void* p = sqlite3_column_blob(st, col);
   std::vector<double> v(bytes / sizeof(double));
@@ -229,25 +273,37 @@ FileFormat ReadFormat(sqlite3* db) {
 // One row of the worlds table, checked (WorldRowProblem).
 DatasetWorld ReadWorldRow(sqlite3_stmt* s) {
   DatasetWorld w;
-  w.episode = sqlite3_column_int64(s, 0);
-  w.seed = sqlite3_column_int64(s, 1);
-  w.size = {sqlite3_column_double(s, 2), sqlite3_column_double(s, 3)};
-  w.map_cell = sqlite3_column_double(s, 4);
-  w.lattice_step = sqlite3_column_double(s, 5);
-  w.robot_radius = sqlite3_column_double(s, 6);
-  w.eps = sqlite3_column_double(s, 7);
-  w.robots = sqlite3_column_int(s, 8);
-  w.targets = sqlite3_column_int(s, 9);
-  w.steps = sqlite3_column_int(s, 10);
-  w.flowtime = sqlite3_column_int(s, 11);
-  const std::vector<double> boxes = Doubles(s, 12);
+  w.episode = Integer(s, 0);
+  std::vector<double> boxes;
+  try {
+    w.seed = Integer(s, 1);
+    w.size = {Real(s, 2), Real(s, 3)};
+    w.map_cell = Real(s, 4);
+    w.lattice_step = Real(s, 5);
+    w.robot_radius = Real(s, 6);
+    w.eps = Real(s, 7);
+    w.robots = SmallInteger(s, 8);
+    w.targets = SmallInteger(s, 9);
+    w.steps = SmallInteger(s, 10);
+    w.flowtime = SmallInteger(s, 11);
+    boxes = Doubles(s, 12);
+    w.log_det_prior = Doubles(s, 13);
+  } catch (const ColumnError& e) {
+    throw std::runtime_error("episode " + std::to_string(w.episode) + ": " +
+                             e.what());
+  }
   if (boxes.size() % 4 != 0)
     throw std::runtime_error("episode " + std::to_string(w.episode) +
                              ": obstacles blob is not 4 floats per box");
+  // As many as a world can have (a million zero-size boxes were read).
+  if (boxes.size() / 4 > static_cast<std::size_t>(limits::kMaxBodies))
+    throw std::runtime_error("episode " + std::to_string(w.episode) + ": " +
+                             std::to_string(boxes.size() / 4) +
+                             " obstacle boxes, more than a " + "world has (" +
+                             std::to_string(limits::kMaxBodies) + ")");
   for (std::size_t i = 0; i < boxes.size(); i += 4)
     w.obstacles.push_back(
         {{boxes[i], boxes[i + 1]}, {boxes[i + 2], boxes[i + 3]}});
-  w.log_det_prior = Doubles(s, 13);
   if (const std::string problem = WorldRowProblem(w); !problem.empty())
     throw std::runtime_error("episode " + std::to_string(w.episode) +
                              ": world row is inconsistent: " + problem);
@@ -333,45 +389,57 @@ DatasetSample ReadSampleRow(sqlite3_stmt* s, const FileFormat& f,
                             std::size_t first_world,
                             const std::vector<DatasetWorld>& worlds) {
   DatasetSample d;
-  d.episode = sqlite3_column_int64(s, 0);
-  d.step = sqlite3_column_int(s, 1);
-  d.robot = sqlite3_column_int(s, 2);
-  d.position = {sqlite3_column_double(s, 3), sqlite3_column_double(s, 4)};
-  const int label = sqlite3_column_int(s, 5);
-  const int acted = sqlite3_column_int(s, 7);
-  d.useful = sqlite3_column_int(s, 6) != 0;
-  const auto it = std::lower_bound(episodes.begin(), episodes.end(), d.episode);
+  d.episode = Integer(s, 0);
+  d.step = SmallInteger(s, 1);
+  d.robot = SmallInteger(s, 2);
   const std::string where = "episode " + std::to_string(d.episode) + " step " +
                             std::to_string(d.step) + " robot " +
                             std::to_string(d.robot);
-  if (it == episodes.end() || *it != d.episode)
-    throw std::runtime_error(where + ": sample of no world");
-  d.world = static_cast<int>(first_world + (it - episodes.begin()));
-  const DatasetWorld& w = worlds[d.world];
-  if (label < 0 || label >= kNumMoves || acted < 0 || acted > kNumMoves ||
-      d.robot < 0 || d.robot >= w.robots)
-    throw std::runtime_error(where + ": label or robot out of range");
-  d.label = static_cast<Move>(label);
-  d.acted = static_cast<Move>(acted);
-  const std::vector<double> nb = Doubles(s, 8);
-  const std::vector<double> tg = Doubles(s, 9);
-  if (nb.size() % 2 != 0 || tg.size() != 6u * w.targets)
-    throw std::runtime_error(where + ": neighbours or targets blob size");
-  if (!Inside(w, d.position) || !AllFinite(nb) || !AllFinite(tg))
-    throw std::runtime_error(where +
-                             ": position outside the workspace, or a "
-                             "neighbour or belief not finite");
-  for (std::size_t i = 0; i < nb.size(); i += 2)
-    d.neighbours.emplace_back(nb[i], nb[i + 1]);
-  ReadBeliefs(tg, w, where, &d);
-  if (f.has_search) ReadSearchPoints(Doubles(s, 10), w, where, &d);
-  if (f.has_came) {
-    const int came = sqlite3_column_int(s, 11);
-    if (came < 0 || came > kNumMoves)
-      throw std::runtime_error(where + ": came out of range");
-    d.came = static_cast<Move>(came);
+  try {
+    d.position = {Real(s, 3), Real(s, 4)};
+    const int label = SmallInteger(s, 5);
+    const int useful = SmallInteger(s, 6);
+    const int acted = SmallInteger(s, 7);
+    const auto it =
+        std::lower_bound(episodes.begin(), episodes.end(), d.episode);
+    if (it == episodes.end() || *it != d.episode)
+      throw std::runtime_error(where + ": sample of no world");
+    d.world = static_cast<int>(first_world + (it - episodes.begin()));
+    const DatasetWorld& w = worlds[d.world];
+    if (label < 0 || label >= kNumMoves || acted < 0 || acted > kNumMoves ||
+        d.robot < 0 || d.robot >= w.robots || d.step < 0 || useful < 0 ||
+        useful > 1)
+      throw std::runtime_error(where +
+                               ": label, acted, useful, step or robot out of "
+                               "range");
+    d.useful = useful != 0;
+    d.label = static_cast<Move>(label);
+    d.acted = static_cast<Move>(acted);
+    const std::vector<double> nb = Doubles(s, 8);
+    const std::vector<double> tg = Doubles(s, 9);
+    // At most the team (a 100 MB blob was read).
+    if (nb.size() % 2 != 0 ||
+        nb.size() / 2 > static_cast<std::size_t>(w.robots) ||
+        tg.size() != 6u * w.targets)
+      throw std::runtime_error(where + ": neighbours or targets blob size");
+    if (!Inside(w, d.position) || !AllFinite(nb) || !AllFinite(tg))
+      throw std::runtime_error(where +
+                               ": position outside the workspace, or a "
+                               "neighbour or belief not finite");
+    for (std::size_t i = 0; i < nb.size(); i += 2)
+      d.neighbours.emplace_back(nb[i], nb[i + 1]);
+    ReadBeliefs(tg, w, where, &d);
+    if (f.has_search) ReadSearchPoints(Doubles(s, 10), w, where, &d);
+    if (f.has_came) {
+      const int came = SmallInteger(s, 11);
+      if (came < 0 || came > kNumMoves)
+        throw std::runtime_error(where + ": came out of range");
+      d.came = static_cast<Move>(came);
+    }
+    return d;
+  } catch (const ColumnError& e) {
+    throw std::runtime_error(where + ": " + e.what());
   }
-  return d;
 }
 
 // Appends the file's worlds and samples; returns its recipe.

@@ -268,6 +268,21 @@ def shard(tmp_path_factory):
      "position outside the workspace"),
     ("UPDATE samples SET y = -50 WHERE rowid = 1",
      "position outside the workspace"),
+    # SQLite converts between types at will: a label 'x' was read as 0,
+    # 1.7 as 1, a position 'abc' as 0.0 (a review, 2026-12-07).
+    ("UPDATE samples SET label = 'x' WHERE rowid = 1",
+     "column label holds text, not an integer"),
+    ("UPDATE samples SET label = 1.7 WHERE rowid = 1",
+     "column label holds a real number, not an integer"),
+    ("UPDATE samples SET x = 'abc' WHERE rowid = 1",
+     "column x holds text, not a number"),
+    ("UPDATE worlds SET flowtime = 'zz'", "column flowtime holds text"),
+    ("UPDATE samples SET step = -5 WHERE rowid = 1", "step or robot out of "
+     "range"),
+    ("UPDATE worlds SET obstacles = zeroblob(320000)",
+     "10000 obstacle boxes, more than a world has (5000)"),
+    ("UPDATE samples SET neighbours = zeroblob(8000) WHERE rowid = 1",
+     "neighbours or targets blob size"),
 ])
 def test_a_damaged_dataset_is_refused(shard, tmp_path, sql, match):
     """A shard edited to nonsense (a world 1e12 m wide, a lattice step of 0,

@@ -442,3 +442,27 @@ def test_a_wheeled_robot_on_open_floor_never_stalls(tmp_path, tolerance,
     summary = json.loads((out / "summary.json").read_text())
     assert summary["steps"] == 60
     assert summary["robot_stalls"] == 0, summary
+
+
+def test_channels_from_a_kept_renderer_are_a_fresh_ones():
+    # A mission keeps one channel renderer for the settings last asked for
+    # (making it every call was a third of the call): what it draws at every
+    # step, with settings switched back and forth and across a restart, is
+    # what a mission that never drew before draws.
+    maze = str(SOURCE / "scenarios" / "maze.yaml")
+    settings = [{}, {"geodesic": True, "trail": True}, {"window": 24}]
+    kept = aia.Mission(maze, seed=3)
+    greedy = aia.builtin_policy("greedy")
+    moves = []
+    for step in range(6):
+        for s in settings[step % 2:]:
+            drawn = kept.channels(**s)
+            fresh = aia.Mission(maze, seed=3)
+            for m in moves:
+                fresh.step(m)
+            assert np.array_equal(drawn, fresh.channels(**s)), (step, s)
+        moves.append(greedy.decide(kept))
+        kept.step(moves[-1])
+    kept._restart(4, "test")
+    other = aia.Mission(maze, seed=4)
+    assert np.array_equal(kept.channels(), other.channels())
