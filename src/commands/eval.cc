@@ -155,6 +155,17 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
                            "` (aia policies lists them)");
     }
   }
+  // A model that no evaluated policy reads would change nothing (aia run
+  // warns of it; here it went unsaid), as aia dataset says.
+  bool reads_model = false;
+  for (const auto& spec : setup.policies)
+    reads_model = reads_model || spec->model_file() != nullptr;
+  for (const Override& o : setup.overrides)
+    if (!reads_model &&
+        (o.path == "policy.model" || o.path == "policy.model_sha256"))
+      throw InputError("command line", 0, "--set " + o.path,
+                       "no policy of this evaluation reads a model (a "
+                       "learned policy does: igbnet)");
   return setup;
 }
 

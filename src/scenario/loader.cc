@@ -221,6 +221,10 @@ Scenario ParseScenario(const std::string& yaml, const std::string& file,
                        const std::string& base_dir,
                        const std::vector<Override>& overrides) {
   ConfigNode root = ParseYaml(yaml, file);
+  // A document that is not a mapping is the file's error, not that of the
+  // first flag that sets a key in it.
+  if (!root.IsMap() && !root.IsNull() && !overrides.empty())
+    Read(root, file, base_dir);
   for (const Override& o : overrides) Apply(o, &root);
   return Read(root, file, base_dir);
 }

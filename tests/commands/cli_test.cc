@@ -214,6 +214,20 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
       {{"run", scenario, "--seed", "1", "--seed", "2"},
        "error: command line: --seed: given 2 times; give it once (aia run "
        "--help lists the options)\n"},
+      // A document that is not a mapping is the file's error, also with a
+      // flag that sets a key in it (the flag was blamed).
+      {{"run", SourcePath("tests/data/bad/top_level_list.yaml"), "--max-steps",
+        "2"},
+       "error: " + SourcePath("tests/data/bad/top_level_list.yaml") +
+           ":2: (document): must be a mapping with keys among name, seed, "
+           "workspace, robots, sensor, targets, mission, communication, "
+           "policy, physics, render, got [robots, targets]\n"},
+      // A model no evaluated policy reads changed nothing, unsaid.
+      {{"eval", "--sizes", "3x3", "--seeds", "1", "--policies", "greedy",
+        "--set", "policy.model=" + SourcePath("models/igbnet.pt"), "--out",
+        "/nonexistent/aia_eval"},
+       "error: command line: --set policy.model: no policy of this "
+       "evaluation reads a model (a learned policy does: igbnet)\n"},
       {{"plan", scenario, "--budget", "many"},
        "error: command line: --budget: must be an integer in [0, "
        "1000000000], got many\n"},

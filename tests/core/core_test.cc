@@ -104,6 +104,17 @@ TEST(InputErrorTest, FormatIsOneLine) {
                 .Format(),
             "a\\nb.yaml:2: (yaml): bad \\x01 escape: \\n\\t\\r\\x7f\\x00 end");
   EXPECT_EQ(OneLine("caf\xc3\xa9 ok"), "caf\xc3\xa9 ok");  // UTF-8 stays
+  // Bytes that are not UTF-8 are escapes, never raw on a terminal (a --set
+  // key or a path of another encoding was echoed as it came): a stray
+  // byte, a cut sequence, an overlong form, a surrogate; four-byte UTF-8
+  // stays.
+  EXPECT_EQ(OneLine("see\xff"
+                    "d"),
+            "see\\xffd");
+  EXPECT_EQ(OneLine("caf\xc3"), "caf\\xc3");
+  EXPECT_EQ(OneLine("\xc0\xaf"), "\\xc0\\xaf");
+  EXPECT_EQ(OneLine("\xed\xa0\x80"), "\\xed\\xa0\\x80");
+  EXPECT_EQ(OneLine("\xf0\x9f\x98\x80!"), "\xf0\x9f\x98\x80!");
 }
 
 TEST(PointGridTest, NearIsEveryPointWithinTheRadiusAscending) {
