@@ -248,8 +248,7 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
   spec.targets = o.size.targets;
   spec.seed = o.first_seed;
   spec.overrides = {{"--policy", "policy.name", o.policy}};
-  for (const std::string& s : o.sets) {
-    Override ov = ParseSetFlag(s);
+  for (Override& ov : ParseSetFlags(o.sets)) {
     RefuseSetOfFlagKey(ov, "seed", "--first-seed");
     RefuseSetOfFlagKey(ov, "robots.count", "--size");
     RefuseSetOfFlagKey(ov, "targets.count", "--size");

@@ -73,8 +73,7 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
                         const std::vector<EvalInstance>& instances) {
   EvalSetup setup;
   std::vector<Override> policy_sets;
-  for (const std::string& text : sets) {
-    const Override o = ParseSetFlag(text);
+  for (const Override& o : ParseSetFlags(sets)) {
     const std::string key = "--set " + o.path;
     // A whole section holding a key the command sets would replace it.
     for (const char* held : {"robots.count", "targets.count", "policy.name",

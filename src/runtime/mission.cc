@@ -71,8 +71,7 @@ std::vector<Override> CommandOverrides::ToOverrides(
         {"--max-steps", "mission.max_steps", std::to_string(*max_steps)});
   out.insert(out.end(), flags.begin(), flags.end());
   const std::size_t given = out.size();
-  for (const std::string& s : sets) {
-    Override o = ParseSetFlag(s);
+  for (Override& o : ParseSetFlags(sets)) {
     for (std::size_t i = 0; i < given; ++i)
       RefuseSetOfFlagKey(o, out[i].path, out[i].flag);
     out.push_back(std::move(o));

@@ -178,6 +178,28 @@ Override ParseSetFlag(const std::string& text) {
   return o;
 }
 
+std::vector<Override> ParseSetFlags(const std::vector<std::string>& texts) {
+  std::vector<Override> out;
+  for (const std::string& text : texts) {
+    Override o = ParseSetFlag(text);
+    for (const Override& before : out) {
+      if (before.path == o.path)
+        throw InputError("command line", 0, "--set " + o.path,
+                         "given twice (=" + before.value +
+                             ", then =" + o.value + "); give it once");
+      if (ReplacesSectionOf(o.path, before.path))
+        throw InputError("command line", 0, "--set " + o.path,
+                         "replaces the whole section, and an earlier --set "
+                         "gives " +
+                             before.path +
+                             " in it; give the section once, or its keys "
+                             "one by one");
+    }
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
 bool ReplacesSectionOf(const std::string& set_path, const std::string& path) {
   return path.rfind(set_path + ".", 0) == 0;
 }

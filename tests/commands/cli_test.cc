@@ -222,6 +222,16 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
            ":2: (document): must be a mapping with keys among name, seed, "
            "workspace, robots, sensor, targets, mission, communication, "
            "policy, physics, render, got [robots, targets]\n"},
+      // A --set given twice, or a section after a key in it: the later
+      // silently undid the earlier (a key twice in a file is an error).
+      {{"run", scenario, "--set", "seed=5", "--set", "seed=9"},
+       "error: command line: --set seed: given twice (=5, then =9); give it "
+       "once\n"},
+      {{"eval", "--sizes", "3x3", "--seeds", "1", "--set", "sensor.range=3",
+        "--set", "sensor={range: 2}", "--out", "/nonexistent/aia_eval"},
+       "error: command line: --set sensor: replaces the whole section, and "
+       "an earlier --set gives sensor.range in it; give the section once, or "
+       "its keys one by one\n"},
       // A model no evaluated policy reads changed nothing, unsaid.
       {{"eval", "--sizes", "3x3", "--seeds", "1", "--policies", "greedy",
         "--set", "policy.model=" + SourcePath("models/igbnet.pt"), "--out",
