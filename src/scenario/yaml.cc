@@ -282,7 +282,12 @@ class Converter {
 
   [[noreturn]] void Fail(int line, const std::string& key,
                          const std::string& what) const {
-    if (!origin_.empty()) throw InputError("command line", 0, origin_, what);
+    // A --set value's key under the path it was given for (--set
+    // robots.count for a duplicate inside `robots={count: 2, count: 3}`).
+    if (!origin_.empty())
+      throw InputError(
+          "command line", 0,
+          key.empty() || key[0] == '(' ? origin_ : origin_ + " " + key, what);
     throw InputError(file_, line, key, what);
   }
 
@@ -539,7 +544,10 @@ ConfigNode ParseYamlValue(const std::string& text, const std::string& flag,
         "command line", 0, named,
         "invalid YAML value '" + text + "': " + YamlMessage(e, text));
   }
-  ConfigNode out = Converter("command line", flag).Convert(node, "", 0);
+  // Keys inside the value are named under the path it sets.
+  const std::string path =
+      key.rfind(flag + " ", 0) == 0 ? key.substr(flag.size() + 1) : "";
+  ConfigNode out = Converter("command line", flag).Convert(node, path, 0);
   out.SetOrigin(flag);
   return out;
 }

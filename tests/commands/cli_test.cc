@@ -232,6 +232,11 @@ TEST(CliTest, ParserErrorsAreOneErrorLine) {
        "error: command line: --set sensor: replaces the whole section, and "
        "an earlier --set gives sensor.range in it; give the section once, or "
        "its keys one by one\n"},
+      // A key inside a --set value is named under the path it sets (the
+      // error said only --set).
+      {{"run", scenario, "--set", "robots={count: 2, count: 3}"},
+       "error: command line: --set robots.count: duplicate key (first given "
+       "at line 1); give each key once\n"},
       // A model no evaluated policy reads changed nothing, unsaid.
       {{"eval", "--sizes", "3x3", "--seeds", "1", "--policies", "greedy",
         "--set", "policy.model=" + SourcePath("models/igbnet.pt"), "--out",
