@@ -225,7 +225,8 @@ class Converter {
         // take 12 s).
         std::unordered_map<std::string, int> seen;
         for (const auto& kv : node) {
-          const int key_line = LineOf(kv.first, out.line);
+          // A null key (`~: 3`) has no mark of its own: its value's line.
+          const int key_line = LineOf(kv.first, LineOf(kv.second, out.line));
           if (!kv.first.IsScalar()) {
             ConfigNode shown = Convert(kv.first, key, key_line);
             Fail(key_line, key.empty() ? "(document)" : key,
