@@ -214,6 +214,14 @@ def _box(size):
 VECTOR_FEATURES = ("x_share", "y_share", "step_share", "localized_share")
 
 
+class _UnknownAgent(InputError, KeyError):
+    """An agent not among possible_agents: bad input (aia.InputError, as
+    python.md says) and a KeyError, as a dict of the agents' spaces says."""
+
+    def __str__(self):  # the message, not KeyError's quoted repr of it
+        return str(self.args[0]) if self.args else ""
+
+
 class ParallelEnv:
     """aia as a PettingZoo ParallelEnv; see the module's doc."""
 
@@ -308,16 +316,18 @@ class ParallelEnv:
 
     def observation_space(self, agent, _api="ParallelEnv"):
         self._open("observation_space", _api)
-        return self._observation_spaces[self._agent(agent)]
+        return self._observation_spaces[self._agent(agent, "observation_space",
+                                                    _api)]
 
     def action_space(self, agent, _api="ParallelEnv"):
         self._open("action_space", _api)
-        return self._action_spaces[self._agent(agent)]
+        return self._action_spaces[self._agent(agent, "action_space", _api)]
 
-    def _agent(self, agent):
+    def _agent(self, agent, what, api):
         if agent not in self._robot:
-            raise KeyError(f"unknown agent {agent!r}; agents are robot_0 .. "
-                           f"robot_{len(self.possible_agents) - 1}")
+            raise _UnknownAgent(
+                f"aia.{api}.{what}: agent: unknown agent {agent!r}; agents "
+                f"are robot_0 .. robot_{len(self.possible_agents) - 1}")
         return agent
 
     def _open(self, what, api="ParallelEnv"):

@@ -481,3 +481,17 @@ def test_the_envs_mission_is_stepped_by_the_env_only():
     env.step({a: 0 for a in env.agents})
     assert env.mission.steps == 1
     env.mission.state()  # read freely
+
+
+def test_an_unknown_agents_space_is_bad_input_and_a_key_error():
+    env = aia.parallel_env(DEFAULT)
+    for call, what in ((env.observation_space, "observation_space"),
+                       (env.action_space, "action_space"),
+                       (aia.aec_env(DEFAULT).observation_space,
+                        "observation_space")):
+        for kind in (aia.InputError, KeyError):
+            with pytest.raises(kind) as e:
+                call("nobody")
+            assert str(e.value).endswith(
+                f"{what}: agent: unknown agent 'nobody'; agents are robot_0 "
+                f".. robot_9"), str(e.value)
