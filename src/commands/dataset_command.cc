@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "aia/core/clock.h"
 #include "aia/core/error.h"
 #include "aia/core/field_io.h"
 #include "aia/core/rng.h"
@@ -78,9 +79,7 @@ class DatasetObserver : public StepObserver {
       killed_ = true;
       return ObserverStatus::kStop;
     }
-    if (max_seconds_ > 0.0 &&
-        std::chrono::duration<double>(Clock::now() - start_).count() >
-            max_seconds_) {
+    if (max_seconds_ > 0.0 && SecondsSince(start_) > max_seconds_) {
       over_time_ = true;
       return ObserverStatus::kStop;
     }
@@ -425,8 +424,7 @@ int RunDataset(const DatasetOptions& o) {
     writer.WriteEpisode(episode.world, episode.kept);
     ++written;
     samples += static_cast<long>(episode.kept.size());
-    const double secs =
-        std::chrono::duration<double>(Clock::now() - t0).count();
+    const double secs = SecondsSince(t0);
     char buf[200];
     std::snprintf(buf, sizeof buf,
                   "[aia dataset] shard %d/%d  episode %zu/%d  %ld samples  "
@@ -436,7 +434,7 @@ int RunDataset(const DatasetOptions& o) {
     line.Update(buf);
   }
   line.Finish();
-  const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
+  const double secs = SecondsSince(t0);
   std::string skip;
   if (o.max_seconds > 0.0)
     skip = ", " + std::to_string(skipped) + " skipped (over --max-seconds " +

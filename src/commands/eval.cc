@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "aia/commands/plan_command.h"
+#include "aia/core/clock.h"
 #include "aia/core/error.h"
 #include "aia/runtime/episode.h"
 #include "aia/runtime/instance.h"
@@ -19,11 +20,6 @@
 
 namespace aia {
 namespace {
-
-double SecondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-      .count();
-}
 
 // The policy keys of the registry's declarations: "policy.p_v" -> "p_v".
 std::set<std::string> DeclaredParams(const PolicyRegistry& registry,

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "aia/commands/episode_picture.h"
+#include "aia/core/clock.h"
 #include "aia/core/error.h"
 #include "aia/core/interrupt.h"
 #include "aia/core/io.h"
@@ -91,11 +92,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
-
-double SecondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-      .count();
-}
 
 // The render flags as overrides of the scenario's render section, so that
 // they are checked (and reported under the flag) like the file's values.

@@ -18,6 +18,16 @@ std::string FirstRuleKeySet(const IgbNetParams& params) {
   return "";
 }
 
+int BestValidMove(const Lattice& lattice, int here, const float* logits,
+                  int skip) {
+  int best = -1;
+  for (int a = 0; a < kNumMoves; ++a) {
+    if (a == skip || !lattice.Valid(here, static_cast<Move>(a))) continue;
+    if (best < 0 || logits[a] > logits[best]) best = a;
+  }
+  return best;
+}
+
 // --- OpenAims ----------------------------------------------------------------
 
 void OpenAims::Of(const DecisionContext& ctx, int robot,
@@ -262,13 +272,8 @@ Move NoUndo::Replace(const DecisionContext& ctx, int robot, Move best,
     // success): the network's best valid move that does not undo the last.
     const Lattice& lattice = ctx.map->lattice();
     const int here = (*ctx.robot_lattice)[robot];
-    int next = -1;
-    for (int a = 0; a < kNumMoves; ++a) {
-      if (a == static_cast<int>(best) ||
-          !lattice.Valid(here, static_cast<Move>(a)))
-        continue;
-      if (next < 0 || logits[a] > logits[next]) next = a;
-    }
+    const int next =
+        BestValidMove(lattice, here, logits, static_cast<int>(best));
     if (next >= 0) {
       ++idle_moves_;
       return static_cast<Move>(next);

@@ -132,12 +132,7 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
     const int here = (*ctx.robot_lattice)[i];
     const float* l = batch_logits_.data() + b * kNumMoves;
     std::copy(l, l + kNumMoves, logits_.data() + i * kNumMoves);
-    // The network's most probable valid move (ties to the lower index).
-    int best = -1;
-    for (int a = 0; a < kNumMoves; ++a) {
-      if (!lattice.Valid(here, static_cast<Move>(a))) continue;
-      if (best < 0 || l[a] > l[best]) best = a;
-    }
+    const int best = BestValidMove(lattice, here, l);
     if (best < 0) {
       status = PolicyStatus::kNoValidMove;
       continue;

@@ -11,6 +11,7 @@
 #include <new>
 
 #include "aia/core/check.h"
+#include "aia/core/clock.h"
 #include "aia/estimation/filter.h"
 #include "aia/planning/information.h"
 #include "aia/planning/search.h"
@@ -512,9 +513,7 @@ SamplingPlan SamplingTree::Solve(const SamplingProblem& problem,
 
   ExtractPlan(params, &plan);
   if (lease.large()) ReleaseArena();  // the memory goes back to the kernel
-  plan.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-          .count();
+  plan.seconds = SecondsSince(t0);
   return plan;
 }
 

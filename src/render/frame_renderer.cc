@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "aia/core/check.h"
+#include "aia/core/clock.h"
 #include "aia/world/mjcf.h"
 
 namespace aia {
@@ -443,7 +444,7 @@ const cv::Mat& FrameRenderer::Render(const FrameOverlay& overlay) {
   DrawOverlay(overlay, &frame_);
   if (!legend_.empty()) legend_.copyTo(frame_(legend_rect_));
   scene_seconds_ += std::chrono::duration<double>(t1 - t0).count();
-  overlay_seconds_ += std::chrono::duration<double>(Clock::now() - t1).count();
+  overlay_seconds_ += SecondsSince(t1);
   return frame_;
 }
 

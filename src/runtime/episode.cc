@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "aia/core/check.h"
+#include "aia/core/clock.h"
 #include "aia/core/interrupt.h"
 #include "aia/estimation/filter.h"
 #include "aia/learning/network.h"
@@ -14,9 +15,6 @@ namespace aia {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 // Targets move during the first part of a step's physics, so video is smooth.
 constexpr double kTargetMotionSeconds = 0.25;
@@ -213,7 +211,7 @@ void Episode::Step() {
     drives_[i] += m == Move::kStay ? 0 : 1;
     sim_.SetWaypoint(i, lattice.Point(lattice.Next(robot_idx_[i], m)));
   }
-  times_.policy += Since(t0);
+  times_.policy += SecondsSince(t0);
   const Decision decision{moves_, applied_, status};
   for (StepObserver* o : observers_)
     stopped_ |= o->OnDecision(*this, ctx, decision) == ObserverStatus::kStop;
@@ -251,7 +249,7 @@ void Episode::Step() {
     ++decisions_[i];
   }
   Observe();
-  times_.total += Since(t_step);
+  times_.total += SecondsSince(t_step);
   for (StepObserver* o : observers_)
     stopped_ |= o->OnStep(*this) == ObserverStatus::kStop;
 }
@@ -268,7 +266,7 @@ void Episode::StepAsync() {
   const PolicyStatus status = Decide(ctx);
   for (int i = 0; i < n; ++i)
     if (ready_[i]) Apply(i, lattice);
-  times_.policy += Since(t0);
+  times_.policy += SecondsSince(t0);
   const Decision decision{moves_, applied_, status, &ready_};
   for (StepObserver* o : observers_)
     stopped_ |= o->OnDecision(*this, ctx, decision) == ObserverStatus::kStop;
@@ -327,7 +325,7 @@ void Episode::StepAsync() {
     if (!ended_.empty() || stopped_ || done()) break;
   }
   times_.physics += sim_.physics_seconds() - physics_before;
-  times_.total += Since(t_step);
+  times_.total += SecondsSince(t_step);
 }
 
 // The world rule on robot i's move (an invalid one is replaced and
@@ -508,7 +506,7 @@ void Episode::Observe() {
   comm_.Update(step_, robot_pos_);
   Sense(sim_, instance_->scenario.sensor, robot_pos_, target_pos_,
         comm_.active(), &sensor_rngs_, &z_, &sensing_);
-  times_.sensing += Since(t0);
+  times_.sensing += SecondsSince(t0);
 
   t0 = Clock::now();
   // Predict (not at step 0: the prior is the belief at time 0), exchange over
@@ -540,7 +538,7 @@ void Episode::Observe() {
       stats_.success_seconds = stats_.sim_seconds;
     }
   }
-  times_.fusion += Since(t0);
+  times_.fusion += SecondsSince(t0);
 }
 
 std::string EndOfMissionWarnings(const Episode& e, long moves,

@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "aia/core/clock.h"
 #include "aia/core/error.h"
 #include "aia/core/io.h"
 #include "aia/learning/network.h"
@@ -20,11 +21,6 @@ long Sum(const std::vector<long>& counts) {
   long sum = 0;
   for (const long c : counts) sum += c;
   return sum;
-}
-
-double SecondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-      .count();
 }
 
 constexpr char kEffectiveHeader[] =

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "aia/core/check.h"
+#include "aia/core/clock.h"
 #include "aia/world/mjcf.h"
 
 namespace aia {
@@ -221,9 +222,7 @@ void Simulation::StepPhysics() {
   while (true) {
     const auto t0 = std::chrono::steady_clock::now();
     mj_step(m_, d);
-    physics_seconds_ +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-            .count();
+    physics_seconds_ += SecondsSince(t0);
     if (d->warning[mjWARN_CONTACTFULL].number == 0 &&
         d->warning[mjWARN_CNSTRFULL].number == 0)
       break;

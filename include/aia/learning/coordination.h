@@ -190,6 +190,12 @@ struct IgbNetParams {
 // nothing.
 std::string FirstRuleKeySet(const IgbNetParams& params);
 
+// The network's most probable valid move at lattice point `here` from its
+// kNumMoves `logits` (ties to the lower index), `skip` left out (-1: none);
+// -1 where no move is valid.
+int BestValidMove(const Lattice& lattice, int here, const float* logits,
+                  int skip = -1);
+
 // Robot i's open targets (above eps in its own belief, or by what its
 // neighbourhood holds where the context has NeighbourhoodHolds for it; see
 // OpenRule) and where it aims for them: the memory's aims where given, else

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include "aia/core/clock.h"
 #include "aia/core/error.h"
 #include "aia/core/field_io.h"
 #include "aia/core/hash.h"
@@ -35,9 +36,6 @@ namespace aia {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 // The dataset with one channel renderer per world.
 struct Corpus {
@@ -764,7 +762,7 @@ EpochLog TrainEpoch(IgbNetModule& module, torch::optim::Adam* optimizer,
                     epoch + 1, o.epochs, s + 1, num_batches,
                     loss_sum / std::max(weight_sum, 1e-12),
                     static_cast<double>(right) / std::max(seen, 1L),
-                    seen / std::max(Seconds(t0), 1e-9));
+                    seen / std::max(SecondsSince(t0), 1e-9));
       progress->Update(line);
     }
   }
@@ -925,7 +923,7 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
     e.val_loss = v.loss;
     e.val_acc = v.acc;
     e.val_acc_useful = v.acc_useful;
-    e.seconds = Seconds(t0);
+    e.seconds = SecondsSince(t0);
     logs.push_back(e);
     module->eval();
     SaveEpoch(o, *net, module, optimizer, key, logs);
@@ -992,7 +990,7 @@ double TorchNetworkSpeed(const NetworkConfig& config, int height, int width,
   for (int r = 0; r < repeats; ++r) {
     const auto t0 = Clock::now();
     for (int i = 0; i < iterations; ++i) once();
-    rates.push_back(batch * iterations / Seconds(t0));
+    rates.push_back(batch * iterations / SecondsSince(t0));
   }
   std::sort(rates.begin(), rates.end());
   return rates[rates.size() / 2];
