@@ -211,15 +211,18 @@ void SearchMemory::Unmissed(const DecisionContext& ctx, int robot, int k) {
   // Once a search starts (the mean it has then: a static target's moves
   // only by the consensus until measured, which ends the search), and the
   // window scanned only for a mean in an obstacle or whose nearest lattice
-  // point is not a free one of the robot's component (a scan of every
-  // slot's window would cost seconds a step at 1000 x 1000).
+  // point is not a free one of the robot's component or does not see it (a
+  // scan of every slot's window would cost seconds a step at 1000 x 1000).
   const auto& s = slot(robot, k);
   const Lattice& lattice = ctx.map->lattice();
   const int here = (*ctx.robot_lattice)[robot];
   const int component = lattice.components()[here];
   const int nearest = lattice.NearestPoint(s.mean);
-  const bool suspect = !ctx.map->PointFree(s.mean) || !lattice.Free(nearest) ||
-                       lattice.components()[nearest] != component;
+  const bool suspect =
+      !ctx.map->PointFree(s.mean) || !lattice.Free(nearest) ||
+      lattice.components()[nearest] != component ||
+      PredictedPrecision(*ctx.map, *ctx.sensor, lattice.Point(nearest),
+                         s.mean) <= 0.0;
   const bool ring =
       suspect &&
       NearestObserverDistance(*ctx.map, *ctx.sensor, here, s.mean,
@@ -319,9 +322,12 @@ bool SearchMemory::RecomputeShared(const DecisionContext& ctx, int robot, int k,
     }
     if (best != std::numeric_limits<int>::max()) return true;
   }
-  // The prior is searched to 4 sigma: forget, and search it again.
+  // The prior is searched to 4 sigma: forget, and search it again (its
+  // start checked again, as Reaim's forget does: a mean no point sees kept
+  // its ring mark, and the aim stayed at the unseen mean for good).
   s.missed.clear();
   s.aim = s.mean;
+  start_[static_cast<std::size_t>(robot) * num_targets_ + k] = kUnchecked;
   return false;
 }
 
