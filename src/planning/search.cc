@@ -139,6 +139,7 @@ int MissSlots<Derived, Slot, Shared>::Record(const DecisionContext& ctx,
 template <typename Derived, typename Slot, typename Shared>
 void MissSlots<Derived, Slot, Shared>::Update(const DecisionContext& ctx,
                                               int robot) {
+  derived().Prepare(ctx);
   misses_ += Record(ctx, robot);
 }
 
@@ -147,6 +148,7 @@ void MissSlots<Derived, Slot, Shared>::Update(const DecisionContext& ctx,
                                               const std::vector<int>& robots,
                                               const RangeRunner& run,
                                               int workers) {
+  derived().Prepare(ctx);
   misses_ += RecordAll(robots, run, workers, &added_,
                        [&](int i) { return Record(ctx, i); });
 }
@@ -204,6 +206,26 @@ void SearchMemory::Settle(std::size_t at, internal::AimSlot* s,
   if (s->missed.empty() && start_[at] != kRing) s->aim = s->mean;
 }
 
+void SearchMemory::Prepare(const DecisionContext& ctx) {
+  const Lattice& lattice = ctx.map->lattice();
+  if (clear_for_ == lattice.id() && !clear_.empty()) return;
+  const Grid<std::uint8_t>& occupancy = ctx.map->occupancy();
+  const double half = 0.5 * lattice.step();
+  clear_.assign(static_cast<std::size_t>(lattice.size()), 0);
+  for (int q = 0; q < lattice.size(); ++q) {
+    if (!lattice.Free(q)) continue;
+    const Vec2 p = lattice.Point(q);
+    int x0, y0, x1, y1;
+    occupancy.CellOf(p - Vec2(half, half), &x0, &y0);
+    occupancy.CellOf(p + Vec2(half, half), &x1, &y1);
+    bool clear = true;
+    for (int iy = y0; clear && iy <= y1; ++iy)
+      for (int ix = x0; clear && ix <= x1; ++ix) clear = occupancy(ix, iy) == 0;
+    clear_[q] = clear ? 1 : 0;
+  }
+  clear_for_ = lattice.id();
+}
+
 void SearchMemory::Unmissed(const DecisionContext& ctx, int robot, int k) {
   std::uint8_t& start =
       start_[static_cast<std::size_t>(robot) * num_targets_ + k];
@@ -218,11 +240,18 @@ void SearchMemory::Unmissed(const DecisionContext& ctx, int robot, int k) {
   const int here = (*ctx.robot_lattice)[robot];
   const int component = lattice.components()[here];
   const int nearest = lattice.NearestPoint(s.mean);
-  const bool suspect =
-      !ctx.map->PointFree(s.mean) || !lattice.Free(nearest) ||
-      lattice.components()[nearest] != component ||
-      PredictedPrecision(*ctx.map, *ctx.sensor, lattice.Point(nearest),
-                         s.mean) <= 0.0;
+  const Vec2 p = lattice.Point(nearest);
+  const Vec2 off = (s.mean - p).cwiseAbs();
+  const double half = 0.5 * lattice.step();
+  // Seen from its nearest point: cheaply where the point's half-step square
+  // holds the mean and no obstacle, else by the line of sight.
+  const bool seen =
+      lattice.Free(nearest) && lattice.components()[nearest] == component &&
+      ((clear_[nearest] && off.x() <= half && off.y() <= half &&
+        ctx.sensor->InRange(off.norm())) ||
+       (ctx.map->PointFree(s.mean) &&
+        PredictedPrecision(*ctx.map, *ctx.sensor, p, s.mean) > 0.0));
+  const bool suspect = !seen;
   const bool ring =
       suspect &&
       NearestObserverDistance(*ctx.map, *ctx.sensor, here, s.mean,

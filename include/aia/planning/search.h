@@ -601,6 +601,8 @@ class SearchMemory
     start_.assign(static_cast<std::size_t>(num_robots_) * num_targets_,
                   kUnchecked);
   }
+  // Before an Update's robots (one thread): clear_ for this lattice.
+  void Prepare(const DecisionContext& ctx);
   void Settle(std::size_t at, internal::AimSlot* s, bool searching);
   void Unmissed(const DecisionContext& ctx, int robot, int k);
   static bool Sees(const Map& map, const SensorModel& sensor, const Vec2& p,
@@ -614,6 +616,12 @@ class SearchMemory
   // every robot and target.
   enum : std::uint8_t { kUnchecked, kMean, kRing };
   std::vector<std::uint8_t> start_;
+  // Per lattice point of the lattice clear_for_: whether no occupancy cell
+  // within half a step of it holds an obstacle, so that it sees every
+  // point nearer to it than to any other (Unmissed's cheap test: a line of
+  // sight per search start cost 0.2 s at 1000 x 1000).
+  std::vector<std::uint8_t> clear_;
+  std::uint64_t clear_for_ = 0;
 };
 
 // What each robot knows from its missed measurements of static targets, as
@@ -654,6 +662,7 @@ class SearchPoints : public MissSlots<SearchPoints, internal::PointsSlot,
   // points; a point sees the search when it sees one of its points (the
   // mean while there are none).
   void Resized() {}
+  void Prepare(const DecisionContext&) {}
   static void Settle(std::size_t, internal::PointsSlot* s, bool searching);
   void Unmissed(const DecisionContext&, int, int) {}
   static bool Sees(const Map& map, const SensorModel& sensor, const Vec2& p,
