@@ -68,8 +68,19 @@ using KeyValues = std::vector<std::pair<std::string, std::string>>;
 std::vector<Override> AsOverrides(const KeyValues& pairs,
                                   const std::string& flag_prefix) {
   std::vector<Override> out;
-  for (const auto& [key, value] : pairs)
+  for (const auto& [key, value] : pairs) {
+    // A section after a key in it would drop the key in silence (as two
+    // --set flags would: ParseSetFlags); a dict holds no key twice.
+    for (const Override& before : out)
+      if (ReplacesSectionOf(key, before.path))
+        throw InputError("command line", 0, flag_prefix + key,
+                         "replaces the whole section, and an earlier key "
+                         "gives " +
+                             before.path +
+                             " in it; give the section once, or its keys "
+                             "one by one");
     out.push_back({flag_prefix + key, key, value});
+  }
   return out;
 }
 
@@ -1884,6 +1895,8 @@ void BindVectorMissions(py::module_& m) {
                  IntegerArg(threads, "aia.VectorMissions", "threads", 0, 4096));
              const std::uint64_t first =
                  *SeedArg(seed, "aia.VectorMissions", "seed", false);
+             if (n == 0)
+               Refuse("aia.VectorMissions", "n", "must be at least 1");
              if (n - 1 > std::numeric_limits<std::uint64_t>::max() - first)
                Refuse("aia.VectorMissions", "seed",
                       "seed + n - 1 passes 2^64 - 1");

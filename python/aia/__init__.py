@@ -411,7 +411,11 @@ class VectorMissions:
                              f"takes no options (None or {{}}), got "
                              f"{_shown(options)}")
         if seed is None:
-            seed = self._v.next_seed
+            # The seeds after the last used, wrapping past 2^64 - 1 as the
+            # vector's own next seed does (as an env's reset does).
+            first = self._v.next_seed
+            self._v.reset([(first + i) % 2 ** 64 for i in range(n)])
+            return self.states(), {"seeds": self.seeds}
         seed = _integer(seed, "aia.VectorMissions.reset", "seed", 0,
                         _SEED_MAX - n + 1)
         self._v.reset([seed + i for i in range(n)])

@@ -335,6 +335,11 @@ Action AddPlanCommand(CLI::App& app) {
   cmd->add_option("scenario", plan->scenario_path, "scenario YAML file")
       ->required();
   flags->Add(cmd, /*with_policy=*/false, /*with_max_steps=*/false);
+  cmd->get_option("--set")->description(
+      "override a scenario key, e.g. --set mission.eps=0.05 or --set "
+      "policy.max_iterations=5000 (repeatable; see aia schema and aia "
+      "policies; not a key that --seed gives too, nor policy.name: plan runs "
+      "the expert; nor policy.anytime beside --budget)");
   // --budget, as PlanOptions declares it.
   auto declared = std::make_shared<DeclaredFlags>(cmd);
   declared->Add(plan.get());

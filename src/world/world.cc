@@ -218,8 +218,17 @@ GrayImage DecodeWidePgm(const std::string& b, int cols, int rows,
     return out;
   }
   for (std::size_t k = 0; k < n; ++k) {
-    while (at < b.size() && std::isspace(static_cast<unsigned char>(b[at])))
-      ++at;
+    // Whitespace and comments (netpbm reads a '#' to the line's end
+    // anywhere in a plain PGM, as OpenCV does for the narrow ones).
+    while (at < b.size()) {
+      if (std::isspace(static_cast<unsigned char>(b[at]))) {
+        ++at;
+      } else if (b[at] == '#') {
+        while (at < b.size() && b[at] != '\n') ++at;
+      } else {
+        break;
+      }
+    }
     long long v = 0;
     int digits = 0;
     while (at < b.size() && std::isdigit(static_cast<unsigned char>(b[at])) &&

@@ -576,3 +576,16 @@ def test_a_comma_decimal_locale_is_refused_in_one_line(tmp_path):
                             "with ',' as the decimal point"), first
     assert "locale.setlocale(locale.LC_NUMERIC, 'C')" in first
     assert second == "10"
+
+
+def test_a_section_after_a_key_in_it_is_refused():
+    # It dropped the key in silence ({"robots.count": 3, "robots": {...}}
+    # ran 2 robots), as two --set flags would; a key after its section sets
+    # it there.
+    refused(lambda: aia.Mission(DEFAULT, overrides={
+        "robots.count": 3, "robots": {"count": 2}}),
+        "aia.Mission: overrides: robots: replaces the whole section, and an "
+        "earlier key gives robots.count in it")
+    m = aia.Mission(DEFAULT, overrides={"robots": {"count": 2},
+                                        "robots.count": 3})
+    assert m.num_robots == 3

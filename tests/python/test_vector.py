@@ -220,3 +220,11 @@ def test_a_vectors_mission_is_stepped_by_the_vector_only():
     assert v.missions[0].channels().shape[0] == 3  # reading is allowed
     v.step([[4, 4, 4]] * 2)
     assert [m.steps for m in v.missions] == [1, 1]
+
+
+def test_reset_without_a_seed_wraps_past_the_last_seed():
+    # The seeds after 2^64 - 3, 2^64 - 2 are 2^64 - 1 and 0: reset() took
+    # them as a seed out of range, a seed the caller never gave.
+    v = aia.VectorMissions(2, DEFAULT, seed=2 ** 64 - 3, overrides=SMALL)
+    _, info = v.reset()
+    assert list(info["seeds"]) == [2 ** 64 - 1, 0]

@@ -376,6 +376,11 @@ TEST(WorldTest, APgmWhoseWhiteIsAbove255IsScaledToIt) {
                  std::invalid_argument)
         << magic << ": cut";
   }
+  // Comments among a plain PGM's numbers, as netpbm and OpenCV read them.
+  EXPECT_EQ(DecodeMapImage("P2\n3 2\n1000\n1000 0 # a row\n500\n# more\n"
+                           "1000 999 300\n")
+                .pixels,
+            (std::vector<std::uint8_t>{255, 0, 127, 255, 254, 76}));
   for (const char* header : {"P5\n3 2\n0\n", "P5\n3 2\n70000\n"}) {
     try {
       DecodeMapImage(std::string(header) + std::string(12, '\0'));
