@@ -134,6 +134,20 @@ class QuietStderr {
   int saved_ = -1;
 };
 
+// Past whitespace and comments from `*at` (netpbm reads a '#' to the line's
+// end anywhere in a PGM's header, and in a plain PGM's numbers).
+void SkipPgmSpace(const std::string& b, std::size_t* at) {
+  while (*at < b.size()) {
+    if (std::isspace(static_cast<unsigned char>(b[*at]))) {
+      ++*at;
+    } else if (b[*at] == '#') {
+      while (*at < b.size() && b[*at] != '\n') ++*at;
+    } else {
+      break;
+    }
+  }
+}
+
 // Width and height as the image's header declares them, and a PGM's
 // maximum grey value (0 for a PNG, or when the header is cut before it) and
 // where its pixels begin (after the one whitespace that ends the header);
@@ -158,15 +172,7 @@ bool HeaderSize(const std::string& b, long long* cols, long long* rows,
     std::size_t at = 2;
     long long v[3] = {-1, -1, 0};
     for (long long& x : v) {
-      while (at < b.size()) {  // whitespace and comments
-        if (std::isspace(static_cast<unsigned char>(b[at]))) {
-          ++at;
-        } else if (b[at] == '#') {
-          while (at < b.size() && b[at] != '\n') ++at;
-        } else {
-          break;
-        }
-      }
+      SkipPgmSpace(b, &at);
       std::size_t digits = 0;
       x = 0;
       while (at < b.size() && std::isdigit(static_cast<unsigned char>(b[at])) &&
@@ -218,17 +224,7 @@ GrayImage DecodeWidePgm(const std::string& b, int cols, int rows,
     return out;
   }
   for (std::size_t k = 0; k < n; ++k) {
-    // Whitespace and comments (netpbm reads a '#' to the line's end
-    // anywhere in a plain PGM, as OpenCV does for the narrow ones).
-    while (at < b.size()) {
-      if (std::isspace(static_cast<unsigned char>(b[at]))) {
-        ++at;
-      } else if (b[at] == '#') {
-        while (at < b.size() && b[at] != '\n') ++at;
-      } else {
-        break;
-      }
-    }
+    SkipPgmSpace(b, &at);
     long long v = 0;
     int digits = 0;
     while (at < b.size() && std::isdigit(static_cast<unsigned char>(b[at])) &&

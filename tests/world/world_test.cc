@@ -330,18 +330,26 @@ TEST(WorldTest, MapImageBecomesObstacles) {
 // White is the file's maximum grey: a binary PGM whose maxval is below 255
 // was read as stored, its white as grey (every pixel dark at the default
 // threshold); its text form was scaled.
+// A 3 x 2 PGM of these values: binary (P5, one byte a sample up to 255,
+// two above) or plain (P2).
+std::string Pgm(const std::string& magic, int max_gray,
+                const std::vector<int>& values) {
+  std::string bytes = magic + "\n3 2\n" + std::to_string(max_gray) + "\n";
+  for (const int v : values) {
+    if (magic == "P2") {
+      bytes += std::to_string(v) + " ";
+    } else {
+      if (max_gray > 255) bytes += static_cast<char>(v >> 8);
+      bytes += static_cast<char>(v & 0xff);
+    }
+  }
+  return bytes;
+}
+
 TEST(WorldTest, APgmWhoseWhiteIsBelow255IsScaled) {
   for (const std::string magic : {"P5", "P2"}) {
-    std::string bytes = magic + "\n3 2\n100\n";
-    const int values[] = {100, 0, 50, 100, 99, 1};
-    for (const int v : values) {
-      if (magic == "P5") {
-        bytes += static_cast<char>(v);
-      } else {
-        bytes += std::to_string(v) + " ";
-      }
-    }
-    const GrayImage image = DecodeMapImage(bytes);
+    const GrayImage image =
+        DecodeMapImage(Pgm(magic, 100, {100, 0, 50, 100, 99, 1}));
     ASSERT_EQ(image.cols, 3);
     ASSERT_EQ(image.rows, 2);
     EXPECT_EQ(image.pixels,
@@ -356,16 +364,7 @@ TEST(WorldTest, APgmWhoseWhiteIsBelow255IsScaled) {
 // PGM's 1 to 65535 is said, not "corrupt".
 TEST(WorldTest, APgmWhoseWhiteIsAbove255IsScaledToIt) {
   for (const std::string magic : {"P5", "P2"}) {
-    std::string bytes = magic + "\n3 2\n1000\n";
-    const int values[] = {1000, 0, 500, 1000, 999, 300};
-    for (const int v : values) {
-      if (magic == "P5") {
-        bytes += static_cast<char>(v >> 8);
-        bytes += static_cast<char>(v & 0xff);
-      } else {
-        bytes += std::to_string(v) + " ";
-      }
-    }
+    const std::string bytes = Pgm(magic, 1000, {1000, 0, 500, 1000, 999, 300});
     const GrayImage image = DecodeMapImage(bytes);
     ASSERT_EQ(image.cols, 3);
     ASSERT_EQ(image.rows, 2);
