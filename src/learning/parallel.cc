@@ -65,6 +65,18 @@ const RangeRunner& PolicyRunner() {
   return run;
 }
 
+void PrepareCallerTorchThreads(int chunks) {
+  const int threads = PolicyThreads();
+  if (threads <= 1) return;
+  const int want = chunks <= 1 ? threads : 1;
+  thread_local int set_to = 0;
+  if (want == set_to) return;
+  if (const TorchBackend* torch = TorchIfLoaded()) {
+    torch->set_threads(want);
+    set_to = want;
+  }
+}
+
 void ParallelFor(int n, int grain,
                  const std::function<void(int, int, int)>& f) {
   if (n <= 0) return;

@@ -152,6 +152,7 @@ void NetworkScorer::RenderAndRun(const Step& step) {
   if (step.passing)
     features_.resize(step.rows().size() * net_->config().hidden);
   scored_.resize(order_.size() * kNumMoves);
+  PrepareCallerTorchThreads(chunks);
   ParallelFor(chunks, 1, [&](int c0, int c1, int worker) {
     for (int c = c0; c < c1; ++c) {
       const int begin = c * kForwardBatch;

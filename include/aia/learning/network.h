@@ -205,6 +205,14 @@ class PlainConvolutions {
 // two cores). Each index is visited once; what f writes per index must not
 // depend on the split.
 void ParallelFor(int n, int grain, const std::function<void(int, int, int)>& f);
+
+// Before the network's `chunks` run through ParallelFor: libtorch's threads
+// on the calling thread, all the policy's while one chunk runs there alone,
+// one while the pool's threads share the chunks (as each of them runs one).
+// Only where PolicyThreads() > 1 (a command gave the policy the machine);
+// changed only when the choice changes (each change makes libtorch a new
+// team of threads).
+void PrepareCallerTorchThreads(int chunks);
 // ParallelFor in chunks of 16 as a RangeRunner (core/thread_pool.h), for
 // the parts of the learned policy that split the robots, and the episode's
 // fusion of a large team (estimation/team_estimate.h).
