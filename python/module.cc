@@ -69,17 +69,11 @@ std::vector<Override> AsOverrides(const KeyValues& pairs,
                                   const std::string& flag_prefix) {
   std::vector<Override> out;
   for (const auto& [key, value] : pairs) {
-    // A section after a key in it would drop the key in silence (as two
-    // --set flags would: ParseSetFlags); a dict holds no key twice.
-    for (const Override& before : out)
-      if (ReplacesSectionOf(key, before.path))
-        throw InputError("command line", 0, flag_prefix + key,
-                         "replaces the whole section, and an earlier key "
-                         "gives " +
-                             before.path +
-                             " in it; give the section once, or its keys "
-                             "one by one");
-    out.push_back({flag_prefix + key, key, value});
+    // A section after a key in it would drop the key in silence, as two
+    // --set flags would.
+    Override o{flag_prefix + key, key, value};
+    RefuseUndoing(o, out);
+    out.push_back(std::move(o));
   }
   return out;
 }

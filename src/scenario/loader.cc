@@ -178,23 +178,28 @@ Override ParseSetFlag(const std::string& text) {
   return o;
 }
 
+void RefuseUndoing(const Override& o, const std::vector<Override>& before) {
+  const std::string key = FlagKey(o, o.path);
+  const std::string earlier = o.flag == "--set" ? "--set" : "key";
+  for (const Override& b : before) {
+    if (b.path == o.path)
+      throw InputError("command line", 0, key,
+                       "given twice (=" + b.value + ", then =" + o.value +
+                           "); give it once");
+    if (ReplacesSectionOf(o.path, b.path))
+      throw InputError("command line", 0, key,
+                       "replaces the whole section, and an earlier " + earlier +
+                           " gives " + b.path +
+                           " in it; give the section once, or its keys one "
+                           "by one");
+  }
+}
+
 std::vector<Override> ParseSetFlags(const std::vector<std::string>& texts) {
   std::vector<Override> out;
   for (const std::string& text : texts) {
     Override o = ParseSetFlag(text);
-    for (const Override& before : out) {
-      if (before.path == o.path)
-        throw InputError("command line", 0, "--set " + o.path,
-                         "given twice (=" + before.value +
-                             ", then =" + o.value + "); give it once");
-      if (ReplacesSectionOf(o.path, before.path))
-        throw InputError("command line", 0, "--set " + o.path,
-                         "replaces the whole section, and an earlier --set "
-                         "gives " +
-                             before.path +
-                             " in it; give the section once, or its keys "
-                             "one by one");
-    }
+    RefuseUndoing(o, out);
     out.push_back(std::move(o));
   }
   return out;

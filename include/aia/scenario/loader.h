@@ -26,10 +26,12 @@ struct Override {
 // `--set key.path=value` -> Override; InputError naming --set when the text
 // has no '=' or the path is not a key path.
 Override ParseSetFlag(const std::string& text);
-// Every --set, in order; InputError for a key given twice, or a section
-// given after a key in it (the later would silently undo the earlier, where
-// a key given twice in a file is an error).
+// Every --set, in order, each checked by RefuseUndoing.
 std::vector<Override> ParseSetFlags(const std::vector<std::string>& texts);
+// InputError when `o` gives a key one of `before` gives, or a section after
+// a key in it: the later would silently undo the earlier, where a key given
+// twice in a file is an error (--set flags, Python's overrides).
+void RefuseUndoing(const Override& o, const std::vector<Override>& before);
 
 // Whether an override of `set_path` replaces a whole section holding the
 // key `path` (mission holds mission.max_steps).
