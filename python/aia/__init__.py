@@ -590,6 +590,11 @@ class _ProgressBar:
             _sys.stderr.flush()
 
 
+# The worlds one evaluation takes at most, as `aia eval` (eval.cc's
+# kMaxWorlds): more would first fill the memory with their list.
+_MAX_WORLDS = 1000000
+
+
 def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
              threads=0, overrides=None, centralized=False, progress=True):
     """Scores `policy` exactly as `aia eval` scores the built-ins: the same
@@ -636,6 +641,13 @@ def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
     if seed_base + seeds - 1 > _SEED_MAX:
         raise InputError(f"{where}: seed_base: the last seed, seed_base + "
                          f"seeds - 1, must fit in 64 bits")
+    total = len(sizes) * seeds
+    if total > _MAX_WORLDS:
+        raise InputError(f"{where}: seeds: {len(sizes)} sizes x {seeds} "
+                         f"seeds are {total} worlds, more than one "
+                         f"evaluation takes ({_MAX_WORLDS}): split the seeds "
+                         "over several calls with seed_base "
+                         "(docs/sweeps.md)")
     threads = _integer(threads, where, "threads", 0, 4096)
     if not isinstance(centralized, (bool, _np.bool_)):
         raise InputError(f"{where}: centralized: must be True or False, got "
@@ -657,7 +669,6 @@ def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
         out = tempfile.mkdtemp(prefix="aia_evaluate_")
     out = _path(out, where, "out")
     sets = [f"{k}={v}" for k, v in _pairs(overrides, "overrides", where)]
-    total = len(sizes) * seeds
     done_before = _runs_done(out, name, sizes, seeds, seed_base)
     if report is not None:
         report(done_before, total)

@@ -207,8 +207,13 @@ class Converter {
                         : out.tag == "!!float" ? "a decimal number"
                                                : "true or false") +
                        ", as its tag " + out.tag + " says");
+            const bool float_tag = out.tag == "!!float";
             out.style = ConfigNode::Style::kPlain;
             out.tag.clear();
+            // `!!float 12` is the decimal 12.0, not the integer 12: an
+            // integer key refuses it, as it refuses 12.0.
+            if (float_tag && field_text::IsIntegerLiteral(s))
+              out.scalar += ".0";
           }
         }
         break;

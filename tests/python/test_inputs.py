@@ -142,6 +142,18 @@ def test_evaluate_arguments(tmp_path):
             "aia.evaluate: progress: must be True, False or a callable")
     refused(lambda: aia.evaluate(42, ["2x1"], 1, out=tmp_path / "f"),
             "aia.evaluate: policy: must be callable")
+    # More worlds than one evaluation takes: refused before any bar is
+    # drawn or folder made (the bar went to stderr first).
+    import contextlib
+    import io
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        refused(lambda: aia.evaluate(left, ["2x1", "3x1"], 500001,
+                                     out=tmp_path / "g"),
+                "aia.evaluate: seeds: 2 sizes x 500001 seeds are 1000002 "
+                "worlds, more than one evaluation takes (1000000)")
+    assert err.getvalue() == ""
+    assert not (tmp_path / "g").exists()
     (tmp_path / "file").write_text("x")
     refused(lambda: aia.evaluate(left, ["2x1"], 1, out=tmp_path / "file",
                                  progress=False),

@@ -886,11 +886,13 @@ TEST(YamlTest, CustomTagsAndDeepNestingAreNamed) {
 // its key, and `!!str 3` stays a string (not a seed).
 TEST(YamlTest, CoreTagsAreReadAsTheirValues) {
   const Scenario tagged = ParseScenario(
-      "seed: !!int 3\nmission: {eps: !!float 0.25}\nsensor: {line_of_sight: "
-      "!!bool false}\nrobots: {count: 2}\ntargets: {count: 2}\n",
+      "seed: !!int 3\nmission: {eps: !!float 0.25}\nsensor: {range: !!float "
+      "3, line_of_sight: !!bool false}\nrobots: {count: 2}\ntargets: {count: "
+      "2}\n",
       "t.yaml", ".");
   const Scenario plain = ParseScenario(
-      "seed: 3\nmission: {eps: 0.25}\nsensor: {line_of_sight: false}\n"
+      "seed: 3\nmission: {eps: 0.25}\nsensor: {range: 3.0, line_of_sight: "
+      "false}\n"
       "robots: {count: 2}\ntargets: {count: 2}\n",
       "t.yaml", ".");
   EXPECT_EQ(EffectiveYaml(tagged, ""), EffectiveYaml(plain, ""));
@@ -903,7 +905,9 @@ TEST(YamlTest, CoreTagsAreReadAsTheirValues) {
       {"sensor: {line_of_sight: !!bool 1}\n",
        "sensor.line_of_sight: '1' is not true or false, as its tag !!bool "
        "says"},
-      {"seed: !!str 3\n", "seed: must be an integer >= 0, got !!str 3"}};
+      {"seed: !!str 3\n", "seed: must be an integer >= 0, got !!str 3"},
+      // `!!float 12` is the decimal 12.0, refused as 12.0 is.
+      {"seed: !!float 12\n", "seed: must be an integer >= 0, got 12.0"}};
   for (const auto& [text, message] : bad) {
     try {
       ParseScenario(text, "t.yaml", ".");
