@@ -286,6 +286,11 @@ class PickleCheck {
     } catch (const Bad& bad) {
       return "its " + pickle_ + " " + bad.what;
     }
+    // libtorch takes data.pkl's value for the module and asserts that it
+    // is one (its own "INTERNAL ASSERT FAILED ... please report a bug").
+    if (pickle_ == "data.pkl" && root->kind != PValue::Kind::kObject)
+      return "its data.pkl holds " + KindName(root->kind) +
+             ", not a module (not a model file torch wrote)";
     NameTensors(root);
     for (const TensorUse& t : tensors_) {
       const std::string& problem =
@@ -311,6 +316,31 @@ class PickleCheck {
     std::string what;
   };
   [[noreturn]] static void Fail(const std::string& what) { throw Bad{what}; }
+
+  static std::string KindName(PValue::Kind kind) {
+    switch (kind) {
+      case PValue::Kind::kNone:
+        return "None";
+      case PValue::Kind::kInt:
+        return "a number";
+      case PValue::Kind::kText:
+        return "a string";
+      case PValue::Kind::kTuple:
+        return "a tuple";
+      case PValue::Kind::kList:
+        return "a list";
+      case PValue::Kind::kDict:
+        return "a dict";
+      case PValue::Kind::kGlobal:
+        return "a class or function";
+      case PValue::Kind::kStorage:
+        return "a storage";
+      case PValue::Kind::kTensor:
+        return "a tensor";
+      default:
+        return "a value";
+    }
+  }
 
   const char* Take(std::size_t n) {
     if (n > data_.size() - at_) Fail("ends early (the file is cut)");
