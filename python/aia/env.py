@@ -396,13 +396,14 @@ class ParallelEnv:
         if not isinstance(actions, dict):
             raise InputError(f"aia.ParallelEnv.step: actions: must be a dict "
                              f"of agent -> move, got {_shown(actions)}")
+        agents = set(self.agents)  # a list's `in` made a step O(N^2)
         for a in actions:
             if a not in self._robot:
                 raise InputError(
                     f"aia.ParallelEnv.step: actions: unknown agent {a!r}; "
                     f"agents are robot_0 .. "
                     f"robot_{len(self.possible_agents) - 1}")
-            if a not in self.agents:
+            if a not in agents:
                 why = (f"it left at step {self._left[a]}" if a in self._left
                        else "it was not active at reset")
                 raise InputError(f"aia.ParallelEnv.step: actions[{a!r}]: "
@@ -445,7 +446,7 @@ class ParallelEnv:
         self.agents = [a for a in alive
                        if not (terminations[a] or truncations[a])]
         for a in alive:
-            if a not in self.agents:
+            if terminations[a] or truncations[a]:
                 self._left[a] = state["steps"]
         # The agents that left see their last observation too.
         observations = self._observations(state, alive)
@@ -581,6 +582,13 @@ class AECEnv:
         self.terminations = {a: False for a in self.agents}
         self.truncations = {a: False for a in self.agents}
         self._actions = {}
+        # The agents the last mission step ended, in order, each still in
+        # `agents` until it is stepped with None (from _ended_next on), and
+        # whether `rewards` are all 0 since: each turn is O(1), a round
+        # O(N) (a pass over the agents per turn made a round of 800
+        # agents cost more than the mission's step).
+        self._ended_queue, self._ended_next = [], 0
+        self._rewards_zeroed = True
         self.agent_selection = self.agents[0] if self.agents else None
 
     def observe(self, agent):
@@ -625,7 +633,8 @@ class AECEnv:
             for d in (self.rewards, self._cumulative_rewards,
                       self.terminations, self.truncations, self.infos):
                 d.pop(a, None)
-            self.agent_selection = self._next(None)
+            self._ended_next += 1
+            self.agent_selection = self._next()
             return
         if action is None:
             raise InputError(f"aia.AECEnv.step: action: {a} is live: give "
@@ -634,11 +643,12 @@ class AECEnv:
         action = _integer(action, "aia.AECEnv.step", "action", 0, 3)
         self._cumulative_rewards[a] = 0.0
         self._actions[a] = action
-        live = [b for b in self.agents if not self._ended(b)]
-        if len(self._actions) < len(live):
-            self.agent_selection = self._next(a)
-            for b in self.rewards:
-                self.rewards[b] = 0.0
+        if len(self._actions) < len(self.agents):
+            self.agent_selection = self._next()
+            if not self._rewards_zeroed:
+                for b in self.rewards:
+                    self.rewards[b] = 0.0
+                self._rewards_zeroed = True
             return
         obs, rewards, terms, truncs, infos = self._env.step(self._actions)
         self._actions = {}
@@ -649,26 +659,22 @@ class AECEnv:
             self.terminations[b] = terms[b]
             self.truncations[b] = truncs[b]
             self.infos[b] = infos[b]
+        self._rewards_zeroed = False
         # Ended agents first (each is stepped with None), then the live.
-        ended = [b for b in self.agents if self._ended(b)]
-        self.agent_selection = ended[0] if ended else self._next(None)
+        self._ended_queue = [b for b in self.agents if self._ended(b)]
+        self._ended_next = 0
+        self.agent_selection = self._next()
 
-    def _next(self, after):
-        """The next agent to act: an ended one first, else the live agent
-        after `after` (None: the first) that has not acted this round."""
-        for b in self.agents:
-            if self._ended(b):
-                return b
-        live = [b for b in self.agents if b not in self._actions]
-        if not live:
-            return None
-        if after is None or after not in self.agents:
-            return live[0]
-        order = self.agents[self.agents.index(after) + 1:] + self.agents
-        for b in order:
-            if b in live:
-                return b
-        return live[0]
+    def _next(self):
+        """The next agent to act: an ended one first (in order), else the
+        first live agent that has not acted this round. A round's live
+        agents act in the order of `agents` once the ended ones are gone,
+        so those that acted are the first len(_actions) of `agents`."""
+        if self._ended_next < len(self._ended_queue):
+            return self._ended_queue[self._ended_next]
+        if len(self._actions) < len(self.agents):
+            return self.agents[len(self._actions)]
+        return None
 
     def state(self):
         return self._env.state(_api="AECEnv")
