@@ -699,15 +699,37 @@ class Mission {
   // every step's misses, so kept from step 0 on once asked for) as the
   // igbnet policy makes them.
   py::array_t<float> Channels(const KeyValues& params) {
-    const ChannelParams settings =
-        ChannelSettings(params, "aia.Mission.channels");
-    if (settings.search && !search_points_) {
+    ChannelJob job = PrepareChannels(params, "aia.Mission.channels");
+    py::array_t<float> out(job.Shape(num_robots()));
+    ReleaseGil release;
+    RenderChannels(job, out.mutable_data());
+    return out;
+  }
+
+  // What one channels() call renders with: its settings and renderer (the
+  // mission's kept one, or `made` for a view), found with the GIL held.
+  struct ChannelJob {
+    ChannelParams settings;
+    std::unique_ptr<ChannelRenderer> made;
+    ChannelRenderer* renderer = nullptr;
+
+    std::vector<py::ssize_t> Shape(int robots) const {
+      return {static_cast<py::ssize_t>(robots),
+              static_cast<py::ssize_t>(renderer->channels()),
+              static_cast<py::ssize_t>(renderer->height()),
+              static_cast<py::ssize_t>(renderer->width())};
+    }
+  };
+  ChannelJob PrepareChannels(const KeyValues& params, const char* where) {
+    ChannelJob job;
+    job.settings = ChannelSettings(params, where);
+    if (job.settings.search && !search_points_) {
       if (!owned())
-        Refuse("aia.Mission.channels", "search",
+        Refuse(where, "search",
                "a mission seen by a policy inside aia.evaluate keeps no "
                "search points (they are made of every step's misses)");
       if (step() != 0)
-        Refuse("aia.Mission.channels", "search",
+        Refuse(where, "search",
                "the search points are made of every step's misses since "
                "the start: ask for them first at step 0 of a mission (this "
                "one is at step " +
@@ -715,49 +737,46 @@ class Mission {
       search_points_.emplace();
       search_points_->Reset(num_robots(), num_targets());
     }
-    if (settings.search) {
-      ReleaseGil release;
-      SyncSearchPoints();
-    }
     const DecisionContext ctx = Context();
     const Map& map = *ctx.map;
     const Lattice& lattice = map.lattice();
     // As the igbnet policy renders them: one pixel per lattice step, and
     // observation pixels within the sensor's range.
     const ChannelParams at_step =
-        ctx.sensor ? AtSensorRange(AtLatticeStep(settings, lattice.step()),
+        ctx.sensor ? AtSensorRange(AtLatticeStep(job.settings, lattice.step()),
                                    ctx.sensor->range)
-                   : AtLatticeStep(settings, lattice.step());
+                   : AtLatticeStep(job.settings, lattice.step());
     // One renderer kept for the settings last asked for, as the policy keeps
     // its own (making it each call was a third of a call: 0.6 ms, some 15 %
     // of a 10 x 10 env step); a view's world is not kept.
-    std::unique_ptr<ChannelRenderer> made;
     if (!(owned() && channel_renderer_ && channel_key_ == params)) {
       if (const std::string why = ChannelGridProblem(map.size(), at_step);
           !why.empty())
-        Refuse("aia.Mission.channels", "", why);
-      made = std::make_unique<ChannelRenderer>(map.occupancy(), map.size(),
-                                               at_step, &lattice);
+        Refuse(where, "", why);
+      job.made = std::make_unique<ChannelRenderer>(map.occupancy(), map.size(),
+                                                   at_step, &lattice);
       if (owned()) {
-        channel_renderer_ = std::move(made);
+        channel_renderer_ = std::move(job.made);
         channel_key_ = params;
       }
     }
-    ChannelRenderer& renderer = made ? *made : *channel_renderer_;
-    const int n = num_robots();
-    py::array_t<float> out({static_cast<py::ssize_t>(n),
-                            static_cast<py::ssize_t>(renderer.channels()),
-                            static_cast<py::ssize_t>(renderer.height()),
-                            static_cast<py::ssize_t>(renderer.width())});
-    float* data = out.mutable_data();
+    job.renderer = job.made ? job.made.get() : channel_renderer_.get();
+    return job;
+  }
+  // Renders every robot's channels into `data` (Shape's size): no Python,
+  // so on any thread without the GIL, one call per mission at a time.
+  void RenderChannels(const ChannelJob& job, float* data) {
+    if (job.settings.search) SyncSearchPoints();
+    const DecisionContext ctx = Context();
+    const Lattice& lattice = ctx.map->lattice();
+    ChannelRenderer& renderer = *job.renderer;
     std::vector<Vec2> neighbours;
     std::vector<HeatSource> targets;
     const std::vector<double> no_prior(num_targets(), 0.0);
     const std::vector<double>& prior =
         ctx.log_det_prior ? *ctx.log_det_prior : no_prior;
     SearchPointSets points;
-    ReleaseGil release;
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < num_robots(); ++i) {
       neighbours.clear();
       for (int j : ctx.comm->Neighbors(i))
         if (j != i)
@@ -767,12 +786,11 @@ class Mission {
       RobotMemory memory;
       SetTrail(lattice, here, ctx.history ? ctx.history->last(i) : Move::kStay,
                &memory);
-      if (settings.search)
+      if (job.settings.search)
         SetSearchPoints(*search_points_, i, &points, &memory);
       renderer.Render(lattice.Point(here), neighbours, targets, prior, ctx.eps,
                       data + i * renderer.ImageSize(), memory);
     }
-    return out;
   }
   // The search points brought to this step (once per step, in order, as the
   // policy records them); owned missions that asked for them.
@@ -1275,6 +1293,36 @@ class VectorMissions {
     out.info["final_info"] = final_info;
     out.info["final_state"] = final_state;
     out.info["_final_info"] = mask;
+    return out;
+  }
+
+  // Every mission's channels, (n, robots, C, H, W), rendered on the
+  // threads (missions of one scenario share a shape; a generator's worlds
+  // of other sizes in the global frame are refused).
+  py::array_t<float> Channels(const KeyValues& params) {
+    const char* where = "aia.VectorMissions.channels";
+    const int n = size();
+    std::vector<Mission::ChannelJob> jobs;
+    jobs.reserve(n);
+    for (int i = 0; i < n; ++i) {
+      jobs.push_back(missions_[i]->PrepareChannels(params, where));
+      if (jobs[i].Shape(num_robots()) != jobs[0].Shape(num_robots()))
+        Refuse(where, "frame",
+               "the missions' worlds give channels of different sizes "
+               "(mission 0 and " +
+                   std::to_string(i) +
+                   "): use frame centred, or call each mission's channels()");
+    }
+    std::vector<py::ssize_t> shape = jobs[0].Shape(num_robots());
+    const std::size_t each =
+        static_cast<std::size_t>(num_robots()) * jobs[0].renderer->ImageSize();
+    shape.insert(shape.begin(), n);
+    py::array_t<float> out(shape);
+    float* data = out.mutable_data();
+    ReleaseGil release;
+    pool_.get().Run(n, [&](int i, int) {
+      missions_[i]->RenderChannels(jobs[i], data + i * each);
+    });
     return out;
   }
 
@@ -1927,6 +1975,15 @@ void BindVectorMissions(py::module_& m) {
           },
           py::arg("moves"),
           "One step of every mission: (n, robots) integer moves 0..4.")
+      .def(
+          "channels",
+          [](VectorMissions& v, const KeyValues& params) {
+            const VectorMissions::Busy busy(v, "aia.VectorMissions.channels");
+            return v.Channels(params);
+          },
+          py::arg("params"),
+          "Every mission's Mission.channels(), (n, robots, C, H, W), "
+          "rendered on the threads.")
       .def_property_readonly(
           "num_robots",
           OneCall(&VectorMissions::num_robots, "aia.VectorMissions.num_robots"))

@@ -87,7 +87,8 @@ def one_state_remaining(state):
 
 def observe(vector, params):
     """Channels (missions * robots, C, H, W) and valid-move masks."""
-    images = np.concatenate([m.channels(**params) for m in vector.missions])
+    images = vector.channels(**params)  # rendered on the vector's threads
+    images = images.reshape(-1, *images.shape[2:])
     masks = np.concatenate([m.valid_moves() for m in vector.missions])
     return torch.from_numpy(images), torch.from_numpy(masks)
 

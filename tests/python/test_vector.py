@@ -228,3 +228,31 @@ def test_reset_without_a_seed_wraps_past_the_last_seed():
     v = aia.VectorMissions(2, DEFAULT, seed=2 ** 64 - 3, overrides=SMALL)
     _, info = v.reset()
     assert list(info["seeds"]) == [2 ** 64 - 1, 0]
+
+
+def test_vector_channels_are_the_missions_channels():
+    # One (n, N, C, H, W) array rendered on the threads: the same numbers
+    # as each mission's own call, the search points included once asked for
+    # at step 0; asked first later, refused as a mission refuses it.
+    v = aia.VectorMissions(3, DEFAULT, seed=40, overrides=SMALL, threads=2)
+    learned = dict(geodesic=True, reach_world=True, search=True, trail=True)
+    first = v.channels(**learned)
+    assert first.shape[:2] == (3, 3) and first.dtype == np.float32
+    greedy = aia.builtin_policy("greedy")
+    for _ in range(4):
+        v.step(np.stack([greedy.decide(m) for m in v.missions]))
+        for kw in (learned, {}, {"frame": "global"}):
+            together = v.channels(**kw)
+            alone = np.stack([m.channels(**kw) for m in v.missions])
+            assert together.shape == alone.shape
+            assert np.array_equal(together, alone)
+    late = aia.VectorMissions(2, DEFAULT, seed=40, overrides=SMALL)
+    late.step(np.zeros((2, 3), dtype=int))
+    with pytest.raises(aia.InputError,
+                       match=r"^aia.VectorMissions.channels: search: .*step "
+                             r"0 of a mission \(this one is at step 1\)"):
+        late.channels(geodesic=True, reach_world=True, search=True)
+    with pytest.raises(aia.InputError,
+                       match=r"^aia.VectorMissions.channels: channels: "
+                             r"window: "):
+        v.channels(window=2)
