@@ -1,5 +1,8 @@
 #include "aia/planning/decsb.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "aia/planning/information.h"
 
 namespace aia {
@@ -28,6 +31,64 @@ void DecSbPolicy::Reset(const Map&, int num_robots, int, std::uint64_t seed) {
   next_.assign(num_robots, -1);
 }
 
+namespace internal {
+
+void AnnouncedPrecision(const Map& map, const SensorModel& sensor,
+                        const std::vector<Vec2>& announced,
+                        const std::vector<Vec2>& means, long grid_pairs,
+                        TargetGrid* grid, std::vector<double>* extra) {
+  const int m = static_cast<int>(means.size());
+  extra->assign(m, 0.0);
+  if (static_cast<long>(announced.size()) * m <= grid_pairs) {
+    for (const Vec2& q : announced)
+      for (int k = 0; k < m; ++k)
+        (*extra)[k] += PredictedPrecision(map, sensor, q, means[k]);
+    return;
+  }
+  // Every pair further apart than the sensor's range adds exactly 0, so
+  // only the targets in the grid cells around each announced position are
+  // evaluated: each extra[k] gets the same terms in the same order as
+  // above, the zeros left out. The means go into cells of at least the
+  // range (at most 256 a side), clamped to the workspace's (a clamp only
+  // brings cells nearer); a mean that is not finite is never in range.
+  const Vec2 size = map.size();
+  const double cell =
+      std::max({sensor.range, size.x() / 256.0, size.y() / 256.0});
+  const int gx = std::max(1, static_cast<int>(std::ceil(size.x() / cell)));
+  const int gy = std::max(1, static_cast<int>(std::ceil(size.y() / cell)));
+  const auto cell_of = [&](const Vec2& v) {
+    const auto axis = [cell](double c, int g) {
+      return static_cast<int>(std::clamp(std::floor(c / cell), 0.0, g - 1.0));
+    };
+    return axis(v.x(), gx) + gx * axis(v.y(), gy);
+  };
+  std::vector<int>& start = grid->start;
+  start.assign(static_cast<std::size_t>(gx) * gy + 1, 0);
+  for (int k = 0; k < m; ++k)
+    if (means[k].allFinite()) ++start[cell_of(means[k]) + 1];
+  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  grid->items.resize(start.back());
+  grid->fill.assign(start.begin(), start.end() - 1);
+  for (int k = 0; k < m; ++k)
+    if (means[k].allFinite()) grid->items[grid->fill[cell_of(means[k])]++] = k;
+  // The cells the range spans, one more for a pair straddling a cell
+  // border and one for the rounding of the divisions.
+  const int reach = static_cast<int>(sensor.range / cell) + 2;
+  for (const Vec2& q : announced) {
+    const int c = cell_of(q), cx = c % gx, cy = c / gx;
+    for (int y = std::max(0, cy - reach); y <= std::min(gy - 1, cy + reach);
+         ++y)
+      for (int x = std::max(0, cx - reach); x <= std::min(gx - 1, cx + reach);
+           ++x)
+        for (int at = start[x + gx * y]; at < start[x + gx * y + 1]; ++at) {
+          const int k = grid->items[at];
+          (*extra)[k] += PredictedPrecision(map, sensor, q, means[k]);
+        }
+  }
+}
+
+}  // namespace internal
+
 PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
                                  std::vector<Move>* moves) {
   const Lattice& lattice = ctx.map->lattice();
@@ -49,14 +110,13 @@ PolicyStatus DecSbPolicy::Decide(const DecisionContext& ctx,
     }
     if (!Deciding(ctx, i)) continue;  // on its way, on its plan
     // Neighbours' announced positions, evaluated on robot i's own means.
-    extra_.assign(m, 0.0);
-    for (int j : ctx.comm->Neighbors(i)) {
-      if (next_[j] < 0) continue;
-      const Vec2 q = lattice.Point(next_[j]);
-      for (int k = 0; k < m; ++k)
-        extra_[k] += PredictedPrecision(*ctx.map, *ctx.sensor, q,
-                                        ctx.beliefs->PositionMean(i, k));
-    }
+    announced_.clear();
+    for (int j : ctx.comm->Neighbors(i))
+      if (next_[j] >= 0) announced_.push_back(lattice.Point(next_[j]));
+    means_.resize(m);
+    for (int k = 0; k < m; ++k) means_[k] = ctx.beliefs->PositionMean(i, k);
+    internal::AnnouncedPrecision(*ctx.map, *ctx.sensor, announced_, means_,
+                                 internal::kGridPairs, &grid_, &extra_);
     SamplingProblem problem;
     problem.map = ctx.map;
     problem.sensor = ctx.sensor;

@@ -1,7 +1,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "aia/core/error.h"
 #include "aia/estimation/filter.h"
@@ -44,6 +47,55 @@ TEST(InformationTest, LogDetAfterMeasurementByHand) {
   b.omega.setIdentity();
   b.omega(0, 0) = 2;
   EXPECT_NEAR(LogDetSigmaAfter(b, 1.0), -std::log(3.0 * 2.0), 1e-12);
+}
+
+// Dec-SB's sum of what the neighbours' announced positions will measure,
+// by the grid of targets near each position, is the plain sum over every
+// pair to the last bit: means inside and outside the workspace, on the
+// sensor's range exactly, far off and not finite; ranges below a cell, of a
+// cell and beyond the workspace; with boxes blocking the sight.
+TEST(DecSbTest, AnnouncedPrecisionByGridIsThePlainSum) {
+  PolicyFixture s(
+      "workspace: {size: [30.0, 20.0], obstacles: {random: {count: 40}}}\n"
+      "robots: {count: 2}\ntargets: {count: 1}\n");
+  Rng rng(7, "test.decsb_grid", 0);
+  const Lattice& lattice = s.world.map.lattice();
+  for (const double range : {0.001, 0.3, 2.0, 5.5, 100.0}) {
+    SensorModel sensor = s.sensor;
+    sensor.range = range;
+    std::vector<Vec2> announced, means;
+    for (int j = 0; j < 60; ++j)
+      announced.push_back(
+          lattice.Point(static_cast<int>(rng.UniformInt(lattice.size()))));
+    for (int k = 0; k < 300; ++k)
+      means.push_back({rng.Uniform(-3.0, 33.0), rng.Uniform(-3.0, 23.0)});
+    // On the range exactly (along an axis and a diagonal), and beyond.
+    for (int j = 0; j < 10; ++j) {
+      means.push_back(announced[j] + Vec2(range, 0.0));
+      means.push_back(announced[j] - Vec2(0.0, range));
+      means.push_back(announced[j] + Vec2(range, range) / std::sqrt(2.0));
+    }
+    const double inf = std::numeric_limits<double>::infinity();
+    means.push_back({1e12, -1e12});
+    means.push_back({std::nan(""), 3.0});
+    means.push_back({inf, 5.0});
+    internal::TargetGrid grid;
+    std::vector<double> plain, gridded;
+    internal::AnnouncedPrecision(s.world.map, sensor, announced, means,
+                                 std::numeric_limits<long>::max(), &grid,
+                                 &plain);
+    internal::AnnouncedPrecision(s.world.map, sensor, announced, means, 0,
+                                 &grid, &gridded);
+    ASSERT_EQ(plain.size(), means.size());
+    int measured = 0;
+    for (std::size_t k = 0; k < means.size(); ++k) {
+      EXPECT_EQ(std::memcmp(&plain[k], &gridded[k], sizeof(double)), 0)
+          << "range " << range << " target " << k << ": " << plain[k]
+          << " against " << gridded[k];
+      measured += plain[k] > 0.0;
+    }
+    if (range >= 2.0) EXPECT_GT(measured, 20) << range;  // not all zeros
+  }
 }
 
 TEST(RandomPolicyTest, ReturnsValidMovesAndIsReproducible) {

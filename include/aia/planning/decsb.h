@@ -39,6 +39,28 @@ struct DecSbParams {
   SamplingParams Sampling() const;
 };
 
+namespace internal {
+
+// Targets by grid cell (CSR: cell c holds items[start[c] .. start[c + 1])).
+struct TargetGrid {
+  std::vector<int> start, fill, items;
+};
+
+// Below this many position x target pairs AnnouncedPrecision evaluates
+// every pair; above, only the targets within sensor range of each position.
+constexpr long kGridPairs = 4096;
+
+// extra[k] = the sum over `announced` (in order) of the precision a robot
+// there is predicted to measure of a target at means[k]
+// (PredictedPrecision): the same numbers by either way, O(|announced| x
+// targets nearby) by the grid.
+void AnnouncedPrecision(const Map& map, const SensorModel& sensor,
+                        const std::vector<Vec2>& announced,
+                        const std::vector<Vec2>& means, long grid_pairs,
+                        TargetGrid* grid, std::vector<double>* extra);
+
+}  // namespace internal
+
 class DecSbPolicy : public NamedPolicy<DecSbPolicy> {
  public:
   explicit DecSbPolicy(const DecSbParams& params);
@@ -55,7 +77,11 @@ class DecSbPolicy : public NamedPolicy<DecSbPolicy> {
   std::vector<std::vector<int>>
       plans_;              // each robot's last plan (lattice points)
   std::vector<int> next_;  // the planned next position each robot announces
+  // Decide's scratch: a robot's neighbours' announced positions, its own
+  // means, what those positions will measure of each target.
+  std::vector<Vec2> announced_, means_;
   std::vector<double> extra_;
+  internal::TargetGrid grid_;
 };
 
 }  // namespace aia
