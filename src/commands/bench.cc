@@ -166,12 +166,12 @@ void CheckModeFlags(const BenchOptions& o) {
                                 : nullptr;
   const auto refuse = [&](bool given, const char* flag, const char* reads) {
     if (given)
-      throw InputError("command line", 0, flag,
-                       std::string("is not read by aia bench ") + reads);
+      throw InputError::Flag(flag,
+                             std::string("is not read by aia bench ") + reads);
   };
   if (o.network && o.expert)
-    throw InputError("command line", 0, "--expert",
-                     "and --network time different things: give one");
+    throw InputError::Flag("--expert",
+                           "and --network time different things: give one");
   if (mode != nullptr) {
     const std::string with = std::string("with ") + mode;
     refuse(o.policy != d.policy, "--policy", with.c_str());
@@ -192,8 +192,7 @@ void CheckModeFlags(const BenchOptions& o) {
   std::set<std::string> sizes;
   for (const TeamSize& s : o.sizes)
     if (!sizes.insert(s.ToText()).second)
-      throw InputError("command line", 0, "--sizes",
-                       s.ToText() + " is given twice");
+      throw InputError::Flag("--sizes", s.ToText() + " is given twice");
 }
 
 int RunBench(const BenchOptions& o) {
@@ -207,8 +206,7 @@ int RunBench(const BenchOptions& o) {
   if (o.expert) return RunExpertBench(o);
   const PolicyRegistry registry = AllPolicies();
   if (!registry.Has(o.policy))
-    throw InputError("command line", 0, "--policy",
-                     registry.UnknownPolicy(o.policy));
+    throw InputError::Flag("--policy", registry.UnknownPolicy(o.policy));
   const EvalSetup setup =
       MakeEvalSetup({o.policy}, o.sets, registry, Instances(o));
   std::printf(
@@ -238,10 +236,11 @@ int RunBench(const BenchOptions& o) {
       const PhaseTimes& t = episode->times();
       const int steps = episode->step();
       if (steps == 0)
-        throw InputError("command line", 0, "--sizes " + size_text,
-                         "the mission ended before its first decision step "
-                         "(no robot active: every robot fails at step 0?), "
-                         "so there is nothing to time");
+        throw InputError::Flag(
+            "--sizes " + size_text,
+            "the mission ended before its first decision step "
+            "(no robot active: every robot fails at step 0?), "
+            "so there is nothing to time");
       rate.push_back(steps / t.total);
       ms.push_back(1e3 * t.total / steps);
       phys.push_back(1e3 * t.physics / steps);

@@ -118,11 +118,10 @@ class DeclaredFlags {
                 start,
                 comma == std::string::npos ? std::string::npos : comma - start);
             if (item.empty())
-              throw aia::InputError(
-                  "command line", 0, flag,
-                  "'" + text +
-                      "' has an empty item; separate the items by one "
-                      "comma");
+              throw aia::InputError::Flag(
+                  flag, "'" + text +
+                            "' has an empty item; separate the items by one "
+                            "comma");
             list.items.push_back(aia::ConfigNode::Scalar(item));
             if (comma == std::string::npos) break;
             start = comma + 1;
@@ -461,8 +460,8 @@ Action AddDatasetCommand(CLI::App& app) {
     const aia::Ranks& ranks = aia::Ranks::Get();
     if (ranks.distributed()) {  // under mpirun: one shard per rank
       if (cmd->count("--shard"))
-        throw aia::InputError("command line", 0, "--shard",
-                              "is given by the MPI ranks under mpirun");
+        throw aia::InputError::Flag("--shard",
+                                    "is given by the MPI ranks under mpirun");
       o->shard = {ranks.rank(), ranks.size()};
     }
     o->progress = !*quiet && ranks.rank() == 0;
@@ -516,8 +515,8 @@ Action AddTrainCommand(CLI::App& app) {
     // flag beside it would be ignored, so it is refused.
     for (const std::string& flag : network->Given()) {
       if (!o->init.empty() || !validate->empty())
-        throw aia::InputError(
-            "command line", 0, flag,
+        throw aia::InputError::Flag(
+            flag,
             "the network is the one of the " +
                 std::string(!validate->empty() ? "--validate" : "--init") +
                 " model; drop the flag (or --init, for a new network)");
@@ -531,8 +530,8 @@ Action AddTrainCommand(CLI::App& app) {
       for (const CLI::Option* opt : cmd->get_options()) {
         const std::string name = opt->get_name();
         if (opt->count() > 0 && !kRead.count(name))
-          throw aia::InputError(
-              "command line", 0, name,
+          throw aia::InputError::Flag(
+              name,
               "--validate trains nothing and scores the model as it is "
               "(it reads --data, --val-share, --seed, --valid-moves and "
               "--threads); drop the flag");

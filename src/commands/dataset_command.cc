@@ -218,21 +218,19 @@ void CheckOneShardSet(const std::string& out, int shards,
     const std::string path = entry.path().string();
     const int n = ShardCount(path);
     if (n != 0 && n != shards)
-      throw InputError("command line", 0, "--shard",
-                       out + " holds shards of a set of " + std::to_string(n) +
-                           " ('" + path + "'), not of " +
-                           std::to_string(shards) +
-                           ": use the same N, or another folder");
+      throw InputError::Flag(
+          "--shard", out + " holds shards of a set of " + std::to_string(n) +
+                         " ('" + path + "'), not of " + std::to_string(shards) +
+                         ": use the same N, or another folder");
     if (n == 0 ||
         entry.path().filename() == std::filesystem::path(file).filename())
       continue;
     const std::string other = DatasetRecipe(path, "--out");
     if (!other.empty() && other != recipe)
-      throw InputError("command line", 0, "--out",
-                       out + " holds '" + path +
-                           "', written with other options (" + other +
-                           "); this shard's would be " + recipe +
-                           ": use the same options, or another folder");
+      throw InputError::Flag(
+          "--out", out + " holds '" + path + "', written with other options (" +
+                       other + "); this shard's would be " + recipe +
+                       ": use the same options, or another folder");
   }
 }
 
@@ -256,10 +254,10 @@ GeneratedSpec DatasetSpec(const DatasetOptions& o) {
       RefuseSetOfFlagKey(ov, "mission.max_steps", "--max-steps");
     if (!o.model.empty()) RefuseSetOfFlagKey(ov, "policy.model", "--model");
     if (ov.path == "mission.decisions" && ov.value != "lockstep")
-      throw InputError("command line", 0, "--set",
-                       "mission.decisions " + ov.value +
-                           ": datasets record lockstep decisions (the "
-                           "expert labels the whole team's step)");
+      throw InputError::Flag("--set",
+                             "mission.decisions " + ov.value +
+                                 ": datasets record lockstep decisions (the "
+                                 "expert labels the whole team's step)");
     spec.overrides.push_back(ov);
   }
   if (!o.model.empty())
@@ -303,8 +301,7 @@ struct DatasetSetup {
 // built now: a size the world cannot hold is bad input before any work (the
 // episodes' other seeds are named as they come).
 DatasetSetup PrepareDataset(const DatasetOptions& o) {
-  if (o.out.empty())
-    throw InputError("command line", 0, "--out", "is required");
+  if (o.out.empty()) throw InputError::Flag("--out", "is required");
   {
     DatasetOptions flags = o;
     CheckFlags(&flags);  // their declarations: `--flag: what`
@@ -312,15 +309,14 @@ DatasetSetup PrepareDataset(const DatasetOptions& o) {
   DatasetSetup d;
   d.registry = AllPolicies();
   if (!d.registry.Has(o.policy))
-    throw InputError("command line", 0, "--policy",
-                     d.registry.UnknownPolicy(o.policy));
+    throw InputError::Flag("--policy", d.registry.UnknownPolicy(o.policy));
   d.spec = DatasetSpec(o);
   d.base = ReadGenerated(d.spec);
   d.acting = d.registry.Resolve(d.base);
   if (!o.model.empty() && d.acting->model_file() == nullptr)
-    throw InputError("command line", 0, "--model",
-                     "policy " + o.policy +
-                         " reads no model (a learned policy does: igbnet)");
+    throw InputError::Flag(
+        "--model", "policy " + o.policy +
+                       " reads no model (a learned policy does: igbnet)");
   Scenario expert_scenario = d.base;
   expert_scenario.policy.name = "expert";
   expert_scenario.policy.params = ConfigNode();

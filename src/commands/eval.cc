@@ -38,7 +38,7 @@ std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
                                              std::uint64_t seed_base) {
   const std::string why =
       SeedRangeProblem(seed_base, seeds, "--seeds", "--seed-base");
-  if (!why.empty()) throw InputError("command line", 0, "--seed-base", why);
+  if (!why.empty()) throw InputError::Flag("--seed-base", why);
   // Each world is a C-SB solve and a mission per policy (tens of ms at the
   // least): a million is days of work; more would first fill the memory
   // with their list.
@@ -46,8 +46,8 @@ std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
   const std::uint64_t worlds = static_cast<std::uint64_t>(sizes.size()) *
                                static_cast<std::uint64_t>(seeds);
   if (worlds > kMaxWorlds)
-    throw InputError(
-        "command line", 0, "--seeds",
+    throw InputError::Flag(
+        "--seeds",
         std::to_string(sizes.size()) + " sizes x " + std::to_string(seeds) +
             " seeds are " + std::to_string(worlds) +
             " worlds, more than one evaluation takes (" +
@@ -75,27 +75,28 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
     for (const char* held : {"robots.count", "targets.count", "policy.name",
                              "mission.max_steps"}) {
       if (ReplacesSectionOf(o.path, held))
-        throw InputError("command line", 0, key,
-                         "replaces the whole section, which holds " +
-                             std::string(held) +
-                             ", set by the command; set the section's keys "
-                             "one by one (--set " +
-                             o.path + ".KEY=VALUE)");
+        throw InputError::Flag(
+            key, "replaces the whole section, which holds " +
+                     std::string(held) +
+                     ", set by the command; set the section's keys "
+                     "one by one (--set " +
+                     o.path + ".KEY=VALUE)");
     }
     if (o.path == "seed" || o.path == "robots.count" ||
         o.path == "targets.count") {
-      throw InputError("command line", 0, key,
-                       "is set by each instance (--sizes, --seeds, "
-                       "--seed-base), not by --set");
+      throw InputError::Flag(key,
+                             "is set by each instance (--sizes, --seeds, "
+                             "--seed-base), not by --set");
     }
     if (o.path == "policy.name")
-      throw InputError("command line", 0, key,
-                       "the evaluated policies are given by --policies");
+      throw InputError::Flag(key,
+                             "the evaluated policies are given by --policies");
     if (o.path == "mission.max_steps")
-      throw InputError("command line", 0, key,
-                       "is set by the command, not by --set: aia eval runs "
-                       "each mission to 3 F* of the expert's plan, aia bench "
-                       "for --steps decision steps");
+      throw InputError::Flag(
+          key,
+          "is set by the command, not by --set: aia eval runs "
+          "each mission to 3 F* of the expert's plan, aia bench "
+          "for --steps decision steps");
     if (o.path.rfind("policy.", 0) == 0 && o.path != "policy.model" &&
         o.path != "policy.model_sha256") {
       policy_sets.push_back(o);
@@ -136,18 +137,17 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
   setup.expert = resolve("expert");
   for (const std::string& p : policies) {
     if (!registry.Has(p))
-      throw InputError("command line", 0, "--policies",
-                       registry.UnknownPolicy(p));
+      throw InputError::Flag("--policies", registry.UnknownPolicy(p));
     setup.policies.push_back(resolve(p));
   }
   for (const Override& o : policy_sets) {
     if (!used.count(o.path)) {
       std::string names = "expert";
       for (const std::string& p : policies) names += ", " + p;
-      throw InputError("command line", 0, "--set " + o.path,
-                       "no policy of this evaluation (" + names +
-                           ") has the parameter `" + o.path.substr(7) +
-                           "` (aia policies lists them)");
+      throw InputError::Flag("--set " + o.path,
+                             "no policy of this evaluation (" + names +
+                                 ") has the parameter `" + o.path.substr(7) +
+                                 "` (aia policies lists them)");
     }
   }
   // A model that no evaluated policy reads would change nothing (aia run
@@ -158,9 +158,9 @@ EvalSetup MakeEvalSetup(const std::vector<std::string>& policies,
   for (const Override& o : setup.overrides)
     if (!reads_model &&
         (o.path == "policy.model" || o.path == "policy.model_sha256"))
-      throw InputError("command line", 0, "--set " + o.path,
-                       "no policy of this evaluation reads a model (a "
-                       "learned policy does: igbnet)");
+      throw InputError::Flag("--set " + o.path,
+                             "no policy of this evaluation reads a model (a "
+                             "learned policy does: igbnet)");
   return setup;
 }
 

@@ -182,14 +182,14 @@ std::vector<EvalRow> ReadRuns(const std::string& path,
       if (!in) in.emplace(path, kMaxRunsLine);
       return in->Next(&line);
     } catch (const LineTooLong& e) {
-      throw InputError("command line", 0, "--out",
-                       "cannot resume from '" + path + "': " + e.what() +
-                           ", which no row of aia eval is (a file cut by a "
-                           "crash may end in NULs); remove that line and "
-                           "what follows, or use another folder");
+      throw InputError::Flag(
+          "--out", "cannot resume from '" + path + "': " + e.what() +
+                       ", which no row of aia eval is (a file cut by a "
+                       "crash may end in NULs); remove that line and "
+                       "what follows, or use another folder");
     } catch (const std::runtime_error& e) {
-      throw InputError("command line", 0, "--out",
-                       "cannot resume from '" + path + "': " + e.what());
+      throw InputError::Flag("--out",
+                             "cannot resume from '" + path + "': " + e.what());
     }
   };
   const auto report = [&](int at, const std::string& why) {
@@ -360,27 +360,26 @@ std::vector<EvalRow> ResumeFolder(const std::string& out_dir,
     try {
       text = ReadFile(effective_path, kMaxEffectiveBytes);
     } catch (const std::runtime_error& e) {
-      throw InputError(
-          "command line", 0, "--out",
-          "cannot resume from '" + effective_path + "': " + e.what());
+      throw InputError::Flag(
+          "--out", "cannot resume from '" + effective_path + "': " + e.what());
     }
     const ConfigNode folder = ReadEvalConfig(text, effective_path);
     const std::string why = ConfigMismatch(folder, config);
     if (!why.empty())
-      throw InputError("command line", 0, "--out",
-                       out_dir + " holds results of another configuration (" +
-                           why + "; see its effective.yaml): use a new folder");
+      throw InputError::Flag(
+          "--out", out_dir + " holds results of another configuration (" + why +
+                       "; see its effective.yaml): use a new folder");
     merged = WithFolderPolicies(folder, config);
   }
   std::vector<std::string> problems;
   std::vector<EvalRow> rows = ReadRuns(runs_path, &problems);
   // Rows whose configuration cannot be checked are not taken as this one's.
   if (!checked && !rows.empty())
-    throw InputError("command line", 0, "--out",
-                     out_dir + " holds " + std::to_string(rows.size()) +
-                         " rows in runs.csv but no effective.yaml to check "
-                         "them against: put back the effective.yaml of the "
-                         "run that made them, or use a new folder");
+    throw InputError::Flag(
+        "--out", out_dir + " holds " + std::to_string(rows.size()) +
+                     " rows in runs.csv but no effective.yaml to check "
+                     "them against: put back the effective.yaml of the "
+                     "run that made them, or use a new folder");
   if (!problems.empty()) {
     std::string shown;
     for (size_t i = 0; i < problems.size() && i < 5; ++i)

@@ -47,8 +47,7 @@ void CheckEvalFlags(const EvalOptions& o) {
   EvalOptions flags = o;
   CheckFlags(&flags);
   if (o.out_dir.empty())
-    throw InputError("command line", 0, "--out",
-                     "an output folder is required");
+    throw InputError::Flag("--out", "an output folder is required");
   // Before any work: a FIFO at runs.csv blocked the resume's open for ever.
   CheckOutputFiles({o.out_dir + "/runs.csv", o.out_dir + "/summary.csv",
                     o.out_dir + "/effective.yaml"},
@@ -214,10 +213,10 @@ int RunEval(const EvalOptions& o) {
     if (registry.Has(extra->name()) ||
         std::find(policies.begin(), policies.end(), extra->name()) !=
             policies.end())
-      throw InputError("command line", 0, "name",
-                       "'" + extra->name() +
-                           "' is a registered policy's name or listed twice; "
-                           "give the policy another name");
+      throw InputError::Flag(
+          "name", "'" + extra->name() +
+                      "' is a registered policy's name or listed twice; "
+                      "give the policy another name");
     setup.policies.push_back(extra);
     policies.push_back(extra->name());
   }

@@ -157,10 +157,11 @@ int RunPlanCommand(const PlanOptions& o) {
   for (const std::string& text : o.overrides.sets) {
     const Override set = ParseSetFlag(text);
     if (set.path == "policy.name" || ReplacesSectionOf(set.path, "policy.name"))
-      throw InputError("command line", 0, "--set " + set.path,
-                       "aia plan runs the expert (C-SB) and sets policy.name "
-                       "itself; set the expert's keys one by one (--set "
-                       "policy.KEY=VALUE)");
+      throw InputError::Flag(
+          "--set " + set.path,
+          "aia plan runs the expert (C-SB) and sets policy.name "
+          "itself; set the expert's keys one by one (--set "
+          "policy.KEY=VALUE)");
     if (o.budget) RefuseSetOfFlagKey(set, "policy.anytime", "--budget");
   }
   const PolicyRegistry registry = AllPolicies();

@@ -293,20 +293,20 @@ std::string CheckVideoPaths(const RenderOptions& options) {
   const fs::path out(options.out_file);
   if (options.out_file.empty() || out.extension() != ".mp4" ||
       out.stem().empty())
-    throw InputError("command line", 0, "--out",
-                     "must name an .mp4 file, got '" + options.out_file + "'");
+    throw InputError::Flag(
+        "--out", "must name an .mp4 file, got '" + options.out_file + "'");
   CheckOutputFile(options.out_file, "--out");
   // The frames' folder cannot be the video, nor a file written next to it
   // (found before any folder is made).
   if (!options.frames_dir.empty() &&
       fs::path(options.frames_dir).lexically_normal() == out.lexically_normal())
-    throw InputError("command line", 0, "--frames",
-                     "'" + options.frames_dir +
-                         "' is the video's own path (--out); give the "
-                         "frames a folder of their own");
+    throw InputError::Flag("--frames",
+                           "'" + options.frames_dir +
+                               "' is the video's own path (--out); give the "
+                               "frames a folder of their own");
   if (options.frames_dir.empty() && options.frames_every != 1)
-    throw InputError("command line", 0, "--frames-every",
-                     "needs --frames (the folder of the PNG frames)");
+    throw InputError::Flag("--frames-every",
+                           "needs --frames (the folder of the PNG frames)");
   const std::string prefix =
       (out.parent_path() / (out.stem().string() + ".")).string();
   std::vector<std::string> next_to_it;
@@ -398,7 +398,7 @@ RenderResult RenderMission(const RenderOptions& options) {
   try {
     video = std::make_unique<Mp4Writer>(options.out_file, width, height, fps);
   } catch (const std::runtime_error& e) {
-    throw InputError("command line", 0, "--out", e.what());
+    throw InputError::Flag("--out", e.what());
   }
   MissionRunner runner(mission, prefix, "aia render", options.progress, [&] {
     char buf[64];

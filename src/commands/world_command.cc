@@ -14,7 +14,7 @@ namespace aia {
 
 int RunWorldCommand(const WorldOptions& o) {
   if (o.out.empty())
-    throw InputError("command line", 0, "--out", "an output file is needed");
+    throw InputError::Flag("--out", "an output file is needed");
   const std::filesystem::path out(o.out);
   const std::filesystem::path parent =
       out.has_parent_path() ? out.parent_path() : ".";
@@ -23,8 +23,8 @@ int RunWorldCommand(const WorldOptions& o) {
   std::error_code ec;
   if (std::filesystem::exists(parent, ec) &&
       !std::filesystem::is_directory(parent, ec))
-    throw InputError("command line", 0, "--out",
-                     "'" + parent.string() + "' is not a folder");
+    throw InputError::Flag("--out",
+                           "'" + parent.string() + "' is not a folder");
   CheckOutputFile(o.out, "--out");
   const PolicyRegistry registry = AllPolicies();
   const Scenario scenario =

@@ -13,6 +13,10 @@ InputError::InputError(std::string file, int line, std::string key,
       key_(std::move(key)),
       message_(std::move(what)) {}
 
+InputError InputError::Flag(std::string flag, std::string what) {
+  return InputError("command line", 0, std::move(flag), std::move(what));
+}
+
 std::string InputError::Format() const {
   std::string out = file_;
   if (line_ > 0) out += ":" + std::to_string(line_);

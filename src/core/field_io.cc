@@ -88,7 +88,7 @@ InputError KeyError(const std::string& file, const KeySources& sources,
         const std::string named = s.origin != "--set" ? s.origin
                                   : k == key          ? "--set " + key
                                                       : key;
-        return InputError("command line", 0, named, what);
+        return InputError::Flag(named, what);
       }
       return InputError(file, at_value && k == key ? s.value_line : s.key_line,
                         key, what);
@@ -359,9 +359,8 @@ std::string BeyondDouble(field_text::OutOfRange r) {
 void FieldReader::Fail(const ConfigNode& node, const std::string& key,
                        const std::string& what) const {
   if (!node.origin.empty()) {
-    throw InputError("command line", 0,
-                     node.origin == "--set" ? "--set " + key : node.origin,
-                     what);
+    throw InputError::Flag(
+        node.origin == "--set" ? "--set " + key : node.origin, what);
   }
   throw InputError(options_.file, node.line, key.empty() ? "(document)" : key,
                    what);

@@ -324,10 +324,10 @@ void CheckNotAnInput(const std::string& output, const std::string& flag,
                      const std::string& written) {
   for (const InputFile& in : inputs)
     if (SameFile(output, in.path))
-      throw InputError("command line", 0, flag,
-                       "'" + output + "'" +
-                           (written.empty() ? "" : " (" + written + ")") +
-                           " is " + in.what + "; choose another path");
+      throw InputError::Flag(
+          flag, "'" + output + "'" +
+                    (written.empty() ? "" : " (" + written + ")") + " is " +
+                    in.what + "; choose another path");
 }
 
 std::string TemporaryPath(const std::string& path, bool keep_extension) {

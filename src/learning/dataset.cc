@@ -680,7 +680,7 @@ std::string RecipeWithoutShards(std::string recipe) {
 
 std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
                                       const std::string& key) {
-  if (paths.empty()) throw InputError("command line", 0, key, "is required");
+  if (paths.empty()) throw InputError::Flag(key, "is required");
   std::vector<std::string> out;
   std::vector<std::string> given;  // the path that named each file
   for (const std::string& p : paths) {
@@ -742,8 +742,8 @@ std::vector<std::string> DatasetFiles(const std::vector<std::string>& paths,
     for (const std::string& f : files) {
       for (std::size_t i = 0; i < out.size(); ++i)
         if (SameFile(f, out[i]))
-          throw InputError(
-              "command line", 0, key,
+          throw InputError::Flag(
+              key,
               "'" + f + "' is read twice (as '" + given[i] + "' and as '" + p +
                   "'): its samples would count twice; give each dataset once");
       out.push_back(f);

@@ -83,19 +83,20 @@ void NameTheFlag(const InputError& error, const GeneratedSpec& spec) {
         if (e.file() == "command line") throw;
         const std::string why = e.key() + ": " + e.message();
         if (n == 0) {
-          throw InputError("command line", 0, spec.size_flag,
-                           build ? why + world : "'" + spec.size + "': " + why);
+          throw InputError::Flag(
+              spec.size_flag,
+              build ? why + world : "'" + spec.size + "': " + why);
         }
-        throw InputError(
-            "command line", 0, FlagKey(spec.overrides[n - 1]),
+        throw InputError::Flag(
+            FlagKey(spec.overrides[n - 1]),
             why + (build ? world
                          : " (in the generated scenario of " + size + ")"));
       }
     }
   }
   // Not found again: the size and seed it was found with.
-  throw InputError("command line", 0, spec.size_flag,
-                   error.key() + ": " + error.message() + world);
+  throw InputError::Flag(spec.size_flag,
+                         error.key() + ": " + error.message() + world);
 }
 
 }  // namespace aia

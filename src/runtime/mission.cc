@@ -57,8 +57,7 @@ std::vector<Override> CommandOverrides::ToOverrides(
   std::vector<Override> out;
   if (policy) {
     if (!registry.Has(*policy))
-      throw InputError("command line", 0, "--policy",
-                       registry.UnknownPolicy(*policy));
+      throw InputError::Flag("--policy", registry.UnknownPolicy(*policy));
     out.push_back({"--policy", "policy.name", *policy});
   }
   if (seed) out.push_back({"--seed", "seed", std::to_string(*seed)});

@@ -24,7 +24,7 @@ void LockOutput(const std::string& path, const std::string& flag) {
   try {
     held.emplace(key, std::make_unique<FileLock>(path));
   } catch (const std::runtime_error& e) {
-    throw InputError("command line", 0, flag, e.what());
+    throw InputError::Flag(flag, e.what());
   }
 }
 
@@ -32,17 +32,17 @@ void CheckOutputFile(const std::string& path, const std::string& flag) {
   try {
     CheckReplaceableFile(path);
   } catch (const std::runtime_error& e) {
-    throw InputError("command line", 0, flag, e.what());
+    throw InputError::Flag(flag, e.what());
   }
   if (std::string longer = TemporaryNameProblem(path); !longer.empty())
-    throw InputError("command line", 0, flag, longer);
+    throw InputError::Flag(flag, longer);
 }
 
 void CheckOutputFiles(const std::vector<std::string>& paths,
                       const std::string& flag, const std::string& written) {
   for (const std::string& path : paths) {
     const std::string why = OutputFileProblem(path, written);
-    if (!why.empty()) throw InputError("command line", 0, flag, why);
+    if (!why.empty()) throw InputError::Flag(flag, why);
   }
 }
 
@@ -51,17 +51,16 @@ void MakeOutputDir(const std::string& dir, const std::string& flag, bool lock) {
   // An output folder that is a FIFO, device or file: say what it is.
   if (const std::string kind = NonRegularKind(dir);
       !kind.empty() && kind != "a folder")
-    throw InputError("command line", 0, flag,
-                     "'" + dir + "' is " + kind + ", not a folder");
+    throw InputError::Flag(flag, "'" + dir + "' is " + kind + ", not a folder");
   try {
     MakeDirs(dir);
   } catch (const std::bad_alloc&) {
     throw;  // out of memory is not bad input (cli.cc says it)
   } catch (const std::exception& e) {
-    throw InputError("command line", 0, flag, e.what());
+    throw InputError::Flag(flag, e.what());
   }
   if (const std::string why = UnwritableDirProblem(dir); !why.empty())
-    throw InputError("command line", 0, flag, why);
+    throw InputError::Flag(flag, why);
   if (!lock) return;
   LockOutput(dir, flag);
   RemoveStaleTemporaries(dir);

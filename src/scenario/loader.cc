@@ -47,10 +47,10 @@ std::string FlagKey(const Override& o, const std::string& key) {
 // std::regex overflows the stack on a path of some 30 000 characters.
 std::vector<Step> ParsePath(const Override& o) {
   const auto refuse = [&o]() {
-    return InputError("command line", 0, o.flag,
-                      "'" + o.path +
-                          "' is not a key path such as mission.eps or "
-                          "targets.list[0].position");
+    return InputError::Flag(o.flag,
+                            "'" + o.path +
+                                "' is not a key path such as mission.eps or "
+                                "targets.list[0].position");
   };
   const auto letter = [](char c) {
     return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_';
@@ -112,10 +112,10 @@ void Apply(const Override& o, ConfigNode* root) {
         node->origin = o.flag;
       }
       if (!node->IsMap()) {
-        throw InputError("command line", 0, FlagKey(o, o.path),
-                         (key.empty() ? std::string("the document") : key) +
-                             " is not a mapping, so it has no key `" +
-                             step.name + "`");
+        throw InputError::Flag(
+            FlagKey(o, o.path),
+            (key.empty() ? std::string("the document") : key) +
+                " is not a mapping, so it has no key `" + step.name + "`");
       }
       key = ChildKey(key, step.name);
       ConfigNode* child = node->Find(step.name);
@@ -127,8 +127,8 @@ void Apply(const Override& o, ConfigNode* root) {
     } else {
       const std::string item = ItemKey(key, step.index);
       if (!node->IsList() || step.index >= node->items.size()) {
-        throw InputError(
-            "command line", 0, FlagKey(o, o.path),
+        throw InputError::Flag(
+            FlagKey(o, o.path),
             node->IsList()
                 ? key + " has " + std::to_string(node->items.size()) +
                       " entries, so it has no " + item
@@ -169,8 +169,8 @@ std::string Cell(const std::string& text) {
 Override ParseSetFlag(const std::string& text) {
   const std::size_t eq = text.find('=');
   if (eq == std::string::npos || eq == 0) {
-    throw InputError(
-        "command line", 0, "--set",
+    throw InputError::Flag(
+        "--set",
         "'" + text + "' is not key.path=value (e.g. --set mission.eps=0.05)");
   }
   Override o{"--set", text.substr(0, eq), text.substr(eq + 1)};
@@ -183,15 +183,14 @@ void RefuseUndoing(const Override& o, const std::vector<Override>& before) {
   const std::string earlier = o.flag == "--set" ? "--set" : "key";
   for (const Override& b : before) {
     if (b.path == o.path)
-      throw InputError("command line", 0, key,
-                       "given twice (=" + b.value + ", then =" + o.value +
-                           "); give it once");
+      throw InputError::Flag(key, "given twice (=" + b.value +
+                                      ", then =" + o.value + "); give it once");
     if (ReplacesSectionOf(o.path, b.path))
-      throw InputError("command line", 0, key,
-                       "replaces the whole section, and an earlier " + earlier +
-                           " gives " + b.path +
-                           " in it; give the section once, or its keys one "
-                           "by one");
+      throw InputError::Flag(
+          key, "replaces the whole section, and an earlier " + earlier +
+                   " gives " + b.path +
+                   " in it; give the section once, or its keys one "
+                   "by one");
   }
 }
 
@@ -212,14 +211,14 @@ bool ReplacesSectionOf(const std::string& set_path, const std::string& path) {
 void RefuseSetOfFlagKey(const Override& set, const std::string& path,
                         const std::string& flag) {
   if (set.path == path)
-    throw InputError("command line", 0, "--set " + set.path,
-                     "is also given by " + flag + "; give one of them");
+    throw InputError::Flag("--set " + set.path,
+                           "is also given by " + flag + "; give one of them");
   if (ReplacesSectionOf(set.path, path))
-    throw InputError("command line", 0, "--set " + set.path,
-                     "replaces the whole section, and " + flag + " gives " +
-                         path +
-                         " in it; set the section's keys one by one (--set " +
-                         set.path + ".KEY=VALUE) or drop " + flag);
+    throw InputError::Flag(
+        "--set " + set.path,
+        "replaces the whole section, and " + flag + " gives " + path +
+            " in it; set the section's keys one by one (--set " + set.path +
+            ".KEY=VALUE) or drop " + flag);
 }
 
 Scenario LoadScenario(const std::string& path,

@@ -291,8 +291,7 @@ class Converter {
     // A --set value's key under the path it was given for (--set
     // robots.count for a duplicate inside `robots={count: 2, count: 3}`).
     if (!origin_.empty())
-      throw InputError(
-          "command line", 0,
+      throw InputError::Flag(
           key.empty() || key[0] == '(' ? origin_ : origin_ + " " + key, what);
     throw InputError(file_, line, key, what);
   }
@@ -528,27 +527,26 @@ ConfigNode ParseYamlValue(const std::string& text, const std::string& flag,
   // yaml-cpp reads bytes that are not UTF-8 as nothing at all (and quoting
   // them would put them in the error).
   if (!field_text::IsUtf8(text))
-    throw InputError("command line", 0, named, "the value is not UTF-8 text");
+    throw InputError::Flag(named, "the value is not UTF-8 text");
   YAML::Node node;
   try {
     // YAML::Load would silently drop every document after the first.
     if (const Documents docs = CountDocuments(text); docs.count > 1) {
-      throw InputError("command line", 0, named,
-                       "the value holds " + std::to_string(docs.count) +
-                           " YAML documents (separated by ---), not one: '" +
-                           text + "'");
+      throw InputError::Flag(
+          named, "the value holds " + std::to_string(docs.count) +
+                     " YAML documents (separated by ---), not one: '" + text +
+                     "'");
     }
     node = YAML::Load(text);
   } catch (const DocumentStarts::TooManyValues&) {
-    throw InputError("command line", 0, named, TooManyValuesMessage());
+    throw InputError::Flag(named, TooManyValuesMessage());
   } catch (const DocumentStarts::OpenQuote& e) {
-    throw InputError("command line", 0, named, OpenQuoteMessage(e.mark));
+    throw InputError::Flag(named, OpenQuoteMessage(e.mark));
   } catch (const YAML::DeepRecursion& e) {
-    throw InputError("command line", 0, named, TooDeepMessage(e.mark));
+    throw InputError::Flag(named, TooDeepMessage(e.mark));
   } catch (const YAML::Exception& e) {
-    throw InputError(
-        "command line", 0, named,
-        "invalid YAML value '" + text + "': " + YamlMessage(e, text));
+    throw InputError::Flag(
+        named, "invalid YAML value '" + text + "': " + YamlMessage(e, text));
   }
   // Keys inside the value are named under the path it sets.
   const std::string path =

@@ -96,6 +96,17 @@ TEST(InputErrorTest, FormatsFileLineKey) {
             "command line: --policy: unknown");
 }
 
+// Flag() is the constructor's command-line error, field for field.
+TEST(InputErrorTest, FlagIsTheCommandLine) {
+  const InputError e = InputError::Flag("--policy", "unknown");
+  EXPECT_EQ(e.file(), "command line");
+  EXPECT_EQ(e.line(), 0);
+  EXPECT_EQ(e.key(), "--policy");
+  EXPECT_EQ(e.message(), "unknown");
+  EXPECT_STREQ(e.what(), "command line:0: --policy: unknown");
+  EXPECT_EQ(e.Format(), "command line: --policy: unknown");
+}
+
 // A message quoting odd bytes (yaml-cpp's "unknown escape character: " and
 // the raw byte) still prints as one line.
 TEST(InputErrorTest, FormatIsOneLine) {

@@ -15,6 +15,10 @@ class InputError : public std::runtime_error {
   // `line` is 1-based; 0 when no line applies (e.g. a command-line flag).
   InputError(std::string file, int line, std::string key, std::string what);
 
+  // A bad command-line flag (or a value a flag gave): file "command line",
+  // no line, the flag as the key.
+  static InputError Flag(std::string flag, std::string what);
+
   const std::string& file() const { return file_; }
   int line() const { return line_; }
   const std::string& key() const { return key_; }

@@ -148,11 +148,10 @@ struct InputFile {
   std::string what;  // "the input scenario", "the model (--init)", ...
 };
 
-// Throws InputError("command line", 0, flag, "'OUT' is WHAT; choose another
-// path") when `output` is one of `inputs` (SameFile): writing it would
-// replace an input. `written`, when not empty, says how the output comes
-// from the flag ("written next to the video"). Outputs that do not exist
-// yet are no input.
+// Throws InputError::Flag(flag, "'OUT' is WHAT; choose another path") when
+// `output` is one of `inputs` (SameFile): writing it would replace an input.
+// `written`, when not empty, says how the output comes from the flag
+// ("written next to the video"). Outputs that do not exist yet are no input.
 void CheckNotAnInput(const std::string& output, const std::string& flag,
                      const std::vector<InputFile>& inputs,
                      const std::string& written = "");

@@ -134,7 +134,7 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
   Corpus c;
   c.data = ReadDataset(paths, "--data");
   if (c.data.samples.empty())
-    throw InputError("command line", 0, "--data", "holds no samples");
+    throw InputError::Flag("--data", "holds no samples");
   c.renderers.reserve(c.data.worlds.size());
   std::vector<std::vector<int>> of_world;
   if (valid_moves) {
@@ -146,8 +146,8 @@ Corpus LoadCorpus(const std::vector<std::string>& paths,
     const ChannelParams at_step = AtLatticeStep(channels, w.lattice_step);
     if (const std::string why = ChannelGridProblem(w.size, at_step);
         !why.empty())
-      throw InputError(
-          "command line", 0, "--data",
+      throw InputError::Flag(
+          "--data",
           "world of episode " + std::to_string(w.episode) + ": " + why);
     const Map map(w.size, w.obstacles, w.map_cell, w.lattice_step,
                   w.robot_radius);
@@ -207,9 +207,10 @@ void MakeBatch(Corpus* c, const int* idx, int n, double weak_weight,
     const DatasetSample& s = c->data.samples[idx[b]];
     ChannelRenderer& r = c->renderers[s.world];
     if (r.height() != *height || r.width() != *width)
-      throw InputError("command line", 0, "--data",
-                       "worlds of different sizes in the global frame; use "
-                       "--frame centred or one workspace size");
+      throw InputError::Flag(
+          "--data",
+          "worlds of different sizes in the global frame; use "
+          "--frame centred or one workspace size");
     const DatasetWorld& w = c->data.worlds[s.world];
     r.Render(s.position, s.neighbours, s.targets, w.log_det_prior, w.eps,
              images->data() + b * size, SampleMemory(s, w));
@@ -379,8 +380,7 @@ void CheckOptions(const TrainOptions& o) {
   NetworkConfig network = o.network;
   CheckFlags(&network);
   if (o.out.empty())
-    throw InputError("command line", 0, "--out",
-                     "is required (the model file to write)");
+    throw InputError::Flag("--out", "is required (the model file to write)");
 }
 
 // OUT and OUT.pt write the same log (TrainLogPath drops ".pt"): a run of one
@@ -394,12 +394,12 @@ void CheckTheLogIsOurs(const std::string& out) {
   // beside `--out data/small.pt`) is no model.
   for (const std::string& f : {other, CheckpointPath(other)})
     if (std::filesystem::is_regular_file(f, ec))
-      throw InputError("command line", 0, "--out",
-                       "'" + f + "' is there, and the model '" + other +
-                           "' writes the same log as this one ('" +
-                           TrainLogPath(out) +
-                           "'), which this run would replace: choose "
-                           "another name");
+      throw InputError::Flag("--out",
+                             "'" + f + "' is there, and the model '" + other +
+                                 "' writes the same log as this one ('" +
+                                 TrainLogPath(out) +
+                                 "'), which this run would replace: choose "
+                                 "another name");
   // OUT is itself the checkpoint or the log of a model that is there.
   const auto ends = [&](const std::string& tail) {
     return out.size() > tail.size() &&
@@ -413,11 +413,11 @@ void CheckTheLogIsOurs(const std::string& out) {
   }
   for (const std::string& model : owners)
     if (std::filesystem::is_regular_file(model, ec))
-      throw InputError("command line", 0, "--out",
-                       "'" + out + "' is what the model '" + model +
-                           "', which is there, keeps beside it (its " +
-                           (ends(".ckpt") ? "checkpoint" : "log") +
-                           "): choose another name");
+      throw InputError::Flag("--out",
+                             "'" + out + "' is what the model '" + model +
+                                 "', which is there, keeps beside it (its " +
+                                 (ends(".ckpt") ? "checkpoint" : "log") +
+                                 "): choose another name");
 }
 
 // No file written (the model, its checkpoint, its log) may be a file read:
@@ -440,7 +440,7 @@ void CheckOutputsAreNotInputs(const TrainOptions& o) {
     // A FIFO, device or folder: found before any training, not when the
     // first epoch is saved.
     if (const std::string why = OutputFileProblem(path, written); !why.empty())
-      throw InputError("command line", 0, "--out", why);
+      throw InputError::Flag("--out", why);
     // A new *.sqlite file in a --data folder would be read as data next
     // time.
     const std::filesystem::path p(path);
@@ -450,11 +450,11 @@ void CheckOutputsAreNotInputs(const TrainOptions& o) {
       if (parent.empty()) parent = ".";
       std::error_code ec;
       if (std::filesystem::is_directory(d, ec) && SameFile(parent.string(), d))
-        throw InputError("command line", 0, "--out",
-                         "'" + path + "'" +
-                             (written.empty() ? "" : " (" + written + ")") +
-                             " would be read as a dataset file of --data '" +
-                             d + "'; choose another path");
+        throw InputError::Flag(
+            "--out", "'" + path + "'" +
+                         (written.empty() ? "" : " (" + written + ")") +
+                         " would be read as a dataset file of --data '" + d +
+                         "'; choose another path");
     }
   }
 }
@@ -486,18 +486,19 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
     if (const auto [key, needs] = c->MissingPrerequisite(); !key.empty()) {
       std::string flag = "--" + std::string(key);
       std::replace(flag.begin(), flag.end(), '_', '-');
-      throw InputError("command line", 0, flag,
-                       needs == "geodesic"
-                           ? "needs the reach channel (--geodesic, or an "
-                             "--init model with it)"
-                           : "needs --reach-world 1");
+      throw InputError::Flag(flag,
+                             needs == "geodesic"
+                                 ? "needs the reach channel (--geodesic, or an "
+                                   "--init model with it)"
+                                 : "needs --reach-world 1");
     }
     if (o->geodesic_length > 0.0 && !c->geodesic)
-      throw InputError("command line", 0, "--geodesic-length",
-                       "needs the reach channel (--geodesic, or an --init "
-                       "model with it)");
+      throw InputError::Flag(
+          "--geodesic-length",
+          "needs the reach channel (--geodesic, or an --init "
+          "model with it)");
     if (const std::string problem = n->CentreProblem(); !problem.empty())
-      throw InputError("command line", 0, "--centre", problem);
+      throw InputError::Flag("--centre", problem);
   };
   if (o->init.empty()) {
     redefine(&o->network);
@@ -509,16 +510,16 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
   o->network = before;
   redefine(&o->network);
   if (o->network.message_hops < before.message_hops)
-    throw InputError("command line", 0, "--message-hops",
-                     "the --init model passes messages over " +
-                         std::to_string(before.message_hops) +
-                         " hops; it can be extended, not cut");
+    throw InputError::Flag("--message-hops",
+                           "the --init model passes messages over " +
+                               std::to_string(before.message_hops) +
+                               " hops; it can be extended, not cut");
   if (before.centre > 0 && o->network.centre != before.centre)
-    throw InputError("command line", 0, "--centre",
-                     "the --init model reads a centre of " +
-                         std::to_string(before.centre) +
-                         " cells; it can be added to a model without one, "
-                         "not changed");
+    throw InputError::Flag(
+        "--centre", "the --init model reads a centre of " +
+                        std::to_string(before.centre) +
+                        " cells; it can be added to a model without one, "
+                        "not changed");
   if (o->network.ToJson() == before.ToJson()) return net;
   // The stem's weights are kept by input channel index, so the channels
   // both models have must keep their places: one added after the last, or
@@ -527,13 +528,13 @@ std::unique_ptr<TorchNet> NetworkToTrain(TrainOptions* o) {
                                  has = o->network.channels.names();
   if (!std::equal(had.begin(), had.begin() + std::min(had.size(), has.size()),
                   has.begin()))
-    throw InputError("command line", 0, "--init",
-                     "the model's input channels (" + field_text::Join(had) +
-                         ") would not keep their places among those asked "
-                         "for (" +
-                         field_text::Join(has) +
-                         "): a channel can be added after the last, or the "
-                         "last ones removed");
+    throw InputError::Flag(
+        "--init", "the model's input channels (" + field_text::Join(had) +
+                      ") would not keep their places among those asked "
+                      "for (" +
+                      field_text::Join(has) +
+                      "): a channel can be added after the last, or the "
+                      "last ones removed");
   // The same weights: a new channel 4 is read by the same stem, and what
   // is added (a trail channel, the centre, message hops) starts at zero
   // weight; a trail channel removed is dropped.
@@ -554,13 +555,13 @@ std::unique_ptr<FileLock> LockOutputFolder(const std::string& out) {
     MakeDirs(parent.string());
     lock = std::make_unique<FileLock>(parent.string());
   } catch (const std::runtime_error& e) {
-    throw InputError("command line", 0, "--out", e.what());
+    throw InputError::Flag("--out", e.what());
   }
   // A folder no file can be made in (/proc, read-only): refused before the
   // first epoch, not when the model is written.
   if (const std::string why = UnwritableDirProblem(parent.string());
       !why.empty())
-    throw InputError("command line", 0, "--out", why);
+    throw InputError::Flag("--out", why);
   // OUT, OUT.ckpt and the log share OUT's name without ".pt".
   std::string prefix = std::filesystem::path(out).filename().string();
   if (prefix.size() > 3 && prefix.compare(prefix.size() - 3, 3, ".pt") == 0)
@@ -856,16 +857,16 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
     // from it would keep this one: refused, as --resume is.
     std::error_code ec;
     if (o.resume)
-      throw InputError("command line", 0, "--resume",
-                       "--epochs 0 trains nothing: there is nothing to "
-                       "resume; drop the flag");
+      throw InputError::Flag("--resume",
+                             "--epochs 0 trains nothing: there is nothing to "
+                             "resume; drop the flag");
     if (std::filesystem::exists(CheckpointPath(o.out), ec))
-      throw InputError("command line", 0, "--out",
-                       "'" + CheckpointPath(o.out) +
-                           "' is there (a training run of this model); "
-                           "--epochs 0 would write a model it does not "
-                           "describe beside it: remove it or choose another "
-                           "--out");
+      throw InputError::Flag(
+          "--out", "'" + CheckpointPath(o.out) +
+                       "' is there (a training run of this model); "
+                       "--epochs 0 would write a model it does not "
+                       "describe beside it: remove it or choose another "
+                       "--out");
     net->Save(o.out);
     return {};
   }
@@ -894,8 +895,8 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
   }
 
   if (corpus.train.empty())
-    throw InputError("command line", 0, "--data",
-                     "leaves no training samples after the split");
+    throw InputError::Flag("--data",
+                           "leaves no training samples after the split");
   if (hops > 0) LinkNeighbours(&corpus);
   if (o.progress)
     std::fprintf(stderr,
@@ -950,11 +951,11 @@ ValidationResult TorchValidate(const std::string& model,
   Corpus corpus = LoadCorpus(data, net->config().channels, val_share, seed, 1.0,
                              valid_moves);
   if (corpus.val.empty())
-    throw InputError("command line", 0, "--val-share",
-                     "holds out none of the " +
-                         std::to_string(corpus.data.worlds.size()) +
-                         " worlds of --data: nothing to validate on (a larger "
-                         "--val-share, or more worlds)");
+    throw InputError::Flag(
+        "--val-share",
+        "holds out none of the " + std::to_string(corpus.data.worlds.size()) +
+            " worlds of --data: nothing to validate on (a larger "
+            "--val-share, or more worlds)");
   const int hops = net->config().message_hops;
   if (hops > 0) LinkNeighbours(&corpus);
   return Evaluate(net->impl().module, &corpus, hops);
