@@ -248,6 +248,48 @@ void Dequantize(const std::int64_t* key, int d, double* block) {
                           (i < d * d ? eo : ex) - kKeyBits);
 }
 
+// Each row's key of target k's block (dimension d), row b's at
+// keys[b * (d * d + d + 2)]: a block equal bit for bit to the row before's
+// has its key (common in a full graph, where most rows hold one belief).
+void KeyRows(const BeliefSet& beliefs, const std::vector<int>& rows, int k,
+             int d, std::int64_t* keys) {
+  const int n = static_cast<int>(rows.size());
+  const int len = d * d + d + 2;
+  const std::size_t bytes = sizeof(double) * (d * d + d);
+  for (int b = 0; b < n; ++b) {
+    const double* block = beliefs.Omega(rows[b], k).data();
+    if (b > 0 &&
+        std::memcmp(block, beliefs.Omega(rows[b - 1], k).data(), bytes) == 0) {
+      std::copy(&keys[(b - 1) * len], &keys[b * len], &keys[b * len]);
+    } else {
+      Quantize(block, d, &keys[b * len]);
+    }
+  }
+}
+
+// Whether rows a and b have the same key (keys of `len` entries).
+bool SameKey(const std::int64_t* keys, int len, int a, int b) {
+  return std::equal(&keys[a * len], &keys[a * len] + len, &keys[b * len]);
+}
+
+// The row whose key more than half of the n rows have (Boyer-Moore's
+// majority vote over the keys, then a count), or -1 where none does.
+int MajorityRow(const std::int64_t* keys, int len, int n) {
+  int candidate = -1, count = 0;
+  for (int b = 0; b < n; ++b) {
+    if (count == 0) {
+      candidate = b;
+      count = 1;
+    } else {
+      count += SameKey(keys, len, b, candidate) ? 1 : -1;
+    }
+  }
+  if (candidate < 0) return -1;
+  count = 0;
+  for (int b = 0; b < n; ++b) count += SameKey(keys, len, b, candidate);
+  return 2 * count > n ? candidate : -1;
+}
+
 }  // namespace
 
 void TeamHeatmap::Prepare(const BeliefSet& beliefs,
@@ -263,17 +305,12 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
   const RangeRunner& runner = run ? run : serial;
   if (!run) workers = 1;
   common_.resize(m);
-  if (base_.nx() != grid.nx() || base_.ny() != grid.ny() ||
-      base_.cell() != grid.cell()) {
-    base_ = Grid<float>(grid.nx(), grid.ny(), grid.cell(), 0.0f);
-  } else {
-    std::fill(base_.data().begin(), base_.data().end(), 0.0f);
-  }
+  ResetBase(grid);
   // The belief more than half the rows hold about each target, if any, to
-  // 2^-40 of its scale (Boyer-Moore's majority vote over the keys, then a
-  // count). The majority's block is the one its key gives back, so no
-  // robot's heatmap depends on the order of the rows: relabelling the robots
-  // permutes them. Targets in parallel; their heat into the base in order.
+  // 2^-40 of its scale. The majority's block is the one its key gives back,
+  // so no robot's heatmap depends on the order of the rows: relabelling the
+  // robots permutes them. Targets in parallel; their heat into the base in
+  // order.
   const BeliefLayout& layout = beliefs.layout();
   const int n = static_cast<int>(rows.size());
   member_.assign(static_cast<std::size_t>(n) * m, 0);
@@ -286,50 +323,8 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
     if (w.representative.rows() != 1 || &w.representative.layout() != &layout ||
         w.representative.data().cols() != layout.stride())
       w.representative = BeliefSet(&layout, 1);
-    for (int k = k0; k < k1; ++k) {
-      const int d = layout.dim(k);
-      const int len = d * d + d + 2;
-      w.keys.resize(static_cast<std::size_t>(n) * len);
-      // A block equal bit for bit to the row before's has its key (common
-      // in a full graph, where most rows hold one belief).
-      const std::size_t bytes = sizeof(double) * (d * d + d);
-      for (int b = 0; b < n; ++b) {
-        const double* block = beliefs.Omega(rows[b], k).data();
-        if (b > 0 && std::memcmp(block, beliefs.Omega(rows[b - 1], k).data(),
-                                 bytes) == 0) {
-          std::copy(&w.keys[(b - 1) * len], &w.keys[b * len], &w.keys[b * len]);
-        } else {
-          Quantize(block, d, &w.keys[b * len]);
-        }
-      }
-      const auto same = [&](int a, int b) {
-        return std::equal(&w.keys[a * len], &w.keys[a * len] + len,
-                          &w.keys[b * len]);
-      };
-      int candidate = -1, count = 0;
-      for (int b = 0; b < n; ++b) {
-        if (count == 0) {
-          candidate = b;
-          count = 1;
-        } else {
-          count += same(b, candidate) ? 1 : -1;
-        }
-      }
-      HeatStamp& stamp = common_[k];
-      stamp.nx = stamp.ny = 0;
-      if (candidate < 0) continue;
-      count = 0;
-      for (int b = 0; b < n; ++b) count += same(b, candidate);
-      if (2 * count <= n) continue;
-      for (int b = 0; b < n; ++b)
-        member_[static_cast<std::size_t>(b) * m + k] = same(b, candidate);
-      Dequantize(&w.keys[candidate * len], d,
-                 w.representative.Omega(0, k).data());
-      const HeatSource s = SourceOf(w.representative, 0, k);
-      MakeHeatStamp(s.mean, s.cov,
-                    HeatWeight(s.log_det, log_det_prior[k], params.eps),
-                    params.blur, params.cutoff, grid, &stamp);
-    }
+    for (int k = k0; k < k1; ++k)
+      CommonStamp(beliefs, rows, k, log_det_prior[k], params, grid, &w);
   });
   for (int k = 0; k < m; ++k) AddHeatStamp(common_[k], false, &base_);
   // Each row's own stamps where it holds another belief, rows in parallel.
@@ -337,25 +332,66 @@ void TeamHeatmap::Prepare(const BeliefSet& beliefs,
   if (robot_own_.size() < rows.size()) robot_own_.resize(rows.size());
   robot_used_.assign(rows.size(), 0);
   runner(n, [&](int b0, int b1, int) {
-    for (int b = b0; b < b1; ++b) {
-      std::vector<Own>& own = robot_own_[b];
-      int used = 0;
-      for (int k = 0; k < m; ++k) {
-        if (member_[static_cast<std::size_t>(b) * m + k]) continue;
-        const HeatSource s = SourceOf(beliefs, rows[b], k);
-        const double w = HeatWeight(s.log_det, log_det_prior[k], params.eps);
-        if (!(w > 0.0) && common_[k].nx == 0) continue;  // no heat either way
-        if (used == static_cast<int>(own.size())) own.emplace_back();
-        own[used].target = k;
-        MakeHeatStamp(s.mean, s.cov, w, params.blur, params.cutoff, grid,
-                      &own[used].stamp);
-        ++used;
-      }
-      robot_used_[b] = used;
-    }
+    for (int b = b0; b < b1; ++b)
+      robot_used_[b] =
+          OwnStamps(beliefs, rows[b], b, log_det_prior, params, grid);
   });
   own_used_ = 0;
   for (const int u : robot_used_) own_used_ += u;
+}
+
+void TeamHeatmap::ResetBase(const Grid<float>& grid) {
+  if (base_.nx() != grid.nx() || base_.ny() != grid.ny() ||
+      base_.cell() != grid.cell()) {
+    base_ = Grid<float>(grid.nx(), grid.ny(), grid.cell(), 0.0f);
+  } else {
+    std::fill(base_.data().begin(), base_.data().end(), 0.0f);
+  }
+}
+
+void TeamHeatmap::CommonStamp(const BeliefSet& beliefs,
+                              const std::vector<int>& rows, int k,
+                              double log_det_prior, const HeatmapParams& params,
+                              const Grid<float>& grid, Scratch* w) {
+  const int m = static_cast<int>(common_.size());
+  const int n = static_cast<int>(rows.size());
+  const int d = beliefs.layout().dim(k);
+  const int len = d * d + d + 2;
+  w->keys.resize(static_cast<std::size_t>(n) * len);
+  std::int64_t* keys = w->keys.data();
+  KeyRows(beliefs, rows, k, d, keys);
+  HeatStamp& stamp = common_[k];
+  stamp.nx = stamp.ny = 0;
+  const int majority = MajorityRow(keys, len, n);
+  if (majority < 0) return;
+  for (int b = 0; b < n; ++b)
+    member_[static_cast<std::size_t>(b) * m + k] =
+        SameKey(keys, len, b, majority);
+  Dequantize(&keys[majority * len], d, w->representative.Omega(0, k).data());
+  const HeatSource s = SourceOf(w->representative, 0, k);
+  MakeHeatStamp(s.mean, s.cov, HeatWeight(s.log_det, log_det_prior, params.eps),
+                params.blur, params.cutoff, grid, &stamp);
+}
+
+int TeamHeatmap::OwnStamps(const BeliefSet& beliefs, int row, int b,
+                           const std::vector<double>& log_det_prior,
+                           const HeatmapParams& params,
+                           const Grid<float>& grid) {
+  const int m = static_cast<int>(common_.size());
+  std::vector<Own>& own = robot_own_[b];
+  int used = 0;
+  for (int k = 0; k < m; ++k) {
+    if (member_[static_cast<std::size_t>(b) * m + k]) continue;
+    const HeatSource s = SourceOf(beliefs, row, k);
+    const double w = HeatWeight(s.log_det, log_det_prior[k], params.eps);
+    if (!(w > 0.0) && common_[k].nx == 0) continue;  // no heat either way
+    if (used == static_cast<int>(own.size())) own.emplace_back();
+    own[used].target = k;
+    MakeHeatStamp(s.mean, s.cov, w, params.blur, params.cutoff, grid,
+                  &own[used].stamp);
+    ++used;
+  }
+  return used;
 }
 
 void TeamHeatmap::Edits(int b, std::vector<HeatEdit>* out) const {

@@ -159,6 +159,20 @@ class TeamHeatmap {
     BeliefSet representative;
   };
   std::vector<Scratch> scratch_;
+
+  // base_ shaped like `grid`, all zeros (its memory kept where the shape is).
+  void ResetBase(const Grid<float>& grid);
+  // Target k's block that more than half of `rows` hold, if any, as
+  // common_[k]'s stamp (else an empty one), its holders marked in member_;
+  // w's keys and representative as scratch.
+  void CommonStamp(const BeliefSet& beliefs, const std::vector<int>& rows,
+                   int k, double log_det_prior, const HeatmapParams& params,
+                   const Grid<float>& grid, Scratch* w);
+  // The stamps of row `row` (rows[b]) for the targets where it holds another
+  // block than the majority's, into robot_own_[b]; returns how many.
+  int OwnStamps(const BeliefSet& beliefs, int row, int b,
+                const std::vector<double>& log_det_prior,
+                const HeatmapParams& params, const Grid<float>& grid);
 };
 
 }  // namespace aia
