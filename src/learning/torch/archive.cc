@@ -75,6 +75,44 @@ std::string Unpack(const std::string& b, const ZipEntry& e) {
   return out;
 }
 
+// Why the data of zip entry `entry` (`size` bytes at `packed`, stored or
+// deflated to `unpacked` bytes) does not match its CRC-32, or "".
+std::string EntryDataDamage(const std::string& entry, const Bytef* packed,
+                            std::uint32_t method, std::uint32_t size,
+                            std::uint32_t unpacked, std::uint32_t crc) {
+  std::uint32_t got = 0;
+  if (method == 0) {  // stored: tensors and pickles
+    if (unpacked != size) return entry + " has two different sizes";
+    got = static_cast<std::uint32_t>(crc32(0L, packed, size));
+  } else if (method == 8) {  // deflated: TorchScript code, a few KiB
+    // libtorch allocates the declared size before inflating, so a lying
+    // header is checked here first.
+    if (unpacked > kMaxDeflatedEntry)
+      return entry + " declares " + std::to_string(unpacked) +
+             " bytes unpacked (at most " + std::to_string(kMaxDeflatedEntry) +
+             ")";
+    std::string out(unpacked, '\0');
+    z_stream z{};
+    if (inflateInit2(&z, -MAX_WBITS) != Z_OK) return "zlib failed";
+    z.next_in = const_cast<Bytef*>(packed);
+    z.avail_in = size;
+    z.next_out = reinterpret_cast<Bytef*>(out.data());
+    z.avail_out = unpacked;
+    const int rc = inflate(&z, Z_FINISH);
+    const bool whole = rc == Z_STREAM_END && z.total_out == unpacked;
+    inflateEnd(&z);
+    if (!whole) return entry + " does not unpack to its declared size";
+    got = static_cast<std::uint32_t>(
+        crc32(0L, reinterpret_cast<const Bytef*>(out.data()), unpacked));
+  } else {
+    return entry + " uses compression method " + std::to_string(method) +
+           " (model files store or deflate)";
+  }
+  if (got != crc)
+    return entry + " fails its CRC-32 check (the file is damaged)";
+  return "";
+}
+
 // Why the zip container is not intact, or "" (and *zip lists its entries).
 // TorchScript's reader does not check the entries' CRC-32s, and its parser
 // crashes on some corrupted code entries (found by fuzzing); a damaged file
@@ -141,36 +179,10 @@ std::string ZipDamage(const std::string& b, Zip* zip) {
         std::size_t{local} + 30 + u16(local + 26) + u16(local + 28);
     if (data + size > b.size()) return entry + " is cut short";
     const auto* packed = reinterpret_cast<const Bytef*>(b.data() + data);
-    std::uint32_t got = 0;
-    if (method == 0) {  // stored: tensors and pickles
-      if (unpacked != size) return entry + " has two different sizes";
-      got = static_cast<std::uint32_t>(crc32(0L, packed, size));
-    } else if (method == 8) {  // deflated: TorchScript code, a few KiB
-      // libtorch allocates the declared size before inflating, so a lying
-      // header is checked here first.
-      if (unpacked > kMaxDeflatedEntry)
-        return entry + " declares " + std::to_string(unpacked) +
-               " bytes unpacked (at most " + std::to_string(kMaxDeflatedEntry) +
-               ")";
-      std::string out(unpacked, '\0');
-      z_stream z{};
-      if (inflateInit2(&z, -MAX_WBITS) != Z_OK) return "zlib failed";
-      z.next_in = const_cast<Bytef*>(packed);
-      z.avail_in = size;
-      z.next_out = reinterpret_cast<Bytef*>(out.data());
-      z.avail_out = unpacked;
-      const int rc = inflate(&z, Z_FINISH);
-      const bool whole = rc == Z_STREAM_END && z.total_out == unpacked;
-      inflateEnd(&z);
-      if (!whole) return entry + " does not unpack to its declared size";
-      got = static_cast<std::uint32_t>(
-          crc32(0L, reinterpret_cast<const Bytef*>(out.data()), unpacked));
-    } else {
-      return entry + " uses compression method " + std::to_string(method) +
-             " (model files store or deflate)";
-    }
-    if (got != crc)
-      return entry + " fails its CRC-32 check (the file is damaged)";
+    if (std::string why =
+            EntryDataDamage(entry, packed, method, size, unpacked, crc);
+        !why.empty())
+      return why;
     if (is_version) {  // a small number in the range this libtorch reads
       char* end = nullptr;
       const std::string text = method == 0 ? b.substr(data, size) : "";
