@@ -42,6 +42,22 @@ void CheckGenerator(const Scenario& s, const FieldChecker& check) {
                            "the points beside it; got " +
                            FormatNumber(g.wall));
   }
+  // A wheeled robot arrives anywhere within physics.tolerance of its point
+  // and drives on from there: with less room beside a wall than that it
+  // catches the wall's end (walls of 0.19 beside 0.5 - 2 x 0.15, 5 mm a
+  // side, jammed robots for the rest of the mission).
+  const double tolerance = s.physics.tolerance;
+  if (g.HasWalls() && s.robots.model == RobotModel::kDiffDrive &&
+      !(g.wall < step - 2 * (radius + tolerance) - 1e-9)) {
+    check.Fail(g.wall,
+               "must be less than robots.step - 2 (robots.radius + "
+               "physics.tolerance) (" +
+                   FormatNumber(step - 2 * (radius + tolerance)) +
+                   ") for diff_drive robots: a wheeled robot is anywhere "
+                   "within the tolerance of its lattice point, and a thicker "
+                   "wall would catch it passing; got " +
+                   FormatNumber(g.wall));
+  }
   if (g.HasCorridors() && StepsIn(g.corridor, step) < 1) {
     check.Fail(g.corridor, "is narrower than " + step_text + ": the robots " +
                                "move between lattice points, so a corridor " +

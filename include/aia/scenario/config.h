@@ -161,7 +161,9 @@ struct GeneratorConfig {
                       "corridors; cave: a cellular-automaton cave"));
     a->Visit(AIA_FIELD(wall).In(kLength).Doc(
         "maze, rooms, corridors: wall thickness, metres; below robots.step - "
-        "2 robots.radius (walls stand between lattice points)"));
+        "2 robots.radius (walls stand between lattice points), for "
+        "diff_drive robots below robots.step - 2 (robots.radius + "
+        "physics.tolerance)"));
     a->Visit(AIA_FIELD(corridor).In(kLength).Doc(
         "maze: passage width; corridors: corridor width; metres, rounded "
         "down to whole robots.step, at least one; maze: two cells of it fit "
