@@ -23,24 +23,30 @@ std::atomic<const TorchBackend*> loaded{nullptr};
 
 const TorchBackend* LoadBackend() {
   // libtorch's OpenMP threads spin for a while after each parallel region
-  // by default, taking a core from the policy's own threads and the
-  // physics: async rounds of few deciding robots ran 1.5 to 3.9 times
-  // slower. GNU OpenMP reads the setting once, as the plugin loads it; a
-  // setting of the caller's own stays, and ours is taken back after the
-  // load (an OpenMP runtime loaded later, a Python program's PyTorch,
-  // keeps its own default).
-  struct PassiveWhileLoading {
-    const bool set = ::getenv("OMP_WAIT_POLICY") == nullptr;
-    PassiveWhileLoading() {
-      if (set) ::setenv("OMP_WAIT_POLICY", "PASSIVE", /*overwrite=*/0);
+  // (GNU OpenMP: 300 000 turns by default), holding a core the policy's
+  // own threads and the physics need: on a busy machine a 10 x 10 step's
+  // policy took 19 to 194 ms and a 200-robot async step's 145 to 484 (3.9
+  // and 4.3 ms, 85 to 123 when idle). After 1 000 turns they sleep: 12.6
+  // to 13.2 and 154 to 156 ms busy, and no slower idle (3.4 to 4.0 ms
+  // against 3.5 to 3.9). (Waiting passively from the start, as
+  // OMP_WAIT_POLICY=PASSIVE, cost 1 ms of the idle 10 x 10 step.) GNU
+  // OpenMP reads the setting once, as the plugin loads it; a setting of
+  // the caller's own stays, and ours is taken back after the load (an
+  // OpenMP runtime loaded later, a Python program's PyTorch, keeps its own
+  // default).
+  struct ShortSpinWhileLoading {
+    const bool set = ::getenv("OMP_WAIT_POLICY") == nullptr &&
+                     ::getenv("GOMP_SPINCOUNT") == nullptr;
+    ShortSpinWhileLoading() {
+      if (set) ::setenv("GOMP_SPINCOUNT", "1000", /*overwrite=*/0);
     }
-    ~PassiveWhileLoading() {
-      if (set) ::unsetenv("OMP_WAIT_POLICY");
+    ~ShortSpinWhileLoading() {
+      if (set) ::unsetenv("GOMP_SPINCOUNT");
     }
   };
   const TorchBackend* table;
   {
-    const PassiveWhileLoading passive;
+    const ShortSpinWhileLoading short_spin;
     table = static_cast<const TorchBackend*>(LoadPluginTable(
         AIA_TORCH_PLUGIN, kTorchBackendSymbol,
         PluginHeader{kTorchBackendVersion, sizeof(TorchBackend)},
