@@ -49,11 +49,14 @@ void AnnouncedPrecision(const Map& map, const SensorModel& sensor,
   // only the targets in the grid cells around each announced position are
   // evaluated: each extra[k] gets the same terms in the same order as
   // above, the zeros left out. The means go into cells of at least the
-  // range (at most 256 a side), clamped to the workspace's (a clamp only
-  // brings cells nearer); a mean that is not finite is never in range.
+  // range (at most 256 a side, and about four times as many as targets at
+  // most: the cells are cleared for each robot), clamped to the
+  // workspace's (a clamp only brings cells nearer); a mean that is not
+  // finite is never in range.
   const Vec2 size = map.size();
   const double cell =
-      std::max({sensor.range, size.x() / 256.0, size.y() / 256.0});
+      std::max({sensor.range, size.x() / 256.0, size.y() / 256.0,
+                std::sqrt(size.x() * size.y() / (4.0 * m))});
   const int gx = std::max(1, static_cast<int>(std::ceil(size.x() / cell)));
   const int gy = std::max(1, static_cast<int>(std::ceil(size.y() / cell)));
   const auto cell_of = [&](const Vec2& v) {
