@@ -436,8 +436,8 @@ class VectorMissions:
     def channels(self, frame=None, **params):
         """Every mission's Mission.channels(frame, **params), one (n, N, C,
         H, W) float32 array, rendered on the vector's threads (the GIL let
-        go): the same numbers as the missions' own calls, in a fraction of
-        their time."""
+        go): the same numbers as the missions' own calls, without a
+        Python loop over the missions."""
         if frame is not None:
             params["frame"] = frame
         return self._v.channels(_pairs(params, "channels",
