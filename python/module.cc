@@ -2075,6 +2075,7 @@ PYBIND11_MODULE(_aia, m) {
   (void)py::array_t<long long>(1);
   py::module_::import("atexit").attr("register")(
       py::cpp_function(&aia::python::StopEvaluationsAtExit));
+  m.attr("MAX_EVAL_WORLDS") = aia::kMaxEvalWorlds;
   m.def(
       "_exiting", [] { return aia::python::g_exiting.load(); },
       "whether the interpreter's exit has begun (aia.evaluate's end then)");

@@ -600,9 +600,8 @@ class _ProgressBar:
             _sys.stderr.flush()
 
 
-# The worlds one evaluation takes at most, as `aia eval` (eval.cc's
-# kMaxWorlds): more would first fill the memory with their list.
-_MAX_WORLDS = 1000000
+# The worlds one evaluation takes at most, as `aia eval`.
+_MAX_WORLDS = _aia.MAX_EVAL_WORLDS
 
 
 def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,

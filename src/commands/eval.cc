@@ -39,19 +39,15 @@ std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
   const std::string why =
       SeedRangeProblem(seed_base, seeds, "--seeds", "--seed-base");
   if (!why.empty()) throw InputError::Flag("--seed-base", why);
-  // Each world is a C-SB solve and a mission per policy (tens of ms at the
-  // least): a million is days of work; more would first fill the memory
-  // with their list.
-  constexpr std::uint64_t kMaxWorlds = 1000000;
   const std::uint64_t worlds = static_cast<std::uint64_t>(sizes.size()) *
                                static_cast<std::uint64_t>(seeds);
-  if (worlds > kMaxWorlds)
+  if (worlds > kMaxEvalWorlds)
     throw InputError::Flag(
         "--seeds",
         std::to_string(sizes.size()) + " sizes x " + std::to_string(seeds) +
             " seeds are " + std::to_string(worlds) +
             " worlds, more than one evaluation takes (" +
-            std::to_string(kMaxWorlds) +
+            std::to_string(kMaxEvalWorlds) +
             "): split the seeds over several evaluations with --seed-base "
             "(docs/sweeps.md)");
   std::vector<EvalInstance> out;

@@ -104,9 +104,9 @@ bool IsDenseUniform(const RowWeights& r, int n, bool counted) {
 // with the team: 279 ms of fusion at 1000 robots with 100 failed, 33 with
 // none), and a subtraction that cancels where they hold most of the
 // information. Stops as soon as every row is counted (the full graph: after
-// two rows). Whether every row is.
-bool CountRows(const std::vector<RowWeights>& w,
-               std::vector<std::uint8_t>* counted) {
+// two rows). How many rows are counted.
+int CountRows(const std::vector<RowWeights>& w,
+              std::vector<std::uint8_t>* counted) {
   const int n = static_cast<int>(w.size());
   counted->assign(n, 0);
   int count = 0;
@@ -117,7 +117,7 @@ bool CountRows(const std::vector<RowWeights>& w,
       (*counted)[j] = 1;
     }
   }
-  return count == n;
+  return count;
 }
 
 // Rows of the N x stride belief matrices, as contiguous arrays (the storage
@@ -264,9 +264,7 @@ void MixRows(const BeliefLayout& layout, const std::vector<RowWeights>& w,
   std::vector<std::uint8_t>& counted = counted_storage;
   int n_counted = n;
   if (dense) {
-    if (!CountRows(w, &counted))
-      n_counted = static_cast<int>(
-          std::count(counted.begin(), counted.end(), std::uint8_t{1}));
+    n_counted = CountRows(w, &counted);
     sum->resize(cols);
     const int blocks = static_cast<int>((cols + kSumColumns - 1) / kSumColumns);
     RunRange(split, blocks, [&](int b0, int b1, int) {

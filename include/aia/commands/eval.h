@@ -38,8 +38,14 @@ struct EvalInstance {
   std::uint64_t seed = 0;
 };
 
+// The worlds one evaluation takes at most (sizes x seeds): each is a C-SB
+// solve and a mission per policy (tens of ms at the least), so a million is
+// days of work; more would first fill the memory with their list.
+inline constexpr std::uint64_t kMaxEvalWorlds = 1000000;
+
 // Sizes in the given order, seeds seed_base .. seed_base + seeds - 1;
-// InputError naming --seed-base when the last seed would pass 2^64 - 1.
+// InputError naming --seed-base when the last seed would pass 2^64 - 1, or
+// --seeds when there are more than kMaxEvalWorlds.
 std::vector<EvalInstance> EnumerateInstances(const std::vector<TeamSize>& sizes,
                                              int seeds,
                                              std::uint64_t seed_base);

@@ -329,29 +329,22 @@ class PickleCheck {
   };
   [[noreturn]] static void Fail(const std::string& what) { throw Bad{what}; }
 
+  // What a value of each kind is, in PValue::Kind's order.
   static std::string KindName(PValue::Kind kind) {
-    switch (kind) {
-      case PValue::Kind::kNone:
-        return "None";
-      case PValue::Kind::kInt:
-        return "a number";
-      case PValue::Kind::kText:
-        return "a string";
-      case PValue::Kind::kTuple:
-        return "a tuple";
-      case PValue::Kind::kList:
-        return "a list";
-      case PValue::Kind::kDict:
-        return "a dict";
-      case PValue::Kind::kGlobal:
-        return "a class or function";
-      case PValue::Kind::kStorage:
-        return "a storage";
-      case PValue::Kind::kTensor:
-        return "a tensor";
-      default:
-        return "a value";
-    }
+    static constexpr const char* kNames[] = {"None",
+                                             "a number",
+                                             "a string",
+                                             "a tuple",
+                                             "a list",
+                                             "a dict",
+                                             "a class or function",
+                                             "a storage",
+                                             "a tensor",
+                                             "a module",
+                                             "a value"};
+    static_assert(std::size(kNames) ==
+                  static_cast<std::size_t>(PValue::Kind::kOther) + 1);
+    return kNames[static_cast<int>(kind)];
   }
 
   const char* Take(std::size_t n) {
