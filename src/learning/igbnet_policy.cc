@@ -70,6 +70,7 @@ void IgbNetPolicy::Reset(const Map& map, int num_robots, int num_targets,
   scorer_->Reset(map, num_robots, num_targets);
   if (rules_) rules_->Reset(num_robots, num_targets);
   logits_.assign(static_cast<std::size_t>(num_robots) * kNumMoves, 0.0f);
+  known_.Clear();
   decisions_ = shaped_moves_ = handwritten_moves_ = bfloat16_decisions_ = 0;
 }
 
@@ -81,8 +82,11 @@ const SearchMemory& IgbNetPolicy::search() const {
 PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
                                   std::vector<Move>* moves) {
   // Every part reads the beliefs' log dets and means from one digest,
-  // worked out once per step over the policy's threads.
-  digest_.Compute(*given.beliefs, PolicyRunner());
+  // worked out once per step over the policy's threads (and kept, with
+  // what each neighbourhood holds, while the team's knowledge is the same:
+  // async rounds between two sensing ticks).
+  const bool known = known_.Holds(given);
+  if (!known) digest_.Compute(*given.beliefs, PolicyRunner());
   DecisionContext ctx = given;
   ctx.digest = &digest_;
   const Lattice& lattice = ctx.map->lattice();
@@ -94,9 +98,11 @@ PolicyStatus IgbNetPolicy::Decide(const DecisionContext& given,
   for (int b = 0; b < team_.size(); ++b) team_.row_of[team_.rows[b]] = b;
   // The rules' open targets by what each neighbourhood holds.
   if (rules_ && params_.open == OpenRule::kNeighbours) {
-    holds_.Compute(ctx, team_.rows, params_.refresh, PolicyRunner());
+    if (!known)
+      holds_.Compute(ctx, team_.rows, params_.refresh, PolicyRunner());
     ctx.holds = &holds_;
   }
+  known_.Set(given);
   ScorerView view;
   PolicyStatus status = PolicyStatus::kOk;
   for (int i = 0; i < n; ++i) (*moves)[i] = Move::kStay;

@@ -21,6 +21,7 @@ void NetworkScorer::Reset(const Map& map, int num_robots, int num_targets) {
       &map.lattice());
   // The threads' heat grids are the map's shape: made again for this one.
   worker_heat_.clear();
+  heat_known_.Clear();
   // Only a model that reads search points keeps them (N x M slots).
   if (net_->config().channels.search)
     search_.Reset(num_robots, num_targets);
@@ -81,9 +82,11 @@ void NetworkScorer::MatchSensorRange(const DecisionContext& ctx) {
   const ChannelParams at_sensor = AtSensorRange(
       AtLatticeStep(net_->config().channels, ctx.map->lattice().step()),
       ctx.sensor->range);
-  if (at_sensor.observe_range != renderer_->params().observe_range)
+  if (at_sensor.observe_range != renderer_->params().observe_range) {
     renderer_.emplace(ctx.map->occupancy(), ctx.map->size(), at_sensor,
                       &ctx.map->lattice());
+    heat_known_.Clear();
+  }
 }
 
 void NetworkScorer::ChooseRows(Step* step) {
@@ -113,11 +116,15 @@ void NetworkScorer::PrepareInputs(Step* step, int workers) {
     no_prior_.assign(ctx.beliefs->layout().num_targets(), 0.0);
     step->prior = &no_prior_;
   }
-  heat_.Prepare(*ctx.beliefs, rows, *step->prior, renderer_->Heatmap(ctx.eps),
-                renderer_->occupancy(), PolicyRunner(), workers);
-  // The common heatmap's fold, once for every robot that holds it.
+  // The team's heatmaps and the common one's fold (once for every robot
+  // that holds it), kept while the team's knowledge is the same.
   step->folding = renderer_->params().frame == ChannelFrame::kCentred;
-  if (step->folding) fold_.Build(heat_.base());
+  if (!heat_known_.Holds(ctx)) {
+    heat_.Prepare(*ctx.beliefs, rows, *step->prior, renderer_->Heatmap(ctx.eps),
+                  renderer_->occupancy(), PolicyRunner(), workers);
+    if (step->folding) fold_.Build(heat_.base());
+    heat_known_.Set(ctx);
+  }
   if (static_cast<int>(worker_heat_.size()) < workers) {
     worker_heat_.resize(workers, renderer_->occupancy());
     worker_neighbours_.resize(workers);

@@ -1,5 +1,7 @@
 #include "aia/planning/registry.h"
 
+#include <atomic>
+
 #include "aia/core/error.h"
 #include "aia/planning/decsb.h"
 #include "aia/planning/expert.h"
@@ -7,6 +9,11 @@
 #include "aia/planning/random_policy.h"
 
 namespace aia {
+
+std::uint64_t NewKnowledgeStamp() {
+  static std::atomic<std::uint64_t> last{0};
+  return last.fetch_add(1, std::memory_order_relaxed) + 1;
+}
 
 std::string_view PolicyStatusName(PolicyStatus status) {
   switch (status) {

@@ -171,6 +171,7 @@ DecisionContext Episode::Context() const {
   ctx.history = &history_;
   ctx.measurements = &z_;
   if (async()) ctx.ready = &ready_;
+  ctx.knowledge = knowledge_;
   return ctx;
 }
 
@@ -311,6 +312,7 @@ void Episode::StepAsync() {
       };
       slowest();
       while (comm_.ApplyFailures(step_)) {
+        knowledge_ = NewKnowledgeStamp();  // the graph and the active robots
         StopFailedRobots();
         slowest();
       }
@@ -503,6 +505,7 @@ void Episode::Tick() {
 
 void Episode::Observe() {
   auto t0 = Clock::now();
+  knowledge_ = NewKnowledgeStamp();  // a new graph, measurements and beliefs
   comm_.Update(step_, robot_pos_);
   Sense(sim_, instance_->scenario.sensor, robot_pos_, target_pos_,
         comm_.active(), &sensor_rngs_, &z_, &sensing_);

@@ -82,6 +82,9 @@ class IgbNetPolicy : public NamedPolicy<IgbNetPolicy> {
   std::vector<std::uint8_t> walking_;  // per row: moved by the walk this step
   BeliefDigest digest_;                // this step's, for every part
   NeighbourhoodHolds holds_;  // this step's, with policy.open neighbours
+  // The knowledge digest_ and holds_ were worked out from (in async, a
+  // round without a sensing tick or a failure keeps them).
+  KnowledgeMark known_;
   long decisions_ = 0, shaped_moves_ = 0, handwritten_moves_ = 0,
        bfloat16_decisions_ = 0;
 };

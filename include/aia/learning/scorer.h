@@ -130,7 +130,8 @@ class NetworkScorer : public MoveScorer {
   std::vector<float> features_;
   TeamGraph graph_;
   TeamHeatmap heat_;
-  HeatFold fold_;  // heat_.base()'s, for the centred frame
+  HeatFold fold_;             // heat_.base()'s, for the centred frame
+  KnowledgeMark heat_known_;  // what heat_ and fold_ were made from
   // Per worker thread (ParallelFor): a heatmap, the neighbours' points and
   // the targets of channel 4.
   std::vector<Grid<float>> worker_heat_;

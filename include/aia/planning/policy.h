@@ -130,6 +130,37 @@ struct DecisionContext {
   // (planning/search.h; a policy may set it for its own parts); null where
   // none was worked out.
   const NeighbourhoodHolds* holds = nullptr;
+  // A stamp of what the team knows: `beliefs`, `measurements`, the graph
+  // and its active robots (and the mission's eps and priors). Two contexts
+  // with the same nonzero stamp have the same of these, so a policy may keep
+  // what it worked out from them (in async, a round without a sensing tick
+  // or a failure); a context that changes any of them takes a new one
+  // (NewKnowledgeStamp). 0: unknown, work everything out.
+  std::uint64_t knowledge = 0;
+};
+
+// A stamp no context of this process had before (never 0; thread-safe).
+std::uint64_t NewKnowledgeStamp();
+
+// Whether what a part worked out from a context's knowledge (the beliefs'
+// digest, the heatmaps) still holds for another context: the last Set's
+// had the same nonzero stamp and the same beliefs.
+class KnowledgeMark {
+ public:
+  bool Holds(const DecisionContext& ctx) const {
+    return ctx.knowledge != 0 && ctx.knowledge == stamp_ &&
+           ctx.beliefs == beliefs_;
+  }
+  // After the work is done.
+  void Set(const DecisionContext& ctx) {
+    stamp_ = ctx.knowledge;
+    beliefs_ = ctx.beliefs;
+  }
+  void Clear() { *this = KnowledgeMark{}; }
+
+ private:
+  std::uint64_t stamp_ = 0;
+  const BeliefSet* beliefs_ = nullptr;
 };
 
 // Robot (row) i's log det Sigma and position mean of target k, from the

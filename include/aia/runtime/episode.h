@@ -268,6 +268,8 @@ class Episode {
   int num_targets_ = 0;
   int step_ = 0;
   int rounds_ = 0;  // the policy's decisions so far (DecisionContext::round)
+  // DecisionContext::knowledge: new at every Observe and failure.
+  std::uint64_t knowledge_ = 0;
   int flowtime_ = -1;
   bool stopped_ = false;
   bool interrupted_ = false;
