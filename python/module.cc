@@ -1494,12 +1494,25 @@ struct EvalProgress {
   int total = 0;        // runs of this policy in the evaluation
   std::atomic<int> finished{0};
   int reported = 0;
+  void Start() {  // GIL held: the runs done before
+    if (!callback.is_none()) callback(std::min(done_before, total), total);
+  }
   void Report() {  // GIL held
     const int now = finished.load();
     if (callback.is_none() || now == reported) return;
     reported = now;
     callback(std::min(done_before + now, total), total);
   }
+};
+
+// While one lives, what runs on this thread (a progress callback, a
+// policy) is inside an evaluation: an aia.evaluate it calls is refused (it
+// would wait for this one's turn for ever).
+struct InsideEvaluate {
+  InsideEvaluate() { t_inside_evaluate = true; }
+  ~InsideEvaluate() { t_inside_evaluate = false; }
+  InsideEvaluate(const InsideEvaluate&) = delete;
+  InsideEvaluate& operator=(const InsideEvaluate&) = delete;
 };
 
 // A Python callable as a policy of aia's own loop (evaluate): each decision
@@ -1533,10 +1546,7 @@ class CallbackPolicy : public Policy {
     // What runs from here (the progress callback, the policy) is inside an
     // evaluation: an aia.evaluate it calls is refused (it would wait for
     // this one's turn for ever).
-    struct Inside {
-      Inside() { t_inside_evaluate = true; }
-      ~Inside() { t_inside_evaluate = false; }
-    } inside;
+    const InsideEvaluate inside;
     progress_->Report();
     const int n = static_cast<int>(moves->size());
     py::object view = py::cast(new Mission(&ctx, seed_, id_, 0),
@@ -1669,6 +1679,11 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
   report->callback = std::move(progress);
   report->done_before = done_before;
   report->total = total;
+  o.started = [report] {
+    AcquireGil gil;
+    const InsideEvaluate inside;
+    report->Start();
+  };
   o.extra_policies = {std::make_shared<CallbackSpec>(
       name, centralized, std::move(decide), report)};
   int rc = 0;

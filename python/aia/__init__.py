@@ -678,9 +678,8 @@ def evaluate(policy, sizes, seeds, seed_base=0, out=None, name=None,
         out = tempfile.mkdtemp(prefix="aia_evaluate_")
     out = _path(out, where, "out")
     sets = [f"{k}={v}" for k, v in _pairs(overrides, "overrides", where)]
+    # The bar's first line comes from C++ once the inputs are checked.
     done_before = _runs_done(out, name, sizes, seeds, seed_base)
-    if report is not None:
-        report(done_before, total)
     rc, notes = _aia.evaluate(lambda view: decide(Mission._view(view)), name,
                               bool(centralized), list(sizes), seeds,
                               seed_base, out, threads, sets, report,

@@ -254,6 +254,7 @@ int RunEval(const EvalOptions& o) {
             ? (" on " + std::to_string(ranks.size()) + " MPI ranks").c_str()
             : "");
     std::fflush(stdout);
+    if (o.started) o.started();
   }
 
   RowSink sink(o, policies, std::move(rows), total_runs, root, &ranks);

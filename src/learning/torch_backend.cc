@@ -21,24 +21,33 @@ namespace {
 
 std::atomic<const TorchBackend*> loaded{nullptr};
 
+// Neither GNU OpenMP setting of its wait is the caller's own.
+bool WaitUnset() {
+  return ::getenv("OMP_WAIT_POLICY") == nullptr &&
+         ::getenv("GOMP_SPINCOUNT") == nullptr;
+}
+
+// libtorch's OpenMP threads spin for a while after each parallel region
+// (GNU OpenMP: 300 000 turns by default), holding a core the policy's own
+// threads and the physics need: on a busy machine a 10 x 10 step's policy
+// took 19 to 194 ms and a 200-robot async step's 145 to 484 (3.9 and 4.3
+// ms, 85 to 123 when idle). After 1 000 turns they sleep: 12.6 to 13.2 and
+// 154 to 156 ms busy, and no slower idle (3.4 to 4.0 ms against 3.5 to
+// 3.9). (Waiting passively from the start, as OMP_WAIT_POLICY=PASSIVE,
+// cost 1 ms of the idle 10 x 10 step.) GNU OpenMP reads the setting once,
+// as the plugin loads it.
+constexpr char kShortSpin[] = "1000";
+
 const TorchBackend* LoadBackend() {
-  // libtorch's OpenMP threads spin for a while after each parallel region
-  // (GNU OpenMP: 300 000 turns by default), holding a core the policy's
-  // own threads and the physics need: on a busy machine a 10 x 10 step's
-  // policy took 19 to 194 ms and a 200-robot async step's 145 to 484 (3.9
-  // and 4.3 ms, 85 to 123 when idle). After 1 000 turns they sleep: 12.6
-  // to 13.2 and 154 to 156 ms busy, and no slower idle (3.4 to 4.0 ms
-  // against 3.5 to 3.9). (Waiting passively from the start, as
-  // OMP_WAIT_POLICY=PASSIVE, cost 1 ms of the idle 10 x 10 step.) GNU
-  // OpenMP reads the setting once, as the plugin loads it; a setting of
-  // the caller's own stays, and ours is taken back after the load (an
-  // OpenMP runtime loaded later, a Python program's PyTorch, keeps its own
-  // default).
+  // Set for the load only where no program's main set it before its
+  // threads (PreferShortOpenMpSpin: build/aia) and the caller set neither:
+  // an OpenMP runtime loaded later, a Python program's PyTorch, keeps its
+  // own default. (setenv races with a getenv on another thread: a native
+  // thread of a Python program at this moment, not build/aia's.)
   struct ShortSpinWhileLoading {
-    const bool set = ::getenv("OMP_WAIT_POLICY") == nullptr &&
-                     ::getenv("GOMP_SPINCOUNT") == nullptr;
+    const bool set = WaitUnset();
     ShortSpinWhileLoading() {
-      if (set) ::setenv("GOMP_SPINCOUNT", "1000", /*overwrite=*/0);
+      if (set) ::setenv("GOMP_SPINCOUNT", kShortSpin, /*overwrite=*/0);
     }
     ~ShortSpinWhileLoading() {
       if (set) ::unsetenv("GOMP_SPINCOUNT");
@@ -64,6 +73,10 @@ const TorchBackend& Torch() {
 }
 
 const TorchBackend* TorchIfLoaded() { return loaded.load(); }
+
+void PreferShortOpenMpSpin() {
+  if (WaitUnset()) ::setenv("GOMP_SPINCOUNT", kShortSpin, /*overwrite=*/0);
+}
 
 IgbNet::IgbNet(const TorchBackend* backend, TorchNet* net)
     : backend_(backend), net_(net) {

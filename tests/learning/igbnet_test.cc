@@ -2,6 +2,7 @@
 // load give identical outputs; bad model files are bad input; relabelling
 // the robots permutes the actions exactly; the step does not matter.
 #include <gtest/gtest.h>
+#include <stdlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <map>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 
 #include "aia/core/error.h"
 #include "aia/core/hash.h"
@@ -1232,6 +1234,34 @@ TEST(IgbNetPolicyTest, TakesOnlyValidMoves) {
     for (int i = 0; i < 4; ++i)
       EXPECT_TRUE(f.world.map.lattice().Valid(f.positions[i], moves[i]));
   }
+}
+
+// build/aia's main sets libtorch's OpenMP spin for the whole process before
+// any thread (so that loading the plugin needs no setenv, which races with
+// a getenv on another thread), unless the caller chose a wait of its own.
+TEST(OpenMpSpinTest, ShortUnlessTheCallerChoseAWait) {
+  const auto value = [] {
+    const char* v = ::getenv("GOMP_SPINCOUNT");
+    return v ? std::string(v) : std::string("(unset)");
+  };
+  const char* policy = ::getenv("OMP_WAIT_POLICY");
+  const char* spin = ::getenv("GOMP_SPINCOUNT");
+  const std::string had_policy = policy ? policy : "",
+                    had_spin = spin ? spin : "";
+  ::unsetenv("OMP_WAIT_POLICY");
+  ::unsetenv("GOMP_SPINCOUNT");
+  PreferShortOpenMpSpin();
+  EXPECT_EQ(value(), "1000");
+  ::setenv("GOMP_SPINCOUNT", "77", 1);
+  PreferShortOpenMpSpin();
+  EXPECT_EQ(value(), "77");
+  ::unsetenv("GOMP_SPINCOUNT");
+  ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+  PreferShortOpenMpSpin();
+  EXPECT_EQ(value(), "(unset)");
+  ::unsetenv("OMP_WAIT_POLICY");
+  if (policy) ::setenv("OMP_WAIT_POLICY", had_policy.c_str(), 1);
+  if (spin) ::setenv("GOMP_SPINCOUNT", had_spin.c_str(), 1);
 }
 
 }  // namespace

@@ -269,3 +269,32 @@ def test_evaluations_do_not_nest(tmp_path):
                              r"progress callback of a running aia\.evaluate"):
         aia.evaluate(policy, ["4x4"], 1, out=str(tmp_path / "outer"),
                      threads=1, progress=False)
+
+
+def test_a_refusal_draws_no_bar(tmp_path, capfd):
+    """A size or an override that C++ refuses is refused before the bar's
+    first line (it was drawn first, then the error followed it)."""
+    seen = []
+    greedy = aia.builtin_policy("greedy")
+    with pytest.raises(aia.InputError, match=r"sizes\[1\]"):
+        aia.evaluate(greedy, ["2x1", "2y1"], 2, out=tmp_path / "a")
+    with pytest.raises(aia.InputError, match="no_such_key"):
+        aia.evaluate(greedy, ["2x1"], 2, out=tmp_path / "b",
+                     overrides={"sensor.no_such_key": 1})
+    with pytest.raises(aia.InputError, match="no_such_key"):
+        aia.evaluate(greedy, ["2x1"], 2, out=tmp_path / "c",
+                     overrides={"sensor.no_such_key": 1},
+                     progress=lambda done, total: seen.append(done))
+    assert seen == []
+    assert "[aia.evaluate]" not in capfd.readouterr().err
+
+
+def test_the_first_progress_call_is_inside_the_evaluation(tmp_path):
+    def progress(done, total):
+        aia.evaluate(lambda v: [4] * v.num_robots, ["2x1"], 1,
+                     out=str(tmp_path / "inner"), progress=False)
+
+    with pytest.raises(aia.InputError, match="progress callback of a "
+                                             "running aia.evaluate"):
+        aia.evaluate(lambda v: [4] * v.num_robots, ["2x1"], 1,
+                     out=str(tmp_path / "outer"), progress=progress)

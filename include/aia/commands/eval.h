@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -195,6 +196,10 @@ struct EvalOptions {
   // written, abandoning the runs in flight; false waits for them to stop at
   // their next step, then returns kInterruptedExitCode.
   bool exit_on_interrupt = true;
+  // Called once (by the process that writes runs.csv) when the inputs are
+  // checked and the folder resumed, before the first run: aia.evaluate
+  // draws its bar then, not before a refusal.
+  std::function<void()> started;
 
   // The flags that need no scenario, declared once for `aia eval`'s flags
   // and their checks.

@@ -177,6 +177,13 @@ class IgbNet {
 void SetInferenceThreads(int threads);
 int InferenceThreads();
 
+// For a program's main, before it starts any thread: libtorch's OpenMP
+// threads spin 1 000 turns after their work (not GNU OpenMP's 300 000, which
+// held a core the policy and physics need) unless OMP_WAIT_POLICY or
+// GOMP_SPINCOUNT is set, for the whole process and its children. Without
+// it the setting is made and taken back as the plugin loads.
+void PreferShortOpenMpSpin();
+
 // Threads of the learned policy's rendering and inference (workers of
 // ParallelFor; 1 until set; 0 leaves it). Each runs libtorch single-threaded.
 void SetPolicyThreads(int threads);
