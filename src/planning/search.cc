@@ -103,6 +103,7 @@ void MissSlots<Derived, Slot, Shared>::Reset(int num_robots, int num_targets) {
   num_robots_ = num_robots;
   num_targets_ = num_targets;
   slots_.assign(static_cast<std::size_t>(num_robots) * num_targets, Slot{});
+  touched_.assign(num_robots, 1);
   misses_ = 0;
   derived().Resized();
 }
@@ -112,6 +113,7 @@ int MissSlots<Derived, Slot, Shared>::Record(const DecisionContext& ctx,
                                              int robot) {
   AIA_CHECK(robot >= 0 && robot < num_robots_);
   AIA_CHECK(ctx.beliefs->layout().num_targets() == num_targets_);
+  touched_[robot] = 1;  // (each robot's byte is its own thread's)
   const Map& map = *ctx.map;
   const int here = (*ctx.robot_lattice)[robot];
   const Vec2 p = map.lattice().Point(here);
@@ -166,7 +168,7 @@ void MissSlots<Derived, Slot, Shared>::Share(const DecisionContext& ctx,
       [&](int i, int k, int group, int worker) {
         derived().RecomputeShared(ctx, i, k, group, &caches_[worker]);
       },
-      run, workers);
+      &touched_, run, workers);
 }
 
 template class MissSlots<SearchMemory, internal::AimSlot, internal::SharedWalk>;

@@ -348,6 +348,32 @@ TEST(SearchPointsTest, NeighboursShareTheirMisses) {
   EXPECT_EQ(points.Points(0, 0).size(), 3u);
 }
 
+// Robots that decide on arrival share in turns: a robot that sat out the
+// last call shares the miss it records now with the robots deciding with it
+// (the lists read again are those their own calls changed since).
+TEST(SearchPointsTest, AMissRecordedAfterSittingOutACallIsShared) {
+  Team team(
+      "workspace: {size: [10.0, 10.0]}\n"
+      "robots: {count: 3, start: [[4.25, 5.25], [1.25, 1.25], [1.25, "
+      "8.75]]}\n"
+      "targets: {list: [{position: [8.0, 8.0], prior_mean: [6.1, 5.25]}]}\n");
+  SearchPoints points;
+  points.Reset(3, 1);
+  const DecisionContext ctx = team.Context();
+  for (int i = 0; i < 3; ++i) points.Update(ctx, i);  // the beliefs
+  points.Share(ctx, {0, 1, 2});
+  points.Update(ctx, 1);
+  points.Share(ctx, {1});
+  points.Update(ctx, 0);  // robot 0's miss
+  points.Update(ctx, 2);
+  points.Share(ctx, {0, 2});
+  ASSERT_EQ(points.Missed(0, 0).size(), 1u);
+  EXPECT_EQ(points.Missed(2, 0), points.Missed(0, 0));
+  EXPECT_TRUE(points.Missed(1, 0).empty());  // it did not decide
+  points.Share(ctx, {1});
+  EXPECT_EQ(points.Missed(1, 0), points.Missed(0, 0));
+}
+
 // NeighbourMisses against the rule read directly: robot i's list for target
 // k becomes its own list, then every point a neighbour's list (as it was
 // before the call) holds and its own does not, ascending; only where its
@@ -423,18 +449,21 @@ TEST(NeighbourMissesTest, EachRobotTakesItsNeighboursPointsOnce) {
     // took points of a target hold the same set of them.
     std::map<std::pair<int, int>, std::vector<int>> held;
     int shared = 0;
-    sharing.Share(team.Context(), shuffled, m, &slots,
-                  [&](int i, int k, int group, int worker) {
-                    calls.push_back({i, k});
-                    EXPECT_EQ(worker, 0);
-                    std::vector<int> set = slots[i * m + k].missed.points();
-                    std::sort(set.begin(), set.end());
-                    const auto [it, fresh] = held.insert({{group, k}, set});
-                    if (!fresh) {
-                      EXPECT_EQ(set, it->second) << "robot " << i;
-                      ++shared;
-                    }
-                  });
+    std::vector<std::uint8_t> touched(n, 1);
+    sharing.Share(
+        team.Context(), shuffled, m, &slots,
+        [&](int i, int k, int group, int worker) {
+          calls.push_back({i, k});
+          EXPECT_EQ(worker, 0);
+          std::vector<int> set = slots[i * m + k].missed.points();
+          std::sort(set.begin(), set.end());
+          const auto [it, fresh] = held.insert({{group, k}, set});
+          if (!fresh) {
+            EXPECT_EQ(set, it->second) << "robot " << i;
+            ++shared;
+          }
+        },
+        &touched);
     for (int s = 0; s < n * m; ++s)
       EXPECT_EQ(slots[s].missed.points(), expected[s].missed.points())
           << "trial " << trial << ", robot " << s / m << ", target " << s % m;
@@ -458,18 +487,28 @@ TEST(NeighbourMissesTest, CallAfterCallMatchesTheRule) {
     std::vector<MissSlot> slots(n * m);
     const double log_eps = std::log(team.scenario.mission.eps);
     NeighbourMisses sharing;
+    // Only the robots whose lists changed are marked (as MissSlots marks
+    // them): the others' targets are the last call's.
+    std::vector<std::uint8_t> touched(n, 1);
     std::vector<Vec2> p;
     for (int idx : team.positions)
       p.push_back(team.world.map.lattice().Point(idx));
     for (int call = 0; call < 8; ++call) {
       team.comm.Update(call + 2, p);
-      for (MissSlot& s : slots) {
+      for (int at = 0; at < n * m; ++at) {
+        MissSlot& s = slots[at];
         s.log_det = rng.Uniform() < 0.15 ? log_eps - 1.0 : log_eps + 1.0;
         const double u = rng.Uniform();
-        if (u < 0.1) s.missed.clear();
+        if (u < 0.1) {
+          if (!s.missed.empty()) touched[at / m] = 1;
+          s.missed.clear();
+        }
         if (u > 0.7) {
           const int q = NewPoint(s.missed, &rng);
-          if (q >= 0) s.missed.push_back(q);
+          if (q >= 0) {
+            s.missed.push_back(q);
+            touched[at / m] = 1;
+          }
         }
       }
       for (const MissSlot& s : slots)
@@ -482,10 +521,12 @@ TEST(NeighbourMissesTest, CallAfterCallMatchesTheRule) {
       ShareByTheRule(team, slots, robots, m, log_eps, &expected,
                      &expected_calls);
       std::vector<std::pair<int, int>> calls;
-      sharing.Share(team.Context(), robots, m, &slots,
-                    [&](int i, int k, int, int) {
-                      calls.push_back({i, k});
-                    });
+      sharing.Share(
+          team.Context(), robots, m, &slots,
+          [&](int i, int k, int, int) {
+            calls.push_back({i, k});
+          },
+          &touched);
       for (int s = 0; s < n * m; ++s) {
         std::vector<int> got = slots[s].missed.points();
         std::vector<int> want = expected[s].missed.points();

@@ -229,10 +229,16 @@ class ShareCache {
 // one thread, in order). Reuses its scratch.
 class NeighbourMisses {
  public:
+  // `touched`: per robot of the slots, whether its lists may have changed
+  // since the last call (all, after a Reset of the slots): only those are
+  // read again for the targets they missed (an async round's few deciding
+  // robots, not the whole team's N x M slots); cleared here, and set again
+  // for `robots`, whose lists the call changes.
   template <typename Slot, typename Then>
   void Share(const DecisionContext& ctx, const std::vector<int>& robots,
              int num_targets, std::vector<Slot>* slots, Then then,
-             const RangeRunner& run = {}, int workers = 1) {
+             std::vector<std::uint8_t>* touched, const RangeRunner& run = {},
+             int workers = 1) {
     const double log_eps = std::log(ctx.eps);
     const auto points = static_cast<std::size_t>(ctx.map->lattice().size());
     if (mark_.size() != points) {
@@ -245,19 +251,23 @@ class NeighbourMisses {
       return (*slots)[static_cast<std::size_t>(i) * num_targets + k];
     };
     // Per robot, the targets it missed any point of, in one pass over the
-    // slots (the robots split over `run`): the unions below visit only
+    // touched robots' slots (split over `run`): the unions below visit only
     // those, not every target.
     const int num_robots =
         num_targets > 0 ? static_cast<int>(slots->size()) / num_targets : 0;
+    AIA_CHECK(static_cast<int>(touched->size()) == num_robots);
     if (static_cast<int>(missing_.size()) < num_robots)
       missing_.resize(num_robots);
     RunRange(run, num_robots, [&](int j0, int j1, int) {
       for (int j = j0; j < j1; ++j) {
+        if (!(*touched)[j]) continue;
+        (*touched)[j] = 0;
         missing_[j].clear();
         for (int k = 0; k < num_targets; ++k)
           if (!at(j, k).missed.empty()) missing_[j].push_back(k);
       }
     });
+    for (int i : robots) (*touched)[i] = 1;  // the robots take below
     // The last call's unions, which the lists it shared refer to.
     ++call_;
     last_union_.swap(union_);
@@ -560,6 +570,9 @@ class MissSlots {
   long misses_ = 0;
   NeighbourMisses sharing_;
   std::vector<Slot> slots_;
+  // Per robot: whether its lists may have changed since sharing_ last read
+  // them (Record's and Share's robots; every robot after Reset).
+  std::vector<std::uint8_t> touched_;
   std::vector<long> added_;    // per worker
   std::vector<Cache> caches_;  // per worker
 };
