@@ -153,10 +153,14 @@ BENCHMARK(BM_MjStepAlone)
 // One decision step of the default policy (igbnet, its shipped model and
 // coordination) in the worlds of BM_PhysicsStep, one policy thread: what
 // regressed 10x at 1000 robots before any benchmark caught it (issue 36).
-// The counter policy_ms is the policy's share of a step.
+// The counter policy_ms is the policy's share of a step. Arguments: robots,
+// decisions (0 lockstep; 1 async, where a step is one round: the robots
+// whose moves ended decide, which redid the whole team's work each round
+// until 2026-12-07).
 void BM_DefaultPolicyStep(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   Scenario s = GrowingScenario(n, false);
+  if (state.range(1) != 0) s.mission.decisions = Decisions::kAsync;
   s.policy.name = "igbnet";
   s.mission.stop_at_success = false;
   s.mission.max_steps = 1 << 30;
@@ -172,8 +176,7 @@ void BM_DefaultPolicyStep(benchmark::State& state) {
       1e3 * (episode->times().policy - before) / std::max(1L, steps);
 }
 BENCHMARK(BM_DefaultPolicyStep)
-    ->Arg(80)
-    ->Arg(1000)
+    ->ArgsProduct({{80, 1000}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
