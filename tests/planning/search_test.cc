@@ -385,6 +385,27 @@ struct MissSlot {
   MissList missed;
 };
 
+// A team without targets (a hand-made context, or a library's own
+// mission) shares nothing and stops nothing: its slots are empty, its
+// robots still counted.
+TEST(NeighbourMissesTest, NoTargetsNoWork) {
+  Team team(
+      "workspace: {size: [10.0, 10.0]}\n"
+      "robots: {count: 3, start: [[4.25, 5.25], [1.25, 1.25], [1.25, "
+      "8.75]]}\n"
+      "targets: {list: [{position: [8.0, 8.0], prior_mean: [6.1, 5.25]}]}\n");
+  NeighbourMisses sharing;
+  std::vector<MissSlot> slots;
+  std::vector<std::uint8_t> touched(3, 1);
+  int calls = 0;
+  for (int call = 0; call < 2; ++call)
+    sharing.Share(
+        team.Context(), {0, 2}, 0, &slots, [&](int, int, int, int) { ++calls; },
+        &touched);
+  EXPECT_EQ(calls, 0);
+  EXPECT_EQ(touched, (std::vector<std::uint8_t>{1, 0, 1}));
+}
+
 // The rule read directly (above): robot i's expected lists and the
 // expected then(i, k) calls of one Share over `robots`.
 void ShareByTheRule(const Team& team, const std::vector<MissSlot>& slots,

@@ -253,9 +253,9 @@ class NeighbourMisses {
     // Per robot, the targets it missed any point of, in one pass over the
     // touched robots' slots (split over `run`): the unions below visit only
     // those, not every target.
-    const int num_robots =
-        num_targets > 0 ? static_cast<int>(slots->size()) / num_targets : 0;
-    AIA_CHECK(static_cast<int>(touched->size()) == num_robots);
+    const int num_robots = static_cast<int>(touched->size());
+    AIA_CHECK(slots->size() ==
+              static_cast<std::size_t>(num_robots) * num_targets);
     if (static_cast<int>(missing_.size()) < num_robots)
       missing_.resize(num_robots);
     RunRange(run, num_robots, [&](int j0, int j1, int) {
