@@ -1543,10 +1543,7 @@ class CallbackPolicy : public Policy {
   PolicyStatus Decide(const DecisionContext& ctx,
                       std::vector<Move>* moves) override {
     AcquireGil gil;
-    // What runs from here (the progress callback, the policy) is inside an
-    // evaluation: an aia.evaluate it calls is refused (it would wait for
-    // this one's turn for ever).
-    const InsideEvaluate inside;
+    const InsideEvaluate inside;  // the progress callback and the policy
     progress_->Report();
     const int n = static_cast<int>(moves->size());
     py::object view = py::cast(new Mission(&ctx, seed_, id_, 0),

@@ -117,13 +117,14 @@ void NetworkScorer::PrepareInputs(Step* step, int workers) {
     step->prior = &no_prior_;
   }
   // The team's heatmaps and the common one's fold (once for every robot
-  // that holds it), kept while the team's knowledge is the same.
+  // that holds it), kept while the team's knowledge and rows are the same.
   step->folding = renderer_->params().frame == ChannelFrame::kCentred;
-  if (!heat_known_.Holds(ctx)) {
+  if (!heat_known_.Holds(ctx) || heat_rows_ != rows) {
     heat_.Prepare(*ctx.beliefs, rows, *step->prior, renderer_->Heatmap(ctx.eps),
                   renderer_->occupancy(), PolicyRunner(), workers);
     if (step->folding) fold_.Build(heat_.base());
     heat_known_.Set(ctx);
+    heat_rows_ = rows;
   }
   if (static_cast<int>(worker_heat_.size()) < workers) {
     worker_heat_.resize(workers, renderer_->occupancy());

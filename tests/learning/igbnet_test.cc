@@ -725,6 +725,43 @@ TEST(IgbNetPolicyTest, UnreadRowsAreSkippedAndTheOthersScoreAsInTheWholeTeam) {
   }
 }
 
+// A scorer told the same knowledge stamp keeps the team's heatmaps only for
+// the same rows: a team of other rows (a robot fewer) scores as a fresh
+// scorer does, and the first team again as the first time.
+TEST(IgbNetPolicyTest, TheSameKnowledgeWithOtherRowsScoresAsAFreshScorer) {
+  testing::TeamFixture f(kTeam);
+  Personalize(&f);
+  const std::vector<double> prior(3, std::log(1.0));
+  DecisionContext ctx = f.Context();
+  ctx.central = nullptr;
+  ctx.log_det_prior = &prior;
+  ctx.knowledge = NewKnowledgeStamp();
+  const auto rows = [](std::vector<int> r) {
+    ScoringRows team;
+    team.row_of.assign(4, -1);
+    for (int b = 0; b < static_cast<int>(r.size()); ++b) team.row_of[r[b]] = b;
+    team.rows = std::move(r);
+    return team;
+  };
+  const auto score = [&](NetworkScorer* scorer, const ScoringRows& team) {
+    std::vector<float> out(team.rows.size() * kNumMoves, -1.0f);
+    scorer->Score(ctx, team, ScorerView{}, out.data());
+    return out;
+  };
+  const auto fresh = [&](const ScoringRows& team) {
+    NetworkScorer scorer(TestNet(ChannelFrame::kCentred, true));
+    scorer.Reset(f.world.map, 4, f.world.NumTargets());
+    return score(&scorer, team);
+  };
+  NetworkScorer kept(TestNet(ChannelFrame::kCentred, true));
+  kept.Reset(f.world.map, 4, f.world.NumTargets());
+  const ScoringRows all = rows({0, 1, 2, 3}), three = rows({0, 2, 3});
+  const std::vector<float> first = score(&kept, all);
+  EXPECT_EQ(first, fresh(all));
+  EXPECT_EQ(score(&kept, three), fresh(three));
+  EXPECT_EQ(score(&kept, all), first);
+}
+
 // policy.claims (route by default, so the relabelling test above holds with
 // it): two targets at their priors, robot 0 beside the first, robot 1 beside
 // the second, robot 2 far from both. With neighbours, robots 0 and 1 are

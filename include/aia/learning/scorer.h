@@ -130,8 +130,10 @@ class NetworkScorer : public MoveScorer {
   std::vector<float> features_;
   TeamGraph graph_;
   TeamHeatmap heat_;
-  HeatFold fold_;             // heat_.base()'s, for the centred frame
-  KnowledgeMark heat_known_;  // what heat_ and fold_ were made from
+  HeatFold fold_;  // heat_.base()'s, for the centred frame
+  // What heat_ and fold_ were made from: the knowledge and the rows.
+  KnowledgeMark heat_known_;
+  std::vector<int> heat_rows_;
   // Per worker thread (ParallelFor): a heatmap, the neighbours' points and
   // the targets of channel 4.
   std::vector<Grid<float>> worker_heat_;
