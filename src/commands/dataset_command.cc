@@ -7,10 +7,12 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <thread>
 
 #include "aia/core/clock.h"
 #include "aia/core/error.h"
 #include "aia/core/field_io.h"
+#include "aia/core/io.h"
 #include "aia/core/rng.h"
 #include "aia/estimation/heatmap.h"
 #include "aia/learning/dataset.h"
@@ -208,6 +210,28 @@ DatasetWorld EpisodeWorld(const Episode& episode, int e, bool over_time) {
   return world;
 }
 
+// The recipe of another shard of the folder ("" for an empty file: no
+// recipe yet). A shard that another writer holds (an mpirun's other rank,
+// started at the same moment) may not have its tables yet: read again
+// until it has, while that writer holds it (kShardWait at most).
+constexpr auto kShardWait = std::chrono::seconds(10);
+
+std::string OtherShardRecipe(const std::string& path) {
+  const auto until = std::chrono::steady_clock::now() + kShardWait;
+  while (true) {
+    std::error_code ec;
+    if (std::filesystem::file_size(path, ec) == 0 && !ec) return "";
+    try {
+      return DatasetRecipe(path, "--out");
+    } catch (const InputError&) {
+      if (!LockedByAnotherProcess(path) ||
+          std::chrono::steady_clock::now() > until)
+        throw;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
 // One shard set per folder, of one recipe: `aia train --data` reads them
 // all, sets of two counts hold the same episodes, and shards written with
 // other options would be mixed (each shard checks its own on resume).
@@ -225,7 +249,7 @@ void CheckOneShardSet(const std::string& out, int shards,
     if (n == 0 ||
         entry.path().filename() == std::filesystem::path(file).filename())
       continue;
-    const std::string other = DatasetRecipe(path, "--out");
+    const std::string other = OtherShardRecipe(path);
     if (!other.empty() && other != recipe)
       throw InputError::Flag(
           "--out", out + " holds '" + path + "', written with other options (" +

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 
 #include "aia/commands/dataset_command.h"
@@ -269,6 +270,62 @@ TEST(DatasetTest, ResumingWithAnotherRecipeIsRefused) {
     EXPECT_NE(e.Format().find("another recipe"), std::string::npos);
   }
   EXPECT_THROW(ReadDataset({dir + "/none"}, "--data"), InputError);
+  fs::remove_all(dir);
+}
+
+// Shards written at once into one folder (an mpirun's ranks, or --shard
+// K/N jobs started together): each checks the others' recipes, and another
+// writer's shard may not have its tables yet. An empty shard holds no
+// recipe; one that another process holds is read again until it has one
+// (the two-rank test failed once in CI: "no such table: meta").
+TEST(DatasetTest, AShardAnotherWriterIsStillMakingIsWaitedFor) {
+  const std::string dir = testing::MakeTempDir("aia_ds_");
+  const std::vector<std::string> flags = {
+      "dataset", "--episodes", "2", "--size", "3x2", "--keep", "2", "--quiet"};
+  const auto shard = [&](const std::string& k, const std::string& out) {
+    std::vector<std::string> a = flags;
+    for (const std::string& f :
+         {std::string("--shard"), k + "/2", std::string("--out"), out})
+      a.push_back(f);
+    return a;
+  };
+  ASSERT_EQ(testing::RunAia(shard("1", dir + "/ref")).exit_code, 0);
+  const std::string ref = dir + "/ref/shard-1-of-2.sqlite";
+  // An empty file (a writer that has just created it).
+  fs::create_directories(dir + "/a");
+  std::FILE* f = std::fopen((dir + "/a/shard-1-of-2.sqlite").c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fclose(f);
+  const auto empty = testing::RunAia(shard("0", dir + "/a"));
+  EXPECT_EQ(empty.exit_code, 0) << empty.err;
+  // Another process holds the shard, its database without tables of ours
+  // for a second, then the shard's bytes.
+  fs::create_directories(dir + "/b");
+  const std::string writer =
+      "import fcntl, os, sqlite3, sys, time\n"
+      "path, ref, marker = sys.argv[1:4]\n"
+      "f = open(path, 'a+b')\n"
+      "fcntl.flock(f, fcntl.LOCK_EX)\n"
+      "db = sqlite3.connect(path); db.execute('create table x(a)'); "
+      "db.commit(); db.close()\n"
+      "open(marker, 'w').close()\n"
+      "time.sleep(1.0)\n"
+      "data = open(ref, 'rb').read()\n"
+      "f.seek(0); f.truncate(); f.write(data); f.flush(); "
+      "os.fsync(f.fileno())\n"
+      "time.sleep(0.5)\n";
+  {
+    std::ofstream out(dir + "/writer.py");
+    out << writer;
+  }
+  std::string line;
+  for (const std::string& a : shard("0", dir + "/b")) line += " '" + a + "'";
+  const auto held = testing::RunCommand(
+      "/usr/bin/python3 " + dir + "/writer.py " + dir +
+      "/b/shard-1-of-2.sqlite " + ref + " " + dir + "/locked & while [ ! -e " +
+      dir + "/locked ]; do sleep 0.01; done; " + AIA_BINARY + line +
+      "; rc=$?; wait; exit $rc");
+  EXPECT_EQ(held.exit_code, 0) << held.err;
   fs::remove_all(dir);
 }
 
