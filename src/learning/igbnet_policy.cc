@@ -21,15 +21,22 @@ std::string DefaultModelPath(Coordination coordination) {
   const std::filesystem::path here = coordination == Coordination::kNone
                                          ? "models/igbnet_learned.pt"
                                          : "models/igbnet.pt";
-  // An installed aia's own model, whatever the working folder holds.
+  // An installed aia's own model, whatever the working folder holds; a
+  // build's, its source tree's: a models/ folder where a program happens to
+  // run does not change its results (it did: a Python script run from a
+  // folder holding models/igbnet.pt decided with that file, and nothing
+  // said so). The working folder's only where the source tree has none (a
+  // build tree moved away from it).
   if (const std::string data = InstalledDataDir(); !data.empty()) {
     const std::filesystem::path installed = std::filesystem::path(data) / here;
     if (std::filesystem::is_regular_file(installed, ec))
       return installed.lexically_normal().string();
   }
-  if (std::filesystem::is_regular_file(here, ec)) return here.string();
   const std::filesystem::path source =
       std::filesystem::path(AIA_SOURCE_DIR) / here;
+  if (!std::filesystem::is_regular_file(source, ec) &&
+      std::filesystem::is_regular_file(here, ec))
+    return here.string();
   return source.string();
 }
 

@@ -1273,6 +1273,31 @@ TEST(IgbNetPolicyTest, TakesOnlyValidMoves) {
   }
 }
 
+// A build's default model is its source tree's, whatever the working folder
+// holds (a script run from a folder with a models/igbnet.pt of its own
+// decided with that file before, and nothing recorded it).
+TEST(IgbNetTest, TheDefaultModelIsTheSourceTreesWhereverTheProgramRuns) {
+  const std::string dir = testing::MakeTempDir("aia_cwd_");
+  fs::create_directories(dir + "/models");
+  fs::copy_file(testing::SourcePath("models/igbnet_10x10.pt"),
+                dir + "/models/igbnet.pt");
+  fs::copy_file(testing::SourcePath("models/igbnet_10x10.pt"),
+                dir + "/models/igbnet_learned.pt");
+  const fs::path before = fs::current_path();
+  fs::current_path(dir);
+  // (Resolved here: a relative path names the working folder's file.)
+  const fs::path rules =
+      fs::weakly_canonical(DefaultModelPath(Coordination::kRules));
+  const fs::path none =
+      fs::weakly_canonical(DefaultModelPath(Coordination::kNone));
+  fs::current_path(before);
+  EXPECT_EQ(rules,
+            fs::weakly_canonical(testing::SourcePath("models/igbnet.pt")));
+  EXPECT_EQ(none, fs::weakly_canonical(
+                      testing::SourcePath("models/igbnet_learned.pt")));
+  fs::remove_all(dir);
+}
+
 // build/aia's main sets libtorch's OpenMP spin for the whole process before
 // any thread (so that loading the plugin needs no setenv, which races with
 // a getenv on another thread), unless the caller chose a wait of its own.
