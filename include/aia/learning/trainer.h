@@ -142,8 +142,10 @@ struct TrainOptions {
     a->Visit(AIA_FIELD(seed).Doc("initialization, split and shuffling"));
     a->Visit(AIA_FIELD(threads)
                  .In(Between(0, 1024))
-                 .Doc("libtorch threads (0: libtorch's default, one thread "
-                      "with Debian's build)"));
+                 .Doc("libtorch threads (0: libtorch's default, which "
+                      "follows the machine's cores, or OMP_NUM_THREADS: "
+                      "the weights depend on the count, so a model other "
+                      "machines reproduce names it)"));
     a->Visit(AIA_FIELD(message_hops)
                  .In(Between(-1, kMaxMessageHops))
                  .Doc("K: hops of learned message passing over the "

@@ -875,8 +875,9 @@ std::vector<EpochLog> TorchTrain(const TrainOptions& options) {
   // The weights depend on the thread count and on every sample: a resume
   // with other threads or on a dataset that changed since is refused.
   const std::string legacy_key = OptionsKey(o);
-  // The threads libtorch trains on: --threads, else its own default (one
-  // with Debian's build, OMP_NUM_THREADS where set), not the cores.
+  // The threads libtorch trains on: --threads, else its own default
+  // (OMP_NUM_THREADS where set, else from the machine's cores: one on a
+  // 2-core machine, two on a 4-core one), recorded as used.
   const int threads = torch::get_num_threads();
   const std::string key = legacy_key + " threads=" + std::to_string(threads) +
                           " data=" + DataFingerprint(corpus.data);
