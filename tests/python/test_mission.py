@@ -466,3 +466,36 @@ def test_channels_from_a_kept_renderer_are_a_fresh_ones():
     kept._restart(4, "test")
     other = aia.Mission(maze, seed=4)
     assert np.array_equal(kept.channels(), other.channels())
+
+
+DTYPE = """
+import sys, torch
+import aia
+if sys.argv[2] == "64":
+    torch.set_default_dtype(torch.float64)
+m = aia.Mission(sys.argv[1])
+p = aia.builtin_policy("igbnet")
+moves = []
+for _ in range(4):
+    mv = p.decide(m)
+    moves.append([int(x) for x in mv])
+    m.step(mv)
+print(moves, torch.get_default_dtype())
+"""
+
+
+def test_the_programs_torch_default_dtype_changes_no_decision():
+    """A program that made float64 its torch default (the same libtorch as
+    aia's) loaded the model into float64 parameters: 'tensor ... is not
+    finite'. The model is float32 whatever the default, which is left as
+    the program set it."""
+    pytest.importorskip("torch")
+    import sys
+    out = {}
+    for bits in ("32", "64"):
+        r = subprocess.run([sys.executable, "-c", DTYPE, DEFAULT, bits],
+                           capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+        out[bits] = r.stdout.split()
+    assert out["64"][-1] == "torch.float64"
+    assert out["64"][:-1] == out["32"][:-1]

@@ -337,11 +337,33 @@ torch::Tensor FoldedForward(const FoldedNet& f, IgbNetModule& module,
   return module->fc2(FoldedEmbed(f, module, config, input, bf16));
 }
 
+namespace {
+
+// The module with float32 parameters whatever the process's default dtype:
+// a Python program's torch.set_default_dtype(torch.float64) (the same
+// libtorch) made them float64, a model's float32 tensors loaded into them
+// read as garbage ("tensor ... is not finite"), and a new network's
+// initial weights differed. The default is set for the construction only.
+IgbNetModule MakeModule(const NetworkConfig& config) {
+  const caffe2::TypeMeta before = c10::get_default_dtype();
+  c10::set_default_dtype(caffe2::TypeMeta::Make<float>());
+  try {
+    IgbNetModule module(config);
+    c10::set_default_dtype(before);
+    return module;
+  } catch (...) {
+    c10::set_default_dtype(before);
+    throw;
+  }
+}
+
+}  // namespace
+
 TorchNet::TorchNet(const NetworkConfig& config, std::uint64_t seed)
     : TorchNet() {
   torch::manual_seed(seed);
   impl_->config = config;
-  impl_->module = IgbNetModule(config);
+  impl_->module = MakeModule(config);
   impl_->module->eval();
 }
 
@@ -396,7 +418,7 @@ std::unique_ptr<TorchNet> TorchNet::Load(const std::string& path,
     const std::string json(reinterpret_cast<const char*>(meta.data_ptr()),
                            meta.numel());
     net->impl_->config = NetworkConfig::FromJson(json);
-    net->impl_->module = IgbNetModule(net->impl_->config);
+    net->impl_->module = MakeModule(net->impl_->config);
     // Loading replaces tensors whatever their shape: check them after.
     std::vector<std::pair<std::string, std::vector<int64_t>>> shapes;
     for (const auto& p : net->impl_->module->named_parameters())
