@@ -2,26 +2,37 @@
 
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 
+#include "aia/core/check.h"
 #include "aia/core/field_io.h"
 
 namespace aia {
 namespace csv_internal {
 
+// std::to_chars and from_chars, not printf and strtod: the same digits as
+// printf's in the C locale, whatever the process's LC_NUMERIC (a Python
+// program's other thread that set a comma-decimal locale while
+// aia.evaluate ran had the rows written with commas, which failed their
+// own check and ended the process).
 std::string FormatReal(double v, const CsvFormat& f, bool exact) {
   if (exact) return std::isnan(v) ? "nan" : field_text::ShortestReal(v);
   if (f.nan_empty && std::isnan(v)) return "";
-  char buf[64];
+  char buf[400];  // fixed: up to 309 digits before the point
+  std::to_chars_result r;
   if (f.digits >= 0) {
-    std::snprintf(buf, sizeof buf, "%.*f", f.digits, v);
+    r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed,
+                      f.digits);
   } else if (f.significant > 0) {
-    std::snprintf(buf, sizeof buf, "%.*g", f.significant, v);
+    r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general,
+                      f.significant);
   } else {
     return field_text::ShortestReal(v);
   }
-  return buf;
+  AIA_CHECK(r.ec == std::errc());
+  return std::string(buf, r.ptr);
 }
 
 std::optional<long long> ParseInteger(const std::string& cell) {
@@ -43,11 +54,22 @@ std::optional<std::uint64_t> ParseUnsigned(const std::string& cell) {
 }
 
 std::optional<double> ParseReal(const std::string& cell) {
-  if (cell.empty() || std::isspace(static_cast<unsigned char>(cell[0])))
+  const char* begin = cell.data();
+  const char* const last = cell.data() + cell.size();
+  const bool plus = begin != last && *begin == '+';  // strtod's sign
+  if (plus) ++begin;                                 // (from_chars: '-' only)
+  if (begin == last || *begin == '+' || (plus && *begin == '-') ||
+      std::isspace(static_cast<unsigned char>(*begin)))
     return std::nullopt;
-  char* end = nullptr;
-  const double v = std::strtod(cell.c_str(), &end);
-  if (end != cell.c_str() + cell.size()) return std::nullopt;
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(begin, last, v);
+  if (end != last) return std::nullopt;
+  if (ec == std::errc::result_out_of_range) {
+    // Beyond the doubles: strtod's answer (inf, or 0 and the subnormals),
+    // which has no decimal point to misread but where it has one.
+    return std::strtod(cell.c_str(), nullptr);
+  }
+  if (ec != std::errc()) return std::nullopt;
   return v;
 }
 

@@ -589,6 +589,15 @@ std::map<const IgbNetPolicy*, Trail>& Trails() {
   return trails;
 }
 
+// The team's context as a distributed policy is given it, with `prior`.
+DecisionContext TeamContext(const testing::TeamFixture& f,
+                            const std::vector<double>& prior) {
+  DecisionContext ctx = f.Context();
+  ctx.central = nullptr;
+  ctx.log_det_prior = &prior;
+  return ctx;
+}
+
 // One decision; `reset` starts a new episode first (the policy forgets).
 // Between two decisions each robot made the lattice move from its last
 // position to this one (none where it is not a neighbour).
@@ -605,10 +614,8 @@ std::vector<Move> Decide(IgbNetPolicy* policy, const testing::TeamFixture& f,
     trail.history.Record(
         i, MoveBetween(f.world.map.lattice(), trail.last[i], f.positions[i]));
   trail.last = f.positions;
-  DecisionContext ctx = f.Context();
-  ctx.central = nullptr;
+  DecisionContext ctx = TeamContext(f, prior);
   ctx.step = step;
-  ctx.log_det_prior = &prior;
   ctx.history = &trail.history;
   std::vector<Move> moves(n);
   if (reset) policy->Reset(f.world.map, n, f.world.NumTargets(), 1);
@@ -696,9 +703,7 @@ TEST(IgbNetPolicyTest, UnreadRowsAreSkippedAndTheOthersScoreAsInTheWholeTeam) {
     testing::TeamFixture f(kTeam);
     Personalize(&f);
     const std::vector<double> prior(3, std::log(1.0));
-    DecisionContext ctx = f.Context();
-    ctx.central = nullptr;
-    ctx.log_det_prior = &prior;
+    const DecisionContext ctx = TeamContext(f, prior);
     NetworkScorer scorer(TestNet(ChannelFrame::kCentred, true, hops));
     scorer.Reset(f.world.map, 4, f.world.NumTargets());
     ScoringRows team;
@@ -732,9 +737,7 @@ TEST(IgbNetPolicyTest, TheSameKnowledgeWithOtherRowsScoresAsAFreshScorer) {
   testing::TeamFixture f(kTeam);
   Personalize(&f);
   const std::vector<double> prior(3, std::log(1.0));
-  DecisionContext ctx = f.Context();
-  ctx.central = nullptr;
-  ctx.log_det_prior = &prior;
+  DecisionContext ctx = TeamContext(f, prior);
   ctx.knowledge = NewKnowledgeStamp();
   const auto rows = [](std::vector<int> r) {
     ScoringRows team;
