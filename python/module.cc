@@ -199,6 +199,35 @@ class ReleaseGil {
   PyThreadState* state_;
 };
 
+// A value that holds Python objects, kept through a ReleaseGil scope on
+// the heap: a thread that finalization ends inside the scope (above)
+// unwinds through no Python object, whose release without the GIL touched
+// an interpreter being finalized (a segfault at exit, about once in 50
+// runs of a daemon thread stepping an autoresetting VectorMissions on two
+// busy cores). It is leaked then, as the process ends; an exception of the
+// scope's own, which leaves it with the GIL back, releases it.
+template <typename T>
+class Held {
+ public:
+  explicit Held(T value) : value_(new T(std::move(value))) {}
+  ~Held() {
+    if (value_ != nullptr && PyGILState_Check()) delete value_;
+  }
+  Held(const Held&) = delete;
+  Held& operator=(const Held&) = delete;
+  T& get() { return *value_; }
+  // The value back (once, with the GIL).
+  T Take() {
+    T value = std::move(*value_);
+    delete value_;
+    value_ = nullptr;
+    return value;
+  }
+
+ private:
+  T* value_;
+};
+
 // py::gil_scoped_acquire on aia.evaluate's own threads, whose pool would
 // stop a forced unwind: during finalization such a thread waits, without
 // the GIL, until the process ends.
@@ -701,9 +730,13 @@ class Mission {
   py::array_t<float> Channels(const KeyValues& params) {
     ChannelJob job = PrepareChannels(params, "aia.Mission.channels");
     py::array_t<float> out(job.Shape(num_robots()));
-    ReleaseGil release;
-    RenderChannels(job, out.mutable_data());
-    return out;
+    float* data = out.mutable_data();
+    Held<py::array_t<float>> held(std::move(out));
+    {
+      ReleaseGil release;
+      RenderChannels(job, data);
+    }
+    return held.Take();
   }
 
   // What one channels() call renders with: its settings and renderer (the
@@ -1269,31 +1302,34 @@ class VectorMissions {
       if (r.done()) finished.push_back(i);
     }
     if (!autoreset_ || finished.empty()) return out;
-    const py::object loads = py::module_::import("json").attr("loads");
-    py::list final_info, final_state;
-    py::array_t<bool> mask(n);
-    for (int i = 0; i < n; ++i) {
-      final_info.append(py::none());
-      final_state.append(py::none());
-      mask.mutable_at(i) = false;
-    }
     std::vector<std::uint64_t> seeds(n);
-    for (int i : finished) {
-      final_info[i] = loads(missions_[i]->SummaryText());
-      final_state[i] = missions_[i]->State();
-      mask.mutable_at(i) = true;
-      seeds[i] = next_seed_++;
+    {
+      const py::object loads = py::module_::import("json").attr("loads");
+      py::list final_info, final_state;
+      py::array_t<bool> mask(n);
+      for (int i = 0; i < n; ++i) {
+        final_info.append(py::none());
+        final_state.append(py::none());
+        mask.mutable_at(i) = false;
+      }
+      for (int i : finished) {
+        final_info[i] = loads(missions_[i]->SummaryText());
+        final_state[i] = missions_[i]->State();
+        mask.mutable_at(i) = true;
+        seeds[i] = next_seed_++;
+      }
+      out.info["final_info"] = final_info;
+      out.info["final_state"] = final_state;
+      out.info["_final_info"] = mask;
     }
+    Held<VectorStepResult> held(std::move(out));
     {
       ReleaseGil release;
       pool_.get().Run(static_cast<int>(finished.size()), [&](int k, int) {
         missions_[finished[k]]->Start(seeds[finished[k]]);
       });
     }
-    out.info["final_info"] = final_info;
-    out.info["final_state"] = final_state;
-    out.info["_final_info"] = mask;
-    return out;
+    return held.Take();
   }
 
   // Every mission's channels, (n, robots, C, H, W), rendered on the
@@ -1319,11 +1355,14 @@ class VectorMissions {
     shape.insert(shape.begin(), n);
     py::array_t<float> out(shape);
     float* data = out.mutable_data();
-    ReleaseGil release;
-    pool_.get().Run(n, [&](int i, int) {
-      missions_[i]->RenderChannels(jobs[i], data + i * each);
-    });
-    return out;
+    Held<py::array_t<float>> held(std::move(out));
+    {
+      ReleaseGil release;
+      pool_.get().Run(n, [&](int i, int) {
+        missions_[i]->RenderChannels(jobs[i], data + i * each);
+      });
+    }
+    return held.Take();
   }
 
  private:
@@ -1463,6 +1502,7 @@ class PyDataset {
     for (py::ssize_t k = 0; k < b; ++k)
       labels.mutable_at(k) =
           static_cast<long long>(data_.samples[indices[k]].label);
+    Held<py::tuple> held(py::make_tuple(std::move(images), std::move(labels)));
     {
       ReleaseGil release;
       for (py::ssize_t k = 0; k < b; ++k) {
@@ -1473,7 +1513,7 @@ class PyDataset {
                                    SampleMemory(s, w));
       }
     }
-    return py::make_tuple(images, labels);
+    return held.Take();
   }
 
  private:
@@ -1644,10 +1684,12 @@ class CStdioCapture {
 // aia.evaluate's core: `aia eval` with one more policy, the callable.
 // Returns the exit code and what aia eval wrote to stderr (notes such as
 // dropped rows; the wrapper turns them into Python warnings).
-py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
+// (The callables as handles: a thread that finalization ends at the GIL
+// below unwinds through no Python reference of its own; see Held.)
+py::tuple Evaluate(py::handle decide, const std::string& name, bool centralized,
                    const std::vector<std::string>& sizes, int seeds,
                    std::uint64_t seed_base, const std::string& out, int threads,
-                   const std::vector<std::string>& sets, py::object progress,
+                   const std::vector<std::string>& sets, py::handle progress,
                    int done_before, int total) {
   if (t_inside_evaluate)
     Refuse("aia.evaluate", "",
@@ -1673,7 +1715,7 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
   o.progress = false;  // aia eval's own line would bypass sys.stderr
   o.exit_on_interrupt = false;
   auto report = std::make_shared<EvalProgress>();
-  report->callback = std::move(progress);
+  report->callback = py::reinterpret_borrow<py::object>(progress);
   report->done_before = done_before;
   report->total = total;
   o.started = [report] {
@@ -1682,7 +1724,9 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
     report->Start();
   };
   o.extra_policies = {std::make_shared<CallbackSpec>(
-      name, centralized, std::move(decide), report)};
+      name, centralized, py::reinterpret_borrow<py::object>(decide), report)};
+  report.reset();  // held by the options only
+  Held<EvalOptions> options(std::move(o));
   int rc = 0;
   std::string notes;
   {
@@ -1700,7 +1744,7 @@ py::tuple Evaluate(py::object decide, const std::string& name, bool centralized,
       ~Running() { --g_evaluations; }
     } running;
     try {
-      rc = RunEval(o);
+      rc = RunEval(options.get());
     } catch (const InputError& e) {
       throw Renamed(e, "aia.evaluate");
     }
