@@ -202,7 +202,7 @@ class ReleaseGil {
 // A value that holds Python objects, kept through a ReleaseGil scope on
 // the heap: a thread that finalization ends inside the scope (above)
 // unwinds through no Python object, whose release without the GIL touched
-// an interpreter being finalized (a segfault at exit, about once in 50
+// an interpreter being finalized (a segfault at exit, about once in 60
 // runs of a daemon thread stepping an autoresetting VectorMissions on two
 // busy cores). It is leaked then, as the process ends; an exception of the
 // scope's own, which leaves it with the GIL back, releases it.
