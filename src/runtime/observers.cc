@@ -134,9 +134,13 @@ void EstimateObserver::Score(const Episode& e) {
     sum_sq_[k] += error * error;
     sum_nees_[k] += nees;
     if (impl_) {
-      std::string& row = impl_->row;
-      row = std::to_string(e.filter_step()) + ',' + std::to_string(k) + ',' +
-            std::to_string(robot);
+      std::string& row = impl_->row;  // its memory kept, as the trace's
+      row.clear();
+      row += std::to_string(e.filter_step());
+      row += ',';
+      row += std::to_string(k);
+      row += ',';
+      row += std::to_string(robot);
       AppendScientific(error, &row);
       AppendScientific(nees, &row);
       row += '\n';
