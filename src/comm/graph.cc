@@ -1,6 +1,7 @@
 #include "aia/comm/graph.h"
 
 #include <algorithm>
+#include <atomic>
 
 #include "aia/core/check.h"
 
@@ -23,6 +24,15 @@ int CommNetwork::NumActive() const {
   return count;
 }
 
+namespace {
+
+std::uint64_t NewGraphStamp() {
+  static std::atomic<std::uint64_t> last{0};
+  return ++last;
+}
+
+}  // namespace
+
 bool CommNetwork::ApplyFailures(int step) {
   bool any = false;
   for (const auto& f : failures_) {
@@ -32,6 +42,7 @@ bool CommNetwork::ApplyFailures(int step) {
     }
   }
   if (!any) return false;
+  graph_stamp_ = NewGraphStamp();
   for (int i = 0; i < n_; ++i) {
     std::vector<int>& nb = neighbors_[i];
     if (!active_[i]) {
@@ -55,6 +66,7 @@ void CommNetwork::Update(int step, const std::vector<Vec2>& positions) {
   const bool keep =
       params_.mode != CommMode::kRange && params_.packet_loss_lambda <= 0.0;
   if (keep && full_active_ == active_) return;
+  graph_stamp_ = NewGraphStamp();
   full_active_.clear();
   // The candidate edges (i <- j), each robot's ascending: every other
   // active robot, or those in range.

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -85,6 +86,8 @@ BeliefLayout::BeliefLayout(std::vector<TargetModel> models)
 BeliefSet::BeliefSet(const BeliefLayout* layout, int rows) : layout_(layout) {
   AIA_CHECK(layout != nullptr && rows >= 0);
   data_.setZero(rows, layout->stride());
+  common_.setZero(layout->stride());
+  own_.resize(layout->num_targets());
 }
 
 void BeliefSet::SetPrior(const std::vector<Eigen::VectorXd>& means,
@@ -93,6 +96,7 @@ void BeliefSet::SetPrior(const std::vector<Eigen::VectorXd>& means,
   AIA_CHECK(static_cast<int>(means.size()) == lay.num_targets());
   AIA_CHECK(static_cast<int>(covs.size()) == lay.num_targets());
   if (rows() == 0) return;
+  Unshare();
   for (int k = 0; k < lay.num_targets(); ++k) {
     const int d = lay.dim(k);
     AIA_CHECK(means[k].size() == d && covs[k].rows() == d &&
@@ -106,61 +110,125 @@ void BeliefSet::SetPrior(const std::vector<Eigen::VectorXd>& means,
     Omega(0, k) = 0.5 * (omega + omega.transpose());
     Xi(0, k) = Omega(0, k) * means[k];
   }
-  for (int r = 1; r < rows(); ++r) data_.row(r) = data_.row(0);
+  if (rows() == 1) return;
+  common_ = data_.row(0).transpose();
+  StartSharing();
+}
+
+void BeliefSet::StartSharing() {
+  const int m = layout_->num_targets();
+  shared_.assign(static_cast<std::size_t>(rows()) * m, 1);
+  for (std::vector<int>& own : own_) own.clear();
+  sharing_ = true;
+}
+
+void BeliefSet::SetOwnRows(int k, const std::vector<int>& rows) {
+  AIA_CHECK(sharing_);
+  const std::size_t m = layout_->num_targets();
+  for (int r : own_[k]) shared_[r * m + k] = 1;
+  for (int r : rows) shared_[r * m + k] = 0;
+  own_[k] = rows;
+}
+
+double* BeliefSet::OwnBlock(int row, int k) {
+  double* own = RawBlock(row, k);
+  if (!Shared(row, k)) return own;
+  const int size = layout_->dim(k) * (layout_->dim(k) + 1);
+  std::copy_n(CommonBlock(k), size, own);
+  shared_[static_cast<std::size_t>(row) * layout_->num_targets() + k] = 0;
+  std::vector<int>& list = own_[k];
+  list.insert(std::lower_bound(list.begin(), list.end(), row), row);
+  return own;
+}
+
+void BeliefSet::Unshare() {
+  if (!sharing_) return;
+  const int m = layout_->num_targets();
+  for (int r = 0; r < rows(); ++r)
+    for (int k = 0; k < m; ++k)
+      if (Shared(r, k)) {
+        const int size = layout_->dim(k) * (layout_->dim(k) + 1);
+        std::copy_n(CommonBlock(k), size, RawBlock(r, k));
+      }
+  sharing_ = false;
+  shared_.clear();
+  for (std::vector<int>& own : own_) own.clear();
+}
+
+BeliefSet::Storage BeliefSet::Materialized() const {
+  BeliefSet copy = *this;
+  copy.Unshare();
+  return std::move(copy.data_);
+}
+
+BeliefSet::Storage& BeliefSet::data() {
+  Unshare();
+  return data_;
+}
+
+const BeliefSet::Storage& BeliefSet::data() const {
+  AIA_CHECK_MSG(!sharing_, "a shared belief set's storage is read by block");
+  return data_;
+}
+
+void BeliefSet::Swap(BeliefSet& other) {
+  AIA_CHECK(layout_ == other.layout_);
+  data_.swap(other.data_);
+  std::swap(sharing_, other.sharing_);
+  common_.swap(other.common_);
+  shared_.swap(other.shared_);
+  own_.swap(other.own_);
 }
 
 Eigen::Map<Eigen::MatrixXd> BeliefSet::Omega(int row, int k) {
   const int d = layout_->dim(k);
-  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
-              layout_->omega_offset(k),
-          d, d};
+  return {OwnBlock(row, k), d, d};
 }
 
 Eigen::Map<const Eigen::MatrixXd> BeliefSet::Omega(int row, int k) const {
   const int d = layout_->dim(k);
-  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
-              layout_->omega_offset(k),
-          d, d};
+  return {Block(row, k), d, d};
 }
 
 Eigen::Map<Eigen::VectorXd> BeliefSet::Xi(int row, int k) {
-  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
-              layout_->xi_offset(k),
-          layout_->dim(k)};
+  const int d = layout_->dim(k);
+  return {OwnBlock(row, k) + d * d, d};
 }
 
 Eigen::Map<const Eigen::VectorXd> BeliefSet::Xi(int row, int k) const {
-  return {data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
-              layout_->xi_offset(k),
-          layout_->dim(k)};
+  const int d = layout_->dim(k);
+  return {Block(row, k) + d * d, d};
 }
 
 Eigen::VectorXd BeliefSet::Mean(int row, int k) const {
-  const double* block = Omega(row, k).data();
+  const double* block = Block(row, k);
   if (layout_->dim(k) == 2) return MeanOf<2>(block);
   return MeanOf<4>(block);
 }
 
 Eigen::MatrixXd BeliefSet::Covariance(int row, int k) const {
-  const double* block = Omega(row, k).data();
+  const double* block = Block(row, k);
   if (layout_->dim(k) == 2) return CovarianceOf<2>(block);
   return CovarianceOf<4>(block);
 }
 
 Vec2 BeliefSet::PositionMean(int row, int k) const {
-  const double* block = Omega(row, k).data();
+  const double* block = Block(row, k);
   if (layout_->dim(k) == 2) return MeanOf<2>(block);
   return MeanOf<4>(block).head<2>();
 }
 
 Mat2 BeliefSet::PositionCovariance(int row, int k) const {
-  const double* block = Omega(row, k).data();
+  const double* block = Block(row, k);
   if (layout_->dim(k) == 2) return CovarianceOf<2>(block);
   return CovarianceOf<4>(block).topLeftCorner<2, 2>();
 }
 
 double BeliefSet::DetCovariance(int row, int k) const {
-  const double* block = Omega(row, k).data();
+  return DetCovarianceOf(Block(row, k), k);
+}
+
+double BeliefSet::DetCovarianceOf(const double* block, int k) const {
   double det_omega = 0.0;
   if (layout_->dim(k) == 2) {
     // Positive definite: a positive det and a positive diagonal.
@@ -182,7 +250,7 @@ double BeliefSet::DetCovariance(int row, int k) const {
 }
 
 double BeliefSet::LogDetCovariance(int row, int k) const {
-  const double* block = Omega(row, k).data();
+  const double* block = Block(row, k);
   if (layout_->dim(k) == 2) return LogDetCovarianceOf<2>(block);
   return LogDetCovarianceOf<4>(block);
 }
@@ -191,7 +259,14 @@ void BeliefSet::CopyRow(int row, const BeliefSet& from, int from_row) {
   AIA_CHECK(data_.cols() == from.data_.cols());
   AIA_CHECK(row >= 0 && row < rows() && from_row >= 0 &&
             from_row < from.rows());
-  data_.row(row) = from.data_.row(from_row);
+  if (!sharing_ && !from.sharing_) {
+    data_.row(row) = from.data_.row(from_row);
+    return;
+  }
+  for (int k = 0; k < layout_->num_targets(); ++k) {
+    const int size = layout_->dim(k) * (layout_->dim(k) + 1);
+    std::copy_n(from.Block(from_row, k), size, OwnBlock(row, k));
+  }
 }
 
 void BeliefDigest::Compute(const BeliefSet& beliefs, const RangeRunner& run) {
@@ -209,9 +284,11 @@ void BeliefDigest::Compute(const BeliefSet& beliefs, const RangeRunner& run) {
       for (int k = 0; k < m_; ++k) {
         const std::size_t at = static_cast<std::size_t>(r) * m_ + k;
         const int d = layout.dim(k);
-        const double* block = beliefs.Omega(r, k).data();
-        if (r > r0 && std::memcmp(block, beliefs.Omega(r - 1, k).data(),
-                                  sizeof(double) * (d * d + d)) == 0) {
+        const double* block = beliefs.Block(r, k);
+        const double* before = r > r0 ? beliefs.Block(r - 1, k) : nullptr;
+        if (before == block ||
+            (before != nullptr &&
+             std::memcmp(block, before, sizeof(double) * (d * d + d)) == 0)) {
           log_det_[at] = log_det_[at - m_];
           mean_[at] = mean_[at - m_];
         } else if (d == 2) {

@@ -4,11 +4,14 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <iterator>
 #include <mutex>
 #include <string>
 
 #include "aia/core/check.h"
 #include "aia/core/fields.h"
+#include "aia/core/repeated_sum.h"
 #include "spd.h"
 
 namespace aia {
@@ -308,6 +311,208 @@ void MixRows(const BeliefLayout& layout, const std::vector<RowWeights>& w,
   });
 }
 
+// The DKF on a shared set (docs/design.md, Estimation), target by target,
+// to the bit what MixRows and the measurements give row by row. In a full
+// graph every standard row (neighbours: every other counted row; the
+// team's one pair of weights) that holds target k's common block gets one
+// and the same result, off (S - C) + self C, worked out once; the column
+// sum S adds the rows' blocks in ascending row order, runs of the common
+// block at once (AddRepeated, the same bits as one addition at a time).
+// Only the own blocks and the special rows (other weights, rows left out of
+// a neighbourhood) are mixed one by one, each as MixRows mixes it, and kept
+// as the row's own where the result is not the common one bit for bit.
+// O(M (own blocks + special rows) + N) instead of O(N M) a step.
+class SharedMix {
+ public:
+  // Whether the step suits it: every row uniform, some dense row (so S is
+  // summed) and few special rows (a range graph's are most: MixRows).
+  bool Plan(const std::vector<RowWeights>& w, int n) {
+    if (n < 2) return false;
+    n_ = n;
+    w_ = &w;
+    dense_ = false;
+    for (int i = 0; i < n; ++i) {
+      if (!w[i].uniform) return false;
+      dense_ = dense_ || IsDenseUniform(w[i], n, true);
+    }
+    if (!dense_) return false;
+    n_counted_ = CountRows(w, &counted_);
+    counted_before_.assign(n + 1, 0);
+    for (int i = 0; i < n; ++i)
+      counted_before_[i + 1] = counted_before_[i] + counted_[i];
+    special_.clear();
+    is_special_.assign(n, 0);
+    has_standard_ = false;
+    for (int i = 0; i < n; ++i) {
+      const RowWeights& r = w[i];
+      const bool full = counted_[i] && IsDenseUniform(r, n, true) &&
+                        static_cast<int>(r.nb->size()) == n_counted_ - 1;
+      if (full && !has_standard_) {
+        self_ = r.self;
+        off_ = r.off;
+        has_standard_ = true;
+      }
+      if (!full || r.self != self_ || r.off != off_) {
+        special_.push_back(i);
+        is_special_[i] = 1;
+      }
+    }
+    return 8 * static_cast<int>(special_.size()) <= n;
+  }
+
+  void Mix(const BeliefSet& b, BeliefSet* out, const RangeRunner& run) {
+    const BeliefLayout& layout = b.layout();
+    const int m = layout.num_targets();
+    if (!out->sharing()) out->StartSharing();
+    RunRange(run, m, [&](int k0, int k1, int) {
+      thread_local Scratch scratch;
+      for (int k = k0; k < k1; ++k) MixTarget(b, k, out, &scratch);
+    });
+  }
+
+ private:
+  struct Scratch {
+    Eigen::ArrayXd sum, o;
+    std::vector<int> rows, own;
+  };
+  using Block = Eigen::Map<const Eigen::ArrayXd>;
+
+  // S = the first counted row's block, then += each later counted row's.
+  void Sum(const BeliefSet& b, int k, const std::vector<int>& own, int width,
+           Eigen::ArrayXd* sum) const {
+    double* s = sum->data();
+    sum->setZero();
+    bool first = true;
+    const auto add = [&](const double* v, std::int64_t count) {
+      if (count <= 0) return;
+      if (first) {
+        std::copy_n(v, width, s);
+        first = false;
+        --count;
+      }
+      if (count == 1) {
+        for (int e = 0; e < width; ++e) s[e] += v[e];
+      } else if (count > 1) {
+        for (int e = 0; e < width; ++e) s[e] = AddRepeated(s[e], v[e], count);
+      }
+    };
+    const double* common = b.CommonBlock(k);
+    int from = 0;  // rows [from, r) hold the common block
+    for (int r : own) {
+      add(common, counted_before_[r] - counted_before_[from]);
+      if (counted_[r]) add(b.Block(r, k), 1);
+      from = r + 1;
+    }
+    add(common, counted_before_[n_] - counted_before_[from]);
+  }
+
+  // Row i's block k as MixRows makes it (the sum trick, the rows left out,
+  // the direct sum where they cancel; or the direct sum).
+  void MixRow(const BeliefSet& b, int k, int i, const Eigen::ArrayXd& sum,
+              Eigen::ArrayXd* out) const {
+    const RowWeights& r = (*w_)[i];
+    const int width = static_cast<int>(sum.size());
+    Eigen::ArrayXd& o = *out;
+    const Block own(b.Block(i, k), width);
+    const auto add_rows = [&](const int* rows, int count, double scale) {
+      const int full = count / 4 * 4;
+      const auto in = [&](int c) { return Block(b.Block(rows[c], k), width); };
+      for (int c = 0; c < full; c += 4)
+        o += scale * (in(c) + in(c + 1) + in(c + 2) + in(c + 3));
+      const int rest = count - full;
+      if (rest == 3) o += scale * (in(full) + in(full + 1) + in(full + 2));
+      if (rest == 2) o += scale * (in(full) + in(full + 1));
+      if (rest == 1) o += scale * in(full);
+    };
+    const auto direct = [&] {
+      o = r.self * own;
+      add_rows(r.nb->data(), static_cast<int>(r.nb->size()), r.off);
+    };
+    if (!IsDenseUniform(r, n_, counted_[i])) {
+      direct();
+      return;
+    }
+    o = r.off * (sum - own) + r.self * own;
+    if (static_cast<int>(r.nb->size()) == n_counted_ - 1) return;
+    // The counted rows neither in nb nor i, ascending (AddExcludedRows).
+    thread_local std::vector<int> left_out;
+    left_out.clear();
+    std::size_t next = 0;
+    for (int j = 0; j < n_; ++j) {
+      if (next < r.nb->size() && (*r.nb)[next] == j) {
+        ++next;
+        continue;
+      }
+      if (j != i && counted_[j]) left_out.push_back(j);
+    }
+    add_rows(left_out.data(), static_cast<int>(left_out.size()), -r.off);
+    const int d = b.layout().dim(k);
+    for (int e = 0; e < d; ++e) {
+      const int diagonal = e * d + e;
+      if (!(o[diagonal] > kCancelled * r.off * sum[diagonal])) {
+        direct();  // ResumCancelledBlocks
+        return;
+      }
+    }
+  }
+
+  void MixTarget(const BeliefSet& b, int k, BeliefSet* out, Scratch* s) const {
+    const BeliefLayout& layout = b.layout();
+    const int d = layout.dim(k), width = d * d + d;
+    s->sum.resize(width);
+    s->o.resize(width);
+    // The rows mixed one by one: b's own rows of k and the special rows.
+    s->rows.clear();
+    if (b.sharing()) {
+      const std::vector<int>& own = b.OwnRows(k);
+      std::set_union(own.begin(), own.end(), special_.begin(), special_.end(),
+                     std::back_inserter(s->rows));
+      Sum(b, k, own, width, &s->sum);
+    } else {
+      for (int i = 0; i < n_; ++i) s->rows.push_back(i);
+      Sum(b, k, s->rows, width, &s->sum);
+    }
+    // The common block's result, where some row of b holds it.
+    double* common = out->CommonBlockToWrite(k);
+    bool has_common =
+        b.sharing() && b.OwnRows(k).size() < static_cast<std::size_t>(n_);
+    if (has_common && has_standard_) {
+      const Block c(b.CommonBlock(k), width);
+      Eigen::Map<Eigen::ArrayXd>(common, width) =
+          off_ * (s->sum - c) + self_ * c;
+    } else {
+      has_common = false;
+    }
+    s->own.clear();
+    for (int i : s->rows) {
+      MixRow(b, k, i, s->sum, &s->o);
+      if (!has_common && !is_special_[i]) {
+        std::copy_n(s->o.data(), width, common);
+        has_common = true;
+        continue;
+      }
+      if (has_common &&
+          std::memcmp(s->o.data(), common, sizeof(double) * width) == 0)
+        continue;
+      std::copy_n(s->o.data(), width, out->RawBlock(i, k));
+      s->own.push_back(i);
+    }
+    if (!has_common) {
+      // No row holds a common result: every row was mixed one by one (the
+      // special rows are all of them), and the common block is unused.
+      std::fill_n(common, width, 0.0);
+    }
+    out->SetOwnRows(k, s->own);
+  }
+
+  int n_ = 0, n_counted_ = 0;
+  const std::vector<RowWeights>* w_ = nullptr;
+  bool dense_ = false, has_standard_ = false;
+  double self_ = 0.0, off_ = 0.0;
+  std::vector<std::uint8_t> counted_, is_special_;
+  std::vector<int> counted_before_, special_;
+};
+
 void FuseRows(const BeliefSet& predicted, const std::vector<RowWeights>& w,
               const std::vector<std::vector<Measurement>>& z,
               const std::vector<Vec2>& positions, BeliefSet* out,
@@ -318,12 +523,28 @@ void FuseRows(const BeliefSet& predicted, const std::vector<RowWeights>& w,
   AIA_CHECK(static_cast<int>(w.size()) == n);
   AIA_CHECK(static_cast<int>(z.size()) == n &&
             static_cast<int>(positions.size()) == n);
-  if (out->data().rows() != n ||
-      out->data().cols() != predicted.data().cols()) {
+  if (out->rows() != n || &out->layout() != &predicted.layout()) {
     *out = BeliefSet(&predicted.layout(), n);
   }
+  thread_local SharedMix shared;
+  if (shared.Plan(w, n)) {
+    const RangeRunner& split = SplitFor(n, predicted.layout().stride(), run);
+    shared.Mix(predicted, out, split);
+    for (int i = 0; i < n; ++i)
+      if (!z[i].empty()) AddMeasurements(z[i], positions[i], out, i);
+    return;
+  }
+  // Row by row over the storage: every block its own.
+  const BeliefSet* from = &predicted;
+  thread_local BeliefSet unshared;
+  if (predicted.sharing()) {
+    unshared = predicted;
+    unshared.Unshare();
+    from = &unshared;
+  }
+  out->Unshare();
   thread_local Eigen::ArrayXd sum;
-  MixRows(predicted.layout(), w, predicted.data(), &out->data(), &sum, run,
+  MixRows(predicted.layout(), w, from->data(), &out->data(), &sum, run,
           [&](int i) {
             AddMeasurements(z[i], positions[i], out, i);
             if (row_done) row_done(i);
@@ -343,13 +564,121 @@ bool BlockSpd(const double* block, double tol) {
 
 }  // namespace
 
+namespace {
+
+// One block's time update, as Predict makes it: whether it was scaled back
+// (PredictBlock), or the divergence's message in `failure`.
+bool PredictOne(const BeliefLayout& layout, int k, double* block,
+                std::string* failure) {
+  try {
+    return layout.dim(k) == 2 ? PredictBlock<2>(layout.model(k), block, true)
+                              : PredictBlock<4>(layout.model(k), block, true);
+  } catch (const EstimateDiverged& e) {
+    *failure = e.what();
+    return false;
+  }
+}
+
+[[noreturn]] void ThrowDivergedEverywhere(int k) {
+  throw EstimateDiverged(k, "its predicted variance passes " +
+                                FormatNumber(kMaxVariance) +
+                                " m^2, or its mean " + FormatNumber(kMaxMean) +
+                                ", in every estimate that counts");
+}
+
+// Predict on a shared set: each target's common block once (where a row
+// holds it) and its own blocks, targets split over `run`; the same blocks,
+// failure and divergence as row by row (the common block's failure is the
+// first row's that holds it).
+void PredictShared(BeliefSet* beliefs, const std::vector<std::uint8_t>* active,
+                   const RangeRunner& run) {
+  const BeliefLayout& layout = beliefs->layout();
+  const int rows = beliefs->rows(), m = layout.num_targets();
+  const auto counts = [&](int r) { return active == nullptr || (*active)[r]; };
+  std::vector<std::size_t> failure_at(m, SIZE_MAX);
+  std::vector<std::string> failure(m);
+  std::vector<std::uint8_t> diverged(m, 0);
+  RunRange(run, m, [&](int k0, int k1, int) {
+    for (int k = k0; k < k1; ++k) {
+      if (layout.is_static(k)) continue;
+      const std::vector<int>& own = beliefs->OwnRows(k);
+      // The first row holding the common block, and whether an active one
+      // does.
+      int first_shared = -1;
+      bool active_shared = false;
+      for (int r = 0, o = 0; r < rows; ++r) {
+        if (o < static_cast<int>(own.size()) && own[o] == r) {
+          ++o;
+          continue;
+        }
+        if (first_shared < 0) first_shared = r;
+        active_shared = counts(r);
+        if (active_shared) break;
+        // (Rows past the first inactive ones: a walk as long as the
+        // failed robots' run, not the team.)
+      }
+      bool counted = false, kept = false;
+      std::string message;
+      const auto note = [&](int r, bool scaled, bool ok) {
+        if (!ok) {
+          const std::size_t at = static_cast<std::size_t>(r) * m + k;
+          if (at < failure_at[k]) {
+            failure_at[k] = at;
+            failure[k] = message;
+          }
+        }
+        return scaled;
+      };
+      if (first_shared >= 0) {
+        message.clear();
+        const bool scaled =
+            PredictOne(layout, k, beliefs->CommonBlockToWrite(k), &message);
+        note(first_shared, scaled, message.empty());
+        if (active_shared) {
+          counted = true;
+          kept = kept || !scaled;
+        }
+      }
+      for (int r : own) {
+        message.clear();
+        const bool scaled =
+            PredictOne(layout, k, beliefs->RawBlock(r, k), &message);
+        note(r, scaled, message.empty());
+        if (counts(r)) {
+          counted = true;
+          kept = kept || !scaled;
+        }
+      }
+      diverged[k] = counted && !kept;
+    }
+  });
+  std::size_t first = SIZE_MAX;
+  int at_k = -1;
+  for (int k = 0; k < m; ++k)
+    if (failure_at[k] < first) {
+      first = failure_at[k];
+      at_k = k;
+    }
+  if (at_k >= 0) throw EstimateDiverged(at_k, failure[at_k]);
+  for (int k = 0; k < m; ++k)
+    if (diverged[k]) ThrowDivergedEverywhere(k);
+}
+
+}  // namespace
+
 void Predict(BeliefSet* beliefs, const std::vector<std::uint8_t>* active,
              const RangeRunner& run) {
   const BeliefLayout& layout = beliefs->layout();
   if (layout.all_static()) return;
+  AIA_CHECK(active == nullptr ||
+            static_cast<int>(active->size()) == beliefs->rows());
+  if (beliefs->sharing()) {
+    PredictShared(beliefs, active,
+                  SplitFor(beliefs->rows(), layout.stride(), run));
+    return;
+  }
   BeliefSet::Storage& data = beliefs->data();
   const int rows = beliefs->rows(), m = layout.num_targets();
-  AIA_CHECK(active == nullptr || static_cast<int>(active->size()) == rows);
   // Per row and target: whether the prediction was scaled back. A row is
   // predicted whole on one thread; the first failure in row-major order is
   // the one thrown, whatever the split (a part stops at its own first).
@@ -395,11 +724,7 @@ void Predict(BeliefSet* beliefs, const std::vector<std::uint8_t>* active,
       counted = true;
       kept = scaled[static_cast<std::size_t>(r) * m + k] == 0;
     }
-    if (counted && !kept)
-      throw EstimateDiverged(
-          k, "its predicted variance passes " + FormatNumber(kMaxVariance) +
-                 " m^2, or its mean " + FormatNumber(kMaxMean) +
-                 ", in every estimate that counts");
+    if (counted && !kept) ThrowDivergedEverywhere(k);
   }
 }
 
@@ -425,19 +750,18 @@ void AddMeasurements(const std::vector<Measurement>& z, const Vec2& p,
                      BeliefSet* beliefs, int row) {
   const BeliefLayout& layout = beliefs->layout();
   AIA_CHECK(row >= 0 && row < beliefs->rows());
-  double* data = beliefs->data().data() + row * beliefs->data().cols();
   for (const Measurement& m : z) {
     AIA_CHECK(m.target >= 0 && m.target < layout.num_targets());
     AIA_CHECK(m.precision >= 0.0);
     const int d = layout.dim(m.target);
     // Z = M' R^-1 M with M = [I 0], R^-1 = r I: r on the first two diagonal
     // entries of the column-major block.
-    double* omega = data + layout.omega_offset(m.target);
+    double* omega = beliefs->OwnBlock(row, m.target);
     omega[0] += m.precision;
     omega[d + 1] += m.precision;
     // M' R^-1 (y + p): y is relative to the robot, and y + p = M x + v is
     // the measurement of the target's absolute position.
-    double* xi = data + layout.xi_offset(m.target);
+    double* xi = omega + d * d;
     xi[0] += m.precision * (m.y.x() + p.x());
     xi[1] += m.precision * (m.y.y() + p.y());
   }
@@ -545,11 +869,9 @@ void CentralUpdate(const std::vector<std::vector<Measurement>>& z,
 
 bool AllBlocksSpd(const BeliefSet& beliefs, double tol) {
   const BeliefLayout& layout = beliefs.layout();
-  const BeliefSet::Storage& data = beliefs.data();
   for (int r = 0; r < beliefs.rows(); ++r) {
-    const double* row = data.data() + r * data.cols();
     for (int k = 0; k < layout.num_targets(); ++k) {
-      const double* block = row + layout.omega_offset(k);
+      const double* block = beliefs.Block(r, k);
       const bool ok = layout.dim(k) == 2 ? BlockSpd<2>(block, tol)
                                          : BlockSpd<4>(block, tol);
       if (!ok) return false;

@@ -108,7 +108,7 @@ PolicyStatus ExpertPolicy::Decide(const DecisionContext& ctx,
     team_best_ = central_done;
     if (team_best_) {
       const BeliefSet& b = *ctx.beliefs;
-      if (!best_belief_ || best_belief_->data().cols() != b.data().cols())
+      if (!best_belief_ || &best_belief_->layout() != &b.layout())
         best_belief_ = std::make_unique<BeliefSet>(&b.layout(), 1);
       TeamBestRows(b, ctx.comm->active(), &best_rows_);
       TeamBestBelief(b, best_rows_, best_belief_.get());

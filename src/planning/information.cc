@@ -14,8 +14,7 @@ void PredictBlock(const BeliefSet& beliefs, int row, int k,
   const int d = model.dim();
   // The filter's own time update, on a copy of the block.
   double block[4 * 4 + 4];
-  const double* from =
-      beliefs.data().row(row).data() + beliefs.layout().omega_offset(k);
+  const double* from = beliefs.Block(row, k);
   std::copy(from, from + d * d + d, block);
   if (!beliefs.layout().is_static(k)) PredictInformationBlock(model, block);
   out->dim = d;

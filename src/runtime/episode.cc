@@ -517,7 +517,8 @@ void Episode::Observe() {
   try {
     estimate_.Update(filter_step() > 0, comm_.AllNeighbors(),
                      instance_->scenario.communication.kappa_self, z_,
-                     robot_pos_, comm_.active(), PolicyRunner());
+                     robot_pos_, comm_.active(), PolicyRunner(),
+                     comm_.graph_stamp());
   } catch (const EstimateDiverged& e) {
     // Unstable dynamics that no robot measures: the model, not the robots,
     // makes the mission impossible; stop with the key to blame.

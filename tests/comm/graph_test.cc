@@ -87,6 +87,41 @@ TEST(CommTest, AKeptFullGraphIsTheOneBuiltAnew) {
   EXPECT_EQ(kept.Neighbors(1), (std::vector<int>{2, 4}));
 }
 
+// The graph's stamp changes with the graph and only then: a kept full
+// graph keeps it, a failure (at an Update or between two) and every range
+// graph or lossy graph change it.
+TEST(CommTest, TheGraphStampChangesWithTheGraph) {
+  const std::vector<Vec2> pos(4, Vec2(0, 0));
+  CommNetwork full({}, 4, {{2, 3}}, 1);
+  full.Update(0, pos);
+  const std::uint64_t first = full.graph_stamp();
+  EXPECT_NE(first, 0u);
+  full.Update(1, pos);
+  full.Update(2, pos);
+  EXPECT_EQ(full.graph_stamp(), first);
+  full.Update(3, pos);  // robot 2 fails
+  const std::uint64_t failed = full.graph_stamp();
+  EXPECT_NE(failed, first);
+  full.Update(4, pos);
+  EXPECT_EQ(full.graph_stamp(), failed);
+  EXPECT_FALSE(full.ApplyFailures(5));  // nobody new
+  EXPECT_EQ(full.graph_stamp(), failed);
+
+  CommNetwork other({}, 4, {}, 1);
+  other.Update(0, pos);
+  EXPECT_NE(other.graph_stamp(), first);  // unique in the process
+  EXPECT_NE(other.graph_stamp(), failed);
+
+  CommParams range;
+  range.mode = CommMode::kRange;
+  range.range = 10.0;
+  CommNetwork ranged(range, 4, {}, 1);
+  ranged.Update(0, pos);
+  const std::uint64_t before = ranged.graph_stamp();
+  ranged.Update(1, pos);
+  EXPECT_NE(ranged.graph_stamp(), before);
+}
+
 TEST(CommTest, SameSeedSameLosses) {
   CommParams p;
   p.packet_loss_lambda = 2.0;

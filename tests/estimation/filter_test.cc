@@ -340,11 +340,16 @@ TEST(FuseTest, SplitOverThreadsGivesTheSerialNumbersToTheBit) {
       std::vector<std::atomic<int>> done(n);
       Fuse(predicted, w, z, p, &split, *run, [&](int i) {
         // Row i is final here: the same bits as the serial fusion's.
-        EXPECT_EQ(split.data().row(i), serial.data().row(i));
+        EXPECT_EQ(split.Materialized().row(i), serial.Materialized().row(i));
         ++done[i];
       });
+      // The full graph's fusion is shared (target by target), the others'
+      // row by row.
+      const bool shared = split.sharing();
+      EXPECT_EQ(shared, density == 1.0);
       EXPECT_EQ(split.data(), serial.data()) << "density " << density;
-      for (int i = 0; i < n; ++i) EXPECT_EQ(done[i].load(), 1) << i;
+      for (int i = 0; i < n; ++i)
+        EXPECT_EQ(done[i].load(), shared ? 0 : 1) << i;
     }
   }
 }
@@ -485,13 +490,12 @@ TEST(FuseTest, CommutesWithRelabellingTheRobots) {
 
 // Repeated fusion without measurements: every robot converges to one belief.
 // Returns the largest deviation from robot 0 relative to the largest entry.
-double Disagreement(const BeliefSet& b) {
+double Disagreement(const BeliefSet& beliefs) {
+  const BeliefSet::Storage b = beliefs.Materialized();
   double worst = 0.0;
-  for (int i = 1; i < b.rows(); ++i) {
-    worst = std::max(worst,
-                     (b.data().row(i) - b.data().row(0)).cwiseAbs().maxCoeff());
-  }
-  return worst / b.data().cwiseAbs().maxCoeff();
+  for (int i = 1; i < b.rows(); ++i)
+    worst = std::max(worst, (b.row(i) - b.row(0)).cwiseAbs().maxCoeff());
+  return worst / b.cwiseAbs().maxCoeff();
 }
 
 void FuseRepeatedly(const Graph& g, int steps, BeliefSet* beliefs) {
@@ -945,6 +949,107 @@ TEST(FilterStressTest, AnUnmeasuredRowOfAnUnstableTargetStaysWithinTheBounds) {
               std::string::npos)
         << e.what();
   }
+}
+
+}  // namespace
+}  // namespace aia
+
+namespace aia {
+namespace {
+
+// The shared fusion (a full graph's: target by target, common blocks
+// summed in runs) against the row-by-row fusion, to the bit, over a
+// mission's worth of steps: the same robots beside one more row that
+// nobody hears and that mixes with weights of its own (so the whole step
+// goes row by row, and leaves the others' numbers alone). Rows measure now
+// and then, some messages are lost, a robot fails, and some targets move.
+TEST(FuseTest, SharedFusionIsTheRowByRowFusionToTheBit) {
+  Rng rng(20261208);
+  std::vector<TargetModel> models;
+  for (int k = 0; k < 24; ++k)
+    models.push_back(k % 4 == 1 ? ConstantVelocity(0.01) : StaticModel(2));
+  const BeliefLayout layout(models);
+  const int n = 40, m = layout.num_targets();
+  std::vector<Eigen::VectorXd> means;
+  std::vector<Eigen::MatrixXd> covs;
+  for (int k = 0; k < m; ++k) {
+    const int d = layout.dim(k);
+    means.push_back(Eigen::VectorXd::Random(d) * 5.0);
+    covs.push_back(RandomSpd(d, &rng));
+  }
+  BeliefSet shared(&layout, n), next(&layout, n);
+  shared.SetPrior(means, covs);
+  ASSERT_TRUE(shared.sharing());
+  BeliefSet rows(&layout, n + 1), rows_next(&layout, n + 1);
+  rows.SetPrior(means, covs);
+  rows.Unshare();
+  ThreadPool pool(2);
+  const RangeRunner threads = PoolRunner(&pool);
+  int steps_shared = 0;
+  // Whether row i measured target k, or missed a message, so far.
+  std::vector<char> touched(static_cast<std::size_t>(n) * m, 0);
+  const auto touch_all = [&](int i) {
+    std::fill_n(touched.begin() + static_cast<std::ptrdiff_t>(i) * m, m, 1);
+  };
+  for (int t = 0; t < 60; ++t) {
+    Graph g = FullGraph(n);
+    if (t % 7 == 3) {  // lost messages: robot 5 misses 9's, 12 misses 0's
+      g[5].erase(std::find(g[5].begin(), g[5].end(), 9));
+      g[12].erase(g[12].begin());
+      touch_all(5);
+      touch_all(12);
+    }
+    if (t >= 30) {  // robot 17 failed: nobody hears it, it hears nobody
+      g[17].clear();
+      for (int i = 0; i < n; ++i)
+        if (i != 17) g[i].erase(std::find(g[i].begin(), g[i].end(), 17));
+      touch_all(17);
+    }
+    Measurements z(n);
+    for (int i = 0; i < n; ++i)
+      if (rng.Bernoulli(0.1)) {
+        const int k = static_cast<int>(rng.Uniform(0.0, m - 0.5));
+        z[i].push_back(
+            {k, Vec2(rng.Normal(), rng.Normal()), rng.Uniform(1.0, 400.0)});
+        touched[static_cast<std::size_t>(i) * m + k] = 1;
+      }
+    const std::vector<Vec2> p = RandomPositions(n, &rng);
+    Predict(&shared, nullptr, t % 2 ? threads : RangeRunner{});
+    Predict(&rows);
+    DkfWeights w;
+    MakeDkfWeights(g, 0.75, &w);
+    Fuse(shared, w, z, p, &next, t % 2 ? threads : RangeRunner{});
+    steps_shared += next.sharing();
+    // The extra row: 0.5 itself, 0.3 and 0.2 from robots 0 and 1.
+    Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n + 1, n + 1);
+    FusionWeights(g, 0.75, &W);
+    Eigen::MatrixXd Wx = Eigen::MatrixXd::Zero(n + 1, n + 1);
+    Wx.topLeftCorner(n, n) = W.topLeftCorner(n, n);
+    Wx(n, n) = 0.5;
+    Wx(n, 0) = 0.3;
+    Wx(n, 1) = 0.2;
+    Measurements zx = z;
+    zx.emplace_back();
+    std::vector<Vec2> px = p;
+    px.emplace_back(0.0, 0.0);
+    Fuse(rows, Wx, zx, px, &rows_next);
+    ASSERT_FALSE(rows_next.sharing());
+    std::swap(shared, next);
+    std::swap(rows, rows_next);
+    const BeliefSet::Storage a = shared.Materialized();
+    ASSERT_TRUE(a == rows.data().topRows(n)) << "step " << t;
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < m; ++k)
+        ASSERT_EQ(shared.DetCovariance(i, k), rows.DetCovariance(i, k));
+  }
+  // Every step shared; a robot that heard every message and never measured
+  // a target holds its common block.
+  EXPECT_EQ(steps_shared, 60);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < m; ++k)
+      if (!touched[static_cast<std::size_t>(i) * m + k])
+        EXPECT_TRUE(shared.Shared(i, k)) << i << " " << k;
+  EXPECT_FALSE(shared.Shared(17, 0));  // failed: predicted alone
 }
 
 }  // namespace

@@ -99,6 +99,10 @@ class CommNetwork {
   bool Active(int i) const { return active_[i] != 0; }
   const std::vector<std::uint8_t>& active() const { return active_; }
   int NumActive() const;
+  // Changes whenever the graph may have (a new graph, a failure), unique in
+  // the process and never 0: readers that derive something from the graph
+  // (the DKF's weights) keep it while the stamp stays.
+  std::uint64_t graph_stamp() const { return graph_stamp_; }
   // Directed edges (receiver, sender) that were in range but lost this step.
   const std::vector<std::pair<int, int>>& Lost() const { return lost_; }
 
@@ -110,6 +114,7 @@ class CommNetwork {
   std::vector<std::uint8_t> active_;
   std::vector<std::vector<int>> neighbors_;
   std::vector<std::pair<int, int>> lost_;
+  std::uint64_t graph_stamp_ = 0;
   // The active robots the full graph in neighbors_ was built for (empty:
   // none is kept).
   std::vector<std::uint8_t> full_active_;

@@ -1,8 +1,9 @@
 // Gaussian beliefs over the hidden state x = [x_1; ...; x_M] in information
 // form, block diagonal per target (docs/design.md, Estimation). All robots'
 // beliefs are stored in one row-major matrix, one row per robot, so that DKF
-// fusion is one dense product W * B over contiguous memory and never touches a
-// 2M x 2M matrix.
+// fusion runs over contiguous memory and never touches a 2M x 2M matrix;
+// blocks that many rows hold bit for bit are kept once per target (the
+// common block, BeliefSet).
 #ifndef AIA_ESTIMATION_BELIEF_H_
 #define AIA_ESTIMATION_BELIEF_H_
 
@@ -42,6 +43,16 @@ class BeliefLayout {
 };
 
 // Beliefs of `rows` agents (robots, or one row for the centralized filter).
+//
+// A set of two rows or more may share blocks (docs/design.md, Estimation):
+// in a full graph the robots that never measured a target hold one belief
+// of it bit for bit, kept once as the target's common block; a row whose
+// block k is its own is in OwnRows(k). Readers see the same values either
+// way (Block, Omega, Xi); a non-const Omega or Xi first makes the row's
+// block its own (a copy of the common one), and the non-const data() makes
+// every block its own. The DKF (filter.h, Fuse) keeps a full graph's set
+// shared, which makes a step O(M + the blocks that differ) instead of
+// O(N M).
 class BeliefSet {
  public:
   using Storage =
@@ -50,12 +61,23 @@ class BeliefSet {
   BeliefSet() = default;
   BeliefSet(const BeliefLayout* layout, int rows);
 
-  // Every row gets the prior N(mean_k, cov_k) for each target k.
+  // Every row gets the prior N(mean_k, cov_k) for each target k (one
+  // common block per target for a set of two rows or more).
   void SetPrior(const std::vector<Eigen::VectorXd>& means,
                 const std::vector<Eigen::MatrixXd>& covs);
 
   int rows() const { return static_cast<int>(data_.rows()); }
   const BeliefLayout& layout() const { return *layout_; }
+
+  // Block k of a row: Omega (column-major) then xi, d * d + d doubles.
+  const double* Block(int row, int k) const {
+    return Shared(row, k)
+               ? common_.data() + layout_->omega_offset(k)
+               : data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
+                     layout_->omega_offset(k);
+  }
+  // The same block, made the row's own first.
+  double* OwnBlock(int row, int k);
 
   Eigen::Map<Eigen::MatrixXd> Omega(int row, int k);
   Eigen::Map<const Eigen::MatrixXd> Omega(int row, int k) const;
@@ -73,16 +95,60 @@ class BeliefSet {
   // positive definite.
   double DetCovariance(int row, int k) const;
   double LogDetCovariance(int row, int k) const;
+  // The same of a block (Block's layout) of target k.
+  double DetCovarianceOf(const double* block, int k) const;
 
   // Copy of one row from another set with the same layout.
   void CopyRow(int row, const BeliefSet& from, int from_row);
 
-  Storage& data() { return data_; }
-  const Storage& data() const { return data_; }
+  // Whether any block is shared, whether row's block k is, and the rows
+  // whose block k is their own, ascending (while sharing()).
+  bool sharing() const { return sharing_; }
+  bool Shared(int row, int k) const {
+    return sharing_ &&
+           shared_[static_cast<std::size_t>(row) * layout_->num_targets() +
+                   k] != 0;
+  }
+  const std::vector<int>& OwnRows(int k) const { return own_[k]; }
+  const double* CommonBlock(int k) const {
+    return common_.data() + layout_->omega_offset(k);
+  }
+
+  // Every block its own (the values unchanged), and the storage, row by
+  // row. The const data() is for sets that share nothing (checked).
+  Storage& data();
+  const Storage& data() const;
+  void Unshare();
+  // A copy of the storage with every block in place (shared or not).
+  Storage Materialized() const;
+
+  // For the DKF, which writes a shared set target by target: `rows` (own,
+  // ascending) become target k's own rows and every other row shares the
+  // common block, which the caller writes (CommonBlockToWrite). The own
+  // rows' blocks are written through RawBlock. StartSharing makes every
+  // block shared, of unwritten common blocks, before the first.
+  void StartSharing();
+  void SetOwnRows(int k, const std::vector<int>& rows);
+  double* CommonBlockToWrite(int k) {
+    return common_.data() + layout_->omega_offset(k);
+  }
+  double* RawBlock(int row, int k) {
+    return data_.data() + static_cast<Eigen::Index>(row) * data_.cols() +
+           layout_->omega_offset(k);
+  }
+
+  // Exchanges the two sets' contents (same layout and rows).
+  void Swap(BeliefSet& other);
 
  private:
   const BeliefLayout* layout_ = nullptr;
   Storage data_;
+  // While sharing_: shared_[row * M + k] says block k of row is common_'s;
+  // own_[k] lists the rows whose block k is not, ascending.
+  bool sharing_ = false;
+  Eigen::VectorXd common_;
+  std::vector<std::uint8_t> shared_;
+  std::vector<std::vector<int>> own_;
 };
 
 // What readers of every robot's belief take from it each step, worked out

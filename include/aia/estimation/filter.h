@@ -98,12 +98,17 @@ struct DkfWeights {
 void MakeDkfWeights(const std::vector<std::vector<int>>& neighbors,
                     double kappa_self, DkfWeights* w);
 // Fuse with these weights: the same numbers, to the bit, as Fuse with the
-// FusionWeights matrix, in O(N * stride) for the full graph and O(edges *
-// stride) for a sparse one. Large sets (rows x stride of 2^18 doubles or
-// more, about 200 robots and targets) split their rows over `run`, with the
-// same numbers for any split; `row_done(i)`, where given, is called once row
-// i is final, on the thread that fused it (a reader of that row alone may
-// run there). No allocation once `out` has its size.
+// FusionWeights matrix. Where most rows' neighbours are every other robot
+// (a full graph, a few messages lost or robots failed) `out` comes out
+// shared (BeliefSet): O(M x the blocks that differ from the common one +
+// N) a step; otherwise row by row, O(N * stride) for a dense graph and
+// O(edges * stride) for a sparse one, `out` sharing nothing. Large sets
+// (rows x stride of 2^18 doubles or more, about 200 robots and targets)
+// split their targets or rows over `run`, with the same numbers for any
+// split. Row by row, `row_done(i)`, where given, is called once row i is
+// final, on the thread that fused it (a reader of that row alone may run
+// there); a shared `out` calls it for no row (read its common and own
+// blocks).
 void Fuse(const BeliefSet& predicted, const DkfWeights& w,
           const std::vector<std::vector<Measurement>>& z,
           const std::vector<Vec2>& positions, BeliefSet* out,

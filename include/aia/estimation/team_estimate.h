@@ -38,12 +38,14 @@ class TeamEstimate {
   // best estimates over the `active` robots. Predict's EstimateDiverged
   // passes through (the caller knows which key to blame). The fusion and
   // the dets of a large team are split over `run` (filter.h, Fuse), with the
-  // same numbers for any split.
+  // same numbers for any split. `graph_stamp` (CommNetwork::graph_stamp; 0:
+  // unknown) keeps the DKF's weights from the step before while it and
+  // kappa_self stay (making them reads every edge).
   void Update(bool predict, const std::vector<std::vector<int>>& neighbors,
               double kappa_self, const std::vector<std::vector<Measurement>>& z,
               const std::vector<Vec2>& positions,
               const std::vector<std::uint8_t>& active,
-              const RangeRunner& run = {});
+              const RangeRunner& run = {}, std::uint64_t graph_stamp = 0);
 
   int num_robots() const { return fused_.rows(); }
   int num_targets() const { return layout_.num_targets(); }
@@ -52,9 +54,7 @@ class TeamEstimate {
   const BeliefSet& fused() const { return fused_; }
   const BeliefSet& central() const { return central_; }
   // det Sigma_i^k of robot i's fused belief.
-  double Det(int robot, int target) const {
-    return det_[static_cast<std::size_t>(robot) * num_targets() + target];
-  }
+  double Det(int robot, int target) const;
   // The active robot with the smallest det Sigma_k, or -1 if none is active.
   int BestRobot(int target) const { return best_[target]; }
   // det Sigma_k of that robot's belief (infinity when none is active).
@@ -65,11 +65,17 @@ class TeamEstimate {
   const std::vector<double>& log_det_prior() const { return log_det_prior_; }
 
  private:
+  void SharedBestRows(const std::vector<std::uint8_t>& active);
+
   BeliefLayout layout_;
   BeliefSet predicted_, fused_, central_;
   DkfWeights weights_;
-  std::vector<double> det_, min_det_, log_det_prior_;
-  std::vector<int> best_;
+  std::uint64_t weights_stamp_ = 0;
+  double weights_kappa_ = 0.0;
+  // det_: det Sigma of each row's own blocks (every block's while fused_
+  // shares none); det_common_: of each target's common block.
+  std::vector<double> det_, det_common_, min_det_, log_det_prior_;
+  std::vector<int> best_, active_rows_;
 };
 
 }  // namespace aia
