@@ -256,14 +256,17 @@ void KeyRows(const BeliefSet& beliefs, const std::vector<int>& rows, int k,
   const int n = static_cast<int>(rows.size());
   const int len = d * d + d + 2;
   const std::size_t bytes = sizeof(double) * (d * d + d);
+  const double* before = nullptr;
   for (int b = 0; b < n; ++b) {
-    const double* block = beliefs.Omega(rows[b], k).data();
-    if (b > 0 &&
-        std::memcmp(block, beliefs.Omega(rows[b - 1], k).data(), bytes) == 0) {
+    // (Rows that share the set's common block share its address.)
+    const double* block = beliefs.Block(rows[b], k);
+    if (before != nullptr &&
+        (block == before || std::memcmp(block, before, bytes) == 0)) {
       std::copy(&keys[(b - 1) * len], &keys[b * len], &keys[b * len]);
     } else {
       Quantize(block, d, &keys[b * len]);
     }
+    before = block;
   }
 }
 
