@@ -357,7 +357,74 @@ class SharedMix {
         is_special_[i] = 1;
       }
     }
-    return 8 * static_cast<int>(special_.size()) <= n;
+    if (8 * static_cast<int>(special_.size()) > n) return false;
+    // The counted rows a special dense row leaves out (neither in nb nor
+    // itself), ascending, once for every target (AddExcludedRows' rows).
+    left_out_.resize(special_.size());
+    for (std::size_t s = 0; s < special_.size(); ++s) {
+      const int i = special_[s];
+      const RowWeights& r = w[i];
+      std::vector<int>& out = left_out_[s];
+      out.clear();
+      if (!IsDenseUniform(r, n, counted_[i]) ||
+          static_cast<int>(r.nb->size()) == n_counted_ - 1)
+        continue;
+      std::size_t next = 0;
+      for (int j = 0; j < n; ++j) {
+        if (next < r.nb->size() && (*r.nb)[next] == j) {
+          ++next;
+          continue;
+        }
+        if (j != i && counted_[j]) out.push_back(j);
+      }
+    }
+    return true;
+  }
+
+  // Whether target-by-target work pays for `b`: the blocks mixed one by
+  // one (own blocks, and the special rows') at most a quarter of all. A
+  // set that shares nothing (after a step row by row) is judged by a few
+  // targets' majority blocks; every one of them row by row is three times
+  // the row-by-row mix (the blocks of a target are a row apart).
+  bool Pays(const BeliefSet& b) const {
+    const int m = b.layout().num_targets();
+    if (m == 0) return true;
+    if (b.sharing()) {
+      const std::size_t limit = static_cast<std::size_t>(n_) * m / 4;
+      std::size_t own = 0;
+      for (int k = 0; k < m && own <= limit; ++k) {
+        const std::vector<int>& rows = b.OwnRows(k);
+        own += rows.size();
+        for (int i : special_)
+          own += !std::binary_search(rows.begin(), rows.end(), i);
+      }
+      return own <= limit;
+    }
+    const int samples = std::min(m, 8);
+    std::size_t differ = 0;
+    for (int s = 0; s < samples; ++s) {
+      const int k = static_cast<int>(static_cast<long>(s) * m / samples);
+      const std::size_t bytes =
+          sizeof(double) * b.layout().dim(k) * (b.layout().dim(k) + 1);
+      // Boyer-Moore's majority vote over the rows' blocks, then a count.
+      int candidate = 0, votes = 0;
+      for (int i = 0; i < n_; ++i) {
+        if (votes == 0) {
+          candidate = i;
+          votes = 1;
+        } else {
+          votes += std::memcmp(b.Block(i, k), b.Block(candidate, k), bytes) == 0
+                       ? 1
+                       : -1;
+        }
+      }
+      // The blocks that would be own: those apart from the majority's,
+      // and every block of a special row.
+      for (int i = 0; i < n_; ++i)
+        differ += is_special_[i] ||
+                  std::memcmp(b.Block(i, k), b.Block(candidate, k), bytes) != 0;
+    }
+    return 4 * differ <= static_cast<std::size_t>(samples) * n_;
   }
 
   void Mix(const BeliefSet& b, BeliefSet* out, const RangeRunner& run) {
@@ -434,17 +501,10 @@ class SharedMix {
     }
     o = r.off * (sum - own) + r.self * own;
     if (static_cast<int>(r.nb->size()) == n_counted_ - 1) return;
-    // The counted rows neither in nb nor i, ascending (AddExcludedRows).
-    thread_local std::vector<int> left_out;
-    left_out.clear();
-    std::size_t next = 0;
-    for (int j = 0; j < n_; ++j) {
-      if (next < r.nb->size() && (*r.nb)[next] == j) {
-        ++next;
-        continue;
-      }
-      if (j != i && counted_[j]) left_out.push_back(j);
-    }
+    // A special row (a standard one has every other counted row).
+    const std::vector<int>& left_out =
+        left_out_[std::lower_bound(special_.begin(), special_.end(), i) -
+                  special_.begin()];
     add_rows(left_out.data(), static_cast<int>(left_out.size()), -r.off);
     const int d = b.layout().dim(k);
     for (int e = 0; e < d; ++e) {
@@ -511,6 +571,7 @@ class SharedMix {
   double self_ = 0.0, off_ = 0.0;
   std::vector<std::uint8_t> counted_, is_special_;
   std::vector<int> counted_before_, special_;
+  std::vector<std::vector<int>> left_out_;  // per special row
 };
 
 void FuseRows(const BeliefSet& predicted, const std::vector<RowWeights>& w,
@@ -527,7 +588,7 @@ void FuseRows(const BeliefSet& predicted, const std::vector<RowWeights>& w,
     *out = BeliefSet(&predicted.layout(), n);
   }
   thread_local SharedMix shared;
-  if (shared.Plan(w, n)) {
+  if (shared.Plan(w, n) && shared.Pays(predicted)) {
     const RangeRunner& split = SplitFor(n, predicted.layout().stride(), run);
     shared.Mix(predicted, out, split);
     for (int i = 0; i < n; ++i)
