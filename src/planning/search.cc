@@ -893,22 +893,50 @@ void TargetClaims::Route(int self, const std::vector<int>& others,
 // --- ClosedNeighbourhoods ----------------------------------------------------
 
 int ClosedNeighbourhoods::Of(const DecisionContext& ctx, int i, bool* fresh) {
-  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the robots
-  ForClosed(ctx, i, [&](int j) {
-    hash = (hash ^ static_cast<std::uint64_t>(j)) * 1099511628211ull;
-  });
-  auto it = index_.emplace(hash, -1).first;
-  int* link = &it->second;
-  for (; *link >= 0; link = &next_[*link])
-    if (SameClosed(ctx, first_[*link], i)) {
-      *fresh = false;
-      return *link;
+  const std::uint64_t stamp = ctx.comm->graph_stamp();
+  const auto n = static_cast<std::size_t>(ctx.comm->size());
+  // A new graph (or one without a stamp, at a step's first call) starts
+  // the classes again; within a step the graph stays.
+  if (stamp != stamp_ || class_of_.size() != n ||
+      (stamp == 0 && first_.empty())) {
+    AIA_CHECK_MSG(first_.empty(), "the graph changed within a step");
+    stamp_ = stamp;
+    class_of_.assign(n, -1);
+    class_first_.clear();
+    class_next_.clear();
+    index_.clear();
+    group_of_class_.clear();
+    group_classes_.clear();
+  }
+  int c = class_of_[i];
+  if (c < 0) {
+    std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the robots
+    ForClosed(ctx, i, [&](int j) {
+      hash = (hash ^ static_cast<std::uint64_t>(j)) * 1099511628211ull;
+    });
+    auto it = index_.emplace(hash, -1).first;
+    int* link = &it->second;
+    for (; *link >= 0; link = &class_next_[*link])
+      if (SameClosed(ctx, class_first_[*link], i)) {
+        c = *link;
+        break;
+      }
+    if (c < 0) {
+      c = *link = static_cast<int>(class_first_.size());
+      class_first_.push_back(i);
+      class_next_.push_back(-1);
+      group_of_class_.push_back(-1);
     }
-  *link = static_cast<int>(first_.size());
-  first_.push_back(i);
-  next_.push_back(-1);
-  *fresh = true;
-  return *link;
+    class_of_[i] = c;
+  }
+  int& group = group_of_class_[c];
+  *fresh = group < 0;
+  if (group < 0) {
+    group = static_cast<int>(first_.size());
+    first_.push_back(i);
+    group_classes_.push_back(c);
+  }
+  return group;
 }
 
 bool ClosedNeighbourhoods::SameClosed(const DecisionContext& ctx, int a,

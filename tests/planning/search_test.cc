@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <random>
 #include <string>
 #include <thread>
 #include <utility>
@@ -603,6 +604,54 @@ TEST(NeighbourhoodHoldsTest, KnownAnswersInAFullGraph) {
   holds.Compute(team.Context(), robots, 1.0);
   EXPECT_FALSE(holds.Open(0, 0));
   EXPECT_FALSE(holds.Has(-1));
+}
+
+// One ClosedNeighbourhoods over steps whose graph stays or changes (range
+// graphs with lost edges, robots that move): each step's groups are the
+// robots asked with equal closed neighbourhoods, numbered in the order the
+// step first asks for them, each led by its first robot asked, as a fresh
+// grouping of that step gives them.
+TEST(ClosedNeighbourhoodsTest, KeptClassesGroupAsAFreshGrouping) {
+  const std::unique_ptr<Team> made = GraphTrial(1, 3, 900);
+  Team& team = *made;
+  const int n = 9;
+  Rng rng(9, "closed_neighbourhoods_test");
+  ClosedNeighbourhoods kept;
+  const auto closed = [&](int i) {
+    std::vector<int> c;
+    ClosedNeighbourhoods::ForClosed(team.Context(), i,
+                                    [&](int j) { c.push_back(j); });
+    return c;
+  };
+  for (int step = 0; step < 12; ++step) {
+    if (step % 3 == 2) {  // a new graph: the robots move
+      std::vector<Vec2> p;
+      for (int i = 0; i < n; ++i)
+        p.push_back(Vec2(rng.Uniform() * 10.0, rng.Uniform() * 10.0));
+      team.comm.Update(step + 2, p);
+    }
+    std::vector<int> asked;
+    for (int i = 0; i < n; ++i)
+      if (rng.Uniform() < 0.7) asked.push_back(i);
+    std::shuffle(asked.begin(), asked.end(), std::mt19937(step));
+    const DecisionContext ctx = team.Context();
+    kept.Clear();
+    ClosedNeighbourhoods fresh_grouping;
+    std::vector<std::vector<int>> leaders;  // per group: its closed set
+    for (int i : asked) {
+      bool fresh = false, fresh_new = false;
+      const int g = kept.Of(ctx, i, &fresh);
+      EXPECT_EQ(g, fresh_grouping.Of(ctx, i, &fresh_new)) << step << " " << i;
+      EXPECT_EQ(fresh, fresh_new);
+      // The expected group: the first one with robot i's closed set.
+      const auto at = std::find(leaders.begin(), leaders.end(), closed(i));
+      EXPECT_EQ(g, static_cast<int>(at - leaders.begin())) << step;
+      EXPECT_EQ(fresh, at == leaders.end());
+      if (at == leaders.end()) leaders.push_back(closed(i));
+      EXPECT_EQ(closed(kept.robot(g)), closed(i));
+    }
+    EXPECT_EQ(kept.size(), static_cast<int>(leaders.size()));
+  }
 }
 
 // NeighbourhoodHolds against the rule read directly, robot by robot: random

@@ -91,17 +91,20 @@ int NearestObserverDistance(const Map& map, const SensorModel& sensor, int here,
 // Robots grouped by closed neighbourhood (the robot and its neighbours in
 // this step's graph): robots whose neighbourhoods hold the same robots share
 // a group. Neighbourhoods are hashed (FNV-1a over the robots, ascending),
-// then compared exactly. O(edges) a step.
+// then compared exactly, each robot's once per graph (its class, kept while
+// the graph's stamp is: CommNetwork::graph_stamp); a step's groups are its
+// classes in the order the step first asks for them. O(edges) a new graph,
+// O(robots asked) a step while the graph stays (a full graph: N^2 and N).
 class ClosedNeighbourhoods {
  public:
-  // Forgets every group (the start of a step).
+  // Forgets every group (the start of a step); the classes stay.
   void Clear() {
+    for (int c : group_classes_) group_of_class_[c] = -1;
+    group_classes_.clear();
     first_.clear();
-    next_.clear();
-    index_.clear();
   }
   // Robot i's group: an index in order of making; *fresh says whether this
-  // call made it.
+  // call made it. Between Clear and Clear the graph must stay.
   int Of(const DecisionContext& ctx, int i, bool* fresh);
   int size() const { return static_cast<int>(first_.size()); }
   // The first robot put in group g.
@@ -122,9 +125,15 @@ class ClosedNeighbourhoods {
 
  private:
   bool SameClosed(const DecisionContext& ctx, int a, int b);
-  std::vector<int> first_, next_;  // per group: first robot, next same hash
-  std::unordered_map<std::uint64_t, int> index_;  // hash -> first group
-  std::vector<int> closed_a_;                     // SameClosed's scratch
+  // Per graph: each robot's class (-1: not asked yet); per class its first
+  // robot and the next class of the same hash.
+  std::uint64_t stamp_ = 0;
+  std::vector<int> class_of_, class_first_, class_next_;
+  std::unordered_map<std::uint64_t, int> index_;  // hash -> first class
+  // Per step: each class's group (-1: none yet), the classes given one,
+  // each group's first robot.
+  std::vector<int> group_of_class_, group_classes_, first_;
+  std::vector<int> closed_a_;  // SameClosed's scratch
 };
 
 // A robot's missed lattice points of one target, in the order they were
