@@ -135,22 +135,26 @@ struct RowPair {
   RowMap Out(int i) const { return {out.data() + i * out.cols() + c0, width}; }
 };
 
+// o += scale * (in(0) + in(1) + ... + in(count - 1)), four terms summed
+// in order in one pass over `o`, which saves loads and stores of `o` in a
+// loop that is bound by memory traffic.
+template <typename In, typename Out>
+void AddInFours(const In& in, int count, double scale, Out&& o) {
+  const int full = count / 4 * 4;
+  for (int c = 0; c < full; c += 4)
+    o += scale * (in(c) + in(c + 1) + in(c + 2) + in(c + 3));
+  const int rest = count - full;
+  if (rest == 3) o += scale * (in(full) + in(full + 1) + in(full + 2));
+  if (rest == 2) o += scale * (in(full) + in(full + 1));
+  if (rest == 1) o += scale * in(full);
+}
+
 // o += scale * sum_j B_j over the rows j = rows(0), rows(1), ..., rows(count
-// - 1), in that (ascending) order. Four rows go in one pass over `o`, which
-// saves loads and stores of `o` in a loop that is bound by memory traffic.
+// - 1), in that (ascending) order.
 template <typename Rows>
 void AddRows(const Rows& rows, int count, const RowPair& m, double scale,
              RowMap o) {
-  const int full = count / 4 * 4;
-  for (int c = 0; c < full; c += 4)
-    o += scale * (m.In(rows(c)) + m.In(rows(c + 1)) + m.In(rows(c + 2)) +
-                  m.In(rows(c + 3)));
-  const int rest = count - full;
-  if (rest == 3)
-    o += scale *
-         (m.In(rows(full)) + m.In(rows(full + 1)) + m.In(rows(full + 2)));
-  if (rest == 2) o += scale * (m.In(rows(full)) + m.In(rows(full + 1)));
-  if (rest == 1) o += scale * m.In(rows(full));
+  AddInFours([&](int c) { return m.In(rows(c)); }, count, scale, o);
 }
 
 void AddRows(const std::vector<int>& rows, const RowPair& m, double scale,
@@ -481,15 +485,10 @@ class SharedMix {
     const int width = static_cast<int>(sum.size());
     Eigen::ArrayXd& o = *out;
     const Block own(b.Block(i, k), width);
+    // AddRows' sums (four rows a pass), over the rows' blocks of k.
     const auto add_rows = [&](const int* rows, int count, double scale) {
-      const int full = count / 4 * 4;
-      const auto in = [&](int c) { return Block(b.Block(rows[c], k), width); };
-      for (int c = 0; c < full; c += 4)
-        o += scale * (in(c) + in(c + 1) + in(c + 2) + in(c + 3));
-      const int rest = count - full;
-      if (rest == 3) o += scale * (in(full) + in(full + 1) + in(full + 2));
-      if (rest == 2) o += scale * (in(full) + in(full + 1));
-      if (rest == 1) o += scale * in(full);
+      AddInFours([&](int c) { return Block(b.Block(rows[c], k), width); },
+                 count, scale, o);
     };
     const auto direct = [&] {
       o = r.self * own;
