@@ -50,7 +50,8 @@ class BeliefLayout {
 // block k is its own is in OwnRows(k). Readers see the same values either
 // way (Block, Omega, Xi); a non-const Omega or Xi first makes the row's
 // block its own (a copy of the common one), and the non-const data() makes
-// every block its own. The DKF (filter.h, Fuse) keeps a full graph's set
+// every block its own (so on a shared set they are not for several threads
+// at once, as reads are). The DKF (filter.h, Fuse) keeps a full graph's set
 // shared, which makes a step O(M + the blocks that differ) instead of
 // O(N M).
 class BeliefSet {
