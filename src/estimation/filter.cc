@@ -163,6 +163,22 @@ void AddRows(const std::vector<int>& rows, const RowPair& m, double scale,
           scale, o);
 }
 
+// Calls visit(j) for the counted rows j of a team of n neither in nb
+// (ascending) nor i, ascending: the rows a dense row leaves out.
+template <typename Visit>
+void ForLeftOut(const std::vector<int>& nb, int i,
+                const std::vector<std::uint8_t>& counted, int n,
+                Visit&& visit) {
+  std::size_t next = 0;
+  for (int j = 0; j < n; ++j) {
+    if (next < nb.size() && nb[next] == j) {
+      ++next;
+      continue;
+    }
+    if (j != i && counted[j]) visit(j);
+  }
+}
+
 // o += scale * sum_j B_j over the counted rows of the team not in nb and
 // not i, in ascending order and grouped as AddRows groups them: the same
 // numbers, without a list of those rows (nb is ascending). Whether there was
@@ -174,19 +190,13 @@ bool AddExcludedRows(const std::vector<int>& nb, int i,
   // nb holds every counted row but i (i is counted)
   if (static_cast<int>(nb.size()) == n_counted - 1) return false;
   int pending[4], count = 0;
-  std::size_t next = 0;
-  for (int j = 0; j < n; ++j) {
-    if (next < nb.size() && nb[next] == j) {
-      ++next;
-      continue;
-    }
-    if (j == i || !counted[j]) continue;
+  ForLeftOut(nb, i, counted, n, [&](int j) {
     pending[count++] = j;
     if (count == 4) {
       AddRows([&](int c) { return pending[c]; }, 4, m, scale, o);
       count = 0;
     }
-  }
+  });
   AddRows([&](int c) { return pending[c]; }, count, m, scale, o);
   return true;
 }
@@ -334,12 +344,12 @@ class SharedMix {
     if (n < 2) return false;
     n_ = n;
     w_ = &w;
-    dense_ = false;
+    bool dense = false;
     for (int i = 0; i < n; ++i) {
       if (!w[i].uniform) return false;
-      dense_ = dense_ || IsDenseUniform(w[i], n, true);
+      dense = dense || IsDenseUniform(w[i], n, true);
     }
-    if (!dense_) return false;
+    if (!dense) return false;
     n_counted_ = CountRows(w, &counted_);
     counted_before_.assign(n + 1, 0);
     for (int i = 0; i < n; ++i)
@@ -370,17 +380,9 @@ class SharedMix {
       const RowWeights& r = w[i];
       std::vector<int>& out = left_out_[s];
       out.clear();
-      if (!IsDenseUniform(r, n, counted_[i]) ||
-          static_cast<int>(r.nb->size()) == n_counted_ - 1)
-        continue;
-      std::size_t next = 0;
-      for (int j = 0; j < n; ++j) {
-        if (next < r.nb->size() && (*r.nb)[next] == j) {
-          ++next;
-          continue;
-        }
-        if (j != i && counted_[j]) out.push_back(j);
-      }
+      if (IsDenseUniform(r, n, counted_[i]) &&
+          static_cast<int>(r.nb->size()) != n_counted_ - 1)
+        ForLeftOut(*r.nb, i, counted_, n, [&](int j) { out.push_back(j); });
     }
     return true;
   }
@@ -566,7 +568,7 @@ class SharedMix {
 
   int n_ = 0, n_counted_ = 0;
   const std::vector<RowWeights>* w_ = nullptr;
-  bool dense_ = false, has_standard_ = false;
+  bool has_standard_ = false;
   double self_ = 0.0, off_ = 0.0;
   std::vector<std::uint8_t> counted_, is_special_;
   std::vector<int> counted_before_, special_;
@@ -655,9 +657,16 @@ void PredictShared(BeliefSet* beliefs, const std::vector<std::uint8_t>* active,
   const BeliefLayout& layout = beliefs->layout();
   const int rows = beliefs->rows(), m = layout.num_targets();
   const auto counts = [&](int r) { return active == nullptr || (*active)[r]; };
-  std::vector<std::size_t> failure_at(m, SIZE_MAX);
-  std::vector<std::string> failure(m);
-  std::vector<std::uint8_t> diverged(m, 0);
+  // (Kept from call to call: no allocation a step.)
+  thread_local std::vector<std::size_t> failure_at_storage;
+  thread_local std::vector<std::string> failure_storage;
+  thread_local std::vector<std::uint8_t> diverged_storage;
+  std::vector<std::size_t>& failure_at = failure_at_storage;
+  std::vector<std::string>& failure = failure_storage;
+  std::vector<std::uint8_t>& diverged = diverged_storage;
+  failure_at.assign(m, SIZE_MAX);
+  failure.resize(m);
+  diverged.assign(m, 0);
   RunRange(run, m, [&](int k0, int k1, int) {
     for (int k = k0; k < k1; ++k) {
       if (layout.is_static(k)) continue;
